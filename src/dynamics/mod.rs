@@ -1,0 +1,208 @@
+//! Rigid-body dynamics with geared rotors, one algorithm per file, in RBDA's notation:
+//!
+//! - [`rnea`]: inverse dynamics `τ = H(q) q̈ + C(q, q̇) q̇ + g(q)` (RBDA Table 5.1), with rotors
+//!   as in design.md §1;
+//! - [`crba`]: the joint-space mass matrix `H(q)` (RBDA Table 6.2) with rotor terms;
+//! - [`forward_dynamics`]: `q̈ = H⁻¹ (τ − C q̇ − g)` by Cholesky (RBDA §6.1, "FDcrb");
+//! - [`regressor`]: `Y(q, q̇, q̈)` with `τ + friction = Y θ` exactly, θ as in
+//!   [`crate::model::ParamLayout`];
+//! - [`energy`]: kinetic and potential energy, from body velocities and poses;
+//! - [`kinematics`]: world poses, points and point Jacobians.
+//!
+//! Every function takes the immutable [`Model`] and a mutable [`Data`] workspace (pinocchio's
+//! split): no allocation happens on the hot path. Joint vectors are `&[f64]` of length `n`.
+//! Units: rad, rad/s, rad/s², N m (prismatic joints: m, m/s, m/s², N).
+
+mod crba;
+mod energy;
+mod fd;
+pub mod kinematics;
+mod regressor;
+mod rnea;
+
+pub use crba::crba;
+pub use energy::{kinetic_energy, potential_energy};
+pub use fd::{forward_dynamics, FdError};
+pub use regressor::{inertia_bilinear, regressor};
+pub use rnea::{friction_torque, rnea, rnea_with_friction, sign};
+
+use crate::model::{Joint, Model, RotorModel};
+use crate::spatial::{Force, Motion, RigidInertia, Transform};
+use nalgebra::{DMatrix, DVector};
+
+/// Workspace and results of the dynamics algorithms for one [`Model`].
+///
+/// After [`forward_pass`], `x_up`, `s`, `v`, `a` and the rotor fields hold the kinematics of the
+/// state that was passed; the other fields hold the result of the last algorithm that wrote them.
+#[derive(Clone, Debug)]
+pub struct Data {
+    /// `x_up[i] = i_X_λ(i)`: parent frame to body `i` frame (RBDA `Xup`).
+    pub x_up: Vec<Transform>,
+    /// Motion subspace of joint `i` in body `i` coordinates.
+    pub s: Vec<Motion>,
+    /// Spatial velocity of body `i`, body coordinates.
+    pub v: Vec<Motion>,
+    /// Spatial acceleration of body `i` including the fictitious `−g` base acceleration.
+    pub a: Vec<Motion>,
+    /// Net spatial force on body `i` (RNEA backward pass).
+    pub f: Vec<Force>,
+    /// Parent frame to rotor `i` frame (identity where joint `i` has no rotor).
+    pub x_rot: Vec<Transform>,
+    /// Rotor motion subspace `S_rot = N [axis; 0]`, rotor coordinates (zero in reflected mode).
+    pub s_rot: Vec<Motion>,
+    /// Rotor spatial velocity.
+    pub v_rot: Vec<Motion>,
+    /// Rotor spatial acceleration (with `−g`).
+    pub a_rot: Vec<Motion>,
+    /// Body inertias (operational form), cached from the model.
+    pub inertia: Vec<RigidInertia>,
+    /// Rotor inertias (zero where none).
+    pub inertia_rot: Vec<RigidInertia>,
+    /// Composite inertias (CRBA).
+    pub ic: Vec<RigidInertia>,
+    /// Joint torques (RNEA result).
+    pub tau: DVector<f64>,
+    /// Mass matrix (CRBA result).
+    pub h: DMatrix<f64>,
+    /// Bias forces `C q̇ + g` (forward dynamics).
+    pub bias: DVector<f64>,
+    /// Accelerations (forward dynamics result).
+    pub qdd: DVector<f64>,
+    /// World (base) to body `i` frame, filled by [`kinematics::update_world`].
+    pub x_world: Vec<Transform>,
+    /// `s_anc[i * n + k]`: joint `k`'s motion subspace in body `i` coordinates, for `k` in the
+    /// support of `i` (regressor workspace).
+    pub s_anc: Vec<Motion>,
+}
+
+impl Data {
+    /// A workspace sized for `model`.
+    pub fn new(model: &Model) -> Self {
+        let n = model.dof();
+        let zero_i = RigidInertia {
+            m: 0.0,
+            h: Default::default(),
+            ibar: Default::default(),
+        };
+        Self {
+            x_up: vec![Transform::identity(); n],
+            s: vec![Motion::zero(); n],
+            v: vec![Motion::zero(); n],
+            a: vec![Motion::zero(); n],
+            f: vec![Force::zero(); n],
+            x_rot: vec![Transform::identity(); n],
+            s_rot: vec![Motion::zero(); n],
+            v_rot: vec![Motion::zero(); n],
+            a_rot: vec![Motion::zero(); n],
+            inertia: model.bodies.iter().map(|b| b.inertia.rigid()).collect(),
+            inertia_rot: model
+                .bodies
+                .iter()
+                .map(|b| b.rotor.as_ref().map_or(zero_i, |r| r.inertia.rigid()))
+                .collect(),
+            ic: vec![zero_i; n],
+            tau: DVector::zeros(n),
+            h: DMatrix::zeros(n, n),
+            bias: DVector::zeros(n),
+            qdd: DVector::zeros(n),
+            x_world: vec![Transform::identity(); n],
+            s_anc: vec![Motion::zero(); n * n],
+        }
+    }
+
+    /// Whether this workspace was made for a model of this shape.
+    pub fn fits(&self, model: &Model) -> bool {
+        self.x_up.len() == model.dof()
+    }
+}
+
+/// The fictitious base acceleration `a_0 = [0; −g]` that accounts for gravity (RBDA §5.3).
+#[inline]
+pub fn base_acceleration(model: &Model) -> Motion {
+    Motion::new(Default::default(), -model.gravity)
+}
+
+/// Joint and rotor transforms for configuration `q`: fills `x_up`, `s`, `x_rot`, `s_rot`.
+///
+/// Rotor `i` (design.md §1), full model: `X_rot = X_J(N q_i) X_rot,0` and
+/// `S_rot = N [axis; 0]`; reflected model: `X_rot = X_rot,0` (frozen) and `S_rot = 0`.
+pub fn update_transforms(model: &Model, data: &mut Data, q: &[f64]) {
+    debug_assert!(data.fits(model));
+    let full = model.rotor_model == RotorModel::Full;
+    for (i, b) in model.bodies.iter().enumerate() {
+        data.s[i] = b.joint.motion_subspace();
+        data.x_up[i] = b.joint.transform(q[i]).compose(&b.x_tree);
+        if let Some(r) = &b.rotor {
+            if full {
+                let spin = Joint::Revolute { axis: r.axis }.transform(r.gear_ratio * q[i]);
+                data.x_rot[i] = spin.compose(&r.x_rot);
+                data.s_rot[i] = Motion::new(r.axis * r.gear_ratio, Default::default());
+            } else {
+                data.x_rot[i] = r.x_rot;
+                data.s_rot[i] = Motion::zero();
+            }
+        }
+    }
+}
+
+/// The RNEA forward pass (RBDA Table 5.1, first loop) for bodies and rotors: calls
+/// [`update_transforms`], then fills `v`, `a`, `v_rot`, `a_rot`. With `gravity = false` the
+/// base does not accelerate (for mass-matrix columns and energy).
+///
+/// `v_i = X_up,i v_λ(i) + S_i q̇_i`, `a_i = X_up,i a_λ(i) + S_i q̈_i + v_i × S_i q̇_i`, and for the
+/// rotor of joint `i` on `p = λ(i)`: `v_rot = X_rot v_p + S_rot q̇_i`,
+/// `a_rot = X_rot a_p + S_rot q̈_i + v_rot × S_rot q̇_i` (with `S_rot = 0` when reflected).
+pub fn forward_pass(
+    model: &Model,
+    data: &mut Data,
+    q: &[f64],
+    qd: &[f64],
+    qdd: &[f64],
+    gravity: bool,
+) {
+    update_transforms(model, data, q);
+    let a0 = if gravity {
+        base_acceleration(model)
+    } else {
+        Motion::zero()
+    };
+    for (i, b) in model.bodies.iter().enumerate() {
+        let (v_p, a_p) = match b.parent {
+            Some(p) => (data.v[p], data.a[p]),
+            None => (Motion::zero(), a0),
+        };
+        let x_up = &data.x_up[i];
+        let vj = data.s[i] * qd[i];
+        let v = x_up.apply_motion(&v_p) + vj;
+        data.a[i] = x_up.apply_motion(&a_p) + data.s[i] * qdd[i] + v.cross_motion(&vj);
+        data.v[i] = v;
+        if b.rotor.is_some() {
+            let x_rot = &data.x_rot[i];
+            let vj_rot = data.s_rot[i] * qd[i];
+            let v_rot = x_rot.apply_motion(&v_p) + vj_rot;
+            data.a_rot[i] =
+                x_rot.apply_motion(&a_p) + data.s_rot[i] * qdd[i] + v_rot.cross_motion(&vj_rot);
+            data.v_rot[i] = v_rot;
+        }
+    }
+}
+
+/// Armature `N² (axisᵀ Ī_rot axis)` (kg m²) of joint `i`'s rotor in the reflected model.
+#[inline]
+pub fn armature(model: &Model, i: usize) -> f64 {
+    model.bodies[i].rotor.as_ref().map_or(0.0, |r| {
+        r.gear_ratio * r.gear_ratio * r.axis.dot(&(r.inertia.ibar() * r.axis))
+    })
+}
+
+/// Checks that joint vectors have the model's length (a programming error otherwise).
+#[inline]
+pub(crate) fn check_len(model: &Model, name: &str, v: &[f64]) {
+    assert_eq!(
+        v.len(),
+        model.dof(),
+        "{name} has {} entries, the model has {} joints",
+        v.len(),
+        model.dof()
+    );
+}

@@ -1,0 +1,85 @@
+//! Recursive Newton–Euler inverse dynamics with geared rotors (RBDA Table 5.1; design.md §1).
+
+use super::{armature, check_len, forward_pass, Data};
+use crate::model::{Model, RotorModel};
+use nalgebra::DVector;
+
+/// Inverse dynamics `τ = H(q) q̈ + C(q, q̇) q̇ + g(q)` of links and rotors, at the joints
+/// (gearbox output), without friction. Returns `&data.tau`.
+///
+/// Backward pass: `f_i = I_i a_i + v_i ×* I_i v_i`; `τ_i = S_iᵀ f_i + S_rot,iᵀ f_rot,i`; the
+/// parent receives `X_up,iᵀ f_i + X_rot,iᵀ f_rot,i`. In the reflected model the rotor term in
+/// `τ_i` is the armature `N² I_axis q̈_i`.
+pub fn rnea<'a>(
+    model: &Model,
+    data: &'a mut Data,
+    q: &[f64],
+    qd: &[f64],
+    qdd: &[f64],
+) -> &'a DVector<f64> {
+    check_len(model, "q", q);
+    check_len(model, "qd", qd);
+    check_len(model, "qdd", qdd);
+    forward_pass(model, data, q, qd, qdd, true);
+    let full = model.rotor_model == RotorModel::Full;
+    for i in 0..model.dof() {
+        let (ii, v) = (&data.inertia[i], data.v[i]);
+        data.f[i] = ii.mul_motion(&data.a[i]) + v.cross_force(&ii.mul_motion(&v));
+    }
+    for i in (0..model.dof()).rev() {
+        let b = &model.bodies[i];
+        let mut tau = data.s[i].dot(&data.f[i]);
+        let mut to_parent = data.x_up[i].inv_apply_force(&data.f[i]);
+        if b.rotor.is_some() {
+            let (ir, vr) = (&data.inertia_rot[i], data.v_rot[i]);
+            let f_rot = ir.mul_motion(&data.a_rot[i]) + vr.cross_force(&ir.mul_motion(&vr));
+            tau += if full {
+                data.s_rot[i].dot(&f_rot)
+            } else {
+                armature(model, i) * qdd[i]
+            };
+            to_parent += data.x_rot[i].inv_apply_force(&f_rot);
+        }
+        data.tau[i] = tau;
+        if let Some(p) = b.parent {
+            data.f[p] += to_parent;
+        }
+    }
+    &data.tau
+}
+
+/// Joint friction `B q̇ + B_c sign(q̇)` of the model's friction coefficients (N m), with
+/// `sign(0) = 0`.
+pub fn friction_torque(model: &Model, qd: &[f64]) -> DVector<f64> {
+    DVector::from_iterator(
+        model.dof(),
+        model
+            .bodies
+            .iter()
+            .zip(qd)
+            .map(|(b, &w)| b.friction.viscous * w + b.friction.coulomb * sign(w)),
+    )
+}
+
+/// `τ` needed at the joints including friction: [`rnea`] plus [`friction_torque`].
+pub fn rnea_with_friction(
+    model: &Model,
+    data: &mut Data,
+    q: &[f64],
+    qd: &[f64],
+    qdd: &[f64],
+) -> DVector<f64> {
+    rnea(model, data, q, qd, qdd) + friction_torque(model, qd)
+}
+
+/// `sign(x)` with `sign(0) = 0` (the regressor's Coulomb column).
+#[inline]
+pub fn sign(x: f64) -> f64 {
+    if x > 0.0 {
+        1.0
+    } else if x < 0.0 {
+        -1.0
+    } else {
+        0.0
+    }
+}

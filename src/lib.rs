@@ -1,0 +1,20 @@
+//! # physid
+//!
+//! Physically-consistent inertial parameter identification of robots, with ground truth.
+//! The method is Wensing, Kim & Slotine, "Linear Matrix Inequalities for Physically-Consistent
+//! Inertial Parameter Identification" (RA-L 2018).
+//!
+//! Data flows `io → model → spatial/dynamics → sim | ident → experiment → diagnose → io`:
+//! - [`spatial`]: Featherstone's spatial algebra and the inertial parameters `π` with their
+//!   consistency conditions;
+//! - [`model`]: the immutable robot model (tree, joints, rotors, friction, ellipsoids), the
+//!   built-in Cheetah-3 leg;
+//! - [`dynamics`]: RNEA, CRBA, forward dynamics, the regressor, energy and kinematics;
+//! - [`io`]: robot descriptions (URDF, TOML) in, MJCF/URDF out.
+#![warn(missing_docs)]
+
+pub mod dynamics;
+pub mod io;
+pub mod model;
+pub mod sim;
+pub mod spatial;

@@ -1,0 +1,284 @@
+//! Identities that the dynamics algorithms must satisfy, each checked against something
+//! independent: the regressor against RNEA, CRBA against RNEA columns, forward dynamics against
+//! RNEA, RNEA against energy (power balance, gravity as the gradient of potential energy),
+//! kinetic energy from body velocities against the mass matrix, and regressor columns against
+//! finite differences of RNEA in the parameters. Random trees with rotors, and the Cheetah leg.
+
+use nalgebra::{DMatrix, DVector};
+use physid::dynamics::{
+    self, crba, forward_dynamics, kinetic_energy, potential_energy, regressor, rnea, Data,
+};
+use physid::model::random::{random_state, random_tree};
+use physid::model::{cheetah3, Model, RotorModel};
+
+/// The models every identity is checked on.
+fn models() -> Vec<Model> {
+    let mut v = vec![
+        cheetah3::leg(),
+        cheetah3::leg().with_rotor_model(RotorModel::Reflected),
+        cheetah3::leg_with(&cheetah3::LegOptions {
+            rotors: false,
+            ..Default::default()
+        })
+        .unwrap(),
+    ];
+    for seed in 0..6 {
+        let n = 2 + (seed as usize * 3) % 7;
+        v.push(random_tree(seed, n));
+        v.push(random_tree(100 + seed, n).with_rotor_model(RotorModel::Reflected));
+    }
+    v
+}
+
+fn rel(a: &DVector<f64>, b: &DVector<f64>) -> f64 {
+    (a - b).norm() / (1.0 + b.norm())
+}
+
+#[test]
+fn regressor_times_parameters_equals_rnea_plus_friction() {
+    for (mi, m) in models().iter().enumerate() {
+        let mut d = Data::new(m);
+        let theta = m.parameters();
+        let mut y = DMatrix::zeros(m.dof(), theta.len());
+        for s in 0..20 {
+            let [q, qd, qdd] = random_state(1000 * mi as u64 + s, m.dof(), 3.0);
+            regressor(m, &mut d, &q, &qd, &qdd, &mut y);
+            let tau = dynamics::rnea_with_friction(m, &mut d, &q, &qd, &qdd);
+            let err = (&y * &theta - &tau).norm() / tau.norm();
+            assert!(err < 1e-10, "{}: relative error {err:e}", m.name);
+        }
+    }
+}
+
+#[test]
+fn regressor_columns_are_derivatives_of_rnea_in_the_parameters() {
+    // τ is linear in θ, so a central difference is exact up to round-off.
+    for m in models().iter().take(4) {
+        let mut d = Data::new(m);
+        let theta = m.parameters();
+        let [q, qd, qdd] = random_state(7, m.dof(), 2.0);
+        let mut y = DMatrix::zeros(m.dof(), theta.len());
+        regressor(m, &mut d, &q, &qd, &qdd, &mut y);
+        let h = 1e-3;
+        for c in 0..theta.len() {
+            let mut tp = theta.clone();
+            tp[c] += h;
+            let mut tm = theta.clone();
+            tm[c] -= h;
+            let (mp, mm) = (
+                m.with_parameters(&tp).unwrap(),
+                m.with_parameters(&tm).unwrap(),
+            );
+            let (mut dp, mut dm) = (Data::new(&mp), Data::new(&mm));
+            let fd = (dynamics::rnea_with_friction(&mp, &mut dp, &q, &qd, &qdd)
+                - dynamics::rnea_with_friction(&mm, &mut dm, &q, &qd, &qdd))
+                / (2.0 * h);
+            let col = y.column(c).into_owned();
+            assert!(
+                (&fd - &col).norm() < 1e-9 * (1.0 + col.norm()),
+                "{} column {c}: {fd} vs {col}",
+                m.name
+            );
+        }
+    }
+}
+
+#[test]
+fn mass_matrix_is_symmetric_positive_definite_and_matches_rnea_columns() {
+    for (mi, m) in models().iter().enumerate() {
+        let mut d = Data::new(m);
+        let n = m.dof();
+        let [q, _, _] = random_state(77 + mi as u64, n, 3.0);
+        let h = crba(m, &mut d, &q).clone();
+        assert!(
+            (&h - h.transpose()).norm() < 1e-14 * h.norm(),
+            "{}: H not symmetric",
+            m.name
+        );
+        assert!(
+            h.clone().cholesky().is_some(),
+            "{}: H not positive definite",
+            m.name
+        );
+        // Column j of H = τ(q, 0, e_j) − τ(q, 0, 0) without gravity.
+        let no_g = m.clone().with_gravity(nalgebra::Vector3::zeros());
+        let zero = vec![0.0; n];
+        for j in 0..n {
+            let mut e = zero.clone();
+            e[j] = 1.0;
+            let col = rnea(&no_g, &mut d, &q, &zero, &e).clone();
+            assert!(
+                (col - h.column(j)).norm() < 1e-12 * (1.0 + h.norm()),
+                "{}: column {j}",
+                m.name
+            );
+        }
+    }
+}
+
+#[test]
+fn forward_dynamics_inverts_rnea() {
+    for (mi, m) in models().iter().enumerate() {
+        let mut d = Data::new(m);
+        for s in 0..10 {
+            let [q, qd, qdd] = random_state(500 + 50 * mi as u64 + s, m.dof(), 3.0);
+            let tau = rnea(m, &mut d, &q, &qd, &qdd).clone();
+            let got = forward_dynamics(m, &mut d, &q, &qd, tau.as_slice())
+                .unwrap()
+                .clone();
+            let want = DVector::from_vec(qdd.clone());
+            assert!(rel(&got, &want) < 1e-9, "{}: {got} vs {want}", m.name);
+        }
+    }
+}
+
+#[test]
+fn kinetic_energy_from_body_velocities_equals_half_qd_h_qd() {
+    for (mi, m) in models().iter().enumerate() {
+        let mut d = Data::new(m);
+        let [q, qd, _] = random_state(900 + mi as u64, m.dof(), 3.0);
+        let t = kinetic_energy(m, &mut d, &q, &qd);
+        let h = crba(m, &mut d, &q).clone();
+        let v = DVector::from_vec(qd);
+        let t2 = 0.5 * v.dot(&(&h * &v));
+        assert!(
+            (t - t2).abs() < 1e-12 * (1.0 + t.abs()),
+            "{}: {t} vs {t2}",
+            m.name
+        );
+    }
+}
+
+/// Total energy along the curve q(t) = q + q̇ t + ½ q̈ t², q̇(t) = q̇ + q̈ t.
+fn energy_on_curve(m: &Model, d: &mut Data, q: &[f64], qd: &[f64], qdd: &[f64], t: f64) -> f64 {
+    let qt: Vec<f64> = (0..q.len())
+        .map(|i| q[i] + qd[i] * t + 0.5 * qdd[i] * t * t)
+        .collect();
+    let vt: Vec<f64> = (0..q.len()).map(|i| qd[i] + qdd[i] * t).collect();
+    kinetic_energy(m, d, &qt, &vt) + potential_energy(m, d, &qt)
+}
+
+#[test]
+fn power_balance_tau_dot_qd_equals_energy_rate() {
+    // For τ = ID(q, q̇, q̈) without friction, dE/dt = τ · q̇ exactly; checked by a central
+    // difference of E along the motion (truncation O(h²) with h = 1e-4 s).
+    for (mi, m) in models().iter().enumerate() {
+        let mut d = Data::new(m);
+        for s in 0..5 {
+            let [q, qd, qdd] = random_state(3000 + 10 * mi as u64 + s, m.dof(), 2.0);
+            let tau = rnea(m, &mut d, &q, &qd, &qdd).clone();
+            let power = tau.dot(&DVector::from_vec(qd.clone()));
+            let h = 1e-4;
+            let de = (energy_on_curve(m, &mut d, &q, &qd, &qdd, h)
+                - energy_on_curve(m, &mut d, &q, &qd, &qdd, -h))
+                / (2.0 * h);
+            let scale = 1.0 + tau.norm() * DVector::from_vec(qd.clone()).norm();
+            assert!(
+                (de - power).abs() < 1e-6 * scale,
+                "{}: dE/dt {de} vs τ·q̇ {power}",
+                m.name
+            );
+        }
+    }
+}
+
+#[test]
+fn gravity_torque_is_the_gradient_of_potential_energy() {
+    for (mi, m) in models().iter().enumerate() {
+        let mut d = Data::new(m);
+        let n = m.dof();
+        let [q, _, _] = random_state(4000 + mi as u64, n, 3.0);
+        let zero = vec![0.0; n];
+        let g = rnea(m, &mut d, &q, &zero, &zero).clone();
+        for i in 0..n {
+            let h = 1e-5;
+            let (mut qp, mut qm) = (q.clone(), q.clone());
+            qp[i] += h;
+            qm[i] -= h;
+            let du =
+                (potential_energy(m, &mut d, &qp) - potential_energy(m, &mut d, &qm)) / (2.0 * h);
+            assert!(
+                (du - g[i]).abs() < 1e-7 * (1.0 + g.norm()),
+                "{} joint {i}: {du} vs {}",
+                m.name,
+                g[i]
+            );
+        }
+    }
+}
+
+#[test]
+fn coriolis_matrix_satisfies_the_skew_symmetry_of_h_dot_minus_2c() {
+    // q̇ᵀ (Ḣ − 2C) q̇ = 0, i.e. q̇ · (C q̇) = ½ q̇ᵀ Ḣ q̇ with Ḣ by central differences.
+    for (mi, m) in models().iter().enumerate() {
+        let mut d = Data::new(m);
+        let n = m.dof();
+        let [q, qd, _] = random_state(5000 + mi as u64, n, 2.0);
+        let zero = vec![0.0; n];
+        let no_g = m.clone().with_gravity(nalgebra::Vector3::zeros());
+        let cqd = rnea(&no_g, &mut d, &q, &qd, &zero).clone();
+        let h = 1e-5;
+        let shift = |s: f64| -> Vec<f64> { q.iter().zip(&qd).map(|(a, b)| a + s * b).collect() };
+        let hd =
+            (crba(m, &mut d, &shift(h)).clone() - crba(m, &mut d, &shift(-h)).clone()) / (2.0 * h);
+        let v = DVector::from_vec(qd.clone());
+        let lhs = v.dot(&cqd);
+        let rhs = 0.5 * v.dot(&(&hd * &v));
+        assert!(
+            (lhs - rhs).abs() < 1e-6 * (1.0 + lhs.abs()),
+            "{}: {lhs} vs {rhs}",
+            m.name
+        );
+    }
+}
+
+#[test]
+fn frictionless_passive_simulation_conserves_energy() {
+    // RK4 at 0.5 ms for 2 s: the relative energy drift must stay below 1e-6 (it is O(dt⁴)).
+    let m = cheetah3::leg_with(&cheetah3::LegOptions {
+        friction: [Default::default(); 3],
+        ..Default::default()
+    })
+    .unwrap();
+    let mut d = Data::new(&m);
+    let (mut q, mut qd) = (vec![0.8, -1.0, 1.9], vec![1.0, -2.0, 3.0]);
+    let e0 = kinetic_energy(&m, &mut d, &q, &qd) + potential_energy(&m, &mut d, &q);
+    let zero = DVector::zeros(3);
+    let mut tau = |_t: f64, _q: &[f64], _qd: &[f64]| zero.clone();
+    let dt = 5e-4;
+    let mut worst: f64 = 0.0;
+    let scale = kinetic_energy(&m, &mut d, &q, &qd) + 10.0;
+    for k in 0..4000 {
+        physid::sim::rk4_step(&m, &mut d, k as f64 * dt, &mut q, &mut qd, dt, &mut tau).unwrap();
+        let e = kinetic_energy(&m, &mut d, &q, &qd) + potential_energy(&m, &mut d, &q);
+        worst = worst.max((e - e0).abs() / scale);
+    }
+    assert!(worst < 1e-6, "energy drift {worst:e}");
+    assert!(
+        qd.iter().any(|v| v.abs() > 0.5),
+        "the leg should still be moving"
+    );
+}
+
+#[test]
+fn rotor_gyroscopic_coupling_is_what_the_reflected_model_drops() {
+    // With rotors, the full and reflected models share the armature diagonal term but differ
+    // off the diagonal by the rotor cross terms N S_rotᵀ I_rot X_rot S_j; for the Cheetah leg
+    // those are of order N I_axis ≈ 10 × 5e-4 kg m².
+    let full = cheetah3::leg();
+    let refl = cheetah3::leg().with_rotor_model(RotorModel::Reflected);
+    let q = [0.3, -0.7, 1.4];
+    let hf = crba(&full, &mut Data::new(&full), &q).clone();
+    let hr = crba(&refl, &mut Data::new(&refl), &q).clone();
+    let diff = &hf - &hr;
+    // Knee rotor sits on the thigh: its coupling with the hip joint is N I_axis (both about y).
+    let r = full.bodies[2].rotor.as_ref().unwrap();
+    let i_axis = r.axis.dot(&(r.inertia.ibar() * r.axis));
+    assert!(
+        (diff[(2, 1)] - r.gear_ratio * i_axis).abs() < 1e-12,
+        "{diff}"
+    );
+    for i in 0..3 {
+        assert!(diff[(i, i)].abs() < 0.2 * hf[(i, i)], "{diff}");
+    }
+}
