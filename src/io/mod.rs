@@ -1,1 +1,100 @@
-//! File formats.
+//! File formats: robot descriptions in (URDF, TOML), models out (MJCF, URDF), and the one
+//! place that touches the file system. Every error names the file and the element at fault;
+//! every file is written atomically (temporary file, then rename).
+
+pub mod mjcf;
+pub mod robot_toml;
+pub mod urdf;
+
+use crate::model::{cheetah3, Model, ModelError};
+use std::path::{Path, PathBuf};
+
+/// An input or output failure, naming the file and what in it is wrong.
+#[derive(Debug, thiserror::Error)]
+pub enum IoError {
+    /// The file could not be read or written.
+    #[error("{path}: {source}")]
+    Fs {
+        /// The file.
+        path: PathBuf,
+        /// The operating-system error.
+        source: std::io::Error,
+    },
+    /// The file is not valid in its format (XML, TOML).
+    #[error("{path}: {message}")]
+    Parse {
+        /// The file.
+        path: PathBuf,
+        /// What the parser reported, with line and key where known.
+        message: String,
+    },
+    /// The description is well formed but not a valid robot (missing link, loop, bad value).
+    #[error("{path}: {message}")]
+    Invalid {
+        /// The file.
+        path: PathBuf,
+        /// What is wrong, naming the element.
+        message: String,
+    },
+    /// The model built from the file is not valid.
+    #[error("{path}: {source}")]
+    Model {
+        /// The file.
+        path: PathBuf,
+        /// The model error, naming the body, joint or rotor.
+        source: ModelError,
+    },
+    /// An unknown robot name.
+    #[error(
+        "unknown robot '{0}': give 'cheetah3', a .urdf file or a .toml file with a [robot] table"
+    )]
+    UnknownRobot(String),
+}
+
+impl IoError {
+    pub(crate) fn invalid(path: &Path, message: impl Into<String>) -> Self {
+        IoError::Invalid {
+            path: path.to_path_buf(),
+            message: message.into(),
+        }
+    }
+}
+
+/// Reads a whole file, naming it on failure.
+pub fn read_to_string(path: &Path) -> Result<String, IoError> {
+    std::fs::read_to_string(path).map_err(|source| IoError::Fs {
+        path: path.to_path_buf(),
+        source,
+    })
+}
+
+/// Writes `contents` to `path` atomically: a temporary file in the same directory, then a rename,
+/// so a reader never sees half a file and a failure leaves any old file intact.
+pub fn write_atomic(path: &Path, contents: &[u8]) -> Result<(), IoError> {
+    use std::io::Write;
+    let fs_err = |source| IoError::Fs {
+        path: path.to_path_buf(),
+        source,
+    };
+    let dir = match path.parent() {
+        Some(d) if !d.as_os_str().is_empty() => d.to_path_buf(),
+        _ => PathBuf::from("."),
+    };
+    let mut tmp = tempfile::NamedTempFile::new_in(&dir).map_err(fs_err)?;
+    tmp.write_all(contents).map_err(fs_err)?;
+    tmp.as_file().sync_all().map_err(fs_err)?;
+    tmp.persist(path).map_err(|e| fs_err(e.error))?;
+    Ok(())
+}
+
+/// Resolves a `--robot` argument: `cheetah3` (the built-in leg), a `.urdf` file, or a `.toml`
+/// file whose `[robot]` table describes the robot (see [`robot_toml`]).
+pub fn load_robot(arg: &str) -> Result<Model, IoError> {
+    let path = Path::new(arg);
+    match path.extension().and_then(|e| e.to_str()) {
+        _ if arg == "cheetah3" => Ok(cheetah3::leg()),
+        Some("urdf") => urdf::load(path, &robot_toml::RobotExtras::default(), path.parent()),
+        Some("toml") => robot_toml::load(path),
+        _ => Err(IoError::UnknownRobot(arg.to_string())),
+    }
+}

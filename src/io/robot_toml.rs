@@ -1,0 +1,512 @@
+//! The `[robot]` table of a physid TOML file (a scenario or a robot file). Unknown keys are
+//! errors. Three ways to give the robot, exactly one per file:
+//!
+//! ```toml
+//! [robot]
+//! builtin = "cheetah3"          # the built-in leg, with optional `truth`, `gear_ratios`,
+//!                               # `rotors = false` for the link-only leg
+//! # or
+//! urdf = "arm.urdf"             # relative to this file; sidecar tables below add to it
+//! # or
+//! name = "my_leg"               # an explicit tree: [[robot.body]] tables, parents first
+//! ```
+//!
+//! Shared keys (units): `gravity = [x, y, z]` (m/s², base frame), `rotor_model = "full" |
+//! "reflected"`, `[[robot.rotor]]` with `joint = "name"` (sidecar rotors), `[[robot.friction]]`
+//! with `joint`, `viscous` (N m s/rad), `coulomb` (N m), `[[robot.ellipsoid]]` with `body` (a
+//! body or rotor name), `center` (m), `semi_axes` (m), optional `rpy` (rad).
+//!
+//! A `[[robot.body]]` has `name`, `joint`, `parent` (`"base"` or an earlier body), `type`
+//! (`"revolute"` | `"prismatic"`), `axis`, `origin = { xyz (m), rpy (rad) }` (the joint frame in
+//! the parent's frame at q = 0, URDF convention), `inertial`, and optional `ellipsoid`,
+//! `rotor`, `friction`, `limits = { lower, upper (rad or m), velocity (rad/s), effort (N m) }`.
+//!
+//! An `inertial` is either `pi = [m, hx, hy, hz, Ixx, Ixy, Ixz, Iyy, Iyz, Izz]` (the paper's
+//! order, kg, kg m, kg m², about the body frame origin) or `mass` (kg), `com` (m) and
+//! `inertia = [Ixx, Ixy, Ixz, Iyy, Iyz, Izz]` (kg m², about the CoM, body axes); either may add
+//! `thicken = d` (m) to thicken the mass distribution by an rms extent `d` on every axis.
+//! A `rotor` has optional `name`, `gear_ratio`, `origin` (in the parent body frame), optional
+//! `axis` (rotor frame, default the joint axis), `inertial` (rotor frame) and `ellipsoid`.
+
+use super::IoError;
+use crate::model::cheetah3::{self, LegOptions, Truth};
+use crate::model::{Body, Joint, JointFriction, JointLimits, Model, RotorModel, STANDARD_GRAVITY};
+use crate::spatial::{rpy_to_matrix, Ellipsoid, InertialParams, Transform};
+use nalgebra::{Matrix3, Vector3};
+use serde::Deserialize;
+use std::path::{Path, PathBuf};
+
+/// A frame placement: `xyz` (m) and URDF roll-pitch-yaw `rpy` (rad).
+#[derive(Clone, Debug, Default, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct OriginSpec {
+    /// Position (m).
+    #[serde(default)]
+    pub xyz: [f64; 3],
+    /// Roll, pitch, yaw (rad).
+    #[serde(default)]
+    pub rpy: [f64; 3],
+}
+
+impl OriginSpec {
+    fn transform(&self) -> Transform {
+        Transform::from_pose(
+            &rpy_to_matrix(&Vector3::from(self.rpy)),
+            &Vector3::from(self.xyz),
+        )
+    }
+}
+
+/// Inertial parameters, see the module docs.
+#[derive(Clone, Debug, Default, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct InertialSpec {
+    /// The ten parameters in the paper's order.
+    pub pi: Option<[f64; 10]>,
+    /// Mass (kg).
+    pub mass: Option<f64>,
+    /// Centre of mass (m).
+    pub com: Option<[f64; 3]>,
+    /// `[Ixx, Ixy, Ixz, Iyy, Iyz, Izz]` about the CoM (kg m²).
+    pub inertia: Option<[f64; 6]>,
+    /// Added rms extent (m).
+    pub thicken: Option<f64>,
+}
+
+impl InertialSpec {
+    fn params(&self, what: &str) -> Result<InertialParams, String> {
+        let p = match (self.pi, self.mass, self.com, self.inertia) {
+            (Some(pi), None, None, None) => {
+                InertialParams::from_slice(&pi).map_err(|e| format!("{what}.inertial.pi: {e}"))?
+            }
+            (None, Some(m), Some(c), Some(i)) => {
+                let ic = Matrix3::new(i[0], i[1], i[2], i[1], i[3], i[4], i[2], i[4], i[5]);
+                InertialParams::from_mass_com_inertia(m, &Vector3::from(c), &ic)
+            }
+            _ => {
+                return Err(format!(
+                    "{what}.inertial: give either `pi` or all of `mass`, `com`, `inertia`"
+                ))
+            }
+        };
+        match self.thicken {
+            Some(d) if !(d.is_finite() && d >= 0.0) => {
+                Err(format!("{what}.inertial.thicken: {d} m must be >= 0"))
+            }
+            Some(d) => Ok(p.thickened(d)),
+            None => Ok(p),
+        }
+    }
+}
+
+/// An ellipsoid in a body frame.
+#[derive(Clone, Debug, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct EllipsoidSpec {
+    /// Body or rotor name (sidecar form only).
+    pub body: Option<String>,
+    /// Centre (m).
+    pub center: [f64; 3],
+    /// Semi-axes (m), along the axes rotated by `rpy`.
+    pub semi_axes: [f64; 3],
+    /// Orientation of the semi-axes (rad).
+    #[serde(default)]
+    pub rpy: [f64; 3],
+}
+
+impl EllipsoidSpec {
+    fn ellipsoid(&self, what: &str) -> Result<Ellipsoid, String> {
+        if self.semi_axes.iter().any(|a| !(a.is_finite() && *a > 0.0)) {
+            return Err(format!(
+                "{what}.ellipsoid.semi_axes: {:?} must all be positive",
+                self.semi_axes
+            ));
+        }
+        let r = rpy_to_matrix(&Vector3::from(self.rpy));
+        let a = Vector3::from(self.semi_axes);
+        let qs = r * Matrix3::from_diagonal(&a.component_mul(&a)) * r.transpose();
+        Ok(Ellipsoid {
+            center: Vector3::from(self.center),
+            qs,
+        })
+    }
+}
+
+/// A rotor driven by a joint.
+#[derive(Clone, Debug, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct RotorSpec {
+    /// The driving joint (sidecar form only).
+    pub joint: Option<String>,
+    /// Rotor name (default `<joint>_rotor`).
+    pub name: Option<String>,
+    /// Gear ratio N.
+    pub gear_ratio: f64,
+    /// Rotor frame in the parent body's frame.
+    #[serde(default)]
+    pub origin: OriginSpec,
+    /// Spin axis in the rotor frame (default: the joint axis).
+    pub axis: Option<[f64; 3]>,
+    /// Rotor inertial parameters, rotor frame.
+    pub inertial: InertialSpec,
+    /// Bounding ellipsoid, rotor frame.
+    pub ellipsoid: Option<EllipsoidSpec>,
+}
+
+/// Friction of one joint (sidecar form).
+#[derive(Clone, Debug, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct FrictionSpec {
+    /// Joint name.
+    pub joint: String,
+    /// Viscous coefficient (N m s/rad).
+    #[serde(default)]
+    pub viscous: f64,
+    /// Coulomb coefficient (N m).
+    #[serde(default)]
+    pub coulomb: f64,
+}
+
+/// One body of an explicit tree.
+#[derive(Clone, Debug, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct BodySpec {
+    /// Body name.
+    pub name: String,
+    /// Joint name.
+    pub joint: String,
+    /// `"base"` or the name of an earlier body.
+    pub parent: String,
+    /// `"revolute"` or `"prismatic"`.
+    #[serde(rename = "type")]
+    pub joint_type: String,
+    /// Joint axis in the joint frame.
+    pub axis: [f64; 3],
+    /// Joint frame in the parent frame at q = 0.
+    #[serde(default)]
+    pub origin: OriginSpec,
+    /// Inertial parameters in the joint frame.
+    pub inertial: InertialSpec,
+    /// Bounding ellipsoid.
+    pub ellipsoid: Option<EllipsoidSpec>,
+    /// Rotor driven by this joint.
+    pub rotor: Option<RotorSpec>,
+    /// Joint friction.
+    pub friction: Option<JointFriction>,
+    /// Joint limits.
+    pub limits: Option<LimitsSpec>,
+}
+
+/// Joint limits; missing entries are unlimited.
+#[derive(Clone, Debug, Default, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct LimitsSpec {
+    /// Lower position limit (rad or m).
+    pub lower: Option<f64>,
+    /// Upper position limit (rad or m).
+    pub upper: Option<f64>,
+    /// Speed limit (rad/s or m/s).
+    pub velocity: Option<f64>,
+    /// Torque limit (N m or N).
+    pub effort: Option<f64>,
+}
+
+/// The `[robot]` table.
+#[derive(Clone, Debug, Default, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct RobotSpec {
+    /// `"cheetah3"`.
+    pub builtin: Option<String>,
+    /// A URDF file, relative to the TOML file.
+    pub urdf: Option<PathBuf>,
+    /// Robot name (explicit trees).
+    pub name: Option<String>,
+    /// Built-in leg: ground truth (`{ kind = "thickened", d = 0.01 }` or `{ kind = "published" }`).
+    pub truth: Option<Truth>,
+    /// Built-in leg: gear ratios (ab/ad, hip, knee).
+    pub gear_ratios: Option<[f64; 3]>,
+    /// Built-in leg: include the rotors (default true).
+    pub rotors: Option<bool>,
+    /// Explicit tree.
+    #[serde(default)]
+    pub body: Vec<BodySpec>,
+    /// Gravity (m/s², base frame).
+    pub gravity: Option<[f64; 3]>,
+    /// Rotor treatment.
+    pub rotor_model: Option<RotorModel>,
+    /// Sidecar rotors (`joint` names the driving joint).
+    #[serde(default)]
+    pub rotor: Vec<RotorSpec>,
+    /// Friction per joint.
+    #[serde(default)]
+    pub friction: Vec<FrictionSpec>,
+    /// Bounding ellipsoids by body or rotor name.
+    #[serde(default)]
+    pub ellipsoid: Vec<EllipsoidSpec>,
+}
+
+impl RobotSpec {
+    /// The keys that apply to any robot.
+    pub fn extras(&self) -> RobotExtras {
+        RobotExtras {
+            gravity: self.gravity,
+            rotor_model: self.rotor_model,
+            rotor: self.rotor.clone(),
+            friction: self.friction.clone(),
+            ellipsoid: self.ellipsoid.clone(),
+        }
+    }
+}
+
+/// Additions that apply to any robot: sidecar rotors, friction, ellipsoids, gravity, rotor model.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct RobotExtras {
+    /// Gravity (m/s², base frame).
+    pub gravity: Option<[f64; 3]>,
+    /// Rotor treatment.
+    pub rotor_model: Option<RotorModel>,
+    /// Sidecar rotors (`joint` names the driving joint).
+    pub rotor: Vec<RotorSpec>,
+    /// Friction per joint.
+    pub friction: Vec<FrictionSpec>,
+    /// Bounding ellipsoids by body or rotor name.
+    pub ellipsoid: Vec<EllipsoidSpec>,
+}
+
+fn rotor_from_spec(
+    spec: &RotorSpec,
+    joint_name: &str,
+    joint_axis: Vector3<f64>,
+    x_parent: &Transform,
+) -> Result<crate::model::Rotor, String> {
+    let name = spec
+        .name
+        .clone()
+        .unwrap_or_else(|| format!("{joint_name}_rotor"));
+    let what = format!("rotor '{name}'");
+    Ok(crate::model::Rotor {
+        x_rot: spec.origin.transform().compose(x_parent),
+        axis: spec.axis.map_or(joint_axis, Vector3::from),
+        gear_ratio: spec.gear_ratio,
+        inertia: spec.inertial.params(&what)?,
+        bounding: spec
+            .ellipsoid
+            .as_ref()
+            .map(|e| e.ellipsoid(&what))
+            .transpose()?,
+        name,
+    })
+}
+
+impl RobotExtras {
+    /// Applies sidecar rotors, friction and ellipsoids to `bodies`. `x_parent_link[i]` is the
+    /// transform from body `i`'s parent body frame to its URDF parent link frame (identity for
+    /// explicit trees), so sidecar rotor origins are given relative to the parent link.
+    pub fn apply(
+        &self,
+        bodies: &mut [Body],
+        x_parent_link: &[Transform],
+        path: &Path,
+    ) -> Result<(), IoError> {
+        let find = |bodies: &[Body], joint: &str, what: &str| {
+            bodies
+                .iter()
+                .position(|b| b.joint_name == joint)
+                .ok_or_else(|| {
+                    IoError::invalid(
+                        path,
+                        format!("{what} names joint '{joint}', which the robot does not have"),
+                    )
+                })
+        };
+        for r in &self.rotor {
+            let joint = r.joint.as_deref().ok_or_else(|| {
+                IoError::invalid(path, "robot.rotor: each sidecar rotor needs `joint`")
+            })?;
+            let k = find(bodies, joint, "robot.rotor")?;
+            if bodies[k].rotor.is_some() {
+                return Err(IoError::invalid(
+                    path,
+                    format!("robot.rotor: joint '{joint}' already has a rotor"),
+                ));
+            }
+            let axis = bodies[k].joint.axis();
+            bodies[k].rotor = Some(
+                rotor_from_spec(r, joint, axis, &x_parent_link[k])
+                    .map_err(|m| IoError::invalid(path, m))?,
+            );
+        }
+        for f in &self.friction {
+            let k = find(bodies, &f.joint, "robot.friction")?;
+            bodies[k].friction = JointFriction {
+                viscous: f.viscous,
+                coulomb: f.coulomb,
+            };
+        }
+        for e in &self.ellipsoid {
+            let name = e.body.as_deref().ok_or_else(|| {
+                IoError::invalid(path, "robot.ellipsoid: each entry needs `body`")
+            })?;
+            let ell = e
+                .ellipsoid(&format!("ellipsoid of '{name}'"))
+                .map_err(|m| IoError::invalid(path, m))?;
+            if let Some(b) = bodies.iter_mut().find(|b| b.name == name) {
+                b.bounding = Some(ell);
+            } else if let Some(r) = bodies
+                .iter_mut()
+                .filter_map(|b| b.rotor.as_mut())
+                .find(|r| r.name == name)
+            {
+                r.bounding = Some(ell);
+            } else {
+                return Err(IoError::invalid(
+                    path,
+                    format!("robot.ellipsoid names '{name}', which is neither a body nor a rotor"),
+                ));
+            }
+        }
+        Ok(())
+    }
+}
+
+/// A TOML error with the file name, line and column.
+pub(crate) fn toml_error(path: &Path, e: toml::de::Error) -> IoError {
+    IoError::Parse {
+        path: path.to_path_buf(),
+        message: e.to_string().trim_end().to_string(),
+    }
+}
+
+/// Loads the `[robot]` table of a TOML file; other top-level tables (a scenario's) are ignored
+/// here and checked by their own readers.
+pub fn load(path: &Path) -> Result<Model, IoError> {
+    let text = super::read_to_string(path)?;
+    #[derive(Deserialize)]
+    struct Doc {
+        robot: Option<RobotSpec>,
+    }
+    let doc: Doc = toml::from_str(&text).map_err(|e| toml_error(path, e))?;
+    let spec = doc
+        .robot
+        .ok_or_else(|| IoError::invalid(path, "no [robot] table"))?;
+    from_spec(&spec, path)
+}
+
+/// Builds the model a `[robot]` table describes; `path` is the TOML file (for relative paths
+/// and error messages).
+pub fn from_spec(spec: &RobotSpec, path: &Path) -> Result<Model, IoError> {
+    let model_err = |source| IoError::Model {
+        path: path.to_path_buf(),
+        source,
+    };
+    let extras = spec.extras();
+    let ways = [
+        spec.builtin.is_some(),
+        spec.urdf.is_some(),
+        !spec.body.is_empty(),
+    ];
+    if ways.iter().filter(|w| **w).count() != 1 {
+        return Err(IoError::invalid(
+            path,
+            "robot: give exactly one of `builtin`, `urdf` or [[robot.body]] tables",
+        ));
+    }
+    if spec.builtin.is_none()
+        && (spec.truth.is_some() || spec.gear_ratios.is_some() || spec.rotors.is_some())
+    {
+        return Err(IoError::invalid(
+            path,
+            "robot: `truth`, `gear_ratios` and `rotors` apply to the built-in leg only",
+        ));
+    }
+    let model = if let Some(b) = &spec.builtin {
+        if b != "cheetah3" {
+            return Err(IoError::invalid(
+                path,
+                format!("robot.builtin: unknown robot '{b}' (known: cheetah3)"),
+            ));
+        }
+        let mut o = LegOptions::default();
+        if let Some(t) = spec.truth {
+            o.truth = t;
+        }
+        if let Some(g) = spec.gear_ratios {
+            o.gear_ratios = g;
+        }
+        if let Some(r) = spec.rotors {
+            o.rotors = r;
+        }
+        let m = cheetah3::leg_with(&o).map_err(model_err)?;
+        let mut bodies = m.bodies.clone();
+        let ident = vec![Transform::identity(); bodies.len()];
+        extras.apply(&mut bodies, &ident, path)?;
+        let gravity = extras.gravity.map_or(m.gravity, Vector3::from);
+        Model::new(m.name.clone(), bodies, gravity).map_err(model_err)?
+    } else if let Some(u) = &spec.urdf {
+        let upath = path.parent().unwrap_or(Path::new(".")).join(u);
+        return super::urdf::load(&upath, &extras, upath.parent());
+    } else {
+        let mut bodies: Vec<Body> = vec![];
+        for (k, b) in spec.body.iter().enumerate() {
+            let what = format!("robot.body[{k}] '{}'", b.name);
+            let e = |m: String| IoError::invalid(path, m);
+            let parent = match b.parent.as_str() {
+                "base" => None,
+                p => Some(bodies.iter().position(|x| x.name == p).ok_or_else(|| {
+                    e(format!(
+                        "{what}: parent '{p}' is not 'base' or an earlier body"
+                    ))
+                })?),
+            };
+            let axis = Vector3::from(b.axis);
+            let joint = match b.joint_type.as_str() {
+                "revolute" => Joint::Revolute { axis },
+                "prismatic" => Joint::Prismatic { axis },
+                t => {
+                    return Err(e(format!(
+                        "{what}: type '{t}' is not 'revolute' or 'prismatic'"
+                    )))
+                }
+            };
+            let l = b.limits.clone().unwrap_or_default();
+            let d = JointLimits::default();
+            bodies.push(Body {
+                name: b.name.clone(),
+                joint_name: b.joint.clone(),
+                parent,
+                joint,
+                x_tree: b.origin.transform(),
+                inertia: b.inertial.params(&what).map_err(e)?,
+                bounding: b
+                    .ellipsoid
+                    .as_ref()
+                    .map(|x| x.ellipsoid(&what))
+                    .transpose()
+                    .map_err(e)?,
+                rotor: b
+                    .rotor
+                    .as_ref()
+                    .map(|r| rotor_from_spec(r, &b.joint, axis, &Transform::identity()))
+                    .transpose()
+                    .map_err(e)?,
+                friction: b.friction.unwrap_or_default(),
+                limits: JointLimits {
+                    lower: l.lower.unwrap_or(d.lower),
+                    upper: l.upper.unwrap_or(d.upper),
+                    velocity: l.velocity.unwrap_or(d.velocity),
+                    effort: l.effort.unwrap_or(d.effort),
+                },
+            });
+        }
+        let ident = vec![Transform::identity(); bodies.len()];
+        extras.apply(&mut bodies, &ident, path)?;
+        let gravity = extras
+            .gravity
+            .map_or(Vector3::new(0.0, 0.0, -STANDARD_GRAVITY), Vector3::from);
+        let name = spec.name.clone().unwrap_or_else(|| "robot".into());
+        Model::new(name, bodies, gravity).map_err(model_err)?
+    };
+    let model = model.with_rotor_model(extras.rotor_model.unwrap_or_default());
+    model.check_physical().map_err(model_err)?;
+    Ok(model)
+}

@@ -1,0 +1,470 @@
+//! URDF import (urdf-rs) for fixed-base robots, and export with inertial tags.
+//!
+//! Import rules:
+//! - the root link and everything fixed to it form the static base; its inertia is ignored;
+//! - `fixed` joints are merged: the child's inertia is added to its parent body, expressed in
+//!   the parent's frame; `revolute`, `continuous` and `prismatic` joints become bodies;
+//!   `floating` and `planar` joints are rejected (physid models fixed-base robots);
+//! - a joint with `<mimic>` whose child is a leaf link on the parent of the mimicked joint's
+//!   body is a **rotor** of that joint, with gear ratio = multiplier (this is how physid exports
+//!   rotors, so URDF round-trips); rotors can also come from a scenario's sidecar (TOML);
+//! - `<dynamics damping friction>` become viscous and Coulomb friction;
+//! - a link without `<inertial>` is massless (urdf-rs gives it zero mass); a moving joint whose
+//!   whole subtree is massless is an error (its mass matrix would be singular);
+//! - a joint limit of `effort = 0` or `velocity = 0` means "not given" (infinite);
+//! - where an element appears twice (for example two `<origin>` in one joint), urdfdom and
+//!   so pinocchio and ROS use the first; physid does the same and reports a warning.
+
+use super::robot_toml::RobotExtras;
+use super::IoError;
+use crate::model::{Body, Joint, JointFriction, JointLimits, Model, Rotor, STANDARD_GRAVITY};
+use crate::spatial::{rpy_to_matrix, InertialParams, Transform};
+use nalgebra::{Matrix3, Vector3};
+use std::collections::HashMap;
+use std::path::Path;
+
+/// Loads a URDF file, applying the sidecar `extras` (rotors, friction, ellipsoids).
+/// `base_dir` resolves nothing yet (meshes are not read) and is kept for symmetry.
+pub fn load(path: &Path, extras: &RobotExtras, _base_dir: Option<&Path>) -> Result<Model, IoError> {
+    let xml = super::read_to_string(path)?;
+    let (model, _warnings) = from_str(&xml, path, extras)?;
+    Ok(model)
+}
+
+/// The inertial parameters of a URDF `<inertial>` in its link frame.
+fn link_params(l: &urdf_rs::Link) -> InertialParams {
+    let i = &l.inertial;
+    let rot = rpy_to_matrix(&Vector3::from(i.origin.rpy.0));
+    let t = &i.inertia;
+    let ic_local = Matrix3::new(
+        t.ixx, t.ixy, t.ixz, t.ixy, t.iyy, t.iyz, t.ixz, t.iyz, t.izz,
+    );
+    let ic = rot * ic_local * rot.transpose();
+    InertialParams::from_mass_com_inertia(i.mass.value, &Vector3::from(i.origin.xyz.0), &ic)
+}
+
+fn origin_transform(p: &urdf_rs::Pose) -> Transform {
+    Transform::from_pose(
+        &rpy_to_matrix(&Vector3::from(p.rpy.0)),
+        &Vector3::from(p.xyz.0),
+    )
+}
+
+/// Joints in which an element that URDF allows once appears more than once.
+fn duplicate_elements(xml: &str) -> Vec<String> {
+    let mut out = vec![];
+    let mut rest = xml;
+    while let Some(start) = rest.find("<joint") {
+        let block = &rest[start..];
+        let end = block.find("</joint>").map_or(block.len(), |e| e + 8);
+        let body = &block[..end];
+        let name = body
+            .split("name=\"")
+            .nth(1)
+            .and_then(|s| s.split('"').next())
+            .unwrap_or("?")
+            .to_string();
+        for tag in ["<origin", "<axis", "<limit", "<dynamics", "<mimic"] {
+            if body.matches(tag).count() > 1 {
+                out.push(format!(
+                    "joint '{name}' has more than one {tag}>; the first is used"
+                ));
+            }
+        }
+        rest = &block[end.min(block.len())..];
+        if end == 0 {
+            break;
+        }
+    }
+    out
+}
+
+/// Keeps only the first `<origin>` of each joint, as urdfdom does, before urdf-rs parses it.
+fn first_origin_only(xml: &str) -> String {
+    let mut out = String::with_capacity(xml.len());
+    let mut rest = xml;
+    while let Some(start) = rest.find("<joint") {
+        out.push_str(&rest[..start]);
+        let block = &rest[start..];
+        let end = block.find("</joint>").map_or(block.len(), |e| e + 8);
+        let mut body = block[..end].to_string();
+        if let Some(first) = body.find("<origin") {
+            let after = first + 7;
+            while let Some(k) = body[after..].find("<origin") {
+                let s = after + k;
+                let e = body[s..].find("/>").map_or(body.len(), |e| s + e + 2);
+                body.replace_range(s..e, "");
+            }
+        }
+        out.push_str(&body);
+        rest = &block[end..];
+    }
+    out.push_str(rest);
+    out
+}
+
+/// Parses URDF text. Returns the model and warnings (e.g. duplicate elements).
+pub fn from_str(
+    xml: &str,
+    path: &Path,
+    extras: &RobotExtras,
+) -> Result<(Model, Vec<String>), IoError> {
+    let warnings = duplicate_elements(xml);
+    let robot = urdf_rs::read_from_string(&first_origin_only(xml)).map_err(|e| IoError::Parse {
+        path: path.to_path_buf(),
+        message: format!("not a valid URDF: {e}"),
+    })?;
+    let bad = |m: String| IoError::invalid(path, m);
+
+    let mut link_idx = HashMap::new();
+    for (i, l) in robot.links.iter().enumerate() {
+        if link_idx.insert(l.name.as_str(), i).is_some() {
+            return Err(bad(format!("link '{}' is defined twice", l.name)));
+        }
+        let m = l.inertial.mass.value;
+        if !m.is_finite() || m < 0.0 {
+            return Err(bad(format!(
+                "link '{}': mass {m} kg is not a finite non-negative number",
+                l.name
+            )));
+        }
+    }
+    // Each link has at most one parent joint; every joint names existing links.
+    let mut parent_joint: HashMap<&str, usize> = HashMap::new();
+    let mut children: HashMap<&str, Vec<usize>> = HashMap::new();
+    for (j, jt) in robot.joints.iter().enumerate() {
+        for (role, l) in [("parent", &jt.parent.link), ("child", &jt.child.link)] {
+            if !link_idx.contains_key(l.as_str()) {
+                return Err(bad(format!(
+                    "joint '{}' names {role} link '{l}', which is not defined",
+                    jt.name
+                )));
+            }
+        }
+        if let Some(&other) = parent_joint.get(jt.child.link.as_str()) {
+            return Err(bad(format!(
+                "link '{}' is the child of two joints ('{}' and '{}'): a closed loop, but URDF describes a tree",
+                jt.child.link, robot.joints[other].name, jt.name
+            )));
+        }
+        parent_joint.insert(&jt.child.link, j);
+        children.entry(&jt.parent.link).or_default().push(j);
+    }
+    let roots: Vec<&str> = robot
+        .links
+        .iter()
+        .map(|l| l.name.as_str())
+        .filter(|l| !parent_joint.contains_key(l))
+        .collect();
+    let root = match roots.as_slice() {
+        [r] => *r,
+        [] => {
+            return Err(bad(
+                "no root link: the joints form a closed loop".to_string()
+            ))
+        }
+        many => {
+            return Err(bad(format!(
+                "several root links ({}): the robot is not one connected tree",
+                many.join(", ")
+            )))
+        }
+    };
+
+    // Joints in file order, each once its parent link is placed (a topological order that keeps
+    // the file's order where it already lists parents first). attach[link] = (body index or None
+    // for the base, link_X_body).
+    let mut attach: HashMap<&str, (Option<usize>, Transform)> = HashMap::new();
+    attach.insert(root, (None, Transform::identity()));
+    let mut bodies: Vec<Body> = vec![];
+    let mut body_parent_link_x: Vec<Transform> = vec![]; // parent link frame from parent body frame
+    let mut mimics = vec![];
+    let mut done = vec![false; robot.joints.len()];
+    let mut progress = true;
+    while progress {
+        progress = false;
+        for (j, jt) in robot.joints.iter().enumerate() {
+            let Some(&(pb, x_p)) = attach.get(jt.parent.link.as_str()).filter(|_| !done[j]) else {
+                continue;
+            };
+            done[j] = true;
+            progress = true;
+            let child = jt.child.link.as_str();
+            let x_origin = origin_transform(&jt.origin).compose(&x_p);
+            let child_params = link_params(&robot.links[link_idx[child]]);
+            let axis = Vector3::from(jt.axis.xyz.0);
+            use urdf_rs::JointType as T;
+            let joint = match jt.joint_type {
+                T::Fixed => {
+                    if let Some(b) = pb {
+                        let merged = child_params.transformed(&x_origin.inverse());
+                        bodies[b].inertia = InertialParams(bodies[b].inertia.0 + merged.0);
+                    }
+                    attach.insert(child, (pb, x_origin));
+                    continue;
+                }
+                T::Revolute | T::Continuous => Joint::Revolute { axis },
+                T::Prismatic => Joint::Prismatic { axis },
+                ref other => {
+                    return Err(bad(format!(
+                        "joint '{}' has type {other:?}: physid models fixed-base robots with one-DoF joints (revolute, continuous, prismatic, fixed)",
+                        jt.name
+                    )))
+                }
+            };
+            if let Some(mimic) = &jt.mimic {
+                if children.get(child).is_some_and(|c| !c.is_empty()) {
+                    return Err(bad(format!(
+                        "joint '{}' mimics '{}' but its child link '{child}' has children: only a leaf link can be a rotor",
+                        jt.name, mimic.joint
+                    )));
+                }
+                mimics.push((jt, mimic, pb, x_origin, child_params));
+                attach.insert(child, (pb, x_origin));
+                continue;
+            }
+            let lim = &jt.limit;
+            let inf_if_zero = |v: f64| if v > 0.0 { v } else { f64::INFINITY };
+            let (lower, upper) = match jt.joint_type {
+                T::Continuous => (f64::NEG_INFINITY, f64::INFINITY),
+                _ if lim.lower == 0.0 && lim.upper == 0.0 => (f64::NEG_INFINITY, f64::INFINITY),
+                _ => (lim.lower, lim.upper),
+            };
+            let friction =
+                jt.dynamics
+                    .as_ref()
+                    .map_or(JointFriction::default(), |d| JointFriction {
+                        viscous: d.damping,
+                        coulomb: d.friction,
+                    });
+            bodies.push(Body {
+                name: child.to_string(),
+                joint_name: jt.name.clone(),
+                parent: pb,
+                joint,
+                x_tree: x_origin,
+                inertia: child_params,
+                bounding: None,
+                rotor: None,
+                friction,
+                limits: JointLimits {
+                    lower,
+                    upper,
+                    velocity: inf_if_zero(lim.velocity),
+                    effort: inf_if_zero(lim.effort),
+                },
+            });
+            body_parent_link_x.push(x_p);
+            attach.insert(child, (Some(bodies.len() - 1), Transform::identity()));
+        }
+    }
+    if done.iter().any(|d| !d) {
+        let lost: Vec<&str> = robot
+            .links
+            .iter()
+            .map(|l| l.name.as_str())
+            .filter(|l| !attach.contains_key(l))
+            .collect();
+        return Err(bad(format!(
+            "links {} are not reachable from the root '{root}': they form a closed loop",
+            lost.join(", ")
+        )));
+    }
+    if bodies.is_empty() {
+        return Err(bad("the robot has no moving joints".to_string()));
+    }
+
+    // Mimic joints become rotors.
+    for (jt, mimic, pb, x_rot, params) in mimics {
+        let k = bodies
+            .iter()
+            .position(|b| b.joint_name == mimic.joint)
+            .ok_or_else(|| {
+                bad(format!(
+                    "joint '{}' mimics '{}', which is not a moving joint",
+                    jt.name, mimic.joint
+                ))
+            })?;
+        if bodies[k].parent != pb {
+            return Err(bad(format!(
+                "joint '{}' mimics '{}' but is not mounted on that joint's parent body: not a rotor",
+                jt.name, mimic.joint
+            )));
+        }
+        if mimic.offset.unwrap_or(0.0) != 0.0 {
+            return Err(bad(format!(
+                "joint '{}': a rotor's mimic offset must be 0",
+                jt.name
+            )));
+        }
+        if bodies[k].rotor.is_some() {
+            return Err(bad(format!("joint '{}' drives two rotors", mimic.joint)));
+        }
+        bodies[k].rotor = Some(Rotor {
+            name: jt.child.link.clone(),
+            x_rot,
+            axis: Vector3::from(jt.axis.xyz.0),
+            gear_ratio: mimic.multiplier.unwrap_or(1.0),
+            inertia: params,
+            bounding: None,
+        });
+    }
+
+    extras.apply(&mut bodies, &body_parent_link_x, path)?;
+
+    // A joint whose subtree (and rotor) has no mass cannot be accelerated.
+    let n = bodies.len();
+    let mut subtree_mass: Vec<f64> = bodies
+        .iter()
+        .map(|b| b.inertia.mass() + b.rotor.as_ref().map_or(0.0, |r| r.inertia.mass()))
+        .collect();
+    for i in (0..n).rev() {
+        if let Some(p) = bodies[i].parent {
+            subtree_mass[p] += subtree_mass[i];
+        }
+    }
+    if let Some(i) = (0..n).find(|&i| subtree_mass[i] <= 0.0) {
+        return Err(bad(format!(
+            "joint '{}' moves only massless links (no <inertial> or zero mass from link '{}' on): its mass matrix would be singular",
+            bodies[i].joint_name, bodies[i].name
+        )));
+    }
+    let gravity = extras
+        .gravity
+        .map_or(Vector3::new(0.0, 0.0, -STANDARD_GRAVITY), Vector3::from);
+    let model = Model::new(robot.name.clone(), bodies, gravity)
+        .map_err(|source| IoError::Model {
+            path: path.to_path_buf(),
+            source,
+        })?
+        .with_rotor_model(extras.rotor_model.unwrap_or_default());
+    model.check_physical().map_err(|source| IoError::Model {
+        path: path.to_path_buf(),
+        source,
+    })?;
+    Ok((model, warnings))
+}
+
+fn pose(x: &Transform) -> urdf_rs::Pose {
+    let (rot, pos) = x.to_pose();
+    let (r, p, y) = nalgebra::Rotation3::from_matrix_unchecked(rot).euler_angles();
+    urdf_rs::Pose {
+        xyz: urdf_rs::Vec3([pos.x, pos.y, pos.z]),
+        rpy: urdf_rs::Vec3([r, p, y]),
+    }
+}
+
+fn inertial(p: &InertialParams) -> urdf_rs::Inertial {
+    let (c, ic) = match (p.com(), p.inertia_about_com()) {
+        (Some(c), Some(ic)) => (c, ic),
+        _ => (Vector3::zeros(), p.ibar()),
+    };
+    urdf_rs::Inertial {
+        origin: urdf_rs::Pose {
+            xyz: urdf_rs::Vec3([c.x, c.y, c.z]),
+            rpy: urdf_rs::Vec3([0.0; 3]),
+        },
+        mass: urdf_rs::Mass { value: p.mass() },
+        inertia: urdf_rs::Inertia {
+            ixx: ic[(0, 0)],
+            ixy: ic[(0, 1)],
+            ixz: ic[(0, 2)],
+            iyy: ic[(1, 1)],
+            iyz: ic[(1, 2)],
+            izz: ic[(2, 2)],
+        },
+    }
+}
+
+fn link(name: &str, p: &InertialParams) -> urdf_rs::Link {
+    urdf_rs::Link {
+        name: name.into(),
+        inertial: inertial(p),
+        visual: vec![],
+        collision: vec![],
+    }
+}
+
+/// The model as URDF text: one link per body with its inertial, one joint per joint with its
+/// limits and friction (`<dynamics damping friction>`), and each rotor as a leaf link on the
+/// parent body driven by a `<mimic>` joint with `multiplier = N` (read back by [`from_str`]).
+/// The base link is `base`. Numbers are written with full precision.
+pub fn to_string(model: &Model) -> String {
+    let mut links = vec![link("base", &InertialParams::zero())];
+    let mut joints = vec![];
+    let parent_link =
+        |p: Option<usize>| p.map_or("base".to_string(), |p| model.bodies[p].name.clone());
+    let finite_or = |v: f64, d: f64| if v.is_finite() { v } else { d };
+    for b in &model.bodies {
+        links.push(link(&b.name, &b.inertia));
+        let (jt, axis) = match b.joint {
+            Joint::Revolute { axis } if b.limits.lower.is_finite() => {
+                (urdf_rs::JointType::Revolute, axis)
+            }
+            Joint::Revolute { axis } => (urdf_rs::JointType::Continuous, axis),
+            Joint::Prismatic { axis } => (urdf_rs::JointType::Prismatic, axis),
+        };
+        joints.push(urdf_rs::Joint {
+            name: b.joint_name.clone(),
+            joint_type: jt,
+            origin: pose(&b.x_tree),
+            parent: urdf_rs::LinkName {
+                link: parent_link(b.parent),
+            },
+            child: urdf_rs::LinkName {
+                link: b.name.clone(),
+            },
+            axis: urdf_rs::Axis {
+                xyz: urdf_rs::Vec3([axis.x, axis.y, axis.z]),
+            },
+            limit: urdf_rs::JointLimit {
+                lower: finite_or(b.limits.lower, 0.0),
+                upper: finite_or(b.limits.upper, 0.0),
+                effort: finite_or(b.limits.effort, 0.0),
+                velocity: finite_or(b.limits.velocity, 0.0),
+                ..Default::default()
+            },
+            calibration: None,
+            dynamics: Some(urdf_rs::Dynamics {
+                damping: b.friction.viscous,
+                friction: b.friction.coulomb,
+            }),
+            mimic: None,
+            safety_controller: None,
+        });
+        if let Some(r) = &b.rotor {
+            links.push(link(&r.name, &r.inertia));
+            joints.push(urdf_rs::Joint {
+                name: format!("{}_joint", r.name),
+                joint_type: urdf_rs::JointType::Continuous,
+                origin: pose(&r.x_rot),
+                parent: urdf_rs::LinkName {
+                    link: parent_link(b.parent),
+                },
+                child: urdf_rs::LinkName {
+                    link: r.name.clone(),
+                },
+                axis: urdf_rs::Axis {
+                    xyz: urdf_rs::Vec3([r.axis.x, r.axis.y, r.axis.z]),
+                },
+                limit: Default::default(),
+                calibration: None,
+                dynamics: None,
+                mimic: Some(urdf_rs::Mimic {
+                    joint: b.joint_name.clone(),
+                    multiplier: Some(r.gear_ratio),
+                    offset: None,
+                }),
+                safety_controller: None,
+            });
+        }
+    }
+    let robot = urdf_rs::Robot {
+        name: model.name.clone(),
+        version: None,
+        links,
+        joints,
+        materials: vec![],
+    };
+    urdf_rs::write_to_string(&robot).expect("serializing a URDF built in memory cannot fail")
+}

@@ -1,0 +1,264 @@
+//! Robot descriptions in and out: the TOML leg equals the built-in, URDF import of the real
+//! KUKA LWR4+ file, URDF and MJCF export round trips, and clear errors for bad input.
+
+use physid::dynamics::{regressor, rnea, Data};
+use physid::io::{self, robot_toml, urdf, IoError};
+use physid::model::random::random_state;
+use physid::model::{cheetah3, Model};
+use std::path::{Path, PathBuf};
+
+fn kuka_path() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("../shared/data/real/kuka_lwr4/kuka_lwr4.urdf")
+}
+
+/// Two models describe the same dynamics: equal torques and regressors on random states.
+fn assert_same_dynamics(a: &Model, b: &Model, tol: f64) {
+    assert_eq!(a.dof(), b.dof());
+    assert_eq!(a.layout(), b.layout());
+    let (mut da, mut db) = (Data::new(a), Data::new(b));
+    let p = a.layout().len;
+    let (mut ya, mut yb) = (
+        nalgebra::DMatrix::zeros(a.dof(), p),
+        nalgebra::DMatrix::zeros(a.dof(), p),
+    );
+    for s in 0..10 {
+        let [q, qd, qdd] = random_state(s, a.dof(), 2.0);
+        let ta = rnea(a, &mut da, &q, &qd, &qdd).clone();
+        let tb = rnea(b, &mut db, &q, &qd, &qdd).clone();
+        assert!(
+            (&ta - &tb).norm() <= tol * (1.0 + ta.norm()),
+            "{ta} vs {tb}"
+        );
+        regressor(a, &mut da, &q, &qd, &qdd, &mut ya);
+        regressor(b, &mut db, &q, &qd, &qdd, &mut yb);
+        assert!((&ya - &yb).norm() <= tol * (1.0 + ya.norm()));
+    }
+    assert!((a.parameters() - b.parameters()).norm() <= tol * a.parameters().norm());
+}
+
+#[test]
+fn toml_leg_is_the_builtin_leg() {
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenarios/cheetah3_leg.toml");
+    let from_file = robot_toml::load(&path).unwrap();
+    let builtin = cheetah3::leg();
+    assert_same_dynamics(&from_file, &builtin, 1e-14);
+    for (a, b) in from_file.bodies.iter().zip(&builtin.bodies) {
+        assert_eq!(a.name, b.name);
+        assert_eq!(a.friction, b.friction);
+        assert!((a.limits.effort - b.limits.effort).abs() < 1e-12);
+        assert!((a.limits.velocity - b.limits.velocity).abs() < 1e-12);
+        let (ea, eb) = (a.bounding.unwrap(), b.bounding.unwrap());
+        assert!((ea.qs - eb.qs).norm() < 1e-15 && (ea.center - eb.center).norm() < 1e-15);
+        let (ra, rb) = (a.rotor.as_ref().unwrap(), b.rotor.as_ref().unwrap());
+        assert_eq!(ra.name, rb.name);
+        assert!((ra.bounding.unwrap().qs - rb.bounding.unwrap().qs).norm() < 1e-15);
+    }
+}
+
+#[test]
+fn kuka_urdf_loads_with_seven_joints_and_merged_fixed_links() {
+    let m = io::load_robot(kuka_path().to_str().unwrap()).unwrap();
+    assert_eq!(m.dof(), 7);
+    let names: Vec<_> = m.bodies.iter().map(|b| b.joint_name.as_str()).collect();
+    assert_eq!(
+        names,
+        [
+            "lwr_0_joint",
+            "lwr_1_joint",
+            "lwr_2_joint",
+            "lwr_3_joint",
+            "lwr_4_joint",
+            "lwr_5_joint",
+            "lwr_6_joint"
+        ]
+    );
+    // A serial chain.
+    for (i, b) in m.bodies.iter().enumerate() {
+        assert_eq!(b.parent, i.checked_sub(1));
+    }
+    assert!(
+        m.total_mass() > 10.0 && m.total_mass() < 30.0,
+        "{}",
+        m.total_mass()
+    );
+    // The file has a joint with two <origin> elements; like urdfdom we take the first.
+    let xml = std::fs::read_to_string(kuka_path()).unwrap();
+    let (_, warnings) = urdf::from_str(&xml, &kuka_path(), &Default::default()).unwrap();
+    assert!(
+        warnings
+            .iter()
+            .any(|w| w.contains("box_lwr_base_joint") && w.contains("<origin")),
+        "{warnings:?}"
+    );
+}
+
+#[test]
+fn urdf_export_round_trips_links_rotors_and_friction() {
+    for m in [cheetah3::leg(), physid::model::random::random_tree(3, 6)] {
+        let text = urdf::to_string(&m);
+        let (back, _) =
+            urdf::from_str(&text, Path::new("roundtrip.urdf"), &Default::default()).unwrap();
+        assert_eq!(back.rotor_count(), m.rotor_count());
+        assert_same_dynamics(&back, &m, 1e-12);
+    }
+}
+
+#[test]
+fn mjcf_export_lumps_rotors_and_writes_armature() {
+    let m = cheetah3::leg();
+    let text = io::mjcf::to_string(&m);
+    assert_eq!(text.matches("<body ").count(), 3);
+    assert_eq!(text.matches("armature=").count(), 3);
+    // Knee armature N² I_yy of the knee rotor, about 10.6² × 1.4e-3 kg m².
+    let r = m.bodies[2].rotor.as_ref().unwrap();
+    let arm = 10.6f64.powi(2) * r.inertia.ibar()[(1, 1)];
+    assert!(text.contains(&format!("armature=\"{arm}\"")), "{text}");
+    // Lumping conserves mass: the abad rotor sits on the base, the others are lumped.
+    let lumped = io::mjcf::lumped_inertias(&m);
+    let total: f64 = lumped.iter().map(|p| p.mass()).sum();
+    let abad_rotor = m.bodies[0].rotor.as_ref().unwrap().inertia.mass();
+    assert!((total + abad_rotor - m.total_mass()).abs() < 1e-12);
+}
+
+fn urdf_err(xml: &str) -> String {
+    match urdf::from_str(xml, Path::new("bad.urdf"), &Default::default()) {
+        Err(e) => e.to_string(),
+        Ok(_) => panic!("accepted a bad URDF"),
+    }
+}
+
+const LINK: &str = r#"<inertial><mass value="1"/><inertia ixx="0.01" ixy="0" ixz="0" iyy="0.01" iyz="0" izz="0.01"/></inertial>"#;
+
+fn robot(body: &str) -> String {
+    format!("<robot name=\"r\">{body}</robot>")
+}
+
+#[test]
+fn bad_urdfs_get_errors_that_name_the_element() {
+    let two = format!(
+        r#"<link name="base"/><link name="a">{LINK}</link>
+           <joint name="j1" type="revolute"><parent link="base"/><child link="a"/><axis xyz="0 0 1"/><limit lower="-1" upper="1" effort="1" velocity="1"/></joint>"#
+    );
+    // Missing link.
+    let e = urdf_err(&robot(
+        &two.replace("<child link=\"a\"/>", "<child link=\"ghost\"/>"),
+    ));
+    assert!(
+        e.contains("bad.urdf") && e.contains("'j1'") && e.contains("'ghost'"),
+        "{e}"
+    );
+    // A loop: a second joint makes 'a' a child twice.
+    let looped = format!(
+        r#"{two}<link name="b">{LINK}</link>
+           <joint name="j2" type="revolute"><parent link="a"/><child link="b"/><axis xyz="0 0 1"/></joint>
+           <joint name="j3" type="revolute"><parent link="b"/><child link="a"/><axis xyz="0 0 1"/></joint>"#
+    );
+    let e = urdf_err(&robot(&looped));
+    assert!(e.contains("loop") && e.contains("'a'"), "{e}");
+    // Non-positive mass.
+    let e = urdf_err(&robot(
+        &two.replace("<mass value=\"1\"/>", "<mass value=\"-2\"/>"),
+    ));
+    assert!(e.contains("link 'a'") && e.contains("-2"), "{e}");
+    // Inertia violating the triangle inequality: Izz > Ixx + Iyy.
+    let e = urdf_err(&robot(&two.replace("izz=\"0.01\"", "izz=\"0.05\"")));
+    assert!(e.contains("body 'a'") && e.contains("triangle"), "{e}");
+    // A massless moving chain.
+    let e = urdf_err(&robot(&two.replace(LINK, "")));
+    assert!(e.contains("'j1'") && e.contains("massless"), "{e}");
+    // Floating joint.
+    let e = urdf_err(&robot(
+        &two.replace("type=\"revolute\"", "type=\"floating\""),
+    ));
+    assert!(e.contains("'j1'") && e.contains("fixed-base"), "{e}");
+    // Not XML at all.
+    let e = urdf_err("<robot name=");
+    assert!(e.contains("bad.urdf"), "{e}");
+}
+
+#[test]
+fn bad_toml_gets_file_line_and_key() {
+    let dir = tempfile::tempdir().unwrap();
+    let write = |name: &str, text: &str| {
+        let p = dir.path().join(name);
+        std::fs::write(&p, text).unwrap();
+        p
+    };
+    let p = write(
+        "typo.toml",
+        "[robot]\nbuiltin = \"cheetah3\"\ngear_ratio = [1, 2, 3]\n",
+    );
+    let e = robot_toml::load(&p).unwrap_err().to_string();
+    assert!(
+        e.contains("typo.toml") && e.contains("line 3") && e.contains("gear_ratio"),
+        "{e}"
+    );
+    let p = write("unknown.toml", "[robot]\nbuiltin = \"cheetah4\"\n");
+    let e = robot_toml::load(&p).unwrap_err().to_string();
+    assert!(e.contains("cheetah4"), "{e}");
+    let good = std::fs::read_to_string(
+        Path::new(env!("CARGO_MANIFEST_DIR")).join("scenarios/cheetah3_leg.toml"),
+    )
+    .unwrap();
+    let p = write(
+        "mass.toml",
+        &good.replacen("pi = [1.6452", "pi = [-1.6452", 1),
+    );
+    let e = robot_toml::load(&p).unwrap_err().to_string();
+    assert!(
+        e.contains("mass.toml") && e.contains("body 'abad'") && e.contains("negative mass"),
+        "{e}"
+    );
+    let p = write(
+        "parent.toml",
+        &good.replacen("parent = \"abad\"", "parent = \"shank\"", 1),
+    );
+    let e = robot_toml::load(&p).unwrap_err().to_string();
+    assert!(e.contains("'thigh'") && e.contains("parent 'shank'"), "{e}");
+    // Mass outside its bounding ellipsoid is reported with the margin.
+    let p = write(
+        "ell.toml",
+        &good.replacen(
+            "semi_axes = [0.13, 0.13, 0.30]",
+            "semi_axes = [0.03, 0.03, 0.1]",
+            1,
+        ),
+    );
+    let e = robot_toml::load(&p).unwrap_err().to_string();
+    assert!(e.contains("body 'shank'") && e.contains("ellipsoid"), "{e}");
+    assert!(matches!(
+        io::load_robot("robot.xyz"),
+        Err(IoError::UnknownRobot(_))
+    ));
+    let e = io::load_robot("/nonexistent/r.urdf")
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("/nonexistent/r.urdf"), "{e}");
+}
+
+#[test]
+fn sidecar_rotor_on_a_urdf_joint() {
+    let dir = tempfile::tempdir().unwrap();
+    let toml = format!(
+        r#"[robot]
+urdf = "{}"
+[[robot.rotor]]
+joint = "lwr_2_joint"
+gear_ratio = 100.0
+inertial = {{ mass = 0.3, com = [0.0, 0.0, 0.0], inertia = [2e-5, 0.0, 0.0, 2e-5, 0.0, 3e-5] }}
+[[robot.friction]]
+joint = "lwr_2_joint"
+viscous = 0.5
+coulomb = 1.5
+"#,
+        kuka_path().display()
+    );
+    let p = dir.path().join("kuka.toml");
+    std::fs::write(&p, toml).unwrap();
+    let m = robot_toml::load(&p).unwrap();
+    assert_eq!(m.rotor_count(), 1);
+    let r = m.bodies[2].rotor.as_ref().unwrap();
+    assert_eq!(r.gear_ratio, 100.0);
+    assert_eq!(m.bodies[2].friction.coulomb, 1.5);
+    assert_eq!(m.layout().len, 80 + 14);
+}
