@@ -98,7 +98,9 @@ impl Default for LegOptions {
 }
 
 /// `Cheetah3.h` parameters in Cheetah-Software order `[m, hx, hy, hz, Ixx, Iyy, Izz, Iyz, Ixz,
-/// Ixy]`, about each body's joint frame (design.md §6).
+/// Ixy]`, about each body's joint frame (design.md §6). Digits are kept verbatim as published,
+/// trailing zeros included.
+#[allow(clippy::excessive_precision)]
 pub mod published {
     /// Ab/ad link.
     pub const ABAD: [f64; 10] = [

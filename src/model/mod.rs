@@ -350,6 +350,18 @@ impl Model {
         self
     }
 
+    /// The link-only model: every rotor removed (its parameters leave the layout).
+    pub fn without_rotors(&self) -> Model {
+        let bodies = self
+            .bodies
+            .iter()
+            .cloned()
+            .map(|b| Body { rotor: None, ..b })
+            .collect();
+        Model::new(self.name.clone(), bodies, self.gravity)
+            .expect("removing rotors keeps a valid model")
+    }
+
     /// Number of degrees of freedom (one per joint).
     pub fn dof(&self) -> usize {
         self.bodies.len()

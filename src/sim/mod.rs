@@ -4,6 +4,9 @@ use crate::dynamics::{forward_dynamics, Data, FdError};
 use crate::model::Model;
 use nalgebra::DVector;
 
+/// A joint-torque law `τ(t, q, q̇)` (N m).
+pub type TorqueFn<'a> = dyn FnMut(f64, &[f64], &[f64]) -> DVector<f64> + 'a;
+
 /// One classical Runge–Kutta (RK4) step of `ẋ = (q̇, FD(q, q̇, τ))` over `dt` (s), in place.
 ///
 /// `tau(t, q, q̇)` is the generalized force applied at the joints (N m), friction included by
@@ -16,7 +19,7 @@ pub fn rk4_step(
     q: &mut [f64],
     qd: &mut [f64],
     dt: f64,
-    tau: &mut dyn FnMut(f64, &[f64], &[f64]) -> DVector<f64>,
+    tau: &mut TorqueFn,
 ) -> Result<(), FdError> {
     let n = model.dof();
     let mut deriv = |t: f64, q: &[f64], qd: &[f64]| -> Result<DVector<f64>, FdError> {

@@ -1,0 +1,54 @@
+"""Cross-check physid against pinocchio: RNEA torques, the joint-torque regressor and the
+inertial parameters read from URDF, on the link-only Cheetah-3 leg (exported by physid as URDF)
+and on the real KUKA LWR4+ URDF (read by both). Exits non-zero on disagreement.
+
+usage: python scripts/check_pinocchio.py [--physid PATH]
+"""
+import sys
+import tempfile
+
+import numpy as np
+import pinocchio as pin
+
+from physid_common import KUKA_URDF, PIN_FROM_PAPER, Report, dynamics, export, physid_bin, rel_err
+
+TOL = 1e-9
+
+
+def check(report, label, urdf_path, dyn):
+    model = pin.buildModelFromUrdf(urdf_path)
+    data = model.createData()
+    assert model.nq == model.nv == len(dyn["joint_names"]), "joint count differs"
+    names = list(model.names)[1:]
+    if names != dyn["joint_names"]:
+        sys.exit(f"{label}: joint order differs: pinocchio {names} vs physid {dyn['joint_names']}")
+    n = model.nv
+    # Inertial parameters as each reads them from the URDF.
+    theta = np.asarray(dyn["theta"])
+    pin_theta = np.concatenate([model.inertias[i + 1].toDynamicParameters()[PIN_FROM_PAPER] for i in range(n)])
+    report.add(f"{label}: inertial parameters from URDF", rel_err(theta[: 10 * n], pin_theta), TOL)
+    perm = np.concatenate([10 * i + np.array(PIN_FROM_PAPER) for i in range(n)])
+    e_tau = e_y = 0.0
+    for s in dyn["samples"]:
+        q, v, a = (np.asarray(s[k]) for k in ("q", "qd", "qdd"))
+        tau = pin.rnea(model, data, q, v, a)
+        y = pin.computeJointTorqueRegressor(model, data, q, v, a)
+        e_tau = max(e_tau, rel_err(s["tau"], tau))
+        e_y = max(e_y, rel_err(np.asarray(s["Y"])[:, : 10 * n], y[:, perm]))
+    report.add(f"{label}: rnea over {len(dyn['samples'])} random states", e_tau, TOL)
+    report.add(f"{label}: joint torque regressor (link columns)", e_y, TOL)
+
+
+def main():
+    binary = physid_bin(sys.argv)
+    report = Report("check_pinocchio")
+    with tempfile.TemporaryDirectory() as d:
+        leg = ["--robot", "cheetah3", "--no-rotors"]
+        urdf = export(binary, leg, "urdf", d)
+        check(report, "link-only Cheetah-3 leg", urdf, dynamics(binary, ["--robot", urdf]))
+    check(report, "KUKA LWR4+ (shared URDF)", KUKA_URDF, dynamics(binary, ["--robot", KUKA_URDF]))
+    report.finish()
+
+
+if __name__ == "__main__":
+    main()

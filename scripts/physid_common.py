@@ -1,0 +1,68 @@
+"""Helpers shared by the cross-check scripts: run the physid binary, load its JSON."""
+import json
+import os
+import subprocess
+import sys
+import tempfile
+
+# Paper order [m, hx, hy, hz, Ixx, Ixy, Ixz, Iyy, Iyz, Izz] from pinocchio's
+# [m, hx, hy, hz, Ixx, Ixy, Iyy, Ixz, Iyz, Izz]: paper[k] = pin[PIN_FROM_PAPER[k]].
+PIN_FROM_PAPER = [0, 1, 2, 3, 4, 5, 7, 6, 8, 9]
+
+ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+KUKA_URDF = os.path.join(ROOT, "..", "shared", "data", "real", "kuka_lwr4", "kuka_lwr4.urdf")
+
+
+def physid_bin(argv):
+    """The physid binary: --physid PATH, $PHYSID_BIN, or the release build."""
+    if "--physid" in argv:
+        return argv[argv.index("--physid") + 1]
+    if os.environ.get("PHYSID_BIN"):
+        return os.environ["PHYSID_BIN"]
+    target = os.environ.get("CARGO_TARGET_DIR", os.path.join(ROOT, "target"))
+    return os.path.join(target, "release", "physid")
+
+
+def run(binary, *args):
+    res = subprocess.run([binary, *args], capture_output=True, text=True)
+    if res.returncode != 0:
+        sys.exit(f"physid {' '.join(args)} failed:\n{res.stderr}")
+    return res.stdout
+
+
+def dynamics(binary, robot_args, samples=25, seed=7):
+    """Random states with physid's tau, Y and H, as a dict."""
+    with tempfile.TemporaryDirectory() as d:
+        out = os.path.join(d, "dyn.json")
+        run(binary, "dynamics", *robot_args, "--samples", str(samples), "--seed", str(seed), "--out", out)
+        with open(out) as f:
+            return json.load(f)
+
+
+def export(binary, robot_args, fmt, directory):
+    path = os.path.join(directory, "model." + ("xml" if fmt == "mjcf" else "urdf"))
+    run(binary, "export", *robot_args, f"--{fmt}", path)
+    return path
+
+
+class Report:
+    """Collects (case, max error, tolerance) and exits non-zero if any exceeds its tolerance."""
+
+    def __init__(self, name):
+        self.name, self.rows = name, []
+
+    def add(self, case, err, tol):
+        ok = err <= tol
+        self.rows.append(ok)
+        print(f"{'ok  ' if ok else 'FAIL'} {case:<58} max rel. error {err:.2e} (tol {tol:.0e})")
+
+    def finish(self):
+        failed = self.rows.count(False)
+        print(f"{self.name}: {len(self.rows) - failed} passed, {failed} failed")
+        sys.exit(1 if failed or not self.rows else 0)
+
+
+def rel_err(a, b):
+    import numpy as np
+    a, b = np.asarray(a, float), np.asarray(b, float)
+    return float(np.max(np.abs(a - b)) / (1.0 + np.max(np.abs(b))))

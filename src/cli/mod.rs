@@ -1,0 +1,128 @@
+//! Command-line arguments (clap derive) and their dispatch to library entry points.
+
+mod model_cmd;
+
+use clap::{Parser, Subcommand, ValueEnum};
+use physid::model::{Model, RotorModel};
+
+/// Physically-consistent inertial parameter identification of robots, with ground truth.
+#[derive(Parser, Debug)]
+#[command(name = "physid", version, about)]
+pub struct Cli {
+    #[command(subcommand)]
+    command: Command,
+}
+
+/// Which robot, and how its rotors are modelled.
+#[derive(clap::Args, Debug, Clone)]
+pub struct RobotArgs {
+    /// `cheetah3` (built-in leg), a .urdf file, or a .toml file with a [robot] table.
+    #[arg(long, default_value = "cheetah3")]
+    robot: String,
+    /// Override the rotor treatment: full (spinning rotor bodies) or reflected (armature).
+    #[arg(long, value_enum)]
+    rotor_model: Option<RotorArg>,
+    /// Drop the rotors (the link-only model).
+    #[arg(long)]
+    no_rotors: bool,
+}
+
+#[derive(ValueEnum, Debug, Clone, Copy)]
+enum RotorArg {
+    Full,
+    Reflected,
+}
+
+impl RobotArgs {
+    fn load(&self) -> anyhow::Result<Model> {
+        let mut m = physid::io::load_robot(&self.robot)?;
+        if self.no_rotors {
+            m = m.without_rotors();
+        }
+        if let Some(r) = self.rotor_model {
+            m = m.with_rotor_model(match r {
+                RotorArg::Full => RotorModel::Full,
+                RotorArg::Reflected => RotorModel::Reflected,
+            });
+        }
+        Ok(m)
+    }
+}
+
+#[derive(Subcommand, Debug)]
+enum Command {
+    /// Describe a robot: bodies, rotors, mass properties, consistency margins, and its
+    /// dynamics at a reference configuration.
+    Model {
+        #[command(flatten)]
+        robot: RobotArgs,
+        /// Print JSON instead of text.
+        #[arg(long)]
+        json: bool,
+    },
+    /// Export a robot to MJCF (rotors as armature) and/or URDF (rotors as mimic joints).
+    Export {
+        #[command(flatten)]
+        robot: RobotArgs,
+        /// Write MJCF here.
+        #[arg(long)]
+        mjcf: Option<std::path::PathBuf>,
+        /// Write URDF here.
+        #[arg(long)]
+        urdf: Option<std::path::PathBuf>,
+    },
+    /// Evaluate the dynamics at random states and write JSON (q, qd, qdd, tau, Y, H) for the
+    /// cross-check scripts.
+    Dynamics {
+        #[command(flatten)]
+        robot: RobotArgs,
+        /// Number of random states.
+        #[arg(long, default_value_t = 20)]
+        samples: usize,
+        /// Random seed.
+        #[arg(long, default_value_t = 1)]
+        seed: u64,
+        /// Range of the random joint positions, velocities and accelerations (±).
+        #[arg(long, default_value_t = 2.0)]
+        scale: f64,
+        /// Output JSON file.
+        #[arg(long)]
+        out: std::path::PathBuf,
+    },
+}
+
+/// Runs one command.
+pub fn run(cli: Cli) -> anyhow::Result<()> {
+    match cli.command {
+        Command::Model { robot, json } => model_cmd::describe(&robot.load()?, json),
+        Command::Export { robot, mjcf, urdf } => {
+            let m = robot.load()?;
+            anyhow::ensure!(
+                mjcf.is_some() || urdf.is_some(),
+                "give --mjcf FILE and/or --urdf FILE"
+            );
+            if let Some(p) = mjcf {
+                physid::io::write_atomic(&p, physid::io::mjcf::to_string(&m).as_bytes())?;
+                eprintln!("wrote {}", p.display());
+            }
+            if let Some(p) = urdf {
+                physid::io::write_atomic(&p, physid::io::urdf::to_string(&m).as_bytes())?;
+                eprintln!("wrote {}", p.display());
+            }
+            Ok(())
+        }
+        Command::Dynamics {
+            robot,
+            samples,
+            seed,
+            scale,
+            out,
+        } => {
+            anyhow::ensure!(
+                scale.is_finite() && scale > 0.0,
+                "--scale must be a positive number, got {scale}"
+            );
+            model_cmd::dynamics_json(&robot.load()?, samples, seed, scale, &out)
+        }
+    }
+}

@@ -1,0 +1,146 @@
+//! `physid model` and `physid dynamics`.
+
+use nalgebra::DMatrix;
+use physid::dynamics::{crba, regressor, rnea, Data};
+use physid::model::random::random_state;
+use physid::model::Model;
+use physid::spatial::{ConsistencyReport, Ellipsoid, InertialParams};
+use serde_json::json;
+
+fn body_json(name: &str, p: &InertialParams, e: Option<&Ellipsoid>) -> serde_json::Value {
+    let r: ConsistencyReport = p.consistency(e);
+    json!({
+        "name": name,
+        "pi": p.0.as_slice(),
+        "mass": p.mass(),
+        "com": p.com().map(|c| c.as_slice().to_vec()),
+        "principal_moments": p.principal_moments().map(|(v, _)| v.as_slice().to_vec()),
+        "consistency": r,
+    })
+}
+
+/// Prints the model summary.
+pub fn describe(m: &Model, as_json: bool) -> anyhow::Result<()> {
+    let mut bodies = vec![];
+    for b in &m.bodies {
+        bodies.push(body_json(&b.name, &b.inertia, b.bounding.as_ref()));
+        if let Some(r) = &b.rotor {
+            bodies.push(body_json(&r.name, &r.inertia, r.bounding.as_ref()));
+        }
+    }
+    let q0: Vec<f64> = m
+        .bodies
+        .iter()
+        .map(|b| 0.0f64.clamp(b.limits.lower, b.limits.upper))
+        .collect();
+    let mut d = Data::new(m);
+    let zero = vec![0.0; m.dof()];
+    let g = rnea(m, &mut d, &q0, &zero, &zero).clone();
+    let h = crba(m, &mut d, &q0).clone();
+    if as_json {
+        let v = json!({
+            "name": m.name, "dof": m.dof(), "rotors": m.rotor_count(),
+            "rotor_model": m.rotor_model, "total_mass": m.total_mass(),
+            "parameters": m.layout().len, "bodies": bodies,
+            "joints": m.bodies.iter().map(|b| json!({"name": b.joint_name, "friction": b.friction,
+                "limits": [b.limits.lower, b.limits.upper, b.limits.velocity, b.limits.effort]})).collect::<Vec<_>>(),
+            "q0": q0, "gravity_torque_q0": g.as_slice(),
+        });
+        println!("{}", serde_json::to_string_pretty(&v)?);
+        return Ok(());
+    }
+    println!(
+        "{}: {} joints, {} rotors ({:?} model), {:.4} kg, {} parameters",
+        m.name,
+        m.dof(),
+        m.rotor_count(),
+        m.rotor_model,
+        m.total_mass(),
+        m.layout().len
+    );
+    println!(
+        "\n{:<12} {:>8} {:>26} {:>30} {:>11} {:>11} {:>9}",
+        "body", "m [kg]", "CoM [m]", "principal I_C [kg m^2]", "min eig I", "min eig J", "tr(JQ)/m"
+    );
+    let push = |name: &str, p: &InertialParams, e: Option<&Ellipsoid>| {
+        let r = p.consistency(e);
+        let c = p.com().unwrap_or_default();
+        let pm = p.principal_moments().map(|x| x.0).unwrap_or_default();
+        println!(
+            "{:<12} {:>8.4} {:>26} {:>30} {:>11.3e} {:>11.3e} {:>9}",
+            name,
+            p.mass(),
+            format!("({:.4}, {:.4}, {:.4})", c.x, c.y, c.z),
+            format!("({:.2e}, {:.2e}, {:.2e})", pm.x, pm.y, pm.z),
+            r.min_eig_spatial,
+            r.min_eig_pseudo,
+            r.trace_jq_per_mass
+                .map_or("-".into(), |t| format!("{t:.3}"))
+        );
+    };
+    for b in &m.bodies {
+        push(&b.name, &b.inertia, b.bounding.as_ref());
+        if let Some(r) = &b.rotor {
+            push(&r.name, &r.inertia, r.bounding.as_ref());
+        }
+    }
+    println!(
+        "\n{:<14} {:>8} {:>12} {:>12} {:>22}",
+        "joint", "N", "B [Nms/rad]", "Bc [Nm]", "limits [rad]"
+    );
+    for b in &m.bodies {
+        println!(
+            "{:<14} {:>8} {:>12.3} {:>12.3} {:>22}",
+            b.joint_name,
+            b.rotor
+                .as_ref()
+                .map_or("-".into(), |r| format!("{}", r.gear_ratio)),
+            b.friction.viscous,
+            b.friction.coulomb,
+            format!("[{}, {}]", b.limits.lower, b.limits.upper)
+        );
+    }
+    println!(
+        "\nat q = {q0:?}: gravity torque g(q) = {:.4?} N m",
+        g.as_slice()
+    );
+    println!("mass matrix H(q) [kg m^2]:{h:.5}");
+    Ok(())
+}
+
+/// Writes random-state dynamics as JSON for the check scripts.
+pub fn dynamics_json(
+    m: &Model,
+    samples: usize,
+    seed: u64,
+    scale: f64,
+    out: &std::path::Path,
+) -> anyhow::Result<()> {
+    let mut d = Data::new(m);
+    let mut y = DMatrix::zeros(m.dof(), m.layout().len);
+    let rows = |x: &DMatrix<f64>| -> Vec<Vec<f64>> {
+        x.row_iter().map(|r| r.iter().copied().collect()).collect()
+    };
+    let mut states = vec![];
+    for s in 0..samples {
+        let [q, qd, qdd] = random_state(
+            seed.wrapping_mul(1_000_003).wrapping_add(s as u64),
+            m.dof(),
+            scale,
+        );
+        let tau = rnea(m, &mut d, &q, &qd, &qdd).clone();
+        regressor(m, &mut d, &q, &qd, &qdd, &mut y);
+        let h = crba(m, &mut d, &q).clone();
+        states.push(json!({"q": q, "qd": qd, "qdd": qdd, "tau": tau.as_slice(), "Y": rows(&y), "H": rows(&h)}));
+    }
+    let v = json!({
+        "model": m.name, "rotor_model": m.rotor_model,
+        "joint_names": m.bodies.iter().map(|b| b.joint_name.clone()).collect::<Vec<_>>(),
+        "body_names": m.bodies.iter().map(|b| b.name.clone()).collect::<Vec<_>>(),
+        "parameter_names": m.parameter_names(), "theta": m.parameters().as_slice(),
+        "samples": states,
+    });
+    physid::io::write_atomic(out, serde_json::to_string(&v)?.as_bytes())?;
+    eprintln!("wrote {} states to {}", samples, out.display());
+    Ok(())
+}
