@@ -1,4 +1,6 @@
-//! Time integration of the forward dynamics.
+//! Time integration of the forward dynamics, and an independent engine ([`rapier`]).
+
+pub mod rapier;
 
 use crate::dynamics::{forward_dynamics, Data, FdError};
 use crate::model::Model;

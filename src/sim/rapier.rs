@@ -1,0 +1,195 @@
+//! An independent engine: the same model simulated in rapier3d (f64) with reduced-coordinate
+//! multibody joints, so physid's dynamics can be checked against code it does not share.
+//!
+//! Mapping: each physid body becomes a dynamic rigid body without colliders whose local frame is
+//! the body's joint frame, with mass, CoM and inertia set explicitly. A revolute joint `i` is a
+//! rapier generic joint whose free DOF is the local x axis of its two joint frames:
+//! `frame1 = (R_tree B, p_tree)` on the parent and `frame2 = (B, 0)` on the child, with `B` a
+//! rotation taking x onto the joint axis, so that `child = parent · T(p) R_tree R_axis(q)` as in
+//! physid. rapier's default joint damping is removed. Rotors are not mapped here yet.
+
+use crate::model::{Joint, Model};
+use crate::spatial::InertialParams;
+use nalgebra::{Matrix3, Rotation3, Vector3};
+use rapier3d_f64::prelude::*;
+
+/// Why a model cannot be run in rapier.
+#[derive(Debug, thiserror::Error, PartialEq)]
+pub enum RapierError {
+    /// A feature not mapped to rapier.
+    #[error("rapier engine: {0}")]
+    Unsupported(String),
+}
+
+/// A model running in rapier's multibody solver.
+pub struct RapierSim {
+    bodies: RigidBodySet,
+    colliders: ColliderSet,
+    impulse_joints: ImpulseJointSet,
+    multibody_joints: MultibodyJointSet,
+    soft_bodies: SoftBodySet,
+    islands: IslandManager,
+    broad_phase: BroadPhaseBvh,
+    narrow_phase: NarrowPhase,
+    ccd: CCDSolver,
+    pipeline: PhysicsPipeline,
+    params: IntegrationParameters,
+    gravity: Vector,
+    /// Multibody joint handle of each physid joint.
+    handles: Vec<MultibodyJointHandle>,
+}
+
+fn vec3(v: &Vector3<f64>) -> Vector {
+    Vector::new(v.x, v.y, v.z)
+}
+
+fn rot3(m: &Matrix3<f64>) -> Rotation {
+    let c = |j: usize| Vector::new(m[(0, j)], m[(1, j)], m[(2, j)]);
+    Rotation::from_mat3(&rapier3d_f64::math::Matrix::from_cols(c(0), c(1), c(2))).normalize()
+}
+
+/// A rotation taking the x axis onto the unit vector `a`.
+fn x_onto(a: &Vector3<f64>) -> Matrix3<f64> {
+    Rotation3::rotation_between(&Vector3::x(), a)
+        .unwrap_or_else(|| Rotation3::from_axis_angle(&Vector3::z_axis(), std::f64::consts::PI))
+        .into_inner()
+}
+
+fn mass_properties(p: &InertialParams) -> MassProperties {
+    let c = p.com().unwrap_or_default();
+    let ic = p.inertia_about_com().unwrap_or_default();
+    let col = |j: usize| Vector::new(ic[(0, j)], ic[(1, j)], ic[(2, j)]);
+    MassProperties::with_inertia_matrix(
+        vec3(&c),
+        p.mass(),
+        rapier3d_f64::math::Matrix::from_cols(col(0), col(1), col(2)),
+    )
+}
+
+impl RapierSim {
+    /// Builds the multibody at `(q0, q̇0)` with time step `dt` (s).
+    pub fn new(model: &Model, q0: &[f64], qd0: &[f64], dt: f64) -> Result<Self, RapierError> {
+        if model.rotor_count() > 0 {
+            return Err(RapierError::Unsupported(
+                "rotors are not mapped yet; use the link-only model".into(),
+            ));
+        }
+        let mut bodies = RigidBodySet::new();
+        let mut multibody_joints = MultibodyJointSet::new();
+        let base = bodies.insert(RigidBodyBuilder::fixed().build());
+        let mut rb = vec![];
+        let mut handles = vec![];
+        for (i, b) in model.bodies.iter().enumerate() {
+            let Joint::Revolute { axis } = b.joint else {
+                return Err(RapierError::Unsupported(format!(
+                    "joint '{}' is prismatic",
+                    b.joint_name
+                )));
+            };
+            let body = RigidBodyBuilder::dynamic()
+                .additional_mass_properties(mass_properties(&b.inertia))
+                .build();
+            let h = bodies.insert(body);
+            let parent = b.parent.map_or(base, |p| rb[p]);
+            let (r_tree, p_tree) = b.x_tree.to_pose();
+            let bm = x_onto(&axis);
+            let joint = GenericJointBuilder::new(JointAxesMask::LOCKED_REVOLUTE_AXES)
+                .local_frame1(Pose::from_parts(vec3(&p_tree), rot3(&(r_tree * bm))))
+                .local_frame2(Pose::from_parts(Vector::ZERO, rot3(&bm)))
+                .build();
+            let jh = multibody_joints
+                .insert(parent, h, joint, true)
+                .ok_or_else(|| RapierError::Unsupported(format!("rapier refused joint {i}")))?;
+            rb.push(h);
+            handles.push(jh);
+        }
+        let mut sim = Self {
+            bodies,
+            colliders: ColliderSet::new(),
+            impulse_joints: ImpulseJointSet::new(),
+            multibody_joints,
+            soft_bodies: SoftBodySet::new(),
+            islands: IslandManager::new(),
+            broad_phase: BroadPhaseBvh::new(),
+            narrow_phase: NarrowPhase::new(),
+            ccd: CCDSolver::new(),
+            pipeline: PhysicsPipeline::new(),
+            params: IntegrationParameters {
+                dt,
+                ..Default::default()
+            },
+            gravity: vec3(&model.gravity),
+            handles,
+        };
+        sim.set_state(q0, qd0);
+        Ok(sim)
+    }
+
+    /// The multibody link id of each physid joint.
+    fn link_ids(&self) -> Vec<usize> {
+        self.handles
+            .iter()
+            .map(|&h| self.multibody_joints.get(h).expect("joint exists").1)
+            .collect()
+    }
+
+    /// Sets joint positions (rad) and velocities (rad/s); assumes the current coordinates are
+    /// zero (called once, from [`RapierSim::new`]).
+    fn set_state(&mut self, q: &[f64], qd: &[f64]) {
+        let ids = self.link_ids();
+        let (mb, _) = self
+            .multibody_joints
+            .get_mut(self.handles[0])
+            .expect("joint exists");
+        mb.damping_mut().fill(0.0);
+        let mut disp = vec![0.0; mb.ndofs()];
+        let dof: Vec<usize> = ids
+            .iter()
+            .map(|&l| mb.link(l).expect("link exists").assembly_id())
+            .collect();
+        for (i, &d) in dof.iter().enumerate() {
+            disp[d] = q[i];
+        }
+        mb.apply_displacements(&disp);
+        for (i, &d) in dof.iter().enumerate() {
+            mb.generalized_velocity_mut()[d] = qd[i];
+        }
+        mb.forward_kinematics(&self.bodies, false);
+        mb.update_rigid_bodies(&mut self.bodies, true);
+    }
+
+    /// Advances one time step without applied torque.
+    pub fn step(&mut self) {
+        self.pipeline.step(
+            self.gravity,
+            &self.params,
+            &mut self.islands,
+            &mut self.broad_phase,
+            &mut self.narrow_phase,
+            &mut self.bodies,
+            &mut self.colliders,
+            &mut self.impulse_joints,
+            &mut self.multibody_joints,
+            &mut self.soft_bodies,
+            &mut self.ccd,
+            &(),
+            &(),
+        );
+    }
+
+    /// Joint positions (rad) and velocities (rad/s).
+    pub fn state(&self) -> (Vec<f64>, Vec<f64>) {
+        let (mb, _) = self
+            .multibody_joints
+            .get(self.handles[0])
+            .expect("joint exists");
+        let mut q = vec![];
+        let mut qd = vec![];
+        for l in self.link_ids() {
+            let link = mb.link(l).expect("link exists");
+            q.push(link.joint().coords()[3]);
+            qd.push(mb.generalized_velocity()[link.assembly_id()]);
+        }
+        (q, qd)
+    }
+}
