@@ -45,10 +45,12 @@ fn row_block(s: &Motion, v: &Motion, a: &Motion) -> [f64; 10] {
     std::array::from_fn(|c| k1[c] - k2[c])
 }
 
+/// Writes ten coefficients into row `row`, columns `col..col + 10` of a column-major `n × p`
+/// buffer.
 #[inline]
-fn put(y: &mut DMatrix<f64>, row: usize, col: usize, vals: &[f64; 10]) {
+fn put(y: &mut [f64], n: usize, row: usize, col: usize, vals: &[f64; 10]) {
     for (c, v) in vals.iter().enumerate() {
-        y[(row, col + c)] = *v;
+        y[(col + c) * n + row] = *v;
     }
 }
 
@@ -73,6 +75,7 @@ pub fn regressor(
         "regressor output has the wrong shape"
     );
     forward_pass(model, data, q, qd, qdd, true);
+    let y = y.as_mut_slice();
     y.fill(0.0);
     let full = model.rotor_model == RotorModel::Full;
     for i in 0..n {
@@ -86,24 +89,24 @@ pub fn regressor(
         }
         let (v, a) = (data.v[i], data.a[i]);
         for &k in model.support(i) {
-            put(y, k, 10 * i, &row_block(&data.s_anc[i * n + k], &v, &a));
+            put(y, n, k, 10 * i, &row_block(&data.s_anc[i * n + k], &v, &a));
         }
         if let (Some(col), Some(r)) = (layout.rotor_col[i], &b.rotor) {
             let (vr, ar) = (data.v_rot[i], data.a_rot[i]);
             if full {
-                put(y, i, col, &row_block(&data.s_rot[i], &vr, &ar));
+                put(y, n, i, col, &row_block(&data.s_rot[i], &vr, &ar));
             } else {
                 let s = Motion::new(r.axis * r.gear_ratio, Default::default());
-                put(y, i, col, &inertia_bilinear(&s, &s).map(|c| c * qdd[i]));
+                put(y, n, i, col, &inertia_bilinear(&s, &s).map(|c| c * qdd[i]));
             }
             if let Some(p) = b.parent {
                 for &k in model.support(p) {
                     let s = data.x_rot[i].apply_motion(&data.s_anc[p * n + k]);
-                    put(y, k, col, &row_block(&s, &vr, &ar));
+                    put(y, n, k, col, &row_block(&s, &vr, &ar));
                 }
             }
         }
-        y[(i, layout.viscous_col + i)] = qd[i];
-        y[(i, layout.coulomb_col + i)] = sign(qd[i]);
+        y[(layout.viscous_col + i) * n + i] = qd[i];
+        y[(layout.coulomb_col + i) * n + i] = sign(qd[i]);
     }
 }

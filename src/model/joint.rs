@@ -55,8 +55,9 @@ impl Joint {
     #[inline]
     pub fn transform(&self, q: f64) -> Transform {
         match *self {
+            // E = R(q)ᵀ = R(−q).
             Joint::Revolute { axis } => Transform {
-                e: rot_axis_angle(&axis, q).transpose(),
+                e: rot_axis_angle(&axis, -q),
                 r: Vector3::zeros(),
             },
             Joint::Prismatic { axis } => Transform::translation(&(axis * q)),

@@ -2,7 +2,7 @@
 //! matrices.
 
 use super::{skew, Force, Motion};
-use nalgebra::{Matrix3, Matrix6, Rotation3, Unit, Vector3};
+use nalgebra::{Matrix3, Matrix6, Rotation3, Vector3};
 
 /// A Plücker transform `B_X_A` from frame A to frame B.
 ///
@@ -22,9 +22,23 @@ impl Default for Transform {
     }
 }
 
-/// Rotation matrix of a rotation by `angle` (rad) about the unit `axis`.
-pub fn rot_axis_angle(axis: &Vector3<f64>, angle: f64) -> Matrix3<f64> {
-    Rotation3::from_axis_angle(&Unit::new_unchecked(*axis), angle).into_inner()
+/// Rotation matrix of a rotation by `angle` (rad) about the unit `axis` (Rodrigues):
+/// `R = c 1 + s a× + (1 − c) a aᵀ`.
+#[inline]
+pub fn rot_axis_angle(a: &Vector3<f64>, angle: f64) -> Matrix3<f64> {
+    let (s, c) = angle.sin_cos();
+    let t = 1.0 - c;
+    Matrix3::new(
+        c + t * a.x * a.x,
+        t * a.x * a.y - s * a.z,
+        t * a.x * a.z + s * a.y,
+        t * a.x * a.y + s * a.z,
+        c + t * a.y * a.y,
+        t * a.y * a.z - s * a.x,
+        t * a.x * a.z - s * a.y,
+        t * a.y * a.z + s * a.x,
+        c + t * a.z * a.z,
+    )
 }
 
 /// Rotation matrix from URDF roll-pitch-yaw angles (rad): `R = Rz(yaw) Ry(pitch) Rx(roll)`.
@@ -167,6 +181,16 @@ mod tests {
         assert!((id.to_matrix() - Matrix6::identity()).norm() < 1e-14);
         let p = Vector3::new(0.5, -0.2, 0.9);
         assert!((a.point_to_a(&a.point_to_b(&p)) - p).norm() < 1e-15);
+    }
+
+    #[test]
+    fn rodrigues_matches_nalgebra() {
+        let a = Vector3::new(0.3, -0.5, 0.8).normalize();
+        for angle in [-2.5, -0.1, 0.0, 0.7, 3.1] {
+            let want =
+                Rotation3::from_axis_angle(&nalgebra::Unit::new_normalize(a), angle).into_inner();
+            assert!((rot_axis_angle(&a, angle) - want).norm() < 1e-15);
+        }
     }
 
     #[test]
