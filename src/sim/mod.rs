@@ -1,6 +1,7 @@
 //! Time integration of the forward dynamics, and an independent engine ([`rapier`]).
 
 pub mod rapier;
+pub mod signal;
 
 use crate::dynamics::{forward_dynamics, Data, FdError};
 use crate::model::Model;
