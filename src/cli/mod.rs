@@ -1,6 +1,7 @@
 //! Command-line arguments (clap derive) and their dispatch to library entry points.
 
 mod model_cmd;
+mod simulate_cmd;
 
 use clap::{Parser, Subcommand, ValueEnum};
 use physid::model::{Model, RotorModel};
@@ -25,6 +26,12 @@ pub struct RobotArgs {
     /// Drop the rotors (the link-only model).
     #[arg(long)]
     no_rotors: bool,
+}
+
+#[derive(ValueEnum, Debug, Clone, Copy)]
+enum EngineArg {
+    Physid,
+    Rapier,
 }
 
 #[derive(ValueEnum, Debug, Clone, Copy)]
@@ -71,6 +78,29 @@ enum Command {
         #[arg(long)]
         urdf: Option<std::path::PathBuf>,
     },
+    /// Simulate a scenario's excitation experiment and log it to MCAP (and CSV).
+    Simulate {
+        /// Scenario file (TOML).
+        scenario: std::path::PathBuf,
+        /// Output MCAP file.
+        #[arg(long)]
+        out: std::path::PathBuf,
+        /// Also write the processed samples (t, q, dq, ddq, tau) as CSV.
+        #[arg(long)]
+        csv: Option<std::path::PathBuf>,
+        /// Override the engine.
+        #[arg(long, value_enum)]
+        engine: Option<EngineArg>,
+        /// Override the duration (s).
+        #[arg(long)]
+        duration: Option<f64>,
+        /// Override the seed.
+        #[arg(long)]
+        seed: Option<u64>,
+        /// Print the summary as JSON.
+        #[arg(long)]
+        json: bool,
+    },
     /// Evaluate the dynamics at random states and write JSON (q, qd, qdd, tau, Y, H) for the
     /// cross-check scripts.
     Dynamics {
@@ -110,6 +140,29 @@ pub fn run(cli: Cli) -> anyhow::Result<()> {
                 eprintln!("wrote {}", p.display());
             }
             Ok(())
+        }
+        Command::Simulate {
+            scenario,
+            out,
+            csv,
+            engine,
+            duration,
+            seed,
+            json,
+        } => {
+            let engine = engine.map(|e| match e {
+                EngineArg::Physid => physid::sim::scenario::Engine::Physid,
+                EngineArg::Rapier => physid::sim::scenario::Engine::Rapier,
+            });
+            simulate_cmd::run(
+                &scenario,
+                &out,
+                csv.as_deref(),
+                engine,
+                duration,
+                seed,
+                json,
+            )
         }
         Command::Dynamics {
             robot,

@@ -2,8 +2,10 @@
 //! place that touches the file system. Every error names the file and the element at fault;
 //! every file is written atomically (temporary file, then rename).
 
+pub mod mcap_log;
 pub mod mjcf;
 pub mod robot_toml;
+pub mod samples;
 pub mod urdf;
 
 use crate::model::{cheetah3, Model, ModelError};
@@ -76,15 +78,47 @@ pub fn write_atomic(path: &Path, contents: &[u8]) -> Result<(), IoError> {
         path: path.to_path_buf(),
         source,
     };
-    let dir = match path.parent() {
-        Some(d) if !d.as_os_str().is_empty() => d.to_path_buf(),
-        _ => PathBuf::from("."),
-    };
-    let mut tmp = tempfile::NamedTempFile::new_in(&dir).map_err(fs_err)?;
+    let mut tmp = new_temp_beside(path)?;
     tmp.write_all(contents).map_err(fs_err)?;
     tmp.as_file().sync_all().map_err(fs_err)?;
     tmp.persist(path).map_err(|e| fs_err(e.error))?;
     Ok(())
+}
+
+/// Reads a scenario file: the scenario, its robot (the ground truth), and the file's text.
+/// Errors name the file, the line and the key.
+pub fn load_scenario(
+    path: &Path,
+) -> Result<(crate::sim::scenario::Scenario, Model, String), IoError> {
+    let text = read_to_string(path)?;
+    let sc: crate::sim::scenario::Scenario =
+        toml::from_str(&text).map_err(|e| robot_toml::toml_error(path, e))?;
+    let model = robot_toml::from_spec(&sc.robot, path)?;
+    sc.validate(model.dof())
+        .map_err(|e| IoError::invalid(path, e.to_string()))?;
+    Ok((sc, model, text))
+}
+
+/// A temporary file in the directory of `path` (so the final rename stays on one file system),
+/// readable by others like a normally created file (0644 on Unix).
+pub fn new_temp_beside(path: &Path) -> Result<tempfile::NamedTempFile, IoError> {
+    let fs_err = |source| IoError::Fs {
+        path: path.to_path_buf(),
+        source,
+    };
+    let dir = match path.parent() {
+        Some(d) if !d.as_os_str().is_empty() => d.to_path_buf(),
+        _ => PathBuf::from("."),
+    };
+    let tmp = tempfile::NamedTempFile::new_in(&dir).map_err(fs_err)?;
+    #[cfg(unix)]
+    {
+        use std::os::unix::fs::PermissionsExt;
+        tmp.as_file()
+            .set_permissions(std::fs::Permissions::from_mode(0o644))
+            .map_err(fs_err)?;
+    }
+    Ok(tmp)
 }
 
 /// Resolves a `--robot` argument: `cheetah3` (the built-in leg), a `.urdf` file, or a `.toml`

@@ -1,11 +1,29 @@
 //! Time integration of the forward dynamics, and an independent engine ([`rapier`]).
 
+pub mod excitation;
 pub mod rapier;
+pub mod report;
+pub mod scenario;
 pub mod signal;
+pub mod simulate;
 
 use crate::dynamics::{forward_dynamics, Data, FdError};
 use crate::model::Model;
 use nalgebra::DVector;
+
+/// Runs a scenario on its engine (see [`simulate::simulate`] and [`rapier`]).
+pub fn run(
+    model: &Model,
+    scenario: &scenario::Scenario,
+    progress: &mut dyn FnMut(f64),
+) -> Result<simulate::Recording, simulate::SimError> {
+    match scenario.simulation.engine {
+        scenario::Engine::Physid => simulate::simulate(model, scenario, progress),
+        scenario::Engine::Rapier => Err(simulate::SimError::Engine(
+            "the rapier engine runs passive link-only checks so far (physid::sim::rapier); closed-loop experiments use engine = \"physid\"".into(),
+        )),
+    }
+}
 
 /// A joint-torque law `τ(t, q, q̇)` (N m).
 pub type TorqueFn<'a> = dyn FnMut(f64, &[f64], &[f64]) -> DVector<f64> + 'a;

@@ -1,0 +1,332 @@
+//! MCAP logs of experiments, readable by Foxglove and ROS 2 tools.
+//!
+//! Channels (CDR-encoded, `ros2msg` schemas, log time = experiment time in ns):
+//! - `/joint_states` (`sensor_msgs/msg/JointState`): what the robot logs: encoder positions
+//!   (rad), the controller's velocity (rad/s), the logged torque (N m) in `effort`;
+//! - `/physid/processed` (`physid_msgs/msg/JointSample`): the offline-processed q, q̇, q̈ and
+//!   torque that identification uses;
+//! - `/physid/ground_truth` (`physid_msgs/msg/JointSample`): true q, q̇, q̈, the torque the
+//!   actuators delivered, the true friction and effect torques.
+//!
+//! Metadata records: `physid` (format version, engine, rate), `scenario` (`toml`: the scenario
+//! text) and `ground_truth_parameters` (`names`, `values`: JSON arrays of θ). Files are written
+//! to a temporary file beside the target and renamed when complete.
+
+use super::samples::Trajectory;
+use super::IoError;
+use crate::sim::simulate::Recording;
+use serde::{Deserialize, Serialize};
+use std::collections::BTreeMap;
+use std::path::Path;
+
+/// `builtin_interfaces/msg/Time`.
+#[derive(Serialize, Deserialize, Debug, Clone, PartialEq)]
+struct Time {
+    sec: i32,
+    nanosec: u32,
+}
+
+/// `std_msgs/msg/Header`.
+#[derive(Serialize, Deserialize, Debug, Clone, PartialEq)]
+struct Header {
+    stamp: Time,
+    frame_id: String,
+}
+
+/// `sensor_msgs/msg/JointState`.
+#[derive(Serialize, Deserialize, Debug, Clone, PartialEq)]
+struct JointState {
+    header: Header,
+    name: Vec<String>,
+    position: Vec<f64>,
+    velocity: Vec<f64>,
+    effort: Vec<f64>,
+}
+
+/// `physid_msgs/msg/JointSample`.
+#[derive(Serialize, Deserialize, Debug, Clone, PartialEq)]
+struct JointSample {
+    header: Header,
+    name: Vec<String>,
+    position: Vec<f64>,
+    velocity: Vec<f64>,
+    acceleration: Vec<f64>,
+    effort: Vec<f64>,
+    friction: Vec<f64>,
+    effects: Vec<f64>,
+}
+
+const SEP: &str =
+    "================================================================================";
+
+fn header_defs() -> String {
+    format!("{SEP}\nMSG: std_msgs/Header\nbuiltin_interfaces/Time stamp\nstring frame_id\n{SEP}\nMSG: builtin_interfaces/Time\nint32 sec\nuint32 nanosec\n")
+}
+
+fn joint_state_schema() -> String {
+    format!("std_msgs/Header header\nstring[] name\nfloat64[] position\nfloat64[] velocity\nfloat64[] effort\n{}", header_defs())
+}
+
+fn joint_sample_schema() -> String {
+    format!(
+        "# physid: one sample of joint data (rad, rad/s, rad/s^2, N m)\nstd_msgs/Header header\nstring[] name\nfloat64[] position\nfloat64[] velocity\nfloat64[] acceleration\nfloat64[] effort\nfloat64[] friction\nfloat64[] effects\n{}",
+        header_defs()
+    )
+}
+
+/// Topic names.
+pub const TOPIC_MEASURED: &str = "/joint_states";
+/// Processed signals.
+pub const TOPIC_PROCESSED: &str = "/physid/processed";
+/// Ground truth.
+pub const TOPIC_TRUTH: &str = "/physid/ground_truth";
+/// Format version in the `physid` metadata record.
+pub const FORMAT: &str = "physid-mcap-1";
+
+fn stamp(t: f64) -> (Header, u64) {
+    let ns = (t * 1e9).round().max(0.0) as u64;
+    (
+        Header {
+            stamp: Time {
+                sec: (ns / 1_000_000_000) as i32,
+                nanosec: (ns % 1_000_000_000) as u32,
+            },
+            frame_id: String::new(),
+        },
+        ns,
+    )
+}
+
+fn cdr_bytes<T: Serialize>(m: &T) -> Vec<u8> {
+    cdr::serialize::<_, _, cdr::CdrLe>(m, cdr::Infinite).expect("CDR of plain structs cannot fail")
+}
+
+/// What to put into a log beside the recording.
+pub struct LogMeta<'a> {
+    /// Scenario TOML text.
+    pub scenario_toml: &'a str,
+    /// Engine name.
+    pub engine: &'a str,
+    /// Ground-truth parameter names and values (θ).
+    pub parameters: (&'a [String], &'a [f64]),
+}
+
+/// Writes a recording as MCAP (see the module docs), atomically.
+pub fn write(path: &Path, rec: &Recording, meta: &LogMeta) -> Result<(), IoError> {
+    let fs_err = |source| IoError::Fs {
+        path: path.to_path_buf(),
+        source,
+    };
+    let mcap_err = |e: mcap::McapError| IoError::Invalid {
+        path: path.to_path_buf(),
+        message: format!("MCAP: {e}"),
+    };
+    let tmp = super::new_temp_beside(path)?;
+    {
+        let file = std::io::BufWriter::new(tmp.as_file());
+        let mut w = mcap::WriteOptions::new()
+            .compression(Some(mcap::Compression::Zstd))
+            .profile("ros2")
+            .create(file)
+            .map_err(mcap_err)?;
+        let js = w
+            .add_schema(
+                "sensor_msgs/msg/JointState",
+                "ros2msg",
+                joint_state_schema().as_bytes(),
+            )
+            .map_err(mcap_err)?;
+        let sample = w
+            .add_schema(
+                "physid_msgs/msg/JointSample",
+                "ros2msg",
+                joint_sample_schema().as_bytes(),
+            )
+            .map_err(mcap_err)?;
+        let none = BTreeMap::new();
+        let c_meas = w
+            .add_channel(js, TOPIC_MEASURED, "cdr", &none)
+            .map_err(mcap_err)?;
+        let c_proc = w
+            .add_channel(sample, TOPIC_PROCESSED, "cdr", &none)
+            .map_err(mcap_err)?;
+        let c_true = w
+            .add_channel(sample, TOPIC_TRUTH, "cdr", &none)
+            .map_err(mcap_err)?;
+        let names = rec.truth.joint_names.clone();
+        let n = names.len();
+        let row = |v: &[f64], k: usize| v[k * n..(k + 1) * n].to_vec();
+        for k in 0..rec.truth.len() {
+            let (header, ns) = stamp(rec.truth.t[k]);
+            let mh = |channel_id| mcap::records::MessageHeader {
+                channel_id,
+                sequence: k as u32,
+                log_time: ns,
+                publish_time: ns,
+            };
+            let m = &rec.measured;
+            let msg = JointState {
+                header: header.clone(),
+                name: names.clone(),
+                position: m.q_at(k).to_vec(),
+                velocity: m.qd_at(k).to_vec(),
+                effort: m.tau_at(k).to_vec(),
+            };
+            w.write_to_known_channel(&mh(c_meas), &cdr_bytes(&msg))
+                .map_err(mcap_err)?;
+            let p = &rec.processed;
+            let msg = JointSample {
+                header: header.clone(),
+                name: names.clone(),
+                position: p.q_at(k).to_vec(),
+                velocity: p.qd_at(k).to_vec(),
+                acceleration: p.qdd_at(k).map(<[f64]>::to_vec).unwrap_or_default(),
+                effort: p.tau_at(k).to_vec(),
+                friction: vec![],
+                effects: vec![],
+            };
+            w.write_to_known_channel(&mh(c_proc), &cdr_bytes(&msg))
+                .map_err(mcap_err)?;
+            let t = &rec.truth;
+            let msg = JointSample {
+                header,
+                name: names.clone(),
+                position: t.q_at(k).to_vec(),
+                velocity: t.qd_at(k).to_vec(),
+                acceleration: t.qdd_at(k).map(<[f64]>::to_vec).unwrap_or_default(),
+                effort: t.tau_at(k).to_vec(),
+                friction: row(&rec.friction, k),
+                effects: row(&rec.effects, k),
+            };
+            w.write_to_known_channel(&mh(c_true), &cdr_bytes(&msg))
+                .map_err(mcap_err)?;
+        }
+        let md = |name: &str, kv: Vec<(&str, String)>| mcap::records::Metadata {
+            name: name.into(),
+            metadata: kv.into_iter().map(|(k, v)| (k.to_string(), v)).collect(),
+        };
+        w.write_metadata(&md(
+            "physid",
+            vec![
+                ("format", FORMAT.into()),
+                ("version", env!("CARGO_PKG_VERSION").into()),
+                ("engine", meta.engine.into()),
+            ],
+        ))
+        .map_err(mcap_err)?;
+        w.write_metadata(&md("scenario", vec![("toml", meta.scenario_toml.into())]))
+            .map_err(mcap_err)?;
+        let (pn, pv) = meta.parameters;
+        w.write_metadata(&md(
+            "ground_truth_parameters",
+            vec![
+                ("names", serde_json::to_string(pn).expect("strings")),
+                ("values", serde_json::to_string(pv).expect("numbers")),
+            ],
+        ))
+        .map_err(mcap_err)?;
+        w.finish().map_err(mcap_err)?;
+    }
+    tmp.persist(path).map_err(|e| fs_err(e.error))?;
+    Ok(())
+}
+
+/// An MCAP log read back.
+#[derive(Clone, Debug)]
+pub struct Log {
+    /// `/joint_states`.
+    pub measured: Trajectory,
+    /// `/physid/processed`, if present.
+    pub processed: Option<Trajectory>,
+    /// `/physid/ground_truth`, if present.
+    pub truth: Option<Trajectory>,
+    /// Metadata records by name.
+    pub metadata: BTreeMap<String, BTreeMap<String, String>>,
+}
+
+impl Log {
+    /// The signals identification should use: processed if present, else measured.
+    pub fn identification_input(&self) -> &Trajectory {
+        self.processed.as_ref().unwrap_or(&self.measured)
+    }
+}
+
+/// Reads a log written by [`write`] (or any MCAP with `sensor_msgs/msg/JointState` on
+/// `/joint_states`). Errors name the file and the message.
+pub fn read(path: &Path) -> Result<Log, IoError> {
+    let bytes = std::fs::read(path).map_err(|source| IoError::Fs {
+        path: path.to_path_buf(),
+        source,
+    })?;
+    let bad = |m: String| IoError::invalid(path, m);
+    let mut measured: Option<Trajectory> = None;
+    let mut processed: Option<Trajectory> = None;
+    let mut truth: Option<Trajectory> = None;
+    let stream =
+        mcap::MessageStream::new(&bytes).map_err(|e| bad(format!("not an MCAP file: {e}")))?;
+    for (i, m) in stream.enumerate() {
+        let m = m.map_err(|e| bad(format!("record {i}: {e}")))?;
+        let t = m.log_time as f64 / 1e9;
+        match m.channel.topic.as_str() {
+            TOPIC_MEASURED => {
+                let js: JointState = cdr::deserialize(&m.data)
+                    .map_err(|e| bad(format!("{TOPIC_MEASURED} message {}: {e}", m.sequence)))?;
+                let tr = measured.get_or_insert_with(|| Trajectory::new(js.name.clone(), false));
+                if js.position.len() != tr.dof()
+                    || js.velocity.len() != tr.dof()
+                    || js.effort.len() != tr.dof()
+                {
+                    return Err(bad(format!(
+                        "{TOPIC_MEASURED} message {}: joint count differs from the first message",
+                        m.sequence
+                    )));
+                }
+                tr.push(t, &js.position, &js.velocity, None, &js.effort);
+            }
+            topic @ (TOPIC_PROCESSED | TOPIC_TRUTH) => {
+                let s: JointSample = cdr::deserialize(&m.data)
+                    .map_err(|e| bad(format!("{topic} message {}: {e}", m.sequence)))?;
+                let slot = if topic == TOPIC_PROCESSED {
+                    &mut processed
+                } else {
+                    &mut truth
+                };
+                let tr = slot.get_or_insert_with(|| {
+                    Trajectory::new(s.name.clone(), !s.acceleration.is_empty())
+                });
+                tr.push(
+                    t,
+                    &s.position,
+                    &s.velocity,
+                    (!s.acceleration.is_empty()).then_some(&s.acceleration[..]),
+                    &s.effort,
+                );
+            }
+            _ => {}
+        }
+    }
+    let mut metadata = BTreeMap::new();
+    if let Ok(Some(summary)) = mcap::Summary::read(&bytes) {
+        for idx in &summary.metadata_indexes {
+            let md = mcap::read::metadata(&bytes, idx)
+                .map_err(|e| bad(format!("metadata '{}': {e}", idx.name)))?;
+            metadata.insert(md.name, md.metadata);
+        }
+    }
+    let measured = measured.ok_or_else(|| bad(format!("no {TOPIC_MEASURED} messages")))?;
+    for (name, tr) in [
+        ("measured", Some(&measured)),
+        ("processed", processed.as_ref()),
+        ("ground truth", truth.as_ref()),
+    ] {
+        if let Some(tr) = tr {
+            tr.validate().map_err(|e| bad(format!("{name}: {e}")))?;
+        }
+    }
+    Ok(Log {
+        measured,
+        processed,
+        truth,
+        metadata,
+    })
+}

@@ -1,0 +1,318 @@
+//! Time series of joint data (`Trajectory`) and the CSV format of design.md §5:
+//! a header row, then `t, q1..qn, dq1..dqn, [ddq1..ddqn,] tau1..taun` (s, rad, rad/s, rad/s²,
+//! N m). Extra columns are ignored on reading (the KUKA logs carry set-points too).
+
+use super::IoError;
+use std::path::Path;
+
+/// Joint data sampled in time, stored sample-major (`q[k * n + j]`).
+#[derive(Clone, Debug, PartialEq)]
+pub struct Trajectory {
+    /// Joint names (length `n`).
+    pub joint_names: Vec<String>,
+    /// Sample times (s), increasing.
+    pub t: Vec<f64>,
+    /// Positions (rad).
+    pub q: Vec<f64>,
+    /// Velocities (rad/s).
+    pub qd: Vec<f64>,
+    /// Accelerations (rad/s²), if known.
+    pub qdd: Option<Vec<f64>>,
+    /// Joint torques (N m).
+    pub tau: Vec<f64>,
+}
+
+/// A bad sample, naming its index and field.
+#[derive(Debug, thiserror::Error, PartialEq)]
+pub enum SampleError {
+    /// A non-finite value.
+    #[error("sample {sample} (t = {t} s): {field} is {value}")]
+    NotFinite {
+        /// Sample index (0-based).
+        sample: usize,
+        /// Its time stamp.
+        t: f64,
+        /// e.g. `q2`.
+        field: String,
+        /// The value.
+        value: f64,
+    },
+    /// Time does not increase.
+    #[error("sample {sample}: time {t} s does not increase (previous {previous} s)")]
+    NonMonotonicTime {
+        /// Sample index.
+        sample: usize,
+        /// Its time.
+        t: f64,
+        /// The previous time.
+        previous: f64,
+    },
+    /// No samples at all.
+    #[error("no samples")]
+    Empty,
+    /// Inconsistent array lengths.
+    #[error("{field} has {got} values, expected {expected}")]
+    Length {
+        /// The array.
+        field: &'static str,
+        /// Its length.
+        got: usize,
+        /// The expected length.
+        expected: usize,
+    },
+}
+
+impl Trajectory {
+    /// An empty trajectory for `joint_names`.
+    pub fn new(joint_names: Vec<String>, with_qdd: bool) -> Self {
+        Self {
+            joint_names,
+            t: vec![],
+            q: vec![],
+            qd: vec![],
+            qdd: with_qdd.then(Vec::new),
+            tau: vec![],
+        }
+    }
+    /// Number of joints.
+    pub fn dof(&self) -> usize {
+        self.joint_names.len()
+    }
+    /// Number of samples.
+    pub fn len(&self) -> usize {
+        self.t.len()
+    }
+    /// No samples.
+    pub fn is_empty(&self) -> bool {
+        self.t.is_empty()
+    }
+    /// Appends one sample.
+    pub fn push(&mut self, t: f64, q: &[f64], qd: &[f64], qdd: Option<&[f64]>, tau: &[f64]) {
+        self.t.push(t);
+        self.q.extend_from_slice(q);
+        self.qd.extend_from_slice(qd);
+        if let (Some(v), Some(a)) = (self.qdd.as_mut(), qdd) {
+            v.extend_from_slice(a);
+        }
+        self.tau.extend_from_slice(tau);
+    }
+    fn row<'a>(&self, v: &'a [f64], k: usize) -> &'a [f64] {
+        let n = self.dof();
+        &v[k * n..(k + 1) * n]
+    }
+    /// Positions of sample `k`.
+    pub fn q_at(&self, k: usize) -> &[f64] {
+        self.row(&self.q, k)
+    }
+    /// Velocities of sample `k`.
+    pub fn qd_at(&self, k: usize) -> &[f64] {
+        self.row(&self.qd, k)
+    }
+    /// Accelerations of sample `k`, if present.
+    pub fn qdd_at(&self, k: usize) -> Option<&[f64]> {
+        self.qdd.as_ref().map(|v| self.row(v, k))
+    }
+    /// Torques of sample `k`.
+    pub fn tau_at(&self, k: usize) -> &[f64] {
+        self.row(&self.tau, k)
+    }
+    /// Samples `range` as a new trajectory.
+    pub fn slice(&self, range: std::ops::Range<usize>) -> Trajectory {
+        let n = self.dof();
+        let cut = |v: &Vec<f64>| v[range.start * n..range.end * n].to_vec();
+        Trajectory {
+            joint_names: self.joint_names.clone(),
+            t: self.t[range.clone()].to_vec(),
+            q: cut(&self.q),
+            qd: cut(&self.qd),
+            qdd: self.qdd.as_ref().map(cut),
+            tau: cut(&self.tau),
+        }
+    }
+
+    /// Checks lengths, finiteness and increasing time, naming the first bad sample.
+    pub fn validate(&self) -> Result<(), SampleError> {
+        let (m, n) = (self.len(), self.dof());
+        if m == 0 {
+            return Err(SampleError::Empty);
+        }
+        let arrays: [(&'static str, Option<&Vec<f64>>); 4] = [
+            ("q", Some(&self.q)),
+            ("qd", Some(&self.qd)),
+            ("qdd", self.qdd.as_ref()),
+            ("tau", Some(&self.tau)),
+        ];
+        for (field, v) in arrays {
+            if let Some(v) = v {
+                if v.len() != m * n {
+                    return Err(SampleError::Length {
+                        field,
+                        got: v.len(),
+                        expected: m * n,
+                    });
+                }
+            }
+        }
+        for k in 0..m {
+            let t = self.t[k];
+            if !t.is_finite() {
+                return Err(SampleError::NotFinite {
+                    sample: k,
+                    t,
+                    field: "t".into(),
+                    value: t,
+                });
+            }
+            if k > 0 && t <= self.t[k - 1] {
+                return Err(SampleError::NonMonotonicTime {
+                    sample: k,
+                    t,
+                    previous: self.t[k - 1],
+                });
+            }
+            for (name, v) in [
+                ("q", Some(&self.q)),
+                ("dq", Some(&self.qd)),
+                ("ddq", self.qdd.as_ref()),
+                ("tau", Some(&self.tau)),
+            ] {
+                if let Some(v) = v {
+                    if let Some(j) = (0..n).find(|&j| !v[k * n + j].is_finite()) {
+                        return Err(SampleError::NotFinite {
+                            sample: k,
+                            t,
+                            field: format!("{name}{}", j + 1),
+                            value: v[k * n + j],
+                        });
+                    }
+                }
+            }
+        }
+        Ok(())
+    }
+}
+
+/// Shortest text that reads back as the same `f64`, in exponent form for very small or large
+/// magnitudes.
+fn num(x: f64) -> String {
+    let a = x.abs();
+    if a != 0.0 && !(1e-4..1e15).contains(&a) {
+        format!("{x:e}")
+    } else {
+        x.to_string()
+    }
+}
+
+/// CSV text of a trajectory (full precision, so reading it back gives the same numbers).
+pub fn to_csv(tr: &Trajectory) -> String {
+    let n = tr.dof();
+    let mut w = csv::Writer::from_writer(vec![]);
+    let mut header = vec!["t".to_string()];
+    let groups: Vec<&str> = if tr.qdd.is_some() {
+        vec!["q", "dq", "ddq", "tau"]
+    } else {
+        vec!["q", "dq", "tau"]
+    };
+    for g in &groups {
+        header.extend((1..=n).map(|j| format!("{g}{j}")));
+    }
+    w.write_record(&header).expect("writing to memory");
+    for k in 0..tr.len() {
+        let mut rec = vec![num(tr.t[k])];
+        let mut add = |v: &[f64]| rec.extend(v.iter().map(|&x| num(x)));
+        add(tr.q_at(k));
+        add(tr.qd_at(k));
+        if let Some(a) = tr.qdd_at(k) {
+            add(a);
+        }
+        add(tr.tau_at(k));
+        w.write_record(&rec).expect("writing to memory");
+    }
+    String::from_utf8(w.into_inner().expect("in memory")).expect("CSV is UTF-8")
+}
+
+/// Writes a trajectory as CSV, atomically.
+pub fn write_csv(path: &Path, tr: &Trajectory) -> Result<(), IoError> {
+    super::write_atomic(path, to_csv(tr).as_bytes())
+}
+
+/// Reads a trajectory from CSV. Joint names are `joint1..n` unless `joint_names` is given.
+/// Errors name the file, the line and the column.
+pub fn read_csv(path: &Path, joint_names: Option<&[String]>) -> Result<Trajectory, IoError> {
+    let text = super::read_to_string(path)?;
+    let bad = |m: String| IoError::invalid(path, m);
+    let mut r = csv::ReaderBuilder::new()
+        .trim(csv::Trim::All)
+        .from_reader(text.as_bytes());
+    let header: Vec<String> = r
+        .headers()
+        .map_err(|e| bad(format!("header: {e}")))?
+        .iter()
+        .map(str::to_string)
+        .collect();
+    let col = |name: &str| header.iter().position(|h| h == name);
+    let n = (1..)
+        .take_while(|j| col(&format!("q{j}")).is_some())
+        .count();
+    if n == 0 {
+        return Err(bad(
+            "no q1 column: expected a header `t, q1..qn, dq1..dqn, [ddq1..ddqn,] tau1..taun`"
+                .into(),
+        ));
+    }
+    let need = |g: &str| -> Result<Vec<usize>, IoError> {
+        (1..=n)
+            .map(|j| {
+                col(&format!("{g}{j}")).ok_or_else(|| {
+                    bad(format!(
+                        "missing column {g}{j} ({n} joints from the q columns)"
+                    ))
+                })
+            })
+            .collect()
+    };
+    let t_col = col("t").ok_or_else(|| bad("missing column t".into()))?;
+    let (qc, dqc, tauc) = (need("q")?, need("dq")?, need("tau")?);
+    let ddqc = if col("ddq1").is_some() {
+        Some(need("ddq")?)
+    } else {
+        None
+    };
+    if let Some(names) = joint_names {
+        if names.len() != n {
+            return Err(bad(format!(
+                "the file has {n} joints, the robot has {}",
+                names.len()
+            )));
+        }
+    }
+    let names = joint_names.map_or_else(
+        || (1..=n).map(|j| format!("joint{j}")).collect(),
+        |v| v.to_vec(),
+    );
+    let mut tr = Trajectory::new(names, ddqc.is_some());
+    for (k, rec) in r.records().enumerate() {
+        let line = k + 2;
+        let rec = rec.map_err(|e| bad(format!("line {line}: {e}")))?;
+        let get = |c: usize| -> Result<f64, IoError> {
+            let s = rec.get(c).unwrap_or("");
+            s.parse::<f64>().map_err(|_| {
+                bad(format!(
+                    "line {line}, column '{}': '{s}' is not a number",
+                    header[c]
+                ))
+            })
+        };
+        let vals = |cs: &[usize]| cs.iter().map(|&c| get(c)).collect::<Result<Vec<f64>, _>>();
+        let ddq = ddqc.as_deref().map(vals).transpose()?;
+        tr.push(
+            get(t_col)?,
+            &vals(&qc)?,
+            &vals(&dqc)?,
+            ddq.as_deref(),
+            &vals(&tauc)?,
+        );
+    }
+    tr.validate().map_err(|e| bad(e.to_string()))?;
+    Ok(tr)
+}

@@ -1,0 +1,339 @@
+//! Excitation controllers, evaluated at the control rate on the **measured** state (as on the
+//! robot): the paper's Cartesian impedance shell experiment, Fourier-series joint trajectories
+//! with PD or computed-torque tracking, and none (passive).
+
+use super::scenario::{ExcitationSpec, ScenarioError};
+use crate::dynamics::{kinematics, rnea, Data};
+use crate::model::Model;
+use nalgebra::{DVector, Vector3};
+use rand::{Rng, SeedableRng};
+use rand_chacha::ChaCha8Rng;
+
+/// The shell target (design.md §3): the azimuth `φ` and a polar phase `θ` integrate
+/// `φ̇ = A_φ sin(ω_φ t)`, `θ̇ = A_θ sin(ω_θ t)` from zero; the polar angle from straight down is
+/// `θ_p = polar_mid + polar_amplitude sin θ`, which keeps the target in a band of the shell that
+/// a leg with joint limits can reach; the target is `c + r ∘ [sin θ_p cos φ, sin θ_p sin φ,
+/// −cos θ_p]`.
+#[derive(Clone, Debug)]
+pub struct Shell {
+    body: usize,
+    offset: Vector3<f64>,
+    center: Vector3<f64>,
+    radii: Vector3<f64>,
+    a_phi: f64,
+    a_theta: f64,
+    w_phi: f64,
+    w_theta: f64,
+    polar_mid: f64,
+    polar_amplitude: f64,
+    kp: Vector3<f64>,
+    kd: Vector3<f64>,
+    joint_damping: f64,
+    gravity_compensation: bool,
+}
+
+impl Shell {
+    /// Target position and velocity (m, m/s; base frame) at time `t` (s).
+    pub fn target(&self, t: f64) -> (Vector3<f64>, Vector3<f64>) {
+        let phi = self.a_phi / self.w_phi * (1.0 - (self.w_phi * t).cos());
+        let phid = self.a_phi * (self.w_phi * t).sin();
+        let th = self.a_theta / self.w_theta * (1.0 - (self.w_theta * t).cos());
+        let thd = self.a_theta * (self.w_theta * t).sin();
+        let tp = self.polar_mid + self.polar_amplitude * th.sin();
+        let tpd = self.polar_amplitude * th.cos() * thd;
+        let (st, ct) = tp.sin_cos();
+        let (sp, cp) = phi.sin_cos();
+        let dir = Vector3::new(st * cp, st * sp, -ct);
+        let ddir = Vector3::new(
+            ct * cp * tpd - st * sp * phid,
+            ct * sp * tpd + st * cp * phid,
+            st * tpd,
+        );
+        (
+            self.center + self.radii.component_mul(&dir),
+            self.radii.component_mul(&ddir),
+        )
+    }
+}
+
+/// Fourier-series joint trajectories `q_d = offset + Σ_l a_l sin(ω_l t) + b_l (cos(ω_l t) − 1)`,
+/// `ω_l = 2π l f_0`, with random coefficients (decaying as 1/l) scaled to the amplitude.
+#[derive(Clone, Debug)]
+pub struct Fourier {
+    w: Vec<f64>,
+    a: Vec<Vec<f64>>,
+    b: Vec<Vec<f64>>,
+    offset: Vec<f64>,
+    kp: Vec<f64>,
+    kd: Vec<f64>,
+    computed_torque: bool,
+}
+
+impl Fourier {
+    /// Desired `(q, q̇, q̈)` at time `t`.
+    pub fn desired(&self, t: f64) -> [Vec<f64>; 3] {
+        let n = self.offset.len();
+        let (mut q, mut qd, mut qdd) = (self.offset.clone(), vec![0.0; n], vec![0.0; n]);
+        for (l, w) in self.w.iter().enumerate() {
+            let (s, c) = (w * t).sin_cos();
+            for j in 0..n {
+                let (a, b) = (self.a[j][l], self.b[j][l]);
+                q[j] += a * s + b * (c - 1.0);
+                qd[j] += w * (a * c - b * s);
+                qdd[j] -= w * w * (a * s + b * c);
+            }
+        }
+        [q, qd, qdd]
+    }
+}
+
+/// A controller ready to run.
+#[derive(Clone, Debug)]
+pub enum Controller {
+    /// Cartesian impedance on the shell.
+    Shell(Shell),
+    /// Fourier tracking.
+    Fourier(Fourier),
+    /// Zero torque.
+    Passive,
+}
+
+impl Controller {
+    /// Builds the controller of a scenario for `model`; `seed` draws the Fourier coefficients.
+    pub fn new(model: &Model, spec: &ExcitationSpec, seed: u64) -> Result<Self, ScenarioError> {
+        Ok(match spec {
+            ExcitationSpec::Shell {
+                point,
+                center,
+                radii,
+                a_phi,
+                a_theta,
+                w_phi,
+                w_theta,
+                polar_mid,
+                polar_amplitude,
+                kp,
+                kd,
+                joint_damping,
+                gravity_compensation,
+            } => {
+                let (body, offset) = match point {
+                    Some(p) => (
+                        model
+                            .bodies
+                            .iter()
+                            .position(|b| b.name == p.body)
+                            .ok_or_else(|| ScenarioError {
+                                key: "excitation.point.body".into(),
+                                reason: format!("'{}' is not a body of the robot", p.body),
+                            })?,
+                        Vector3::from(p.offset),
+                    ),
+                    None => (model.dof() - 1, Vector3::zeros()),
+                };
+                Controller::Shell(Shell {
+                    body,
+                    offset,
+                    center: Vector3::from(*center),
+                    radii: Vector3::from(*radii),
+                    a_phi: *a_phi,
+                    a_theta: *a_theta,
+                    w_phi: *w_phi,
+                    w_theta: *w_theta,
+                    polar_mid: *polar_mid,
+                    polar_amplitude: *polar_amplitude,
+                    kp: Vector3::from(*kp),
+                    kd: Vector3::from(*kd),
+                    joint_damping: *joint_damping,
+                    gravity_compensation: *gravity_compensation,
+                })
+            }
+            ExcitationSpec::Fourier {
+                harmonics,
+                base_frequency,
+                amplitude,
+                offset,
+                kp,
+                kd,
+                computed_torque,
+            } => {
+                let mut rng = ChaCha8Rng::seed_from_u64(seed ^ 0x5eed_f00d);
+                let n = model.dof();
+                let w: Vec<f64> = (1..=*harmonics)
+                    .map(|l| 2.0 * std::f64::consts::PI * l as f64 * base_frequency)
+                    .collect();
+                let mut a = vec![vec![0.0; *harmonics]; n];
+                let mut b = vec![vec![0.0; *harmonics]; n];
+                for j in 0..n {
+                    for l in 0..*harmonics {
+                        a[j][l] = rng.random_range(-1.0..1.0) / (l + 1) as f64;
+                        b[j][l] = rng.random_range(-1.0..1.0) / (l + 1) as f64;
+                    }
+                }
+                let mut f = Fourier {
+                    w,
+                    a,
+                    b,
+                    offset: offset.clone(),
+                    kp: kp.clone(),
+                    kd: kd.clone(),
+                    computed_torque: *computed_torque,
+                };
+                // Scale each joint to its amplitude over one fundamental period.
+                let period = 1.0 / base_frequency;
+                let mut peak = vec![0.0f64; n];
+                for k in 0..2000 {
+                    let [q, _, _] = f.desired(period * k as f64 / 2000.0);
+                    for j in 0..n {
+                        peak[j] = peak[j].max((q[j] - offset[j]).abs());
+                    }
+                }
+                for j in 0..n {
+                    let s = if peak[j] > 0.0 {
+                        amplitude[j] / peak[j]
+                    } else {
+                        0.0
+                    };
+                    f.a[j]
+                        .iter_mut()
+                        .chain(f.b[j].iter_mut())
+                        .for_each(|c| *c *= s);
+                }
+                Controller::Fourier(f)
+            }
+            ExcitationSpec::Passive => Controller::Passive,
+        })
+    }
+
+    /// A starting state `(q, q̇)`: on target at rest for the shell (inverse kinematics seeded
+    /// with `guess`, then deterministic restarts; the best solution inside the joint limits), on
+    /// the desired trajectory for Fourier, `guess` at rest for passive.
+    pub fn initial_state(
+        &self,
+        model: &Model,
+        data: &mut Data,
+        guess: &[f64],
+    ) -> Result<(Vec<f64>, Vec<f64>), ScenarioError> {
+        let n = model.dof();
+        match self {
+            Controller::Shell(s) => {
+                let (p, _) = s.target(0.0);
+                let mut rng = ChaCha8Rng::seed_from_u64(7);
+                let mut seeds = vec![guess.to_vec()];
+                for _ in 0..40 {
+                    seeds.push(
+                        model
+                            .bodies
+                            .iter()
+                            .map(|b| {
+                                let (lo, hi) = (b.limits.lower.max(-3.0), b.limits.upper.min(3.0));
+                                rng.random_range(lo..=hi)
+                            })
+                            .collect(),
+                    );
+                }
+                let mut best: Option<(f64, Vec<f64>)> = None;
+                for seed in &seeds {
+                    let q = solve_ik(model, data, s.body, &s.offset, &p, seed);
+                    kinematics::update_world(model, data, &q);
+                    let r = (kinematics::point_position(data, s.body, &s.offset) - p).norm();
+                    if best.as_ref().is_none_or(|(rb, _)| r < *rb - 1e-9) {
+                        best = Some((r, q));
+                    }
+                    if r < 1e-8 {
+                        break;
+                    }
+                }
+                let (r, q) = best.expect("at least one seed");
+                if r > 1e-6 {
+                    return Err(ScenarioError {
+                        key: "excitation".into(),
+                        reason: format!(
+                            "the shell target's start ({:.3}, {:.3}, {:.3}) m is out of reach within the joint limits (closest {r:.3} m)",
+                            p.x, p.y, p.z
+                        ),
+                    });
+                }
+                Ok((q, vec![0.0; n]))
+            }
+            Controller::Fourier(f) => {
+                let [q, qd, _] = f.desired(0.0);
+                Ok((q, qd))
+            }
+            Controller::Passive => Ok((guess.to_vec(), vec![0.0; n])),
+        }
+    }
+
+    /// Joint torque command (N m) at time `t` from the measured `q`, `q̇`.
+    pub fn torque(
+        &self,
+        model: &Model,
+        data: &mut Data,
+        t: f64,
+        q: &[f64],
+        qd: &[f64],
+    ) -> DVector<f64> {
+        let n = model.dof();
+        match self {
+            Controller::Shell(s) => {
+                kinematics::update_world(model, data, q);
+                let p = kinematics::point_position(data, s.body, &s.offset);
+                let jac = kinematics::point_jacobian(model, data, s.body, &s.offset);
+                let qdv = DVector::from_column_slice(qd);
+                let v = &jac * &qdv;
+                let (pd, vd) = s.target(t);
+                let f = s.kp.component_mul(&(pd - p))
+                    + s.kd.component_mul(&(vd - Vector3::new(v[0], v[1], v[2])));
+                let mut tau = jac.transpose() * f - qdv * s.joint_damping;
+                if s.gravity_compensation {
+                    let zero = vec![0.0; n];
+                    tau += rnea(model, data, q, &zero, &zero);
+                }
+                tau
+            }
+            Controller::Fourier(f) => {
+                let [qd_d, qdd_d_vel, qdd_d] = f.desired(t);
+                let e: Vec<f64> = (0..n).map(|j| qd_d[j] - q[j]).collect();
+                let ed: Vec<f64> = (0..n).map(|j| qdd_d_vel[j] - qd[j]).collect();
+                if f.computed_torque {
+                    let a: Vec<f64> = (0..n)
+                        .map(|j| qdd_d[j] + f.kp[j] * e[j] + f.kd[j] * ed[j])
+                        .collect();
+                    rnea(model, data, q, qd, &a).clone()
+                } else {
+                    DVector::from_iterator(n, (0..n).map(|j| f.kp[j] * e[j] + f.kd[j] * ed[j]))
+                }
+            }
+            Controller::Passive => DVector::zeros(n),
+        }
+    }
+}
+
+/// Damped-least-squares inverse kinematics of a point: joint positions putting `offset` on
+/// `body` at `target` (base frame), starting from `guess`, clamped to the joint limits.
+pub fn solve_ik(
+    model: &Model,
+    data: &mut Data,
+    body: usize,
+    offset: &Vector3<f64>,
+    target: &Vector3<f64>,
+    guess: &[f64],
+) -> Vec<f64> {
+    let mut q = guess.to_vec();
+    let lambda2 = 1e-4;
+    for _ in 0..200 {
+        kinematics::update_world(model, data, &q);
+        let e = target - kinematics::point_position(data, body, offset);
+        if e.norm() < 1e-10 {
+            break;
+        }
+        let j = kinematics::point_jacobian(model, data, body, offset);
+        let jjt = &j * j.transpose() + nalgebra::Matrix3::identity() * lambda2;
+        let Some(inv) = jjt.try_inverse() else { break };
+        let dq = j.transpose() * (inv * e);
+        for (i, b) in model.bodies.iter().enumerate() {
+            q[i] = (q[i] + dq[i]).clamp(b.limits.lower, b.limits.upper);
+        }
+    }
+    q
+}

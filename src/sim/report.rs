@@ -1,0 +1,84 @@
+//! How well a recording excites the model: joint ranges, peak torques and the rank and
+//! condition number of the stacked regressor.
+
+use crate::dynamics::{regressor, Data};
+use crate::io::samples::Trajectory;
+use crate::model::Model;
+use nalgebra::{DMatrix, SymmetricEigen};
+
+/// Excitation summary of a trajectory.
+#[derive(Clone, Debug, serde::Serialize)]
+pub struct Excitation {
+    /// Per joint `[min, max]` position (rad).
+    pub q_range: Vec<[f64; 2]>,
+    /// Per joint peak |q̇| (rad/s).
+    pub qd_peak: Vec<f64>,
+    /// Per joint peak |τ| (N m).
+    pub tau_peak: Vec<f64>,
+    /// Numerical rank of the stacked regressor (columns scaled to unit norm), tolerance 1e-8
+    /// of the largest singular value.
+    pub rank: usize,
+    /// Number of parameters.
+    pub parameters: usize,
+    /// Condition number of the scaled stacked regressor on its identifiable subspace
+    /// (largest over smallest singular value above the rank tolerance).
+    pub condition: f64,
+}
+
+/// Computes the summary from the trajectory's q, q̇, q̈ (every `stride`-th sample).
+pub fn excitation(model: &Model, tr: &Trajectory, stride: usize) -> Excitation {
+    let n = model.dof();
+    let p = model.layout().len;
+    let mut d = Data::new(model);
+    let mut y = DMatrix::zeros(n, p);
+    let mut yty = DMatrix::<f64>::zeros(p, p);
+    let zero = vec![0.0; n];
+    for k in (0..tr.len()).step_by(stride.max(1)) {
+        regressor(
+            model,
+            &mut d,
+            tr.q_at(k),
+            tr.qd_at(k),
+            tr.qdd_at(k).unwrap_or(&zero),
+            &mut y,
+        );
+        yty.gemm_tr(1.0, &y, &y, 1.0);
+    }
+    // Column scaling: Y D with D = diag(1/‖Y_c‖).
+    let scale: Vec<f64> = (0..p)
+        .map(|c| {
+            if yty[(c, c)] > 0.0 {
+                1.0 / yty[(c, c)].sqrt()
+            } else {
+                0.0
+            }
+        })
+        .collect();
+    let scaled = DMatrix::from_fn(p, p, |i, j| yty[(i, j)] * scale[i] * scale[j]);
+    let ev = SymmetricEigen::new(scaled).eigenvalues;
+    let smax = ev.iter().cloned().fold(0.0f64, f64::max).max(0.0).sqrt();
+    let sv: Vec<f64> = ev
+        .iter()
+        .map(|e| e.max(0.0).sqrt())
+        .filter(|s| *s > 1e-8 * smax)
+        .collect();
+    let smin = sv.iter().cloned().fold(f64::INFINITY, f64::min);
+    let mut q_range = vec![[f64::INFINITY, f64::NEG_INFINITY]; n];
+    let (mut qd_peak, mut tau_peak) = (vec![0.0f64; n], vec![0.0f64; n]);
+    for k in 0..tr.len() {
+        for j in 0..n {
+            let q = tr.q_at(k)[j];
+            q_range[j] = [q_range[j][0].min(q), q_range[j][1].max(q)];
+            qd_peak[j] = qd_peak[j].max(tr.qd_at(k)[j].abs());
+            tau_peak[j] = tau_peak[j].max(tr.tau_at(k)[j].abs());
+        }
+    }
+    Excitation {
+        q_range,
+        qd_peak,
+        tau_peak,
+        rank: sv.len(),
+        parameters: p,
+        condition: smax / smin,
+    }
+}

@@ -1,0 +1,297 @@
+//! The ground-truth simulator: closed-loop excitation with friction, torque limits, effects,
+//! sensors and offline processing, as on the robot (design.md §3).
+//!
+//! Per control period `[t_k, t_k+1)` (default 1 kHz):
+//! 1. the encoder reads `q_enc = round((q + n_q) / step) · step`; the controller's velocity is
+//!    the backward difference of `q_enc` (or the truth);
+//! 2. the controller computes `τ_cmd` from the measured state; the actuators deliver
+//!    `τ_mot = clip(τ_cmd)` (effort, and the back-EMF limit when motor constants are given);
+//! 3. `τ_mot` is held while RK4 integrates `H q̈ = τ_mot + τ_effects(q) − τ_f(q̇) − C q̇ − g`
+//!    over `substeps` steps, with friction `τ_f = B q̇ + B_c tanh(q̇ / v_s)`: Coulomb friction
+//!    regularized over `v_s` (default 0.01 rad/s), a smooth, documented stand-in for stiction
+//!    that the regressor's `sign(q̇)` matches away from zero velocity;
+//! 4. the log records the commanded (delivered) torque plus torque-sensing noise and sensor
+//!    effects, exactly what the robot logs: its noise acts through the feedback.
+//!
+//! Offline, the encoder signal is processed into q, q̇, q̈ for identification (zero-phase
+//! Butterworth or plain differences). The ground truth (true q, q̇, q̈, τ_mot, friction) is kept
+//! beside it.
+
+use super::excitation::Controller;
+use super::scenario::{EffectSpec, Processing, Scenario, ScenarioError, VelocityFeedback};
+use super::signal::{butterworth_lowpass, differentiate};
+use crate::dynamics::{forward_dynamics, Data};
+use crate::io::samples::Trajectory;
+use crate::model::Model;
+use nalgebra::DVector;
+use rand::SeedableRng;
+use rand_chacha::ChaCha8Rng;
+use rand_distr::{Distribution, Normal};
+
+/// A simulation that cannot run or that failed.
+#[derive(Debug, thiserror::Error)]
+pub enum SimError {
+    /// A scenario value is invalid.
+    #[error("scenario {0}")]
+    Scenario(#[from] ScenarioError),
+    /// The state blew up.
+    #[error("simulation diverged at t = {t:.4} s: joint '{joint}' {what}")]
+    Diverged {
+        /// Time (s).
+        t: f64,
+        /// Joint name.
+        joint: String,
+        /// What happened.
+        what: String,
+    },
+    /// The other engine refused the model.
+    #[error("{0}")]
+    Engine(String),
+}
+
+/// Everything one simulated experiment produces.
+#[derive(Clone, Debug)]
+pub struct Recording {
+    /// True state, accelerations and the torque the actuators delivered (τ_mot).
+    pub truth: Trajectory,
+    /// True friction torque per sample (N m, sample-major).
+    pub friction: Vec<f64>,
+    /// True torque of the injected physical effects per sample (N m, sample-major).
+    pub effects: Vec<f64>,
+    /// What the robot logs: encoder positions, the controller's velocity, its difference as
+    /// acceleration, and the logged torque.
+    pub measured: Trajectory,
+    /// Offline-processed q, q̇, q̈ and torque: the identification input.
+    pub processed: Trajectory,
+}
+
+/// Joint torque limit for the motor torque-speed curve: at motor speed `ω = N q̇`, a motor with
+/// constant `k_t`, resistance `R` and supply `V` delivers at most `k_t (V ∓ k_t ω) / R` (driving /
+/// braking); at the joint that is multiplied by `N`.
+fn back_emf_limit(tau: f64, qd: f64, n: f64, kt: f64, r: f64, v: f64) -> f64 {
+    let w = (n * qd).abs();
+    let driving = tau * qd > 0.0;
+    let i_max = if driving {
+        (v - kt * w).max(0.0) / r
+    } else {
+        (v + kt * w) / r
+    };
+    n.abs() * kt * i_max
+}
+
+/// Simulates `scenario` on `model` (the ground truth). `progress(fraction)` is called about a
+/// hundred times. Deterministic: the same scenario gives the same numbers.
+pub fn simulate(
+    model: &Model,
+    scenario: &Scenario,
+    progress: &mut dyn FnMut(f64),
+) -> Result<Recording, SimError> {
+    let n = model.dof();
+    scenario.validate(n)?;
+    let s = &scenario.simulation;
+    let dt = 1.0 / s.rate;
+    let h = dt / s.substeps as f64;
+    let samples = (s.duration * s.rate).round() as usize;
+    let controller = Controller::new(model, &scenario.excitation, s.seed)?;
+    let mut data = Data::new(model);
+    let mut cdata = Data::new(model);
+    let guess: Vec<f64> = match &s.initial_q {
+        Some(q) => q.clone(),
+        None => model
+            .bodies
+            .iter()
+            .enumerate()
+            .map(|(i, b)| {
+                (if i % 2 == 0 { 0.3f64 } else { -0.6 }).clamp(b.limits.lower, b.limits.upper)
+            })
+            .collect(),
+    };
+    let (mut q, mut qd) = controller.initial_state(model, &mut cdata, &guess)?;
+    let mut rng = ChaCha8Rng::seed_from_u64(s.seed);
+    let se = &scenario.sensors;
+    let enc_noise = Normal::new(0.0, se.encoder_noise).expect("validated");
+    let tau_noise = Normal::new(0.0, se.torque_noise).expect("validated");
+    let motor = match (se.motor_kt, se.motor_resistance, se.supply_voltage) {
+        (Some(kt), Some(r), Some(v)) => Some((kt, r, v)),
+        _ => None,
+    };
+    let names: Vec<String> = model.bodies.iter().map(|b| b.joint_name.clone()).collect();
+    let mut truth = Trajectory::new(names.clone(), true);
+    let mut measured = Trajectory::new(names.clone(), true);
+    let (mut friction_log, mut effects_log) = (
+        Vec::with_capacity(samples * n),
+        Vec::with_capacity(samples * n),
+    );
+    let vs = s.friction_velocity;
+    let friction = |qd: &[f64]| -> Vec<f64> {
+        model
+            .bodies
+            .iter()
+            .zip(qd)
+            .map(|(b, &w)| b.friction.viscous * w + b.friction.coulomb * (w / vs).tanh())
+            .collect()
+    };
+    let physical_effects = |q: &[f64]| -> Vec<f64> {
+        let mut out = vec![0.0; n];
+        for e in &scenario.effects {
+            if let EffectSpec::Spring { stiffness, rest } = e {
+                for j in 0..n {
+                    out[j] -= stiffness[j] * (q[j] - rest[j]);
+                }
+            }
+        }
+        out
+    };
+    let mut offset = vec![0.0; n];
+    for e in &scenario.effects {
+        if let EffectSpec::TorqueOffset { offset: o } = e {
+            for j in 0..n {
+                offset[j] += o[j];
+            }
+        }
+    }
+    let quantize = |x: f64| {
+        if se.encoder_step > 0.0 {
+            (x / se.encoder_step).round() * se.encoder_step
+        } else {
+            x
+        }
+    };
+    let mut q_enc_prev: Option<Vec<f64>> = None;
+    let mut last_report = 0usize;
+    for k in 0..samples {
+        let t = k as f64 / s.rate;
+        // 1. Sensors.
+        let q_enc: Vec<f64> = q
+            .iter()
+            .map(|&x| quantize(x + enc_noise.sample(&mut rng)))
+            .collect();
+        let qd_fb: Vec<f64> = match (se.velocity_feedback, &q_enc_prev) {
+            (VelocityFeedback::True, _) => qd.clone(),
+            (VelocityFeedback::FiniteDifference, Some(p)) => {
+                q_enc.iter().zip(p).map(|(a, b)| (a - b) / dt).collect()
+            }
+            (VelocityFeedback::FiniteDifference, None) => qd.clone(),
+        };
+        // 2. Controller and actuators.
+        let cmd = controller.torque(model, &mut cdata, t, &q_enc, &qd_fb);
+        let tau_mot: Vec<f64> = (0..n)
+            .map(|j| {
+                let b = &model.bodies[j];
+                let mut lim = b.limits.effort;
+                if let (Some((kt, r, v)), Some(rot)) = (motor, &b.rotor) {
+                    lim = lim.min(back_emf_limit(cmd[j], qd[j], rot.gear_ratio, kt, r, v));
+                }
+                cmd[j].clamp(-lim, lim)
+            })
+            .collect();
+        // Truth at t_k.
+        let f = friction(&qd);
+        let fx = physical_effects(&q);
+        let net: Vec<f64> = (0..n).map(|j| tau_mot[j] + fx[j] - f[j]).collect();
+        let qdd = forward_dynamics(model, &mut data, &q, &qd, &net)
+            .map_err(|e| SimError::Engine(e.to_string()))?
+            .as_slice()
+            .to_vec();
+        truth.push(t, &q, &qd, Some(&qdd), &tau_mot);
+        friction_log.extend_from_slice(&f);
+        effects_log.extend_from_slice(&fx);
+        let logged: Vec<f64> = (0..n)
+            .map(|j| tau_mot[j] + offset[j] + tau_noise.sample(&mut rng))
+            .collect();
+        measured.push(t, &q_enc, &qd_fb, Some(&vec![0.0; n]), &logged);
+        q_enc_prev = Some(q_enc);
+        // 3. Integrate the period with τ_mot held.
+        let mut tau_fn = |_t: f64, q: &[f64], qd: &[f64]| -> DVector<f64> {
+            let f = friction(qd);
+            let fx = physical_effects(q);
+            DVector::from_iterator(n, (0..n).map(|j| tau_mot[j] + fx[j] - f[j]))
+        };
+        for m in 0..s.substeps {
+            super::rk4_step(
+                model,
+                &mut data,
+                t + m as f64 * h,
+                &mut q,
+                &mut qd,
+                h,
+                &mut tau_fn,
+            )
+            .map_err(|e| SimError::Engine(e.to_string()))?;
+        }
+        for j in 0..n {
+            if !q[j].is_finite() || !qd[j].is_finite() || qd[j].abs() > s.max_speed {
+                return Err(SimError::Diverged {
+                    t: t + dt,
+                    joint: model.bodies[j].joint_name.clone(),
+                    what: format!(
+                        "reached q = {:.4} rad, q̇ = {:.4} rad/s (limit {} rad/s)",
+                        q[j], qd[j], s.max_speed
+                    ),
+                });
+            }
+        }
+        if k * 100 / samples > last_report {
+            last_report = k * 100 / samples;
+            progress(k as f64 / samples as f64);
+        }
+    }
+    progress(1.0);
+    // The online velocity's difference as the logged acceleration.
+    let mqdd = column_map(&measured.qd, n, |x| differentiate(x, dt));
+    measured.qdd = Some(mqdd);
+    let processed = process(&measured, scenario, dt)?;
+    Ok(Recording {
+        truth,
+        friction: friction_log,
+        effects: effects_log,
+        measured,
+        processed,
+    })
+}
+
+/// Applies `f` to each joint's column of sample-major data.
+fn column_map(v: &[f64], n: usize, f: impl Fn(&[f64]) -> Vec<f64>) -> Vec<f64> {
+    let m = v.len() / n;
+    let mut out = vec![0.0; v.len()];
+    for j in 0..n {
+        let col: Vec<f64> = (0..m).map(|k| v[k * n + j]).collect();
+        for (k, x) in f(&col).into_iter().enumerate() {
+            out[k * n + j] = x;
+        }
+    }
+    out
+}
+
+/// Offline processing of the logged encoder positions and torques (see [`Processing`]).
+pub fn process(
+    measured: &Trajectory,
+    scenario: &Scenario,
+    dt: f64,
+) -> Result<Trajectory, SimError> {
+    let n = measured.dof();
+    let p = &scenario.processing;
+    let mut out = measured.clone();
+    match p.method {
+        Processing::FiniteDifference => {
+            out.qd = column_map(&measured.q, n, |x| differentiate(x, dt));
+            out.qdd = Some(column_map(&out.qd, n, |x| differentiate(x, dt)));
+        }
+        Processing::Butterworth => {
+            let sos =
+                butterworth_lowpass(p.order, p.cutoff, 1.0 / dt).map_err(|e| ScenarioError {
+                    key: "processing".into(),
+                    reason: e.to_string(),
+                })?;
+            out.q = column_map(&measured.q, n, |x| sos.filtfilt(x));
+            out.qd = column_map(&measured.q, n, |x| sos.filtfilt(&differentiate(x, dt)));
+            out.qdd = Some(column_map(&out.qd, n, |x| {
+                sos.filtfilt(&differentiate(x, dt))
+            }));
+            if p.filter_torque {
+                out.tau = column_map(&measured.tau, n, |x| sos.filtfilt(x));
+            }
+        }
+    }
+    Ok(out)
+}
