@@ -54,12 +54,14 @@ pub fn run(
         samples::write_csv(c, &rec.processed)?;
     }
     let ex = physid::sim::report::excitation(&model, &rec.truth, 10);
+    let (cons_rms, cons_max) = physid::sim::report::engine_consistency(&model, &rec);
     let sim_s = sc.simulation.duration;
     if json {
         let v = serde_json::json!({
             "scenario": path, "out": out, "engine": engine_name, "samples": rec.truth.len(),
             "simulated_seconds": sim_s, "wall_seconds": wall, "real_time_factor": sim_s / wall,
             "excitation": ex,
+            "physid_inverse_dynamics_residual": { "rms": cons_rms, "max": cons_max },
         });
         println!("{}", serde_json::to_string_pretty(&v)?);
         return Ok(());
@@ -89,9 +91,19 @@ pub fn run(
         ex.rank, ex.parameters, ex.condition
     );
     println!(
+        "physid inverse dynamics on this trajectory: residual RMS {} N m, max {} N m",
+        fmt_e(&cons_rms),
+        fmt_e(&cons_max)
+    );
+    println!(
         "wrote {}{}",
         out.display(),
         csv.map_or(String::new(), |c| format!(" and {}", c.display()))
     );
     Ok(())
+}
+
+fn fmt_e(v: &[f64]) -> String {
+    let parts: Vec<String> = v.iter().map(|x| format!("{x:.2e}")).collect();
+    format!("[{}]", parts.join(", "))
 }

@@ -15,6 +15,13 @@ use nalgebra::DMatrix;
 pub fn crba<'a>(model: &Model, data: &'a mut Data, q: &[f64]) -> &'a DMatrix<f64> {
     check_len(model, "q", q);
     update_transforms(model, data, q);
+    crba_from_transforms(model, data);
+    &data.h
+}
+
+/// CRBA on the transforms already in `data` (from [`update_transforms`] or an RNEA at the same
+/// `q`), filling `data.h`.
+pub(crate) fn crba_from_transforms(model: &Model, data: &mut Data) {
     let n = model.dof();
     let full = model.rotor_model == RotorModel::Full;
     data.ic.copy_from_slice(&data.inertia);
@@ -66,5 +73,4 @@ pub fn crba<'a>(model: &Model, data: &'a mut Data, q: &[f64]) -> &'a DMatrix<f64
             }
         }
     }
-    &data.h
 }

@@ -1,6 +1,7 @@
 //! Forward dynamics by the composite-rigid-body method (RBDA §6.1; spatial_v2 `FDcrb`).
 
-use super::{check_len, crba, rnea, Data};
+use super::crba::crba_from_transforms;
+use super::{check_len, rnea, Data};
 use crate::model::Model;
 use nalgebra::DVector;
 
@@ -13,7 +14,8 @@ pub enum FdError {
 }
 
 /// `q̈ = H(q)⁻¹ (τ − C(q, q̇) q̇ − g(q))` for the generalized force `τ` applied at the joints
-/// (add friction to `τ` yourself). Returns `&data.qdd`.
+/// (add friction to `τ` yourself). Returns `&data.qdd`. The joint transforms are computed once
+/// (by the RNEA for the bias) and reused by the CRBA; nothing is allocated.
 pub fn forward_dynamics<'a>(
     model: &Model,
     data: &'a mut Data,
@@ -22,21 +24,20 @@ pub fn forward_dynamics<'a>(
     tau: &[f64],
 ) -> Result<&'a DVector<f64>, FdError> {
     check_len(model, "tau", tau);
-    let zero = [0.0; 64];
     let n = model.dof();
-    let bias = if n <= zero.len() {
-        rnea(model, data, q, qd, &zero[..n]).clone()
-    } else {
-        rnea(model, data, q, qd, &vec![0.0; n]).clone()
-    };
-    data.bias.copy_from(&bias);
-    crba(model, data, q);
-    let chol = data
-        .h
-        .clone()
-        .cholesky()
-        .ok_or(FdError::SingularMassMatrix)?;
-    let rhs = DVector::from_column_slice(tau) - &data.bias;
-    data.qdd = chol.solve(&rhs);
+    let mut zero = std::mem::take(&mut data.zero);
+    zero.resize(n, 0.0);
+    rnea(model, data, q, qd, &zero);
+    data.zero = zero;
+    std::mem::swap(&mut data.bias, &mut data.tau);
+    crba_from_transforms(model, data);
+    let mut ws = std::mem::take(&mut data.chol);
+    ws.clone_from(&data.h);
+    let chol = ws.cholesky().ok_or(FdError::SingularMassMatrix)?;
+    for i in 0..n {
+        data.qdd[i] = tau[i] - data.bias[i];
+    }
+    chol.solve_mut(&mut data.qdd);
+    data.chol = chol.unpack();
     Ok(&data.qdd)
 }

@@ -70,6 +70,10 @@ pub struct Data {
     pub qdd: DVector<f64>,
     /// World (base) to body `i` frame, filled by [`kinematics::update_world`].
     pub x_world: Vec<Transform>,
+    /// Cholesky workspace for forward dynamics.
+    pub chol: DMatrix<f64>,
+    /// A zero joint vector.
+    pub zero: Vec<f64>,
     /// `s_anc[i * n + k]`: joint `k`'s motion subspace in body `i` coordinates, for `k` in the
     /// support of `i` (regressor workspace).
     pub s_anc: Vec<Motion>,
@@ -107,6 +111,8 @@ impl Data {
             qdd: DVector::zeros(n),
             x_world: vec![Transform::identity(); n],
             s_anc: vec![Motion::zero(); n * n],
+            chol: DMatrix::zeros(n, n),
+            zero: vec![0.0; n],
         }
     }
 

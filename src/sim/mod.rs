@@ -11,18 +11,13 @@ use crate::dynamics::{forward_dynamics, Data, FdError};
 use crate::model::Model;
 use nalgebra::DVector;
 
-/// Runs a scenario on its engine (see [`simulate::simulate`] and [`rapier`]).
+/// Runs a scenario (see [`simulate::simulate`]; the engine is the scenario's choice).
 pub fn run(
     model: &Model,
     scenario: &scenario::Scenario,
     progress: &mut dyn FnMut(f64),
 ) -> Result<simulate::Recording, simulate::SimError> {
-    match scenario.simulation.engine {
-        scenario::Engine::Physid => simulate::simulate(model, scenario, progress),
-        scenario::Engine::Rapier => Err(simulate::SimError::Engine(
-            "the rapier engine runs passive link-only checks so far (physid::sim::rapier); closed-loop experiments use engine = \"physid\"".into(),
-        )),
-    }
+    simulate::simulate(model, scenario, progress)
 }
 
 /// A joint-torque law `τ(t, q, q̇)` (N m).

@@ -6,7 +6,14 @@
 //! rapier generic joint whose free DOF is the local x axis of its two joint frames:
 //! `frame1 = (R_tree B, p_tree)` on the parent and `frame2 = (B, 0)` on the child, with `B` a
 //! rotation taking x onto the joint axis, so that `child = parent · T(p) R_tree R_axis(q)` as in
-//! physid. rapier's default joint damping is removed. Rotors are not mapped here yet.
+//! physid. rapier's default joint damping is removed.
+//!
+//! A rotor is its own rigid body on the parent, on a revolute multibody joint about its spin
+//! axis at `x_rot`, held to `q_rot = N q_i` by rapier's DOF coupling (an equality constraint),
+//! which keeps its gyroscopic coupling as physid's full rotor model does. A joint torque `τ_i`
+//! is applied as the torque `τ_i a_i` on body `i` and `−τ_i a_i` on its parent (`a_i` the joint
+//! axis in world coordinates): an internal torque whose generalized force is `τ_i` on joint `i`
+//! alone.
 
 use crate::model::{Joint, Model};
 use crate::spatial::InertialParams;
@@ -37,6 +44,14 @@ pub struct RapierSim {
     gravity: Vector,
     /// Multibody joint handle of each physid joint.
     handles: Vec<MultibodyJointHandle>,
+    /// Rigid body of each physid body.
+    links: Vec<RigidBodyHandle>,
+    /// Parent rigid body of each physid body (the base for roots).
+    parents: Vec<RigidBodyHandle>,
+    /// Joint axis of each body, in its own frame.
+    axes: Vec<Vector3<f64>>,
+    /// Multibody joint handle of each rotor (with its joint index and gear ratio).
+    rotors: Vec<(usize, MultibodyJointHandle, f64)>,
 }
 
 fn vec3(v: &Vector3<f64>) -> Vector {
@@ -69,16 +84,14 @@ fn mass_properties(p: &InertialParams) -> MassProperties {
 impl RapierSim {
     /// Builds the multibody at `(q0, q̇0)` with time step `dt` (s).
     pub fn new(model: &Model, q0: &[f64], qd0: &[f64], dt: f64) -> Result<Self, RapierError> {
-        if model.rotor_count() > 0 {
-            return Err(RapierError::Unsupported(
-                "rotors are not mapped yet; use the link-only model".into(),
-            ));
-        }
         let mut bodies = RigidBodySet::new();
         let mut multibody_joints = MultibodyJointSet::new();
         let base = bodies.insert(RigidBodyBuilder::fixed().build());
         let mut rb = vec![];
         let mut handles = vec![];
+        let mut parents = vec![];
+        let mut axes = vec![];
+        let mut rotors = vec![];
         for (i, b) in model.bodies.iter().enumerate() {
             let Joint::Revolute { axis } = b.joint else {
                 return Err(RapierError::Unsupported(format!(
@@ -100,8 +113,28 @@ impl RapierSim {
             let jh = multibody_joints
                 .insert(parent, h, joint, true)
                 .ok_or_else(|| RapierError::Unsupported(format!("rapier refused joint {i}")))?;
+            if let Some(r) = &b.rotor {
+                let body = RigidBodyBuilder::dynamic()
+                    .additional_mass_properties(mass_properties(&r.inertia))
+                    .build();
+                let hr = bodies.insert(body);
+                let (r_rot, p_rot) = r.x_rot.to_pose();
+                let br = x_onto(&r.axis);
+                let joint = GenericJointBuilder::new(JointAxesMask::LOCKED_REVOLUTE_AXES)
+                    .local_frame1(Pose::from_parts(vec3(&p_rot), rot3(&(r_rot * br))))
+                    .local_frame2(Pose::from_parts(Vector::ZERO, rot3(&br)))
+                    .build();
+                let jr = multibody_joints
+                    .insert(parent, hr, joint, true)
+                    .ok_or_else(|| {
+                        RapierError::Unsupported(format!("rapier refused rotor '{}'", r.name))
+                    })?;
+                rotors.push((i, jr, r.gear_ratio));
+            }
             rb.push(h);
             handles.push(jh);
+            parents.push(parent);
+            axes.push(axis);
         }
         let mut sim = Self {
             bodies,
@@ -120,7 +153,12 @@ impl RapierSim {
             },
             gravity: vec3(&model.gravity),
             handles,
+            links: rb,
+            parents,
+            axes,
+            rotors,
         };
+        sim.couple_rotors();
         sim.set_state(q0, qd0);
         Ok(sim)
     }
@@ -133,29 +171,83 @@ impl RapierSim {
             .collect()
     }
 
-    /// Sets joint positions (rad) and velocities (rad/s); assumes the current coordinates are
-    /// zero (called once, from [`RapierSim::new`]).
+    /// Adds the gear constraints `q_rot = N q_i`.
+    fn couple_rotors(&mut self) {
+        let ids = self.link_ids();
+        let couplings: Vec<MultibodyDofCoupling> = self
+            .rotors
+            .iter()
+            .map(|&(i, jr, n)| MultibodyDofCoupling {
+                link1: ids[i],
+                dof1: 0,
+                axis1: 3,
+                link2: self.multibody_joints.get(jr).expect("rotor exists").1,
+                dof2: 0,
+                axis2: 3,
+                coeff: n,
+                offset: 0.0,
+            })
+            .collect();
+        let (mb, _) = self
+            .multibody_joints
+            .get_mut(self.handles[0])
+            .expect("joint exists");
+        for c in couplings {
+            mb.add_dof_coupling(c);
+        }
+    }
+
+    /// Sets joint positions (rad) and velocities (rad/s), rotors at `N q`, `N q̇`; assumes the
+    /// current coordinates are zero (called once, from [`RapierSim::new`]).
     fn set_state(&mut self, q: &[f64], qd: &[f64]) {
         let ids = self.link_ids();
+        let rotor_ids: Vec<(usize, usize, f64)> = self
+            .rotors
+            .iter()
+            .map(|&(i, jr, n)| (i, self.multibody_joints.get(jr).expect("rotor exists").1, n))
+            .collect();
         let (mb, _) = self
             .multibody_joints
             .get_mut(self.handles[0])
             .expect("joint exists");
         mb.damping_mut().fill(0.0);
         let mut disp = vec![0.0; mb.ndofs()];
-        let dof: Vec<usize> = ids
-            .iter()
-            .map(|&l| mb.link(l).expect("link exists").assembly_id())
-            .collect();
-        for (i, &d) in dof.iter().enumerate() {
+        let mut vel = vec![0.0; mb.ndofs()];
+        for (i, &l) in ids.iter().enumerate() {
+            let d = mb.link(l).expect("link exists").assembly_id();
             disp[d] = q[i];
+            vel[d] = qd[i];
+        }
+        for &(i, l, n) in &rotor_ids {
+            let d = mb.link(l).expect("rotor link exists").assembly_id();
+            disp[d] = n * q[i];
+            vel[d] = n * qd[i];
         }
         mb.apply_displacements(&disp);
-        for (i, &d) in dof.iter().enumerate() {
-            mb.generalized_velocity_mut()[d] = qd[i];
+        for (d, v) in vel.iter().enumerate() {
+            mb.generalized_velocity_mut()[d] = *v;
         }
         mb.forward_kinematics(&self.bodies, false);
         mb.update_rigid_bodies(&mut self.bodies, true);
+    }
+
+    /// Advances one time step with the joint torques `tau` (N m) held.
+    pub fn step_with_torque(&mut self, tau: &[f64]) {
+        for h in self.links.iter().chain(&self.parents) {
+            if let Some(b) = self.bodies.get_mut(*h) {
+                b.reset_torques(true);
+            }
+        }
+        for (i, &h) in self.links.iter().enumerate() {
+            let rot = self.bodies[h].position().rotation;
+            let a = rot * vec3(&self.axes[i]);
+            self.bodies[h].add_torque(a * tau[i], true);
+            let p = self.parents[i];
+            if self.bodies[p].is_dynamic() {
+                self.bodies[p].add_torque(-a * tau[i], true);
+            }
+        }
+        self.step();
     }
 
     /// Advances one time step without applied torque.

@@ -82,3 +82,35 @@ pub fn excitation(model: &Model, tr: &Trajectory, stride: usize) -> Excitation {
         condition: smax / smin,
     }
 }
+
+/// How well physid's inverse dynamics explains a recording's ground truth: per joint RMS and max
+/// of `τ_mot + τ_effects − τ_friction − RNEA(q, q̇, q̈)` (N m). Zero up to integration error for
+/// physid's own engine; for rapier it measures how far the two engines' torques differ on the
+/// same trajectory.
+pub fn engine_consistency(
+    model: &Model,
+    rec: &crate::sim::simulate::Recording,
+) -> (Vec<f64>, Vec<f64>) {
+    let n = model.dof();
+    let mut d = Data::new(model);
+    let tr = &rec.truth;
+    let (mut ss, mut mx) = (vec![0.0; n], vec![0.0f64; n]);
+    for k in 0..tr.len() {
+        let tau = crate::dynamics::rnea(
+            model,
+            &mut d,
+            tr.q_at(k),
+            tr.qd_at(k),
+            tr.qdd_at(k).expect("truth has q̈"),
+        );
+        for j in 0..n {
+            let r = tr.tau_at(k)[j] + rec.effects[k * n + j] - rec.friction[k * n + j] - tau[j];
+            ss[j] += r * r;
+            mx[j] = mx[j].max(r.abs());
+        }
+    }
+    (
+        ss.iter().map(|s| (s / tr.len() as f64).sqrt()).collect(),
+        mx,
+    )
+}

@@ -18,7 +18,7 @@
 //! beside it.
 
 use super::excitation::Controller;
-use super::scenario::{EffectSpec, Processing, Scenario, ScenarioError, VelocityFeedback};
+use super::scenario::{EffectSpec, Engine, Processing, Scenario, ScenarioError, VelocityFeedback};
 use super::signal::{butterworth_lowpass, differentiate};
 use crate::dynamics::{forward_dynamics, Data};
 use crate::io::samples::Trajectory;
@@ -93,7 +93,6 @@ pub fn simulate(
     let h = dt / s.substeps as f64;
     let samples = (s.duration * s.rate).round() as usize;
     let controller = Controller::new(model, &scenario.excitation, s.seed)?;
-    let mut data = Data::new(model);
     let mut cdata = Data::new(model);
     let guess: Vec<f64> = match &s.initial_q {
         Some(q) => q.clone(),
@@ -106,7 +105,23 @@ pub fn simulate(
             })
             .collect(),
     };
-    let (mut q, mut qd) = controller.initial_state(model, &mut cdata, &guess)?;
+    let (q0, qd0) = controller.initial_state(model, &mut cdata, &guess)?;
+    let mut engine: Box<dyn Integrator + '_> = match s.engine {
+        Engine::Physid => Box::new(PhysidIntegrator {
+            model,
+            data: Data::new(model),
+            q: q0,
+            qd: qd0,
+            h,
+            substeps: s.substeps,
+        }),
+        Engine::Rapier => Box::new(RapierIntegrator {
+            sim: super::rapier::RapierSim::new(model, &q0, &qd0, h)
+                .map_err(|e| SimError::Engine(e.to_string()))?,
+            substeps: s.substeps,
+            h,
+        }),
+    };
     let mut rng = ChaCha8Rng::seed_from_u64(s.seed);
     let se = &scenario.sensors;
     let enc_noise = Normal::new(0.0, se.encoder_noise).expect("validated");
@@ -122,26 +137,7 @@ pub fn simulate(
         Vec::with_capacity(samples * n),
         Vec::with_capacity(samples * n),
     );
-    let vs = s.friction_velocity;
-    let friction = |qd: &[f64]| -> Vec<f64> {
-        model
-            .bodies
-            .iter()
-            .zip(qd)
-            .map(|(b, &w)| b.friction.viscous * w + b.friction.coulomb * (w / vs).tanh())
-            .collect()
-    };
-    let physical_effects = |q: &[f64]| -> Vec<f64> {
-        let mut out = vec![0.0; n];
-        for e in &scenario.effects {
-            if let EffectSpec::Spring { stiffness, rest } = e {
-                for j in 0..n {
-                    out[j] -= stiffness[j] * (q[j] - rest[j]);
-                }
-            }
-        }
-        out
-    };
+    let loads = Loads { model, scenario };
     let mut offset = vec![0.0; n];
     for e in &scenario.effects {
         if let EffectSpec::TorqueOffset { offset: o } = e {
@@ -161,6 +157,7 @@ pub fn simulate(
     let mut last_report = 0usize;
     for k in 0..samples {
         let t = k as f64 / s.rate;
+        let (q, qd) = engine.state();
         // 1. Sensors.
         let q_enc: Vec<f64> = q
             .iter()
@@ -185,14 +182,11 @@ pub fn simulate(
                 cmd[j].clamp(-lim, lim)
             })
             .collect();
-        // Truth at t_k.
-        let f = friction(&qd);
-        let fx = physical_effects(&q);
-        let net: Vec<f64> = (0..n).map(|j| tau_mot[j] + fx[j] - f[j]).collect();
-        let qdd = forward_dynamics(model, &mut data, &q, &qd, &net)
-            .map_err(|e| SimError::Engine(e.to_string()))?
-            .as_slice()
-            .to_vec();
+        // 3. Integrate the period with τ_mot held; the truth at t_k.
+        let (q, qd) = engine.state();
+        let f = loads.friction(&qd);
+        let fx = loads.effects(&q);
+        let qdd = engine.period(&tau_mot, &loads)?;
         truth.push(t, &q, &qd, Some(&qdd), &tau_mot);
         friction_log.extend_from_slice(&f);
         effects_log.extend_from_slice(&fx);
@@ -201,32 +195,15 @@ pub fn simulate(
             .collect();
         measured.push(t, &q_enc, &qd_fb, Some(&vec![0.0; n]), &logged);
         q_enc_prev = Some(q_enc);
-        // 3. Integrate the period with τ_mot held.
-        let mut tau_fn = |_t: f64, q: &[f64], qd: &[f64]| -> DVector<f64> {
-            let f = friction(qd);
-            let fx = physical_effects(q);
-            DVector::from_iterator(n, (0..n).map(|j| tau_mot[j] + fx[j] - f[j]))
-        };
-        for m in 0..s.substeps {
-            super::rk4_step(
-                model,
-                &mut data,
-                t + m as f64 * h,
-                &mut q,
-                &mut qd,
-                h,
-                &mut tau_fn,
-            )
-            .map_err(|e| SimError::Engine(e.to_string()))?;
-        }
+        let (q1, qd1) = engine.state();
         for j in 0..n {
-            if !q[j].is_finite() || !qd[j].is_finite() || qd[j].abs() > s.max_speed {
+            if !q1[j].is_finite() || !qd1[j].is_finite() || qd1[j].abs() > s.max_speed {
                 return Err(SimError::Diverged {
                     t: t + dt,
                     joint: model.bodies[j].joint_name.clone(),
                     what: format!(
                         "reached q = {:.4} rad, q̇ = {:.4} rad/s (limit {} rad/s)",
-                        q[j], qd[j], s.max_speed
+                        q1[j], qd1[j], s.max_speed
                     ),
                 });
             }
@@ -248,6 +225,124 @@ pub fn simulate(
         measured,
         processed,
     })
+}
+
+/// Friction and physical effects, shared by the engines.
+pub(crate) struct Loads<'a> {
+    model: &'a Model,
+    scenario: &'a Scenario,
+}
+
+impl Loads<'_> {
+    /// `B q̇ + B_c tanh(q̇ / v_s)` (N m).
+    fn friction(&self, qd: &[f64]) -> Vec<f64> {
+        let vs = self.scenario.simulation.friction_velocity;
+        self.model
+            .bodies
+            .iter()
+            .zip(qd)
+            .map(|(b, &w)| b.friction.viscous * w + b.friction.coulomb * (w / vs).tanh())
+            .collect()
+    }
+    /// Torque of the injected physical effects (N m).
+    fn effects(&self, q: &[f64]) -> Vec<f64> {
+        let n = q.len();
+        let mut out = vec![0.0; n];
+        for e in &self.scenario.effects {
+            if let EffectSpec::Spring { stiffness, rest } = e {
+                for j in 0..n {
+                    out[j] -= stiffness[j] * (q[j] - rest[j]);
+                }
+            }
+        }
+        out
+    }
+    /// Net generalized force on the joints for a held motor torque.
+    fn net(&self, tau_mot: &[f64], q: &[f64], qd: &[f64]) -> Vec<f64> {
+        let (f, fx) = (self.friction(qd), self.effects(q));
+        (0..q.len()).map(|j| tau_mot[j] + fx[j] - f[j]).collect()
+    }
+}
+
+/// An engine that advances the robot one control period at a time.
+trait Integrator {
+    /// Current `(q, q̇)`.
+    fn state(&self) -> (Vec<f64>, Vec<f64>);
+    /// Integrates one control period with `tau_mot` held; returns the true `q̈` at its start.
+    fn period(&mut self, tau_mot: &[f64], loads: &Loads) -> Result<Vec<f64>, SimError>;
+}
+
+/// physid's forward dynamics with RK4.
+struct PhysidIntegrator<'a> {
+    model: &'a Model,
+    data: Data,
+    q: Vec<f64>,
+    qd: Vec<f64>,
+    h: f64,
+    substeps: usize,
+}
+
+impl Integrator for PhysidIntegrator<'_> {
+    fn state(&self) -> (Vec<f64>, Vec<f64>) {
+        (self.q.clone(), self.qd.clone())
+    }
+    fn period(&mut self, tau_mot: &[f64], loads: &Loads) -> Result<Vec<f64>, SimError> {
+        let net = loads.net(tau_mot, &self.q, &self.qd);
+        let qdd = forward_dynamics(self.model, &mut self.data, &self.q, &self.qd, &net)
+            .map_err(|e| SimError::Engine(e.to_string()))?
+            .as_slice()
+            .to_vec();
+        let mut tau_fn =
+            |_t: f64, q: &[f64], qd: &[f64]| DVector::from_vec(loads.net(tau_mot, q, qd));
+        for _ in 0..self.substeps {
+            super::rk4_step(
+                self.model,
+                &mut self.data,
+                0.0,
+                &mut self.q,
+                &mut self.qd,
+                self.h,
+                &mut tau_fn,
+            )
+            .map_err(|e| SimError::Engine(e.to_string()))?;
+        }
+        Ok(qdd)
+    }
+}
+
+/// rapier3d's multibody solver (first-order); the true `q̈` at the start of a period is the
+/// velocity change of its first step over the step, constraint impulses (the gears) included.
+struct RapierIntegrator {
+    sim: super::rapier::RapierSim,
+    substeps: usize,
+    h: f64,
+}
+
+impl Integrator for RapierIntegrator {
+    fn state(&self) -> (Vec<f64>, Vec<f64>) {
+        self.sim.state()
+    }
+    fn period(&mut self, tau_mot: &[f64], loads: &Loads) -> Result<Vec<f64>, SimError> {
+        let (q0, qd0) = self.sim.state();
+        let mut qdd = vec![];
+        for m in 0..self.substeps {
+            let (q, qd) = if m == 0 {
+                (q0.clone(), qd0.clone())
+            } else {
+                self.sim.state()
+            };
+            self.sim.step_with_torque(&loads.net(tau_mot, &q, &qd));
+            if m == 0 {
+                let (_, qd1) = self.sim.state();
+                qdd = qd1
+                    .iter()
+                    .zip(&qd0)
+                    .map(|(a, b)| (a - b) / self.h)
+                    .collect();
+            }
+        }
+        Ok(qdd)
+    }
 }
 
 /// Applies `f` to each joint's column of sample-major data.
