@@ -34,8 +34,8 @@ pub fn forward_dynamics<'a>(
     let mut ws = std::mem::take(&mut data.chol);
     ws.clone_from(&data.h);
     let chol = ws.cholesky().ok_or(FdError::SingularMassMatrix)?;
-    for i in 0..n {
-        data.qdd[i] = tau[i] - data.bias[i];
+    for ((a, t), b) in data.qdd.iter_mut().zip(tau).zip(data.bias.iter()) {
+        *a = t - b;
     }
     chol.solve_mut(&mut data.qdd);
     data.chol = chol.unpack();
