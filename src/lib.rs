@@ -10,10 +10,13 @@
 //! - [`model`]: the immutable robot model (tree, joints, rotors, friction, ellipsoids), the
 //!   built-in Cheetah-3 leg;
 //! - [`dynamics`]: RNEA, CRBA, forward dynamics, the regressor, energy and kinematics;
-//! - [`io`]: robot descriptions (URDF, TOML) in, MJCF/URDF out.
+//! - [`sim`]: scenario files, the closed-loop excitation simulator, signal processing, rapier;
+//! - [`ident`]: identification under the paper's four constraint sets with Clarabel;
+//! - [`io`]: robot descriptions (URDF, TOML) in, MJCF/URDF out, MCAP and CSV logs.
 #![warn(missing_docs)]
 
 pub mod dynamics;
+pub mod ident;
 pub mod io;
 pub mod model;
 pub mod sim;

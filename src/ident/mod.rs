@@ -1,0 +1,468 @@
+//! Identification under the paper's four constraint sets (eq. 10):
+//!
+//! `min_θ (1/n_s) Σ_k ‖Y_k θ − τ_k‖² + w ‖θ − θ̂‖²`, with per body (links and rotors)
+//! - `none`: no constraint (ordinary least squares, solved directly);
+//! - `semi`: `I(π) ⪰ ε 1` (6×6);
+//! - `consistent`: `J(π) ⪰ ε 1` (4×4);
+//! - `ellipsoid`: `J(π) ⪰ ε 1`, `tr(J(π) Q) ≥ 0` and `C(π) ⪰ 0` for the body's bounding
+//!   ellipsoid;
+//!
+//! and non-negative friction coefficients in the constrained sets. `θ̂` is the prior (the robot
+//! description's parameters, e.g. CAD) and `w` a small weight (the paper: 1e-6). The strict
+//! inequalities become `⪰ ε 1` with `ε = 1e-6` (kg m², kg; see [`Options::eps`]): far below every
+//! body's margin in the default truth (`λ_min(J) ≥ 5e-5`), far above round-off.
+//!
+//! The data enter only through the normal equations ([`NormalEquations`]): `P = 2 D (YᵀY/n_s +
+//! w 1) D`, `q = −2 D (Yᵀτ/n_s + w θ̂)` in scaled variables `θ = D x` with
+//! `D = diag(1/√(YᵀY_cc/n_s + w))`, so the cone program has `p` variables whatever `n_s` is and
+//! unit-diagonal curvature. Clarabel solves it to global optimality; its status is mapped to a
+//! result or an [`IdentError`]. No Clarabel type leaves this module.
+
+pub mod analysis;
+pub mod lmi;
+pub mod normal;
+
+pub use normal::NormalEquations;
+
+use crate::model::Model;
+use crate::spatial::{ConsistencyReport, InertialParams};
+use clarabel::algebra::CscMatrix;
+use clarabel::solver::{DefaultSettings, DefaultSolver, IPSolver, SolverStatus, SupportedConeT};
+use lmi::Lmi;
+use nalgebra::{DMatrix, DVector};
+use serde::Serialize;
+
+/// The constraint set, loosest to tightest.
+#[derive(
+    Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize, serde::Deserialize, PartialOrd, Ord,
+)]
+#[serde(rename_all = "lowercase")]
+pub enum ConstraintSet {
+    /// Ordinary least squares.
+    None,
+    /// `I(π) ⪰ ε 1`.
+    Semi,
+    /// `J(π) ⪰ ε 1`.
+    Consistent,
+    /// `J(π) ⪰ ε 1`, `tr(J Q) ≥ 0`, `C(π) ⪰ 0`.
+    Ellipsoid,
+}
+
+impl ConstraintSet {
+    /// All four, loosest first.
+    pub const ALL: [ConstraintSet; 4] = [
+        ConstraintSet::None,
+        ConstraintSet::Semi,
+        ConstraintSet::Consistent,
+        ConstraintSet::Ellipsoid,
+    ];
+    /// Lower-case name.
+    pub fn name(&self) -> &'static str {
+        match self {
+            ConstraintSet::None => "none",
+            ConstraintSet::Semi => "semi",
+            ConstraintSet::Consistent => "consistent",
+            ConstraintSet::Ellipsoid => "ellipsoid",
+        }
+    }
+}
+
+impl std::str::FromStr for ConstraintSet {
+    type Err = String;
+    fn from_str(s: &str) -> Result<Self, String> {
+        ConstraintSet::ALL
+            .into_iter()
+            .find(|c| c.name() == s)
+            .ok_or_else(|| {
+                format!("unknown constraint set '{s}' (none, semi, consistent, ellipsoid)")
+            })
+    }
+}
+
+/// Identification options.
+#[derive(Clone, Debug)]
+pub struct Options {
+    /// Constraint set.
+    pub constraints: ConstraintSet,
+    /// Weight `w` of `‖θ − θ̂‖²`.
+    pub prior_weight: f64,
+    /// Margin `ε` of the strict matrix inequalities.
+    pub eps: f64,
+    /// Solve `none` with the cone solver instead of directly (for cross-checks).
+    pub force_cone_solver: bool,
+}
+
+impl Options {
+    /// The paper's settings for a constraint set: `w = 1e-6`, `ε = 1e-6`.
+    pub fn new(constraints: ConstraintSet) -> Self {
+        Self {
+            constraints,
+            prior_weight: 1e-6,
+            eps: 1e-6,
+            force_cone_solver: false,
+        }
+    }
+}
+
+/// Identification failed.
+#[derive(Debug, thiserror::Error)]
+pub enum IdentError {
+    /// Fewer samples than parameters, without a prior to fill the gap.
+    #[error("{samples} samples give {rows} equations for {params} parameters; give more samples or a prior weight > 0")]
+    TooFewSamples {
+        /// Samples.
+        samples: usize,
+        /// Equations.
+        rows: usize,
+        /// Parameters.
+        params: usize,
+    },
+    /// The ellipsoid set needs every body's bounding ellipsoid.
+    #[error("constraint set 'ellipsoid' needs a bounding ellipsoid for '{0}' (add one to the robot description)")]
+    MissingEllipsoid(String),
+    /// The constraints admit no parameters.
+    #[error("the constraints are infeasible ({0}): no parameters satisfy them")]
+    Infeasible(String),
+    /// The solver stopped without an answer.
+    #[error("the cone solver stopped with status {status} after {iterations} iterations")]
+    SolverFailed {
+        /// Clarabel's status.
+        status: String,
+        /// Iterations.
+        iterations: u32,
+    },
+    /// A bad option.
+    #[error("{0}")]
+    BadOption(String),
+}
+
+/// Solver information.
+#[derive(Clone, Debug, Serialize)]
+pub struct SolverInfo {
+    /// `"direct"` for least squares without the cone solver, else Clarabel's status.
+    pub status: String,
+    /// Interior-point iterations (0 for direct).
+    pub iterations: u32,
+    /// Solve time (s), setup included.
+    pub seconds: f64,
+    /// Primal and dual residuals.
+    pub residuals: [f64; 2],
+}
+
+/// One identified body.
+#[derive(Clone, Debug, Serialize)]
+pub struct IdentifiedBody {
+    /// Body or rotor name.
+    pub name: String,
+    /// Ten parameters, paper order, body frame.
+    pub pi: [f64; 10],
+    /// Consistency margins computed from `pi` (independently of the solver).
+    pub consistency: ConsistencyReport,
+}
+
+/// The result of one identification.
+#[derive(Clone, Debug, Serialize)]
+pub struct Identified {
+    /// Constraint set used.
+    pub constraints: ConstraintSet,
+    /// The full parameter vector θ (see [`crate::model::ParamLayout`]).
+    #[serde(skip)]
+    pub theta: DVector<f64>,
+    /// Links then rotors.
+    pub bodies: Vec<IdentifiedBody>,
+    /// Viscous coefficients (N m s/rad).
+    pub viscous: Vec<f64>,
+    /// Coulomb coefficients (N m).
+    pub coulomb: Vec<f64>,
+    /// The objective `(1/n_s) Σ ‖Y θ − τ‖² + w ‖θ − θ̂‖²`.
+    pub objective: f64,
+    /// Whether every constraint of the set holds (checked from the parameters, not the solver).
+    pub constraints_hold: bool,
+    /// Solver information.
+    pub solver: SolverInfo,
+}
+
+/// The bodies of a model in parameter order: `(name, first column, ellipsoid)`.
+pub fn bodies(model: &Model) -> Vec<(String, usize, Option<crate::spatial::Ellipsoid>)> {
+    let mut out: Vec<_> = model
+        .bodies
+        .iter()
+        .enumerate()
+        .map(|(i, b)| (b.name.clone(), 10 * i, b.bounding))
+        .collect();
+    for (i, b) in model.bodies.iter().enumerate() {
+        if let (Some(c), Some(r)) = (model.layout().rotor_col[i], &b.rotor) {
+            out.push((r.name.clone(), c, r.bounding));
+        }
+    }
+    out
+}
+
+/// Whether `theta` satisfies `set` (with `ε` relaxed to strict positivity and a round-off
+/// tolerance on the linear and CoM conditions).
+pub fn constraints_hold(model: &Model, theta: &DVector<f64>, set: ConstraintSet) -> bool {
+    let l = model.layout();
+    let friction_ok = (l.viscous_col..l.len).all(|c| theta[c] >= -1e-9);
+    bodies(model).iter().all(|(_, c, e)| {
+        let p = InertialParams(theta.fixed_rows::<10>(*c).into_owned());
+        let r = p.consistency(e.as_ref());
+        match set {
+            ConstraintSet::None => true,
+            ConstraintSet::Semi => r.min_eig_spatial > 0.0 && friction_ok,
+            ConstraintSet::Consistent => r.min_eig_pseudo > 0.0 && friction_ok,
+            ConstraintSet::Ellipsoid => {
+                r.min_eig_pseudo > 0.0
+                    && r.trace_jq
+                        .is_some_and(|t| t >= -1e-9 * p.mass().abs().max(1.0))
+                    && r.min_eig_com.is_some_and(|c| c >= -1e-9)
+                    && friction_ok
+            }
+        }
+    })
+}
+
+/// Identifies `model`'s parameters from normal equations `ne` under `opts`, with prior `prior`
+/// (usually `model.parameters()`).
+pub fn identify(
+    model: &Model,
+    ne: &NormalEquations,
+    prior: &DVector<f64>,
+    opts: &Options,
+) -> Result<Identified, IdentError> {
+    let p = model.layout().len;
+    let ns = ne.samples;
+    let w = opts.prior_weight;
+    if !(w.is_finite() && w >= 0.0) {
+        return Err(IdentError::BadOption(format!(
+            "prior weight {w} must be >= 0"
+        )));
+    }
+    if !(opts.eps.is_finite() && opts.eps >= 0.0) {
+        return Err(IdentError::BadOption(format!(
+            "eps {} must be >= 0",
+            opts.eps
+        )));
+    }
+    if ns == 0 || (w == 0.0 && ns * model.dof() < p) {
+        return Err(IdentError::TooFewSamples {
+            samples: ns,
+            rows: ns * model.dof(),
+            params: p,
+        });
+    }
+    let m = ns as f64;
+    // H = YᵀY/n_s + w 1 (the objective's Hessian / 2), g = Yᵀτ/n_s + w θ̂.
+    let mut h = &ne.yty / m;
+    for i in 0..p {
+        h[(i, i)] += w;
+    }
+    let g = &ne.ytt / m + prior * w;
+    let constant = ne.tt / m + w * prior.norm_squared();
+    let start = std::time::Instant::now();
+    let (theta, solver) = if opts.constraints == ConstraintSet::None && !opts.force_cone_solver {
+        (
+            analysis::least_squares(&h, &g),
+            SolverInfo {
+                status: "direct".into(),
+                iterations: 0,
+                seconds: 0.0,
+                residuals: [0.0; 2],
+            },
+        )
+    } else {
+        solve_cone(model, &h, &g, opts)?
+    };
+    let seconds = start.elapsed().as_secs_f64();
+    let objective = theta.dot(&(&h * &theta)) - 2.0 * theta.dot(&g) + constant;
+    Ok(result(
+        model,
+        theta,
+        opts.constraints,
+        objective,
+        SolverInfo { seconds, ..solver },
+    ))
+}
+
+fn result(
+    model: &Model,
+    theta: DVector<f64>,
+    set: ConstraintSet,
+    objective: f64,
+    solver: SolverInfo,
+) -> Identified {
+    let l = model.layout();
+    let n = model.dof();
+    let bodies = bodies(model)
+        .into_iter()
+        .map(|(name, c, e)| {
+            let pi = InertialParams(theta.fixed_rows::<10>(c).into_owned());
+            IdentifiedBody {
+                name,
+                pi: pi.0.into(),
+                consistency: pi.consistency(e.as_ref()),
+            }
+        })
+        .collect();
+    Identified {
+        constraints: set,
+        bodies,
+        viscous: (0..n).map(|i| theta[l.viscous_col + i]).collect(),
+        coulomb: (0..n).map(|i| theta[l.coulomb_col + i]).collect(),
+        objective,
+        constraints_hold: constraints_hold(model, &theta, set),
+        theta,
+        solver,
+    }
+}
+
+/// Upper triangle of a symmetric matrix as CSC (Clarabel needs the upper triangle).
+fn upper_csc(m: &DMatrix<f64>) -> CscMatrix<f64> {
+    let n = m.nrows();
+    let (mut colptr, mut rowval, mut nzval) = (vec![0], vec![], vec![]);
+    for j in 0..n {
+        for i in 0..=j {
+            let v = m[(i, j)];
+            if v != 0.0 {
+                rowval.push(i);
+                nzval.push(v);
+            }
+        }
+        colptr.push(rowval.len());
+    }
+    CscMatrix::new(n, n, colptr, rowval, nzval)
+}
+
+/// Builds and solves the cone program in scaled variables.
+fn solve_cone(
+    model: &Model,
+    h: &DMatrix<f64>,
+    g: &DVector<f64>,
+    opts: &Options,
+) -> Result<(DVector<f64>, SolverInfo), IdentError> {
+    let p = h.nrows();
+    let d: Vec<f64> = (0..p)
+        .map(|i| {
+            if h[(i, i)] > 0.0 {
+                1.0 / h[(i, i)].sqrt()
+            } else {
+                1.0
+            }
+        })
+        .collect();
+    let ps = DMatrix::from_fn(p, p, |i, j| 2.0 * d[i] * h[(i, j)] * d[j]);
+    let q: Vec<f64> = (0..p).map(|i| -2.0 * d[i] * g[i]).collect();
+    // Constraint rows: A x + s = b, s in the cones. Triplets (row, col, value).
+    let (mut ai, mut aj, mut av, mut b) = (vec![], vec![], vec![], vec![]);
+    let mut cones = vec![];
+    let mut push_lmi = |lmi: Lmi,
+                        col: usize,
+                        offset_eps: f64,
+                        ai: &mut Vec<usize>,
+                        aj: &mut Vec<usize>,
+                        av: &mut Vec<f64>,
+                        b: &mut Vec<f64>| {
+        let r0 = b.len();
+        let basis = lmi.basis();
+        for (k, colv) in basis.iter().enumerate() {
+            for (r, v) in colv.iter().enumerate() {
+                if *v != 0.0 {
+                    ai.push(r0 + r);
+                    aj.push(col + k);
+                    av.push(-v * d[col + k]);
+                }
+            }
+        }
+        let eye = DMatrix::<f64>::identity(lmi.dim(), lmi.dim()) * offset_eps;
+        b.extend(lmi::svec(&eye).iter().map(|x| -x));
+        cones.push(SupportedConeT::PSDTriangleConeT(lmi.dim()));
+    };
+    let set = opts.constraints;
+    let mut nonneg_rows: Vec<(usize, Vec<(usize, f64)>)> = vec![];
+    for (name, col, ell) in bodies(model) {
+        match set {
+            ConstraintSet::None => {}
+            ConstraintSet::Semi => push_lmi(
+                Lmi::Spatial,
+                col,
+                opts.eps,
+                &mut ai,
+                &mut aj,
+                &mut av,
+                &mut b,
+            ),
+            ConstraintSet::Consistent => push_lmi(
+                Lmi::Pseudo,
+                col,
+                opts.eps,
+                &mut ai,
+                &mut aj,
+                &mut av,
+                &mut b,
+            ),
+            ConstraintSet::Ellipsoid => {
+                let e = ell.ok_or_else(|| IdentError::MissingEllipsoid(name.clone()))?;
+                push_lmi(
+                    Lmi::Pseudo,
+                    col,
+                    opts.eps,
+                    &mut ai,
+                    &mut aj,
+                    &mut av,
+                    &mut b,
+                );
+                push_lmi(Lmi::Com(e), col, 0.0, &mut ai, &mut aj, &mut av, &mut b);
+                let form = lmi::trace_jq_form(&e);
+                nonneg_rows.push((0, (0..10).map(|k| (col + k, form[k])).collect()));
+            }
+        }
+    }
+    if set != ConstraintSet::None {
+        let l = model.layout();
+        for c in l.viscous_col..l.len {
+            nonneg_rows.push((0, vec![(c, 1.0)]));
+        }
+    }
+    if !nonneg_rows.is_empty() {
+        let r0 = b.len();
+        for (r, (_, terms)) in nonneg_rows.iter().enumerate() {
+            for (c, v) in terms {
+                if *v != 0.0 {
+                    ai.push(r0 + r);
+                    aj.push(*c);
+                    av.push(-v * d[*c]);
+                }
+            }
+            b.push(0.0);
+        }
+        cones.push(SupportedConeT::NonnegativeConeT(nonneg_rows.len()));
+    }
+    let a = CscMatrix::new_from_triplets(b.len(), p, ai, aj, av);
+    let settings = DefaultSettings {
+        verbose: false,
+        max_iter: 200,
+        ..DefaultSettings::default()
+    };
+    let mut solver = DefaultSolver::new(&upper_csc(&ps), &q, &a, &b, &cones, settings)
+        .map_err(|e| IdentError::BadOption(format!("cone program rejected: {e}")))?;
+    solver.solve();
+    let sol = &solver.solution;
+    let info = |status: SolverStatus| SolverInfo {
+        status: format!("{status:?}"),
+        iterations: sol.iterations,
+        seconds: sol.solve_time,
+        residuals: [sol.r_prim, sol.r_dual],
+    };
+    match sol.status {
+        SolverStatus::Solved | SolverStatus::AlmostSolved => {
+            let theta = DVector::from_iterator(p, sol.x.iter().zip(&d).map(|(x, s)| x * s));
+            Ok((theta, info(sol.status)))
+        }
+        SolverStatus::PrimalInfeasible | SolverStatus::AlmostPrimalInfeasible => {
+            Err(IdentError::Infeasible(format!("{:?}", sol.status)))
+        }
+        s => Err(IdentError::SolverFailed {
+            status: format!("{s:?}"),
+            iterations: sol.iterations,
+        }),
+    }
+}

@@ -1,0 +1,115 @@
+//! Streaming least-squares data: `YᵀY`, `Yᵀτ`, `τᵀτ` and the sample count, accumulated in one
+//! pass (design.md §4), so memory and the cone program's size do not grow with the number of
+//! samples. Rows are buffered in blocks and added with one matrix product per block.
+
+use crate::dynamics::{regressor, Data};
+use crate::io::samples::Trajectory;
+use crate::model::Model;
+use nalgebra::{DMatrix, DVector};
+
+/// Rows per block before the `YᵀY` update (a multiple of every joint count up to 8).
+const BLOCK_SAMPLES: usize = 128;
+
+/// The normal equations of `min Σ_k ‖Y_k θ − τ_k‖²` over the samples added so far.
+#[derive(Clone, Debug)]
+pub struct NormalEquations {
+    /// `Σ Y_kᵀ Y_k` (p×p).
+    pub yty: DMatrix<f64>,
+    /// `Σ Y_kᵀ τ_k`.
+    pub ytt: DVector<f64>,
+    /// `Σ ‖τ_k‖²`.
+    pub tt: f64,
+    /// Number of samples added.
+    pub samples: usize,
+    n: usize,
+    rows: DMatrix<f64>,
+    taus: DVector<f64>,
+    filled: usize,
+}
+
+impl NormalEquations {
+    /// Empty normal equations for a model with `n` joints and `p` parameters.
+    pub fn new(n: usize, p: usize) -> Self {
+        Self {
+            yty: DMatrix::zeros(p, p),
+            ytt: DVector::zeros(p),
+            tt: 0.0,
+            samples: 0,
+            n,
+            rows: DMatrix::zeros(BLOCK_SAMPLES * n, p),
+            taus: DVector::zeros(BLOCK_SAMPLES * n),
+            filled: 0,
+        }
+    }
+
+    /// Adds one sample's regressor `y` (n×p) and torque `tau`.
+    pub fn add(&mut self, y: &DMatrix<f64>, tau: &[f64]) {
+        let r0 = self.filled * self.n;
+        self.rows
+            .view_mut((r0, 0), (self.n, y.ncols()))
+            .copy_from(y);
+        for (j, t) in tau.iter().enumerate() {
+            self.taus[r0 + j] = *t;
+        }
+        self.filled += 1;
+        self.samples += 1;
+        if self.filled == BLOCK_SAMPLES {
+            self.flush();
+        }
+    }
+
+    /// Adds the buffered rows into the sums.
+    fn flush(&mut self) {
+        if self.filled == 0 {
+            return;
+        }
+        let m = self.filled * self.n;
+        let rows = self.rows.rows(0, m);
+        let taus = self.taus.rows(0, m);
+        self.yty.gemm_tr(1.0, &rows, &rows, 1.0);
+        self.ytt.gemv_tr(1.0, &rows, &taus, 1.0);
+        self.tt += taus.norm_squared();
+        self.filled = 0;
+    }
+
+    /// Folds in buffered rows; call before reading the sums.
+    pub fn finish(mut self) -> Self {
+        self.flush();
+        self
+    }
+
+    /// Combines two accumulations (for parallel or incremental use). Both must be finished.
+    pub fn merged(mut self, other: &NormalEquations) -> Self {
+        self.flush();
+        self.yty += &other.yty;
+        self.ytt += &other.ytt;
+        self.tt += other.tt;
+        self.samples += other.samples;
+        self
+    }
+
+    /// Accumulates samples `range` of a trajectory (which must carry q̈) for `model`.
+    pub fn from_trajectory(model: &Model, tr: &Trajectory, range: std::ops::Range<usize>) -> Self {
+        let (n, p) = (model.dof(), model.layout().len);
+        let mut ne = Self::new(n, p);
+        let mut d = Data::new(model);
+        let mut y = DMatrix::zeros(n, p);
+        for k in range {
+            regressor(
+                model,
+                &mut d,
+                tr.q_at(k),
+                tr.qd_at(k),
+                tr.qdd_at(k).expect("q̈ present"),
+                &mut y,
+            );
+            ne.add(&y, tr.tau_at(k));
+        }
+        ne.finish()
+    }
+
+    /// `Σ ‖Y θ − τ‖²` for parameters `theta`.
+    pub fn residual_sum_of_squares(&self, theta: &DVector<f64>) -> f64 {
+        (theta.dot(&(&self.yty * theta)) - 2.0 * theta.dot(&self.ytt) + self.tt).max(0.0)
+    }
+}
