@@ -24,7 +24,7 @@ fi
 echo "ok"
 
 step "python venv ($VENV)"
-if ! "$VENV/bin/python" -c "import numpy, mujoco, pinocchio" 2>/dev/null; then
+if ! "$VENV/bin/python" -c "import numpy, mujoco, pinocchio, cvxpy, clarabel, scs" 2>/dev/null; then
   python3 -m venv "$VENV"
   "$VENV/bin/pip" install -q --upgrade pip
   "$VENV/bin/pip" install -q -r scripts/requirements.txt
@@ -44,11 +44,11 @@ if grep -qE 'test result: FAILED|error(\[E[0-9]+\])?:' "$CARGO_TARGET_DIR/physid
 fi
 rust_passed=$(grep -oE 'test result: ok\. [0-9]+ passed' "$CARGO_TARGET_DIR/physid-test.log" | awk '{s+=$4} END {print s+0}')
 
-step "python cross-checks (pinocchio, MuJoCo)"
+step "python cross-checks (pinocchio, MuJoCo, CVXPY)"
 cargo build --quiet --release --bin physid
 export PHYSID_BIN="$CARGO_TARGET_DIR/release/physid"
 py_passed=0; py_failed=0
-for s in check_pinocchio check_mujoco; do
+for s in check_pinocchio check_mujoco check_cvxpy; do
   out=$("$VENV/bin/python" "scripts/$s.py" 2>&1) && rc=0 || rc=$?
   echo "$out"
   p=$(echo "$out" | grep -oE '[0-9]+ passed' | tail -1 | awk '{print $1}')

@@ -1,5 +1,6 @@
 //! Command-line arguments (clap derive) and their dispatch to library entry points.
 
+mod identify_cmd;
 mod model_cmd;
 mod simulate_cmd;
 
@@ -101,6 +102,41 @@ enum Command {
         #[arg(long)]
         json: bool,
     },
+    /// Identify inertial and friction parameters under a constraint set.
+    Identify {
+        /// Samples: a physid MCAP (its processed signals), another MCAP with JointState, or CSV.
+        #[arg(long)]
+        data: std::path::PathBuf,
+        #[command(flatten)]
+        robot: RobotArgs,
+        /// Constraint set: none, semi, consistent, ellipsoid.
+        #[arg(long, default_value = "ellipsoid")]
+        constraints: physid::ident::ConstraintSet,
+        /// Training samples, `a:b` (indices, end exclusive); default all.
+        #[arg(long)]
+        train: Option<String>,
+        /// Validation samples of the same file, `a:b`.
+        #[arg(long)]
+        validate: Option<String>,
+        /// Validate on another file (all its samples).
+        #[arg(long)]
+        validate_data: Option<std::path::PathBuf>,
+        /// Weight of the prior term w ‖θ − θ̂‖² (θ̂: the robot description's parameters).
+        #[arg(long, default_value_t = 1e-6)]
+        prior_weight: f64,
+        /// Margin ε of the strict matrix inequalities.
+        #[arg(long, default_value_t = 1e-6)]
+        eps: f64,
+        /// Print JSON (schema: docs/identify-json.md).
+        #[arg(long)]
+        json: bool,
+        /// Write the identified model as URDF.
+        #[arg(long)]
+        out_urdf: Option<std::path::PathBuf>,
+        /// Write the optimization problem as JSON (for scripts/check_cvxpy.py).
+        #[arg(long)]
+        export_problem: Option<std::path::PathBuf>,
+    },
     /// Evaluate the dynamics at random states and write JSON (q, qd, qdd, tau, Y, H) for the
     /// cross-check scripts.
     Dynamics {
@@ -164,6 +200,31 @@ pub fn run(cli: Cli) -> anyhow::Result<()> {
                 json,
             )
         }
+        Command::Identify {
+            data,
+            robot,
+            constraints,
+            train,
+            validate,
+            validate_data,
+            prior_weight,
+            eps,
+            json,
+            out_urdf,
+            export_problem,
+        } => identify_cmd::run(identify_cmd::Args {
+            data: &data,
+            model: robot.load()?,
+            constraints,
+            train: train.as_deref(),
+            validate: validate.as_deref(),
+            validate_data: validate_data.as_deref(),
+            prior_weight,
+            eps,
+            json,
+            out_urdf: out_urdf.as_deref(),
+            export_problem: export_problem.as_deref(),
+        }),
         Command::Dynamics {
             robot,
             samples,

@@ -10,6 +10,17 @@ use nalgebra::{DMatrix, DVector};
 /// Rows per block before the `YᵀY` update (a multiple of every joint count up to 8).
 const BLOCK_SAMPLES: usize = 128;
 
+/// OpenBLAS threads by default; one thread keeps results independent of the machine's thread
+/// count (and the parallelism belongs to the experiment level).
+fn single_threaded_blas() {
+    static ONCE: std::sync::Once = std::sync::Once::new();
+    extern "C" {
+        fn openblas_set_num_threads(n: std::ffi::c_int);
+    }
+    // SAFETY: a plain setter of OpenBLAS, linked through clarabel's `sdp-openblas`.
+    ONCE.call_once(|| unsafe { openblas_set_num_threads(1) });
+}
+
 /// The normal equations of `min Σ_k ‖Y_k θ − τ_k‖²` over the samples added so far.
 #[derive(Clone, Debug)]
 pub struct NormalEquations {
@@ -58,29 +69,52 @@ impl NormalEquations {
         }
     }
 
-    /// Adds the buffered rows into the sums.
+    /// Adds the buffered rows into the sums: the upper triangle of `YᵀY` by BLAS `dsyrk`
+    /// (symmetric rank-k update, half the work of a general product).
     fn flush(&mut self) {
         if self.filled == 0 {
             return;
         }
         let m = self.filled * self.n;
+        let p = self.yty.ncols();
+        let lda = self.rows.nrows();
+        single_threaded_blas();
+        // SAFETY: `rows` is column-major lda×p with m <= lda valid rows; `yty` is p×p.
+        unsafe {
+            blas::dsyrk(
+                b'U',
+                b'T',
+                p as i32,
+                m as i32,
+                1.0,
+                self.rows.as_slice(),
+                lda as i32,
+                1.0,
+                self.yty.as_mut_slice(),
+                p as i32,
+            );
+        }
         let rows = self.rows.rows(0, m);
         let taus = self.taus.rows(0, m);
-        self.yty.gemm_tr(1.0, &rows, &rows, 1.0);
         self.ytt.gemv_tr(1.0, &rows, &taus, 1.0);
         self.tt += taus.norm_squared();
         self.filled = 0;
     }
 
-    /// Folds in buffered rows; call before reading the sums.
+    /// Folds in buffered rows and fills the lower triangle; call before reading the sums.
     pub fn finish(mut self) -> Self {
         self.flush();
+        let p = self.yty.ncols();
+        for j in 0..p {
+            for i in j + 1..p {
+                self.yty[(i, j)] = self.yty[(j, i)];
+            }
+        }
         self
     }
 
-    /// Combines two accumulations (for parallel or incremental use). Both must be finished.
+    /// Combines two finished accumulations (for parallel or incremental use).
     pub fn merged(mut self, other: &NormalEquations) -> Self {
-        self.flush();
         self.yty += &other.yty;
         self.ytt += &other.ytt;
         self.tt += other.tt;

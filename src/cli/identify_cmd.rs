@@ -1,0 +1,259 @@
+//! `physid identify`.
+
+use anyhow::{bail, Context};
+use physid::ident::{self, analysis, ConstraintSet, NormalEquations, Options};
+use physid::io::samples::Trajectory;
+use physid::model::Model;
+use serde_json::json;
+use std::ops::Range;
+use std::path::Path;
+
+/// Parses `a:b` (sample indices, end exclusive; either side may be empty).
+pub fn parse_range(s: &str, len: usize, what: &str) -> anyhow::Result<Range<usize>> {
+    let (a, b) = s
+        .split_once(':')
+        .with_context(|| format!("{what}: '{s}' is not a range like 0:5000"))?;
+    let a: usize = if a.is_empty() {
+        0
+    } else {
+        a.parse()
+            .with_context(|| format!("{what}: '{a}' is not a sample index"))?
+    };
+    let b: usize = if b.is_empty() {
+        len
+    } else {
+        b.parse()
+            .with_context(|| format!("{what}: '{b}' is not a sample index"))?
+    };
+    if a >= b || b > len {
+        bail!("{what}: {a}:{b} is not a non-empty range within the {len} samples");
+    }
+    Ok(a..b)
+}
+
+/// Loads identification data: the processed signals of a physid MCAP, the joint states of another
+/// MCAP, or a CSV; q̈ is derived (zero-phase 20 Hz Butterworth, central differences) if absent.
+pub fn load_data(path: &Path, model: &Model) -> anyhow::Result<Trajectory> {
+    let names: Vec<String> = model.bodies.iter().map(|b| b.joint_name.clone()).collect();
+    let mut tr = match path.extension().and_then(|e| e.to_str()) {
+        Some("mcap") => physid::io::mcap_log::read(path)?
+            .identification_input()
+            .clone(),
+        Some("csv") => physid::io::samples::read_csv(path, Some(&names))?,
+        _ => bail!("{}: give a .mcap or .csv file", path.display()),
+    };
+    if tr.dof() != model.dof() {
+        bail!(
+            "{}: the data have {} joints, the robot has {}",
+            path.display(),
+            tr.dof(),
+            model.dof()
+        );
+    }
+    tr.validate()
+        .map_err(|e| anyhow::anyhow!("{}: {e}", path.display()))?;
+    if tr.qdd.is_none() {
+        let dts: Vec<f64> = tr.t.windows(2).map(|w| w[1] - w[0]).collect();
+        let mut sorted = dts.clone();
+        sorted.sort_by(f64::total_cmp);
+        let dt = sorted.get(sorted.len() / 2).copied().unwrap_or(1e-3);
+        let fs = 1.0 / dt;
+        let sos = physid::sim::signal::butterworth_lowpass(2, (20.0f64).min(0.4 * fs), fs)?;
+        let n = tr.dof();
+        let m = tr.len();
+        let mut qdd = vec![0.0; m * n];
+        for j in 0..n {
+            let qd: Vec<f64> = (0..m).map(|k| tr.qd[k * n + j]).collect();
+            for (k, v) in sos
+                .filtfilt(&physid::sim::signal::differentiate(&qd, dt))
+                .into_iter()
+                .enumerate()
+            {
+                qdd[k * n + j] = v;
+            }
+        }
+        tr.qdd = Some(qdd);
+        eprintln!("note: {} has no ddq columns; q̈ = zero-phase 20 Hz Butterworth of the central difference of q̇", path.display());
+    }
+    Ok(tr)
+}
+
+/// Arguments of `identify`.
+pub struct Args<'a> {
+    pub data: &'a Path,
+    pub model: Model,
+    pub constraints: ConstraintSet,
+    pub train: Option<&'a str>,
+    pub validate: Option<&'a str>,
+    pub validate_data: Option<&'a Path>,
+    pub prior_weight: f64,
+    pub eps: f64,
+    pub json: bool,
+    pub out_urdf: Option<&'a Path>,
+    pub export_problem: Option<&'a Path>,
+}
+
+/// Runs the identification and prints the report.
+pub fn run(a: Args) -> anyhow::Result<()> {
+    let m = &a.model;
+    let tr = load_data(a.data, m)?;
+    let train = match a.train {
+        Some(s) => parse_range(s, tr.len(), "--train")?,
+        None => 0..tr.len(),
+    };
+    let vdata;
+    let (vtr, vrange) = match (a.validate, a.validate_data) {
+        (Some(_), Some(_)) => bail!("give --validate or --validate-data, not both"),
+        (Some(s), None) => (Some(&tr), Some(parse_range(s, tr.len(), "--validate")?)),
+        (None, Some(p)) => {
+            vdata = load_data(p, m)?;
+            let r = 0..vdata.len();
+            (Some(&vdata), Some(r))
+        }
+        (None, None) => (None, None),
+    };
+    let start = std::time::Instant::now();
+    let ne = NormalEquations::from_trajectory(m, &tr, train.clone());
+    let mut opts = Options::new(a.constraints);
+    opts.prior_weight = a.prior_weight;
+    opts.eps = a.eps;
+    let prior = m.parameters();
+    let r = ident::identify(m, &ne, &prior, &opts)?;
+    let total = start.elapsed().as_secs_f64();
+    let (train_rms, train_all) = analysis::rms_error(m, &r.theta, &tr, train.clone());
+    let val = vtr
+        .zip(vrange.clone())
+        .map(|(v, rg)| analysis::rms_error(m, &r.theta, v, rg));
+    let idf = analysis::identifiability(m, &ne, &r.theta);
+    if let Some(p) = a.out_urdf {
+        let im = m.with_parameters(&r.theta)?;
+        physid::io::write_atomic(p, physid::io::urdf::to_string(&im).as_bytes())?;
+        if !r.constraints_hold || !ident::constraints_hold(m, &r.theta, ConstraintSet::Consistent) {
+            eprintln!(
+                "warning: {} holds physically inconsistent inertias (identified with '{}')",
+                p.display(),
+                a.constraints.name()
+            );
+        }
+    }
+    let names = m.parameter_names();
+    if let Some(p) = a.export_problem {
+        // The problem as data, for independent solvers (scripts/check_cvxpy.py): the objective
+        // θᵀ H θ − 2 gᵀ θ + c and, per body, its parameter columns and ellipsoid.
+        let ns = ne.samples as f64;
+        let mut h = &ne.yty / ns;
+        for i in 0..h.nrows() {
+            h[(i, i)] += a.prior_weight;
+        }
+        let g = &ne.ytt / ns + &prior * a.prior_weight;
+        let c = ne.tt / ns + a.prior_weight * prior.norm_squared();
+        let rows: Vec<Vec<f64>> = h.row_iter().map(|r| r.iter().copied().collect()).collect();
+        let bodies: Vec<_> = ident::bodies(m)
+            .into_iter()
+            .map(|(name, col, e)| json!({"name": name, "col": col, "ellipsoid": e.map(|e| json!({"center": e.center.as_slice(), "qs": e.qs.as_slice()}))}))
+            .collect();
+        let l = m.layout();
+        let v = json!({
+            "constraints": a.constraints, "eps": a.eps, "H": rows, "g": g.as_slice(), "c": c,
+            "bodies": bodies, "friction_cols": (l.viscous_col..l.len).collect::<Vec<_>>(),
+            "physid": {"objective": r.objective, "theta": r.theta.as_slice(), "status": r.solver.status},
+        });
+        physid::io::write_atomic(p, serde_json::to_string(&v)?.as_bytes())?;
+    }
+    if a.json {
+        let v = json!({
+            "data": a.data, "robot": m.name, "constraints": a.constraints,
+            "train": { "range": [train.start, train.end], "rms": train_rms, "rms_overall": train_all },
+            "validation": val.as_ref().map(|(rms, all)| json!({ "range": vrange.as_ref().map(|r| [r.start, r.end]), "rms": rms, "rms_overall": all })),
+            "bodies": r.bodies, "friction": { "viscous": r.viscous, "coulomb": r.coulomb },
+            "objective": r.objective, "constraints_hold": r.constraints_hold,
+            "solver": r.solver, "end_to_end_seconds": total,
+            "identifiability": idf,
+            "parameter_names": names, "theta": r.theta.as_slice(),
+        });
+        println!("{}", serde_json::to_string_pretty(&v)?);
+        return Ok(());
+    }
+    println!(
+        "{}: '{}' on samples {}..{} of {} ({} parameters), {} in {:.1} ms ({} iterations, {:.1} ms end to end)",
+        m.name,
+        a.constraints.name(),
+        train.start,
+        train.end,
+        a.data.display(),
+        names.len(),
+        r.solver.status,
+        r.solver.seconds * 1e3,
+        r.solver.iterations,
+        total * 1e3
+    );
+    println!(
+        "\n{:<12} {:>8} {:>28} {:>30} {:>11} {:>11} {:>9}",
+        "body", "m [kg]", "CoM [m]", "principal I_C [kg m^2]", "min eig I", "min eig J", "tr(JQ)/m"
+    );
+    for b in &r.bodies {
+        let p = physid::spatial::InertialParams(nalgebra::SVector::from(b.pi));
+        let c = p.com().unwrap_or_default();
+        let pm = p.principal_moments().map(|x| x.0).unwrap_or_default();
+        let c_ = &b.consistency;
+        println!(
+            "{:<12} {:>8.4} {:>28} {:>30} {:>11.3e} {:>11.3e} {:>9}",
+            b.name,
+            p.mass(),
+            format!("({:.4}, {:.4}, {:.4})", c.x, c.y, c.z),
+            format!("({:.2e}, {:.2e}, {:.2e})", pm.x, pm.y, pm.z),
+            c_.min_eig_spatial,
+            c_.min_eig_pseudo,
+            c_.trace_jq_per_mass
+                .map_or("-".into(), |t| format!("{t:.3}"))
+        );
+    }
+    println!(
+        "\n{:<14} {:>12} {:>12} {:>12} {:>14}",
+        "joint", "B [Nms/rad]", "Bc [Nm]", "train RMS", "validation RMS"
+    );
+    for (j, b) in m.bodies.iter().enumerate() {
+        println!(
+            "{:<14} {:>12.4} {:>12.4} {:>12.4} {:>14}",
+            b.joint_name,
+            r.viscous[j],
+            r.coulomb[j],
+            train_rms[j],
+            val.as_ref()
+                .map_or("-".into(), |(v, _)| format!("{:.4}", v[j]))
+        );
+    }
+    println!(
+        "overall RMS: train {train_all:.4} N m{}",
+        val.as_ref()
+            .map_or(String::new(), |(_, v)| format!(", validation {v:.4} N m"))
+    );
+    let inconsistent: Vec<&str> = r
+        .bodies
+        .iter()
+        .filter(|b| b.consistency.min_eig_pseudo <= 0.0)
+        .map(|b| b.name.as_str())
+        .collect();
+    println!(
+        "physically consistent (J > 0 for every body): {}",
+        if inconsistent.is_empty() {
+            "yes".to_string()
+        } else {
+            format!("NO ({})", inconsistent.join(", "))
+        }
+    );
+    println!(
+        "constraints of '{}': {}; objective {:.6e}; regressor rank {} of {}, condition {:.2e}; {} unidentifiable directions",
+        a.constraints.name(),
+        if a.constraints == ConstraintSet::None { "none imposed" } else if r.constraints_hold { "all hold" } else { "do NOT all hold" },
+        r.objective,
+        idf.rank,
+        idf.parameters,
+        idf.condition,
+        idf.parameters - idf.rank
+    );
+    for u in idf.unidentifiable.iter().take(5) {
+        println!("  unidentifiable: {u}");
+    }
+    Ok(())
+}
