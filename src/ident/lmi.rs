@@ -111,7 +111,7 @@ mod tests {
         let sb = svec(&b);
         let dot: f64 = sa.iter().zip(&sb).map(|(x, y)| x * y).sum();
         assert!((dot - (&a * &b).trace()).abs() < 1e-12);
-        assert!((smat(&sa, 4) - a).norm() < 1e-14);
+        assert!((smat(&sa, 4) - &a).norm() < 1e-14);
         // Clarabel's order: (0,0), (0,1), (1,1), (0,2), ...
         assert_eq!(sa[0], a[(0, 0)]);
         assert!((sa[1] - std::f64::consts::SQRT_2 * a[(0, 1)]).abs() < 1e-15);
