@@ -78,6 +78,51 @@ pub fn load_data(path: &Path, model: &Model) -> anyhow::Result<Trajectory> {
     Ok(tr)
 }
 
+/// Identification data: in memory, or a CSV with q̈ streamed from disk (memory independent of
+/// its length).
+pub enum Data {
+    /// Loaded samples.
+    Memory(Trajectory),
+    /// A streamable CSV and its sample count.
+    Csv(std::path::PathBuf, usize),
+}
+
+impl Data {
+    /// Opens `path`: CSV files with `ddq` columns stream, everything else is loaded.
+    pub fn open(path: &Path, model: &Model) -> anyhow::Result<Data> {
+        if path.extension().and_then(|e| e.to_str()) == Some("csv")
+            && physid::io::samples::csv_has_ddq(path)?
+        {
+            let len = physid::io::samples::stream_csv(path, model.dof(), 0..0, &mut |_, _| {})?;
+            return Ok(Data::Csv(path.to_path_buf(), len));
+        }
+        Ok(Data::Memory(load_data(path, model)?))
+    }
+    fn len(&self) -> usize {
+        match self {
+            Data::Memory(t) => t.len(),
+            Data::Csv(_, n) => *n,
+        }
+    }
+    fn normal_equations(&self, m: &Model, r: Range<usize>) -> anyhow::Result<NormalEquations> {
+        Ok(match self {
+            Data::Memory(t) => NormalEquations::from_trajectory(m, t, r),
+            Data::Csv(p, _) => NormalEquations::from_csv(m, p, r)?.0,
+        })
+    }
+    fn rms(
+        &self,
+        m: &Model,
+        theta: &nalgebra::DVector<f64>,
+        r: Range<usize>,
+    ) -> anyhow::Result<(Vec<f64>, f64)> {
+        Ok(match self {
+            Data::Memory(t) => analysis::rms_error(m, theta, t, r),
+            Data::Csv(p, _) => analysis::rms_error_csv(m, theta, p, r)?,
+        })
+    }
+}
+
 /// Arguments of `identify`.
 pub struct Args<'a> {
     pub data: &'a Path,
@@ -91,12 +136,13 @@ pub struct Args<'a> {
     pub json: bool,
     pub out_urdf: Option<&'a Path>,
     pub export_problem: Option<&'a Path>,
+    pub allow_few_samples: bool,
 }
 
 /// Runs the identification and prints the report.
 pub fn run(a: Args) -> anyhow::Result<()> {
     let m = &a.model;
-    let tr = load_data(a.data, m)?;
+    let tr = Data::open(a.data, m)?;
     let train = match a.train {
         Some(s) => parse_range(s, tr.len(), "--train")?,
         None => 0..tr.len(),
@@ -106,24 +152,34 @@ pub fn run(a: Args) -> anyhow::Result<()> {
         (Some(_), Some(_)) => bail!("give --validate or --validate-data, not both"),
         (Some(s), None) => (Some(&tr), Some(parse_range(s, tr.len(), "--validate")?)),
         (None, Some(p)) => {
-            vdata = load_data(p, m)?;
+            vdata = Data::open(p, m)?;
             let r = 0..vdata.len();
             (Some(&vdata), Some(r))
         }
         (None, None) => (None, None),
     };
+    let p = m.layout().len;
+    if train.len() * m.dof() < p && !a.allow_few_samples {
+        bail!(
+            "{}: {} samples give {} equations for {p} parameters: the fit is decided by the prior; give more samples, or --allow-few-samples if that is what you want",
+            a.data.display(),
+            train.len(),
+            train.len() * m.dof()
+        );
+    }
     let start = std::time::Instant::now();
-    let ne = NormalEquations::from_trajectory(m, &tr, train.clone());
+    let ne = tr.normal_equations(m, train.clone())?;
     let mut opts = Options::new(a.constraints);
     opts.prior_weight = a.prior_weight;
     opts.eps = a.eps;
     let prior = m.parameters();
     let r = ident::identify(m, &ne, &prior, &opts)?;
     let total = start.elapsed().as_secs_f64();
-    let (train_rms, train_all) = analysis::rms_error(m, &r.theta, &tr, train.clone());
-    let val = vtr
-        .zip(vrange.clone())
-        .map(|(v, rg)| analysis::rms_error(m, &r.theta, v, rg));
+    let (train_rms, train_all) = tr.rms(m, &r.theta, train.clone())?;
+    let val = match vtr.zip(vrange.clone()) {
+        Some((v, rg)) => Some(v.rms(m, &r.theta, rg)?),
+        None => None,
+    };
     let idf = analysis::identifiability(m, &ne, &r.theta);
     if let Some(p) = a.out_urdf {
         let im = m.with_parameters(&r.theta)?;

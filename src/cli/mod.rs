@@ -136,6 +136,9 @@ enum Command {
         /// Write the optimization problem as JSON (for scripts/check_cvxpy.py).
         #[arg(long)]
         export_problem: Option<std::path::PathBuf>,
+        /// Accept fewer equations than parameters (the prior then decides the rest).
+        #[arg(long)]
+        allow_few_samples: bool,
     },
     /// Evaluate the dynamics at random states and write JSON (q, qd, qdd, tau, Y, H) for the
     /// cross-check scripts.
@@ -212,6 +215,7 @@ pub fn run(cli: Cli) -> anyhow::Result<()> {
             json,
             out_urdf,
             export_problem,
+            allow_few_samples,
         } => identify_cmd::run(identify_cmd::Args {
             data: &data,
             model: robot.load()?,
@@ -224,6 +228,7 @@ pub fn run(cli: Cli) -> anyhow::Result<()> {
             json,
             out_urdf: out_urdf.as_deref(),
             export_problem: export_problem.as_deref(),
+            allow_few_samples,
         }),
         Command::Dynamics {
             robot,

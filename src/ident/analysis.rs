@@ -78,6 +78,33 @@ pub fn rms_error(
     (per, overall)
 }
 
+/// Per-joint RMS of `Y θ − τ` over samples `range` of a CSV file, streamed (N m).
+pub fn rms_error_csv(
+    model: &Model,
+    theta: &DVector<f64>,
+    path: &std::path::Path,
+    range: std::ops::Range<usize>,
+) -> Result<(Vec<f64>, f64), crate::io::IoError> {
+    let (n, p) = (model.dof(), model.layout().len);
+    let mut d = Data::new(model);
+    let mut y = DMatrix::zeros(n, p);
+    let mut ss = vec![0.0; n];
+    let mut count = 0usize;
+    crate::io::samples::stream_csv(path, n, range, &mut |_, s| {
+        regressor(model, &mut d, s.q, s.qd, s.qdd, &mut y);
+        let pred = &y * theta;
+        for j in 0..n {
+            ss[j] += (pred[j] - s.tau[j]).powi(2);
+        }
+        count += 1;
+    })?;
+    let c = count.max(1) as f64;
+    Ok((
+        ss.iter().map(|v| (v / c).sqrt()).collect(),
+        (ss.iter().sum::<f64>() / (c * n as f64)).sqrt(),
+    ))
+}
+
 /// What the data determine.
 #[derive(Clone, Debug, Serialize)]
 pub struct Identifiability {

@@ -142,6 +142,24 @@ impl NormalEquations {
         ne.finish()
     }
 
+    /// Accumulates samples `range` of a CSV file (with `ddq` columns) by streaming it: memory
+    /// does not depend on the file's length. Returns the sums and the file's sample count.
+    pub fn from_csv(
+        model: &Model,
+        path: &std::path::Path,
+        range: std::ops::Range<usize>,
+    ) -> Result<(Self, usize), crate::io::IoError> {
+        let (n, p) = (model.dof(), model.layout().len);
+        let mut ne = Self::new(n, p);
+        let mut d = Data::new(model);
+        let mut y = DMatrix::zeros(n, p);
+        let total = crate::io::samples::stream_csv(path, n, range, &mut |_, s| {
+            regressor(model, &mut d, s.q, s.qd, s.qdd, &mut y);
+            ne.add(&y, s.tau);
+        })?;
+        Ok((ne.finish(), total))
+    }
+
     /// `Σ ‖Y θ − τ‖²` for parameters `theta`.
     pub fn residual_sum_of_squares(&self, theta: &DVector<f64>) -> f64 {
         (theta.dot(&(&self.yty * theta)) - 2.0 * theta.dot(&self.ytt) + self.tt).max(0.0)

@@ -316,3 +316,128 @@ pub fn read_csv(path: &Path, joint_names: Option<&[String]>) -> Result<Trajector
     tr.validate().map_err(|e| bad(e.to_string()))?;
     Ok(tr)
 }
+
+/// One sample while streaming.
+pub struct SampleRef<'a> {
+    /// Time (s).
+    pub t: f64,
+    /// Positions.
+    pub q: &'a [f64],
+    /// Velocities.
+    pub qd: &'a [f64],
+    /// Accelerations.
+    pub qdd: &'a [f64],
+    /// Torques.
+    pub tau: &'a [f64],
+}
+
+/// Streams a CSV with `ddq` columns sample by sample without loading it, checking each sample
+/// (finite values, increasing time) as it goes; `f(k, sample)` sees samples `range` only.
+/// Returns the number of samples in the file. Memory does not grow with the file.
+pub fn stream_csv(
+    path: &Path,
+    n: usize,
+    range: std::ops::Range<usize>,
+    f: &mut dyn FnMut(usize, &SampleRef),
+) -> Result<usize, IoError> {
+    let file = std::fs::File::open(path).map_err(|source| IoError::Fs {
+        path: path.to_path_buf(),
+        source,
+    })?;
+    let bad = |m: String| IoError::invalid(path, m);
+    let mut r = csv::ReaderBuilder::new()
+        .trim(csv::Trim::All)
+        .from_reader(std::io::BufReader::new(file));
+    let header: Vec<String> = r
+        .headers()
+        .map_err(|e| bad(format!("header: {e}")))?
+        .iter()
+        .map(str::to_string)
+        .collect();
+    let col = |name: &str| header.iter().position(|h| h == name);
+    let found = (1..)
+        .take_while(|j| col(&format!("q{j}")).is_some())
+        .count();
+    if found != n {
+        return Err(bad(format!(
+            "the file has {found} joints (q columns), the robot has {n}"
+        )));
+    }
+    let need = |g: &str| -> Result<Vec<usize>, IoError> {
+        (1..=n)
+            .map(|j| col(&format!("{g}{j}")).ok_or_else(|| bad(format!("missing column {g}{j}"))))
+            .collect()
+    };
+    let t_col = col("t").ok_or_else(|| bad("missing column t".into()))?;
+    let cols = [need("q")?, need("dq")?, need("ddq")?, need("tau")?];
+    let mut vals = vec![0.0; 4 * n];
+    let mut prev = f64::NEG_INFINITY;
+    let mut rec = csv::StringRecord::new();
+    let mut k = 0usize;
+    while r
+        .read_record(&mut rec)
+        .map_err(|e| bad(format!("line {}: {e}", k + 2)))?
+    {
+        let get = |c: usize| -> Result<f64, IoError> {
+            let s = rec.get(c).unwrap_or("");
+            let v: f64 = s.parse().map_err(|_| {
+                bad(format!(
+                    "line {}, column '{}': '{s}' is not a number",
+                    k + 2,
+                    header[c]
+                ))
+            })?;
+            if v.is_finite() {
+                Ok(v)
+            } else {
+                Err(bad(format!(
+                    "sample {k} (line {}): {} is {v}",
+                    k + 2,
+                    header[c]
+                )))
+            }
+        };
+        let t = get(t_col)?;
+        if t <= prev {
+            return Err(bad(format!(
+                "sample {k}: time {t} s does not increase (previous {prev} s)"
+            )));
+        }
+        prev = t;
+        if range.contains(&k) {
+            for (g, cs) in cols.iter().enumerate() {
+                for (j, &c) in cs.iter().enumerate() {
+                    vals[g * n + j] = get(c)?;
+                }
+            }
+            f(
+                k,
+                &SampleRef {
+                    t,
+                    q: &vals[..n],
+                    qd: &vals[n..2 * n],
+                    qdd: &vals[2 * n..3 * n],
+                    tau: &vals[3 * n..],
+                },
+            );
+        }
+        k += 1;
+    }
+    if k == 0 {
+        return Err(bad("no samples".into()));
+    }
+    Ok(k)
+}
+
+/// Whether a CSV's header has `ddq` columns (so it can be streamed).
+pub fn csv_has_ddq(path: &Path) -> Result<bool, IoError> {
+    let file = std::fs::File::open(path).map_err(|source| IoError::Fs {
+        path: path.to_path_buf(),
+        source,
+    })?;
+    let mut r = csv::Reader::from_reader(std::io::BufReader::new(file));
+    let h = r
+        .headers()
+        .map_err(|e| IoError::invalid(path, format!("header: {e}")))?;
+    Ok(h.iter().any(|c| c.trim() == "ddq1"))
+}
