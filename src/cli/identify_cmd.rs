@@ -137,6 +137,7 @@ pub struct Args<'a> {
     pub out_urdf: Option<&'a Path>,
     pub export_problem: Option<&'a Path>,
     pub allow_few_samples: bool,
+    pub regularizer: ident::Regularizer,
 }
 
 /// Runs the identification and prints the report.
@@ -172,6 +173,7 @@ pub fn run(a: Args) -> anyhow::Result<()> {
     let mut opts = Options::new(a.constraints);
     opts.prior_weight = a.prior_weight;
     opts.eps = a.eps;
+    opts.regularizer = a.regularizer;
     let prior = m.parameters();
     let r = ident::identify(m, &ne, &prior, &opts)?;
     let total = start.elapsed().as_secs_f64();
@@ -197,12 +199,23 @@ pub fn run(a: Args) -> anyhow::Result<()> {
         // The problem as data, for independent solvers (scripts/check_cvxpy.py): the objective
         // θᵀ H θ − 2 gᵀ θ + c and, per body, its parameter columns and ellipsoid.
         let ns = ne.samples as f64;
+        let logdet = a.regularizer == ident::Regularizer::LogDet;
+        let first_friction = m.layout().viscous_col;
+        let wi = |i: usize| {
+            if !logdet || i >= first_friction {
+                a.prior_weight
+            } else {
+                0.0
+            }
+        };
         let mut h = &ne.yty / ns;
+        let mut g = &ne.ytt / ns;
+        let mut c = ne.tt / ns;
         for i in 0..h.nrows() {
-            h[(i, i)] += a.prior_weight;
+            h[(i, i)] += wi(i);
+            g[i] += wi(i) * prior[i];
+            c += wi(i) * prior[i] * prior[i];
         }
-        let g = &ne.ytt / ns + &prior * a.prior_weight;
-        let c = ne.tt / ns + a.prior_weight * prior.norm_squared();
         let rows: Vec<Vec<f64>> = h.row_iter().map(|r| r.iter().copied().collect()).collect();
         let bodies: Vec<_> = ident::bodies(m)
             .into_iter()
@@ -211,6 +224,7 @@ pub fn run(a: Args) -> anyhow::Result<()> {
         let l = m.layout();
         let v = json!({
             "constraints": a.constraints, "eps": a.eps, "H": rows, "g": g.as_slice(), "c": c,
+            "regularizer": a.regularizer, "w": a.prior_weight, "prior": prior.as_slice(),
             "bodies": bodies, "friction_cols": (l.viscous_col..l.len).collect::<Vec<_>>(),
             "physid": {"objective": r.objective, "theta": r.theta.as_slice(), "status": r.solver.status},
         });

@@ -139,6 +139,10 @@ enum Command {
         /// Accept fewer equations than parameters (the prior then decides the rest).
         #[arg(long)]
         allow_few_samples: bool,
+        /// Prior term: euclidean (w ‖θ − θ̂‖², the paper) or logdet (w Σ Bregman divergence of
+        /// −log det between J and the prior's J; Lee, Wensing & Park).
+        #[arg(long, default_value = "euclidean")]
+        regularizer: physid::ident::Regularizer,
     },
     /// Evaluate the dynamics at random states and write JSON (q, qd, qdd, tau, Y, H) for the
     /// cross-check scripts.
@@ -216,6 +220,7 @@ pub fn run(cli: Cli) -> anyhow::Result<()> {
             out_urdf,
             export_problem,
             allow_few_samples,
+            regularizer,
         } => identify_cmd::run(identify_cmd::Args {
             data: &data,
             model: robot.load()?,
@@ -229,6 +234,7 @@ pub fn run(cli: Cli) -> anyhow::Result<()> {
             out_urdf: out_urdf.as_deref(),
             export_problem: export_problem.as_deref(),
             allow_few_samples,
+            regularizer,
         }),
         Command::Dynamics {
             robot,

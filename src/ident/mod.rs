@@ -90,6 +90,35 @@ pub struct Options {
     pub eps: f64,
     /// Solve `none` with the cone solver instead of directly (for cross-checks).
     pub force_cone_solver: bool,
+    /// The prior term's geometry.
+    pub regularizer: Regularizer,
+}
+
+/// How the estimate is pulled towards the prior `θ̂`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, serde::Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Regularizer {
+    /// `w ‖θ − θ̂‖²` (the paper).
+    Euclidean,
+    /// `w Σ_b d(J_b, Ĵ_b)` with the Bregman divergence of `−log det`,
+    /// `d(J, Ĵ) = −log det(Ĵ⁻¹ J) + tr(Ĵ⁻¹ J) − 4` (Lee, Wensing & Park, "Geometric robot
+    /// dynamic identification", 2020), plus `w ‖·‖²` on the friction coefficients. Invariant to
+    /// the body frame and finite only for `J ≻ 0`, so it implies physical consistency.
+    /// Cast for Clarabel as `[[J, L], [Lᵀ, diag L]] ⪰ 0` (L lower triangular) with
+    /// `u_i ≤ log L_ii` (exponential cones), so `Σ u_i ≤ log det J`. Very large weights
+    /// (≳ 1e6 against unit-scaled data) make the program badly scaled.
+    LogDet,
+}
+
+impl std::str::FromStr for Regularizer {
+    type Err = String;
+    fn from_str(s: &str) -> Result<Self, String> {
+        match s {
+            "euclidean" => Ok(Regularizer::Euclidean),
+            "logdet" => Ok(Regularizer::LogDet),
+            _ => Err(format!("unknown regularizer '{s}' (euclidean, logdet)")),
+        }
+    }
 }
 
 impl Options {
@@ -100,6 +129,7 @@ impl Options {
             prior_weight: 1e-6,
             eps: 1e-6,
             force_cone_solver: false,
+            regularizer: Regularizer::Euclidean,
         }
     }
 }
@@ -251,29 +281,43 @@ pub fn identify(
         });
     }
     let m = ns as f64;
-    // H = YᵀY/n_s + w 1 (the objective's Hessian / 2), g = Yᵀτ/n_s + w θ̂.
+    let logdet = opts.regularizer == Regularizer::LogDet;
+    // The Euclidean prior weight applies to every parameter, or only to friction under log-det.
+    let l = model.layout();
+    let euclid_w = |i: usize| {
+        if !logdet || i >= l.viscous_col {
+            w
+        } else {
+            0.0
+        }
+    };
+    // H = YᵀY/n_s + W (the objective's Hessian / 2), g = Yᵀτ/n_s + W θ̂.
     let mut h = &ne.yty / m;
+    let mut g = &ne.ytt / m;
+    let mut constant = ne.tt / m;
     for i in 0..p {
-        h[(i, i)] += w;
+        h[(i, i)] += euclid_w(i);
+        g[i] += euclid_w(i) * prior[i];
+        constant += euclid_w(i) * prior[i] * prior[i];
     }
-    let g = &ne.ytt / m + prior * w;
-    let constant = ne.tt / m + w * prior.norm_squared();
     let start = std::time::Instant::now();
-    let (theta, solver) = if opts.constraints == ConstraintSet::None && !opts.force_cone_solver {
-        (
-            analysis::least_squares(&h, &g),
-            SolverInfo {
-                status: "direct".into(),
-                iterations: 0,
-                seconds: 0.0,
-                residuals: [0.0; 2],
-            },
-        )
+    let direct = opts.constraints == ConstraintSet::None && !opts.force_cone_solver && !logdet;
+    let (theta, solver) = if direct {
+        let info = SolverInfo {
+            status: "direct".into(),
+            iterations: 0,
+            seconds: 0.0,
+            residuals: [0.0; 2],
+        };
+        (analysis::least_squares(&h, &g), info)
     } else {
-        solve_cone(model, &h, &g, opts)?
+        solve_cone(model, &h, &g, prior, opts)?
     };
     let seconds = start.elapsed().as_secs_f64();
-    let objective = theta.dot(&(&h * &theta)) - 2.0 * theta.dot(&g) + constant;
+    let mut objective = theta.dot(&(&h * &theta)) - 2.0 * theta.dot(&g) + constant;
+    if logdet {
+        objective += w * bregman_logdet(model, &theta, prior).unwrap_or(f64::INFINITY);
+    }
     Ok(result(
         model,
         theta,
@@ -315,6 +359,21 @@ fn result(
     }
 }
 
+/// `Σ_b d(J_b, Ĵ_b)`, the log-det Bregman divergence summed over bodies; `None` if some `J_b`
+/// or `Ĵ_b` is not positive definite.
+pub fn bregman_logdet(model: &Model, theta: &DVector<f64>, prior: &DVector<f64>) -> Option<f64> {
+    let mut total = 0.0;
+    for (_, c, _) in bodies(model) {
+        let j = InertialParams(theta.fixed_rows::<10>(c).into_owned()).pseudo_inertia();
+        let j0 = InertialParams(prior.fixed_rows::<10>(c).into_owned()).pseudo_inertia();
+        let ch0 = j0.cholesky()?;
+        let chj = j.cholesky()?;
+        let logdet = |l: &nalgebra::Matrix4<f64>| 2.0 * (0..4).map(|i| l[(i, i)].ln()).sum::<f64>();
+        total += -(logdet(&chj.l()) - logdet(&ch0.l())) + (ch0.inverse() * j).trace() - 4.0;
+    }
+    Some(total)
+}
+
 /// Upper triangle of a symmetric matrix as CSC (Clarabel needs the upper triangle).
 fn upper_csc(m: &DMatrix<f64>) -> CscMatrix<f64> {
     let n = m.nrows();
@@ -337,9 +396,15 @@ fn solve_cone(
     model: &Model,
     h: &DMatrix<f64>,
     g: &DVector<f64>,
+    prior: &DVector<f64>,
     opts: &Options,
 ) -> Result<(DVector<f64>, SolverInfo), IdentError> {
     let p = h.nrows();
+    let logdet = opts.regularizer == Regularizer::LogDet;
+    let nb = bodies(model).len();
+    // Log-det extra variables per body: 10 entries of a lower-triangular L, then 4 of u.
+    let extra = if logdet { 14 * nb } else { 0 };
+    let nv = p + extra;
     let d: Vec<f64> = (0..p)
         .map(|i| {
             if h[(i, i)] > 0.0 {
@@ -348,9 +413,18 @@ fn solve_cone(
                 1.0
             }
         })
+        .chain(std::iter::repeat_n(1.0, extra))
         .collect();
-    let ps = DMatrix::from_fn(p, p, |i, j| 2.0 * d[i] * h[(i, j)] * d[j]);
-    let q: Vec<f64> = (0..p).map(|i| -2.0 * d[i] * g[i]).collect();
+    let ps = DMatrix::from_fn(nv, nv, |i, j| {
+        if i < p && j < p {
+            2.0 * d[i] * h[(i, j)] * d[j]
+        } else {
+            0.0
+        }
+    });
+    let mut q: Vec<f64> = (0..nv)
+        .map(|i| if i < p { -2.0 * d[i] * g[i] } else { 0.0 })
+        .collect();
     // Constraint rows: A x + s = b, s in the cones. Triplets (row, col, value).
     let (mut ai, mut aj, mut av, mut b) = (vec![], vec![], vec![], vec![]);
     let mut cones = vec![];
@@ -422,6 +496,93 @@ fn solve_cone(
             nonneg_rows.push((0, vec![(c, 1.0)]));
         }
     }
+    if logdet {
+        // Per body: w (tr(Ĵ⁻¹ J) − Σ u_i) in the objective, with
+        // [[J, L], [Lᵀ, diag L]] ⪰ 0 (8×8) and (u_i, 1, L_ii) in the exponential cone, so that
+        // Σ u_i ≤ log det J.
+        let w = opts.prior_weight;
+        let s2 = std::f64::consts::SQRT_2;
+        let jbasis = Lmi::Pseudo.basis();
+        // L's lower-triangular entries (i >= j) in order, and their positions.
+        let lpos: Vec<(usize, usize)> = (0..4).flat_map(|j| (j..4).map(move |i| (i, j))).collect();
+        for (bi, (name, col, _)) in bodies(model).iter().enumerate() {
+            let j0 = InertialParams(prior.fixed_rows::<10>(*col).into_owned()).pseudo_inertia();
+            let j0inv = j0
+                .try_inverse()
+                .filter(|_| j0.cholesky().is_some())
+                .ok_or_else(|| IdentError::BadOption(format!("log-det regularizer: the prior of '{name}' is not physically consistent (J not positive definite)")))?;
+            for k in 0..10 {
+                let mut e = nalgebra::SVector::<f64, 10>::zeros();
+                e[k] = 1.0;
+                let t = (j0inv * InertialParams(e).pseudo_inertia()).trace();
+                q[col + k] += w * t * d[col + k];
+            }
+            let base = p + 14 * bi;
+            for i in 0..4 {
+                q[base + 10 + i] = -w;
+            }
+            // svec of the 8×8 matrix: entry (r, c) with r <= c, column by column.
+            let r0 = b.len();
+            let mut idx = 0usize;
+            for c in 0..8 {
+                for r in 0..=c {
+                    let row = r0 + idx;
+                    let scale = if r == c { 1.0 } else { s2 };
+                    if c < 4 {
+                        // J block: linear in π.
+                        let jidx = c * (c + 1) / 2 + r;
+                        for (k, colv) in jbasis.iter().enumerate() {
+                            if colv[jidx] != 0.0 {
+                                ai.push(row);
+                                aj.push(col + k);
+                                av.push(-colv[jidx] * d[col + k]);
+                            }
+                        }
+                    } else if r < 4 {
+                        // Off-diagonal block (r, c−4) = L[r][c−4], lower triangular: r >= c−4.
+                        let (li, lj) = (r, c - 4);
+                        if li >= lj {
+                            let pos = lpos
+                                .iter()
+                                .position(|&x| x == (li, lj))
+                                .expect("lower entry");
+                            ai.push(row);
+                            aj.push(base + pos);
+                            av.push(-scale);
+                        }
+                    } else if r == c {
+                        // diag(L).
+                        let pos = lpos
+                            .iter()
+                            .position(|&x| x == (r - 4, r - 4))
+                            .expect("diagonal entry");
+                        ai.push(row);
+                        aj.push(base + pos);
+                        av.push(-1.0);
+                    }
+                    idx += 1;
+                }
+            }
+            b.extend(std::iter::repeat_n(0.0, idx));
+            cones.push(SupportedConeT::PSDTriangleConeT(8));
+            for i in 0..4 {
+                let pos = lpos
+                    .iter()
+                    .position(|&x| x == (i, i))
+                    .expect("diagonal entry");
+                let row = b.len();
+                // s = (u_i, 1, L_ii) in K_exp.
+                ai.push(row);
+                aj.push(base + 10 + i);
+                av.push(-1.0);
+                ai.push(row + 2);
+                aj.push(base + pos);
+                av.push(-1.0);
+                b.extend([0.0, 1.0, 0.0]);
+                cones.push(SupportedConeT::ExponentialConeT());
+            }
+        }
+    }
     if !nonneg_rows.is_empty() {
         let r0 = b.len();
         for (r, (_, terms)) in nonneg_rows.iter().enumerate() {
@@ -436,7 +597,7 @@ fn solve_cone(
         }
         cones.push(SupportedConeT::NonnegativeConeT(nonneg_rows.len()));
     }
-    let a = CscMatrix::new_from_triplets(b.len(), p, ai, aj, av);
+    let a = CscMatrix::new_from_triplets(b.len(), nv, ai, aj, av);
     let settings = DefaultSettings {
         verbose: false,
         max_iter: 200,
@@ -454,7 +615,7 @@ fn solve_cone(
     };
     match sol.status {
         SolverStatus::Solved | SolverStatus::AlmostSolved => {
-            let theta = DVector::from_iterator(p, sol.x.iter().zip(&d).map(|(x, s)| x * s));
+            let theta = DVector::from_iterator(p, sol.x.iter().zip(&d).take(p).map(|(x, s)| x * s));
             Ok((theta, info(sol.status)))
         }
         SolverStatus::PrimalInfeasible | SolverStatus::AlmostPrimalInfeasible => {
