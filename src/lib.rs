@@ -12,10 +12,12 @@
 //! - [`dynamics`]: RNEA, CRBA, forward dynamics, the regressor, energy and kinematics;
 //! - [`sim`]: scenario files, the closed-loop excitation simulator, signal processing, rapier;
 //! - [`ident`]: identification under the paper's four constraint sets with Clarabel;
+//! - [`experiment`]: the validation-error-versus-sample-size experiment, in parallel;
 //! - [`io`]: robot descriptions (URDF, TOML) in, MJCF/URDF out, MCAP and CSV logs.
 #![warn(missing_docs)]
 
 pub mod dynamics;
+pub mod experiment;
 pub mod ident;
 pub mod io;
 pub mod model;

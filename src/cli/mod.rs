@@ -1,5 +1,6 @@
 //! Command-line arguments (clap derive) and their dispatch to library entry points.
 
+mod experiment_cmd;
 mod identify_cmd;
 mod model_cmd;
 mod simulate_cmd;
@@ -144,6 +145,20 @@ enum Command {
         #[arg(long, default_value = "euclidean")]
         regularizer: physid::ident::Regularizer,
     },
+    /// The sample-size experiment of a scenario file (its [experiment] table), in parallel.
+    Experiment {
+        /// Scenario file (TOML).
+        scenario: std::path::PathBuf,
+        /// Output directory.
+        #[arg(long, default_value = "results/sample_size")]
+        out: std::path::PathBuf,
+        /// Override the number of seeds.
+        #[arg(long)]
+        seeds: Option<usize>,
+        /// Worker threads (default: all cores). Results do not depend on it.
+        #[arg(long)]
+        threads: Option<usize>,
+    },
     /// Evaluate the dynamics at random states and write JSON (q, qd, qdd, tau, Y, H) for the
     /// cross-check scripts.
     Dynamics {
@@ -236,6 +251,12 @@ pub fn run(cli: Cli) -> anyhow::Result<()> {
             allow_few_samples,
             regularizer,
         }),
+        Command::Experiment {
+            scenario,
+            out,
+            seeds,
+            threads,
+        } => experiment_cmd::run(&scenario, &out, seeds, threads),
         Command::Dynamics {
             robot,
             samples,

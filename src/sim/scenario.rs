@@ -283,6 +283,8 @@ pub struct Scenario {
     /// Injected effects.
     #[serde(default)]
     pub effects: Vec<EffectSpec>,
+    /// The sample-size experiment (`physid experiment`).
+    pub experiment: Option<crate::experiment::ExperimentSpec>,
 }
 
 /// A scenario value that cannot be simulated, with the key and the reason.

@@ -1,0 +1,400 @@
+//! The paper's validation-error-versus-sample-size experiment (its last figure), with ground
+//! truth: for each seed, simulate the scenario once; for each training size `n_s` on a grid and
+//! each constraint set, identify on the first `n_s` samples and validate on the next
+//! `validation` samples; record per-joint validation RMS, parameter errors against the truth,
+//! physical consistency and solve time.
+//!
+//! Work is reused: the regressor of every sample is computed once per seed and the normal
+//! equations grow incrementally along the size grid. Seeds run in parallel (rayon); rows come back
+//! in (seed, size, set) order, so results are identical whatever the thread count.
+
+use crate::dynamics::{regressor, Data};
+use crate::ident::{self, ConstraintSet, NormalEquations, Options};
+use crate::model::Model;
+use crate::sim::scenario::Scenario;
+use crate::spatial::InertialParams;
+use nalgebra::{DMatrix, DVector};
+use rand::SeedableRng;
+use rand_distr::{Distribution, Normal};
+use rayon::prelude::*;
+use serde::{Deserialize, Serialize};
+
+/// The `[experiment]` table of a scenario file.
+#[derive(Clone, Debug, Deserialize, Serialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct ExperimentSpec {
+    /// Number of seeds (simulated experiments).
+    #[serde(default = "seeds")]
+    pub seeds: usize,
+    /// First seed; seeds are `first_seed .. first_seed + seeds`.
+    #[serde(default = "first_seed")]
+    pub first_seed: u64,
+    /// Training sizes (samples); default a log grid of `points` sizes from `min_size` to
+    /// `max_size`.
+    pub sizes: Option<Vec<usize>>,
+    /// Smallest training size of the default grid.
+    #[serde(default = "min_size")]
+    pub min_size: usize,
+    /// Largest training size of the default grid.
+    #[serde(default = "max_size")]
+    pub max_size: usize,
+    /// Grid points.
+    #[serde(default = "points")]
+    pub points: usize,
+    /// Validation samples after each training window (the paper: 10,000).
+    #[serde(default = "validation")]
+    pub validation: usize,
+    /// Constraint sets to compare (default all four).
+    #[serde(default = "all_sets")]
+    pub constraints: Vec<ConstraintSet>,
+    /// Prior weight `w`.
+    #[serde(default = "prior_weight")]
+    pub prior_weight: f64,
+    /// Relative error of the "CAD" prior: masses, principal inertias and friction are scaled by
+    /// `1 + e·n` and the CoM moved by `e/10` m·n, `n ~ N(0, 1)` drawn from the prior seed.
+    #[serde(default = "prior_error")]
+    pub prior_error: f64,
+}
+
+fn seeds() -> usize {
+    20
+}
+fn first_seed() -> u64 {
+    1
+}
+fn min_size() -> usize {
+    10
+}
+fn max_size() -> usize {
+    10_000
+}
+fn points() -> usize {
+    12
+}
+fn validation() -> usize {
+    10_000
+}
+fn all_sets() -> Vec<ConstraintSet> {
+    ConstraintSet::ALL.to_vec()
+}
+fn prior_weight() -> f64 {
+    1e-6
+}
+fn prior_error() -> f64 {
+    0.2
+}
+
+impl Default for ExperimentSpec {
+    fn default() -> Self {
+        Self {
+            seeds: seeds(),
+            first_seed: first_seed(),
+            sizes: None,
+            min_size: min_size(),
+            max_size: max_size(),
+            points: points(),
+            validation: validation(),
+            constraints: all_sets(),
+            prior_weight: prior_weight(),
+            prior_error: prior_error(),
+        }
+    }
+}
+
+impl ExperimentSpec {
+    /// The training sizes, ascending and distinct.
+    pub fn grid(&self) -> Vec<usize> {
+        let mut g = match &self.sizes {
+            Some(s) => s.clone(),
+            None => {
+                let (a, b) = ((self.min_size.max(1)) as f64, (self.max_size.max(1)) as f64);
+                let k = self.points.max(2);
+                (0..k)
+                    .map(|i| (a * (b / a).powf(i as f64 / (k - 1) as f64)).round() as usize)
+                    .collect()
+            }
+        };
+        g.sort_unstable();
+        g.dedup();
+        g
+    }
+
+    /// Checks the values; errors name the key.
+    pub fn validate(&self) -> Result<(), crate::sim::scenario::ScenarioError> {
+        let e = |key: &str, reason: String| {
+            Err(crate::sim::scenario::ScenarioError {
+                key: format!("experiment.{key}"),
+                reason,
+            })
+        };
+        if self.seeds == 0 {
+            return e("seeds", "must be at least 1".into());
+        }
+        if self.grid().first().is_none_or(|&s| s == 0) {
+            return e("sizes", "need positive training sizes".into());
+        }
+        if self.validation == 0 {
+            return e("validation", "must be at least 1".into());
+        }
+        if self.constraints.is_empty() {
+            return e("constraints", "name at least one set".into());
+        }
+        if !(self.prior_weight.is_finite() && self.prior_weight > 0.0) {
+            return e(
+                "prior_weight",
+                format!(
+                    "{} must be > 0 (the small sizes need the prior)",
+                    self.prior_weight
+                ),
+            );
+        }
+        if !(self.prior_error.is_finite() && self.prior_error >= 0.0 && self.prior_error < 0.5) {
+            return e(
+                "prior_error",
+                format!("{} must be in [0, 0.5)", self.prior_error),
+            );
+        }
+        Ok(())
+    }
+}
+
+/// One (seed, size, set) cell.
+#[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
+pub struct Row {
+    /// Seed of the simulated experiment.
+    pub seed: u64,
+    /// Training samples.
+    pub n_s: usize,
+    /// Constraint set.
+    pub constraints: ConstraintSet,
+    /// Validation RMS per joint (N m), joints in model order, `;`-joined in CSV.
+    pub val_rms: Vec<f64>,
+    /// Validation RMS over all joints (N m).
+    pub val_rms_overall: f64,
+    /// Training RMS over all joints (N m).
+    pub train_rms_overall: f64,
+    /// Mean relative mass error over bodies.
+    pub mass_err: f64,
+    /// Mean CoM error over bodies (m).
+    pub com_err: f64,
+    /// Mean relative error of the inertia about the CoM (Frobenius) over bodies.
+    pub inertia_err: f64,
+    /// Mean relative Frobenius error of the pseudo-inertia `J` over bodies.
+    pub j_err: f64,
+    /// Every body's `J(π) ≻ 0`.
+    pub consistent: bool,
+    /// Solver status.
+    pub status: String,
+    /// Solve time (s).
+    pub solve_s: f64,
+}
+
+/// A "CAD" prior: the truth with relative errors of size `e`, physically consistent.
+pub fn cad_prior(model: &Model, e: f64, seed: u64) -> DVector<f64> {
+    let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(seed);
+    let nrm = Normal::new(0.0, 1.0).expect("unit normal");
+    let truth = model.parameters();
+    let mut prior = truth.clone();
+    for (_, c, _) in ident::bodies(model) {
+        let p = InertialParams(truth.fixed_rows::<10>(c).into_owned());
+        let (m, com, ic) = (
+            p.mass(),
+            p.com().unwrap_or_default(),
+            p.inertia_about_com().unwrap_or_default(),
+        );
+        let mut draw = || nrm.sample(&mut rng);
+        let m2 = m * (1.0 + e * draw()).max(0.2);
+        let c2 = com + nalgebra::Vector3::new(draw(), draw(), draw()) * (e / 10.0);
+        let ic2 = ic * (1.0 + e * draw()).max(0.2);
+        prior
+            .rows_mut(c, 10)
+            .copy_from(&InertialParams::from_mass_com_inertia(m2, &c2, &ic2).0);
+    }
+    let l = model.layout();
+    for c in l.viscous_col..l.len {
+        prior[c] = (truth[c] * (1.0 + e * nrm.sample(&mut rng))).max(0.0);
+    }
+    prior
+}
+
+/// Mean parameter errors of `theta` against the model's truth: (mass, CoM, inertia, J).
+pub fn parameter_errors(model: &Model, theta: &DVector<f64>) -> [f64; 4] {
+    let truth = model.parameters();
+    let bodies = ident::bodies(model);
+    let mut acc = [0.0; 4];
+    for (_, c, _) in &bodies {
+        let t = InertialParams(truth.fixed_rows::<10>(*c).into_owned());
+        let h = InertialParams(theta.fixed_rows::<10>(*c).into_owned());
+        acc[0] += ((h.mass() - t.mass()) / t.mass()).abs();
+        acc[1] += match (h.com(), t.com()) {
+            (Some(a), Some(b)) => (a - b).norm(),
+            _ => f64::NAN,
+        };
+        acc[2] += match (h.inertia_about_com(), t.inertia_about_com()) {
+            (Some(a), Some(b)) => (a - b).norm() / b.norm(),
+            _ => f64::NAN,
+        };
+        acc[3] += (h.pseudo_inertia() - t.pseudo_inertia()).norm() / t.pseudo_inertia().norm();
+    }
+    acc.map(|v| v / bodies.len() as f64)
+}
+
+/// Errors of an experiment.
+#[derive(Debug, thiserror::Error)]
+pub enum ExperimentError {
+    /// A bad value.
+    #[error("{0}")]
+    Spec(#[from] crate::sim::scenario::ScenarioError),
+    /// A simulation failed.
+    #[error("seed {seed}: {source}")]
+    Sim {
+        /// The seed.
+        seed: u64,
+        /// What failed.
+        source: crate::sim::simulate::SimError,
+    },
+    /// An identification failed.
+    #[error("seed {seed}, n_s = {n_s}, {set}: {source}")]
+    Ident {
+        /// The seed.
+        seed: u64,
+        /// Training size.
+        n_s: usize,
+        /// Constraint set.
+        set: &'static str,
+        /// What failed.
+        source: ident::IdentError,
+    },
+}
+
+/// Runs one seed: simulate, then every (size, set) cell.
+pub fn run_seed(
+    model: &Model,
+    scenario: &Scenario,
+    spec: &ExperimentSpec,
+    seed: u64,
+) -> Result<Vec<Row>, ExperimentError> {
+    let grid = spec.grid();
+    let max_n = *grid.last().expect("validated grid");
+    let mut sc = scenario.clone();
+    sc.simulation.seed = seed;
+    sc.simulation.duration = (max_n + spec.validation + 1) as f64 / sc.simulation.rate;
+    let rec = crate::sim::run(model, &sc, &mut |_| {})
+        .map_err(|source| ExperimentError::Sim { seed, source })?;
+    let data = &rec.processed;
+    let (n, p) = (model.dof(), model.layout().len);
+    let total = (max_n + spec.validation).min(data.len());
+    // Every sample's regressor once (n × p each, column-major).
+    let mut d = Data::new(model);
+    let mut y = DMatrix::zeros(n, p);
+    let mut ys: Vec<DMatrix<f64>> = Vec::with_capacity(total);
+    for k in 0..total {
+        regressor(
+            model,
+            &mut d,
+            data.q_at(k),
+            data.qd_at(k),
+            data.qdd_at(k).expect("processed q̈"),
+            &mut y,
+        );
+        ys.push(y.clone());
+    }
+    let rms = |theta: &DVector<f64>, range: std::ops::Range<usize>| -> (Vec<f64>, f64) {
+        let mut ss = vec![0.0; n];
+        for k in range.clone() {
+            let pred = &ys[k] * theta;
+            for j in 0..n {
+                ss[j] += (pred[j] - data.tau_at(k)[j]).powi(2);
+            }
+        }
+        let c = range.len().max(1) as f64;
+        (
+            ss.iter().map(|s| (s / c).sqrt()).collect(),
+            (ss.iter().sum::<f64>() / (c * n as f64)).sqrt(),
+        )
+    };
+    let prior = cad_prior(model, spec.prior_error, 1_000_003 ^ seed);
+    let mut ne = NormalEquations::new(n, p);
+    let mut added = 0;
+    let mut rows = vec![];
+    for &n_s in &grid {
+        while added < n_s.min(total) {
+            ne.add(&ys[added], data.tau_at(added));
+            added += 1;
+        }
+        let snapshot = ne.clone().finish();
+        for &set in &spec.constraints {
+            let mut o = Options::new(set);
+            o.prior_weight = spec.prior_weight;
+            let r = ident::identify(model, &snapshot, &prior, &o).map_err(|source| {
+                ExperimentError::Ident {
+                    seed,
+                    n_s,
+                    set: set.name(),
+                    source,
+                }
+            })?;
+            let (val, val_all) = rms(&r.theta, n_s..(n_s + spec.validation).min(total));
+            let (_, train_all) = rms(&r.theta, 0..n_s);
+            let [mass_err, com_err, inertia_err, j_err] = parameter_errors(model, &r.theta);
+            rows.push(Row {
+                seed,
+                n_s,
+                constraints: set,
+                val_rms: val,
+                val_rms_overall: val_all,
+                train_rms_overall: train_all,
+                mass_err,
+                com_err,
+                inertia_err,
+                j_err,
+                consistent: ident::constraints_hold(model, &r.theta, ConstraintSet::Consistent),
+                status: r.solver.status.clone(),
+                solve_s: r.solver.seconds,
+            });
+        }
+    }
+    Ok(rows)
+}
+
+/// Runs the whole experiment, seeds in parallel on the current rayon pool. `progress(done,
+/// total)` is called as seeds finish.
+pub fn run(
+    model: &Model,
+    scenario: &Scenario,
+    spec: &ExperimentSpec,
+    progress: &(dyn Fn(usize, usize) + Sync),
+) -> Result<Vec<Row>, ExperimentError> {
+    spec.validate()?;
+    let seeds: Vec<u64> = (0..spec.seeds as u64)
+        .map(|i| spec.first_seed + i)
+        .collect();
+    let done = std::sync::atomic::AtomicUsize::new(0);
+    let per_seed: Vec<Vec<Row>> = seeds
+        .par_iter()
+        .map(|&s| {
+            let r = run_seed(model, scenario, spec, s);
+            progress(
+                done.fetch_add(1, std::sync::atomic::Ordering::Relaxed) + 1,
+                seeds.len(),
+            );
+            r
+        })
+        .collect::<Result<_, _>>()?;
+    Ok(per_seed.into_iter().flatten().collect())
+}
+
+/// Median and interquartile range of `v` (NaN-free values only).
+pub fn median_iqr(v: &[f64]) -> (f64, f64, f64) {
+    let mut s: Vec<f64> = v.iter().copied().filter(|x| x.is_finite()).collect();
+    if s.is_empty() {
+        return (f64::NAN, f64::NAN, f64::NAN);
+    }
+    s.sort_by(f64::total_cmp);
+    let q = |f: f64| {
+        let x = f * (s.len() - 1) as f64;
+        let (i, t) = (x.floor() as usize, x - x.floor());
+        s[i] + t * (s[(i + 1).min(s.len() - 1)] - s[i])
+    };
+    (q(0.25), q(0.5), q(0.75))
+}
