@@ -105,3 +105,66 @@ fn tighter_constraints_generalize_better_from_few_samples_and_the_gap_closes() {
     assert!(hi / lo < 1.01, "{big:?}");
     assert!((0.8..2.0).contains(&lo), "{big:?}");
 }
+
+#[test]
+fn polars_summary_and_pivot_match_a_direct_computation() {
+    use physid::experiment::tables;
+    let spec = ExperimentSpec {
+        seeds: 4,
+        sizes: Some(vec![40, 400]),
+        validation: 400,
+        ..Default::default()
+    };
+    let rows = run(&spec, 2);
+    let joints = vec!["a".to_string(), "b".to_string(), "c".to_string()];
+    let long = tables::long_table(&rows, &joints).unwrap();
+    assert_eq!(long.height(), 4 * 2 * 4);
+    let summary = tables::summary(&long).unwrap();
+    assert_eq!(summary.height(), 2 * 4);
+    let get = |name: &str, i: usize| {
+        summary
+            .column(name)
+            .unwrap()
+            .get(i)
+            .unwrap()
+            .try_extract::<f64>()
+            .unwrap()
+    };
+    let mut i = 0;
+    for n in [40usize, 400] {
+        for set in ConstraintSet::ALL {
+            let v: Vec<f64> = rows
+                .iter()
+                .filter(|r| r.n_s == n && r.constraints == set)
+                .map(|r| r.val_rms_overall)
+                .collect();
+            let (q1, med, q3) = median_iqr(&v);
+            assert!(
+                (get("val_rms_median", i) - med).abs() <= 1e-12 * med,
+                "{n} {set:?}"
+            );
+            assert!(
+                (get("val_rms_q25", i) - q1).abs() <= 1e-12 * q1
+                    && (get("val_rms_q75", i) - q3).abs() <= 1e-12 * q3
+            );
+            i += 1;
+        }
+    }
+    let p = tables::pivot(
+        &summary,
+        "val_rms_median",
+        &["none", "semi", "consistent", "ellipsoid"],
+    )
+    .unwrap();
+    assert_eq!(p.shape(), (2, 5));
+    let names: Vec<String> = p.get_column_names().iter().map(|s| s.to_string()).collect();
+    assert_eq!(names, ["n_s", "none", "semi", "consistent", "ellipsoid"]);
+    let cell = p
+        .column("ellipsoid")
+        .unwrap()
+        .get(1)
+        .unwrap()
+        .try_extract::<f64>()
+        .unwrap();
+    assert!((cell - get("val_rms_median", 7)).abs() < 1e-15);
+}

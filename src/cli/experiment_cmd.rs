@@ -1,121 +1,14 @@
 //! `physid experiment`: the sample-size experiment, written to `results/NAME/`.
 
 use anyhow::Context;
-use physid::experiment::{self, median_iqr, ExperimentSpec, Row};
-use physid::ident::ConstraintSet;
+use physid::experiment::{self, plots, tables};
 use std::fmt::Write;
 use std::path::Path;
 
-/// The long table as CSV: one row per (seed, n_s, set).
-pub fn rows_csv(rows: &[Row], joints: &[String]) -> String {
-    let mut w = csv::Writer::from_writer(vec![]);
-    let mut header: Vec<String> = ["seed", "n_s", "constraints"]
-        .iter()
-        .map(|s| s.to_string())
-        .collect();
-    header.extend(joints.iter().map(|j| format!("val_rms_{j}")));
-    header.extend(
-        [
-            "val_rms",
-            "train_rms",
-            "mass_err",
-            "com_err_m",
-            "inertia_err",
-            "j_err",
-            "consistent",
-            "status",
-            "solve_s",
-        ]
-        .iter()
-        .map(|s| s.to_string()),
-    );
-    w.write_record(&header).expect("memory");
-    for r in rows {
-        let mut rec = vec![
-            r.seed.to_string(),
-            r.n_s.to_string(),
-            r.constraints.name().to_string(),
-        ];
-        rec.extend(r.val_rms.iter().map(|v| v.to_string()));
-        rec.extend([
-            r.val_rms_overall.to_string(),
-            r.train_rms_overall.to_string(),
-            r.mass_err.to_string(),
-            r.com_err.to_string(),
-            r.inertia_err.to_string(),
-            r.j_err.to_string(),
-            r.consistent.to_string(),
-            r.status.clone(),
-            r.solve_s.to_string(),
-        ]);
-        w.write_record(&rec).expect("memory");
-    }
-    String::from_utf8(w.into_inner().expect("memory")).expect("utf-8")
-}
-
-/// The Markdown summary: median [IQR] over seeds per n_s × set.
-pub fn summary_md(rows: &[Row], spec: &ExperimentSpec, title: &str) -> String {
-    let sets: Vec<ConstraintSet> = spec.constraints.clone();
-    let mut s = String::new();
-    let _ = writeln!(s, "# {title}\n");
-    let _ = writeln!(
-        s,
-        "{} seeds, training on the first n_s samples, validation on the next {}. Median [interquartile range] over seeds.\n",
-        spec.seeds, spec.validation
-    );
-    let table =
-        |s: &mut String, label: &str, f: &dyn Fn(&Row) -> f64, fmt: &dyn Fn(f64) -> String| {
-            let _ = writeln!(s, "## {label}\n");
-            let _ = write!(s, "| n_s |");
-            for set in &sets {
-                let _ = write!(s, " {} |", set.name());
-            }
-            let _ = write!(s, "\n|---|");
-            for _ in &sets {
-                let _ = write!(s, "---|");
-            }
-            let _ = writeln!(s);
-            for n in spec.grid() {
-                let _ = write!(s, "| {n} |");
-                for set in &sets {
-                    let v: Vec<f64> = rows
-                        .iter()
-                        .filter(|r| r.n_s == n && r.constraints == *set)
-                        .map(f)
-                        .collect();
-                    let (lo, med, hi) = median_iqr(&v);
-                    let _ = write!(s, " {} [{}, {}] |", fmt(med), fmt(lo), fmt(hi));
-                }
-                let _ = writeln!(s);
-            }
-            let _ = writeln!(s);
-        };
-    let g = |x: f64| format!("{x:.3}");
-    table(
-        &mut s,
-        "Validation RMS torque error (N m, all joints)",
-        &|r| r.val_rms_overall,
-        &g,
-    );
-    table(
-        &mut s,
-        "Relative pseudo-inertia error ‖Ĵ − J‖/‖J‖ (mean over bodies)",
-        &|r| r.j_err,
-        &g,
-    );
-    table(
-        &mut s,
-        "Physically consistent results (fraction of seeds)",
-        &|r| if r.consistent { 1.0 } else { 0.0 },
-        &|x| format!("{x:.2}"),
-    );
-    table(&mut s, "Solve time (ms)", &|r| r.solve_s * 1e3, &|x| {
-        format!("{x:.2}")
-    });
-    s
-}
-
-/// Runs the experiment of a scenario file and writes the results directory.
+/// Runs the experiment of a scenario file and writes the results directory: `rows.parquet` and
+/// `rows.csv` (the long table), `summary.parquet` and `summary.csv` (median and quartiles over
+/// seeds per n_s × set), `summary.md` (pivots), `validation_error.svg`, `parameter_error.svg`
+/// and `provenance.json`.
 pub fn run(
     path: &Path,
     out: &Path,
@@ -147,9 +40,46 @@ pub fn run(
     bar.finish_and_clear();
     std::fs::create_dir_all(out).with_context(|| format!("creating {}", out.display()))?;
     let joints: Vec<String> = model.bodies.iter().map(|b| b.joint_name.clone()).collect();
-    physid::io::write_atomic(&out.join("rows.csv"), rows_csv(&rows, &joints).as_bytes())?;
-    let title = format!("Validation error versus training size: {}", path.display());
-    let mut md = summary_md(&rows, &spec, &title);
+    let mut long = tables::long_table(&rows, &joints)?;
+    tables::write_parquet(&out.join("rows.parquet"), &mut long)?;
+    tables::write_csv(&out.join("rows.csv"), &mut long)?;
+    let mut summary = tables::summary(&long)?;
+    tables::write_parquet(&out.join("summary.parquet"), &mut summary)?;
+    tables::write_csv(&out.join("summary.csv"), &mut summary)?;
+    let sets: Vec<&str> = spec.constraints.iter().map(|s| s.name()).collect();
+    let mut md = String::new();
+    let _ = writeln!(
+        md,
+        "# Validation error versus training size: {}\n",
+        path.display()
+    );
+    let _ = writeln!(
+        md,
+        "{} seeds (first {}), training on the first n_s samples, validation on the next {}; prior weight {}, prior error {}. Medians over seeds; quartiles in summary.csv.\n",
+        spec.seeds, spec.first_seed, spec.validation, spec.prior_weight, spec.prior_error
+    );
+    for (value, label) in [
+        (
+            "val_rms_median",
+            "Validation RMS torque error (N m, all joints)",
+        ),
+        (
+            "j_err_median",
+            "Relative pseudo-inertia error ‖Ĵ − J‖/‖J‖ (mean over bodies)",
+        ),
+        (
+            "consistent_fraction",
+            "Fraction of physically consistent results",
+        ),
+        ("solve_ms_median", "Solve time (ms)"),
+    ] {
+        let p = tables::pivot(&summary, value, &sets)?;
+        let _ = writeln!(md, "## {label}\n\n{}", tables::markdown(&p));
+    }
+    let _ = writeln!(
+        md,
+        "![validation error](validation_error.svg)\n\n![parameter error](parameter_error.svg)\n"
+    );
     let _ = writeln!(
         md,
         "{cells} cells ({} seeds × {} sizes × {} sets) in {wall:.1} s on {} threads.",
@@ -159,6 +89,22 @@ pub fn run(
         pool.current_num_threads()
     );
     physid::io::write_atomic(&out.join("summary.md"), md.as_bytes())?;
+    plots::plot_vs_ns(
+        &summary,
+        "val_rms",
+        &sets,
+        "Validation error vs training samples (median, IQR band)",
+        "validation RMS torque error [N m]",
+        &out.join("validation_error.svg"),
+    )?;
+    plots::plot_vs_ns(
+        &summary,
+        "j_err",
+        &sets,
+        "Pseudo-inertia error vs training samples (median, IQR band)",
+        "‖Ĵ − J‖ / ‖J‖ (mean over bodies)",
+        &out.join("parameter_error.svg"),
+    )?;
     let git = std::process::Command::new("git")
         .args(["rev-parse", "HEAD"])
         .output()
@@ -177,15 +123,11 @@ pub fn run(
         serde_json::to_string_pretty(&prov)?.as_bytes(),
     )?;
     println!(
-        "{cells} cells in {wall:.1} s; wrote {}/rows.csv, summary.md, provenance.json",
+        "{cells} cells in {wall:.1} s on {} threads; wrote {}/",
+        pool.current_num_threads(),
         out.display()
     );
-    print!(
-        "{}",
-        summary_md(&rows, &spec, &title)
-            .split("## Relative")
-            .next()
-            .unwrap_or("")
-    );
+    let p = tables::pivot(&summary, "val_rms_median", &sets)?;
+    println!("median validation RMS (N m):\n{}", tables::markdown(&p));
     Ok(())
 }

@@ -4,6 +4,7 @@ mod experiment_cmd;
 mod identify_cmd;
 mod model_cmd;
 mod simulate_cmd;
+mod sweep_cmd;
 
 use clap::{Parser, Subcommand, ValueEnum};
 use physid::model::{Model, RotorModel};
@@ -159,6 +160,21 @@ enum Command {
         #[arg(long)]
         threads: Option<usize>,
     },
+    /// A parameter sweep (docs/sweeps.md): a grid over scenario keys crossed with the constraint
+    /// sets; resumable (finished cells are skipped) and shardable across machines.
+    Sweep {
+        /// Sweep file (TOML).
+        sweep: std::path::PathBuf,
+        /// Output directory (default results/<sweep file name>).
+        #[arg(long)]
+        out: Option<std::path::PathBuf>,
+        /// Run only cells with index ≡ K (mod N), e.g. a job array's task: `--shard 3/16`.
+        #[arg(long)]
+        shard: Option<String>,
+        /// Worker threads (default: all cores).
+        #[arg(long)]
+        threads: Option<usize>,
+    },
     /// Evaluate the dynamics at random states and write JSON (q, qd, qdd, tau, Y, H) for the
     /// cross-check scripts.
     Dynamics {
@@ -257,6 +273,15 @@ pub fn run(cli: Cli) -> anyhow::Result<()> {
             seeds,
             threads,
         } => experiment_cmd::run(&scenario, &out, seeds, threads),
+        Command::Sweep {
+            sweep,
+            out,
+            shard,
+            threads,
+        } => {
+            let shard = shard.as_deref().map(sweep_cmd::parse_shard).transpose()?;
+            sweep_cmd::run(&sweep, out, shard, threads)
+        }
         Command::Dynamics {
             robot,
             samples,

@@ -17,6 +17,10 @@ use nalgebra::{DMatrix, DVector};
 use rand::SeedableRng;
 use rand_distr::{Distribution, Normal};
 use rayon::prelude::*;
+
+pub mod plots;
+pub mod sweep;
+pub mod tables;
 use serde::{Deserialize, Serialize};
 
 /// The `[experiment]` table of a scenario file.

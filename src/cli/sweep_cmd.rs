@@ -1,0 +1,125 @@
+//! `physid sweep`: a parameter grid crossed with the constraint sets, resumable and shardable.
+
+use anyhow::{bail, Context};
+use physid::experiment::{sweep, tables};
+use rayon::prelude::*;
+use std::path::{Path, PathBuf};
+
+/// Parses `K/N`.
+pub fn parse_shard(s: &str) -> anyhow::Result<(usize, usize)> {
+    let (k, n) = s
+        .split_once('/')
+        .with_context(|| format!("--shard: '{s}' is not K/N"))?;
+    let (k, n): (usize, usize) = (
+        k.parse().context("--shard K")?,
+        n.parse().context("--shard N")?,
+    );
+    if n == 0 || k >= n {
+        bail!("--shard {k}/{n}: need 0 <= K < N");
+    }
+    Ok((k, n))
+}
+
+/// Runs (this shard of) a sweep, then merges if every cell is present.
+pub fn run(
+    path: &Path,
+    out: Option<PathBuf>,
+    shard: Option<(usize, usize)>,
+    threads: Option<usize>,
+) -> anyhow::Result<()> {
+    let (spec, scenario_path, base) = sweep::load(path)?;
+    spec.experiment
+        .validate()
+        .map_err(|e| anyhow::anyhow!("{}: {e}", path.display()))?;
+    let out =
+        out.unwrap_or_else(|| PathBuf::from("results").join(path.file_stem().unwrap_or_default()));
+    let cells_dir = out.join("cells");
+    std::fs::create_dir_all(&cells_dir)
+        .with_context(|| format!("creating {}", cells_dir.display()))?;
+    let all = sweep::cells(&spec);
+    // Check every grid point before running anything: a bad value fails fast, naming it.
+    let mut seen = std::collections::BTreeSet::new();
+    for c in &all {
+        if seen.insert(format!("{:?}", c.point)) {
+            sweep::scenario_at(&base, &scenario_path, &c.point)?;
+        }
+    }
+    let file = |c: &sweep::Cell| cells_dir.join(format!("{}.parquet", c.id()));
+    let mine: Vec<&sweep::Cell> = all
+        .iter()
+        .filter(|c| shard.is_none_or(|(k, n)| c.index % n == k))
+        .collect();
+    let todo: Vec<&sweep::Cell> = mine.iter().copied().filter(|c| !file(c).exists()).collect();
+    eprintln!(
+        "{}: {} cells{}, {} already done, {} to run",
+        path.display(),
+        mine.len(),
+        shard.map_or(String::new(), |(k, n)| format!(
+            " in shard {k}/{n} of {}",
+            all.len()
+        )),
+        mine.len() - todo.len(),
+        todo.len()
+    );
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(threads.unwrap_or(0))
+        .build()?;
+    let bar = indicatif::ProgressBar::new(todo.len() as u64);
+    bar.set_style(
+        indicatif::ProgressStyle::with_template(
+            "{spinner} cells [{bar:40}] {pos}/{len} {elapsed} eta {eta}",
+        )
+        .expect("valid")
+        .progress_chars("=> "),
+    );
+    let (_, model) = sweep::scenario_at(&base, &scenario_path, &all[0].point)?;
+    let joints: Vec<String> = model.bodies.iter().map(|b| b.joint_name.clone()).collect();
+    pool.install(|| {
+        todo.par_iter().try_for_each(|c| -> anyhow::Result<()> {
+            let rows = sweep::run_cell(&base, &scenario_path, &spec, c)
+                .with_context(|| format!("cell {}", c.id()))?;
+            let consts: Vec<(String, String)> = c
+                .point
+                .iter()
+                .map(|(k, v)| (k.clone(), sweep::value_text(v)))
+                .collect();
+            let mut df = tables::with_constants(tables::long_table(&rows, &joints)?, &consts)?;
+            tables::write_parquet(&file(c), &mut df)?;
+            bar.inc(1);
+            Ok(())
+        })
+    })?;
+    bar.finish_and_clear();
+    let missing = all.iter().filter(|c| !file(c).exists()).count();
+    if missing > 0 {
+        eprintln!("{missing} of {} cells still missing (other shards); merge when all are done by running without --shard", all.len());
+        return Ok(());
+    }
+    let parts = all
+        .iter()
+        .map(|c| tables::read_parquet(&file(c)))
+        .collect::<Result<Vec<_>, _>>()?;
+    let mut long = tables::concat(parts)?;
+    tables::write_parquet(&out.join("rows.parquet"), &mut long)?;
+    tables::write_csv(&out.join("rows.csv"), &mut long)?;
+    let keys: Vec<&str> = spec.grid.keys().map(|k| k.as_str()).collect();
+    let mut summary = tables::summary_by(&long, &keys)?;
+    tables::write_parquet(&out.join("summary.parquet"), &mut summary)?;
+    tables::write_csv(&out.join("summary.csv"), &mut summary)?;
+    let md = format!(
+        "# Sweep {}\n\nGrid: {}; {} seeds; sizes {:?}; sets {:?}. Medians and quartiles over seeds.\n\n{}",
+        path.display(),
+        keys.join(", "),
+        spec.experiment.seeds,
+        spec.experiment.grid(),
+        spec.experiment.constraints.iter().map(|c| c.name()).collect::<Vec<_>>(),
+        tables::markdown(&summary.select(keys.iter().map(|k| k.to_string()).chain(["n_s", "constraints", "val_rms_median", "j_err_median", "consistent_fraction"].map(String::from)))?)
+    );
+    physid::io::write_atomic(&out.join("summary.md"), md.as_bytes())?;
+    println!(
+        "{} cells merged into {}/rows.parquet, summary.csv, summary.md",
+        all.len(),
+        out.display()
+    );
+    Ok(())
+}

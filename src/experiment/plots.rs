@@ -1,0 +1,123 @@
+//! Plots of an experiment (plotters, SVG): a summary column versus n_s on log-log axes, one line
+//! per constraint set (the median over seeds) with its interquartile band.
+
+use plotters::prelude::*;
+use polars::prelude::*;
+use std::path::Path;
+
+/// Plots `{value}_median` with the `{value}_q25`..`{value}_q75` band against n_s per set.
+pub fn plot_vs_ns(
+    summary: &DataFrame,
+    value: &str,
+    sets: &[&str],
+    title: &str,
+    ylabel: &str,
+    path: &Path,
+) -> Result<(), crate::io::IoError> {
+    let err = |m: String| crate::io::IoError::Invalid {
+        path: path.to_path_buf(),
+        message: m,
+    };
+    let get = |name: &str| -> Result<Vec<f64>, crate::io::IoError> {
+        let c = summary.column(name).map_err(|e| err(e.to_string()))?;
+        let c = c.cast(&DataType::Float64).map_err(|e| err(e.to_string()))?;
+        Ok(c.f64()
+            .map_err(|e| err(e.to_string()))?
+            .iter()
+            .map(|v| v.unwrap_or(f64::NAN))
+            .collect())
+    };
+    let ns = get("n_s")?;
+    let (lo, med, hi) = (
+        get(&format!("{value}_q25"))?,
+        get(&format!("{value}_median"))?,
+        get(&format!("{value}_q75"))?,
+    );
+    let set_col = summary
+        .column("constraints")
+        .map_err(|e| err(e.to_string()))?;
+    let set_of: Vec<String> = (0..summary.height())
+        .map(|i| {
+            set_col
+                .get(i)
+                .map(|v| v.str_value().to_string())
+                .unwrap_or_default()
+        })
+        .collect();
+    let finite = |v: &f64| v.is_finite() && *v > 0.0;
+    let xs: Vec<f64> = ns.iter().copied().filter(finite).collect();
+    let ys: Vec<f64> = lo.iter().chain(&hi).copied().filter(finite).collect();
+    let (xmin, xmax) = (
+        xs.iter().cloned().fold(f64::INFINITY, f64::min),
+        xs.iter().cloned().fold(0.0, f64::max),
+    );
+    let (ymin, ymax) = (
+        ys.iter().cloned().fold(f64::INFINITY, f64::min),
+        ys.iter().cloned().fold(0.0, f64::max),
+    );
+    let mut svg = String::new();
+    {
+        let root = SVGBackend::with_string(&mut svg, (860, 540)).into_drawing_area();
+        let draw = |e: String| err(format!("plot: {e}"));
+        root.fill(&WHITE).map_err(|e| draw(e.to_string()))?;
+        let mut chart = ChartBuilder::on(&root)
+            .caption(title, ("sans-serif", 20))
+            .margin(15)
+            .x_label_area_size(45)
+            .y_label_area_size(75)
+            .build_cartesian_2d(
+                (xmin * 0.9..xmax * 1.1).log_scale(),
+                (ymin * 0.8..ymax * 1.25).log_scale(),
+            )
+            .map_err(|e| draw(e.to_string()))?;
+        chart
+            .configure_mesh()
+            .x_desc("training samples n_s")
+            .y_desc(ylabel)
+            .draw()
+            .map_err(|e| draw(e.to_string()))?;
+        for (k, set) in sets.iter().enumerate() {
+            // Fixed, distinguishable colours (loosest to tightest: red, green, purple, blue).
+            const COLOURS: [(u8, u8, u8); 6] = [
+                (214, 39, 40),
+                (44, 160, 44),
+                (148, 103, 189),
+                (31, 119, 180),
+                (255, 127, 14),
+                (23, 190, 207),
+            ];
+            let (r, g, b) = COLOURS[k % COLOURS.len()];
+            let color = RGBColor(r, g, b).to_rgba();
+            let idx: Vec<usize> = (0..ns.len())
+                .filter(|&i| set_of[i] == *set && finite(&lo[i]) && finite(&hi[i]))
+                .collect();
+            let band: Vec<(f64, f64)> = idx
+                .iter()
+                .map(|&i| (ns[i], lo[i]))
+                .chain(idx.iter().rev().map(|&i| (ns[i], hi[i])))
+                .collect();
+            chart
+                .draw_series(std::iter::once(Polygon::new(band, color.mix(0.18))))
+                .map_err(|e| draw(e.to_string()))?;
+            chart
+                .draw_series(LineSeries::new(
+                    idx.iter().map(|&i| (ns[i], med[i])),
+                    color.stroke_width(2),
+                ))
+                .map_err(|e| draw(e.to_string()))?
+                .label(*set)
+                .legend(move |(x, y)| {
+                    PathElement::new(vec![(x, y), (x + 20, y)], color.stroke_width(2))
+                });
+        }
+        chart
+            .configure_series_labels()
+            .border_style(BLACK)
+            .background_style(WHITE.mix(0.85))
+            .position(SeriesLabelPosition::UpperRight)
+            .draw()
+            .map_err(|e| draw(e.to_string()))?;
+        root.present().map_err(|e| draw(e.to_string()))?;
+    }
+    crate::io::write_atomic(path, svg.as_bytes())
+}

@@ -1,0 +1,196 @@
+//! Parameter sweeps: a grid over any scenario keys, crossed with the constraint sets and the
+//! training sizes of the sample-size experiment.
+//!
+//! A sweep file names a base scenario and a grid of dotted scenario keys:
+//!
+//! ```toml
+//! scenario = "cheetah3_shell.toml"      # relative to this file
+//! [grid]
+//! "sensors.torque_noise" = [0.3, 1.0, 3.0]
+//! "simulation.engine" = ["physid", "rapier"]
+//! [experiment]                           # as a scenario's [experiment] table
+//! seeds = 3
+//! sizes = [100, 1000]
+//! validation = 2000
+//! ```
+//!
+//! Each cell (one grid point and one seed) is independent and deterministic; its rows are written
+//! to `cells/<cell id>.parquet` when it finishes, so an interrupted sweep resumes by skipping the
+//! cells already present, and `--shard K/N` runs only the cells with index ≡ K (mod N), which is
+//! how a cluster job array splits a large sweep (see docs/sweeps.md). The final merge reads every
+//! cell file with polars.
+
+use super::{run_seed, ExperimentError, ExperimentSpec, Row};
+use crate::io::IoError;
+use crate::sim::scenario::Scenario;
+use serde::Deserialize;
+use std::path::{Path, PathBuf};
+
+/// A sweep file.
+#[derive(Clone, Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct SweepSpec {
+    /// Base scenario, relative to the sweep file.
+    pub scenario: PathBuf,
+    /// Dotted scenario keys and their values.
+    pub grid: toml::Table,
+    /// The experiment settings for every grid point.
+    #[serde(default)]
+    pub experiment: ExperimentSpec,
+}
+
+/// One grid point: `(key, value)` pairs.
+pub type Point = Vec<(String, toml::Value)>;
+
+/// A cell: a grid point and a seed.
+#[derive(Clone, Debug)]
+pub struct Cell {
+    /// Position in the sweep's cell order.
+    pub index: usize,
+    /// The grid point.
+    pub point: Point,
+    /// The seed.
+    pub seed: u64,
+}
+
+impl Cell {
+    /// A stable file-name-safe id, e.g. `0007_sensors.torque_noise=1_seed=2`.
+    pub fn id(&self) -> String {
+        let kv: Vec<String> = self
+            .point
+            .iter()
+            .map(|(k, v)| format!("{k}={}", value_text(v)))
+            .collect();
+        let raw = format!("{:04}_{}_seed={}", self.index, kv.join("_"), self.seed);
+        raw.chars()
+            .map(|c| {
+                if c.is_ascii_alphanumeric() || "._=-".contains(c) {
+                    c
+                } else {
+                    '-'
+                }
+            })
+            .collect()
+    }
+}
+
+/// A grid value as text (strings without quotes).
+pub fn value_text(v: &toml::Value) -> String {
+    match v {
+        toml::Value::String(s) => s.clone(),
+        other => other.to_string(),
+    }
+}
+
+/// Reads a sweep file and its base scenario text.
+pub fn load(path: &Path) -> Result<(SweepSpec, PathBuf, String), IoError> {
+    let text = crate::io::read_to_string(path)?;
+    let spec: SweepSpec =
+        toml::from_str(&text).map_err(|e| crate::io::robot_toml::toml_error(path, e))?;
+    let scenario = path.parent().unwrap_or(Path::new(".")).join(&spec.scenario);
+    let base = crate::io::read_to_string(&scenario)?;
+    for (k, v) in &spec.grid {
+        if !matches!(v, toml::Value::Array(a) if !a.is_empty()) {
+            return Err(IoError::invalid(
+                path,
+                format!("grid.\"{k}\": give a non-empty list of values"),
+            ));
+        }
+    }
+    Ok((spec, scenario, base))
+}
+
+/// All cells, grid points in lexicographic order of the keys (last key fastest), then seeds.
+pub fn cells(spec: &SweepSpec) -> Vec<Cell> {
+    let keys: Vec<(&String, &Vec<toml::Value>)> = spec
+        .grid
+        .iter()
+        .map(|(k, v)| (k, v.as_array().expect("checked in load")))
+        .collect();
+    let mut points: Vec<Point> = vec![vec![]];
+    for (k, values) in &keys {
+        points = points
+            .into_iter()
+            .flat_map(|p| {
+                values
+                    .iter()
+                    .map(move |v| [p.clone(), vec![((*k).clone(), v.clone())]].concat())
+            })
+            .collect();
+    }
+    let seeds: Vec<u64> = (0..spec.experiment.seeds as u64)
+        .map(|i| spec.experiment.first_seed + i)
+        .collect();
+    let mut out = vec![];
+    for p in points {
+        for &s in &seeds {
+            out.push(Cell {
+                index: out.len(),
+                point: p.clone(),
+                seed: s,
+            });
+        }
+    }
+    out
+}
+
+/// The base scenario with a grid point applied (each dotted key set in the TOML tree, then the
+/// whole scenario parsed and validated: errors name the key).
+pub fn scenario_at(
+    base: &str,
+    scenario_path: &Path,
+    point: &Point,
+) -> Result<(Scenario, crate::model::Model), IoError> {
+    let mut doc: toml::Table =
+        toml::from_str(base).map_err(|e| crate::io::robot_toml::toml_error(scenario_path, e))?;
+    for (key, value) in point {
+        let parts: Vec<&str> = key.split('.').collect();
+        let mut t = &mut doc;
+        for p in &parts[..parts.len() - 1] {
+            t = t
+                .entry(p.to_string())
+                .or_insert_with(|| toml::Value::Table(toml::Table::new()))
+                .as_table_mut()
+                .ok_or_else(|| {
+                    IoError::invalid(
+                        scenario_path,
+                        format!("sweep key '{key}': '{p}' is not a table"),
+                    )
+                })?;
+        }
+        t.insert(parts[parts.len() - 1].to_string(), value.clone());
+    }
+    let text = toml::to_string(&doc)
+        .map_err(|e| IoError::invalid(scenario_path, format!("sweep: {e}")))?;
+    let sc: Scenario = toml::from_str(&text).map_err(|e| IoError::Parse {
+        path: scenario_path.to_path_buf(),
+        message: format!("with sweep values {point:?}: {}", e.to_string().trim_end()),
+    })?;
+    let model = crate::io::robot_toml::from_spec(&sc.robot, scenario_path)?;
+    sc.validate(model.dof()).map_err(|e| {
+        IoError::invalid(scenario_path, format!("with sweep values {point:?}: {e}"))
+    })?;
+    Ok((sc, model))
+}
+
+/// Runs one cell.
+pub fn run_cell(
+    base: &str,
+    scenario_path: &Path,
+    spec: &SweepSpec,
+    cell: &Cell,
+) -> Result<Vec<Row>, SweepError> {
+    let (sc, model) = scenario_at(base, scenario_path, &cell.point)?;
+    Ok(run_seed(&model, &sc, &spec.experiment, cell.seed)?)
+}
+
+/// Sweep errors.
+#[derive(Debug, thiserror::Error)]
+pub enum SweepError {
+    /// A file problem.
+    #[error(transparent)]
+    Io(#[from] IoError),
+    /// An experiment cell failed.
+    #[error(transparent)]
+    Experiment(#[from] ExperimentError),
+}

@@ -1,0 +1,226 @@
+//! Tables of an experiment with polars: the long table (one row per seed × n_s × set), the
+//! summary over seeds (median and interquartile range per n_s × set), and its pivot (n_s rows,
+//! one column per constraint set). Parquet and CSV, written atomically.
+
+use super::Row;
+use crate::io::IoError;
+use polars::prelude::*;
+use std::path::Path;
+
+/// The long table.
+pub fn long_table(rows: &[Row], joints: &[String]) -> PolarsResult<DataFrame> {
+    let f = |name: &str, v: Vec<f64>| Series::new(name.into(), v).into_column();
+    let mut cols = vec![
+        Series::new(
+            "seed".into(),
+            rows.iter().map(|r| r.seed).collect::<Vec<u64>>(),
+        )
+        .into_column(),
+        Series::new(
+            "n_s".into(),
+            rows.iter().map(|r| r.n_s as u64).collect::<Vec<u64>>(),
+        )
+        .into_column(),
+        Series::new(
+            "constraints".into(),
+            rows.iter()
+                .map(|r| r.constraints.name())
+                .collect::<Vec<&str>>(),
+        )
+        .into_column(),
+    ];
+    for (j, name) in joints.iter().enumerate() {
+        cols.push(f(
+            &format!("val_rms_{name}"),
+            rows.iter().map(|r| r.val_rms[j]).collect(),
+        ));
+    }
+    cols.push(f(
+        "val_rms",
+        rows.iter().map(|r| r.val_rms_overall).collect(),
+    ));
+    cols.push(f(
+        "train_rms",
+        rows.iter().map(|r| r.train_rms_overall).collect(),
+    ));
+    cols.push(f("mass_err", rows.iter().map(|r| r.mass_err).collect()));
+    cols.push(f("com_err_m", rows.iter().map(|r| r.com_err).collect()));
+    cols.push(f(
+        "inertia_err",
+        rows.iter().map(|r| r.inertia_err).collect(),
+    ));
+    cols.push(f("j_err", rows.iter().map(|r| r.j_err).collect()));
+    cols.push(
+        Series::new(
+            "consistent".into(),
+            rows.iter().map(|r| r.consistent).collect::<Vec<bool>>(),
+        )
+        .into_column(),
+    );
+    cols.push(
+        Series::new(
+            "status".into(),
+            rows.iter()
+                .map(|r| r.status.as_str())
+                .collect::<Vec<&str>>(),
+        )
+        .into_column(),
+    );
+    cols.push(f(
+        "solve_ms",
+        rows.iter().map(|r| r.solve_s * 1e3).collect(),
+    ));
+    DataFrame::new_infer_height(cols)
+}
+
+fn q(c: &str, p: f64, alias: &str) -> Expr {
+    col(c).quantile(lit(p), QuantileMethod::Linear).alias(alias)
+}
+
+/// Median and quartiles over seeds per (n_s, set), in first-appearance order.
+pub fn summary(long: &DataFrame) -> PolarsResult<DataFrame> {
+    summary_by(long, &[])
+}
+
+/// Adds constant string columns (a sweep's grid values) to a table.
+pub fn with_constants(mut df: DataFrame, columns: &[(String, String)]) -> PolarsResult<DataFrame> {
+    let h = df.height();
+    for (name, value) in columns.iter().rev() {
+        df.insert_column(
+            0,
+            Series::new(name.as_str().into(), vec![value.as_str(); h]).into_column(),
+        )?;
+    }
+    Ok(df)
+}
+
+/// Stacks tables with the same columns.
+pub fn concat(tables: Vec<DataFrame>) -> PolarsResult<DataFrame> {
+    let mut it = tables.into_iter();
+    let mut acc = it
+        .next()
+        .ok_or_else(|| PolarsError::NoData("no tables".into()))?;
+    for t in it {
+        acc.vstack_mut(&t)?;
+    }
+    Ok(acc)
+}
+
+/// Median and quartiles over seeds per (`keys`…, n_s, set), in first-appearance order.
+pub fn summary_by(long: &DataFrame, keys: &[&str]) -> PolarsResult<DataFrame> {
+    let mut by: Vec<Expr> = keys.iter().map(|k| col(*k)).collect();
+    by.extend([col("n_s"), col("constraints")]);
+    long.clone()
+        .lazy()
+        .group_by_stable(by)
+        .agg([
+            len().alias("seeds"),
+            q("val_rms", 0.25, "val_rms_q25"),
+            col("val_rms").median().alias("val_rms_median"),
+            q("val_rms", 0.75, "val_rms_q75"),
+            q("j_err", 0.25, "j_err_q25"),
+            col("j_err").median().alias("j_err_median"),
+            q("j_err", 0.75, "j_err_q75"),
+            col("consistent")
+                .cast(DataType::Float64)
+                .mean()
+                .alias("consistent_fraction"),
+            col("solve_ms").median().alias("solve_ms_median"),
+        ])
+        .collect()
+}
+
+/// The n_s × set table of one summary column.
+pub fn pivot(summary: &DataFrame, value: &str, sets: &[&str]) -> PolarsResult<DataFrame> {
+    let on_columns = Arc::new(df!["constraints" => sets.to_vec()]?);
+    summary
+        .clone()
+        .lazy()
+        .pivot(
+            by_name(["constraints"], true, false),
+            on_columns,
+            by_name(["n_s"], true, false),
+            by_name([value], true, false),
+            element().first(),
+            true,
+            "_".into(),
+            polars::frame::PivotColumnNaming::Auto,
+        )
+        .collect()
+}
+
+fn polars_err(path: &Path, e: PolarsError) -> IoError {
+    IoError::Invalid {
+        path: path.to_path_buf(),
+        message: format!("writing table: {e}"),
+    }
+}
+
+/// Writes a table as Parquet, atomically.
+pub fn write_parquet(path: &Path, df: &mut DataFrame) -> Result<(), IoError> {
+    let tmp = crate::io::new_temp_beside(path)?;
+    ParquetWriter::new(tmp.as_file())
+        .finish(df)
+        .map_err(|e| polars_err(path, e))?;
+    tmp.persist(path).map_err(|e| IoError::Fs {
+        path: path.to_path_buf(),
+        source: e.error,
+    })?;
+    Ok(())
+}
+
+/// Writes a table as CSV, atomically.
+pub fn write_csv(path: &Path, df: &mut DataFrame) -> Result<(), IoError> {
+    let tmp = crate::io::new_temp_beside(path)?;
+    CsvWriter::new(tmp.as_file())
+        .finish(df)
+        .map_err(|e| polars_err(path, e))?;
+    tmp.persist(path).map_err(|e| IoError::Fs {
+        path: path.to_path_buf(),
+        source: e.error,
+    })?;
+    Ok(())
+}
+
+/// Reads a Parquet table (for merging sweep shards and tests).
+pub fn read_parquet(path: &Path) -> Result<DataFrame, IoError> {
+    let f = std::fs::File::open(path).map_err(|source| IoError::Fs {
+        path: path.to_path_buf(),
+        source,
+    })?;
+    ParquetReader::new(f)
+        .finish()
+        .map_err(|e| IoError::Invalid {
+            path: path.to_path_buf(),
+            message: format!("reading table: {e}"),
+        })
+}
+
+/// A Markdown table of a data frame (numbers to 3 significant decimals).
+pub fn markdown(df: &DataFrame) -> String {
+    let mut s = String::new();
+    let names: Vec<String> = df
+        .get_column_names()
+        .iter()
+        .map(|n| n.to_string())
+        .collect();
+    s += &format!(
+        "| {} |\n|{}\n",
+        names.join(" | "),
+        "---|".repeat(names.len())
+    );
+    for i in 0..df.height() {
+        let cells: Vec<String> = df
+            .columns()
+            .iter()
+            .map(|c| match c.get(i) {
+                Ok(AnyValue::Float64(x)) => format!("{x:.3}"),
+                Ok(AnyValue::String(x)) => x.to_string(),
+                Ok(v) => format!("{v}"),
+                Err(_) => String::new(),
+            })
+            .collect();
+        s += &format!("| {} |\n", cells.join(" | "));
+    }
+    s
+}
