@@ -168,3 +168,59 @@ fn polars_summary_and_pivot_match_a_direct_computation() {
         .unwrap();
     assert!((cell - get("val_rms_median", 7)).abs() < 1e-15);
 }
+
+#[test]
+fn random_windows_and_per_body_errors() {
+    use physid::experiment::{tables, Windows};
+    let spec = ExperimentSpec {
+        seeds: 2,
+        sizes: Some(vec![50, 500]),
+        validation: 300,
+        windows: Windows::Random,
+        ..Default::default()
+    };
+    let a = run(&spec, 2);
+    let b = run(&spec, 1);
+    let first = run(
+        &ExperimentSpec {
+            windows: Windows::First,
+            ..spec.clone()
+        },
+        2,
+    );
+    let key = |r: &Row| {
+        format!(
+            "{:?}",
+            Row {
+                solve_s: 0.0,
+                ..r.clone()
+            }
+        )
+    };
+    assert_eq!(
+        a.iter().map(key).collect::<Vec<_>>(),
+        b.iter().map(key).collect::<Vec<_>>(),
+        "random windows must be deterministic"
+    );
+    assert!(
+        a.iter()
+            .zip(&first)
+            .any(|(x, y)| x.val_rms_overall != y.val_rms_overall),
+        "random windows should differ from the first window"
+    );
+    // Six bodies (3 links, 3 rotors), four errors each; their mean is the row's mean error.
+    let (_, m) = setup();
+    let names: Vec<String> = physid::ident::bodies(&m)
+        .into_iter()
+        .map(|(n, _, _)| n)
+        .collect();
+    assert_eq!(names.len(), 6);
+    for r in &a {
+        assert_eq!(r.body_errors.len(), 6);
+        let mean_j = r.body_errors.iter().map(|e| e[3]).sum::<f64>() / 6.0;
+        assert!((mean_j - r.j_err).abs() <= 1e-12 * r.j_err.abs().max(1.0));
+    }
+    let joints = vec!["a".to_string(), "b".to_string(), "c".to_string()];
+    let long = tables::long_table_with_bodies(&a, &joints, &names).unwrap();
+    assert!(long.column("j_err_shank").is_ok() && long.column("mass_err_knee_rotor").is_ok());
+}

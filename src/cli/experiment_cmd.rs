@@ -40,7 +40,11 @@ pub fn run(
     bar.finish_and_clear();
     std::fs::create_dir_all(out).with_context(|| format!("creating {}", out.display()))?;
     let joints: Vec<String> = model.bodies.iter().map(|b| b.joint_name.clone()).collect();
-    let mut long = tables::long_table(&rows, &joints)?;
+    let body_names: Vec<String> = physid::ident::bodies(&model)
+        .into_iter()
+        .map(|(n, _, _)| n)
+        .collect();
+    let mut long = tables::long_table_with_bodies(&rows, &joints, &body_names)?;
     tables::write_parquet(&out.join("rows.parquet"), &mut long)?;
     tables::write_csv(&out.join("rows.csv"), &mut long)?;
     let mut summary = tables::summary(&long)?;
@@ -115,7 +119,7 @@ pub fn run(
     let prov = serde_json::json!({
         "scenario_file": path, "scenario": text, "experiment": spec,
         "seeds": (spec.first_seed..spec.first_seed + spec.seeds as u64).collect::<Vec<_>>(),
-        "git_revision": git, "physid_version": env!("CARGO_PKG_VERSION"),
+        "git_revision": git, "physid_version": env!("CARGO_PKG_VERSION"), "dependencies": dependency_versions(),
         "threads": pool.current_num_threads(), "wall_seconds": wall,
     });
     physid::io::write_atomic(
@@ -130,4 +134,33 @@ pub fn run(
     let p = tables::pivot(&summary, "val_rms_median", &sets)?;
     println!("median validation RMS (N m):\n{}", tables::markdown(&p));
     Ok(())
+}
+
+/// Versions of the numerical dependencies, read from the Cargo.lock the binary was built with.
+fn dependency_versions() -> serde_json::Value {
+    const LOCK: &str = include_str!("../../Cargo.lock");
+    let wanted = [
+        "nalgebra",
+        "clarabel",
+        "rapier3d-f64",
+        "polars",
+        "rayon",
+        "mcap",
+        "openblas-src",
+    ];
+    let mut out = serde_json::Map::new();
+    let mut name = "";
+    for line in LOCK.lines() {
+        if let Some(n) = line.strip_prefix("name = \"") {
+            name = n.trim_end_matches('"');
+        } else if let Some(v) = line.strip_prefix("version = \"") {
+            if wanted.contains(&name) {
+                out.insert(
+                    name.to_string(),
+                    serde_json::Value::String(v.trim_end_matches('"').to_string()),
+                );
+            }
+        }
+    }
+    serde_json::Value::Object(out)
 }

@@ -54,10 +54,25 @@ pub struct ExperimentSpec {
     /// Prior weight `w`.
     #[serde(default = "prior_weight")]
     pub prior_weight: f64,
+    /// Training windows: `"first"` (the first n_s samples, the paper) or `"random"` (n_s
+    /// consecutive samples at a random start, validated on the samples that follow them).
+    #[serde(default)]
+    pub windows: Windows,
     /// Relative error of the "CAD" prior: masses, principal inertias and friction are scaled by
     /// `1 + e·n` and the CoM moved by `e/10` m·n, `n ~ N(0, 1)` drawn from the prior seed.
     #[serde(default = "prior_error")]
     pub prior_error: f64,
+}
+
+/// Where the training window starts.
+#[derive(Clone, Copy, Debug, Default, Deserialize, Serialize, PartialEq, Eq)]
+#[serde(rename_all = "lowercase")]
+pub enum Windows {
+    /// At sample 0.
+    #[default]
+    First,
+    /// At a random sample (drawn from the seed), per size.
+    Random,
 }
 
 fn seeds() -> usize {
@@ -101,6 +116,7 @@ impl Default for ExperimentSpec {
             constraints: all_sets(),
             prior_weight: prior_weight(),
             prior_error: prior_error(),
+            windows: Windows::First,
         }
     }
 }
@@ -185,6 +201,8 @@ pub struct Row {
     pub inertia_err: f64,
     /// Mean relative Frobenius error of the pseudo-inertia `J` over bodies.
     pub j_err: f64,
+    /// Per body (links, then rotors): `[mass, CoM (m), inertia, J]` errors as above.
+    pub body_errors: Vec<[f64; 4]>,
     /// Every body's `J(π) ≻ 0`.
     pub consistent: bool,
     /// Solver status.
@@ -221,26 +239,36 @@ pub fn cad_prior(model: &Model, e: f64, seed: u64) -> DVector<f64> {
     prior
 }
 
-/// Mean parameter errors of `theta` against the model's truth: (mass, CoM, inertia, J).
-pub fn parameter_errors(model: &Model, theta: &DVector<f64>) -> [f64; 4] {
+/// Per-body parameter errors of `theta` against the model's truth, links then rotors:
+/// `[|Δm|/m, ‖Δc‖ (m), ‖ΔI_C‖/‖I_C‖, ‖ΔJ‖/‖J‖]` (Frobenius norms; CoM and inertia about the CoM
+/// are NaN when the identified mass is not positive).
+pub fn body_errors(model: &Model, theta: &DVector<f64>) -> Vec<[f64; 4]> {
     let truth = model.parameters();
-    let bodies = ident::bodies(model);
-    let mut acc = [0.0; 4];
-    for (_, c, _) in &bodies {
-        let t = InertialParams(truth.fixed_rows::<10>(*c).into_owned());
-        let h = InertialParams(theta.fixed_rows::<10>(*c).into_owned());
-        acc[0] += ((h.mass() - t.mass()) / t.mass()).abs();
-        acc[1] += match (h.com(), t.com()) {
-            (Some(a), Some(b)) => (a - b).norm(),
-            _ => f64::NAN,
-        };
-        acc[2] += match (h.inertia_about_com(), t.inertia_about_com()) {
-            (Some(a), Some(b)) => (a - b).norm() / b.norm(),
-            _ => f64::NAN,
-        };
-        acc[3] += (h.pseudo_inertia() - t.pseudo_inertia()).norm() / t.pseudo_inertia().norm();
-    }
-    acc.map(|v| v / bodies.len() as f64)
+    ident::bodies(model)
+        .iter()
+        .map(|(_, c, _)| {
+            let t = InertialParams(truth.fixed_rows::<10>(*c).into_owned());
+            let h = InertialParams(theta.fixed_rows::<10>(*c).into_owned());
+            [
+                ((h.mass() - t.mass()) / t.mass()).abs(),
+                match (h.com(), t.com()) {
+                    (Some(a), Some(b)) => (a - b).norm(),
+                    _ => f64::NAN,
+                },
+                match (h.inertia_about_com(), t.inertia_about_com()) {
+                    (Some(a), Some(b)) => (a - b).norm() / b.norm(),
+                    _ => f64::NAN,
+                },
+                (h.pseudo_inertia() - t.pseudo_inertia()).norm() / t.pseudo_inertia().norm(),
+            ]
+        })
+        .collect()
+}
+
+/// Mean of [`body_errors`] over bodies: (mass, CoM, inertia, J).
+pub fn parameter_errors(model: &Model, theta: &DVector<f64>) -> [f64; 4] {
+    let per = body_errors(model, theta);
+    std::array::from_fn(|k| per.iter().map(|e| e[k]).sum::<f64>() / per.len() as f64)
 }
 
 /// Errors of an experiment.
@@ -321,12 +349,30 @@ pub fn run_seed(
     let mut ne = NormalEquations::new(n, p);
     let mut added = 0;
     let mut rows = vec![];
+    let mut window_rng = rand_chacha::ChaCha8Rng::seed_from_u64(seed ^ 0x77_1d0e);
     for &n_s in &grid {
-        while added < n_s.min(total) {
-            ne.add(&ys[added], data.tau_at(added));
-            added += 1;
-        }
-        let snapshot = ne.clone().finish();
+        // Training samples start..start + n_s, validation on the next `validation` samples.
+        let start = match spec.windows {
+            Windows::First => 0,
+            // The simulation covers max_n + validation samples, so the room is never negative.
+            Windows::Random => rand::Rng::random_range(
+                &mut window_rng,
+                0..=total.saturating_sub(n_s + spec.validation),
+            ),
+        };
+        let snapshot = if start == 0 {
+            while added < n_s.min(total) {
+                ne.add(&ys[added], data.tau_at(added));
+                added += 1;
+            }
+            ne.clone().finish()
+        } else {
+            let mut w = NormalEquations::new(n, p);
+            for k in start..start + n_s {
+                w.add(&ys[k], data.tau_at(k));
+            }
+            w.finish()
+        };
         for &set in &spec.constraints {
             let mut o = Options::new(set);
             o.prior_weight = spec.prior_weight;
@@ -338,8 +384,12 @@ pub fn run_seed(
                     source,
                 }
             })?;
-            let (val, val_all) = rms(&r.theta, n_s..(n_s + spec.validation).min(total));
-            let (_, train_all) = rms(&r.theta, 0..n_s);
+            let (val, val_all) = rms(
+                &r.theta,
+                start + n_s..(start + n_s + spec.validation).min(total),
+            );
+            let (_, train_all) = rms(&r.theta, start..start + n_s);
+            let per_body = body_errors(model, &r.theta);
             let [mass_err, com_err, inertia_err, j_err] = parameter_errors(model, &r.theta);
             rows.push(Row {
                 seed,
@@ -352,6 +402,7 @@ pub fn run_seed(
                 com_err,
                 inertia_err,
                 j_err,
+                body_errors: per_body,
                 consistent: ident::constraints_hold(model, &r.theta, ConstraintSet::Consistent),
                 status: r.solver.status.clone(),
                 solve_s: r.solver.seconds,

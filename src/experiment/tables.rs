@@ -7,6 +7,29 @@ use crate::io::IoError;
 use polars::prelude::*;
 use std::path::Path;
 
+/// The long table; `bodies` names the per-body error columns (links then rotors), e.g.
+/// `mass_err_thigh`, `com_err_m_thigh`, `inertia_err_thigh`, `j_err_thigh`.
+pub fn long_table_with_bodies(
+    rows: &[Row],
+    joints: &[String],
+    bodies: &[String],
+) -> PolarsResult<DataFrame> {
+    let mut df = long_table(rows, joints)?;
+    for (b, name) in bodies.iter().enumerate() {
+        for (k, what) in ["mass_err", "com_err_m", "inertia_err", "j_err"]
+            .iter()
+            .enumerate()
+        {
+            let v: Vec<f64> = rows
+                .iter()
+                .map(|r| r.body_errors.get(b).map_or(f64::NAN, |e| e[k]))
+                .collect();
+            df.with_column(Series::new(format!("{what}_{name}").into(), v).into_column())?;
+        }
+    }
+    Ok(df)
+}
+
 /// The long table.
 pub fn long_table(rows: &[Row], joints: &[String]) -> PolarsResult<DataFrame> {
     let f = |name: &str, v: Vec<f64>| Series::new(name.into(), v).into_column();
@@ -194,6 +217,28 @@ pub fn read_parquet(path: &Path) -> Result<DataFrame, IoError> {
             path: path.to_path_buf(),
             message: format!("reading table: {e}"),
         })
+}
+
+/// The n_s × set table of a summary quantity as "median [q25, q75]" strings.
+pub fn pivot_with_iqr(summary: &DataFrame, value: &str, sets: &[&str]) -> PolarsResult<DataFrame> {
+    let med = pivot(summary, &format!("{value}_median"), sets)?;
+    let lo = pivot(summary, &format!("{value}_q25"), sets)?;
+    let hi = pivot(summary, &format!("{value}_q75"), sets)?;
+    let mut cols = vec![med.column("n_s")?.clone()];
+    for set in sets {
+        let f = |df: &DataFrame, i: usize| {
+            df.column(set)
+                .ok()
+                .and_then(|c| c.get(i).ok())
+                .and_then(|v| v.try_extract::<f64>().ok())
+                .unwrap_or(f64::NAN)
+        };
+        let v: Vec<String> = (0..med.height())
+            .map(|i| format!("{:.3} [{:.3}, {:.3}]", f(&med, i), f(&lo, i), f(&hi, i)))
+            .collect();
+        cols.push(Series::new((*set).into(), v).into_column());
+    }
+    DataFrame::new_infer_height(cols)
 }
 
 /// A Markdown table of a data frame (numbers to 3 significant decimals).

@@ -243,6 +243,10 @@ pub struct RobotSpec {
     /// Bounding ellipsoids by body or rotor name.
     #[serde(default)]
     pub ellipsoid: Vec<EllipsoidSpec>,
+    /// Scale every bounding ellipsoid about its centre (semi-axes × s), after the truth's
+    /// consistency check: below 1 the identification's ellipsoids may cut into the true mass
+    /// distribution (a sweep axis: how tight is too tight).
+    pub ellipsoid_scale: Option<f64>,
 }
 
 impl RobotSpec {
@@ -444,7 +448,17 @@ pub fn from_spec(spec: &RobotSpec, path: &Path) -> Result<Model, IoError> {
         Model::new(m.name.clone(), bodies, gravity).map_err(model_err)?
     } else if let Some(u) = &spec.urdf {
         let upath = path.parent().unwrap_or(Path::new(".")).join(u);
-        return super::urdf::load(&upath, &extras, upath.parent());
+        let m = super::urdf::load(&upath, &extras, upath.parent())?;
+        return Ok(match spec.ellipsoid_scale {
+            Some(s) if s.is_finite() && s > 0.0 => m.with_ellipsoids_scaled(s),
+            Some(s) => {
+                return Err(IoError::invalid(
+                    path,
+                    format!("robot.ellipsoid_scale: {s} must be > 0"),
+                ))
+            }
+            None => m,
+        });
     } else {
         let mut bodies: Vec<Body> = vec![];
         for (k, b) in spec.body.iter().enumerate() {
@@ -508,5 +522,12 @@ pub fn from_spec(spec: &RobotSpec, path: &Path) -> Result<Model, IoError> {
     };
     let model = model.with_rotor_model(extras.rotor_model.unwrap_or_default());
     model.check_physical().map_err(model_err)?;
-    Ok(model)
+    match spec.ellipsoid_scale {
+        None => Ok(model),
+        Some(s) if s.is_finite() && s > 0.0 => Ok(model.with_ellipsoids_scaled(s)),
+        Some(s) => Err(IoError::invalid(
+            path,
+            format!("robot.ellipsoid_scale: {s} must be > 0"),
+        )),
+    }
 }

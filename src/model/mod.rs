@@ -350,6 +350,17 @@ impl Model {
         self
     }
 
+    /// The same model with every bounding ellipsoid scaled about its centre by `s`.
+    pub fn with_ellipsoids_scaled(mut self, s: f64) -> Model {
+        for b in &mut self.bodies {
+            b.bounding = b.bounding.map(|e| e.scaled(s));
+            if let Some(r) = b.rotor.as_mut() {
+                r.bounding = r.bounding.map(|e| e.scaled(s));
+            }
+        }
+        self
+    }
+
     /// The link-only model: every rotor removed (its parameters leave the layout).
     pub fn without_rotors(&self) -> Model {
         let bodies = self
