@@ -59,24 +59,31 @@ pub fn run(
     );
     let _ = writeln!(
         md,
-        "{} seeds (first {}), training on the first n_s samples, validation on the next {}; prior weight {}, prior error {}. Medians over seeds; quartiles in summary.csv.\n",
+        "{} seeds (first {}), training on the first n_s samples, validation on the next {}; prior weight {}, prior error {}. Median and quartiles over seeds (all statistics in summary.csv).\n",
         spec.seeds, spec.first_seed, spec.validation, spec.prior_weight, spec.prior_error
     );
-    for (value, label) in [
+    let iqr_tables = [
         (
-            "val_rms_median",
-            "Validation RMS torque error (N m, all joints)",
+            "val_rms",
+            "Validation RMS torque error (N m, all joints): median [q25, q75]",
         ),
         (
-            "j_err_median",
-            "Relative pseudo-inertia error ‖Ĵ − J‖/‖J‖ (mean over bodies)",
+            "j_err",
+            "Relative pseudo-inertia error ‖Ĵ − J‖/‖J‖ (mean over bodies): median [q25, q75]",
         ),
+    ];
+    for (value, label) in iqr_tables {
+        let p = tables::pivot_with_iqr(&summary, value, &sets)?;
+        let _ = writeln!(md, "## {label}\n\n{}", tables::markdown(&p));
+    }
+    let plain_tables = [
         (
             "consistent_fraction",
             "Fraction of physically consistent results",
         ),
-        ("solve_ms_median", "Solve time (ms)"),
-    ] {
+        ("solve_ms_median", "Solve time (ms), median"),
+    ];
+    for (value, label) in plain_tables {
         let p = tables::pivot(&summary, value, &sets)?;
         let _ = writeln!(md, "## {label}\n\n{}", tables::markdown(&p));
     }

@@ -368,8 +368,8 @@ pub fn run_seed(
             ne.clone().finish()
         } else {
             let mut w = NormalEquations::new(n, p);
-            for k in start..start + n_s {
-                w.add(&ys[k], data.tau_at(k));
+            for (k, y) in ys.iter().enumerate().skip(start).take(n_s) {
+                w.add(y, data.tau_at(k));
             }
             w.finish()
         };
