@@ -179,12 +179,13 @@ fn polars_err(path: &Path, e: PolarsError) -> IoError {
     }
 }
 
-/// Writes a table as Parquet, atomically.
-pub fn write_parquet(path: &Path, df: &mut DataFrame) -> Result<(), IoError> {
+/// Writes through `write` into a temporary file beside `path`, then renames it into place.
+fn write_atomically(
+    path: &Path,
+    write: impl FnOnce(&std::fs::File) -> PolarsResult<()>,
+) -> Result<(), IoError> {
     let tmp = crate::io::new_temp_beside(path)?;
-    ParquetWriter::new(tmp.as_file())
-        .finish(df)
-        .map_err(|e| polars_err(path, e))?;
+    write(tmp.as_file()).map_err(|e| polars_err(path, e))?;
     tmp.persist(path).map_err(|e| IoError::Fs {
         path: path.to_path_buf(),
         source: e.error,
@@ -192,17 +193,14 @@ pub fn write_parquet(path: &Path, df: &mut DataFrame) -> Result<(), IoError> {
     Ok(())
 }
 
+/// Writes a table as Parquet, atomically.
+pub fn write_parquet(path: &Path, df: &mut DataFrame) -> Result<(), IoError> {
+    write_atomically(path, |f| ParquetWriter::new(f).finish(df).map(|_| ()))
+}
+
 /// Writes a table as CSV, atomically.
 pub fn write_csv(path: &Path, df: &mut DataFrame) -> Result<(), IoError> {
-    let tmp = crate::io::new_temp_beside(path)?;
-    CsvWriter::new(tmp.as_file())
-        .finish(df)
-        .map_err(|e| polars_err(path, e))?;
-    tmp.persist(path).map_err(|e| IoError::Fs {
-        path: path.to_path_buf(),
-        source: e.error,
-    })?;
-    Ok(())
+    write_atomically(path, |f| CsvWriter::new(f).finish(df))
 }
 
 /// Reads a Parquet table (for merging sweep shards and tests).

@@ -12,6 +12,20 @@ use serde::Serialize;
 /// counts as unidentifiable.
 pub const RANK_TOL: f64 = 1e-9;
 
+/// Column scaling to unit diagonal: `1/√m_ii`, or `fallback` where `m_ii <= 0` (an
+/// unexcited column).
+pub fn unit_diagonal_scale(m: &DMatrix<f64>, fallback: f64) -> Vec<f64> {
+    (0..m.nrows())
+        .map(|i| {
+            if m[(i, i)] > 0.0 {
+                1.0 / m[(i, i)].sqrt()
+            } else {
+                fallback
+            }
+        })
+        .collect()
+}
+
 /// `argmin θᵀ H θ − 2 gᵀ θ` for symmetric positive semidefinite `H`: Cholesky when `H` is
 /// positive definite, otherwise the minimum-norm solution on `H`'s range (column-scaled
 /// eigen-decomposition, directions below [`RANK_TOL`] dropped).
@@ -23,15 +37,7 @@ pub fn least_squares(h: &DMatrix<f64>, g: &DVector<f64>) -> DVector<f64> {
         }
     }
     let p = h.nrows();
-    let d: Vec<f64> = (0..p)
-        .map(|i| {
-            if h[(i, i)] > 0.0 {
-                1.0 / h[(i, i)].sqrt()
-            } else {
-                0.0
-            }
-        })
-        .collect();
+    let d = unit_diagonal_scale(h, 0.0);
     let hs = DMatrix::from_fn(p, p, |i, j| d[i] * h[(i, j)] * d[j]);
     let eig = SymmetricEigen::new(hs);
     let lmax = eig.eigenvalues.max();
@@ -130,15 +136,7 @@ pub fn identifiability(
 ) -> Identifiability {
     let p = model.layout().len;
     let yty = &ne.yty;
-    let d: Vec<f64> = (0..p)
-        .map(|i| {
-            if yty[(i, i)] > 0.0 {
-                1.0 / yty[(i, i)].sqrt()
-            } else {
-                0.0
-            }
-        })
-        .collect();
+    let d = unit_diagonal_scale(yty, 0.0);
     let hs = DMatrix::from_fn(p, p, |i, j| d[i] * yty[(i, j)] * d[j]);
     let eig = SymmetricEigen::new(hs);
     let lmax = eig.eigenvalues.max().max(0.0);

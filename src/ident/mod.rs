@@ -405,14 +405,8 @@ fn solve_cone(
     // Log-det extra variables per body: 10 entries of a lower-triangular L, then 4 of u.
     let extra = if logdet { 14 * nb } else { 0 };
     let nv = p + extra;
-    let d: Vec<f64> = (0..p)
-        .map(|i| {
-            if h[(i, i)] > 0.0 {
-                1.0 / h[(i, i)].sqrt()
-            } else {
-                1.0
-            }
-        })
+    let d: Vec<f64> = analysis::unit_diagonal_scale(h, 1.0)
+        .into_iter()
         .chain(std::iter::repeat_n(1.0, extra))
         .collect();
     let ps = DMatrix::from_fn(nv, nv, |i, j| {

@@ -236,6 +236,65 @@ pub fn write_csv(path: &Path, tr: &Trajectory) -> Result<(), IoError> {
     super::write_atomic(path, to_csv(tr).as_bytes())
 }
 
+/// Column positions of a CSV in the physid format, from its header.
+struct Columns {
+    header: Vec<String>,
+    t: usize,
+    q: Vec<usize>,
+    dq: Vec<usize>,
+    ddq: Option<Vec<usize>>,
+    tau: Vec<usize>,
+}
+
+impl Columns {
+    /// Reads the header; the joint count is the number of `q1, q2, …` columns.
+    fn parse<R: std::io::Read>(r: &mut csv::Reader<R>, path: &Path) -> Result<Columns, IoError> {
+        let bad = |m: String| IoError::invalid(path, m);
+        let header: Vec<String> = r
+            .headers()
+            .map_err(|e| bad(format!("header: {e}")))?
+            .iter()
+            .map(str::to_string)
+            .collect();
+        let col = |name: &str| header.iter().position(|h| h == name);
+        let n = (1..)
+            .take_while(|j| col(&format!("q{j}")).is_some())
+            .count();
+        if n == 0 {
+            return Err(bad(
+                "no q1 column: expected a header `t, q1..qn, dq1..dqn, [ddq1..ddqn,] tau1..taun`"
+                    .into(),
+            ));
+        }
+        let need = |g: &str| -> Result<Vec<usize>, IoError> {
+            (1..=n)
+                .map(|j| {
+                    col(&format!("{g}{j}")).ok_or_else(|| {
+                        bad(format!(
+                            "missing column {g}{j} ({n} joints from the q columns)"
+                        ))
+                    })
+                })
+                .collect()
+        };
+        let t = col("t").ok_or_else(|| bad("missing column t".into()))?;
+        let (q, dq, tau) = (need("q")?, need("dq")?, need("tau")?);
+        let ddq = if col("ddq1").is_some() {
+            Some(need("ddq")?)
+        } else {
+            None
+        };
+        Ok(Columns {
+            t,
+            q,
+            dq,
+            ddq,
+            tau,
+            header,
+        })
+    }
+}
+
 /// Reads a trajectory from CSV. Joint names are `joint1..n` unless `joint_names` is given.
 /// Errors name the file, the line and the column.
 pub fn read_csv(path: &Path, joint_names: Option<&[String]>) -> Result<Trajectory, IoError> {
@@ -244,40 +303,10 @@ pub fn read_csv(path: &Path, joint_names: Option<&[String]>) -> Result<Trajector
     let mut r = csv::ReaderBuilder::new()
         .trim(csv::Trim::All)
         .from_reader(text.as_bytes());
-    let header: Vec<String> = r
-        .headers()
-        .map_err(|e| bad(format!("header: {e}")))?
-        .iter()
-        .map(str::to_string)
-        .collect();
-    let col = |name: &str| header.iter().position(|h| h == name);
-    let n = (1..)
-        .take_while(|j| col(&format!("q{j}")).is_some())
-        .count();
-    if n == 0 {
-        return Err(bad(
-            "no q1 column: expected a header `t, q1..qn, dq1..dqn, [ddq1..ddqn,] tau1..taun`"
-                .into(),
-        ));
-    }
-    let need = |g: &str| -> Result<Vec<usize>, IoError> {
-        (1..=n)
-            .map(|j| {
-                col(&format!("{g}{j}")).ok_or_else(|| {
-                    bad(format!(
-                        "missing column {g}{j} ({n} joints from the q columns)"
-                    ))
-                })
-            })
-            .collect()
-    };
-    let t_col = col("t").ok_or_else(|| bad("missing column t".into()))?;
-    let (qc, dqc, tauc) = (need("q")?, need("dq")?, need("tau")?);
-    let ddqc = if col("ddq1").is_some() {
-        Some(need("ddq")?)
-    } else {
-        None
-    };
+    let c = Columns::parse(&mut r, path)?;
+    let (n, header) = (c.q.len(), &c.header);
+    let (t_col, qc, dqc, tauc, ddqc) =
+        (c.t, c.q.clone(), c.dq.clone(), c.tau.clone(), c.ddq.clone());
     if let Some(names) = joint_names {
         if names.len() != n {
             return Err(bad(format!(
@@ -348,28 +377,20 @@ pub fn stream_csv(
     let mut r = csv::ReaderBuilder::new()
         .trim(csv::Trim::All)
         .from_reader(std::io::BufReader::new(file));
-    let header: Vec<String> = r
-        .headers()
-        .map_err(|e| bad(format!("header: {e}")))?
-        .iter()
-        .map(str::to_string)
-        .collect();
-    let col = |name: &str| header.iter().position(|h| h == name);
-    let found = (1..)
-        .take_while(|j| col(&format!("q{j}")).is_some())
-        .count();
-    if found != n {
+    let c = Columns::parse(&mut r, path)?;
+    if c.q.len() != n {
         return Err(bad(format!(
-            "the file has {found} joints (q columns), the robot has {n}"
+            "the file has {} joints (q columns), the robot has {n}",
+            c.q.len()
         )));
     }
-    let need = |g: &str| -> Result<Vec<usize>, IoError> {
-        (1..=n)
-            .map(|j| col(&format!("{g}{j}")).ok_or_else(|| bad(format!("missing column {g}{j}"))))
-            .collect()
-    };
-    let t_col = col("t").ok_or_else(|| bad("missing column t".into()))?;
-    let cols = [need("q")?, need("dq")?, need("ddq")?, need("tau")?];
+    let header = &c.header;
+    let t_col = c.t;
+    let ddq = c
+        .ddq
+        .clone()
+        .ok_or_else(|| bad("no ddq columns: streaming needs accelerations".into()))?;
+    let cols = [c.q.clone(), c.dq.clone(), ddq, c.tau.clone()];
     let mut vals = vec![0.0; 4 * n];
     let mut prev = f64::NEG_INFINITY;
     let mut rec = csv::StringRecord::new();

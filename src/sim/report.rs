@@ -45,15 +45,7 @@ pub fn excitation(model: &Model, tr: &Trajectory, stride: usize) -> Excitation {
         yty.gemm_tr(1.0, &y, &y, 1.0);
     }
     // Column scaling: Y D with D = diag(1/‖Y_c‖).
-    let scale: Vec<f64> = (0..p)
-        .map(|c| {
-            if yty[(c, c)] > 0.0 {
-                1.0 / yty[(c, c)].sqrt()
-            } else {
-                0.0
-            }
-        })
-        .collect();
+    let scale = crate::ident::analysis::unit_diagonal_scale(&yty, 0.0);
     let scaled = DMatrix::from_fn(p, p, |i, j| yty[(i, j)] * scale[i] * scale[j]);
     let ev = SymmetricEigen::new(scaled).eigenvalues;
     let smax = ev.iter().cloned().fold(0.0f64, f64::max).max(0.0).sqrt();
