@@ -245,22 +245,81 @@ pub enum Processing {
     FiniteDifference,
 }
 
-/// An effect the model leaves out, injected into the simulation (the diagnosis issue adds the
-/// full library). Unknown kinds are rejected.
+/// An effect the rigid-body model leaves out, injected into the simulation (equations and units
+/// in `docs/scenario-format.md` and [`crate::sim::effects`]). Per-joint lists have one entry per
+/// joint. Unknown kinds are rejected.
 #[derive(Clone, Debug, Deserialize, Serialize, PartialEq)]
 #[serde(tag = "kind", rename_all = "snake_case", deny_unknown_fields)]
 pub enum EffectSpec {
-    /// A constant offset on the logged torque (N m per joint): a sensor effect, it does not act.
+    /// Logged torque `+= offset` (N m): a sensor effect, it does not act.
     TorqueOffset {
         /// Offset per joint (N m).
         offset: Vec<f64>,
     },
-    /// A linear spring at each joint, `τ = −k (q − q_0)` (N m/rad, rad): a cable or hose.
+    /// Logged torque `×= gain` (a torque-constant error): a sensor effect.
+    TorqueGain {
+        /// Gain per joint (1 = none).
+        gain: Vec<f64>,
+    },
+    /// The logged torque lags the kinematics by `samples` control periods: a sensor effect.
+    TimeDelay {
+        /// Delay in samples (≥ 1).
+        samples: usize,
+    },
+    /// Acting `τ = −k (q − q_0)` (N m/rad, rad): a cable or hose.
     Spring {
         /// Stiffness per joint (N m/rad).
         stiffness: Vec<f64>,
         /// Rest position per joint (rad).
         rest: Vec<f64>,
+    },
+    /// Stribeck friction: extra resistance `F_s exp(−(q̇/v_st)²) tanh(q̇/v_s)` at low speed.
+    Stribeck {
+        /// Static excess over Coulomb per joint (N m).
+        static_extra: Vec<f64>,
+        /// Stribeck velocity per joint (rad/s).
+        velocity: Vec<f64>,
+    },
+    /// Direction-dependent Coulomb friction: extra `δ (1 + tanh(q̇/v_s)) / 2`, i.e. `B_c + δ`
+    /// moving forward and `B_c` moving back.
+    AsymmetricCoulomb {
+        /// Extra forward Coulomb friction per joint (N m).
+        delta: Vec<f64>,
+    },
+    /// Load-dependent friction: extra `μ |τ_mot| tanh(q̇/v_s)` (gear mesh losses).
+    LoadDependentFriction {
+        /// Coefficient per joint (dimensionless).
+        coefficient: Vec<f64>,
+    },
+    /// Cogging / torque ripple at a harmonic of the rotor angle: acting `−A sin(h N q + φ)`,
+    /// `N` the joint's gear ratio (1 without a rotor).
+    Cogging {
+        /// Amplitude per joint (N m).
+        amplitude: Vec<f64>,
+        /// Harmonic per joint (cycles per rotor revolution).
+        harmonic: Vec<f64>,
+        /// Phase per joint (rad); default 0.
+        #[serde(default)]
+        phase: Vec<f64>,
+    },
+    /// The base is tilted: the true gravity is the model's rotated by roll (about x) and pitch
+    /// (about y) (rad).
+    Tilt {
+        /// Roll (rad).
+        roll: f64,
+        /// Pitch (rad).
+        pitch: f64,
+    },
+    /// An unmodelled payload on the last body: a solid sphere of `mass` (kg) and `radius` (m)
+    /// centred at `com` (m, last body frame).
+    Payload {
+        /// Mass (kg).
+        mass: f64,
+        /// Centre in the last body's frame (m).
+        com: [f64; 3],
+        /// Radius (m).
+        #[serde(default)]
+        radius: f64,
     },
 }
 
@@ -428,13 +487,68 @@ impl Scenario {
             ExcitationSpec::Passive => {}
         }
         for (i, e) in self.effects.iter().enumerate() {
+            let k = |f: &str| format!("effects[{i}].{f}");
             match e {
-                EffectSpec::TorqueOffset { offset } => {
-                    per_joint(offset, n, &format!("effects[{i}].offset"))?
+                EffectSpec::TorqueOffset { offset } => per_joint(offset, n, &k("offset"))?,
+                EffectSpec::TorqueGain { gain } => {
+                    per_joint(gain, n, &k("gain"))?;
+                    check(gain.iter().all(|g| *g > 0.0), &k("gain"), || {
+                        "gains must be > 0".into()
+                    })?;
+                }
+                EffectSpec::TimeDelay { samples } => {
+                    check(*samples >= 1, &k("samples"), || "must be at least 1".into())?
                 }
                 EffectSpec::Spring { stiffness, rest } => {
-                    per_joint(stiffness, n, &format!("effects[{i}].stiffness"))?;
-                    per_joint(rest, n, &format!("effects[{i}].rest"))?;
+                    per_joint(stiffness, n, &k("stiffness"))?;
+                    per_joint(rest, n, &k("rest"))?;
+                }
+                EffectSpec::Stribeck {
+                    static_extra,
+                    velocity,
+                } => {
+                    per_joint(static_extra, n, &k("static_extra"))?;
+                    per_joint(velocity, n, &k("velocity"))?;
+                    check(velocity.iter().all(|v| *v > 0.0), &k("velocity"), || {
+                        "Stribeck velocities must be > 0".into()
+                    })?;
+                }
+                EffectSpec::AsymmetricCoulomb { delta } => per_joint(delta, n, &k("delta"))?,
+                EffectSpec::LoadDependentFriction { coefficient } => {
+                    per_joint(coefficient, n, &k("coefficient"))?;
+                    check(
+                        coefficient.iter().all(|c| *c >= 0.0),
+                        &k("coefficient"),
+                        || "must be >= 0".into(),
+                    )?;
+                }
+                EffectSpec::Cogging {
+                    amplitude,
+                    harmonic,
+                    phase,
+                } => {
+                    per_joint(amplitude, n, &k("amplitude"))?;
+                    per_joint(harmonic, n, &k("harmonic"))?;
+                    if !phase.is_empty() {
+                        per_joint(phase, n, &k("phase"))?;
+                    }
+                }
+                EffectSpec::Tilt { roll, pitch } => {
+                    check(
+                        roll.is_finite()
+                            && pitch.is_finite()
+                            && roll.abs() < 1.0
+                            && pitch.abs() < 1.0,
+                        &k("roll"),
+                        || "roll and pitch must be finite and below 1 rad".into(),
+                    )?;
+                }
+                EffectSpec::Payload { mass, com, radius } => {
+                    positive(*mass, &k("mass"))?;
+                    non_negative(*radius, &k("radius"))?;
+                    check(com.iter().all(|c| c.is_finite()), &k("com"), || {
+                        "not finite".into()
+                    })?;
                 }
             }
         }

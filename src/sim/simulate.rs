@@ -18,7 +18,7 @@
 //! beside it.
 
 use super::excitation::Controller;
-use super::scenario::{EffectSpec, Engine, Processing, Scenario, ScenarioError, VelocityFeedback};
+use super::scenario::{Engine, Processing, Scenario, ScenarioError, VelocityFeedback};
 use super::signal::{butterworth_lowpass, differentiate};
 use crate::dynamics::{forward_dynamics, Data};
 use crate::io::samples::Trajectory;
@@ -106,17 +106,20 @@ pub fn simulate(
             .collect(),
     };
     let (q0, qd0) = controller.initial_state(model, &mut cdata, &guess)?;
+    // The robot as it really is (tilted base, payload); the controller keeps the nominal model.
+    let real = super::effects::true_robot(model, &scenario.effects);
+    let real = &real;
     let mut engine: Box<dyn Integrator + '_> = match s.engine {
         Engine::Physid => Box::new(PhysidIntegrator {
-            model,
-            data: Data::new(model),
+            model: real,
+            data: Data::new(real),
             q: q0,
             qd: qd0,
             h,
             substeps: s.substeps,
         }),
         Engine::Rapier => Box::new(RapierIntegrator {
-            sim: super::rapier::RapierSim::new(model, &q0, &qd0, h)
+            sim: super::rapier::RapierSim::new(real, &q0, &qd0, h)
                 .map_err(|e| SimError::Engine(e.to_string()))?,
             substeps: s.substeps,
             h,
@@ -138,14 +141,9 @@ pub fn simulate(
         Vec::with_capacity(samples * n),
     );
     let loads = Loads { model, scenario };
-    let mut offset = vec![0.0; n];
-    for e in &scenario.effects {
-        if let EffectSpec::TorqueOffset { offset: o } = e {
-            for j in 0..n {
-                offset[j] += o[j];
-            }
-        }
-    }
+    let delay = super::effects::delay_samples(&scenario.effects);
+    let mut delivered: std::collections::VecDeque<Vec<f64>> =
+        std::collections::VecDeque::with_capacity(delay + 1);
     let quantize = |x: f64| {
         if se.encoder_step > 0.0 {
             (x / se.encoder_step).round() * se.encoder_step
@@ -185,13 +183,21 @@ pub fn simulate(
         // 3. Integrate the period with τ_mot held; the truth at t_k.
         let (q, qd) = engine.state();
         let f = loads.friction(&qd);
-        let fx = loads.effects(&q);
+        let fx = loads.effects(&q, &qd, &tau_mot);
         let qdd = engine.period(&tau_mot, &loads)?;
         truth.push(t, &q, &qd, Some(&qdd), &tau_mot);
         friction_log.extend_from_slice(&f);
         effects_log.extend_from_slice(&fx);
-        let logged: Vec<f64> = (0..n)
-            .map(|j| tau_mot[j] + offset[j] + tau_noise.sample(&mut rng))
+        // The log: the torque delivered `delay` periods ago (a lag between torque and kinematics),
+        // through the sensor effects, plus current-sensing noise.
+        delivered.push_back(tau_mot.clone());
+        if delivered.len() > delay + 1 {
+            delivered.pop_front();
+        }
+        let lagged = delivered.front().expect("just pushed");
+        let logged: Vec<f64> = super::effects::logged_torque(&scenario.effects, lagged)
+            .into_iter()
+            .map(|t| t + tau_noise.sample(&mut rng))
             .collect();
         measured.push(t, &q_enc, &qd_fb, Some(&vec![0.0; n]), &logged);
         q_enc_prev = Some(q_enc);
@@ -245,21 +251,13 @@ impl Loads<'_> {
             .collect()
     }
     /// Torque of the injected physical effects (N m).
-    fn effects(&self, q: &[f64]) -> Vec<f64> {
-        let n = q.len();
-        let mut out = vec![0.0; n];
-        for e in &self.scenario.effects {
-            if let EffectSpec::Spring { stiffness, rest } = e {
-                for j in 0..n {
-                    out[j] -= stiffness[j] * (q[j] - rest[j]);
-                }
-            }
-        }
-        out
+    fn effects(&self, q: &[f64], qd: &[f64], tau_mot: &[f64]) -> Vec<f64> {
+        let vs = self.scenario.simulation.friction_velocity;
+        super::effects::physical_torque(&self.scenario.effects, self.model, q, qd, tau_mot, vs)
     }
     /// Net generalized force on the joints for a held motor torque.
     fn net(&self, tau_mot: &[f64], q: &[f64], qd: &[f64]) -> Vec<f64> {
-        let (f, fx) = (self.friction(qd), self.effects(q));
+        let (f, fx) = (self.friction(qd), self.effects(q, qd, tau_mot));
         (0..q.len()).map(|j| tau_mot[j] + fx[j] - f[j]).collect()
     }
 }
