@@ -45,6 +45,9 @@ fn residual(rec: &Recording, model: &Model) -> f64 {
     worst
 }
 
+/// An effect's expected acting torque at (joint, q, q̇, τ_mot).
+type Expected = Box<dyn Fn(usize, f64, f64, f64) -> f64>;
+
 /// Max over samples of |logged effect torque − expected(q, q̇, τ_mot)|.
 fn signature(rec: &Recording, expected: impl Fn(usize, f64, f64, f64) -> f64) -> f64 {
     let tr = &rec.truth;
@@ -61,7 +64,7 @@ fn signature(rec: &Recording, expected: impl Fn(usize, f64, f64, f64) -> f64) ->
 #[test]
 fn acting_effects_have_their_equations_and_keep_the_dynamics_consistent() {
     let v = 0.01; // friction_velocity of the scenario
-    let cases: Vec<(EffectSpec, Box<dyn Fn(usize, f64, f64, f64) -> f64>)> = vec![
+    let cases: Vec<(EffectSpec, Expected)> = vec![
         (
             EffectSpec::Spring {
                 stiffness: vec![2.0, 3.0, 1.0],
