@@ -391,6 +391,49 @@ fn upper_csc(m: &DMatrix<f64>) -> CscMatrix<f64> {
     CscMatrix::new(n, n, colptr, rowval, nzval)
 }
 
+/// The constraint rows `A x + s = b`, `s` in `cones`, assembled as triplets of `A`.
+#[derive(Default)]
+struct ConeRows {
+    ai: Vec<usize>,
+    aj: Vec<usize>,
+    av: Vec<f64>,
+    b: Vec<f64>,
+    cones: Vec<SupportedConeT<f64>>,
+}
+
+impl ConeRows {
+    /// The index of the next row.
+    fn next_row(&self) -> usize {
+        self.b.len()
+    }
+    /// `A[row, col] = v` (zeros skipped).
+    fn entry(&mut self, row: usize, col: usize, v: f64) {
+        if v != 0.0 {
+            self.ai.push(row);
+            self.aj.push(col);
+            self.av.push(v);
+        }
+    }
+    /// Ends a cone of `rows` rows whose `b` entries are all `b`.
+    fn close(&mut self, rows: usize, b: f64, cone: SupportedConeT<f64>) {
+        self.b.extend(std::iter::repeat_n(b, rows));
+        self.cones.push(cone);
+    }
+    /// `M(π) − ε 1 ⪰ 0` for the body whose ten parameters start at `col` (scaled by `d`):
+    /// `s = svec(M(π)) − ε svec(1)`, i.e. `A = −svec(M_k) d_k`, `b = −ε svec(1)`.
+    fn lmi(&mut self, lmi: Lmi, col: usize, eps: f64, d: &[f64]) {
+        let r0 = self.next_row();
+        for (k, colv) in lmi.basis().iter().enumerate() {
+            for (r, v) in colv.iter().enumerate() {
+                self.entry(r0 + r, col + k, -v * d[col + k]);
+            }
+        }
+        let eye = DMatrix::<f64>::identity(lmi.dim(), lmi.dim()) * eps;
+        self.b.extend(lmi::svec(&eye).iter().map(|x| -x));
+        self.cones.push(SupportedConeT::PSDTriangleConeT(lmi.dim()));
+    }
+}
+
 /// Builds and solves the cone program in scaled variables.
 fn solve_cone(
     model: &Model,
@@ -419,76 +462,26 @@ fn solve_cone(
     let mut q: Vec<f64> = (0..nv)
         .map(|i| if i < p { -2.0 * d[i] * g[i] } else { 0.0 })
         .collect();
-    // Constraint rows: A x + s = b, s in the cones. Triplets (row, col, value).
-    let (mut ai, mut aj, mut av, mut b) = (vec![], vec![], vec![], vec![]);
-    let mut cones = vec![];
-    let mut push_lmi = |lmi: Lmi,
-                        col: usize,
-                        offset_eps: f64,
-                        ai: &mut Vec<usize>,
-                        aj: &mut Vec<usize>,
-                        av: &mut Vec<f64>,
-                        b: &mut Vec<f64>| {
-        let r0 = b.len();
-        let basis = lmi.basis();
-        for (k, colv) in basis.iter().enumerate() {
-            for (r, v) in colv.iter().enumerate() {
-                if *v != 0.0 {
-                    ai.push(r0 + r);
-                    aj.push(col + k);
-                    av.push(-v * d[col + k]);
-                }
-            }
-        }
-        let eye = DMatrix::<f64>::identity(lmi.dim(), lmi.dim()) * offset_eps;
-        b.extend(lmi::svec(&eye).iter().map(|x| -x));
-        cones.push(SupportedConeT::PSDTriangleConeT(lmi.dim()));
-    };
+    let mut rows = ConeRows::default();
     let set = opts.constraints;
-    let mut nonneg_rows: Vec<(usize, Vec<(usize, f64)>)> = vec![];
+    let mut nonneg: Vec<Vec<(usize, f64)>> = vec![];
     for (name, col, ell) in bodies(model) {
         match set {
             ConstraintSet::None => {}
-            ConstraintSet::Semi => push_lmi(
-                Lmi::Spatial,
-                col,
-                opts.eps,
-                &mut ai,
-                &mut aj,
-                &mut av,
-                &mut b,
-            ),
-            ConstraintSet::Consistent => push_lmi(
-                Lmi::Pseudo,
-                col,
-                opts.eps,
-                &mut ai,
-                &mut aj,
-                &mut av,
-                &mut b,
-            ),
+            ConstraintSet::Semi => rows.lmi(Lmi::Spatial, col, opts.eps, &d),
+            ConstraintSet::Consistent => rows.lmi(Lmi::Pseudo, col, opts.eps, &d),
             ConstraintSet::Ellipsoid => {
                 let e = ell.ok_or_else(|| IdentError::MissingEllipsoid(name.clone()))?;
-                push_lmi(
-                    Lmi::Pseudo,
-                    col,
-                    opts.eps,
-                    &mut ai,
-                    &mut aj,
-                    &mut av,
-                    &mut b,
-                );
-                push_lmi(Lmi::Com(e), col, 0.0, &mut ai, &mut aj, &mut av, &mut b);
+                rows.lmi(Lmi::Pseudo, col, opts.eps, &d);
+                rows.lmi(Lmi::Com(e), col, 0.0, &d);
                 let form = lmi::trace_jq_form(&e);
-                nonneg_rows.push((0, (0..10).map(|k| (col + k, form[k])).collect()));
+                nonneg.push((0..10).map(|k| (col + k, form[k])).collect());
             }
         }
     }
     if set != ConstraintSet::None {
         let l = model.layout();
-        for c in l.viscous_col..l.len {
-            nonneg_rows.push((0, vec![(c, 1.0)]));
-        }
+        nonneg.extend((l.viscous_col..l.len).map(|c| vec![(c, 1.0)]));
     }
     if logdet {
         // Per body: w (tr(Ĵ⁻¹ J) − Σ u_i) in the objective, with
@@ -497,100 +490,82 @@ fn solve_cone(
         let w = opts.prior_weight;
         let s2 = std::f64::consts::SQRT_2;
         let jbasis = Lmi::Pseudo.basis();
-        // L's lower-triangular entries (i >= j) in order, and their positions.
-        let lpos: Vec<(usize, usize)> = (0..4).flat_map(|j| (j..4).map(move |i| (i, j))).collect();
+        // L's lower-triangular entries (i >= j) in order; `lpos(i, j)` is the variable offset.
+        let lentries: Vec<(usize, usize)> =
+            (0..4).flat_map(|j| (j..4).map(move |i| (i, j))).collect();
+        let lpos = |i: usize, j: usize| {
+            lentries
+                .iter()
+                .position(|&x| x == (i, j))
+                .expect("lower-triangular entry")
+        };
         for (bi, (name, col, _)) in bodies(model).iter().enumerate() {
             let j0 = InertialParams(prior.fixed_rows::<10>(*col).into_owned()).pseudo_inertia();
-            let j0inv = j0
-                .try_inverse()
-                .filter(|_| j0.cholesky().is_some())
-                .ok_or_else(|| IdentError::BadOption(format!("log-det regularizer: the prior of '{name}' is not physically consistent (J not positive definite)")))?;
+            let j0inv = j0.try_inverse().filter(|_| j0.cholesky().is_some()).ok_or_else(|| {
+                IdentError::BadOption(format!("log-det regularizer: the prior of '{name}' is not physically consistent (J not positive definite)"))
+            })?;
             for k in 0..10 {
                 let mut e = nalgebra::SVector::<f64, 10>::zeros();
                 e[k] = 1.0;
-                let t = (j0inv * InertialParams(e).pseudo_inertia()).trace();
-                q[col + k] += w * t * d[col + k];
+                q[col + k] += w * (j0inv * InertialParams(e).pseudo_inertia()).trace() * d[col + k];
             }
             let base = p + 14 * bi;
             for i in 0..4 {
                 q[base + 10 + i] = -w;
             }
             // svec of the 8×8 matrix: entry (r, c) with r <= c, column by column.
-            let r0 = b.len();
+            let r0 = rows.next_row();
             let mut idx = 0usize;
             for c in 0..8 {
                 for r in 0..=c {
                     let row = r0 + idx;
-                    let scale = if r == c { 1.0 } else { s2 };
                     if c < 4 {
                         // J block: linear in π.
                         let jidx = c * (c + 1) / 2 + r;
                         for (k, colv) in jbasis.iter().enumerate() {
-                            if colv[jidx] != 0.0 {
-                                ai.push(row);
-                                aj.push(col + k);
-                                av.push(-colv[jidx] * d[col + k]);
-                            }
+                            rows.entry(row, col + k, -colv[jidx] * d[col + k]);
                         }
-                    } else if r < 4 {
-                        // Off-diagonal block (r, c−4) = L[r][c−4], lower triangular: r >= c−4.
-                        let (li, lj) = (r, c - 4);
-                        if li >= lj {
-                            let pos = lpos
-                                .iter()
-                                .position(|&x| x == (li, lj))
-                                .expect("lower entry");
-                            ai.push(row);
-                            aj.push(base + pos);
-                            av.push(-scale);
-                        }
+                    } else if r < 4 && r >= c - 4 {
+                        // Off-diagonal block (r, c−4) = L[r][c−4] (lower triangular), ×√2.
+                        rows.entry(row, base + lpos(r, c - 4), -s2);
                     } else if r == c {
                         // diag(L).
-                        let pos = lpos
-                            .iter()
-                            .position(|&x| x == (r - 4, r - 4))
-                            .expect("diagonal entry");
-                        ai.push(row);
-                        aj.push(base + pos);
-                        av.push(-1.0);
+                        rows.entry(row, base + lpos(r - 4, r - 4), -1.0);
                     }
                     idx += 1;
                 }
             }
-            b.extend(std::iter::repeat_n(0.0, idx));
-            cones.push(SupportedConeT::PSDTriangleConeT(8));
+            rows.close(idx, 0.0, SupportedConeT::PSDTriangleConeT(8));
             for i in 0..4 {
-                let pos = lpos
-                    .iter()
-                    .position(|&x| x == (i, i))
-                    .expect("diagonal entry");
-                let row = b.len();
                 // s = (u_i, 1, L_ii) in K_exp.
-                ai.push(row);
-                aj.push(base + 10 + i);
-                av.push(-1.0);
-                ai.push(row + 2);
-                aj.push(base + pos);
-                av.push(-1.0);
-                b.extend([0.0, 1.0, 0.0]);
-                cones.push(SupportedConeT::ExponentialConeT());
+                let row = rows.next_row();
+                rows.entry(row, base + 10 + i, -1.0);
+                rows.entry(row + 2, base + lpos(i, i), -1.0);
+                rows.b.extend([0.0, 1.0, 0.0]);
+                rows.cones.push(SupportedConeT::ExponentialConeT());
             }
         }
     }
-    if !nonneg_rows.is_empty() {
-        let r0 = b.len();
-        for (r, (_, terms)) in nonneg_rows.iter().enumerate() {
-            for (c, v) in terms {
-                if *v != 0.0 {
-                    ai.push(r0 + r);
-                    aj.push(*c);
-                    av.push(-v * d[*c]);
-                }
+    if !nonneg.is_empty() {
+        let r0 = rows.next_row();
+        for (r, terms) in nonneg.iter().enumerate() {
+            for &(c, v) in terms {
+                rows.entry(r0 + r, c, -v * d[c]);
             }
-            b.push(0.0);
         }
-        cones.push(SupportedConeT::NonnegativeConeT(nonneg_rows.len()));
+        rows.close(
+            nonneg.len(),
+            0.0,
+            SupportedConeT::NonnegativeConeT(nonneg.len()),
+        );
     }
+    let ConeRows {
+        ai,
+        aj,
+        av,
+        b,
+        cones,
+    } = rows;
     let a = CscMatrix::new_from_triplets(b.len(), nv, ai, aj, av);
     let settings = DefaultSettings {
         verbose: false,
