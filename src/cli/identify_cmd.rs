@@ -183,6 +183,16 @@ pub fn run(a: Args) -> anyhow::Result<()> {
         None => None,
     };
     let idf = analysis::identifiability(m, &ne, &r.theta);
+    // Against the ground truth, when the data are a physid log that carries it.
+    let truth_errors = ground_truth(a.data, m).map(|truth| {
+        let tm = m.with_parameters(&truth).expect("same layout");
+        let errs = physid::experiment::body_errors(&tm, &r.theta);
+        physid::ident::bodies(m)
+            .into_iter()
+            .zip(errs)
+            .map(|((name, _, _), e)| json!({"name": name, "mass_rel": e[0], "com_m": e[1], "inertia_rel": e[2], "j_rel": e[3]}))
+            .collect::<Vec<_>>()
+    });
     if let Some(p) = a.out_urdf {
         let im = m.with_parameters(&r.theta)?;
         physid::io::write_atomic(p, physid::io::urdf::to_string(&im).as_bytes())?;
@@ -240,6 +250,7 @@ pub fn run(a: Args) -> anyhow::Result<()> {
             "solver": r.solver, "end_to_end_seconds": total,
             "identifiability": idf,
             "parameter_names": names, "theta": r.theta.as_slice(),
+            "truth_errors": truth_errors,
         });
         println!("{}", serde_json::to_string_pretty(&v)?);
         return Ok(());
@@ -325,5 +336,34 @@ pub fn run(a: Args) -> anyhow::Result<()> {
     for u in idf.unidentifiable.iter().take(5) {
         println!("  unidentifiable: {u}");
     }
+    if let Some(errs) = &truth_errors {
+        println!("\nagainst the ground truth in the log (relative errors; CoM in m):");
+        println!(
+            "{:<12} {:>10} {:>10} {:>12} {:>10}",
+            "body", "mass", "CoM", "inertia_C", "J"
+        );
+        for e in errs {
+            println!(
+                "{:<12} {:>10.4} {:>10.4} {:>12.4} {:>10.4}",
+                e["name"].as_str().unwrap_or(""),
+                e["mass_rel"].as_f64().unwrap_or(f64::NAN),
+                e["com_m"].as_f64().unwrap_or(f64::NAN),
+                e["inertia_rel"].as_f64().unwrap_or(f64::NAN),
+                e["j_rel"].as_f64().unwrap_or(f64::NAN)
+            );
+        }
+    }
     Ok(())
+}
+
+/// The ground-truth θ in a physid MCAP's metadata, if its parameter names match the model's.
+fn ground_truth(path: &Path, model: &Model) -> Option<nalgebra::DVector<f64>> {
+    if path.extension().and_then(|e| e.to_str()) != Some("mcap") {
+        return None;
+    }
+    let log = physid::io::mcap_log::read(path).ok()?;
+    let md = log.metadata.get("ground_truth_parameters")?;
+    let names: Vec<String> = serde_json::from_str(md.get("names")?).ok()?;
+    let values: Vec<f64> = serde_json::from_str(md.get("values")?).ok()?;
+    (names == model.parameter_names()).then(|| nalgebra::DVector::from_vec(values))
 }
