@@ -13,9 +13,11 @@
 //! - [`sim`]: scenario files, the closed-loop excitation simulator, signal processing, rapier;
 //! - [`ident`]: identification under the paper's four constraint sets with Clarabel;
 //! - [`experiment`]: the validation-error-versus-sample-size experiment, in parallel;
+//! - [`diagnose`]: where the residual of a model lies (sim-to-real gap, in progress);
 //! - [`io`]: robot descriptions (URDF, TOML) in, MJCF/URDF out, MCAP and CSV logs.
 #![warn(missing_docs)]
 
+pub mod diagnose;
 pub mod dynamics;
 pub mod experiment;
 pub mod ident;
