@@ -6,37 +6,10 @@
 //! reversals, speed, acceleration and torque levels, configuration), each with its RMS and its
 //! share of the residual energy. Effect attribution and the blind benchmark build on it.
 
-use crate::dynamics::{regressor, Data};
 use crate::io::samples::Trajectory;
-use crate::model::Model;
-use nalgebra::{DMatrix, DVector};
 use serde::Serialize;
 
-/// The residual `τ − Y θ` (N m) of samples `range`, sample-major.
-pub fn residuals(
-    model: &Model,
-    theta: &DVector<f64>,
-    tr: &Trajectory,
-    range: std::ops::Range<usize>,
-) -> Vec<f64> {
-    let (n, p) = (model.dof(), model.layout().len);
-    let mut d = Data::new(model);
-    let mut y = DMatrix::zeros(n, p);
-    let mut out = Vec::with_capacity(range.len() * n);
-    for k in range {
-        regressor(
-            model,
-            &mut d,
-            tr.q_at(k),
-            tr.qd_at(k),
-            tr.qdd_at(k).expect("q̈ present"),
-            &mut y,
-        );
-        let pred = &y * theta;
-        out.extend((0..n).map(|j| tr.tau_at(k)[j] - pred[j]));
-    }
-    out
-}
+pub use crate::ident::analysis::residuals;
 
 /// One regime of one joint.
 #[derive(Clone, Debug, Serialize, PartialEq)]

@@ -8,7 +8,6 @@
 //! equations grow incrementally along the size grid. Seeds run in parallel (rayon); rows come back
 //! in (seed, size, set) order, so results are identical whatever the thread count.
 
-use crate::dynamics::{regressor, Data};
 use crate::ident::{self, ConstraintSet, NormalEquations, Options};
 use crate::model::Model;
 use crate::sim::scenario::Scenario;
@@ -317,20 +316,8 @@ pub fn run_seed(
     let (n, p) = (model.dof(), model.layout().len);
     let total = (max_n + spec.validation).min(data.len());
     // Every sample's regressor once (n × p each, column-major).
-    let mut d = Data::new(model);
-    let mut y = DMatrix::zeros(n, p);
     let mut ys: Vec<DMatrix<f64>> = Vec::with_capacity(total);
-    for k in 0..total {
-        regressor(
-            model,
-            &mut d,
-            data.q_at(k),
-            data.qd_at(k),
-            data.qdd_at(k).expect("processed q̈"),
-            &mut y,
-        );
-        ys.push(y.clone());
-    }
+    ident::normal::for_each_regressor(model, data, 0..total, &mut |_, y| ys.push(y.clone()));
     let rms = |theta: &DVector<f64>, range: std::ops::Range<usize>| -> (Vec<f64>, f64) {
         let mut ss = vec![0.0; n];
         for k in range.clone() {

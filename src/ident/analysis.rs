@@ -53,6 +53,22 @@ pub fn least_squares(h: &DMatrix<f64>, g: &DVector<f64>) -> DVector<f64> {
     DVector::from_iterator(p, (0..p).map(|i| d[i] * xs[i]))
 }
 
+/// The residual `τ − Y θ` (N m) of samples `range`, sample-major.
+pub fn residuals(
+    model: &Model,
+    theta: &DVector<f64>,
+    tr: &Trajectory,
+    range: std::ops::Range<usize>,
+) -> Vec<f64> {
+    let n = model.dof();
+    let mut out = Vec::with_capacity(range.len() * n);
+    super::normal::for_each_regressor(model, tr, range, &mut |k, y| {
+        let pred = y * theta;
+        out.extend((0..n).map(|j| tr.tau_at(k)[j] - pred[j]));
+    });
+    out
+}
+
 /// Per-joint RMS of `Y θ − τ` over samples `range` (N m), and the overall RMS.
 pub fn rms_error(
     model: &Model,
@@ -60,27 +76,13 @@ pub fn rms_error(
     tr: &Trajectory,
     range: std::ops::Range<usize>,
 ) -> (Vec<f64>, f64) {
-    let (n, p) = (model.dof(), model.layout().len);
-    let mut d = Data::new(model);
-    let mut y = DMatrix::zeros(n, p);
-    let mut ss = vec![0.0; n];
+    let n = model.dof();
     let count = range.len().max(1) as f64;
-    for k in range {
-        regressor(
-            model,
-            &mut d,
-            tr.q_at(k),
-            tr.qd_at(k),
-            tr.qdd_at(k).expect("q̈ present"),
-            &mut y,
-        );
-        let pred = &y * theta;
-        for j in 0..n {
-            ss[j] += (pred[j] - tr.tau_at(k)[j]).powi(2);
-        }
-    }
-    let per: Vec<f64> = ss.iter().map(|s| (s / count).sqrt()).collect();
-    let overall = (ss.iter().sum::<f64>() / (count * n as f64)).sqrt();
+    let res = residuals(model, theta, tr, range);
+    let per: Vec<f64> = (0..n)
+        .map(|j| (res.iter().skip(j).step_by(n).map(|r| r * r).sum::<f64>() / count).sqrt())
+        .collect();
+    let overall = (res.iter().map(|r| r * r).sum::<f64>() / (count * n as f64)).sqrt();
     (per, overall)
 }
 

@@ -21,6 +21,29 @@ fn single_threaded_blas() {
     ONCE.call_once(|| unsafe { openblas_set_num_threads(1) });
 }
 
+/// Calls `f(k, Y_k)` with the regressor of every sample `k` in `range` of `tr`, which must carry
+/// q̈ (one workspace and one output matrix for the whole range).
+pub fn for_each_regressor(
+    model: &Model,
+    tr: &Trajectory,
+    range: std::ops::Range<usize>,
+    f: &mut dyn FnMut(usize, &DMatrix<f64>),
+) {
+    let mut d = Data::new(model);
+    let mut y = DMatrix::zeros(model.dof(), model.layout().len);
+    for k in range {
+        regressor(
+            model,
+            &mut d,
+            tr.q_at(k),
+            tr.qd_at(k),
+            tr.qdd_at(k).expect("q̈ present"),
+            &mut y,
+        );
+        f(k, &y);
+    }
+}
+
 /// The normal equations of `min Σ_k ‖Y_k θ − τ_k‖²` over the samples added so far.
 #[derive(Clone, Debug)]
 pub struct NormalEquations {
@@ -124,21 +147,8 @@ impl NormalEquations {
 
     /// Accumulates samples `range` of a trajectory (which must carry q̈) for `model`.
     pub fn from_trajectory(model: &Model, tr: &Trajectory, range: std::ops::Range<usize>) -> Self {
-        let (n, p) = (model.dof(), model.layout().len);
-        let mut ne = Self::new(n, p);
-        let mut d = Data::new(model);
-        let mut y = DMatrix::zeros(n, p);
-        for k in range {
-            regressor(
-                model,
-                &mut d,
-                tr.q_at(k),
-                tr.qd_at(k),
-                tr.qdd_at(k).expect("q̈ present"),
-                &mut y,
-            );
-            ne.add(&y, tr.tau_at(k));
-        }
+        let mut ne = Self::new(model.dof(), model.layout().len);
+        for_each_regressor(model, tr, range, &mut |k, y| ne.add(y, tr.tau_at(k)));
         ne.finish()
     }
 
