@@ -268,27 +268,18 @@ pub fn run(a: Args) -> anyhow::Result<()> {
         r.solver.iterations,
         total * 1e3
     );
-    println!(
-        "\n{:<12} {:>8} {:>28} {:>30} {:>11} {:>11} {:>9}",
-        "body", "m [kg]", "CoM [m]", "principal I_C [kg m^2]", "min eig I", "min eig J", "tr(JQ)/m"
-    );
-    for b in &r.bodies {
-        let p = physid::spatial::InertialParams(nalgebra::SVector::from(b.pi));
-        let c = p.com().unwrap_or_default();
-        let pm = p.principal_moments().map(|x| x.0).unwrap_or_default();
-        let c_ = &b.consistency;
-        println!(
-            "{:<12} {:>8.4} {:>28} {:>30} {:>11.3e} {:>11.3e} {:>9}",
-            b.name,
-            p.mass(),
-            format!("({:.4}, {:.4}, {:.4})", c.x, c.y, c.z),
-            format!("({:.2e}, {:.2e}, {:.2e})", pm.x, pm.y, pm.z),
-            c_.min_eig_spatial,
-            c_.min_eig_pseudo,
-            c_.trace_jq_per_mass
-                .map_or("-".into(), |t| format!("{t:.3}"))
-        );
-    }
+    let rows: Vec<_> = r
+        .bodies
+        .iter()
+        .map(|b| {
+            (
+                b.name.clone(),
+                physid::spatial::InertialParams(nalgebra::SVector::from(b.pi)),
+                b.consistency.clone(),
+            )
+        })
+        .collect();
+    super::model_cmd::print_bodies(&rows);
     println!(
         "\n{:<14} {:>12} {:>12} {:>12} {:>14}",
         "joint", "B [Nms/rad]", "Bc [Nm]", "train RMS", "validation RMS"

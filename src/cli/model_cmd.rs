@@ -58,32 +58,22 @@ pub fn describe(m: &Model, as_json: bool) -> anyhow::Result<()> {
         m.total_mass(),
         m.layout().len
     );
-    println!(
-        "\n{:<12} {:>8} {:>26} {:>30} {:>11} {:>11} {:>9}",
-        "body", "m [kg]", "CoM [m]", "principal I_C [kg m^2]", "min eig I", "min eig J", "tr(JQ)/m"
-    );
-    let push = |name: &str, p: &InertialParams, e: Option<&Ellipsoid>| {
-        let r = p.consistency(e);
-        let c = p.com().unwrap_or_default();
-        let pm = p.principal_moments().map(|x| x.0).unwrap_or_default();
-        println!(
-            "{:<12} {:>8.4} {:>26} {:>30} {:>11.3e} {:>11.3e} {:>9}",
-            name,
-            p.mass(),
-            format!("({:.4}, {:.4}, {:.4})", c.x, c.y, c.z),
-            format!("({:.2e}, {:.2e}, {:.2e})", pm.x, pm.y, pm.z),
-            r.min_eig_spatial,
-            r.min_eig_pseudo,
-            r.trace_jq_per_mass
-                .map_or("-".into(), |t| format!("{t:.3}"))
-        );
-    };
+    let mut rows = vec![];
     for b in &m.bodies {
-        push(&b.name, &b.inertia, b.bounding.as_ref());
+        rows.push((
+            b.name.clone(),
+            b.inertia,
+            b.inertia.consistency(b.bounding.as_ref()),
+        ));
         if let Some(r) = &b.rotor {
-            push(&r.name, &r.inertia, r.bounding.as_ref());
+            rows.push((
+                r.name.clone(),
+                r.inertia,
+                r.inertia.consistency(r.bounding.as_ref()),
+            ));
         }
     }
+    print_bodies(&rows);
     println!(
         "\n{:<14} {:>8} {:>12} {:>12} {:>22}",
         "joint", "N", "B [Nms/rad]", "Bc [Nm]", "limits [rad]"
@@ -106,6 +96,30 @@ pub fn describe(m: &Model, as_json: bool) -> anyhow::Result<()> {
     );
     println!("mass matrix H(q) [kg m^2]:{h:.5}");
     Ok(())
+}
+
+/// Prints one line per body: mass, CoM, principal moments about the CoM and the consistency
+/// margins (`λ_min I`, `λ_min J`, `tr(JQ)/m`).
+pub fn print_bodies(rows: &[(String, InertialParams, ConsistencyReport)]) {
+    println!(
+        "\n{:<12} {:>8} {:>28} {:>30} {:>11} {:>11} {:>9}",
+        "body", "m [kg]", "CoM [m]", "principal I_C [kg m^2]", "min eig I", "min eig J", "tr(JQ)/m"
+    );
+    for (name, p, r) in rows {
+        let c = p.com().unwrap_or_default();
+        let pm = p.principal_moments().map(|x| x.0).unwrap_or_default();
+        println!(
+            "{:<12} {:>8.4} {:>28} {:>30} {:>11.3e} {:>11.3e} {:>9}",
+            name,
+            p.mass(),
+            format!("({:.4}, {:.4}, {:.4})", c.x, c.y, c.z),
+            format!("({:.2e}, {:.2e}, {:.2e})", pm.x, pm.y, pm.z),
+            r.min_eig_spatial,
+            r.min_eig_pseudo,
+            r.trace_jq_per_mass
+                .map_or("-".into(), |t| format!("{t:.3}"))
+        );
+    }
 }
 
 /// Writes random-state dynamics as JSON for the check scripts.
