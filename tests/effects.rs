@@ -85,7 +85,13 @@ fn acting_effects_have_their_equations_and_keep_the_dynamics_consistent() {
             EffectSpec::AsymmetricCoulomb {
                 delta: vec![0.6, 0.4, 0.3],
             },
-            Box::new(move |j, _, w, _| -[0.6, 0.4, 0.3][j] * 0.5 * (1.0 + (w / v).tanh())),
+            Box::new(move |j, _, w, _| -[0.6, 0.4, 0.3][j] * (w / v).tanh().max(0.0)),
+        ),
+        (
+            EffectSpec::QuadraticDamping {
+                coefficient: vec![0.2, 0.1, 0.05],
+            },
+            Box::new(|j, _, w, _| -[0.2, 0.1, 0.05][j] * w * w.abs()),
         ),
         (
             EffectSpec::LoadDependentFriction {
@@ -187,4 +193,31 @@ fn bad_effects_are_rejected_with_the_key() {
         .unwrap_err()
         .to_string()
         .contains("effects[0].samples"));
+}
+
+#[test]
+fn compliance_shifts_only_the_logged_angle_by_the_deflection() {
+    let (base, _, _) = with(vec![]);
+    let k = [400.0, 300.0, f64::INFINITY];
+    let (rec, _, _) = with(vec![EffectSpec::Compliance {
+        stiffness: k.to_vec(),
+    }]);
+    assert_eq!(rec.truth, base.truth, "a sensor effect must not act");
+    let mut peak = 0.0f64;
+    for s in 0..rec.truth.len() {
+        for j in 0..3 {
+            let defl = rec.measured.q_at(s)[j] - base.measured.q_at(s)[j];
+            let want = if k[j].is_finite() {
+                rec.truth.tau_at(s)[j] / k[j]
+            } else {
+                0.0
+            };
+            peak = peak.max(want.abs());
+            assert!(
+                (defl - want).abs() < 1e-15,
+                "sample {s} joint {j}: {defl} vs {want}"
+            );
+        }
+    }
+    assert!(peak > 1e-3, "deflection {peak} rad too small to test");
 }

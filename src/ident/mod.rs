@@ -253,13 +253,24 @@ pub fn constraints_hold(model: &Model, theta: &DVector<f64>, set: ConstraintSet)
 
 /// Identifies `model`'s parameters from normal equations `ne` under `opts`, with prior `prior`
 /// (usually `model.parameters()`).
+///
+/// `ne` may carry extra columns after the model's `layout().len` (e.g. the diagnosis's effect
+/// terms): their coefficients are free (no constraint), pulled to `prior` by the same weight `w`,
+/// and returned at the end of `theta`.
 pub fn identify(
     model: &Model,
     ne: &NormalEquations,
     prior: &DVector<f64>,
     opts: &Options,
 ) -> Result<Identified, IdentError> {
-    let p = model.layout().len;
+    let p = ne.yty.nrows();
+    if p < model.layout().len || prior.len() != p {
+        return Err(IdentError::BadOption(format!(
+            "normal equations have {p} columns and the prior {} for a model of {} parameters",
+            prior.len(),
+            model.layout().len
+        )));
+    }
     let ns = ne.samples;
     let w = opts.prior_weight;
     if !(w.is_finite() && w >= 0.0) {

@@ -33,7 +33,7 @@ pub fn physical_torque(
                 out[j] -= static_extra[j] * (-(qd[j] / velocity[j]).powi(2)).exp() * sgn(qd[j])
             }),
             EffectSpec::AsymmetricCoulomb { delta } => {
-                (0..n).for_each(|j| out[j] -= delta[j] * 0.5 * (1.0 + sgn(qd[j])))
+                (0..n).for_each(|j| out[j] -= delta[j] * sgn(qd[j]).max(0.0))
             }
             EffectSpec::LoadDependentFriction { coefficient } => {
                 (0..n).for_each(|j| out[j] -= coefficient[j] * tau_mot[j].abs() * sgn(qd[j]))
@@ -47,9 +47,13 @@ pub fn physical_torque(
                 let ph = phase.get(j).copied().unwrap_or(0.0);
                 out[j] -= amplitude[j] * (harmonic[j] * gear * q[j] + ph).sin();
             }),
+            EffectSpec::QuadraticDamping { coefficient } => {
+                (0..n).for_each(|j| out[j] -= coefficient[j] * qd[j] * qd[j].abs())
+            }
             EffectSpec::TorqueOffset { .. }
             | EffectSpec::TorqueGain { .. }
-            | EffectSpec::TimeDelay { .. } => {}
+            | EffectSpec::TimeDelay { .. }
+            | EffectSpec::Compliance { .. } => {}
             EffectSpec::Tilt { .. } | EffectSpec::Payload { .. } => {}
         }
     }
@@ -66,6 +70,22 @@ pub fn logged_torque(effects: &[EffectSpec], tau: &[f64]) -> Vec<f64> {
                 out.iter_mut().zip(offset).for_each(|(t, o)| *t += o)
             }
             _ => {}
+        }
+    }
+    out
+}
+
+/// The logged encoder angle for link angle `q` under delivered torque `tau_mot`: `q + τ/k`
+/// with a `compliance` effect, else `q`.
+pub fn logged_angle(effects: &[EffectSpec], q: &[f64], tau_mot: &[f64]) -> Vec<f64> {
+    let mut out = q.to_vec();
+    for e in effects {
+        if let EffectSpec::Compliance { stiffness } = e {
+            for (j, o) in out.iter_mut().enumerate() {
+                if stiffness[j].is_finite() {
+                    *o += tau_mot[j] / stiffness[j];
+                }
+            }
         }
     }
     out

@@ -280,8 +280,8 @@ pub enum EffectSpec {
         /// Stribeck velocity per joint (rad/s).
         velocity: Vec<f64>,
     },
-    /// Direction-dependent Coulomb friction: extra `δ (1 + tanh(q̇/v_s)) / 2`, i.e. `B_c + δ`
-    /// moving forward and `B_c` moving back.
+    /// Direction-dependent Coulomb friction: extra `δ max(0, tanh(q̇/v_s))`, i.e. `B_c + δ`
+    /// moving forward, `B_c` moving back, nothing at rest.
     AsymmetricCoulomb {
         /// Extra forward Coulomb friction per joint (N m).
         delta: Vec<f64>,
@@ -301,6 +301,19 @@ pub enum EffectSpec {
         /// Phase per joint (rad); default 0.
         #[serde(default)]
         phase: Vec<f64>,
+    },
+    /// A compliant transmission read on the motor side: the logged encoder reads
+    /// `q + τ_mot / k` (the link lags the motor by the deflection); a sensor effect, the
+    /// controller runs on the link angle.
+    Compliance {
+        /// Transmission stiffness per joint (N m/rad); `inf` for a rigid joint.
+        stiffness: Vec<f64>,
+    },
+    /// Quadratic (fluid) damping `−c q̇ |q̇|` (N m s²/rad²): not in the diagnosis's library,
+    /// for testing that an unexplained residual is reported as such.
+    QuadraticDamping {
+        /// Coefficient per joint (N m s²/rad²).
+        coefficient: Vec<f64>,
     },
     /// The base is tilted: the true gravity is the model's rotated by roll (about x) and pitch
     /// (about y) (rad).
@@ -532,6 +545,22 @@ impl Scenario {
                     if !phase.is_empty() {
                         per_joint(phase, n, &k("phase"))?;
                     }
+                }
+                EffectSpec::Compliance { stiffness } => {
+                    check(stiffness.len() == n, &k("stiffness"), || {
+                        format!("has {} entries for {n} joints", stiffness.len())
+                    })?;
+                    check(stiffness.iter().all(|s| *s > 0.0), &k("stiffness"), || {
+                        "stiffnesses must be > 0 (inf for a rigid joint)".into()
+                    })?;
+                }
+                EffectSpec::QuadraticDamping { coefficient } => {
+                    per_joint(coefficient, n, &k("coefficient"))?;
+                    check(
+                        coefficient.iter().all(|c| *c >= 0.0),
+                        &k("coefficient"),
+                        || "must be >= 0".into(),
+                    )?;
                 }
                 EffectSpec::Tilt { roll, pitch } => {
                     check(

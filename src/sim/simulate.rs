@@ -199,7 +199,8 @@ pub fn simulate(
             .into_iter()
             .map(|t| t + tau_noise.sample(&mut rng))
             .collect();
-        measured.push(t, &q_enc, &qd_fb, Some(&vec![0.0; n]), &logged);
+        let q_log = super::effects::logged_angle(&scenario.effects, &q_enc, &tau_mot);
+        measured.push(t, &q_log, &qd_fb, Some(&vec![0.0; n]), &logged);
         q_enc_prev = Some(q_enc);
         let (q1, qd1) = engine.state();
         for j in 0..n {
