@@ -84,3 +84,209 @@ fn a_low_speed_effect_shows_up_at_low_speed() {
     // the low-speed RMS against the clean run's (asserted above: measured 2.5× and 3.4×), not
     // the share.
 }
+
+// ---- Which and how far: the whole diagnosis on simulated data with a known effect. ----
+
+use physid::diagnose::library::Kind;
+use physid::diagnose::{diagnose, Diagnosis, Options as DiagOptions, Verdict};
+
+/// The blind benchmark's scenario, 20 s, with `effects`; diagnosed on the first 70 % / last 30 %.
+fn diagnosed(effects: Vec<EffectSpec>, seed: u64) -> Diagnosis {
+    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("scenarios/blind.toml");
+    let (mut sc, m, _) = physid::io::load_scenario(&path).unwrap();
+    sc.simulation.seed = seed;
+    sc.effects = effects;
+    let rec = physid::sim::run(&m, &sc, &mut |_| {}).unwrap();
+    let d = &rec.processed;
+    let cut = 14000;
+    diagnose(
+        &m,
+        &d.slice(0..cut),
+        &d.slice(cut..d.len()),
+        &DiagOptions::default(),
+    )
+    .unwrap()
+}
+
+#[test]
+fn clean_data_claim_nothing_and_sit_at_the_noise_floor() {
+    for seed in [3, 4] {
+        let d = diagnosed(vec![], seed);
+        eprintln!("{}", d.summary);
+        assert!(d.effects.is_empty(), "seed {seed}: claimed {:?}", d.effects);
+        assert_eq!(d.verdict, Verdict::NoEffect, "seed {seed}");
+        // The floor is the 0.3 N m torque noise plus what the filtered accelerations add.
+        assert!(
+            d.noise_floor > 0.27 && d.noise_floor < 0.36,
+            "seed {seed}: floor {}",
+            d.noise_floor
+        );
+        assert!(d.overall[0] < 1.2 * d.noise_floor, "seed {seed}");
+    }
+}
+
+#[test]
+fn cogging_is_found_at_its_harmonic_with_its_amplitude() {
+    let amp = [0.5, 0.6, 0.4];
+    let d = diagnosed(
+        vec![EffectSpec::Cogging {
+            amplitude: amp.to_vec(),
+            harmonic: vec![3.0; 3],
+            phase: vec![0.3, 1.0, 2.0],
+        }],
+        5,
+    );
+    eprintln!("{}", d.summary);
+    let e = &d.effects[0];
+    assert_eq!(e.kind, Kind::Cogging);
+    assert_eq!(e.param, 3.0);
+    assert!(e.ambiguous_with.is_empty());
+    for (m, a) in e.magnitudes.iter().zip(amp) {
+        assert!(
+            (m.value - a).abs() < 0.1 * a,
+            "{}: {} vs {a}",
+            m.joint,
+            m.value
+        );
+        assert!(m.se > 0.0 && m.se < 0.1 * a, "{}: se {}", m.joint, m.se);
+    }
+    assert!(d.confirmed[0], "cogging must lower the held-out error");
+    assert!(d.gap_closed > 0.8, "gap closed {}", d.gap_closed);
+}
+
+#[test]
+fn offset_and_forward_friction_are_ambiguous_when_the_joints_never_rest() {
+    let d = diagnosed(
+        // Negative offsets: δ max(0, s) = δ/2 + (δ/2) s with δ = 2 o < 0 then only raises
+        // the Coulomb coefficients, so the constrained fits (B_c >= 0) cannot tell them apart.
+        // (A positive offset above B_c would be told apart by that very bound.)
+        vec![EffectSpec::TorqueOffset {
+            offset: vec![-2.0, -2.5, -2.0],
+        }],
+        6,
+    );
+    eprintln!("{}", d.summary);
+    let e = &d.effects[0];
+    let group: Vec<Kind> = std::iter::once(e.kind)
+        .chain(e.ambiguous_with.iter().copied())
+        .collect();
+    assert!(
+        group.contains(&Kind::TorqueOffset) && group.contains(&Kind::AsymmetricCoulomb),
+        "{group:?}"
+    );
+    assert!(e.separate_by.as_deref().unwrap().contains("rest"));
+}
+
+#[test]
+fn a_time_delay_is_measured_in_seconds() {
+    let d = diagnosed(vec![EffectSpec::TimeDelay { samples: 20 }], 7);
+    eprintln!("{}", d.summary);
+    let e = &d.effects[0];
+    assert_eq!(e.kind, Kind::TimeDelay);
+    let est = e.magnitudes[0].value;
+    assert!((est - 0.020).abs() < 0.004, "delay {est} s vs 0.020 s");
+}
+
+#[test]
+fn the_gamma_test_recovers_the_noise_of_a_periodic_motion() {
+    // q(t) periodic; residual = a smooth function of the state plus white noise of 0.2.
+    use rand::SeedableRng;
+    use rand_distr::{Distribution, Normal};
+    let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(9);
+    let noise = Normal::new(0.0, 0.2).unwrap();
+    let mut tr = physid::io::samples::Trajectory::new(vec!["a".into(), "b".into()], true);
+    let mut res = vec![];
+    for k in 0..8000 {
+        let t = k as f64 * 1e-3;
+        let w = std::f64::consts::TAU * 0.5;
+        let q = [(w * t).sin(), 0.5 * (2.0 * w * t).cos()];
+        let qd = [w * (w * t).cos(), -w * (2.0 * w * t).sin()];
+        let qdd = [-w * w * q[0], -4.0 * w * w * q[1]];
+        tr.push(t, &q, &qd, Some(&qdd), &[0.0, 0.0]);
+        res.push(2.0 * q[0].powi(3) + qd[1] + noise.sample(&mut rng));
+        res.push(0.5 * qdd[0] + noise.sample(&mut rng));
+    }
+    let var = physid::diagnose::noise::gamma_test(&tr, 0..tr.len(), &res, 200);
+    for v in var {
+        assert!((v.sqrt() - 0.2).abs() < 0.02, "noise {} vs 0.2", v.sqrt());
+    }
+}
+
+#[test]
+fn blind_cases_are_diagnosed_from_files_and_scored() {
+    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("scenarios/blind.toml");
+    let (sc, m, _) = physid::io::load_scenario(&path).unwrap();
+    let dir = tempfile::tempdir().unwrap();
+    let opts = DiagOptions::default();
+    // Case 0 is clean, case 7 a spring (slot 3), case 12 rotor inertia left out (slot 8).
+    let clean =
+        physid::diagnose::blind::run_case(0, 3, &sc, &m, &opts, &dir.path().join("a")).unwrap();
+    assert!(clean.found.is_empty(), "{clean:?}");
+    let spring =
+        physid::diagnose::blind::run_case(7, 3, &sc, &m, &opts, &dir.path().join("b")).unwrap();
+    assert_eq!(spring.injected, vec!["spring".to_string()]);
+    assert_eq!(spring.top1, Some(true), "{spring:?}");
+    assert!(spring.magnitude_error.unwrap() < 0.2, "{spring:?}");
+    assert!(spring.visible_gap > 0.15);
+    let rotor =
+        physid::diagnose::blind::run_case(12, 3, &sc, &m, &opts, &dir.path().join("c")).unwrap();
+    assert_eq!(rotor.injected, vec!["rotor_inertia".to_string()]);
+    // The description written for the diagnosis has no rotors.
+    let given = physid::io::load_robot(dir.path().join("c/robot.urdf").to_str().unwrap()).unwrap();
+    assert_eq!(given.rotor_count(), 0);
+    let s = physid::diagnose::blind::score(&[clean, spring, rotor]);
+    assert_eq!((s.clean, s.single), (1, 2));
+    assert_eq!(s.clean_no_claim, 1.0);
+}
+
+#[test]
+fn the_cli_diagnoses_a_file_and_names_bad_input() {
+    let dir = tempfile::tempdir().unwrap();
+    let exe = env!("CARGO_BIN_EXE_physid");
+    let sc = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("scenarios/blind.toml");
+    let (mut s, m, _) = physid::io::load_scenario(&sc).unwrap();
+    s.simulation.duration = 8.0;
+    s.effects = vec![EffectSpec::Spring {
+        stiffness: vec![6.0, 6.0, 6.0],
+        rest: vec![0.0, -0.5, 1.2],
+    }];
+    let rec = physid::sim::run(&m, &s, &mut |_| {}).unwrap();
+    let csv = dir.path().join("run.csv");
+    physid::io::samples::write_csv(&csv, &rec.processed).unwrap();
+    let report = dir.path().join("report");
+    let out = std::process::Command::new(exe)
+        .args(["diagnose", "--robot", "cheetah3", "--json", "--data"])
+        .arg(&csv)
+        .arg("--report")
+        .arg(&report)
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let j: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    assert_eq!(j["effects"][0]["kind"], "spring");
+    assert_eq!(
+        j["samples"][0].as_u64().unwrap() + j["samples"][1].as_u64().unwrap(),
+        8000
+    );
+    for f in [
+        "report.md",
+        "report.json",
+        "where.svg",
+        "spectrum.svg",
+        "how_far.svg",
+    ] {
+        assert!(report.join(f).exists(), "{f} missing");
+    }
+    // A robot with another joint count: the error names the file.
+    let out = std::process::Command::new(exe)
+        .args(["diagnose", "--robot", "cheetah3", "--no-rotors", "--data"])
+        .arg(dir.path().join("missing.csv"))
+        .output()
+        .unwrap();
+    assert!(!out.status.success());
+    assert!(String::from_utf8_lossy(&out.stderr).contains("missing.csv"));
+}

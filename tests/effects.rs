@@ -205,10 +205,10 @@ fn compliance_shifts_only_the_logged_angle_by_the_deflection() {
     assert_eq!(rec.truth, base.truth, "a sensor effect must not act");
     let mut peak = 0.0f64;
     for s in 0..rec.truth.len() {
-        for j in 0..3 {
+        for (j, kj) in k.iter().enumerate() {
             let defl = rec.measured.q_at(s)[j] - base.measured.q_at(s)[j];
-            let want = if k[j].is_finite() {
-                rec.truth.tau_at(s)[j] / k[j]
+            let want = if kj.is_finite() {
+                rec.truth.tau_at(s)[j] / kj
             } else {
                 0.0
             };

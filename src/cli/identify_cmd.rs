@@ -31,51 +31,9 @@ pub fn parse_range(s: &str, len: usize, what: &str) -> anyhow::Result<Range<usiz
     Ok(a..b)
 }
 
-/// Loads identification data: the processed signals of a physid MCAP, the joint states of another
-/// MCAP, or a CSV; q̈ is derived (zero-phase 20 Hz Butterworth, central differences) if absent.
+/// Loads identification data (see [`physid::io::load_trajectory`]).
 pub fn load_data(path: &Path, model: &Model) -> anyhow::Result<Trajectory> {
-    let names: Vec<String> = model.bodies.iter().map(|b| b.joint_name.clone()).collect();
-    let mut tr = match path.extension().and_then(|e| e.to_str()) {
-        Some("mcap") => physid::io::mcap_log::read(path)?
-            .identification_input()
-            .clone(),
-        Some("csv") => physid::io::samples::read_csv(path, Some(&names))?,
-        _ => bail!("{}: give a .mcap or .csv file", path.display()),
-    };
-    if tr.dof() != model.dof() {
-        bail!(
-            "{}: the data have {} joints, the robot has {}",
-            path.display(),
-            tr.dof(),
-            model.dof()
-        );
-    }
-    tr.validate()
-        .map_err(|e| anyhow::anyhow!("{}: {e}", path.display()))?;
-    if tr.qdd.is_none() {
-        let dts: Vec<f64> = tr.t.windows(2).map(|w| w[1] - w[0]).collect();
-        let mut sorted = dts.clone();
-        sorted.sort_by(f64::total_cmp);
-        let dt = sorted.get(sorted.len() / 2).copied().unwrap_or(1e-3);
-        let fs = 1.0 / dt;
-        let sos = physid::sim::signal::butterworth_lowpass(2, (20.0f64).min(0.4 * fs), fs)?;
-        let n = tr.dof();
-        let m = tr.len();
-        let mut qdd = vec![0.0; m * n];
-        for j in 0..n {
-            let qd: Vec<f64> = (0..m).map(|k| tr.qd[k * n + j]).collect();
-            for (k, v) in sos
-                .filtfilt(&physid::sim::signal::differentiate(&qd, dt))
-                .into_iter()
-                .enumerate()
-            {
-                qdd[k * n + j] = v;
-            }
-        }
-        tr.qdd = Some(qdd);
-        eprintln!("note: {} has no ddq columns; q̈ = zero-phase 20 Hz Butterworth of the central difference of q̇", path.display());
-    }
-    Ok(tr)
+    physid::io::load_trajectory(path, model)
 }
 
 /// Identification data: in memory, or a CSV with q̈ streamed from disk (memory independent of

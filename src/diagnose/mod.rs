@@ -1,12 +1,32 @@
 //! Sim-to-real gap diagnosis: where the residual of a model lies, which unmodelled effect causes
 //! it, and how far it shrinks once modelled.
 //!
-//! This module has the first part, **where**: the residual `τ − Y θ` of an identified model on
-//! validation data, broken down per joint and by motion regime (near-zero velocity and
-//! reversals, speed, acceleration and torque levels, configuration), each with its RMS and its
-//! share of the residual energy. Effect attribution and the blind benchmark build on it.
+//! - **Where** ([`breakdown`], [`spectrum`]): the validation residual `τ − Y θ̂₀` of the nominal
+//!   constrained model per joint, per motion regime (near-zero velocity and reversals, speed,
+//!   acceleration and torque levels, configuration) and over frequency (spectrum, coherence with
+//!   the motion).
+//! - **Which** ([`library`], [`select`]): each effect of the library offered as extra regressor
+//!   columns, scored by the cross-validated reduction of the error, forward selection with a
+//!   stopping rule; magnitudes with block-jackknife standard errors; effects the data cannot tell
+//!   apart reported together.
+//! - **How far**: per-joint validation RMS before and after each added effect, the fraction of
+//!   the gap to the noise floor ([`noise`]) closed, and whether something unexplained remains.
+//!
+//! [`diagnose`] runs all three on a training and a validation trajectory; [`blind`] is the
+//! benchmark on simulated data with withheld effects.
 
+pub mod blind;
+pub mod library;
+pub mod noise;
+pub mod report;
+pub mod select;
+pub mod spectrum;
+
+use crate::ident::{self, ConstraintSet, IdentError, NormalEquations};
 use crate::io::samples::Trajectory;
+use crate::model::Model;
+use library::{Context, Kind};
+use nalgebra::DVector;
 use serde::Serialize;
 
 pub use crate::ident::analysis::residuals;
@@ -124,4 +144,596 @@ pub fn breakdown(tr: &Trajectory, range: std::ops::Range<usize>, res: &[f64]) ->
         overall,
         regimes,
     }
+}
+
+/// Diagnosis options.
+#[derive(Clone, Debug)]
+pub struct Options {
+    /// Constraint set of the nominal model and of every fit with effects.
+    pub constraints: ConstraintSet,
+    /// The forward selection's settings.
+    pub selection: select::Settings,
+    /// The kinds offered.
+    pub kinds: Vec<Kind>,
+    /// Joint-samples slower than this (rad/s) are left out of every fit and error (the
+    /// model's `sign(q̇)` Coulomb friction does not describe friction near zero speed).
+    pub min_speed: f64,
+    /// The residual counts as unexplained when its validation mean square exceeds the noise
+    /// floor's by this factor.
+    pub unexplained_ratio: f64,
+}
+
+impl Default for Options {
+    fn default() -> Self {
+        Self {
+            constraints: ConstraintSet::Consistent,
+            selection: select::Settings::default(),
+            kinds: Kind::ALL.to_vec(),
+            min_speed: 0.05,
+            unexplained_ratio: 1.45,
+        }
+    }
+}
+
+/// A diagnosis failed.
+#[derive(Debug, thiserror::Error)]
+pub enum DiagnoseError {
+    /// Identification failed.
+    #[error("identification failed: {0}")]
+    Ident(#[from] IdentError),
+    /// Data unusable.
+    #[error("{0}")]
+    Data(String),
+}
+
+/// One estimated magnitude.
+#[derive(Clone, Debug, Serialize)]
+pub struct Magnitude {
+    /// Joint name, or `"robot"` for one value for the whole robot.
+    pub joint: String,
+    /// Value in `unit`.
+    pub value: f64,
+    /// Block-jackknife standard error.
+    pub se: f64,
+    /// Unit.
+    pub unit: String,
+    /// Fraction of the effect's column not explained by the rigid-body regressor (1: fully
+    /// identifiable; near 0: absorbed by the inertial parameters, the value is meaningless).
+    pub identifiable: f64,
+}
+
+/// One selected effect with its magnitudes.
+#[derive(Clone, Debug, Serialize)]
+pub struct EffectEstimate {
+    /// The kind.
+    pub kind: Kind,
+    /// Its grid value (Stribeck velocity in rad/s, cogging harmonic), 0 otherwise.
+    pub param: f64,
+    /// What the magnitude is.
+    pub magnitude_name: String,
+    /// Magnitudes per joint (or one for the robot).
+    pub magnitudes: Vec<Magnitude>,
+    /// Kinds the data cannot tell apart from this one.
+    pub ambiguous_with: Vec<Kind>,
+    /// What data would separate them.
+    pub separate_by: Option<String>,
+}
+
+/// Validation error of one joint along the selection.
+#[derive(Clone, Debug, Serialize)]
+pub struct JointGap {
+    /// Joint name.
+    pub joint: String,
+    /// Nominal model's validation RMS (N m).
+    pub nominal: f64,
+    /// RMS after each selected effect, cumulatively (N m).
+    pub after: Vec<f64>,
+    /// Estimated noise floor (N m RMS).
+    pub noise_floor: f64,
+    /// Fraction of the gap `nominal² − floor²` closed by all selected effects.
+    pub gap_closed: f64,
+}
+
+/// The verdict.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Verdict {
+    /// No effect selected and the residual is at the noise floor.
+    NoEffect,
+    /// Effects selected and what remains is at the noise floor.
+    Explained,
+    /// Effects selected but a residual above the noise floor remains.
+    PartiallyExplained,
+    /// Nothing in the library explains a residual above the noise floor.
+    Unexplained,
+}
+
+/// A whole diagnosis.
+#[derive(Clone, Debug, Serialize)]
+pub struct Diagnosis {
+    /// Robot name.
+    pub robot: String,
+    /// Joint names.
+    pub joints: Vec<String>,
+    /// Training and validation samples.
+    pub samples: [usize; 2],
+    /// Constraint set.
+    pub constraints: ConstraintSet,
+    /// Whether the nominal model satisfies its constraints.
+    pub nominal_constraints_hold: bool,
+    /// Where: the nominal validation residual by regime.
+    pub breakdown: Breakdown,
+    /// Where in frequency: the nominal validation residual per joint.
+    pub spectra: Vec<spectrum::Spectrum>,
+    /// Spectra of the final residual (after the selected effects).
+    pub spectra_after: Vec<spectrum::Spectrum>,
+    /// Which: the selection.
+    pub selection: select::Selection,
+    /// The selected effects and their magnitudes.
+    pub effects: Vec<EffectEstimate>,
+    /// How far: per joint.
+    pub gap: Vec<JointGap>,
+    /// Validation RMS over all joints: nominal, then after each effect (N m).
+    pub overall: Vec<f64>,
+    /// Per selected effect: whether adding it lowered the validation RMS (held-out data, not
+    /// used by the selection); an unconfirmed effect fits the training runs only.
+    pub confirmed: Vec<bool>,
+    /// Noise floor over all joints (N m RMS).
+    pub noise_floor: f64,
+    /// Fraction of the overall gap closed.
+    pub gap_closed: f64,
+    /// The verdict.
+    pub verdict: Verdict,
+    /// The verdict in words.
+    pub summary: String,
+}
+
+/// What data separates two kinds the data could not tell apart.
+pub fn separate_by(a: Kind, b: Kind) -> String {
+    use Kind::*;
+    let pair = if a <= b { (a, b) } else { (b, a) };
+    match pair {
+        (TorqueOffset, AsymmetricCoulomb) => "rests under load (q̇ = 0 with τ ≠ 0): an offset persists at rest, direction-dependent friction vanishes; without rests δ·max(0, sign q̇) = δ/2 + (δ/2) sign q̇ is an offset plus Coulomb friction".into(),
+        (TorqueOffset, Spring) => "a wider range of joint angles (the spring's torque varies with q, an offset does not)".into(),
+        (TorqueGain, LoadDependentFriction) => "braking motion (τ and q̇ of opposite sign) as often as driving".into(),
+        (Stribeck, AsymmetricCoulomb) | (TorqueOffset, Stribeck) => "slow motion in both directions (q̇ within the Stribeck velocity)".into(),
+        (RotorInertia, Compliance) | (TimeDelay, Compliance) | (TimeDelay, RotorInertia) => "faster excitation (the terms scale with q̈, τ̇ and τ̈ differently with frequency)".into(),
+        _ => "an excitation on which their regressor columns differ more (other joint ranges, speeds and torque levels)".into(),
+    }
+}
+
+fn median(v: &[f64]) -> f64 {
+    let mut s = v.to_vec();
+    s.sort_by(f64::total_cmp);
+    let m = s.len();
+    if m == 0 {
+        0.0
+    } else if m % 2 == 1 {
+        s[m / 2]
+    } else {
+        0.5 * (s[m / 2 - 1] + s[m / 2])
+    }
+}
+
+/// The physical magnitudes of an effect from its coefficients `c` (in column order).
+pub fn magnitudes_of(kind: Kind, c: &[f64], n: usize, gravity: f64) -> Vec<f64> {
+    match kind {
+        Kind::TorqueGain => {
+            let m = median(c);
+            c.iter().map(|x| x - m).collect()
+        }
+        Kind::TimeDelay => vec![c[0]],
+        Kind::Spring => c[..n].to_vec(),
+        Kind::Cogging => (0..n).map(|j| c[j].hypot(c[n + j])).collect(),
+        Kind::Tilt => vec![(c[0].hypot(c[1]) / gravity).atan()],
+        _ => c.to_vec(),
+    }
+}
+
+/// The residual `τ − Z θ` over `tr` for the model plus `variants` (`ctx` without a speed
+/// mask), and its per-joint RMS over the joint-samples at or above `min_speed`.
+fn validation_rms(
+    ctx: &Context,
+    tr: &Trajectory,
+    variants: &[library::Variant],
+    theta: &DVector<f64>,
+    min_speed: f64,
+) -> (Vec<f64>, Vec<f64>) {
+    let n = tr.dof();
+    let mut res = Vec::with_capacity(tr.len() * n);
+    ctx.for_each_row(tr, 0..tr.len(), variants, &mut |_, z, tau| {
+        let pred = z * theta;
+        res.extend((0..n).map(|j| tau[j] - pred[j]));
+    });
+    let rms = (0..n)
+        .map(|j| {
+            let (mut s, mut c) = (0.0, 0usize);
+            for k in 0..tr.len() {
+                if tr.qd_at(k)[j].abs() >= min_speed {
+                    s += res[k * n + j].powi(2);
+                    c += 1;
+                }
+            }
+            (s / c.max(1) as f64).sqrt()
+        })
+        .collect();
+    (rms, res)
+}
+
+fn mean_square(rms: &[f64]) -> f64 {
+    rms.iter().map(|r| r * r).sum::<f64>() / rms.len().max(1) as f64
+}
+
+/// Spectra of a residual per joint with the coherence signals of `tr`.
+fn spectra(model: &Model, tr: &Trajectory, res: &[f64]) -> Vec<spectrum::Spectrum> {
+    let n = tr.dof();
+    let m = tr.len();
+    let fs = if m > 1 {
+        (m - 1) as f64 / (tr.t[m - 1] - tr.t[0])
+    } else {
+        1.0
+    };
+    (0..n)
+        .map(|j| {
+            let col = |f: &dyn Fn(usize) -> f64| (0..m).map(f).collect::<Vec<f64>>();
+            let gear = model.bodies[j].rotor.as_ref().map_or(1.0, |r| r.gear_ratio);
+            let signals = vec![
+                ("q".to_string(), col(&|k| tr.q_at(k)[j])),
+                ("qd".to_string(), col(&|k| tr.qd_at(k)[j])),
+                (
+                    "qdd".to_string(),
+                    col(&|k| tr.qdd_at(k).map_or(0.0, |a| a[j])),
+                ),
+                (
+                    "sin(N q)".to_string(),
+                    col(&|k| (gear * tr.q_at(k)[j]).sin()),
+                ),
+            ];
+            spectrum::spectrum(&tr.joint_names[j], &col(&|k| res[k * n + j]), &signals, fs)
+        })
+        .collect()
+}
+
+/// Diagnoses `model` on `train` (identification and cross-validated selection) and
+/// `validate` (before/after errors, where, noise floor). Both must carry q̈.
+pub fn diagnose(
+    model: &Model,
+    train: &Trajectory,
+    validate: &Trajectory,
+    opts: &Options,
+) -> Result<Diagnosis, DiagnoseError> {
+    let n = model.dof();
+    for (what, tr) in [("training", train), ("validation", validate)] {
+        if tr.dof() != n {
+            return Err(DiagnoseError::Data(format!(
+                "{what} data have {} joints, the robot {n}",
+                tr.dof()
+            )));
+        }
+        if tr.qdd.is_none() {
+            return Err(DiagnoseError::Data(format!(
+                "{what} data carry no accelerations (ddq columns)"
+            )));
+        }
+        if tr.len() < 64 {
+            return Err(DiagnoseError::Data(format!(
+                "{what} data have {} samples; the diagnosis needs at least 64",
+                tr.len()
+            )));
+        }
+    }
+    let iopts = ident::Options::new(opts.constraints);
+    let prior = model.parameters();
+    let ms = opts.min_speed;
+    // The nominal model, fitted on the rows above the speed threshold.
+    let mut ne0 = NormalEquations::new(n, model.layout().len);
+    Context::new(model, &prior, train, ms).for_each_row(
+        train,
+        0..train.len(),
+        &[],
+        &mut |_, z, tau| ne0.add(z, tau),
+    );
+    let nominal = ident::identify(model, &ne0.finish(), &prior, &iopts)?;
+    let theta0 = nominal.theta.clone();
+    let ctx_train = Context::new(model, &theta0, train, ms);
+    let ctx_val = Context::new(model, &theta0, validate, 0.0);
+    let variants = library::variants(&opts.kinds);
+    let k = opts.selection.folds.max(2);
+    let folds = select::Folds::build(&ctx_train, model, train, 0..train.len(), variants, k);
+    let selection = select::forward_select(&folds, model, &iopts, &opts.selection)?;
+    let all = folds.sum_except(usize::MAX);
+    let g = model.gravity.norm().max(1e-12);
+    // How far: refit on all training data with the first i effects.
+    let mut per_step_rms = vec![];
+    let mut final_res = vec![];
+    let mut final_theta = theta0.clone();
+    for i in 0..=selection.chosen.len() {
+        let chosen = &selection.chosen[..i];
+        let theta = if i == 0 {
+            theta0.clone()
+        } else {
+            folds.fit(model, &all, chosen, &iopts)?
+        };
+        let vs: Vec<_> = chosen.iter().map(|&v| folds.variants[v]).collect();
+        let (rms, res) = validation_rms(&ctx_val, validate, &vs, &theta, ms);
+        per_step_rms.push(rms);
+        if i == selection.chosen.len() {
+            final_res = res;
+            final_theta = theta;
+        }
+    }
+    let (_, nominal_res) = validation_rms(&ctx_val, validate, &[], &theta0, ms);
+    // Identifiable fraction of each effect column against the model's columns.
+    let p0 = model.layout().len;
+    let hyy = all.yty.view((0, 0), (p0, p0)).into_owned()
+        + nalgebra::DMatrix::identity(p0, p0) * (1e-12 * all.yty.diagonal().max());
+    let identifiable = |col: usize| {
+        let zc = all
+            .yty
+            .view((0, col), (p0, 1))
+            .into_owned()
+            .column(0)
+            .into_owned();
+        let x = ident::analysis::least_squares(&hyy, &zc);
+        let zz = all.yty[(col, col)];
+        if zz > 0.0 {
+            ((zz - zc.dot(&x)) / zz).clamp(0.0, 1.0)
+        } else {
+            0.0
+        }
+    };
+    // Magnitudes with block-jackknife errors.
+    let mut effects = vec![];
+    let mut off = p0;
+    let fold_thetas = selection
+        .final_cv
+        .as_ref()
+        .map(|c| c.thetas.clone())
+        .unwrap_or_default();
+    for (si, &vi) in selection.chosen.iter().enumerate() {
+        let v = folds.variants[vi];
+        let nc = v.kind.columns(n);
+        let mags = magnitudes_of(v.kind, &final_theta.as_slice()[off..off + nc], n, g);
+        let jk: Vec<Vec<f64>> = fold_thetas
+            .iter()
+            .map(|t| magnitudes_of(v.kind, &t.as_slice()[off..off + nc], n, g))
+            .collect();
+        let kf = jk.len() as f64;
+        let (name, unit) = v.kind.magnitude();
+        let single = mags.len() == 1;
+        let magnitudes = mags
+            .iter()
+            .enumerate()
+            .map(|(i, &value)| {
+                let mean = jk.iter().map(|m| m[i]).sum::<f64>() / kf.max(1.0);
+                let se = ((kf - 1.0) / kf.max(1.0)
+                    * jk.iter().map(|m| (m[i] - mean).powi(2)).sum::<f64>())
+                .sqrt();
+                let cols: Vec<usize> = if single {
+                    (0..nc).map(|c| folds.offsets[vi] + c).collect()
+                } else {
+                    let mut c = vec![folds.offsets[vi] + i];
+                    // Cogging's magnitude needs both of its columns; a spring's stiffness only
+                    // its q column (the constant is its rest position).
+                    if v.kind == Kind::Cogging {
+                        c.push(folds.offsets[vi] + n + i);
+                    }
+                    c
+                };
+                Magnitude {
+                    joint: if single {
+                        "robot".into()
+                    } else {
+                        model.bodies[i].joint_name.clone()
+                    },
+                    value,
+                    se,
+                    unit: unit.into(),
+                    identifiable: cols.iter().map(|&c| identifiable(c)).fold(1.0, f64::min),
+                }
+            })
+            .collect();
+        let step = &selection.steps[si];
+        effects.push(EffectEstimate {
+            kind: v.kind,
+            param: v.param,
+            magnitude_name: name.into(),
+            magnitudes,
+            separate_by: step.ambiguous_with.first().map(|&b| separate_by(v.kind, b)),
+            ambiguous_with: step.ambiguous_with.clone(),
+        });
+        off += nc;
+    }
+    // Noise floor of the final residual (neighbours at least 0.2 s apart).
+    let rate = (validate.len() - 1) as f64 / (validate.t[validate.len() - 1] - validate.t[0]);
+    let exclude = (0.2 * rate).ceil() as usize;
+    // On training and validation data together: more repetitions of each motion, so closer
+    // neighbours (the fit's own training samples bias it by p/N, negligible here).
+    let final_vs: Vec<_> = selection
+        .chosen
+        .iter()
+        .map(|&v| folds.variants[v])
+        .collect();
+    let ctx_train_all = Context::new(model, &theta0, train, 0.0);
+    let (_, train_res) = validation_rms(&ctx_train_all, train, &final_vs, &final_theta, ms);
+    let both = concatenate(vec![train.clone(), validate.clone()]);
+    let masked_res: Vec<f64> = train_res
+        .iter()
+        .chain(&final_res)
+        .enumerate()
+        .map(|(i, r)| {
+            if both.qd_at(i / n)[i % n].abs() < ms {
+                f64::NAN
+            } else {
+                *r
+            }
+        })
+        .collect();
+    let floor_var = noise::gamma_test(&both, 0..both.len(), &masked_res, exclude);
+    let gap: Vec<JointGap> = (0..n)
+        .map(|j| {
+            let nom = per_step_rms[0][j];
+            let last = per_step_rms[per_step_rms.len() - 1][j];
+            let f2 = floor_var[j];
+            let den = nom * nom - f2;
+            JointGap {
+                joint: model.bodies[j].joint_name.clone(),
+                nominal: nom,
+                after: per_step_rms[1..].iter().map(|r| r[j]).collect(),
+                noise_floor: f2.sqrt(),
+                gap_closed: if den > 0.0 {
+                    ((nom * nom - last * last) / den).clamp(-1.0, 1.0)
+                } else {
+                    0.0
+                },
+            }
+        })
+        .collect();
+    let overall: Vec<f64> = per_step_rms.iter().map(|r| mean_square(r).sqrt()).collect();
+    let floor_ms = floor_var.iter().sum::<f64>() / n as f64;
+    let (first, last) = (overall[0].powi(2), overall[overall.len() - 1].powi(2));
+    let gap_closed = if first > floor_ms {
+        ((first - last) / (first - floor_ms)).clamp(-1.0, 1.0)
+    } else {
+        0.0
+    };
+    let confirmed: Vec<bool> = overall.windows(2).map(|w| w[1] < w[0]).collect();
+    let above = last > opts.unexplained_ratio * floor_ms;
+    let verdict = match (selection.steps.is_empty(), above) {
+        (true, false) => Verdict::NoEffect,
+        (true, true) => Verdict::Unexplained,
+        (false, false) => Verdict::Explained,
+        (false, true) => Verdict::PartiallyExplained,
+    };
+    let names: Vec<String> = effects
+        .iter()
+        .map(|e| {
+            if e.ambiguous_with.is_empty() {
+                e.kind.name().to_string()
+            } else {
+                let mut g = vec![e.kind.name()];
+                g.extend(e.ambiguous_with.iter().map(|k| k.name()));
+                format!("one of {{{}}} (ambiguous)", g.join(", "))
+            }
+        })
+        .collect();
+    let unconfirmed: Vec<&str> = effects
+        .iter()
+        .zip(&confirmed)
+        .filter(|(_, c)| !**c)
+        .map(|(e, _)| e.kind.name())
+        .collect();
+    let mut summary = match verdict {
+        Verdict::NoEffect => format!(
+            "no effect found: the validation RMS {:.3} N m is at the noise floor {:.3} N m",
+            overall[0],
+            floor_ms.sqrt()
+        ),
+        Verdict::Explained => format!(
+            "{} explain(s) the gap: validation RMS {:.3} -> {:.3} N m (noise floor {:.3}), {:.0} % of the gap closed",
+            names.join(" + "),
+            overall[0],
+            last.sqrt(),
+            floor_ms.sqrt(),
+            100.0 * gap_closed
+        ),
+        Verdict::PartiallyExplained => format!(
+            "{} explain(s) part of the gap: validation RMS {:.3} -> {:.3} N m, {:.0} % closed; {:.3} N m RMS above the noise floor {:.3} N m remains unexplained",
+            names.join(" + "),
+            overall[0],
+            last.sqrt(),
+            100.0 * gap_closed,
+            (last - floor_ms).max(0.0).sqrt(),
+            floor_ms.sqrt()
+        ),
+        Verdict::Unexplained => format!(
+            "unexplained: the validation RMS {:.3} N m lies above the noise floor {:.3} N m and no effect in the library lowers the cross-validated error enough",
+            overall[0],
+            floor_ms.sqrt()
+        ),
+    };
+    if !unconfirmed.is_empty() {
+        summary += &format!(
+            "; NOT confirmed on the validation data (its error rose when added): {}",
+            unconfirmed.join(", ")
+        );
+    }
+    Ok(Diagnosis {
+        confirmed,
+        robot: model.name.clone(),
+        joints: model.bodies.iter().map(|b| b.joint_name.clone()).collect(),
+        samples: [train.len(), validate.len()],
+        constraints: opts.constraints,
+        nominal_constraints_hold: nominal.constraints_hold,
+        breakdown: breakdown(validate, 0..validate.len(), &nominal_res),
+        spectra: spectra(model, validate, &nominal_res),
+        spectra_after: spectra(model, validate, &final_res),
+        selection,
+        effects,
+        gap,
+        overall,
+        noise_floor: floor_ms.sqrt(),
+        gap_closed,
+        verdict,
+        summary,
+    })
+}
+
+/// Joins trajectories end to end (times shifted so they keep increasing by the first one's
+/// median step).
+pub fn concatenate(parts: Vec<Trajectory>) -> Trajectory {
+    let mut it = parts.into_iter();
+    let mut out = it.next().expect("at least one trajectory");
+    for p in it {
+        let m = out.len();
+        let dt = if m > 1 {
+            (out.t[m - 1] - out.t[0]) / (m - 1) as f64
+        } else {
+            1e-3
+        };
+        let shift = out.t[m - 1] + dt - p.t[0];
+        for k in 0..p.len() {
+            out.push(
+                p.t[k] + shift,
+                p.q_at(k),
+                p.qd_at(k),
+                p.qdd_at(k),
+                p.tau_at(k),
+            );
+        }
+    }
+    out
+}
+
+/// The diagnosis from data files as a user gives them (CSV or MCAP, read by
+/// [`crate::io::load_trajectory`]): training files and validation files. Without validation
+/// files the last `holdout` fraction of the training data is held out.
+pub fn diagnose_files(
+    model: &Model,
+    data: &[std::path::PathBuf],
+    validate: &[std::path::PathBuf],
+    holdout: f64,
+    opts: &Options,
+) -> anyhow::Result<Diagnosis> {
+    if data.is_empty() {
+        anyhow::bail!("no data files given");
+    }
+    let load = |files: &[std::path::PathBuf]| -> anyhow::Result<Trajectory> {
+        let parts = files
+            .iter()
+            .map(|f| crate::io::load_trajectory(f, model))
+            .collect::<anyhow::Result<Vec<_>>>()?;
+        Ok(concatenate(parts))
+    };
+    let all = load(data)?;
+    let (train, val) = if validate.is_empty() {
+        if !(holdout > 0.0 && holdout < 1.0) {
+            anyhow::bail!("the held-out fraction {holdout} must lie strictly between 0 and 1");
+        }
+        let cut = ((1.0 - holdout) * all.len() as f64).round() as usize;
+        (all.slice(0..cut), all.slice(cut..all.len()))
+    } else {
+        (all, load(validate)?)
+    };
+    Ok(diagnose(model, &train, &val, opts)?)
 }

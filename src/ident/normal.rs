@@ -170,6 +170,39 @@ impl NormalEquations {
         Ok((ne.finish(), total))
     }
 
+    /// Finished normal equations from their sums (e.g. a sub-problem or a sum of blocks).
+    pub fn from_sums(
+        n: usize,
+        yty: DMatrix<f64>,
+        ytt: DVector<f64>,
+        tt: f64,
+        samples: usize,
+    ) -> Self {
+        let p = yty.ncols();
+        Self {
+            yty,
+            ytt,
+            tt,
+            samples,
+            n,
+            rows: DMatrix::zeros(0, p),
+            taus: DVector::zeros(0),
+            filled: 0,
+        }
+    }
+
+    /// The normal equations of the columns `cols` only (in that order).
+    pub fn select(&self, cols: &[usize]) -> Self {
+        let m = cols.len();
+        Self::from_sums(
+            self.n,
+            DMatrix::from_fn(m, m, |i, j| self.yty[(cols[i], cols[j])]),
+            DVector::from_fn(m, |i, _| self.ytt[cols[i]]),
+            self.tt,
+            self.samples,
+        )
+    }
+
     /// `Σ ‖Y θ − τ‖²` for parameters `theta`.
     pub fn residual_sum_of_squares(&self, theta: &DVector<f64>) -> f64 {
         (theta.dot(&(&self.yty * theta)) - 2.0 * theta.dot(&self.ytt) + self.tt).max(0.0)

@@ -1,0 +1,222 @@
+//! `physid diagnose` and `physid blind`.
+
+use anyhow::Context as _;
+use physid::diagnose::{self, blind, Diagnosis};
+use physid::ident::ConstraintSet;
+use physid::model::Model;
+use rayon::prelude::*;
+use std::path::{Path, PathBuf};
+
+fn print_text(d: &Diagnosis) {
+    println!(
+        "robot {} ({} joints), {} training / {} validation samples, constraints {}",
+        d.robot,
+        d.joints.len(),
+        d.samples[0],
+        d.samples[1],
+        d.constraints.name()
+    );
+    println!("\nWHERE (nominal model, validation residual)");
+    for (j, name) in d.joints.iter().enumerate() {
+        let sp = &d.spectra[j];
+        println!(
+            "  {name:<12} RMS {:.3} N m; spectrum peak {:.2} Hz; coherence {}",
+            d.breakdown.rms[j],
+            sp.peak_frequency,
+            sp.signals
+                .iter()
+                .zip(&sp.peak_coherence)
+                .map(|(s, (c, f))| format!("{s} {c:.2}@{f:.1}Hz"))
+                .collect::<Vec<_>>()
+                .join(", ")
+        );
+        let mut top: Vec<_> = d
+            .breakdown
+            .regimes
+            .iter()
+            .filter(|r| &r.joint == name && r.samples > 0)
+            .collect();
+        top.sort_by(|a, b| b.rms.total_cmp(&a.rms));
+        for r in top.iter().take(3) {
+            println!(
+                "      {:<44} RMS {:.3} ({} samples, {:.0} % of the energy)",
+                r.regime,
+                r.rms,
+                r.samples,
+                100.0 * r.share
+            );
+        }
+    }
+    println!(
+        "\nWHICH (cross-validated, {} blocks; nominal CV RMS {:.3} N m)",
+        5, d.selection.nominal_cv_rms
+    );
+    for (i, s) in d.selection.steps.iter().enumerate() {
+        println!(
+            "  step {}: {} (CV RMS {:.3} -> {:.3}, -{:.1} % mean square){}{}",
+            i + 1,
+            s.kind.name(),
+            s.cv_rms_before,
+            s.cv_rms_after,
+            100.0 * s.reduction,
+            if s.ambiguous_with.is_empty() {
+                String::new()
+            } else {
+                format!(
+                    "; AMBIGUOUS with {}",
+                    s.ambiguous_with
+                        .iter()
+                        .map(|k| k.name())
+                        .collect::<Vec<_>>()
+                        .join(", ")
+                )
+            },
+            if s.also_fit.is_empty() {
+                String::new()
+            } else {
+                format!(
+                    "; also fit (more terms): {}",
+                    s.also_fit
+                        .iter()
+                        .map(|k| k.name())
+                        .collect::<Vec<_>>()
+                        .join(", ")
+                )
+            }
+        );
+    }
+    println!("  stop: {}", d.selection.stop);
+    for e in &d.effects {
+        println!(
+            "  {}{}: {}",
+            e.kind.name(),
+            if e.param != 0.0 {
+                format!(" ({})", e.param)
+            } else {
+                String::new()
+            },
+            e.magnitude_name
+        );
+        for m in &e.magnitudes {
+            println!(
+                "      {:<12} {:>11.4e} ± {:.1e} {}{}",
+                m.joint,
+                m.value,
+                m.se,
+                m.unit,
+                if m.identifiable < physid::diagnose::blind::IDENTIFIABLE {
+                    " (not identifiable: absorbed by the inertial parameters)"
+                } else {
+                    ""
+                }
+            );
+        }
+        if let Some(s) = &e.separate_by {
+            println!("      to separate: {s}");
+        }
+    }
+    println!("\nHOW FAR (validation RMS, N m)");
+    for g in &d.gap {
+        println!(
+            "  {:<12} {:.3} -> {} (noise floor {:.3}, {:.0} % of the gap closed)",
+            g.joint,
+            g.nominal,
+            g.after
+                .iter()
+                .map(|v| format!("{v:.3}"))
+                .collect::<Vec<_>>()
+                .join(" -> "),
+            g.noise_floor,
+            100.0 * g.gap_closed
+        );
+    }
+    println!("\n{}", d.summary);
+}
+
+/// `physid diagnose`.
+pub fn run(
+    model: &Model,
+    data: &[PathBuf],
+    validate: &[PathBuf],
+    constraints: ConstraintSet,
+    holdout: f64,
+    json: bool,
+    report: Option<&Path>,
+) -> anyhow::Result<()> {
+    let opts = diagnose::Options {
+        constraints,
+        ..Default::default()
+    };
+    let d = diagnose::diagnose_files(model, data, validate, holdout, &opts)?;
+    if let Some(dir) = report {
+        diagnose::report::write(dir, &d)
+            .with_context(|| format!("writing the report to {}", dir.display()))?;
+        eprintln!("wrote the report to {}", dir.display());
+    }
+    if json {
+        println!("{}", serde_json::to_string_pretty(&d)?);
+    } else {
+        print_text(&d);
+    }
+    Ok(())
+}
+
+/// `physid blind`.
+pub fn blind(
+    cases: usize,
+    seed: u64,
+    scenario: &Path,
+    out: Option<&Path>,
+    threads: usize,
+) -> anyhow::Result<()> {
+    anyhow::ensure!(cases > 0, "--cases must be at least 1");
+    let (base, model, _) = physid::io::load_scenario(scenario)?;
+    let work = tempfile::tempdir()?;
+    let opts = diagnose::Options::default();
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(threads)
+        .build()?;
+    let start = std::time::Instant::now();
+    let results: Vec<blind::CaseResult> = pool.install(|| {
+        (0..cases)
+            .into_par_iter()
+            .map(|i| {
+                let r = blind::run_case(
+                    i,
+                    seed,
+                    &base,
+                    &model,
+                    &opts,
+                    &work.path().join(format!("case{i}")),
+                );
+                if let Ok(r) = &r {
+                    eprintln!(
+                        "case {:>3} {:<14} injected [{}] visible {:.3} found [{}] {:?} top1 {:?} mag {:?} rms {:.3}->{:.3} floor {:.3} ({:.1} s)",
+                        r.case,
+                        format!("{:?}", r.category),
+                        r.injected.join(", "),
+                        r.visible_gap,
+                        r.found.join(", "),
+                        r.verdict,
+                        r.top1,
+                        r.magnitude_error.map(|m| (m * 1000.0).round() / 1000.0),
+                        r.rms[0],
+                        r.rms[1],
+                        r.rms[2],
+                        r.seconds
+                    );
+                }
+                r
+            })
+            .collect::<anyhow::Result<Vec<_>>>()
+    })?;
+    let scores = blind::score(&results);
+    let wall = start.elapsed().as_secs_f64();
+    println!("{}", serde_json::to_string_pretty(&scores)?);
+    eprintln!("{cases} cases in {wall:.1} s");
+    if let Some(dir) = out {
+        diagnose::report::write_blind(dir, &results, &scores, seed, scenario, wall)?;
+        eprintln!("wrote {}", dir.display());
+    }
+    Ok(())
+}

@@ -1,0 +1,349 @@
+//! The effect library, identification side: each unmodelled effect offered to the
+//! identification as extra regressor columns `E_k` next to the rigid-body regressor `Y_k`, so
+//! that `τ_k ≈ Y_k θ + E_k c` (equations and units in `docs/diagnose.md`). Linear effects are
+//! columns of the data; nonlinear ones are linearized about the nominal model `θ̂₀` (gain, tilt,
+//! compliance, delay) or searched over a one-dimensional grid (Stribeck velocity, cogging
+//! harmonic), each grid point a [`Variant`].
+//!
+//! Sign convention: a coefficient is the physical magnitude of the injected effect
+//! (`crate::sim::effects`), e.g. the columns of an acting friction are `−∂τ_effect/∂c` because the
+//! motor torque must overcome it.
+
+use crate::dynamics::{regressor, Data};
+use crate::io::samples::Trajectory;
+use crate::model::Model;
+use nalgebra::{DMatrix, DVector, Vector3};
+use serde::Serialize;
+
+/// An effect kind the diagnosis can offer.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize, PartialOrd, Ord)]
+#[serde(rename_all = "snake_case")]
+pub enum Kind {
+    /// Logged `τ += o` (N m per joint).
+    TorqueOffset,
+    /// Logged `τ ×= 1 + δ` (per joint; a common δ is a scale of all inertial parameters).
+    TorqueGain,
+    /// Logged torque lags the kinematics by `d` (s, one for all joints).
+    TimeDelay,
+    /// `τ_acting = −k (q − q₀)` (N m/rad, rad per joint).
+    Spring,
+    /// `τ_acting = −F_s exp(−(q̇/v)²) sign(q̇)` (N m per joint; `v` searched).
+    Stribeck,
+    /// `τ_acting = −δ max(0, sign(q̇))` (N m per joint).
+    AsymmetricCoulomb,
+    /// `τ_acting = −μ |τ| sign(q̇)` (per joint; `|τ|` from the nominal prediction).
+    LoadDependentFriction,
+    /// `τ_acting = −A sin(h N q + φ)` (N m per joint; harmonic `h` searched).
+    Cogging,
+    /// Reflected rotor inertia `I_a q̈` left out of the model (kg m² per joint).
+    RotorInertia,
+    /// Gravity misaligned by a small base tilt (m/s² of the gravity vector's perpendicular
+    /// components; reported as an angle).
+    Tilt,
+    /// Compliant transmission seen by a motor-side encoder: `q_logged = q + κ τ`
+    /// (κ = 1/k, rad/(N m) per joint).
+    Compliance,
+}
+
+impl Kind {
+    /// Every kind, in report order.
+    pub const ALL: [Kind; 11] = [
+        Kind::TorqueOffset,
+        Kind::TorqueGain,
+        Kind::TimeDelay,
+        Kind::Spring,
+        Kind::Stribeck,
+        Kind::AsymmetricCoulomb,
+        Kind::LoadDependentFriction,
+        Kind::Cogging,
+        Kind::RotorInertia,
+        Kind::Tilt,
+        Kind::Compliance,
+    ];
+
+    /// snake_case name (as in scenario files).
+    pub fn name(&self) -> &'static str {
+        match self {
+            Kind::TorqueOffset => "torque_offset",
+            Kind::TorqueGain => "torque_gain",
+            Kind::TimeDelay => "time_delay",
+            Kind::Spring => "spring",
+            Kind::Stribeck => "stribeck",
+            Kind::AsymmetricCoulomb => "asymmetric_coulomb",
+            Kind::LoadDependentFriction => "load_dependent_friction",
+            Kind::Cogging => "cogging",
+            Kind::RotorInertia => "rotor_inertia",
+            Kind::Tilt => "tilt",
+            Kind::Compliance => "compliance",
+        }
+    }
+
+    /// Columns for `n` joints.
+    pub fn columns(&self, n: usize) -> usize {
+        match self {
+            Kind::TimeDelay => 1,
+            Kind::Tilt => 2,
+            Kind::Spring | Kind::Cogging => 2 * n,
+            _ => n,
+        }
+    }
+
+    /// The magnitude's name and unit, per joint (or for the whole robot).
+    pub fn magnitude(&self) -> (&'static str, &'static str) {
+        match self {
+            Kind::TorqueOffset => ("offset", "N m"),
+            Kind::TorqueGain => ("gain error relative to the median joint", "-"),
+            Kind::TimeDelay => ("delay", "s"),
+            Kind::Spring => ("stiffness", "N m/rad"),
+            Kind::Stribeck => ("static excess F_s", "N m"),
+            Kind::AsymmetricCoulomb => ("forward excess delta", "N m"),
+            Kind::LoadDependentFriction => ("coefficient mu", "-"),
+            Kind::Cogging => ("amplitude", "N m"),
+            Kind::RotorInertia => ("reflected inertia", "kg m^2"),
+            Kind::Tilt => ("tilt angle", "rad"),
+            Kind::Compliance => ("compliance 1/k", "rad/(N m)"),
+        }
+    }
+
+    /// The grid of the one-dimensional search, if any: Stribeck velocities (rad/s, ratio √2)
+    /// and cogging harmonics (per rotor revolution).
+    pub fn grid(&self) -> Vec<f64> {
+        match self {
+            Kind::Stribeck => (0..10).map(|i| 0.04 * 2f64.powf(i as f64 / 2.0)).collect(),
+            Kind::Cogging => (1..=8).map(f64::from).collect(),
+            _ => vec![0.0],
+        }
+    }
+}
+
+/// A consumer of augmented rows: `(sample, Z_k, τ_k)`.
+pub type RowSink<'f> = dyn FnMut(usize, &DMatrix<f64>, &[f64]) + 'f;
+
+/// An effect kind at one point of its grid (`param` = Stribeck velocity or cogging harmonic).
+#[derive(Clone, Copy, Debug, PartialEq, Serialize)]
+pub struct Variant {
+    /// The kind.
+    pub kind: Kind,
+    /// The grid value (0 for kinds without one).
+    pub param: f64,
+}
+
+/// Every variant of `kinds`.
+pub fn variants(kinds: &[Kind]) -> Vec<Variant> {
+    kinds
+        .iter()
+        .flat_map(|&kind| {
+            kind.grid()
+                .into_iter()
+                .map(move |param| Variant { kind, param })
+        })
+        .collect()
+}
+
+/// What the columns of one data set need besides the samples: the nominal prediction `Y θ̂₀`
+/// and its time derivatives, computed once over the whole trajectory.
+pub struct Context<'a> {
+    model: &'a Model,
+    theta0: DVector<f64>,
+    /// `θ̂₀` without Coulomb friction (smooth in time), for the linearized kinematic effects.
+    theta_smooth: DVector<f64>,
+    /// `Y_k θ̂₀`, sample-major.
+    pred: Vec<f64>,
+    /// Its first derivative (N m/s), central differences.
+    pred_d: Vec<f64>,
+    /// Smooth prediction's first and second derivatives.
+    smooth_d: Vec<f64>,
+    smooth_dd: Vec<f64>,
+    /// Two unit vectors perpendicular to gravity (the tilt directions).
+    perp: [Vector3<f64>; 2],
+    gear: Vec<f64>,
+    min_speed: f64,
+}
+
+fn derivative(x: &[f64], t: &[f64], n: usize) -> Vec<f64> {
+    let m = t.len();
+    let mut out = vec![0.0; x.len()];
+    if m < 2 {
+        return out;
+    }
+    for k in 0..m {
+        let (a, b) = (k.saturating_sub(1), (k + 1).min(m - 1));
+        let dt = t[b] - t[a];
+        for j in 0..n {
+            out[k * n + j] = (x[b * n + j] - x[a * n + j]) / dt;
+        }
+    }
+    out
+}
+
+impl<'a> Context<'a> {
+    /// The context of trajectory `tr` (with q̈) for nominal parameters `theta0` (the model's
+    /// layout, no extra columns); joints slower than `min_speed` (rad/s) are left out.
+    pub fn new(model: &'a Model, theta0: &DVector<f64>, tr: &Trajectory, min_speed: f64) -> Self {
+        let n = model.dof();
+        let l = model.layout();
+        let theta0 = theta0.rows(0, l.len).into_owned();
+        let mut theta_smooth = theta0.clone();
+        for j in 0..n {
+            theta_smooth[l.coulomb_col + j] = 0.0;
+        }
+        let mut pred = Vec::with_capacity(tr.len() * n);
+        let mut smooth = Vec::with_capacity(tr.len() * n);
+        crate::ident::normal::for_each_regressor(model, tr, 0..tr.len(), &mut |_, y| {
+            pred.extend((y * &theta0).iter());
+            smooth.extend((y * &theta_smooth).iter());
+        });
+        let pred_d = derivative(&pred, &tr.t, n);
+        let smooth_d = derivative(&smooth, &tr.t, n);
+        let smooth_dd = derivative(&smooth_d, &tr.t, n);
+        let g = model.gravity.try_normalize(1e-12).unwrap_or(-Vector3::z());
+        let a = if g.x.abs() < 0.9 {
+            Vector3::x()
+        } else {
+            Vector3::y()
+        };
+        let u1 = (a - g * g.dot(&a)).normalize();
+        let u2 = g.cross(&u1);
+        let gear = model
+            .bodies
+            .iter()
+            .map(|b| b.rotor.as_ref().map_or(1.0, |r| r.gear_ratio))
+            .collect();
+        Self {
+            model,
+            theta0,
+            theta_smooth,
+            pred,
+            pred_d,
+            smooth_d,
+            smooth_dd,
+            perp: [u1, u2],
+            gear,
+            min_speed,
+        }
+    }
+
+    /// Whether a joint moving at `qd` (rad/s) is left out of the fit.
+    pub fn masked(&self, qd: f64) -> bool {
+        qd.abs() < self.min_speed
+    }
+
+    /// The two unit vectors perpendicular to gravity along which a tilt is estimated.
+    pub fn tilt_directions(&self) -> [Vector3<f64>; 2] {
+        self.perp
+    }
+
+    /// Calls `f(k, Z_k, τ_k)` for every sample `k` in `range` with `Z_k = [Y_k | E_k]`, the
+    /// effect columns of `variants` in order after the model's. Rows of joints slower than
+    /// `min_speed` (rad/s) are zero in `Z_k` and `τ_k` (friction near zero speed is outside the
+    /// model); [`Context::masked`] tells which.
+    pub fn for_each_row(
+        &self,
+        tr: &Trajectory,
+        range: std::ops::Range<usize>,
+        variants: &[Variant],
+        f: &mut RowSink,
+    ) {
+        let model = self.model;
+        let n = model.dof();
+        let p0 = model.layout().len;
+        let extra: usize = variants.iter().map(|v| v.kind.columns(n)).sum();
+        let mut z = DMatrix::zeros(n, p0 + extra);
+        let needs = |k: Kind| variants.iter().any(|v| v.kind == k);
+        let gravity_models: Vec<Model> = if needs(Kind::Tilt) {
+            self.perp
+                .iter()
+                .map(|u| model.clone().with_gravity(*u))
+                .collect()
+        } else {
+            vec![]
+        };
+        let mut gdata: Vec<Data> = gravity_models.iter().map(Data::new).collect();
+        let mut data = Data::new(model);
+        let mut yg = DMatrix::zeros(n, p0);
+        let mut y = DMatrix::zeros(n, p0);
+        let mut tau_m = vec![0.0; n];
+        let zeros = vec![0.0; n];
+        let sign = crate::dynamics::sign;
+        for k in range {
+            let (q, qd, qdd, tau) = (
+                tr.q_at(k),
+                tr.qd_at(k),
+                tr.qdd_at(k).expect("q̈ present"),
+                tr.tau_at(k),
+            );
+            z.fill(0.0);
+            regressor(model, &mut data, q, qd, qdd, &mut y);
+            z.columns_mut(0, p0).copy_from(&y);
+            let mut c = p0;
+            for v in variants {
+                match v.kind {
+                    Kind::TorqueOffset => (0..n).for_each(|j| z[(j, c + j)] = 1.0),
+                    Kind::TorqueGain => (0..n).for_each(|j| z[(j, c + j)] = self.pred[k * n + j]),
+                    Kind::TimeDelay => (0..n).for_each(|j| z[(j, c)] = -self.pred_d[k * n + j]),
+                    Kind::Spring => (0..n).for_each(|j| {
+                        z[(j, c + j)] = q[j];
+                        z[(j, c + n + j)] = 1.0;
+                    }),
+                    Kind::Stribeck => (0..n).for_each(|j| {
+                        z[(j, c + j)] = (-(qd[j] / v.param).powi(2)).exp() * sign(qd[j])
+                    }),
+                    Kind::AsymmetricCoulomb => {
+                        (0..n).for_each(|j| z[(j, c + j)] = sign(qd[j]).max(0.0))
+                    }
+                    Kind::LoadDependentFriction => {
+                        // The predicted torque, not the measured one: a column carrying the
+                        // measurement's own noise would "explain" it.
+                        (0..n)
+                            .for_each(|j| z[(j, c + j)] = self.pred[k * n + j].abs() * sign(qd[j]))
+                    }
+                    Kind::Cogging => (0..n).for_each(|j| {
+                        let a = v.param * self.gear[j] * q[j];
+                        z[(j, c + j)] = a.sin();
+                        z[(j, c + n + j)] = a.cos();
+                    }),
+                    Kind::RotorInertia => (0..n).for_each(|j| z[(j, c + j)] = qdd[j]),
+                    Kind::Tilt => {
+                        for (i, (gm, gd)) in gravity_models.iter().zip(gdata.iter_mut()).enumerate()
+                        {
+                            regressor(gm, gd, q, &zeros, &zeros, &mut yg);
+                            let col = &yg * &self.theta0;
+                            (0..n).for_each(|j| z[(j, c + i)] = col[j]);
+                        }
+                    }
+                    Kind::Compliance => {
+                        // −d/dκ_j ID(q − κ_j τ_j e_j, q̇ − κ_j τ̇_j e_j, q̈ − κ_j τ̈_j e_j).
+                        let eps = 1e-7;
+                        for j in 0..n {
+                            let shift = [
+                                self.pred[k * n + j],
+                                self.smooth_d[k * n + j],
+                                self.smooth_dd[k * n + j],
+                            ];
+                            let mut at = |s: f64| {
+                                let (mut a, mut b, mut cc) =
+                                    (q.to_vec(), qd.to_vec(), qdd.to_vec());
+                                a[j] -= s * shift[0];
+                                b[j] -= s * shift[1];
+                                cc[j] -= s * shift[2];
+                                regressor(model, &mut data, &a, &b, &cc, &mut yg);
+                                &yg * &self.theta_smooth
+                            };
+                            let d = (at(eps) - at(-eps)) / (2.0 * eps);
+                            (0..n).for_each(|i| z[(i, c + j)] = d[i]);
+                        }
+                    }
+                }
+                c += v.kind.columns(n);
+            }
+            tau_m.copy_from_slice(tau);
+            for j in 0..n {
+                if self.masked(qd[j]) {
+                    z.row_mut(j).fill(0.0);
+                    tau_m[j] = 0.0;
+                }
+            }
+            f(k, &z, &tau_m);
+        }
+    }
+}

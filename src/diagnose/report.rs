@@ -1,0 +1,437 @@
+//! Reports: a diagnosis as Markdown, JSON and SVG plots (residual by regime, residual spectrum
+//! before and after, validation RMS per joint before and after each effect); the blind
+//! benchmark's case table (polars: CSV, Parquet, Markdown) and scores.
+
+use super::blind::{CaseResult, Scores};
+use super::Diagnosis;
+use crate::experiment::tables;
+use plotters::prelude::*;
+use polars::prelude::*;
+use std::path::Path;
+
+const COLOURS: [(u8, u8, u8); 8] = [
+    (31, 119, 180),
+    (214, 39, 40),
+    (44, 160, 44),
+    (148, 103, 189),
+    (255, 127, 14),
+    (23, 190, 207),
+    (140, 86, 75),
+    (127, 127, 127),
+];
+
+fn colour(k: usize) -> RGBColor {
+    let (r, g, b) = COLOURS[k % COLOURS.len()];
+    RGBColor(r, g, b)
+}
+
+fn plot_err(e: impl std::fmt::Display) -> anyhow::Error {
+    anyhow::anyhow!("plot: {e}")
+}
+
+/// Grouped bars: one group per label, one bar per series.
+fn bars(
+    path: &Path,
+    title: &str,
+    ylabel: &str,
+    labels: &[String],
+    series: &[(String, Vec<f64>)],
+) -> anyhow::Result<()> {
+    let ymax = series
+        .iter()
+        .flat_map(|(_, v)| v.iter().copied())
+        .filter(|v| v.is_finite())
+        .fold(0.0f64, f64::max)
+        .max(1e-9);
+    let groups = labels.len();
+    let per = series.len().max(1);
+    let mut svg = String::new();
+    {
+        let width = (140 + 60 * groups * per).clamp(640, 1400) as u32;
+        let root = SVGBackend::with_string(&mut svg, (width, 620)).into_drawing_area();
+        root.fill(&WHITE).map_err(plot_err)?;
+        let mut chart = ChartBuilder::on(&root)
+            .caption(title, ("sans-serif", 18))
+            .margin(15)
+            .x_label_area_size(40)
+            .y_label_area_size(70)
+            .build_cartesian_2d(0.0..groups as f64, -0.45 * ymax..ymax * 1.2)
+            .map_err(plot_err)?;
+        chart
+            .configure_mesh()
+            .disable_x_mesh()
+            .x_labels(0)
+            .y_desc(ylabel)
+            .draw()
+            .map_err(plot_err)?;
+        // Group labels inside the plot, below the zero line, written downwards.
+        let style = ("sans-serif", 12)
+            .into_font()
+            .transform(FontTransform::Rotate90)
+            .color(&BLACK);
+        chart
+            .draw_series(
+                labels.iter().enumerate().map(|(g, l)| {
+                    Text::new(l.clone(), (g as f64 + 0.45, -0.01 * ymax), style.clone())
+                }),
+            )
+            .map_err(plot_err)?;
+        let w = 0.8 / per as f64;
+        for (s, (name, vals)) in series.iter().enumerate() {
+            let c = colour(s);
+            chart
+                .draw_series(vals.iter().enumerate().map(|(g, v)| {
+                    let x0 = g as f64 + 0.1 + s as f64 * w;
+                    Rectangle::new([(x0, 0.0), (x0 + w * 0.9, v.max(0.0))], c.filled())
+                }))
+                .map_err(plot_err)?
+                .label(name.clone())
+                .legend(move |(x, y)| Rectangle::new([(x, y - 5), (x + 12, y + 5)], c.filled()));
+        }
+        chart
+            .configure_series_labels()
+            .border_style(BLACK)
+            .background_style(WHITE.mix(0.85))
+            .position(SeriesLabelPosition::UpperRight)
+            .draw()
+            .map_err(plot_err)?;
+        root.present().map_err(plot_err)?;
+    }
+    crate::io::write_atomic(path, svg.as_bytes())?;
+    Ok(())
+}
+
+/// Residual PSD per joint, before (solid) and after (thin) the selected effects, log-log.
+fn spectrum_plot(path: &Path, d: &Diagnosis) -> anyhow::Result<()> {
+    let pos = |v: f64| v.is_finite() && v > 0.0;
+    let all: Vec<(f64, f64)> = d
+        .spectra
+        .iter()
+        .chain(&d.spectra_after)
+        .flat_map(|s| s.frequency.iter().copied().zip(s.psd.iter().copied()))
+        .filter(|(f, p)| pos(*f) && pos(*p))
+        .collect();
+    if all.is_empty() {
+        return Ok(());
+    }
+    let fmin = all.iter().map(|a| a.0).fold(f64::INFINITY, f64::min);
+    let fmax = all.iter().map(|a| a.0).fold(0.0, f64::max);
+    let pmin = all.iter().map(|a| a.1).fold(f64::INFINITY, f64::min);
+    let pmax = all.iter().map(|a| a.1).fold(0.0, f64::max);
+    let mut svg = String::new();
+    {
+        let root = SVGBackend::with_string(&mut svg, (900, 540)).into_drawing_area();
+        root.fill(&WHITE).map_err(plot_err)?;
+        let mut chart = ChartBuilder::on(&root)
+            .caption(
+                "validation residual spectrum: nominal (thick), with effects (thin)",
+                ("sans-serif", 18),
+            )
+            .margin(15)
+            .x_label_area_size(45)
+            .y_label_area_size(80)
+            .build_cartesian_2d(
+                (fmin..fmax).log_scale(),
+                (pmin * 0.5..pmax * 2.0).log_scale(),
+            )
+            .map_err(plot_err)?;
+        chart
+            .configure_mesh()
+            .x_desc("frequency (Hz)")
+            .y_desc("PSD (N^2 m^2 / Hz)")
+            .draw()
+            .map_err(plot_err)?;
+        for (j, (a, b)) in d.spectra.iter().zip(&d.spectra_after).enumerate() {
+            let c = colour(j);
+            let pts = |s: &super::spectrum::Spectrum| -> Vec<(f64, f64)> {
+                s.frequency
+                    .iter()
+                    .copied()
+                    .zip(s.psd.iter().copied())
+                    .filter(|(f, p)| pos(*f) && pos(*p))
+                    .collect()
+            };
+            chart
+                .draw_series(LineSeries::new(pts(a), c.stroke_width(2)))
+                .map_err(plot_err)?
+                .label(a.joint.clone())
+                .legend(move |(x, y)| {
+                    PathElement::new(vec![(x, y), (x + 20, y)], c.stroke_width(2))
+                });
+            chart
+                .draw_series(LineSeries::new(pts(b), c.mix(0.6).stroke_width(1)))
+                .map_err(plot_err)?;
+        }
+        chart
+            .configure_series_labels()
+            .border_style(BLACK)
+            .background_style(WHITE.mix(0.85))
+            .position(SeriesLabelPosition::UpperRight)
+            .draw()
+            .map_err(plot_err)?;
+        root.present().map_err(plot_err)?;
+    }
+    crate::io::write_atomic(path, svg.as_bytes())?;
+    Ok(())
+}
+
+/// The Markdown report.
+pub fn markdown(d: &Diagnosis) -> String {
+    let mut s = format!(
+        "# Diagnosis of {}\n\n**{}**\n\n{} joints; {} training and {} validation samples; nominal model: constraint set `{}` (constraints hold: {}).\n\n",
+        d.robot,
+        d.summary,
+        d.joints.len(),
+        d.samples[0],
+        d.samples[1],
+        d.constraints.name(),
+        d.nominal_constraints_hold
+    );
+    s += "## Where\n\nValidation residual of the nominal model per joint and regime (RMS in N m, share of the joint's residual energy). Plot: `where.svg`; spectrum: `spectrum.svg`.\n\n| joint | regime | samples | RMS | share |\n|---|---|---|---|---|\n";
+    for r in &d.breakdown.regimes {
+        s += &format!(
+            "| {} | {} | {} | {:.3} | {:.2} |\n",
+            r.joint, r.regime, r.samples, r.rms, r.share
+        );
+    }
+    s += "\n| joint | PSD peak (Hz) | peak coherence with q, qd, qdd, sin(N q) |\n|---|---|---|\n";
+    for sp in &d.spectra {
+        s += &format!(
+            "| {} | {:.2} | {} |\n",
+            sp.joint,
+            sp.peak_frequency,
+            sp.peak_coherence
+                .iter()
+                .map(|(c, f)| format!("{c:.2} @ {f:.1} Hz"))
+                .collect::<Vec<_>>()
+                .join(", ")
+        );
+    }
+    s += &format!(
+        "\n## Which\n\nCross-validated forward selection (nominal CV RMS {:.3} N m).\n\n",
+        d.selection.nominal_cv_rms
+    );
+    for (i, st) in d.selection.steps.iter().enumerate() {
+        s += &format!(
+            "### Step {}: `{}` (CV RMS {:.3} → {:.3} N m, −{:.1} % mean square)\n\n",
+            i + 1,
+            st.kind.name(),
+            st.cv_rms_before,
+            st.cv_rms_after,
+            100.0 * st.reduction
+        );
+        if !st.ambiguous_with.is_empty() {
+            s += &format!(
+                "**Ambiguous** with {}: the data fit them equally well.\n\n",
+                st.ambiguous_with
+                    .iter()
+                    .map(|k| format!("`{}`", k.name()))
+                    .collect::<Vec<_>>()
+                    .join(", ")
+            );
+        }
+        s +=
+            "| kind | grid value | CV RMS | reduction | blocks improved |\n|---|---|---|---|---|\n";
+        for sc in &st.scores {
+            s += &format!(
+                "| {} | {} | {:.4} | {:.1} % | {} |\n",
+                sc.kind.name(),
+                sc.param,
+                sc.cv_rms,
+                100.0 * sc.reduction,
+                sc.blocks_improved
+            );
+        }
+        s += "\n";
+    }
+    s += &format!("Stopped: {}.\n\n", d.selection.stop);
+    for e in &d.effects {
+        s += &format!(
+            "### `{}`{}: {}\n\n| joint | value | std. error | unit | identifiable |\n|---|---|---|---|---|\n",
+            e.kind.name(),
+            if e.param != 0.0 {
+                format!(" at {}", e.param)
+            } else {
+                String::new()
+            },
+            e.magnitude_name
+        );
+        for m in &e.magnitudes {
+            s += &format!(
+                "| {} | {:.4e} | {:.1e} | {} | {:.2} |\n",
+                m.joint, m.value, m.se, m.unit, m.identifiable
+            );
+        }
+        if let Some(sep) = &e.separate_by {
+            s += &format!("\nTo separate them: {sep}.\n");
+        }
+        s += "\n";
+    }
+    s += "## How far\n\nValidation RMS per joint (N m), nominal then after each effect (cumulative); plot `how_far.svg`.\n\n| joint | nominal |";
+    for st in &d.selection.steps {
+        s += &format!(" + {} |", st.kind.name());
+    }
+    s += " noise floor | gap closed |\n|---|---|";
+    s += &"---|".repeat(d.selection.steps.len() + 2);
+    s += "\n";
+    for g in &d.gap {
+        s += &format!("| {} | {:.3} |", g.joint, g.nominal);
+        for a in &g.after {
+            s += &format!(" {a:.3} |");
+        }
+        s += &format!(" {:.3} | {:.0} % |\n", g.noise_floor, 100.0 * g.gap_closed);
+    }
+    s += &format!(
+        "| all | {} | {:.3} | {:.0} % |\n",
+        d.overall
+            .iter()
+            .map(|v| format!("{v:.3}"))
+            .collect::<Vec<_>>()
+            .join(" | "),
+        d.noise_floor,
+        100.0 * d.gap_closed
+    );
+    s
+}
+
+/// Writes `report.json`, `report.md`, `where.svg`, `spectrum.svg` and `how_far.svg` into `dir`.
+pub fn write(dir: &Path, d: &Diagnosis) -> anyhow::Result<()> {
+    std::fs::create_dir_all(dir)?;
+    crate::io::write_atomic(
+        &dir.join("report.json"),
+        serde_json::to_string_pretty(d)?.as_bytes(),
+    )?;
+    crate::io::write_atomic(&dir.join("report.md"), markdown(d).as_bytes())?;
+    // Where: RMS per regime kind (rows) and joint (series), regimes in the breakdown's order.
+    let mut regimes: Vec<String> = vec![];
+    for r in &d.breakdown.regimes {
+        let short = r.regime.split(" (").next().unwrap_or(&r.regime).to_string();
+        if !regimes.contains(&short) {
+            regimes.push(short);
+        }
+    }
+    let series: Vec<(String, Vec<f64>)> = d
+        .joints
+        .iter()
+        .map(|j| {
+            let v = regimes
+                .iter()
+                .map(|name| {
+                    d.breakdown
+                        .regimes
+                        .iter()
+                        .find(|r| &r.joint == j && r.regime.starts_with(name.as_str()))
+                        .map_or(0.0, |r| r.rms)
+                })
+                .collect();
+            (j.clone(), v)
+        })
+        .collect();
+    let short: Vec<String> = regimes
+        .iter()
+        .map(|r| r.replace("velocity", "vel.").replace("quartile", "q."))
+        .collect();
+    bars(
+        &dir.join("where.svg"),
+        "nominal validation residual by motion regime",
+        "RMS (N m)",
+        &short,
+        &series,
+    )?;
+    spectrum_plot(&dir.join("spectrum.svg"), d)?;
+    let mut steps = vec![(
+        "nominal".to_string(),
+        d.gap.iter().map(|g| g.nominal).collect(),
+    )];
+    for (i, st) in d.selection.steps.iter().enumerate() {
+        steps.push((
+            format!("+ {}", st.kind.name()),
+            d.gap.iter().map(|g| g.after[i]).collect(),
+        ));
+    }
+    steps.push((
+        "noise floor".into(),
+        d.gap.iter().map(|g| g.noise_floor).collect(),
+    ));
+    bars(
+        &dir.join("how_far.svg"),
+        "validation RMS per joint: before and after each effect",
+        "RMS (N m)",
+        &d.joints,
+        &steps,
+    )?;
+    Ok(())
+}
+
+/// The case table as a polars frame.
+pub fn case_table(results: &[CaseResult]) -> PolarsResult<DataFrame> {
+    let opt_bool = |v: Option<bool>| v.map(|b| if b { "yes" } else { "no" }).unwrap_or("");
+    df!(
+        "case" => results.iter().map(|r| r.case as u32).collect::<Vec<_>>(),
+        "category" => results.iter().map(|r| format!("{:?}", r.category).to_lowercase()).collect::<Vec<_>>(),
+        "injected" => results.iter().map(|r| r.injected.join(" + ")).collect::<Vec<_>>(),
+        "visible_gap" => results.iter().map(|r| r.visible_gap).collect::<Vec<_>>(),
+        "found" => results.iter().map(|r| r.found.join(" + ")).collect::<Vec<_>>(),
+        "verdict" => results.iter().map(|r| format!("{:?}", r.verdict)).collect::<Vec<_>>(),
+        "top1" => results.iter().map(|r| opt_bool(r.top1)).collect::<Vec<_>>(),
+        "both_found" => results.iter().map(|r| opt_bool(r.both_found)).collect::<Vec<_>>(),
+        "magnitude_error" => results.iter().map(|r| r.magnitude_error).collect::<Vec<_>>(),
+        "gap_closed" => results.iter().map(|r| r.gap_closed).collect::<Vec<_>>(),
+        "rms_before" => results.iter().map(|r| r.rms[0]).collect::<Vec<_>>(),
+        "rms_after" => results.iter().map(|r| r.rms[1]).collect::<Vec<_>>(),
+        "noise_floor" => results.iter().map(|r| r.rms[2]).collect::<Vec<_>>(),
+    )
+}
+
+/// Writes the blind benchmark's case table (CSV, Parquet, Markdown with the scores) and
+/// `scores.json` into `dir`.
+pub fn write_blind(
+    dir: &Path,
+    results: &[CaseResult],
+    scores: &Scores,
+    seed: u64,
+    scenario: &Path,
+    wall: f64,
+) -> anyhow::Result<()> {
+    std::fs::create_dir_all(dir)?;
+    let mut df = case_table(results)?;
+    tables::write_csv(&dir.join("cases.csv"), &mut df)?;
+    tables::write_parquet(&dir.join("cases.parquet"), &mut df)?;
+    // Per injected kind (single cases): count, top-1, median magnitude error.
+    let per_kind = df
+        .clone()
+        .lazy()
+        .filter(col("category").eq(lit("single")))
+        .group_by([col("injected")])
+        .agg([
+            len().alias("cases"),
+            col("top1")
+                .eq(lit("yes"))
+                .cast(DataType::Float64)
+                .mean()
+                .alias("top1"),
+            col("magnitude_error")
+                .median()
+                .alias("median_magnitude_error"),
+            col("gap_closed").median().alias("median_gap_closed"),
+            col("visible_gap").median().alias("median_visible_gap"),
+        ])
+        .sort(["injected"], Default::default())
+        .collect()?;
+    let mut md = format!(
+        "# Blind benchmark\n\n`physid blind --cases {} --seed {seed}` on `{}` ({:.0} s wall).\n\n## Scores\n\n```json\n{}\n```\n\n## Single effects by kind\n\n{}\n## Cases\n\n{}",
+        scores.cases,
+        scenario.display(),
+        wall,
+        serde_json::to_string_pretty(scores)?,
+        tables::markdown(&per_kind),
+        tables::markdown(&df)
+    );
+    md = md.replace("| null |", "|  |");
+    crate::io::write_atomic(&dir.join("README.md"), md.as_bytes())?;
+    crate::io::write_atomic(
+        &dir.join("scores.json"),
+        serde_json::to_string_pretty(scores)?.as_bytes(),
+    )?;
+    Ok(())
+}

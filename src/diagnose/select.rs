@@ -1,0 +1,328 @@
+//! Which effect: cross-validated forward selection over the effect library.
+//!
+//! The training samples are cut into `K` contiguous blocks; the normal equations of
+//! `[Y | E]` (model columns and every candidate's columns) are accumulated once per block, so
+//! any subset of effects is fitted and scored from sums alone: fit on `K − 1` blocks under the
+//! nominal constraint set, score `‖Z θ − τ‖²` on the held-out block, sum over blocks.
+//!
+//! A step adds the effect kind (at its best grid point) with the lowest cross-validated error,
+//! if it lowers the error by at least `min_reduction` (relative) and in at least `K − 1` of the
+//! `K` held-out blocks. Kinds whose error lies within `tie` of the winner's reduction fit the
+//! data as well: the one with fewest columns is kept (Occam), and equally simple ones are reported
+//! together as ambiguous.
+
+use super::library::{Context, Kind, Variant};
+use crate::ident::{identify, IdentError, NormalEquations, Options};
+use crate::io::samples::Trajectory;
+use crate::model::Model;
+use nalgebra::DVector;
+use serde::Serialize;
+
+/// Selection settings.
+#[derive(Clone, Debug)]
+pub struct Settings {
+    /// Cross-validation blocks `K`.
+    pub folds: usize,
+    /// Smallest relative reduction of the cross-validated error that selects an effect.
+    pub min_reduction: f64,
+    /// Kinds within this fraction of the winner's reduction tie with it.
+    pub tie: f64,
+    /// At most this many effects.
+    pub max_effects: usize,
+}
+
+impl Default for Settings {
+    fn default() -> Self {
+        Self {
+            folds: 5,
+            min_reduction: 0.03,
+            tie: 0.1,
+            max_effects: 3,
+        }
+    }
+}
+
+/// Per-block normal equations of the augmented regressor.
+pub struct Folds {
+    /// Model parameters `p₀`.
+    pub p0: usize,
+    /// Joints.
+    pub n: usize,
+    /// Every candidate variant.
+    pub variants: Vec<Variant>,
+    /// First augmented column of each variant.
+    pub offsets: Vec<usize>,
+    /// One block per fold.
+    pub blocks: Vec<NormalEquations>,
+    /// Rows (joint-samples) fitted per block (rows of slow joints are left out).
+    pub rows: Vec<usize>,
+}
+
+/// A cross-validated score.
+#[derive(Clone, Debug)]
+pub struct Cv {
+    /// Mean squared held-out error per joint-sample (N² m²).
+    pub mse: f64,
+    /// Held-out sum of squares per block.
+    pub block_sse: Vec<f64>,
+    /// The fit of each fold (trained without block `f`), augmented order of the subset.
+    pub thetas: Vec<DVector<f64>>,
+}
+
+impl Folds {
+    /// Accumulates samples `range` of `tr` into `k` contiguous blocks.
+    pub fn build(
+        ctx: &Context,
+        model: &Model,
+        tr: &Trajectory,
+        range: std::ops::Range<usize>,
+        variants: Vec<Variant>,
+        k: usize,
+    ) -> Self {
+        let n = model.dof();
+        let p0 = model.layout().len;
+        let mut offsets = vec![];
+        let mut c = p0;
+        for v in &variants {
+            offsets.push(c);
+            c += v.kind.columns(n);
+        }
+        let mut blocks: Vec<NormalEquations> = (0..k).map(|_| NormalEquations::new(n, c)).collect();
+        let (start, len) = (range.start, range.len());
+        let mut rows = vec![0usize; k];
+        ctx.for_each_row(tr, range, &variants, &mut |s, z, tau| {
+            let b = ((s - start) * k / len).min(k - 1);
+            blocks[b].add(z, tau);
+            rows[b] += tr.qd_at(s).iter().filter(|w| !ctx.masked(**w)).count();
+        });
+        Self {
+            p0,
+            n,
+            variants,
+            offsets,
+            blocks: blocks.into_iter().map(|b| b.finish()).collect(),
+            rows,
+        }
+    }
+
+    /// Augmented column indices of the model plus `chosen` variants.
+    pub fn columns(&self, chosen: &[usize]) -> Vec<usize> {
+        let mut cols: Vec<usize> = (0..self.p0).collect();
+        for &v in chosen {
+            let o = self.offsets[v];
+            cols.extend(o..o + self.variants[v].kind.columns(self.n));
+        }
+        cols
+    }
+
+    /// The sum of the blocks except `skip` (`usize::MAX`: all).
+    pub fn sum_except(&self, skip: usize) -> NormalEquations {
+        let mut it = self
+            .blocks
+            .iter()
+            .enumerate()
+            .filter(|(i, _)| *i != skip)
+            .map(|(_, b)| b);
+        let first = it.next().expect("at least two blocks").clone();
+        it.fold(first, |acc, b| acc.merged(b))
+    }
+
+    /// Fits the model plus `chosen` on `ne` (augmented) with the description as prior.
+    pub fn fit(
+        &self,
+        model: &Model,
+        ne: &NormalEquations,
+        chosen: &[usize],
+        opts: &Options,
+    ) -> Result<DVector<f64>, IdentError> {
+        let cols = self.columns(chosen);
+        let sub = ne.select(&cols);
+        let mut prior = DVector::zeros(cols.len());
+        prior.rows_mut(0, self.p0).copy_from(&model.parameters());
+        Ok(identify(model, &sub, &prior, opts)?.theta)
+    }
+
+    /// The cross-validated error of the model plus `chosen`.
+    pub fn cv(&self, model: &Model, chosen: &[usize], opts: &Options) -> Result<Cv, IdentError> {
+        let cols = self.columns(chosen);
+        let mut block_sse = vec![];
+        let mut thetas = vec![];
+        let mut count = 0usize;
+        for f in 0..self.blocks.len() {
+            let theta = self.fit(model, &self.sum_except(f), chosen, opts)?;
+            block_sse.push(self.blocks[f].select(&cols).residual_sum_of_squares(&theta));
+            count += self.rows[f];
+            thetas.push(theta);
+        }
+        Ok(Cv {
+            mse: block_sse.iter().sum::<f64>() / count.max(1) as f64,
+            block_sse,
+            thetas,
+        })
+    }
+}
+
+/// One kind's best score in a step.
+#[derive(Clone, Debug, Serialize)]
+pub struct Score {
+    /// The kind.
+    pub kind: Kind,
+    /// Its best grid value (0 without a grid).
+    pub param: f64,
+    /// Cross-validated RMS with it added (N m).
+    pub cv_rms: f64,
+    /// Relative reduction of the cross-validated mean square.
+    pub reduction: f64,
+    /// Held-out blocks whose error it lowers.
+    pub blocks_improved: usize,
+}
+
+/// One accepted step.
+#[derive(Clone, Debug, Serialize)]
+pub struct Step {
+    /// The kind kept.
+    pub kind: Kind,
+    /// Its grid value.
+    pub param: f64,
+    /// Cross-validated RMS before and after (N m).
+    pub cv_rms_before: f64,
+    /// After.
+    pub cv_rms_after: f64,
+    /// Relative reduction of the mean square.
+    pub reduction: f64,
+    /// Equally simple kinds that fit as well: the data cannot tell them apart (empty when the
+    /// attribution is unique).
+    pub ambiguous_with: Vec<Kind>,
+    /// Kinds with more columns that fit as well (they contain the kept one's effect).
+    pub also_fit: Vec<Kind>,
+    /// Every kind's score in this step, best first.
+    pub scores: Vec<Score>,
+}
+
+/// The outcome of the forward selection.
+#[derive(Clone, Debug, Serialize)]
+pub struct Selection {
+    /// Cross-validated RMS of the nominal model (N m).
+    pub nominal_cv_rms: f64,
+    /// Accepted steps in order.
+    pub steps: Vec<Step>,
+    /// Why it stopped, with the best rejected candidate's score.
+    pub stop: String,
+    /// Indices of the chosen variants (into [`Folds::variants`]).
+    #[serde(skip)]
+    pub chosen: Vec<usize>,
+    /// Cross-validation of the final set.
+    #[serde(skip)]
+    pub final_cv: Option<Cv>,
+}
+
+/// Forward selection with the stopping rule of the module documentation.
+pub fn forward_select(
+    folds: &Folds,
+    model: &Model,
+    opts: &Options,
+    settings: &Settings,
+) -> Result<Selection, IdentError> {
+    let k = folds.blocks.len();
+    let mut chosen: Vec<usize> = vec![];
+    let mut current = folds.cv(model, &chosen, opts)?;
+    let nominal_cv_rms = current.mse.sqrt();
+    let mut steps = vec![];
+    let stop = loop {
+        if steps.len() >= settings.max_effects {
+            break format!("reached the maximum of {} effects", settings.max_effects);
+        }
+        let used: Vec<Kind> = chosen
+            .iter()
+            .map(|&v| folds.variants[v].kind)
+            .chain(steps.iter().flat_map(|s: &Step| s.ambiguous_with.clone()))
+            .collect();
+        // Best variant of each kind not yet used.
+        let mut best: Vec<(usize, Cv)> = vec![];
+        for kind in Kind::ALL {
+            if used.contains(&kind) {
+                continue;
+            }
+            let mut top: Option<(usize, Cv)> = None;
+            for (vi, v) in folds.variants.iter().enumerate() {
+                if v.kind != kind {
+                    continue;
+                }
+                let mut with = chosen.clone();
+                with.push(vi);
+                // An infeasible or failed fit simply does not compete.
+                if let Ok(cv) = folds.cv(model, &with, opts) {
+                    if top.as_ref().is_none_or(|(_, t)| cv.mse < t.mse) {
+                        top = Some((vi, cv));
+                    }
+                }
+            }
+            best.extend(top);
+        }
+        if best.is_empty() {
+            break "no candidate left".into();
+        }
+        best.sort_by(|a, b| a.1.mse.total_cmp(&b.1.mse));
+        let score = |(vi, cv): &(usize, Cv)| Score {
+            kind: folds.variants[*vi].kind,
+            param: folds.variants[*vi].param,
+            cv_rms: cv.mse.sqrt(),
+            reduction: 1.0 - cv.mse / current.mse,
+            blocks_improved: (0..k)
+                .filter(|&f| cv.block_sse[f] < current.block_sse[f])
+                .count(),
+        };
+        let scores: Vec<Score> = best.iter().map(score).collect();
+        let top = &scores[0];
+        if top.reduction < settings.min_reduction || top.blocks_improved + 1 < k {
+            break format!(
+                "best remaining candidate {} lowers the cross-validated error by {:.1} % in {}/{} blocks (needs {:.1} % in {}/{})",
+                top.kind.name(),
+                100.0 * top.reduction,
+                top.blocks_improved,
+                k,
+                100.0 * settings.min_reduction,
+                k - 1,
+                k
+            );
+        }
+        // Ties: within `tie` of the winner's reduction.
+        let cut = top.reduction * (1.0 - settings.tie);
+        let ties: Vec<usize> = (0..best.len())
+            .filter(|&i| scores[i].reduction >= cut)
+            .collect();
+        let ncols = |i: usize| folds.variants[best[i].0].kind.columns(folds.n);
+        let fewest = ties.iter().map(|&i| ncols(i)).min().expect("winner ties");
+        let simplest: Vec<usize> = ties
+            .iter()
+            .copied()
+            .filter(|&i| ncols(i) == fewest)
+            .collect();
+        let keep = simplest[0];
+        let (vi, cv) = best[keep].clone();
+        let step = Step {
+            kind: folds.variants[vi].kind,
+            param: folds.variants[vi].param,
+            cv_rms_before: current.mse.sqrt(),
+            cv_rms_after: cv.mse.sqrt(),
+            reduction: 1.0 - cv.mse / current.mse,
+            ambiguous_with: simplest[1..].iter().map(|&i| scores[i].kind).collect(),
+            also_fit: ties
+                .iter()
+                .filter(|&&i| ncols(i) > fewest)
+                .map(|&i| scores[i].kind)
+                .collect(),
+            scores,
+        };
+        chosen.push(vi);
+        current = cv;
+        steps.push(step);
+    };
+    Ok(Selection {
+        nominal_cv_rms,
+        steps,
+        stop,
+        chosen,
+        final_cv: Some(current),
+    })
+}
