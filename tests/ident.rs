@@ -225,3 +225,57 @@ fn log_det_regularizer_recovers_clean_data_and_pulls_to_the_prior() {
     assert!(rel < 1e-3, "heavy prior: {rel:e}");
     assert!(ident::bregman_logdet(&m, &r.theta, &prior).unwrap() < 1e-4);
 }
+
+#[test]
+fn extra_columns_are_free_unless_declared_non_negative() {
+    // τ = Y θ − 0.5 r for a column r outside the model: free, its coefficient is −0.5; declared
+    // non-negative, it stops at 0 (and even `none` then goes through the cone solver).
+    let m = cheetah3::leg();
+    let tr = exact_data(&m, 400, 3);
+    let (n, p) = (m.dof(), m.layout().len);
+    let mut ne = NormalEquations::new(n, p + 1);
+    let mut d = Data::new(&m);
+    let mut y = DMatrix::zeros(n, p);
+    let mut z = DMatrix::zeros(n, p + 1);
+    for k in 0..tr.len() {
+        regressor(
+            &m,
+            &mut d,
+            tr.q_at(k),
+            tr.qd_at(k),
+            tr.qdd_at(k).unwrap(),
+            &mut y,
+        );
+        z.columns_mut(0, p).copy_from(&y);
+        let r: Vec<f64> = (0..n).map(|j| ((k * 7 + j * 3) as f64).sin()).collect();
+        let tau: Vec<f64> = (0..n).map(|j| tr.tau_at(k)[j] - 0.5 * r[j]).collect();
+        for j in 0..n {
+            z[(j, p)] = r[j];
+        }
+        ne.add(&z, &tau);
+    }
+    let ne = ne.finish();
+    let mut prior = DVector::zeros(p + 1);
+    prior.rows_mut(0, p).copy_from(&m.parameters());
+    for set in [ConstraintSet::None, ConstraintSet::Consistent] {
+        let mut o = Options::new(set);
+        let free = ident::identify(&m, &ne, &prior, &o).unwrap();
+        assert!(
+            (free.theta[p] + 0.5).abs() < 1e-6,
+            "{set:?}: {}",
+            free.theta[p]
+        );
+        o.nonnegative = vec![p];
+        let held = ident::identify(&m, &ne, &prior, &o).unwrap();
+        assert!(
+            held.theta[p] > -1e-7 && held.theta[p] < 1e-3,
+            "{set:?}: {}",
+            held.theta[p]
+        );
+        assert_ne!(held.solver.status, "direct");
+    }
+    // A non-negative index outside θ is a named error, not a panic.
+    let mut o = Options::new(ConstraintSet::Consistent);
+    o.nonnegative = vec![p + 1];
+    assert!(ident::identify(&m, &ne, &prior, &o).is_err());
+}

@@ -88,6 +88,16 @@ impl Kind {
         }
     }
 
+    /// Whether the coefficients have a physical sign (≥ 0), kept in every fit: Stribeck's
+    /// static excess, load-dependent friction, reflected rotor inertia, compliance. A fit
+    /// that needs the opposite sign is not this effect.
+    pub fn non_negative(&self) -> bool {
+        matches!(
+            self,
+            Kind::Stribeck | Kind::LoadDependentFriction | Kind::RotorInertia | Kind::Compliance
+        )
+    }
+
     /// The magnitude's name and unit, per joint (or for the whole robot).
     pub fn magnitude(&self) -> (&'static str, &'static str) {
         match self {

@@ -282,6 +282,9 @@ pub struct Diagnosis {
     pub noise_floor: f64,
     /// Fraction of the overall gap closed.
     pub gap_closed: f64,
+    /// Validation RMS per joint and overall (N m) with the confirmed effects only (refitted),
+    /// when some selected effect is not confirmed.
+    pub confirmed_only: Option<(Vec<f64>, f64)>,
     /// The verdict.
     pub verdict: Verdict,
     /// The verdict in words.
@@ -598,6 +601,22 @@ pub fn diagnose(
         0.0
     };
     let confirmed: Vec<bool> = overall.windows(2).map(|w| w[1] < w[0]).collect();
+    let confirmed_only = if confirmed.iter().all(|c| *c) {
+        None
+    } else {
+        let keep: Vec<usize> = selection
+            .chosen
+            .iter()
+            .zip(&confirmed)
+            .filter(|(_, c)| **c)
+            .map(|(v, _)| *v)
+            .collect();
+        let theta = folds.fit(model, &all, &keep, &iopts)?;
+        let vs: Vec<_> = keep.iter().map(|&v| folds.variants[v]).collect();
+        let (rms, _) = validation_rms(&ctx_val, validate, &vs, &theta, ms);
+        let o = mean_square(&rms).sqrt();
+        Some((rms, o))
+    };
     let above = last > opts.unexplained_ratio * floor_ms;
     let verdict = match (selection.steps.is_empty(), above) {
         (true, false) => Verdict::NoEffect,
@@ -652,14 +671,15 @@ pub fn diagnose(
             floor_ms.sqrt()
         ),
     };
-    if !unconfirmed.is_empty() {
+    if let Some((_, o)) = &confirmed_only {
         summary += &format!(
-            "; NOT confirmed on the validation data (its error rose when added): {}",
+            "; NOT confirmed on the validation data (its error rose when added): {}; with the confirmed effects only the validation RMS is {o:.3} N m",
             unconfirmed.join(", ")
         );
     }
     Ok(Diagnosis {
         confirmed,
+        confirmed_only,
         robot: model.name.clone(),
         joints: model.bodies.iter().map(|b| b.joint_name.clone()).collect(),
         samples: [train.len(), validate.len()],

@@ -291,6 +291,24 @@ pub fn markdown(d: &Diagnosis) -> String {
         d.noise_floor,
         100.0 * d.gap_closed
     );
+    if let Some((rms, o)) = &d.confirmed_only {
+        s += &format!(
+            "\nNot confirmed on the validation data: {}. Refitted with the confirmed effects only, the validation RMS is {o:.3} N m ({}).\n",
+            d.effects
+                .iter()
+                .zip(&d.confirmed)
+                .filter(|(_, c)| !**c)
+                .map(|(e, _)| format!("`{}`", e.kind.name()))
+                .collect::<Vec<_>>()
+                .join(", "),
+            d.joints
+                .iter()
+                .zip(rms)
+                .map(|(j, r)| format!("{j} {r:.3}"))
+                .collect::<Vec<_>>()
+                .join(", ")
+        );
+    }
     s
 }
 

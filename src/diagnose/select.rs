@@ -139,7 +139,18 @@ impl Folds {
         let sub = ne.select(&cols);
         let mut prior = DVector::zeros(cols.len());
         prior.rows_mut(0, self.p0).copy_from(&model.parameters());
-        Ok(identify(model, &sub, &prior, opts)?.theta)
+        // Effects with a physical sign keep it (in the subset's column order).
+        let mut opts = opts.clone();
+        let mut c = self.p0;
+        for &v in chosen {
+            let kind = self.variants[v].kind;
+            let nc = kind.columns(self.n);
+            if kind.non_negative() {
+                opts.nonnegative.extend(c..c + nc);
+            }
+            c += nc;
+        }
+        Ok(identify(model, &sub, &prior, &opts)?.theta)
     }
 
     /// The cross-validated error of the model plus `chosen`.

@@ -92,6 +92,9 @@ pub struct Options {
     pub force_cone_solver: bool,
     /// The prior term's geometry.
     pub regularizer: Regularizer,
+    /// Further columns of θ constrained to be non-negative (e.g. the diagnosis's effect terms
+    /// with a physical sign); they make even `none` a cone program.
+    pub nonnegative: Vec<usize>,
 }
 
 /// How the estimate is pulled towards the prior `θ̂`.
@@ -130,6 +133,7 @@ impl Options {
             eps: 1e-6,
             force_cone_solver: false,
             regularizer: Regularizer::Euclidean,
+            nonnegative: vec![],
         }
     }
 }
@@ -312,7 +316,15 @@ pub fn identify(
         constant += euclid_w(i) * prior[i] * prior[i];
     }
     let start = std::time::Instant::now();
-    let direct = opts.constraints == ConstraintSet::None && !opts.force_cone_solver && !logdet;
+    if let Some(&c) = opts.nonnegative.iter().find(|&&c| c >= p) {
+        return Err(IdentError::BadOption(format!(
+            "non-negative column {c} outside the {p} parameters"
+        )));
+    }
+    let direct = opts.constraints == ConstraintSet::None
+        && !opts.force_cone_solver
+        && !logdet
+        && opts.nonnegative.is_empty();
     let (theta, solver) = if direct {
         let info = SolverInfo {
             status: "direct".into(),
@@ -494,6 +506,7 @@ fn solve_cone(
         let l = model.layout();
         nonneg.extend((l.viscous_col..l.len).map(|c| vec![(c, 1.0)]));
     }
+    nonneg.extend(opts.nonnegative.iter().map(|&c| vec![(c, 1.0)]));
     if logdet {
         // Per body: w (tr(Ĵ⁻¹ J) − Σ u_i) in the objective, with
         // [[J, L], [Lᵀ, diag L]] ⪰ 0 (8×8) and (u_i, 1, L_ii) in the exponential cone, so that
