@@ -583,7 +583,7 @@ pub fn diagnose(
                 joint: model.bodies[j].joint_name.clone(),
                 nominal: nom,
                 after: per_step_rms[1..].iter().map(|r| r[j]).collect(),
-                noise_floor: f2.sqrt(),
+                noise_floor: f2.sqrt(), // NaN: the joint never moved fast enough
                 gap_closed: if den > 0.0 {
                     ((nom * nom - last * last) / den).clamp(-1.0, 1.0)
                 } else {
@@ -593,7 +593,18 @@ pub fn diagnose(
         })
         .collect();
     let overall: Vec<f64> = per_step_rms.iter().map(|r| mean_square(r).sqrt()).collect();
-    let floor_ms = floor_var.iter().sum::<f64>() / n as f64;
+    // A joint that never moves faster than the threshold has no floor (NaN): left out.
+    let finite: Vec<f64> = floor_var
+        .iter()
+        .copied()
+        .filter(|v| v.is_finite())
+        .collect();
+    if finite.is_empty() {
+        return Err(DiagnoseError::Data(format!(
+            "no joint moves faster than {ms} rad/s often enough to estimate the noise floor"
+        )));
+    }
+    let floor_ms = finite.iter().sum::<f64>() / finite.len() as f64;
     let (first, last) = (overall[0].powi(2), overall[overall.len() - 1].powi(2));
     let gap_closed = if first > floor_ms {
         ((first - last) / (first - floor_ms)).clamp(-1.0, 1.0)
