@@ -133,21 +133,48 @@ fn print_text(d: &Diagnosis) {
     println!("\n{}", d.summary);
 }
 
+/// The arguments of `physid diagnose`.
+pub struct Args<'a> {
+    /// The robot description.
+    pub model: Model,
+    /// Training files.
+    pub data: &'a [PathBuf],
+    /// Validation files (empty: hold out the end of the training data).
+    pub validate: &'a [PathBuf],
+    /// Constraint set of the nominal model.
+    pub constraints: ConstraintSet,
+    /// Held-out fraction without validation files.
+    pub holdout: f64,
+    /// Processing low-pass (Hz).
+    pub cutoff: f64,
+    /// Print JSON.
+    pub json: bool,
+    /// Report directory.
+    pub report: Option<&'a Path>,
+}
+
 /// `physid diagnose`.
-pub fn run(
-    model: &Model,
-    data: &[PathBuf],
-    validate: &[PathBuf],
-    constraints: ConstraintSet,
-    holdout: f64,
-    json: bool,
-    report: Option<&Path>,
-) -> anyhow::Result<()> {
+pub fn run(a: Args) -> anyhow::Result<()> {
+    let Args {
+        model,
+        data,
+        validate,
+        constraints,
+        holdout,
+        cutoff,
+        json,
+        report,
+    } = a;
+    anyhow::ensure!(
+        cutoff.is_finite() && cutoff > 0.0,
+        "--cutoff must be a positive frequency in Hz, got {cutoff}"
+    );
     let opts = diagnose::Options {
         constraints,
+        processing_cutoff: cutoff,
         ..Default::default()
     };
-    let d = diagnose::diagnose_files(model, data, validate, holdout, &opts)?;
+    let d = diagnose::diagnose_files(&model, data, validate, holdout, &opts)?;
     if let Some(dir) = report {
         diagnose::report::write(dir, &d)
             .with_context(|| format!("writing the report to {}", dir.display()))?;

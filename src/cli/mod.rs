@@ -80,6 +80,9 @@ enum Command {
         /// Fraction held out for validation when no --validate is given.
         #[arg(long, default_value_t = 0.3)]
         holdout: f64,
+        /// Low-pass cutoff (Hz) the data were processed with (for the compliance terms).
+        #[arg(long, default_value_t = 20.0)]
+        cutoff: f64,
         /// Print the diagnosis as JSON.
         #[arg(long)]
         json: bool,
@@ -250,17 +253,19 @@ pub fn run(cli: Cli) -> anyhow::Result<()> {
             robot,
             constraints,
             holdout,
+            cutoff,
             json,
             report,
-        } => diagnose_cmd::run(
-            &robot.load()?,
-            &data,
-            &validate,
+        } => diagnose_cmd::run(diagnose_cmd::Args {
+            model: robot.load()?,
+            data: &data,
+            validate: &validate,
             constraints,
             holdout,
+            cutoff,
             json,
-            report.as_deref(),
-        ),
+            report: report.as_deref(),
+        }),
         Command::Blind {
             cases,
             seed,

@@ -271,7 +271,13 @@ fn nominal_validation_ms(
     let cut = (0.7 * tr.len() as f64).round() as usize;
     let (train, val) = (tr.slice(0..cut), tr.slice(cut..tr.len()));
     let prior = model.parameters();
-    let ctx = super::library::Context::new(model, &prior, &train, opts.min_speed);
+    let ctx = super::library::Context::new(
+        model,
+        &prior,
+        &train,
+        opts.min_speed,
+        opts.processing_cutoff,
+    );
     let mut ne = crate::ident::NormalEquations::new(model.dof(), model.layout().len);
     ctx.for_each_row(&train, 0..train.len(), &[], &mut |_, z, tau| ne.add(z, tau));
     let fit = crate::ident::identify(
@@ -280,7 +286,13 @@ fn nominal_validation_ms(
         &prior,
         &crate::ident::Options::new(opts.constraints),
     )?;
-    let vctx = super::library::Context::new(model, &fit.theta, &val, opts.min_speed);
+    let vctx = super::library::Context::new(
+        model,
+        &fit.theta,
+        &val,
+        opts.min_speed,
+        opts.processing_cutoff,
+    );
     let (mut s, mut c) = (0.0, 0usize);
     vctx.for_each_row(&val, 0..val.len(), &[], &mut |k, z, tau| {
         let r = DVector::from_column_slice(tau) - z * &fit.theta;

@@ -159,15 +159,44 @@ pub struct Context<'a> {
     theta_smooth: DVector<f64>,
     /// `Y_k θ̂₀`, sample-major.
     pred: Vec<f64>,
-    /// Its first derivative (N m/s), central differences.
+    /// The first derivative (N m/s, central differences) of the prediction without Coulomb
+    /// friction.
     pred_d: Vec<f64>,
-    /// Smooth prediction's first and second derivatives.
-    smooth_d: Vec<f64>,
-    smooth_dd: Vec<f64>,
+    /// The prediction processed like the encoder signal (filtered; filtered derivative;
+    /// filtered derivative of that), for the deflection of a compliant transmission.
+    defl: [Vec<f64>; 3],
     /// Two unit vectors perpendicular to gravity (the tilt directions).
     perp: [Vector3<f64>; 2],
     gear: Vec<f64>,
     min_speed: f64,
+}
+
+/// `x` (sample-major, `n` columns) processed like an encoder angle: `F(x)`, `F(D x)`,
+/// `F(D F(D x))` with `F` the zero-phase 2nd-order Butterworth low-pass at `cutoff` and `D` the
+/// central difference; unfiltered differences if the filter cannot be built.
+fn processed_like_encoder(x: &[f64], t: &[f64], n: usize, cutoff: f64) -> [Vec<f64>; 3] {
+    let m = t.len();
+    let dt = if m > 1 {
+        (t[m - 1] - t[0]) / (m - 1) as f64
+    } else {
+        1e-3
+    };
+    let fs = 1.0 / dt;
+    let sos = crate::sim::signal::butterworth_lowpass(2, cutoff.min(0.4 * fs), fs).ok();
+    let filt = |v: &[f64]| sos.as_ref().map_or_else(|| v.to_vec(), |s| s.filtfilt(v));
+    let diff = |v: &[f64]| crate::sim::signal::differentiate(v, dt);
+    let mut out = [vec![0.0; x.len()], vec![0.0; x.len()], vec![0.0; x.len()]];
+    for j in 0..n {
+        let col: Vec<f64> = (0..m).map(|k| x[k * n + j]).collect();
+        let d1 = filt(&diff(&col));
+        let d2 = filt(&diff(&d1));
+        for (o, v) in out.iter_mut().zip([filt(&col), d1, d2]) {
+            for k in 0..m {
+                o[k * n + j] = v[k];
+            }
+        }
+    }
+    out
 }
 
 fn derivative(x: &[f64], t: &[f64], n: usize) -> Vec<f64> {
@@ -189,7 +218,17 @@ fn derivative(x: &[f64], t: &[f64], n: usize) -> Vec<f64> {
 impl<'a> Context<'a> {
     /// The context of trajectory `tr` (with q̈) for nominal parameters `theta0` (the model's
     /// layout, no extra columns); joints slower than `min_speed` (rad/s) are left out.
-    pub fn new(model: &'a Model, theta0: &DVector<f64>, tr: &Trajectory, min_speed: f64) -> Self {
+    ///
+    /// `cutoff` (Hz) is the low-pass of the data's processing (zero-phase 2nd-order
+    /// Butterworth of q and of each derivative, as `physid simulate` and `load_trajectory` do),
+    /// applied to the predicted torque for the compliance columns; capped at 0.4 × the rate.
+    pub fn new(
+        model: &'a Model,
+        theta0: &DVector<f64>,
+        tr: &Trajectory,
+        min_speed: f64,
+        cutoff: f64,
+    ) -> Self {
         let n = model.dof();
         let l = model.layout();
         let theta0 = theta0.rows(0, l.len).into_owned();
@@ -203,9 +242,10 @@ impl<'a> Context<'a> {
             pred.extend((y * &theta0).iter());
             smooth.extend((y * &theta_smooth).iter());
         });
-        let pred_d = derivative(&pred, &tr.t, n);
-        let smooth_d = derivative(&smooth, &tr.t, n);
-        let smooth_dd = derivative(&smooth_d, &tr.t, n);
+        // Without the Coulomb jumps: a delayed jump only matters within the masked slow rows,
+        // and differencing it would put spikes into every fitted row next to a reversal.
+        let pred_d = derivative(&smooth, &tr.t, n);
+        let defl = processed_like_encoder(&pred, &tr.t, n, cutoff);
         let g = model.gravity.try_normalize(1e-12).unwrap_or(-Vector3::z());
         let a = if g.x.abs() < 0.9 {
             Vector3::x()
@@ -225,8 +265,7 @@ impl<'a> Context<'a> {
             theta_smooth,
             pred,
             pred_d,
-            smooth_d,
-            smooth_dd,
+            defl,
             perp: [u1, u2],
             gear,
             min_speed,
@@ -326,9 +365,9 @@ impl<'a> Context<'a> {
                         let eps = 1e-7;
                         for j in 0..n {
                             let shift = [
-                                self.pred[k * n + j],
-                                self.smooth_d[k * n + j],
-                                self.smooth_dd[k * n + j],
+                                self.defl[0][k * n + j],
+                                self.defl[1][k * n + j],
+                                self.defl[2][k * n + j],
                             ];
                             let mut at = |s: f64| {
                                 let (mut a, mut b, mut cc) =

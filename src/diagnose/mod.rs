@@ -158,6 +158,8 @@ pub struct Options {
     /// Joint-samples slower than this (rad/s) are left out of every fit and error (the
     /// model's `sign(q̇)` Coulomb friction does not describe friction near zero speed).
     pub min_speed: f64,
+    /// Low-pass cutoff (Hz) of the data's processing, for the compliance columns.
+    pub processing_cutoff: f64,
     /// The residual counts as unexplained when its validation mean square exceeds the noise
     /// floor's by this factor.
     pub unexplained_ratio: f64,
@@ -170,6 +172,7 @@ impl Default for Options {
             selection: select::Settings::default(),
             kinds: Kind::ALL.to_vec(),
             min_speed: 0.05,
+            processing_cutoff: 20.0,
             unexplained_ratio: 1.45,
         }
     }
@@ -428,9 +431,10 @@ pub fn diagnose(
     let iopts = ident::Options::new(opts.constraints);
     let prior = model.parameters();
     let ms = opts.min_speed;
+    let cut = opts.processing_cutoff;
     // The nominal model, fitted on the rows above the speed threshold.
     let mut ne0 = NormalEquations::new(n, model.layout().len);
-    Context::new(model, &prior, train, ms).for_each_row(
+    Context::new(model, &prior, train, ms, cut).for_each_row(
         train,
         0..train.len(),
         &[],
@@ -438,8 +442,8 @@ pub fn diagnose(
     );
     let nominal = ident::identify(model, &ne0.finish(), &prior, &iopts)?;
     let theta0 = nominal.theta.clone();
-    let ctx_train = Context::new(model, &theta0, train, ms);
-    let ctx_val = Context::new(model, &theta0, validate, 0.0);
+    let ctx_train = Context::new(model, &theta0, train, ms, cut);
+    let ctx_val = Context::new(model, &theta0, validate, 0.0, cut);
     let variants = library::variants(&opts.kinds);
     let k = opts.selection.folds.max(2);
     let folds = select::Folds::build(&ctx_train, model, train, 0..train.len(), variants, k);
@@ -557,7 +561,7 @@ pub fn diagnose(
         .iter()
         .map(|&v| folds.variants[v])
         .collect();
-    let ctx_train_all = Context::new(model, &theta0, train, 0.0);
+    let ctx_train_all = Context::new(model, &theta0, train, 0.0, cut);
     let (_, train_res) = validation_rms(&ctx_train_all, train, &final_vs, &final_theta, ms);
     let both = concatenate(vec![train.clone(), validate.clone()]);
     let masked_res: Vec<f64> = train_res
