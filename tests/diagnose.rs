@@ -290,3 +290,34 @@ fn the_cli_diagnoses_a_file_and_names_bad_input() {
     assert!(!out.status.success());
     assert!(String::from_utf8_lossy(&out.stderr).contains("missing.csv"));
 }
+
+#[test]
+fn several_training_runs_are_cross_validated_one_run_out() {
+    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("scenarios/blind.toml");
+    let (mut sc, m, _) = physid::io::load_scenario(&path).unwrap();
+    sc.simulation.duration = 6.0;
+    sc.effects = vec![EffectSpec::Spring {
+        stiffness: vec![6.0, 6.0, 6.0],
+        rest: vec![0.0, -0.5, 1.2],
+    }];
+    let runs: Vec<_> = [11, 12, 13]
+        .iter()
+        .map(|&seed| {
+            sc.simulation.seed = seed;
+            physid::sim::run(&m, &sc, &mut |_| {}).unwrap().processed
+        })
+        .collect();
+    let lens = vec![runs[0].len(), runs[1].len()];
+    let train = physid::diagnose::concatenate(vec![runs[0].clone(), runs[1].clone()]);
+    let opts = DiagOptions {
+        train_runs: lens,
+        ..Default::default()
+    };
+    let d = diagnose(&m, &train, &runs[2], &opts).unwrap();
+    assert!(d.selection.by_run);
+    assert_eq!(d.selection.blocks, 2);
+    // The spring carries over from run to run (both held-out runs improve).
+    assert_eq!(d.effects[0].kind, Kind::Spring);
+    assert_eq!(d.selection.steps[0].scores[0].blocks_improved, 2);
+    assert!(d.confirmed[0]);
+}

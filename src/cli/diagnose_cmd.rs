@@ -48,8 +48,14 @@ fn print_text(d: &Diagnosis) {
         }
     }
     println!(
-        "\nWHICH (cross-validated, {} blocks; nominal CV RMS {:.3} N m)",
-        5, d.selection.nominal_cv_rms
+        "\nWHICH (cross-validated over {} {}; nominal CV RMS {:.3} N m)",
+        d.selection.blocks,
+        if d.selection.by_run {
+            "runs, leaving one out"
+        } else {
+            "contiguous blocks"
+        },
+        d.selection.nominal_cv_rms
     );
     for (i, s) in d.selection.steps.iter().enumerate() {
         println!(

@@ -158,6 +158,9 @@ pub struct Options {
     /// Joint-samples slower than this (rad/s) are left out of every fit and error (the
     /// model's `sign(q̇)` Coulomb friction does not describe friction near zero speed).
     pub min_speed: f64,
+    /// Lengths of the runs joined in the training data (empty: one run). With two or more,
+    /// the cross-validation leaves one run out at a time.
+    pub train_runs: Vec<usize>,
     /// Low-pass cutoff (Hz) of the data's processing, for the compliance columns.
     pub processing_cutoff: f64,
     /// The residual counts as unexplained when its validation mean square exceeds the noise
@@ -173,6 +176,7 @@ impl Default for Options {
             kinds: Kind::ALL.to_vec(),
             min_speed: 0.05,
             processing_cutoff: 20.0,
+            train_runs: vec![],
             unexplained_ratio: 1.45,
         }
     }
@@ -446,7 +450,15 @@ pub fn diagnose(
     let ctx_val = Context::new(model, &theta0, validate, 0.0, cut);
     let variants = library::variants(&opts.kinds);
     let k = opts.selection.folds.max(2);
-    let folds = select::Folds::build(&ctx_train, model, train, 0..train.len(), variants, k);
+    let folds = select::Folds::build(
+        &ctx_train,
+        model,
+        train,
+        0..train.len(),
+        variants,
+        k,
+        &opts.train_runs,
+    );
     let selection = select::forward_select(&folds, model, &iopts, &opts.selection)?;
     let all = folds.sum_except(usize::MAX);
     let g = model.gravity.norm().max(1e-12);
@@ -753,14 +765,16 @@ pub fn diagnose_files(
     if data.is_empty() {
         anyhow::bail!("no data files given");
     }
-    let load = |files: &[std::path::PathBuf]| -> anyhow::Result<Trajectory> {
+    let load = |files: &[std::path::PathBuf]| -> anyhow::Result<(Trajectory, Vec<usize>)> {
         let parts = files
             .iter()
             .map(|f| crate::io::load_trajectory(f, model))
             .collect::<anyhow::Result<Vec<_>>>()?;
-        Ok(concatenate(parts))
+        let lens = parts.iter().map(|p| p.len()).collect();
+        Ok((concatenate(parts), lens))
     };
-    let all = load(data)?;
+    let (all, lens) = load(data)?;
+    let mut opts = opts.clone();
     let (train, val) = if validate.is_empty() {
         if !(holdout > 0.0 && holdout < 1.0) {
             anyhow::bail!("the held-out fraction {holdout} must lie strictly between 0 and 1");
@@ -768,7 +782,9 @@ pub fn diagnose_files(
         let cut = ((1.0 - holdout) * all.len() as f64).round() as usize;
         (all.slice(0..cut), all.slice(cut..all.len()))
     } else {
-        (all, load(validate)?)
+        // Several training runs: leave one run out in the selection.
+        opts.train_runs = lens;
+        (all, load(validate)?.0)
     };
-    Ok(diagnose(model, &train, &val, opts)?)
+    Ok(diagnose(model, &train, &val, &opts)?)
 }

@@ -208,7 +208,13 @@ pub fn markdown(d: &Diagnosis) -> String {
         );
     }
     s += &format!(
-        "\n## Which\n\nCross-validated forward selection (nominal CV RMS {:.3} N m).\n\n",
+        "\n## Which\n\nCross-validated forward selection over {} {} (nominal CV RMS {:.3} N m).\n\n",
+        d.selection.blocks,
+        if d.selection.by_run {
+            "training runs, leaving one run out"
+        } else {
+            "contiguous blocks of the training data"
+        },
         d.selection.nominal_cv_rms
     );
     for (i, st) in d.selection.steps.iter().enumerate() {

@@ -5,9 +5,12 @@
 //! any subset of effects is fitted and scored from sums alone: fit on `K − 1` blocks under the
 //! nominal constraint set, score `‖Z θ − τ‖²` on the held-out block, sum over blocks.
 //!
+//! With several training runs the blocks are the runs (leave one run out), so an effect must
+//! carry over from run to run.
+//!
 //! A step adds the effect kind (at its best grid point) with the lowest cross-validated error,
 //! if it lowers the error by at least `min_reduction` (relative) and in at least `K − 1` of the
-//! `K` held-out blocks. Kinds whose error lies within `tie` of the winner's reduction fit the
+//! `K` held-out blocks (all of them when `K < 4`). Kinds whose error lies within `tie` of the winner's reduction fit the
 //! data as well: the one with fewest columns is kept (Occam), and equally simple ones are reported
 //! together as ambiguous.
 
@@ -56,6 +59,8 @@ pub struct Folds {
     pub blocks: Vec<NormalEquations>,
     /// Rows (joint-samples) fitted per block (rows of slow joints are left out).
     pub rows: Vec<usize>,
+    /// Whether the blocks are whole runs.
+    pub by_run: bool,
 }
 
 /// A cross-validated score.
@@ -70,7 +75,9 @@ pub struct Cv {
 }
 
 impl Folds {
-    /// Accumulates samples `range` of `tr` into `k` contiguous blocks.
+    /// Accumulates samples `range` of `tr` into `k` contiguous blocks, or, when `runs` (the
+    /// lengths of the runs joined in `range`) has two or more entries, one block per run
+    /// (leave-one-run-out).
     pub fn build(
         ctx: &Context,
         model: &Model,
@@ -78,7 +85,17 @@ impl Folds {
         range: std::ops::Range<usize>,
         variants: Vec<Variant>,
         k: usize,
+        runs: &[usize],
     ) -> Self {
+        let by_run = runs.len() >= 2 && runs.iter().sum::<usize>() == range.len();
+        let k = if by_run { runs.len() } else { k };
+        let ends: Vec<usize> = runs
+            .iter()
+            .scan(0, |acc, r| {
+                *acc += r;
+                Some(*acc)
+            })
+            .collect();
         let n = model.dof();
         let p0 = model.layout().len;
         let mut offsets = vec![];
@@ -91,7 +108,11 @@ impl Folds {
         let (start, len) = (range.start, range.len());
         let mut rows = vec![0usize; k];
         ctx.for_each_row(tr, range, &variants, &mut |s, z, tau| {
-            let b = ((s - start) * k / len).min(k - 1);
+            let b = if by_run {
+                ends.partition_point(|&e| e <= s - start).min(k - 1)
+            } else {
+                ((s - start) * k / len).min(k - 1)
+            };
             blocks[b].add(z, tau);
             rows[b] += tr.qd_at(s).iter().filter(|w| !ctx.masked(**w)).count();
         });
@@ -102,6 +123,7 @@ impl Folds {
             offsets,
             blocks: blocks.into_iter().map(|b| b.finish()).collect(),
             rows,
+            by_run,
         }
     }
 
@@ -213,6 +235,10 @@ pub struct Step {
 /// The outcome of the forward selection.
 #[derive(Clone, Debug, Serialize)]
 pub struct Selection {
+    /// Cross-validation blocks (the runs when several training runs are given).
+    pub blocks: usize,
+    /// Whether the blocks are whole runs (leave one run out).
+    pub by_run: bool,
     /// Cross-validated RMS of the nominal model (N m).
     pub nominal_cv_rms: f64,
     /// Accepted steps in order.
@@ -285,7 +311,9 @@ pub fn forward_select(
         };
         let scores: Vec<Score> = best.iter().map(score).collect();
         let top = &scores[0];
-        if top.reduction < settings.min_reduction || top.blocks_improved + 1 < k {
+        // All but one block must improve; with fewer than four blocks, all of them.
+        let needed = if k >= 4 { k - 1 } else { k };
+        if top.reduction < settings.min_reduction || top.blocks_improved < needed {
             break format!(
                 "best remaining candidate {} lowers the cross-validated error by {:.1} % in {}/{} blocks (needs {:.1} % in {}/{})",
                 top.kind.name(),
@@ -293,7 +321,7 @@ pub fn forward_select(
                 top.blocks_improved,
                 k,
                 100.0 * settings.min_reduction,
-                k - 1,
+                needed,
                 k
             );
         }
@@ -330,6 +358,8 @@ pub fn forward_select(
         steps.push(step);
     };
     Ok(Selection {
+        blocks: k,
+        by_run: folds.by_run,
         nominal_cv_rms,
         steps,
         stop,
