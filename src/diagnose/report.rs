@@ -4,26 +4,11 @@
 
 use super::blind::{CaseResult, Scores};
 use super::Diagnosis;
+use crate::experiment::plots::colour;
 use crate::experiment::tables;
 use plotters::prelude::*;
 use polars::prelude::*;
 use std::path::Path;
-
-const COLOURS: [(u8, u8, u8); 8] = [
-    (31, 119, 180),
-    (214, 39, 40),
-    (44, 160, 44),
-    (148, 103, 189),
-    (255, 127, 14),
-    (23, 190, 207),
-    (140, 86, 75),
-    (127, 127, 127),
-];
-
-fn colour(k: usize) -> RGBColor {
-    let (r, g, b) = COLOURS[k % COLOURS.len()];
-    RGBColor(r, g, b)
-}
 
 fn plot_err(e: impl std::fmt::Display) -> anyhow::Error {
     anyhow::anyhow!("plot: {e}")

@@ -5,6 +5,24 @@ use plotters::prelude::*;
 use polars::prelude::*;
 use std::path::Path;
 
+/// The plots' palette (Tableau 10 order: blue, red, green, purple, orange, cyan, brown, grey).
+pub const PALETTE: [(u8, u8, u8); 8] = [
+    (31, 119, 180),
+    (214, 39, 40),
+    (44, 160, 44),
+    (148, 103, 189),
+    (255, 127, 14),
+    (23, 190, 207),
+    (140, 86, 75),
+    (127, 127, 127),
+];
+
+/// Colour `k` of [`PALETTE`], cycling.
+pub fn colour(k: usize) -> RGBColor {
+    let (r, g, b) = PALETTE[k % PALETTE.len()];
+    RGBColor(r, g, b)
+}
+
 /// Plots `{value}_median` with the `{value}_q25`..`{value}_q75` band against n_s per set.
 pub fn plot_vs_ns(
     summary: &DataFrame,
@@ -77,17 +95,8 @@ pub fn plot_vs_ns(
             .draw()
             .map_err(|e| draw(e.to_string()))?;
         for (k, set) in sets.iter().enumerate() {
-            // Fixed, distinguishable colours (loosest to tightest: red, green, purple, blue).
-            const COLOURS: [(u8, u8, u8); 6] = [
-                (214, 39, 40),
-                (44, 160, 44),
-                (148, 103, 189),
-                (31, 119, 180),
-                (255, 127, 14),
-                (23, 190, 207),
-            ];
-            let (r, g, b) = COLOURS[k % COLOURS.len()];
-            let color = RGBColor(r, g, b).to_rgba();
+            // Loosest to tightest: red, green, purple, blue (then orange, cyan).
+            let color = colour([1, 2, 3, 0, 4, 5][k % 6]).to_rgba();
             let idx: Vec<usize> = (0..ns.len())
                 .filter(|&i| set_of[i] == *set && finite(&lo[i]) && finite(&hi[i]))
                 .collect();
