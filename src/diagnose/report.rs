@@ -46,6 +46,14 @@ fn bars(
             .configure_mesh()
             .disable_x_mesh()
             .x_labels(0)
+            .y_label_formatter(&|v| {
+                // The band below zero holds the group labels.
+                if *v < 0.0 {
+                    String::new()
+                } else {
+                    format!("{v:.2}")
+                }
+            })
             .y_desc(ylabel)
             .draw()
             .map_err(plot_err)?;
@@ -124,6 +132,7 @@ fn spectrum_plot(path: &Path, d: &Diagnosis) -> anyhow::Result<()> {
             .configure_mesh()
             .x_desc("frequency (Hz)")
             .y_desc("PSD (N^2 m^2 / Hz)")
+            .y_label_formatter(&|v| format!("{v:.0e}"))
             .draw()
             .map_err(plot_err)?;
         for (j, (a, b)) in d.spectra.iter().zip(&d.spectra_after).enumerate() {
@@ -357,6 +366,9 @@ pub fn write(dir: &Path, d: &Diagnosis) -> anyhow::Result<()> {
             format!("+ {}", st.kind.name()),
             d.gap.iter().map(|g| g.after[i]).collect(),
         ));
+    }
+    if let Some((rms, _)) = &d.confirmed_only {
+        steps.push(("confirmed effects only (refit)".into(), rms.clone()));
     }
     steps.push((
         "noise floor".into(),
