@@ -13,7 +13,6 @@ use super::library::Kind;
 use super::{Diagnosis, Verdict};
 use crate::model::Model;
 use crate::sim::scenario::{EffectSpec, Scenario};
-use nalgebra::DVector;
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use serde::Serialize;
@@ -262,47 +261,29 @@ pub fn category(i: usize) -> (Category, Option<usize>) {
     }
 }
 
-/// The nominal model's validation mean square (last 30 %), fitted as the diagnosis does.
+/// The fraction of each case's data the diagnosis holds out for validation.
+const HOLDOUT: f64 = 0.3;
+
+/// The nominal model's validation mean square (the last [`HOLDOUT`]), fitted as the diagnosis
+/// does.
 fn nominal_validation_ms(
     model: &Model,
     tr: &crate::io::samples::Trajectory,
     opts: &super::Options,
 ) -> anyhow::Result<f64> {
-    let cut = (0.7 * tr.len() as f64).round() as usize;
-    let (train, val) = (tr.slice(0..cut), tr.slice(cut..tr.len()));
-    let prior = model.parameters();
-    let ctx = super::library::Context::new(
-        model,
-        &prior,
-        &train,
-        opts.min_speed,
-        opts.processing_cutoff,
-    );
-    let mut ne = crate::ident::NormalEquations::new(model.dof(), model.layout().len);
-    ctx.for_each_row(&train, 0..train.len(), &[], &mut |_, z, tau| ne.add(z, tau));
-    let fit = crate::ident::identify(
-        model,
-        &ne.finish(),
-        &prior,
-        &crate::ident::Options::new(opts.constraints),
-    )?;
-    let vctx = super::library::Context::new(
-        model,
-        &fit.theta,
-        &val,
-        opts.min_speed,
-        opts.processing_cutoff,
-    );
+    let (train, val) = super::holdout_split(tr, HOLDOUT);
+    let fit = super::fit_nominal(model, &train, opts)?;
+    let ctx = super::library::Context::new(model, &fit.theta, &val, opts.processing_cutoff);
+    let (_, res) = super::residual_rms(&ctx, &val, &[], &fit.theta, opts.min_speed);
+    // Pooled over every joint-sample at or above the speed threshold.
+    let n = model.dof();
     let (mut s, mut c) = (0.0, 0usize);
-    vctx.for_each_row(&val, 0..val.len(), &[], &mut |k, z, tau| {
-        let r = DVector::from_column_slice(tau) - z * &fit.theta;
-        for j in 0..model.dof() {
-            if !vctx.masked(val.qd_at(k)[j]) {
-                s += r[j] * r[j];
-                c += 1;
-            }
+    for (i, r) in res.iter().enumerate() {
+        if !super::library::slow(val.qd_at(i / n)[i % n], opts.min_speed) {
+            s += r * r;
+            c += 1;
         }
-    });
+    }
     Ok(s / c.max(1) as f64)
 }
 
@@ -367,6 +348,12 @@ pub fn run_case(
         .map_err(|e| anyhow::anyhow!("case {i}: {e}"))?;
     let rec = crate::sim::run(model, &sc, &mut |_| {})
         .map_err(|e| anyhow::anyhow!("case {i}: simulation: {e}"))?;
+    // The description the user gives: without rotors when their inertia is left out.
+    let description = if injected.iter().any(|x| x.kind == Some(Kind::RotorInertia)) {
+        model.without_rotors()
+    } else {
+        model.clone()
+    };
     // The benchmark's own yardstick (the diagnosis never sees it): how much the effect raises
     // the nominal model's validation error over the same experiment without it.
     let visible_gap = if injected.is_empty() {
@@ -376,11 +363,6 @@ pub fn run_case(
         twin.effects.clear();
         let clean = crate::sim::run(model, &twin, &mut |_| {})
             .map_err(|e| anyhow::anyhow!("case {i}: clean twin: {e}"))?;
-        let description = if injected.iter().any(|x| x.kind == Some(Kind::RotorInertia)) {
-            model.without_rotors()
-        } else {
-            model.clone()
-        };
         let with = nominal_validation_ms(&description, &rec.processed, opts)?;
         // Rotor inertia left out changes the description, not the data.
         let without = if description.rotor_count() < model.rotor_count() {
@@ -391,11 +373,6 @@ pub fn run_case(
         (with - without).max(0.0).sqrt()
     };
     // The files a user would give.
-    let description = if injected.iter().any(|x| x.kind == Some(Kind::RotorInertia)) {
-        model.without_rotors()
-    } else {
-        model.clone()
-    };
     std::fs::create_dir_all(dir)?;
     let robot = dir.join("robot.urdf");
     let data = dir.join("data.csv");
@@ -404,29 +381,15 @@ pub fn run_case(
     drop(rec);
     let start = std::time::Instant::now();
     let given = crate::io::load_robot(robot.to_str().expect("utf-8 path"))?;
-    let d = super::diagnose_files(&given, std::slice::from_ref(&data), &[], 0.3, opts)?;
+    let d = super::diagnose_files(&given, std::slice::from_ref(&data), &[], HOLDOUT, opts)?;
     let seconds = start.elapsed().as_secs_f64();
     let found: Vec<String> = d
         .effects
         .iter()
-        .map(|e| {
-            std::iter::once(e.kind)
-                .chain(e.ambiguous_with.iter().copied())
-                .map(|k| k.name())
-                .collect::<Vec<_>>()
-                .join("|")
-        })
+        .map(|e| e.group().map(|k| k.name()).collect::<Vec<_>>().join("|"))
         .collect();
-    let in_first = |k: Kind| {
-        d.effects
-            .first()
-            .is_some_and(|e| e.kind == k || e.ambiguous_with.contains(&k))
-    };
-    let anywhere = |k: Kind| {
-        d.effects
-            .iter()
-            .any(|e| e.kind == k || e.ambiguous_with.contains(&k))
-    };
+    let in_first = |k: Kind| d.effects.first().is_some_and(|e| e.group().any(|g| g == k));
+    let anywhere = |k: Kind| d.effects.iter().any(|e| e.group().any(|g| g == k));
     let (mut top1, mut top1_unique, mut both_found, mut magnitude_error_) =
         (None, None, None, None);
     match category {

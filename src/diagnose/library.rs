@@ -126,6 +126,12 @@ impl Kind {
     }
 }
 
+/// Whether a joint moving at `qd` (rad/s) is slower than `min_speed`: its rows are left out of
+/// every fit and error of the diagnosis.
+pub fn slow(qd: f64, min_speed: f64) -> bool {
+    qd.abs() < min_speed
+}
+
 /// A consumer of augmented rows: `(sample, Z_k, τ_k)`.
 pub type RowSink<'f> = dyn FnMut(usize, &DMatrix<f64>, &[f64]) + 'f;
 
@@ -168,7 +174,6 @@ pub struct Context<'a> {
     /// Two unit vectors perpendicular to gravity (the tilt directions).
     perp: [Vector3<f64>; 2],
     gear: Vec<f64>,
-    min_speed: f64,
 }
 
 /// `x` (sample-major, `n` columns) processed like an encoder angle: `F(x)`, `F(D x)`,
@@ -217,18 +222,12 @@ fn derivative(x: &[f64], t: &[f64], n: usize) -> Vec<f64> {
 
 impl<'a> Context<'a> {
     /// The context of trajectory `tr` (with q̈) for nominal parameters `theta0` (the model's
-    /// layout, no extra columns); joints slower than `min_speed` (rad/s) are left out.
+    /// layout, no extra columns).
     ///
     /// `cutoff` (Hz) is the low-pass of the data's processing (zero-phase 2nd-order
     /// Butterworth of q and of each derivative, as `physid simulate` and `load_trajectory` do),
     /// applied to the predicted torque for the compliance columns; capped at 0.4 × the rate.
-    pub fn new(
-        model: &'a Model,
-        theta0: &DVector<f64>,
-        tr: &Trajectory,
-        min_speed: f64,
-        cutoff: f64,
-    ) -> Self {
+    pub fn new(model: &'a Model, theta0: &DVector<f64>, tr: &Trajectory, cutoff: f64) -> Self {
         let n = model.dof();
         let l = model.layout();
         let theta0 = theta0.rows(0, l.len).into_owned();
@@ -268,29 +267,24 @@ impl<'a> Context<'a> {
             defl,
             perp: [u1, u2],
             gear,
-            min_speed,
         }
     }
 
-    /// Whether a joint moving at `qd` (rad/s) is left out of the fit.
-    pub fn masked(&self, qd: f64) -> bool {
-        qd.abs() < self.min_speed
-    }
-
-    /// The two unit vectors perpendicular to gravity along which a tilt is estimated.
-    pub fn tilt_directions(&self) -> [Vector3<f64>; 2] {
-        self.perp
+    /// The model.
+    pub fn model(&self) -> &'a Model {
+        self.model
     }
 
     /// Calls `f(k, Z_k, τ_k)` for every sample `k` in `range` with `Z_k = [Y_k | E_k]`, the
     /// effect columns of `variants` in order after the model's. Rows of joints slower than
     /// `min_speed` (rad/s) are zero in `Z_k` and `τ_k` (friction near zero speed is outside the
-    /// model); [`Context::masked`] tells which.
+    /// model); [`slow`] tells which.
     pub fn for_each_row(
         &self,
         tr: &Trajectory,
         range: std::ops::Range<usize>,
         variants: &[Variant],
+        min_speed: f64,
         f: &mut RowSink,
     ) {
         let model = self.model;
@@ -387,7 +381,7 @@ impl<'a> Context<'a> {
             }
             tau_m.copy_from_slice(tau);
             for j in 0..n {
-                if self.masked(qd[j]) {
+                if slow(qd[j], min_speed) {
                     z.row_mut(j).fill(0.0);
                     tau_m[j] = 0.0;
                 }

@@ -226,6 +226,13 @@ pub struct EffectEstimate {
     pub separate_by: Option<String>,
 }
 
+impl EffectEstimate {
+    /// The kept kind, then those the data cannot tell apart from it.
+    pub fn group(&self) -> impl Iterator<Item = Kind> + '_ {
+        std::iter::once(self.kind).chain(self.ambiguous_with.iter().copied())
+    }
+}
+
 /// Validation error of one joint along the selection.
 #[derive(Clone, Debug, Serialize)]
 pub struct JointGap {
@@ -340,9 +347,9 @@ pub fn magnitudes_of(kind: Kind, c: &[f64], n: usize, gravity: f64) -> Vec<f64> 
     }
 }
 
-/// The residual `τ − Z θ` over `tr` for the model plus `variants` (`ctx` without a speed
-/// mask), and its per-joint RMS over the joint-samples at or above `min_speed`.
-fn validation_rms(
+/// The residual `τ − Z θ` over `tr` for the model plus `variants` (all rows), and its per-joint
+/// RMS over the joint-samples at or above `min_speed`.
+pub(crate) fn residual_rms(
     ctx: &Context,
     tr: &Trajectory,
     variants: &[library::Variant],
@@ -351,7 +358,7 @@ fn validation_rms(
 ) -> (Vec<f64>, Vec<f64>) {
     let n = tr.dof();
     let mut res = Vec::with_capacity(tr.len() * n);
-    ctx.for_each_row(tr, 0..tr.len(), variants, &mut |_, z, tau| {
+    ctx.for_each_row(tr, 0..tr.len(), variants, 0.0, &mut |_, z, tau| {
         let pred = z * theta;
         res.extend((0..n).map(|j| tau[j] - pred[j]));
     });
@@ -359,7 +366,7 @@ fn validation_rms(
         .map(|j| {
             let (mut s, mut c) = (0.0, 0usize);
             for k in 0..tr.len() {
-                if tr.qd_at(k)[j].abs() >= min_speed {
+                if !library::slow(tr.qd_at(k)[j], min_speed) {
                     s += res[k * n + j].powi(2);
                     c += 1;
                 }
@@ -404,6 +411,26 @@ fn spectra(model: &Model, tr: &Trajectory, res: &[f64]) -> Vec<spectrum::Spectru
         .collect()
 }
 
+/// The nominal model: `model`'s parameters identified on `train` under `opts.constraints`,
+/// from the rows of joints at or above `opts.min_speed`, with the description as prior.
+pub fn fit_nominal(
+    model: &Model,
+    train: &Trajectory,
+    opts: &Options,
+) -> Result<ident::Identified, DiagnoseError> {
+    let prior = model.parameters();
+    let mut ne = NormalEquations::new(model.dof(), model.layout().len);
+    Context::new(model, &prior, train, opts.processing_cutoff).for_each_row(
+        train,
+        0..train.len(),
+        &[],
+        opts.min_speed,
+        &mut |_, z, tau| ne.add(z, tau),
+    );
+    let iopts = ident::Options::new(opts.constraints);
+    Ok(ident::identify(model, &ne.finish(), &prior, &iopts)?)
+}
+
 /// Diagnoses `model` on `train` (identification and cross-validated selection) and
 /// `validate` (before/after errors, where, noise floor). Both must carry q̈.
 pub fn diagnose(
@@ -433,38 +460,29 @@ pub fn diagnose(
         }
     }
     let iopts = ident::Options::new(opts.constraints);
-    let prior = model.parameters();
     let ms = opts.min_speed;
     let cut = opts.processing_cutoff;
-    // The nominal model, fitted on the rows above the speed threshold.
-    let mut ne0 = NormalEquations::new(n, model.layout().len);
-    Context::new(model, &prior, train, ms, cut).for_each_row(
-        train,
-        0..train.len(),
-        &[],
-        &mut |_, z, tau| ne0.add(z, tau),
-    );
-    let nominal = ident::identify(model, &ne0.finish(), &prior, &iopts)?;
+    let nominal = fit_nominal(model, train, opts)?;
     let theta0 = nominal.theta.clone();
-    let ctx_train = Context::new(model, &theta0, train, ms, cut);
-    let ctx_val = Context::new(model, &theta0, validate, 0.0, cut);
+    let ctx_train = Context::new(model, &theta0, train, cut);
+    let ctx_val = Context::new(model, &theta0, validate, cut);
     let variants = library::variants(&opts.kinds);
     let k = opts.selection.folds.max(2);
     let folds = select::Folds::build(
         &ctx_train,
-        model,
         train,
         0..train.len(),
         variants,
         k,
         &opts.train_runs,
+        ms,
     );
     let selection = select::forward_select(&folds, model, &iopts, &opts.selection)?;
     let all = folds.sum_except(usize::MAX);
     let g = model.gravity.norm().max(1e-12);
     // How far: refit on all training data with the first i effects.
     let mut per_step_rms = vec![];
-    let mut final_res = vec![];
+    let (mut nominal_res, mut final_res) = (vec![], vec![]);
     let mut final_theta = theta0.clone();
     for i in 0..=selection.chosen.len() {
         let chosen = &selection.chosen[..i];
@@ -474,25 +492,22 @@ pub fn diagnose(
             folds.fit(model, &all, chosen, &iopts)?
         };
         let vs: Vec<_> = chosen.iter().map(|&v| folds.variants[v]).collect();
-        let (rms, res) = validation_rms(&ctx_val, validate, &vs, &theta, ms);
+        let (rms, res) = residual_rms(&ctx_val, validate, &vs, &theta, ms);
         per_step_rms.push(rms);
+        if i == 0 {
+            nominal_res = res.clone();
+        }
         if i == selection.chosen.len() {
             final_res = res;
             final_theta = theta;
         }
     }
-    let (_, nominal_res) = validation_rms(&ctx_val, validate, &[], &theta0, ms);
     // Identifiable fraction of each effect column against the model's columns.
     let p0 = model.layout().len;
     let hyy = all.yty.view((0, 0), (p0, p0)).into_owned()
         + nalgebra::DMatrix::identity(p0, p0) * (1e-12 * all.yty.diagonal().max());
     let identifiable = |col: usize| {
-        let zc = all
-            .yty
-            .view((0, col), (p0, 1))
-            .into_owned()
-            .column(0)
-            .into_owned();
+        let zc = all.yty.column(col).rows(0, p0).into_owned();
         let x = ident::analysis::least_squares(&hyy, &zc);
         let zz = all.yty[(col, col)];
         if zz > 0.0 {
@@ -573,15 +588,14 @@ pub fn diagnose(
         .iter()
         .map(|&v| folds.variants[v])
         .collect();
-    let ctx_train_all = Context::new(model, &theta0, train, 0.0, cut);
-    let (_, train_res) = validation_rms(&ctx_train_all, train, &final_vs, &final_theta, ms);
+    let (_, train_res) = residual_rms(&ctx_train, train, &final_vs, &final_theta, ms);
     let both = concatenate(vec![train.clone(), validate.clone()]);
     let masked_res: Vec<f64> = train_res
         .iter()
         .chain(&final_res)
         .enumerate()
         .map(|(i, r)| {
-            if both.qd_at(i / n)[i % n].abs() < ms {
+            if library::slow(both.qd_at(i / n)[i % n], ms) {
                 f64::NAN
             } else {
                 *r
@@ -640,7 +654,7 @@ pub fn diagnose(
             .collect();
         let theta = folds.fit(model, &all, &keep, &iopts)?;
         let vs: Vec<_> = keep.iter().map(|&v| folds.variants[v]).collect();
-        let (rms, _) = validation_rms(&ctx_val, validate, &vs, &theta, ms);
+        let (rms, _) = residual_rms(&ctx_val, validate, &vs, &theta, ms);
         let o = mean_square(&rms).sqrt();
         Some((rms, o))
     };
@@ -657,8 +671,7 @@ pub fn diagnose(
             if e.ambiguous_with.is_empty() {
                 e.kind.name().to_string()
             } else {
-                let mut g = vec![e.kind.name()];
-                g.extend(e.ambiguous_with.iter().map(|k| k.name()));
+                let g: Vec<&str> = e.group().map(|k| k.name()).collect();
                 format!("one of {{{}}} (ambiguous)", g.join(", "))
             }
         })
@@ -726,6 +739,12 @@ pub fn diagnose(
     })
 }
 
+/// Splits `tr` into its first `1 − holdout` (training) and its last `holdout` (validation).
+pub fn holdout_split(tr: &Trajectory, holdout: f64) -> (Trajectory, Trajectory) {
+    let cut = ((1.0 - holdout) * tr.len() as f64).round() as usize;
+    (tr.slice(0..cut), tr.slice(cut..tr.len()))
+}
+
 /// Joins trajectories end to end (times shifted so they keep increasing by the first one's
 /// median step).
 pub fn concatenate(parts: Vec<Trajectory>) -> Trajectory {
@@ -779,8 +798,7 @@ pub fn diagnose_files(
         if !(holdout > 0.0 && holdout < 1.0) {
             anyhow::bail!("the held-out fraction {holdout} must lie strictly between 0 and 1");
         }
-        let cut = ((1.0 - holdout) * all.len() as f64).round() as usize;
-        (all.slice(0..cut), all.slice(cut..all.len()))
+        holdout_split(&all, holdout)
     } else {
         // Several training runs: leave one run out in the selection.
         opts.train_runs = lens;

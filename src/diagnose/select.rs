@@ -14,7 +14,7 @@
 //! data as well: the one with fewest columns is kept (Occam), and equally simple ones are reported
 //! together as ambiguous.
 
-use super::library::{Context, Kind, Variant};
+use super::library::{slow, Context, Kind, Variant};
 use crate::ident::{identify, IdentError, NormalEquations, Options};
 use crate::io::samples::Trajectory;
 use crate::model::Model;
@@ -80,12 +80,12 @@ impl Folds {
     /// (leave-one-run-out).
     pub fn build(
         ctx: &Context,
-        model: &Model,
         tr: &Trajectory,
         range: std::ops::Range<usize>,
         variants: Vec<Variant>,
         k: usize,
         runs: &[usize],
+        min_speed: f64,
     ) -> Self {
         let by_run = runs.len() >= 2 && runs.iter().sum::<usize>() == range.len();
         let k = if by_run { runs.len() } else { k };
@@ -96,6 +96,7 @@ impl Folds {
                 Some(*acc)
             })
             .collect();
+        let model = ctx.model();
         let n = model.dof();
         let p0 = model.layout().len;
         let mut offsets = vec![];
@@ -107,14 +108,14 @@ impl Folds {
         let mut blocks: Vec<NormalEquations> = (0..k).map(|_| NormalEquations::new(n, c)).collect();
         let (start, len) = (range.start, range.len());
         let mut rows = vec![0usize; k];
-        ctx.for_each_row(tr, range, &variants, &mut |s, z, tau| {
+        ctx.for_each_row(tr, range, &variants, min_speed, &mut |s, z, tau| {
             let b = if by_run {
                 ends.partition_point(|&e| e <= s - start).min(k - 1)
             } else {
                 ((s - start) * k / len).min(k - 1)
             };
             blocks[b].add(z, tau);
-            rows[b] += tr.qd_at(s).iter().filter(|w| !ctx.masked(**w)).count();
+            rows[b] += tr.qd_at(s).iter().filter(|w| !slow(**w, min_speed)).count();
         });
         Self {
             p0,
