@@ -4,7 +4,7 @@
 
 use super::blind::{CaseResult, Scores};
 use super::Diagnosis;
-use crate::experiment::plots::colour;
+use crate::experiment::plots::{colour, legend};
 use crate::experiment::tables;
 use plotters::prelude::*;
 use polars::prelude::*;
@@ -81,13 +81,7 @@ fn bars(
                 .label(name.clone())
                 .legend(move |(x, y)| Rectangle::new([(x, y - 5), (x + 12, y + 5)], c.filled()));
         }
-        chart
-            .configure_series_labels()
-            .border_style(BLACK)
-            .background_style(WHITE.mix(0.85))
-            .position(SeriesLabelPosition::UpperRight)
-            .draw()
-            .map_err(plot_err)?;
+        legend(&mut chart).map_err(plot_err)?;
         root.present().map_err(plot_err)?;
     }
     crate::io::write_atomic(path, svg.as_bytes())?;
@@ -156,13 +150,7 @@ fn spectrum_plot(path: &Path, d: &Diagnosis) -> anyhow::Result<()> {
                 .draw_series(LineSeries::new(pts(b), c.mix(0.6).stroke_width(1)))
                 .map_err(plot_err)?;
         }
-        chart
-            .configure_series_labels()
-            .border_style(BLACK)
-            .background_style(WHITE.mix(0.85))
-            .position(SeriesLabelPosition::UpperRight)
-            .draw()
-            .map_err(plot_err)?;
+        legend(&mut chart).map_err(plot_err)?;
         root.present().map_err(plot_err)?;
     }
     crate::io::write_atomic(path, svg.as_bytes())?;

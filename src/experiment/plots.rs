@@ -23,6 +23,21 @@ pub fn colour(k: usize) -> RGBColor {
     RGBColor(r, g, b)
 }
 
+/// Draws the series legend of `chart` (upper right, framed) the same way in every plot.
+pub fn legend<'a, DB, CT>(chart: &mut ChartContext<'a, DB, CT>) -> Result<(), String>
+where
+    DB: DrawingBackend + 'a,
+    CT: CoordTranslate,
+{
+    chart
+        .configure_series_labels()
+        .border_style(BLACK)
+        .background_style(WHITE.mix(0.85))
+        .position(SeriesLabelPosition::UpperRight)
+        .draw()
+        .map_err(|e| e.to_string())
+}
+
 /// Plots `{value}_median` with the `{value}_q25`..`{value}_q75` band against n_s per set.
 pub fn plot_vs_ns(
     summary: &DataFrame,
@@ -119,13 +134,7 @@ pub fn plot_vs_ns(
                     PathElement::new(vec![(x, y), (x + 20, y)], color.stroke_width(2))
                 });
         }
-        chart
-            .configure_series_labels()
-            .border_style(BLACK)
-            .background_style(WHITE.mix(0.85))
-            .position(SeriesLabelPosition::UpperRight)
-            .draw()
-            .map_err(|e| draw(e.to_string()))?;
+        legend(&mut chart).map_err(draw)?;
         root.present().map_err(|e| draw(e.to_string()))?;
     }
     crate::io::write_atomic(path, svg.as_bytes())
