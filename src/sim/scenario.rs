@@ -401,6 +401,11 @@ fn per_joint(v: &[f64], n: usize, key: &str) -> Result<(), ScenarioError> {
     })
 }
 
+fn per_joint_non_negative(v: &[f64], n: usize, key: &str) -> Result<(), ScenarioError> {
+    per_joint(v, n, key)?;
+    check(v.iter().all(|c| *c >= 0.0), key, || "must be >= 0".into())
+}
+
 impl Scenario {
     /// Checks every value against the robot's joint count `n`.
     pub fn validate(&self, n: usize) -> Result<(), ScenarioError> {
@@ -528,12 +533,7 @@ impl Scenario {
                 }
                 EffectSpec::AsymmetricCoulomb { delta } => per_joint(delta, n, &k("delta"))?,
                 EffectSpec::LoadDependentFriction { coefficient } => {
-                    per_joint(coefficient, n, &k("coefficient"))?;
-                    check(
-                        coefficient.iter().all(|c| *c >= 0.0),
-                        &k("coefficient"),
-                        || "must be >= 0".into(),
-                    )?;
+                    per_joint_non_negative(coefficient, n, &k("coefficient"))?
                 }
                 EffectSpec::Cogging {
                     amplitude,
@@ -555,12 +555,7 @@ impl Scenario {
                     })?;
                 }
                 EffectSpec::QuadraticDamping { coefficient } => {
-                    per_joint(coefficient, n, &k("coefficient"))?;
-                    check(
-                        coefficient.iter().all(|c| *c >= 0.0),
-                        &k("coefficient"),
-                        || "must be >= 0".into(),
-                    )?;
+                    per_joint_non_negative(coefficient, n, &k("coefficient"))?
                 }
                 EffectSpec::Tilt { roll, pitch } => {
                     check(
