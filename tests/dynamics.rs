@@ -282,3 +282,40 @@ fn rotor_gyroscopic_coupling_is_what_the_reflected_model_drops() {
         assert!(diff[(i, i)].abs() < 0.2 * hf[(i, i)], "{diff}");
     }
 }
+
+/// Rotors frozen into the bodies they sit on are the reflected-inertia model minus its
+/// armature: `H_reflected(q) = H_frozen(q) + diag(N² I_axis)`, and gravity is the same.
+#[test]
+fn frozen_rotors_are_the_reflected_model_without_its_armature() {
+    for model in models() {
+        if model.rotor_count() == 0 {
+            continue;
+        }
+        let reflected = model.clone().with_rotor_model(RotorModel::Reflected);
+        let frozen = model.with_rotors_frozen();
+        assert_eq!(frozen.rotor_count(), 0);
+        let n = model.dof();
+        let (mut dr, mut df) = (Data::new(&reflected), Data::new(&frozen));
+        for seed in 0..5 {
+            let [q, _, _] = random_state(seed, n, 1.0);
+            let hr = crba(&reflected, &mut dr, &q).clone();
+            let hf = crba(&frozen, &mut df, &q).clone();
+            let arm =
+                DMatrix::from_diagonal(&DVector::from_fn(n, |i, _| dynamics::armature(&model, i)));
+            let err = (&hr - &hf - &arm).norm();
+            assert!(
+                err < 1e-10 * hr.norm(),
+                "{}: H differs by {err}",
+                model.name
+            );
+            let zero = vec![0.0; n];
+            let gr = rnea(&reflected, &mut dr, &q, &zero, &zero).clone();
+            let gf = rnea(&frozen, &mut df, &q, &zero, &zero).clone();
+            assert!(
+                (&gr - &gf).norm() < 1e-10 * (1.0 + gr.norm()),
+                "{}",
+                model.name
+            );
+        }
+    }
+}

@@ -373,6 +373,21 @@ impl Model {
             .expect("removing rotors keeps a valid model")
     }
 
+    /// The model of a designer who left the rotors' spin out: each rotor's mass properties are
+    /// added to the body it sits on (the parent of its joint's body; lost for a rotor on the
+    /// fixed base), and the rotors removed. What is missing is then only what spinning adds:
+    /// the reflected inertia `N² I_axis` and the gyroscopic coupling.
+    pub fn with_rotors_frozen(&self) -> Model {
+        let mut m = self.without_rotors();
+        for b in &self.bodies {
+            if let (Some(r), Some(p)) = (&b.rotor, b.parent) {
+                let frozen = r.inertia.transformed(&r.x_rot.inverse());
+                m.bodies[p].inertia = InertialParams(m.bodies[p].inertia.0 + frozen.0);
+            }
+        }
+        m
+    }
+
     /// Number of degrees of freedom (one per joint).
     pub fn dof(&self) -> usize {
         self.bodies.len()
