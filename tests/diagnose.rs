@@ -217,23 +217,32 @@ fn blind_cases_are_diagnosed_from_files_and_scored() {
     let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("scenarios/blind.toml");
     let (sc, m, _) = physid::io::load_scenario(&path).unwrap();
     let dir = tempfile::tempdir().unwrap();
-    let opts = DiagOptions::default();
+    let e = physid::diagnose::blind::DESCRIPTION_ERROR;
+    let opts = DiagOptions {
+        description_uncertainty: Some(e),
+        ..Default::default()
+    };
     // Case 0 is clean, case 7 a spring (slot 3), case 12 rotor inertia left out (slot 8).
-    let clean =
-        physid::diagnose::blind::run_case(0, 3, &sc, &m, &opts, &dir.path().join("a")).unwrap();
+    let run = |i: usize, sub: &str| {
+        physid::diagnose::blind::run_case(i, 3, &sc, &m, e, &opts, &dir.path().join(sub)).unwrap()
+    };
+    let clean = run(0, "a");
     assert!(clean.found.is_empty(), "{clean:?}");
-    let spring =
-        physid::diagnose::blind::run_case(7, 3, &sc, &m, &opts, &dir.path().join("b")).unwrap();
+    let spring = run(7, "b");
     assert_eq!(spring.injected, vec!["spring".to_string()]);
     assert_eq!(spring.top1, Some(true), "{spring:?}");
     assert!(spring.magnitude_error.unwrap() < 0.2, "{spring:?}");
     assert!(spring.visible_gap > 0.15);
-    let rotor =
-        physid::diagnose::blind::run_case(12, 3, &sc, &m, &opts, &dir.path().join("c")).unwrap();
+    let rotor = run(12, "c");
     assert_eq!(rotor.injected, vec!["rotor_inertia".to_string()]);
-    // The description written for the diagnosis has no rotors.
+    // The description written for the diagnosis has its rotors frozen into the links they sit
+    // on, and its links' masses carry errors of the stated size.
     let given = physid::io::load_robot(dir.path().join("c/robot.urdf").to_str().unwrap()).unwrap();
     assert_eq!(given.rotor_count(), 0);
+    for (b, t) in given.bodies.iter().zip(&m.with_rotors_frozen().bodies) {
+        let rel = (b.inertia.mass() - t.inertia.mass()) / t.inertia.mass();
+        assert!(rel != 0.0 && rel.abs() < 5.0 * e, "{}: {rel}", b.name);
+    }
     let s = physid::diagnose::blind::score(&[clean, spring, rotor]);
     assert_eq!((s.clean, s.single), (1, 2));
     assert_eq!(s.clean_no_claim, 1.0);
@@ -320,4 +329,95 @@ fn several_training_runs_are_cross_validated_one_run_out() {
     assert_eq!(d.effects[0].kind, Kind::Spring);
     assert_eq!(d.selection.steps[0].scores[0].blocks_improved, 2);
     assert!(d.confirmed[0]);
+}
+
+// ---- Absorbed effects, revealed against a description with stated errors. ----
+
+/// The blind scenario with `effects`, diagnosed (first 70 % / last 30 %) against a description
+/// whose inertial parameters carry 10 % errors, told `told`.
+fn diagnosed_against_description(
+    effects: Vec<EffectSpec>,
+    seed: u64,
+    told: Option<f64>,
+) -> Diagnosis {
+    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("scenarios/blind.toml");
+    let (mut sc, m, _) = physid::io::load_scenario(&path).unwrap();
+    sc.simulation.seed = seed;
+    sc.effects = effects;
+    let rec = physid::sim::run(&m, &sc, &mut |_| {}).unwrap();
+    use rand::SeedableRng;
+    let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(seed + 100);
+    let description = physid::diagnose::anchor::perturbed_description(&m, 0.1, &mut rng);
+    let d = &rec.processed;
+    let cut = 14000;
+    let opts = DiagOptions {
+        description_uncertainty: told,
+        ..Default::default()
+    };
+    diagnose(
+        &description,
+        &d.slice(0..cut),
+        &d.slice(cut..d.len()),
+        &opts,
+    )
+    .unwrap()
+}
+
+#[test]
+fn a_gain_error_absorbed_by_identification_is_revealed_by_the_description() {
+    let gain = vec![1.0, 1.25, 1.0];
+    let effects = || vec![EffectSpec::TorqueGain { gain: gain.clone() }];
+    // Without the description test there is nothing to find: identification absorbs the gain.
+    let blind = diagnosed_against_description(effects(), 5, None);
+    assert!(blind.effects.is_empty(), "{:?}", blind.effects);
+    assert!(
+        blind.overall[0] < 1.2 * blind.noise_floor,
+        "{}",
+        blind.summary
+    );
+    let d = diagnosed_against_description(effects(), 5, Some(0.1));
+    eprintln!("{}", d.summary);
+    assert_eq!(d.effects.len(), 1, "{}", d.summary);
+    let e = &d.effects[0];
+    assert_eq!(e.kind, Kind::TorqueGain);
+    assert_eq!(e.evidence, physid::diagnose::Evidence::Description);
+    assert!(d.confirmed[0], "not confirmed on the held-out data");
+    assert_eq!(d.verdict, Verdict::Absorbed, "{}", d.summary);
+    // Gain minus the median gain: 0.25 on the hip, 0 elsewhere, within three standard errors.
+    for (j, want) in [0.0, 0.25, 0.0].iter().enumerate() {
+        let m = &e.magnitudes[j];
+        assert!(m.se > 0.0 && m.se < 0.08, "joint {j}: se {}", m.se);
+        assert!(
+            (m.value - want).abs() < 3.0 * m.se,
+            "joint {j}: {} ± {} vs {want}",
+            m.value,
+            m.se
+        );
+    }
+}
+
+#[test]
+fn a_tilted_base_is_revealed_by_the_description_and_clean_data_claim_nothing() {
+    let (roll, pitch) = (0.2, -0.15);
+    let d = diagnosed_against_description(vec![EffectSpec::Tilt { roll, pitch }], 6, Some(0.1));
+    eprintln!("{}", d.summary);
+    let e = &d.effects[0];
+    assert_eq!(e.kind, Kind::Tilt, "{}", d.summary);
+    assert_eq!(e.evidence, physid::diagnose::Evidence::Description);
+    let angle = f64::hypot(roll, pitch);
+    let m = &e.magnitudes[0];
+    assert!(
+        (m.value - angle).abs() < 3.0 * m.se && m.se < 0.1,
+        "tilt {} ± {} vs {angle}",
+        m.value,
+        m.se
+    );
+    for seed in [7, 8] {
+        let d = diagnosed_against_description(vec![], seed, Some(0.1));
+        assert!(d.effects.is_empty(), "seed {seed}: {}", d.summary);
+        assert_eq!(d.verdict, Verdict::NoEffect, "seed {seed}");
+        let rep = d.description_test.as_ref().unwrap();
+        // The data term's correlation time (samples per independent one) is a sane number.
+        assert!(rep.correlation_samples >= 1.0 && rep.correlation_samples < 50.0);
+    }
 }

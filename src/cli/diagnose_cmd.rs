@@ -157,6 +157,8 @@ pub struct Args<'a> {
     pub json: bool,
     /// Report directory.
     pub report: Option<&'a Path>,
+    /// Relative uncertainty of the description's inertial parameters (absorbed-effect test).
+    pub description_uncertainty: Option<f64>,
 }
 
 /// `physid diagnose`.
@@ -170,7 +172,14 @@ pub fn run(a: Args) -> anyhow::Result<()> {
         cutoff,
         json,
         report,
+        description_uncertainty,
     } = a;
+    if let Some(e) = description_uncertainty {
+        anyhow::ensure!(
+            e.is_finite() && e > 0.0,
+            "--description-uncertainty must be a positive fraction (0.1 = 10 %), got {e}"
+        );
+    }
     anyhow::ensure!(
         cutoff.is_finite() && cutoff > 0.0,
         "--cutoff must be a positive frequency in Hz, got {cutoff}"
@@ -178,6 +187,7 @@ pub fn run(a: Args) -> anyhow::Result<()> {
     let opts = diagnose::Options {
         constraints,
         processing_cutoff: cutoff,
+        description_uncertainty,
         ..Default::default()
     };
     let d = diagnose::diagnose_files(&model, data, validate, holdout, &opts)?;
@@ -194,18 +204,51 @@ pub fn run(a: Args) -> anyhow::Result<()> {
     Ok(())
 }
 
+/// The arguments of `physid blind`.
+pub struct BlindArgs<'a> {
+    /// Number of cases.
+    pub cases: usize,
+    /// Seed of every draw.
+    pub seed: u64,
+    /// Base scenario.
+    pub scenario: &'a Path,
+    /// Output directory.
+    pub out: Option<&'a Path>,
+    /// Worker threads (0: all cores).
+    pub threads: usize,
+    /// Relative error of the description's inertial parameters.
+    pub description_error: f64,
+    /// The uncertainty the diagnosis is told (None: the error itself; 0: no description test).
+    pub description_uncertainty: Option<f64>,
+}
+
 /// `physid blind`.
-pub fn blind(
-    cases: usize,
-    seed: u64,
-    scenario: &Path,
-    out: Option<&Path>,
-    threads: usize,
-) -> anyhow::Result<()> {
+pub fn blind(a: BlindArgs) -> anyhow::Result<()> {
+    let BlindArgs {
+        cases,
+        seed,
+        scenario,
+        out,
+        threads,
+        description_error,
+        description_uncertainty,
+    } = a;
     anyhow::ensure!(cases > 0, "--cases must be at least 1");
+    anyhow::ensure!(
+        description_error.is_finite() && (0.0..1.0).contains(&description_error),
+        "--description-error must lie in [0, 1), got {description_error}"
+    );
+    let stated = description_uncertainty.unwrap_or(description_error);
+    anyhow::ensure!(
+        stated.is_finite() && stated >= 0.0,
+        "--description-uncertainty must be >= 0, got {stated}"
+    );
     let (base, model, _) = physid::io::load_scenario(scenario)?;
     let work = tempfile::tempdir()?;
-    let opts = diagnose::Options::default();
+    let opts = diagnose::Options {
+        description_uncertainty: (stated > 0.0).then_some(stated),
+        ..Default::default()
+    };
     let pool = rayon::ThreadPoolBuilder::new()
         .num_threads(threads)
         .build()?;
@@ -219,6 +262,7 @@ pub fn blind(
                     seed,
                     &base,
                     &model,
+                    description_error,
                     &opts,
                     &work.path().join(format!("case{i}")),
                 );

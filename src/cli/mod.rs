@@ -89,6 +89,11 @@ enum Command {
         /// Write a report (report.md, report.json, SVG plots) into this directory.
         #[arg(long)]
         report: Option<std::path::PathBuf>,
+        /// How far the description's inertial parameters can be trusted (relative, 0.1 =
+        /// 10 %): tests the identified parameters against it for effects that identification
+        /// absorbs (torque gain, tilt). Off without it.
+        #[arg(long)]
+        description_uncertainty: Option<f64>,
     },
     /// The blind benchmark: simulated cases with withheld effects, diagnosed from files only,
     /// scored against what was injected.
@@ -109,6 +114,13 @@ enum Command {
         /// Worker threads (0 = all cores).
         #[arg(long, default_value_t = 0)]
         threads: usize,
+        /// Relative error drawn into each case's description's inertial parameters.
+        #[arg(long, default_value_t = physid::diagnose::blind::DESCRIPTION_ERROR)]
+        description_error: f64,
+        /// The description uncertainty the diagnosis is told (default: the error drawn; 0
+        /// turns the description test off).
+        #[arg(long)]
+        description_uncertainty: Option<f64>,
     },
     /// Describe a robot: bodies, rotors, mass properties, consistency margins, and its
     /// dynamics at a reference configuration.
@@ -256,6 +268,7 @@ pub fn run(cli: Cli) -> anyhow::Result<()> {
             cutoff,
             json,
             report,
+            description_uncertainty,
         } => diagnose_cmd::run(diagnose_cmd::Args {
             model: robot.load()?,
             data: &data,
@@ -265,6 +278,7 @@ pub fn run(cli: Cli) -> anyhow::Result<()> {
             cutoff,
             json,
             report: report.as_deref(),
+            description_uncertainty,
         }),
         Command::Blind {
             cases,
@@ -272,7 +286,17 @@ pub fn run(cli: Cli) -> anyhow::Result<()> {
             scenario,
             out,
             threads,
-        } => diagnose_cmd::blind(cases, seed, &scenario, out.as_deref(), threads),
+            description_error,
+            description_uncertainty,
+        } => diagnose_cmd::blind(diagnose_cmd::BlindArgs {
+            cases,
+            seed,
+            scenario: &scenario,
+            out: out.as_deref(),
+            threads,
+            description_error,
+            description_uncertainty,
+        }),
         Command::Model { robot, json } => model_cmd::describe(&robot.load()?, json),
         Command::Export { robot, mjcf, urdf } => {
             let m = robot.load()?;

@@ -304,13 +304,21 @@ fn magnitude_error(d: &Diagnosis, kind: Kind, truth: &[f64]) -> Option<f64> {
     (den > 0.0).then(|| (num / den).sqrt())
 }
 
+/// The relative error of the inertial parameters of the description the benchmark gives by
+/// default (drawn by [`super::anchor::perturbed_description`]); the diagnosis is told the
+/// same uncertainty unless said otherwise.
+pub const DESCRIPTION_ERROR: f64 = 0.1;
+
 /// Runs case `i` of the benchmark with base scenario `base` and its robot `model`, writing its
-/// files into `dir`.
+/// files into `dir`. The description given to the diagnosis carries inertial-parameter errors
+/// of relative size `description_error` (0: the simulated robot's own parameters), drawn from
+/// their own random stream.
 pub fn run_case(
     i: usize,
     seed: u64,
     base: &Scenario,
     model: &Model,
+    description_error: f64,
     opts: &super::Options,
     dir: &Path,
 ) -> anyhow::Result<CaseResult> {
@@ -348,11 +356,19 @@ pub fn run_case(
         .map_err(|e| anyhow::anyhow!("case {i}: {e}"))?;
     let rec = crate::sim::run(model, &sc, &mut |_| {})
         .map_err(|e| anyhow::anyhow!("case {i}: simulation: {e}"))?;
-    // The description the user gives: without rotors when their inertia is left out.
-    let description = if injected.iter().any(|x| x.kind == Some(Kind::RotorInertia)) {
-        model.without_rotors()
+    // The description the user gives: without the rotors' spin when their inertia is left out
+    // (their mass frozen into the bodies they sit on), with errors in its inertial parameters.
+    let exact = if injected.iter().any(|x| x.kind == Some(Kind::RotorInertia)) {
+        model.with_rotors_frozen()
     } else {
         model.clone()
+    };
+    let description = if description_error > 0.0 {
+        let mut drng = ChaCha8Rng::seed_from_u64(seed ^ 0x00de_5c41_b710);
+        drng.set_stream(i as u64);
+        super::anchor::perturbed_description(&exact, description_error, &mut drng)
+    } else {
+        exact
     };
     // The benchmark's own yardstick (the diagnosis never sees it): how much the effect raises
     // the nominal model's validation error over the same experiment without it.

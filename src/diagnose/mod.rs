@@ -15,6 +15,7 @@
 //! [`diagnose`] runs all three on a training and a validation trajectory; [`blind`] is the
 //! benchmark on simulated data with withheld effects.
 
+pub mod anchor;
 pub mod blind;
 pub mod library;
 pub mod noise;
@@ -166,6 +167,9 @@ pub struct Options {
     /// The residual counts as unexplained when its validation mean square exceeds the noise
     /// floor's by this factor.
     pub unexplained_ratio: f64,
+    /// Relative uncertainty `ε` of the description's inertial parameters: when given, effects
+    /// that identification absorbs are tested against the description ([`anchor`]).
+    pub description_uncertainty: Option<f64>,
 }
 
 impl Default for Options {
@@ -178,6 +182,7 @@ impl Default for Options {
             processing_cutoff: 20.0,
             train_runs: vec![],
             unexplained_ratio: 1.45,
+            description_uncertainty: None,
         }
     }
 }
@@ -200,13 +205,27 @@ pub struct Magnitude {
     pub joint: String,
     /// Value in `unit`.
     pub value: f64,
-    /// Block-jackknife standard error.
+    /// Standard error: block jackknife (cross-validation evidence) or posterior (description
+    /// evidence).
     pub se: f64,
     /// Unit.
     pub unit: String,
     /// Fraction of the effect's column not explained by the rigid-body regressor (1: fully
     /// identifiable; near 0: absorbed by the inertial parameters, the value is meaningless).
+    /// Absorbed effects found against the description are identified through it: 1, their
+    /// precision is in `se`.
     pub identifiable: f64,
+}
+
+/// What an effect was found by.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Evidence {
+    /// It lowers the cross-validated torque error ([`select`]).
+    CrossValidation,
+    /// Identification absorbs it, but the identified parameters depart from the description
+    /// as it dictates ([`anchor`]).
+    Description,
 }
 
 /// One selected effect with its magnitudes.
@@ -214,6 +233,8 @@ pub struct Magnitude {
 pub struct EffectEstimate {
     /// The kind.
     pub kind: Kind,
+    /// What it was found by.
+    pub evidence: Evidence,
     /// Its grid value (Stribeck velocity in rad/s, cogging harmonic), 0 otherwise.
     pub param: f64,
     /// What the magnitude is.
@@ -260,6 +281,9 @@ pub enum Verdict {
     PartiallyExplained,
     /// Nothing in the library explains a residual above the noise floor.
     Unexplained,
+    /// The residual is at the noise floor, but identification absorbs an effect that the
+    /// description reveals.
+    Absorbed,
 }
 
 /// A whole diagnosis.
@@ -283,6 +307,8 @@ pub struct Diagnosis {
     pub spectra_after: Vec<spectrum::Spectrum>,
     /// Which: the selection.
     pub selection: select::Selection,
+    /// Which, for absorbed effects: the description test (with a stated uncertainty).
+    pub description_test: Option<anchor::Report>,
     /// The selected effects and their magnitudes.
     pub effects: Vec<EffectEstimate>,
     /// How far: per joint.
@@ -344,6 +370,30 @@ pub fn magnitudes_of(kind: Kind, c: &[f64], n: usize, gravity: f64) -> Vec<f64> 
         Kind::Cogging => (0..n).map(|j| c[j].hypot(c[n + j])).collect(),
         Kind::Tilt => vec![(c[0].hypot(c[1]) / gravity).atan()],
         _ => c.to_vec(),
+    }
+}
+
+/// First-order standard error of a one-value magnitude from its coefficients' errors.
+fn magnitude_se(kind: Kind, c: &[f64], se: &[f64], n: usize, gravity: f64) -> f64 {
+    let base = magnitudes_of(kind, c, n, gravity)[0];
+    let mut v = 0.0;
+    for i in 0..c.len() {
+        let h = 1e-6 * c[i].abs().max(1e-9);
+        let mut cp = c.to_vec();
+        cp[i] += h;
+        let d = (magnitudes_of(kind, &cp, n, gravity)[0] - base) / h;
+        v += (d * se[i]).powi(2);
+    }
+    v.sqrt()
+}
+
+/// Sample rate of `tr` (Hz) from its first and last time stamps.
+fn sample_rate(tr: &Trajectory) -> f64 {
+    let m = tr.len();
+    if m > 1 {
+        (m - 1) as f64 / (tr.t[m - 1] - tr.t[0])
+    } else {
+        1.0
     }
 }
 
@@ -480,24 +530,111 @@ pub fn diagnose(
     let selection = select::forward_select(&folds, model, &iopts, &opts.selection)?;
     let all = folds.sum_except(usize::MAX);
     let g = model.gravity.norm().max(1e-12);
+    // Absorbed effects, against the description when its uncertainty is stated and the
+    // cross-validation claims nothing: a visible effect's columns are linearized (a delay to
+    // first order, a rotor without its gyroscopic terms), and what they miss biases θ in ways
+    // the prior test would misread as an absorbed effect.
+    let description_test = match opts.description_uncertainty {
+        Some(eps) if selection.chosen.is_empty() => {
+            let (_, res) = residual_rms(&ctx_train, train, &[], &theta0, ms);
+            let masked: Vec<f64> = res
+                .iter()
+                .enumerate()
+                .map(|(i, r)| {
+                    if library::slow(train.qd_at(i / n)[i % n], ms) {
+                        f64::NAN
+                    } else {
+                        *r
+                    }
+                })
+                .collect();
+            let fast: Vec<f64> = masked.iter().copied().filter(|r| r.is_finite()).collect();
+            let s2 = fast.iter().map(|r| r * r).sum::<f64>() / fast.len().max(1) as f64;
+            let tau_c = anchor::correlation_time(&masked, n, sample_rate(train));
+            let anchor = anchor::Anchor {
+                ne: &all,
+                weight: 1.0 / (s2 * tau_c).max(1e-300),
+                mean: model.parameters(),
+                precision: anchor::prior_precision(model, eps),
+            };
+            // A kind that is one of the model's parameters (rotor inertia, when the model
+            // has rotors) would test the description, not an unmodelled effect.
+            let exclude: Vec<Kind> = if model.rotor_count() > 0 {
+                vec![Kind::RotorInertia]
+            } else {
+                vec![]
+            };
+            let (mut steps, mut stop) = anchor::select(
+                &anchor,
+                &folds,
+                &[],
+                &exclude,
+                opts.selection.max_effects,
+                opts.selection.tie,
+            );
+            // The test is in-sample: each step must pass again on the held-out data alone.
+            if !steps.is_empty() {
+                let vs: Vec<_> = steps.iter().map(|st| folds.variants[st.variant]).collect();
+                let vfolds =
+                    select::Folds::build(&ctx_val, validate, 0..validate.len(), vs, 2, &[], ms);
+                let vall = vfolds.sum_except(usize::MAX);
+                let held = anchor::Anchor {
+                    ne: &vall,
+                    ..anchor
+                };
+                let passed = (0..steps.len())
+                    .take_while(|&k| {
+                        let base = vfolds.columns(&(0..k).collect::<Vec<_>>());
+                        let d = steps[k].kind.columns(n);
+                        let cand: Vec<usize> = (vfolds.offsets[k]..vfolds.offsets[k] + d).collect();
+                        held.fit(&base, &cand).statistic
+                            >= anchor::chi2_upper_quantile(d, anchor::CONFIRM_ALPHA)
+                    })
+                    .count();
+                if passed < steps.len() {
+                    stop = format!(
+                        "{} passed on the training data but not again on the held-out data (dropped)",
+                        steps[passed].kind.name()
+                    );
+                    steps.truncate(passed);
+                }
+            }
+            Some(anchor::Report {
+                uncertainty: eps,
+                residual_ms: s2,
+                correlation_samples: tau_c,
+                steps,
+                stop,
+            })
+        }
+        _ => None,
+    };
+    let anchored: &[anchor::Step] = description_test.as_ref().map_or(&[], |r| &r.steps);
+    let chosen: Vec<usize> = selection
+        .chosen
+        .iter()
+        .copied()
+        .chain(anchored.iter().map(|s| s.variant))
+        .collect();
+    let n_cv = selection.chosen.len();
     // How far: refit on all training data with the first i effects.
     let mut per_step_rms = vec![];
     let (mut nominal_res, mut final_res) = (vec![], vec![]);
     let mut final_theta = theta0.clone();
-    for i in 0..=selection.chosen.len() {
-        let chosen = &selection.chosen[..i];
+    for i in 0..=chosen.len() {
+        let first = &chosen[..i];
         let theta = if i == 0 {
             theta0.clone()
         } else {
-            folds.fit(model, &all, chosen, &iopts)?
+            folds.fit(model, &all, first, &iopts)?
         };
-        let vs: Vec<_> = chosen.iter().map(|&v| folds.variants[v]).collect();
+        let vs: Vec<_> = first.iter().map(|&v| folds.variants[v]).collect();
         let (rms, res) = residual_rms(&ctx_val, validate, &vs, &theta, ms);
         per_step_rms.push(rms);
         if i == 0 {
             nominal_res = res.clone();
         }
-        if i == selection.chosen.len() {
+        if i == chosen.len() {
             final_res = res;
             final_theta = theta;
         }
@@ -514,6 +651,13 @@ pub fn diagnose(
             ((zz - zc.dot(&x)) / zz).clamp(0.0, 1.0)
         } else {
             0.0
+        }
+    };
+    let joint_of = |single: bool, i: usize| {
+        if single {
+            "robot".to_string()
+        } else {
+            model.bodies[i].joint_name.clone()
         }
     };
     // Magnitudes with block-jackknife errors.
@@ -555,11 +699,7 @@ pub fn diagnose(
                     c
                 };
                 Magnitude {
-                    joint: if single {
-                        "robot".into()
-                    } else {
-                        model.bodies[i].joint_name.clone()
-                    },
+                    joint: joint_of(single, i),
                     value,
                     se,
                     unit: unit.into(),
@@ -570,6 +710,7 @@ pub fn diagnose(
         let step = &selection.steps[si];
         effects.push(EffectEstimate {
             kind: v.kind,
+            evidence: Evidence::CrossValidation,
             param: v.param,
             magnitude_name: name.into(),
             magnitudes,
@@ -578,16 +719,47 @@ pub fn diagnose(
         });
         off += nc;
     }
+    // Absorbed effects: posterior magnitudes; errors propagated to first order.
+    for st in anchored {
+        let v = folds.variants[st.variant];
+        let (name, unit) = v.kind.magnitude();
+        let mags = magnitudes_of(v.kind, &st.beta, n, g);
+        let single = mags.len() == 1;
+        let magnitudes = mags
+            .iter()
+            .enumerate()
+            .map(|(i, &value)| {
+                let se = if single {
+                    magnitude_se(v.kind, &st.beta, &st.se, n, g)
+                } else {
+                    st.se[i]
+                };
+                Magnitude {
+                    joint: joint_of(single, i),
+                    value,
+                    se,
+                    unit: unit.into(),
+                    // Identified through the description; its precision is in `se`.
+                    identifiable: 1.0,
+                }
+            })
+            .collect();
+        effects.push(EffectEstimate {
+            kind: v.kind,
+            evidence: Evidence::Description,
+            param: v.param,
+            magnitude_name: name.into(),
+            magnitudes,
+            separate_by: st.ambiguous_with.first().map(|&b| separate_by(v.kind, b)),
+            ambiguous_with: st.ambiguous_with.clone(),
+        });
+    }
     // Noise floor of the final residual (neighbours at least 0.2 s apart).
     let rate = (validate.len() - 1) as f64 / (validate.t[validate.len() - 1] - validate.t[0]);
     let exclude = (0.2 * rate).ceil() as usize;
     // On training and validation data together: more repetitions of each motion, so closer
     // neighbours (the fit's own training samples bias it by p/N, negligible here).
-    let final_vs: Vec<_> = selection
-        .chosen
-        .iter()
-        .map(|&v| folds.variants[v])
-        .collect();
+    let final_vs: Vec<_> = chosen.iter().map(|&v| folds.variants[v]).collect();
     let (_, train_res) = residual_rms(&ctx_train, train, &final_vs, &final_theta, ms);
     let both = concatenate(vec![train.clone(), validate.clone()]);
     let masked_res: Vec<f64> = train_res
@@ -641,12 +813,13 @@ pub fn diagnose(
     } else {
         0.0
     };
+    // Held-out confirmation of cross-validation evidence: the validation error falls.
+    // Description evidence was confirmed on the validation data before it was kept.
     let confirmed: Vec<bool> = overall.windows(2).map(|w| w[1] < w[0]).collect();
     let confirmed_only = if confirmed.iter().all(|c| *c) {
         None
     } else {
-        let keep: Vec<usize> = selection
-            .chosen
+        let keep: Vec<usize> = chosen
             .iter()
             .zip(&confirmed)
             .filter(|(_, c)| **c)
@@ -660,22 +833,21 @@ pub fn diagnose(
     };
     let above = last > opts.unexplained_ratio * floor_ms;
     let verdict = match (selection.steps.is_empty(), above) {
-        (true, false) => Verdict::NoEffect,
+        (true, false) if anchored.is_empty() => Verdict::NoEffect,
+        (true, false) => Verdict::Absorbed,
         (true, true) => Verdict::Unexplained,
         (false, false) => Verdict::Explained,
         (false, true) => Verdict::PartiallyExplained,
     };
-    let names: Vec<String> = effects
-        .iter()
-        .map(|e| {
-            if e.ambiguous_with.is_empty() {
-                e.kind.name().to_string()
-            } else {
-                let g: Vec<&str> = e.group().map(|k| k.name()).collect();
-                format!("one of {{{}}} (ambiguous)", g.join(", "))
-            }
-        })
-        .collect();
+    let name_of = |e: &EffectEstimate| {
+        if e.ambiguous_with.is_empty() {
+            e.kind.name().to_string()
+        } else {
+            let g: Vec<&str> = e.group().map(|k| k.name()).collect();
+            format!("one of {{{}}} (ambiguous)", g.join(", "))
+        }
+    };
+    let names: Vec<String> = effects[..n_cv].iter().map(name_of).collect();
     let unconfirmed: Vec<&str> = effects
         .iter()
         .zip(&confirmed)
@@ -685,6 +857,11 @@ pub fn diagnose(
     let mut summary = match verdict {
         Verdict::NoEffect => format!(
             "no effect found: the validation RMS {:.3} N m is at the noise floor {:.3} N m",
+            overall[0],
+            floor_ms.sqrt()
+        ),
+        Verdict::Absorbed => format!(
+            "no gap: the validation RMS {:.3} N m is at the noise floor {:.3} N m",
             overall[0],
             floor_ms.sqrt()
         ),
@@ -711,9 +888,17 @@ pub fn diagnose(
             floor_ms.sqrt()
         ),
     };
+    if let Some(rep) = description_test.as_ref().filter(|r| !r.steps.is_empty()) {
+        let absorbed: Vec<String> = effects[n_cv..].iter().map(name_of).collect();
+        summary += &format!(
+            "; absorbed by identification but revealed by the description (stated uncertainty {:.0} %): {}",
+            100.0 * rep.uncertainty,
+            absorbed.join(" + ")
+        );
+    }
     if let Some((_, o)) = &confirmed_only {
         summary += &format!(
-            "; NOT confirmed on the validation data (its error rose when added): {}; with the confirmed effects only the validation RMS is {o:.3} N m",
+            "; NOT confirmed on the validation data: {}; with the confirmed effects only the validation RMS is {o:.3} N m",
             unconfirmed.join(", ")
         );
     }
@@ -729,6 +914,7 @@ pub fn diagnose(
         spectra: spectra(model, validate, &nominal_res),
         spectra_after: spectra(model, validate, &final_res),
         selection,
+        description_test,
         effects,
         gap,
         overall,

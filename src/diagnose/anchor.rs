@@ -1,0 +1,570 @@
+//! Which effect, when identification absorbs it: evidence from the robot description.
+//!
+//! Some effects change the torques in ways the inertial parameters mimic almost exactly: one
+//! joint's torque gain scales what its row of `Y θ` sees; a tilted base rotates gravity, which
+//! the first moments `h` follow. Identification then absorbs them: the identified model predicts
+//! the torques as well with or without the effect (no validation gap, nothing for the
+//! cross-validation of [`super::select`] to find), but its parameters are biased away from the
+//! description's in the pattern the effect dictates.
+//!
+//! When the user states how far the description can be trusted, a relative uncertainty `ε` of
+//! its inertial parameters, the description becomes a Gaussian prior
+//! `θ ~ N(θ_d, diag σ²)` with, per body of mass `m` and RMS distance `ℓ` of its mass from the
+//! body frame origin (`ℓ² = tr Σ / m`, `Σ` the second moments of `J(π)`):
+//! `σ_m = ε m`, `σ_h = ε m ℓ`, `σ_I = ε m ℓ²` for each entry of `Ī`; friction has no prior.
+//!
+//! Split an effect's columns `E` (over the training rows) into their absorbable part `Y S`,
+//! `S = (YᵀY)⁺ YᵀE` (what the parameters can mimic), and the rest (what cross-validation
+//! tests). The absorbable part is tested against the prior alone: with `u = θ + S β` the
+//! parameters the data see,
+//!
+//! `J*(S) = min_{u,β} ‖Y u − τ‖² / (s² τ_c) + (u − S β − θ_d)ᵀ P (u − S β − θ_d)`,
+//!
+//! `P = diag σ⁻²`, `s²` the nominal residual's mean square and `τ_c ≥ 1` its integrated
+//! autocorrelation (samples per independent one, by batch means), so the data term is a
+//! log-likelihood. `Δ = J*(∅) − J*(S)` is `χ²(d)` distributed (`d` columns) when the effect is
+//! absent and the prior is right: a kind is claimed when `Δ` exceeds the `χ²(d)` quantile at a
+//! family-wise level [`ALPHA`] over all candidates (Bonferroni), and confirmed when the held-out
+//! data alone exceed the quantile at [`CONFIRM_ALPHA`]. The confirmation guards against noise,
+//! not against a description whose errors happen to look like an effect: that is what `ε`
+//! states.
+
+use super::library::Kind;
+use super::select::Folds;
+use crate::ident::analysis::least_squares;
+use crate::ident::NormalEquations;
+use crate::model::Model;
+use crate::spatial::InertialParams;
+use nalgebra::{DMatrix, DVector};
+use rand::Rng;
+use rand_distr::StandardNormal;
+use serde::Serialize;
+
+/// Family-wise false-claim level of the description test over all candidate variants.
+pub const ALPHA: f64 = 1e-3;
+/// Level of the held-out confirmation.
+pub const CONFIRM_ALPHA: f64 = 1e-2;
+/// Largest fraction of a candidate column's energy outside the span of the model's columns
+/// for the candidate to enter the test: the description test is for effects that
+/// identification absorbs; visible ones are cross-validation's (which, unlike an in-sample
+/// test, is robust to what the model still misses).
+pub const ABSORBED: f64 = 0.2;
+/// Batch length of the autocorrelation estimate (s).
+const BATCH: f64 = 1.0;
+
+/// The 10×10 prior precision of one body's `π` for a relative uncertainty `eps` of its
+/// description `pi`: the affine-invariant metric on pseudo-inertias (the Hessian of the log-det
+/// divergence), `δπᵀ P δπ = tr((J⁻¹ δJ)²) / ε²` with `δJ = J(δπ)`. Under it `J + δJ` is
+/// `J + ε J^½ G J^½` with `G` a symmetric Gaussian matrix (`G_ii ~ N(0, 1)`,
+/// `G_ij ~ N(0, ½)`): the mass has relative deviation `ε`, every entry
+/// `ε √((J_ii J_jj + J_ij²)/2)`, and the error scales with the body's extent in each direction.
+/// A body whose `J` is not positive definite (massless) carries no prior.
+pub fn body_precision(pi: &InertialParams, eps: f64) -> nalgebra::SMatrix<f64, 10, 10> {
+    let mut p = nalgebra::SMatrix::<f64, 10, 10>::zeros();
+    let Some(jinv) = pi.pseudo_inertia().cholesky().map(|c| c.inverse()) else {
+        return p;
+    };
+    let e: Vec<nalgebra::Matrix4<f64>> = (0..10)
+        .map(|k| {
+            let mut u = InertialParams(nalgebra::SVector::<f64, 10>::zeros());
+            u.0[k] = 1.0;
+            jinv * u.pseudo_inertia()
+        })
+        .collect();
+    for k in 0..10 {
+        for l in 0..10 {
+            p[(k, l)] = (e[k] * e[l]).trace() / (eps * eps);
+        }
+    }
+    p
+}
+
+/// The prior precision of every model parameter: [`body_precision`] blocks for each body and
+/// rotor, zero for friction.
+pub fn prior_precision(model: &Model, eps: f64) -> DMatrix<f64> {
+    let l = model.layout();
+    let mut p = DMatrix::zeros(l.len, l.len);
+    let mut put = |c: usize, pi: &InertialParams| {
+        p.view_mut((c, c), (10, 10))
+            .copy_from(&body_precision(pi, eps));
+    };
+    for (i, b) in model.bodies.iter().enumerate() {
+        put(10 * i, &b.inertia);
+        if let (Some(c), Some(r)) = (l.rotor_col[i], &b.rotor) {
+            put(c, &r.inertia);
+        }
+    }
+    p
+}
+
+/// A description of `model` whose inertial parameters carry the errors the prior of relative
+/// uncertainty `eps` describes ([`body_precision`]): each body's and rotor's `J` becomes
+/// `J + ε J^½ G J^½`, redrawn in the (at 10 %, astronomically rare) case it is not positive
+/// definite. Kinematics, friction and rotors' gear ratios are kept; massless bodies too.
+pub fn perturbed_description<R: Rng>(model: &Model, eps: f64, rng: &mut R) -> Model {
+    let mut draw = |pi: &InertialParams| -> InertialParams {
+        let j = pi.pseudo_inertia();
+        let eig = j.symmetric_eigen();
+        if eig.eigenvalues.min() <= 0.0 {
+            return *pi;
+        }
+        let half = eig.eigenvectors
+            * nalgebra::Matrix4::from_diagonal(&eig.eigenvalues.map(f64::sqrt))
+            * eig.eigenvectors.transpose();
+        loop {
+            let mut g = nalgebra::Matrix4::zeros();
+            for r in 0..4 {
+                for c in r..4 {
+                    let z: f64 = rng.sample(StandardNormal);
+                    g[(r, c)] = if r == c { z } else { z * 0.5f64.sqrt() };
+                    g[(c, r)] = g[(r, c)];
+                }
+            }
+            let q = j + half * g * half * eps;
+            let q = 0.5 * (q + q.transpose());
+            if q.symmetric_eigenvalues().min() > 0.0 {
+                return InertialParams::from_pseudo_inertia(&q);
+            }
+        }
+    };
+    let mut out = model.clone();
+    for b in &mut out.bodies {
+        b.inertia = draw(&b.inertia);
+        if let Some(r) = b.rotor.as_mut() {
+            r.inertia = draw(&r.inertia);
+        }
+    }
+    out
+}
+
+/// `τ_c`: the nominal residual's long-run variance over its variance (samples per independent
+/// sample, at least 1), by batch means of [`BATCH`] seconds per joint, pooled. `res` is
+/// sample-major with `n` joints; NaN entries (slow joint-samples) count as zero.
+pub fn correlation_time(res: &[f64], n: usize, rate: f64) -> f64 {
+    let m = res.len() / n.max(1);
+    let b = ((BATCH * rate).round() as usize).max(1);
+    let (mut long, mut var) = (0.0, 0.0);
+    for j in 0..n {
+        let r = |k: usize| {
+            let v = res[k * n + j];
+            if v.is_finite() {
+                v
+            } else {
+                0.0
+            }
+        };
+        for start in (0..m.saturating_sub(b - 1)).step_by(b) {
+            let s: f64 = (start..start + b).map(r).sum();
+            long += s * s;
+            var += (start..start + b).map(|k| r(k).powi(2)).sum::<f64>();
+        }
+    }
+    if var > 0.0 {
+        (long / var).max(1.0)
+    } else {
+        1.0
+    }
+}
+
+/// The data and prior of the test: normal equations over `[Y | E_all]` (augmented columns of a
+/// [`Folds`]), the data weight `1/(s² τ_c)`, the prior mean and precision of the model columns.
+pub struct Anchor<'a> {
+    /// Normal equations of the augmented regressor.
+    pub ne: &'a NormalEquations,
+    /// Data weight `w = 1/(s² τ_c)` (1/(N m)²).
+    pub weight: f64,
+    /// Prior mean of the model columns `θ_d`.
+    pub mean: DVector<f64>,
+    /// Prior precision of the model columns.
+    pub precision: DMatrix<f64>,
+}
+
+/// One candidate's test.
+#[derive(Clone, Debug, Serialize)]
+pub struct Test {
+    /// The kind.
+    pub kind: Kind,
+    /// Its grid value (0 without a grid).
+    pub param: f64,
+    /// `Δ = J*(∅) − J*(S)`.
+    pub statistic: f64,
+    /// Its `χ²(d)` threshold at the family-wise level.
+    pub threshold: f64,
+    /// Columns `d`.
+    pub columns: usize,
+    /// The largest fraction of a column's energy outside the span of the base columns (what
+    /// cross-validation sees; near 0: fully absorbed).
+    pub visible: f64,
+}
+
+/// The fit of one candidate: `Δ`, its coefficients `β` with posterior standard errors, and how
+/// visible its columns are.
+pub struct Fit {
+    /// `Δ`.
+    pub statistic: f64,
+    /// `β` (in the effect's column units).
+    pub beta: Vec<f64>,
+    /// Posterior standard errors of `β`.
+    pub se: Vec<f64>,
+    /// Per column, the fraction of its energy outside the span of the base columns.
+    pub visible: Vec<f64>,
+}
+
+impl Anchor<'_> {
+    /// `J*` with base columns `base` (model columns first, then chosen effects, all free of
+    /// prior but the model's) and the absorbable part of candidate columns `cand`.
+    pub fn fit(&self, base: &[usize], cand: &[usize]) -> Fit {
+        let (pb, d) = (base.len(), cand.len());
+        let p0 = self.mean.len();
+        let a = DMatrix::from_fn(pb, pb, |i, j| self.ne.yty[(base[i], base[j])]);
+        let b = DVector::from_fn(pb, |i, _| self.ne.ytt[base[i]]);
+        let abe = DMatrix::from_fn(pb, d, |i, j| self.ne.yty[(base[i], cand[j])]);
+        // S = A⁺ A_YE, column by column.
+        let mut s = DMatrix::zeros(pb, d);
+        for c in 0..d {
+            s.set_column(c, &least_squares(&a, &abe.column(c).into_owned()));
+        }
+        let pmat = DMatrix::from_fn(pb, pb, |i, j| {
+            if base[i] < p0 && base[j] < p0 {
+                self.precision[(base[i], base[j])]
+            } else {
+                0.0
+            }
+        });
+        let mean = DVector::from_fn(pb, |i, _| {
+            if base[i] < p0 {
+                self.mean[base[i]]
+            } else {
+                0.0
+            }
+        });
+        let pm = &pmat * &mean;
+        let ps = &pmat * &s;
+        // Variables x = [u; β]; J = xᵀHx − 2 gᵀx + const.
+        let mut h = DMatrix::zeros(pb + d, pb + d);
+        h.view_mut((0, 0), (pb, pb))
+            .copy_from(&(&a * self.weight + &pmat));
+        h.view_mut((0, pb), (pb, d)).copy_from(&(-&ps));
+        h.view_mut((pb, 0), (d, pb)).copy_from(&(-ps.transpose()));
+        h.view_mut((pb, pb), (d, d))
+            .copy_from(&(s.transpose() * &ps));
+        let mut g = DVector::zeros(pb + d);
+        g.rows_mut(0, pb).copy_from(&(&b * self.weight + &pm));
+        g.rows_mut(pb, d).copy_from(&(-(s.transpose() * &pm)));
+        // A small relative ridge; directions neither data nor prior see are held at zero.
+        let floor = 1e-12 * h.diagonal().max().max(1e-300);
+        for i in 0..pb + d {
+            let v = h[(i, i)];
+            h[(i, i)] = if v > 0.0 { v * (1.0 + 1e-12) } else { floor };
+        }
+        let x = least_squares(&h, &g);
+        let j_with = -g.dot(&x);
+        // Without the candidate: the model block alone.
+        let h0 = h.view((0, 0), (pb, pb)).into_owned();
+        let g0 = g.rows(0, pb).into_owned();
+        let x0 = least_squares(&h0, &g0);
+        let j_without = -g0.dot(&x0);
+        let inv = h
+            .clone()
+            .cholesky()
+            .map(|c| c.inverse())
+            .unwrap_or_else(|| h.clone().pseudo_inverse(1e-14).expect("symmetric"));
+        let se = (0..d)
+            .map(|c| inv[(pb + c, pb + c)].max(0.0).sqrt())
+            .collect();
+        let visible = (0..d)
+            .map(|c| {
+                let zz = self.ne.yty[(cand[c], cand[c])];
+                if zz > 0.0 {
+                    ((zz - abe.column(c).dot(&s.column(c))) / zz).clamp(0.0, 1.0)
+                } else {
+                    0.0
+                }
+            })
+            .collect();
+        Fit {
+            visible,
+            statistic: (j_without - j_with).max(0.0),
+            beta: x.rows(pb, d).iter().copied().collect(),
+            se,
+        }
+    }
+}
+
+/// Upper-tail standard normal quantile `z` with `P(Z > z) = p` (Abramowitz & Stegun 26.2.23,
+/// absolute error below 4.5e-4), for `0 < p ≤ 0.5`.
+pub fn normal_upper_quantile(p: f64) -> f64 {
+    let t = (-2.0 * p.ln()).sqrt();
+    t - (2.515517 + 0.802853 * t + 0.010328 * t * t)
+        / (1.0 + 1.432788 * t + 0.189269 * t * t + 0.001308 * t * t * t)
+}
+
+/// The `χ²(d)` quantile exceeded with probability `p`: exact for `d = 1` (`z_{p/2}²`) and
+/// `d = 2` (`−2 ln p`), Wilson–Hilferty above.
+pub fn chi2_upper_quantile(d: usize, p: f64) -> f64 {
+    match d {
+        0 | 1 => return normal_upper_quantile(0.5 * p).powi(2),
+        2 => return -2.0 * p.ln(),
+        _ => {}
+    }
+    let d = d as f64;
+    let z = normal_upper_quantile(p);
+    let v = 2.0 / (9.0 * d);
+    d * (1.0 - v + z * v.sqrt()).powi(3)
+}
+
+/// One accepted step of the description test.
+#[derive(Clone, Debug, Serialize)]
+pub struct Step {
+    /// The kind kept.
+    pub kind: Kind,
+    /// Its grid value.
+    pub param: f64,
+    /// Its test on the training data.
+    pub statistic: f64,
+    /// The threshold it passed.
+    pub threshold: f64,
+    /// Equally simple kinds within `tie` of its statistic that also pass.
+    pub ambiguous_with: Vec<Kind>,
+    /// Every kind's best test in this step, largest statistic over threshold first.
+    pub tests: Vec<Test>,
+    /// Posterior coefficients of its columns.
+    #[serde(skip)]
+    pub beta: Vec<f64>,
+    /// Their posterior standard errors.
+    #[serde(skip)]
+    pub se: Vec<f64>,
+    /// Index of the variant (into [`Folds::variants`]).
+    #[serde(skip)]
+    pub variant: usize,
+}
+
+/// The description test's outcome.
+#[derive(Clone, Debug, Serialize)]
+pub struct Report {
+    /// The stated relative uncertainty `ε` of the description's inertial parameters.
+    pub uncertainty: f64,
+    /// Residual mean square `s²` (N² m²) and correlation time `τ_c` (samples) of the data term.
+    pub residual_ms: f64,
+    /// `τ_c`.
+    pub correlation_samples: f64,
+    /// Accepted steps.
+    pub steps: Vec<Step>,
+    /// Why it stopped.
+    pub stop: String,
+}
+
+/// Forward selection by the description test over the variants of `folds` that are absorbed
+/// (every column at most [`ABSORBED`] visible against the model and `chosen`) and not of a kind
+/// in `exclude`, after the effects `chosen` (free columns), adding at most `max` kinds. Ties
+/// within `tie` of the winner's `Δ` resolve by fewest columns, then are reported as ambiguous.
+pub fn select(
+    anchor: &Anchor,
+    folds: &Folds,
+    chosen: &[usize],
+    exclude: &[Kind],
+    max: usize,
+    tie: f64,
+) -> (Vec<Step>, String) {
+    let mut base = folds.columns(chosen);
+    let cols = |vi: usize| -> Vec<usize> {
+        let d = folds.variants[vi].kind.columns(folds.n);
+        (folds.offsets[vi]..folds.offsets[vi] + d).collect()
+    };
+    let candidates: Vec<usize> = (0..folds.variants.len())
+        .filter(|&v| !exclude.contains(&folds.variants[v].kind))
+        .filter(|&v| {
+            anchor
+                .fit(&base, &cols(v))
+                .visible
+                .iter()
+                .all(|f| *f <= ABSORBED)
+        })
+        .collect();
+    let per_test = ALPHA / candidates.len().max(1) as f64;
+    let mut used: Vec<Kind> = exclude.to_vec();
+    let mut steps = vec![];
+    let stop = loop {
+        if steps.len() >= max {
+            break format!("reached the maximum of {max} effects");
+        }
+        let mut best: Vec<(usize, Test)> = vec![];
+        for kind in Kind::ALL {
+            if used.contains(&kind) {
+                continue;
+            }
+            let mut top: Option<(usize, Test)> = None;
+            for &vi in candidates
+                .iter()
+                .filter(|&&v| folds.variants[v].kind == kind)
+            {
+                let v = folds.variants[vi];
+                let cand = cols(vi);
+                let d = cand.len();
+                let f = anchor.fit(&base, &cand);
+                let t = Test {
+                    kind,
+                    param: v.param,
+                    statistic: f.statistic,
+                    threshold: chi2_upper_quantile(d, per_test),
+                    columns: d,
+                    visible: f.visible.iter().copied().fold(0.0, f64::max),
+                };
+                if top.as_ref().is_none_or(|(_, b)| t.statistic > b.statistic) {
+                    top = Some((vi, t));
+                }
+            }
+            best.extend(top);
+        }
+        if best.is_empty() {
+            break "no candidate left".into();
+        }
+        let excess = |t: &Test| t.statistic / t.threshold;
+        best.sort_by(|a, b| excess(&b.1).total_cmp(&excess(&a.1)));
+        let tests: Vec<Test> = best.iter().map(|(_, t)| t.clone()).collect();
+        let top = &tests[0];
+        if top.statistic < top.threshold {
+            break format!(
+                "best remaining candidate {} has Δ = {:.1} below its χ² threshold {:.1}",
+                top.kind.name(),
+                top.statistic,
+                top.threshold
+            );
+        }
+        let cut = top.statistic * (1.0 - tie);
+        let ties: Vec<usize> = (0..best.len())
+            .filter(|&i| tests[i].statistic >= tests[i].threshold && tests[i].statistic >= cut)
+            .collect();
+        let fewest = ties
+            .iter()
+            .map(|&i| tests[i].columns)
+            .min()
+            .expect("winner");
+        let simplest: Vec<usize> = ties
+            .into_iter()
+            .filter(|&i| tests[i].columns == fewest)
+            .collect();
+        let (vi, t) = best[simplest[0]].clone();
+        let ambiguous_with: Vec<Kind> = simplest[1..].iter().map(|&i| tests[i].kind).collect();
+        used.push(t.kind);
+        used.extend(&ambiguous_with);
+        let cand = cols(vi);
+        let f = anchor.fit(&base, &cand);
+        base.extend(cand);
+        steps.push(Step {
+            beta: f.beta,
+            se: f.se,
+            kind: t.kind,
+            param: t.param,
+            statistic: t.statistic,
+            threshold: t.threshold,
+            ambiguous_with,
+            tests,
+            variant: vi,
+        });
+    };
+    (steps, stop)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use rand::SeedableRng;
+
+    #[test]
+    fn quantiles_match_tables() {
+        // Normal: 1.960 at 2.5 %, 3.090 at 0.1 %; χ²: 3.841 (1, 5 %), 13.82 (2, 0.1 %),
+        // 16.27 (3, 0.1 %), 23.21 (10, 1 %).
+        assert!((normal_upper_quantile(0.025) - 1.960).abs() < 1e-3);
+        assert!((normal_upper_quantile(1e-3) - 3.090).abs() < 1e-3);
+        assert!((chi2_upper_quantile(1, 0.05) - 3.841).abs() < 0.05);
+        assert!((chi2_upper_quantile(2, 1e-3) - 13.82).abs() < 0.01);
+        // Wilson–Hilferty: within 2 % at d >= 3 down to 0.1 %.
+        assert!((chi2_upper_quantile(3, 1e-3) / 16.27 - 1.0).abs() < 0.02);
+        assert!((chi2_upper_quantile(10, 0.01) / 23.21 - 1.0).abs() < 0.02);
+    }
+
+    /// With data that pin the parameters exactly and a column that is wholly absorbable
+    /// (`E = Y s`), the statistic is the generalized-least-squares one of the parameter error
+    /// `r = u − θ_d` along `s`: `Δ = (sᵀP r)² / (sᵀP s)`.
+    #[test]
+    fn the_statistic_is_the_prior_weighted_projection_on_the_absorbed_direction() {
+        let p = 4;
+        let y = DMatrix::from_fn(40, p, |i, j| ((i * 7 + j * 3) % 11) as f64 - 5.0 + j as f64);
+        let s = DVector::from_vec(vec![1.0, -0.5, 0.25, 2.0]);
+        let e = &y * &s;
+        let u = DVector::from_vec(vec![1.3, 0.2, -0.7, 0.9]);
+        let tau = &y * &u;
+        let mut z = DMatrix::zeros(40, p + 1);
+        z.view_mut((0, 0), (40, p)).copy_from(&y);
+        z.set_column(p, &e);
+        let ne = NormalEquations::from_sums(
+            1,
+            z.transpose() * &z,
+            z.transpose() * &tau,
+            tau.norm_squared(),
+            40,
+        );
+        let mean = DVector::from_vec(vec![1.0, 0.0, -0.5, 1.0]);
+        let precision = DMatrix::from_diagonal(&DVector::from_vec(vec![4.0, 1.0, 9.0, 0.5]));
+        let anchor = Anchor {
+            ne: &ne,
+            weight: 1e8,
+            mean: mean.clone(),
+            precision: precision.clone(),
+        };
+        let f = anchor.fit(&[0, 1, 2, 3], &[p]);
+        let r = &u - &mean;
+        let spr = s.dot(&(&precision * &r));
+        let sps = s.dot(&(&precision * &s));
+        let want = spr * spr / sps;
+        assert!(
+            (f.statistic - want).abs() < 1e-4 * want,
+            "{} vs {want}",
+            f.statistic
+        );
+        assert!((f.beta[0] - spr / sps).abs() < 1e-6);
+        assert!((f.se[0] - sps.powf(-0.5)).abs() < 1e-4 * f.se[0]);
+        assert!(f.visible[0] < 1e-9);
+    }
+
+    /// The perturbation has the deviation the prior states (mass: 10 % at `ε = 0.1`), and the
+    /// prior precision is the inverse covariance of its draws: `E[δπᵀ P δπ] = 10` per body.
+    #[test]
+    fn perturbed_descriptions_follow_the_stated_prior() {
+        let m = crate::model::cheetah3::leg();
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(1);
+        let k = 400;
+        let thigh = &m.bodies[1].inertia;
+        let p = body_precision(thigh, 0.1);
+        let (mut rel, mut quad) = (vec![], vec![]);
+        for _ in 0..k {
+            let d = perturbed_description(&m, 0.1, &mut rng);
+            for b in &d.bodies {
+                assert!(b.inertia.min_eig_pseudo() > 0.0, "{}", b.name);
+                let r = b.rotor.as_ref().unwrap();
+                assert!(r.inertia.min_eig_pseudo() > 0.0, "{}", r.name);
+            }
+            let q = &d.bodies[1].inertia;
+            rel.push((q.mass() - thigh.mass()) / thigh.mass());
+            let dp = q.0 - thigh.0;
+            quad.push(dp.dot(&(p * dp)));
+        }
+        let mean = |v: &[f64]| v.iter().sum::<f64>() / v.len() as f64;
+        let mu = mean(&rel);
+        let sd = (rel.iter().map(|x| (x - mu).powi(2)).sum::<f64>() / (k - 1) as f64).sqrt();
+        // Standard errors over 400 draws: 0.005 on the mean, 0.0035 on the deviation.
+        assert!(mu.abs() < 0.015, "mean {mu}");
+        assert!((sd - 0.1).abs() < 0.012, "sd {sd}");
+        // χ²(10): mean 10, standard error of the mean 0.22.
+        assert!(
+            (mean(&quad) - 10.0).abs() < 0.8,
+            "E[δπᵀPδπ] {}",
+            mean(&quad)
+        );
+        let all = prior_precision(&m, 0.1);
+        let l = m.layout();
+        assert_eq!(all[(l.viscous_col, l.viscous_col)], 0.0);
+        assert_eq!(all[(10, 10)], p[(0, 0)]);
+    }
+}
