@@ -298,6 +298,24 @@ fn the_cli_diagnoses_a_file_and_names_bad_input() {
         .unwrap();
     assert!(!out.status.success());
     assert!(String::from_utf8_lossy(&out.stderr).contains("missing.csv"));
+    // A negative description uncertainty is refused by name.
+    let out = std::process::Command::new(exe)
+        .args([
+            "diagnose",
+            "--robot",
+            "cheetah3",
+            "--description-uncertainty=-0.1",
+            "--data",
+        ])
+        .arg(&csv)
+        .output()
+        .unwrap();
+    assert!(!out.status.success());
+    assert!(
+        String::from_utf8_lossy(&out.stderr).contains("--description-uncertainty"),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
 }
 
 #[test]

@@ -92,6 +92,34 @@ fn print_text(d: &Diagnosis) {
         );
     }
     println!("  stop: {}", d.selection.stop);
+    if let Some(t) = &d.description_test {
+        println!(
+            "  against the description (stated uncertainty {:.0} %, correlation time {:.1} samples):",
+            100.0 * t.uncertainty,
+            t.correlation_samples
+        );
+        for st in &t.steps {
+            println!(
+                "    {} absorbed: Δ = {:.1} > χ² threshold {:.1}{}",
+                st.kind.name(),
+                st.statistic,
+                st.threshold,
+                if st.ambiguous_with.is_empty() {
+                    String::new()
+                } else {
+                    format!(
+                        "; AMBIGUOUS with {}",
+                        st.ambiguous_with
+                            .iter()
+                            .map(|k| k.name())
+                            .collect::<Vec<_>>()
+                            .join(", ")
+                    )
+                }
+            );
+        }
+        println!("    stop: {}", t.stop);
+    }
     for e in &d.effects {
         println!(
             "  {}{}: {}",
@@ -292,7 +320,15 @@ pub fn blind(a: BlindArgs) -> anyhow::Result<()> {
     println!("{}", serde_json::to_string_pretty(&scores)?);
     eprintln!("{cases} cases in {wall:.1} s");
     if let Some(dir) = out {
-        diagnose::report::write_blind(dir, &results, &scores, seed, scenario, wall)?;
+        diagnose::report::write_blind(
+            dir,
+            &results,
+            &scores,
+            seed,
+            scenario,
+            [description_error, stated],
+            wall,
+        )?;
         eprintln!("wrote {}", dir.display());
     }
     Ok(())

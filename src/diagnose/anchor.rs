@@ -8,10 +8,10 @@
 //! description's in the pattern the effect dictates.
 //!
 //! When the user states how far the description can be trusted, a relative uncertainty `ε` of
-//! its inertial parameters, the description becomes a Gaussian prior
-//! `θ ~ N(θ_d, diag σ²)` with, per body of mass `m` and RMS distance `ℓ` of its mass from the
-//! body frame origin (`ℓ² = tr Σ / m`, `Σ` the second moments of `J(π)`):
-//! `σ_m = ε m`, `σ_h = ε m ℓ`, `σ_I = ε m ℓ²` for each entry of `Ī`; friction has no prior.
+//! its inertial parameters, the description becomes a Gaussian prior on each body's
+//! pseudo-inertia in the affine-invariant geometry ([`body_precision`]):
+//! `δπᵀ P δπ = tr((J⁻¹ δJ)²) / ε²`, `J_true = J + ε J^½ G J^½` with `G` symmetric Gaussian.
+//! Friction has no prior.
 //!
 //! Split an effect's columns `E` (over the training rows) into their absorbable part `Y S`,
 //! `S = (YᵀY)⁺ YᵀE` (what the parameters can mimic), and the rest (what cross-validation
@@ -20,18 +20,19 @@
 //!
 //! `J*(S) = min_{u,β} ‖Y u − τ‖² / (s² τ_c) + (u − S β − θ_d)ᵀ P (u − S β − θ_d)`,
 //!
-//! `P = diag σ⁻²`, `s²` the nominal residual's mean square and `τ_c ≥ 1` its integrated
+//! `P` the prior precision, `s²` the nominal residual's mean square and `τ_c ≥ 1` its integrated
 //! autocorrelation (samples per independent one, by batch means), so the data term is a
 //! log-likelihood. `Δ = J*(∅) − J*(S)` is `χ²(d)` distributed (`d` columns) when the effect is
 //! absent and the prior is right: a kind is claimed when `Δ` exceeds the `χ²(d)` quantile at a
-//! family-wise level [`ALPHA`] over all candidates (Bonferroni), and confirmed when the held-out
-//! data alone exceed the quantile at [`CONFIRM_ALPHA`]. The confirmation guards against noise,
-//! not against a description whose errors happen to look like an effect: that is what `ε`
-//! states.
+//! family-wise level [`ALPHA`] over all candidates (Bonferroni). Only candidates whose columns
+//! are at least `1 − ABSORBED` absorbable enter. The test is in-sample, so the diagnosis keeps
+//! a step only if the held-out data alone pass it again at [`CONFIRM_ALPHA`]. That guards
+//! against noise, not against a description whose errors exceed `ε` or happen to look like an
+//! effect: that is what stating `ε` risks.
 
 use super::library::Kind;
 use super::select::Folds;
-use crate::ident::analysis::least_squares;
+use crate::ident::analysis::{least_squares, min_norm_solve};
 use crate::ident::NormalEquations;
 use crate::model::Model;
 use crate::spatial::InertialParams;
@@ -219,11 +220,10 @@ impl Anchor<'_> {
         let a = DMatrix::from_fn(pb, pb, |i, j| self.ne.yty[(base[i], base[j])]);
         let b = DVector::from_fn(pb, |i, _| self.ne.ytt[base[i]]);
         let abe = DMatrix::from_fn(pb, d, |i, j| self.ne.yty[(base[i], cand[j])]);
-        // S = A⁺ A_YE, column by column.
-        let mut s = DMatrix::zeros(pb, d);
-        for c in 0..d {
-            s.set_column(c, &least_squares(&a, &abe.column(c).into_owned()));
-        }
+        // S = A⁺ A_YE, the minimum-norm solution: no component along parameter combinations
+        // the data never excite (there any choice is equivalent in exact arithmetic, and a
+        // near-singular Cholesky would fill them with round-off).
+        let s = min_norm_solve(&a, &abe);
         let pmat = DMatrix::from_fn(pb, pb, |i, j| {
             if base[i] < p0 && base[j] < p0 {
                 self.precision[(base[i], base[j])]

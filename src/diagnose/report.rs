@@ -233,6 +233,47 @@ pub fn markdown(d: &Diagnosis) -> String {
         s += "\n";
     }
     s += &format!("Stopped: {}.\n\n", d.selection.stop);
+    if let Some(t) = &d.description_test {
+        s += &format!(
+            "### Absorbed effects: the test against the description (stated uncertainty {:.0} %)\n\nResidual mean square {:.4} N² m², correlation time {:.1} samples.\n\n",
+            100.0 * t.uncertainty,
+            t.residual_ms,
+            t.correlation_samples
+        );
+        for (i, st) in t.steps.iter().enumerate() {
+            s += &format!(
+                "Step {}: `{}` (Δ = {:.1} > χ² threshold {:.1}){}\n\n| kind | Δ | threshold | columns | visible |\n|---|---|---|---|---|\n",
+                i + 1,
+                st.kind.name(),
+                st.statistic,
+                st.threshold,
+                if st.ambiguous_with.is_empty() {
+                    String::new()
+                } else {
+                    format!(
+                        "; **ambiguous** with {}",
+                        st.ambiguous_with
+                            .iter()
+                            .map(|k| format!("`{}`", k.name()))
+                            .collect::<Vec<_>>()
+                            .join(", ")
+                    )
+                }
+            );
+            for x in &st.tests {
+                s += &format!(
+                    "| {} | {:.1} | {:.1} | {} | {:.3} |\n",
+                    x.kind.name(),
+                    x.statistic,
+                    x.threshold,
+                    x.columns,
+                    x.visible
+                );
+            }
+            s += "\n";
+        }
+        s += &format!("Stopped: {}.\n\n", t.stop);
+    }
     for e in &d.effects {
         s += &format!(
             "### `{}`{}: {}\n\n| joint | value | std. error | unit | identifiable |\n|---|---|---|---|---|\n",
@@ -242,7 +283,11 @@ pub fn markdown(d: &Diagnosis) -> String {
             } else {
                 String::new()
             },
-            e.magnitude_name
+            match e.evidence {
+                super::Evidence::CrossValidation => e.magnitude_name.clone(),
+                super::Evidence::Description =>
+                    format!("{} (found against the description)", e.magnitude_name),
+            }
         );
         for m in &e.magnitudes {
             s += &format!(
@@ -349,9 +394,9 @@ pub fn write(dir: &Path, d: &Diagnosis) -> anyhow::Result<()> {
         "nominal".to_string(),
         d.gap.iter().map(|g| g.nominal).collect(),
     )];
-    for (i, st) in d.selection.steps.iter().enumerate() {
+    for (i, e) in d.effects.iter().enumerate() {
         steps.push((
-            format!("+ {}", st.kind.name()),
+            format!("+ {}", e.kind.name()),
             d.gap.iter().map(|g| g.after[i]).collect(),
         ));
     }
@@ -400,6 +445,7 @@ pub fn write_blind(
     scores: &Scores,
     seed: u64,
     scenario: &Path,
+    description: [f64; 2],
     wall: f64,
 ) -> anyhow::Result<()> {
     std::fs::create_dir_all(dir)?;
@@ -428,8 +474,10 @@ pub fn write_blind(
         .sort(["injected"], Default::default())
         .collect()?;
     let mut md = format!(
-        "# Blind benchmark\n\n`physid blind --cases {} --seed {seed}` on `{}` ({:.0} s wall).\n\n## Scores\n\n```json\n{}\n```\n\n## Single effects by kind\n\n{}\n## Cases\n\n{}",
+        "# Blind benchmark\n\n`physid blind --cases {} --seed {seed} --description-error {} --description-uncertainty {}` on `{}` ({:.0} s wall).\n\nEach case's description carries inertial-parameter errors of relative size `--description-error`; the diagnosis is told `--description-uncertainty` (0: no test against the description).\n\n## Scores\n\n```json\n{}\n```\n\n## Single effects by kind\n\n{}\n## Cases\n\n{}",
         scores.cases,
+        description[0],
+        description[1],
         scenario.display(),
         wall,
         serde_json::to_string_pretty(scores)?,

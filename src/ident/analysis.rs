@@ -36,21 +36,36 @@ pub fn least_squares(h: &DMatrix<f64>, g: &DVector<f64>) -> DVector<f64> {
             return x;
         }
     }
+    min_norm_solve(h, &DMatrix::from_column_slice(g.len(), 1, g.as_slice()))
+        .column(0)
+        .into()
+}
+
+/// The minimum-norm solutions `X` of `H X = G` on the range of symmetric positive semidefinite
+/// `H` (column-scaled eigen-decomposition, directions below [`RANK_TOL`] dropped), for every
+/// column of `G` at once.
+pub fn min_norm_solve(h: &DMatrix<f64>, g: &DMatrix<f64>) -> DMatrix<f64> {
     let p = h.nrows();
     let d = unit_diagonal_scale(h, 0.0);
     let hs = DMatrix::from_fn(p, p, |i, j| d[i] * h[(i, j)] * d[j]);
     let eig = SymmetricEigen::new(hs);
     let lmax = eig.eigenvalues.max();
-    let gs = DVector::from_iterator(p, (0..p).map(|i| d[i] * g[i]));
-    let mut xs = DVector::zeros(p);
-    for k in 0..p {
-        let l = eig.eigenvalues[k];
-        if l > RANK_TOL * lmax {
-            let v = eig.eigenvectors.column(k);
-            xs += v * (v.dot(&gs) / l);
+    let mut x = DMatrix::zeros(p, g.ncols());
+    for c in 0..g.ncols() {
+        let gs = DVector::from_iterator(p, (0..p).map(|i| d[i] * g[(i, c)]));
+        let mut xs = DVector::zeros(p);
+        for k in 0..p {
+            let l = eig.eigenvalues[k];
+            if l > RANK_TOL * lmax {
+                let v = eig.eigenvectors.column(k);
+                xs += v * (v.dot(&gs) / l);
+            }
+        }
+        for i in 0..p {
+            x[(i, c)] = d[i] * xs[i];
         }
     }
-    DVector::from_iterator(p, (0..p).map(|i| d[i] * xs[i]))
+    x
 }
 
 /// The residual `τ − Y θ` (N m) of samples `range`, sample-major.
