@@ -898,7 +898,7 @@ pub fn diagnose(
     }
     if let Some((_, o)) = &confirmed_only {
         summary += &format!(
-            "; NOT confirmed on the validation data: {}; with the confirmed effects only the validation RMS is {o:.3} N m",
+            "; NOT confirmed on the validation data (its error rose when added): {}; with the confirmed effects only the validation RMS is {o:.3} N m",
             unconfirmed.join(", ")
         );
     }
