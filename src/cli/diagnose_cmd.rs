@@ -65,30 +65,8 @@ fn print_text(d: &Diagnosis) {
             s.cv_rms_before,
             s.cv_rms_after,
             100.0 * s.reduction,
-            if s.ambiguous_with.is_empty() {
-                String::new()
-            } else {
-                format!(
-                    "; AMBIGUOUS with {}",
-                    s.ambiguous_with
-                        .iter()
-                        .map(|k| k.name())
-                        .collect::<Vec<_>>()
-                        .join(", ")
-                )
-            },
-            if s.also_fit.is_empty() {
-                String::new()
-            } else {
-                format!(
-                    "; also fit (more terms): {}",
-                    s.also_fit
-                        .iter()
-                        .map(|k| k.name())
-                        .collect::<Vec<_>>()
-                        .join(", ")
-                )
-            }
+            listed("; AMBIGUOUS with ", &s.ambiguous_with),
+            listed("; also fit (more terms): ", &s.also_fit)
         );
     }
     println!("  stop: {}", d.selection.stop);
@@ -104,18 +82,7 @@ fn print_text(d: &Diagnosis) {
                 st.kind.name(),
                 st.statistic,
                 st.threshold,
-                if st.ambiguous_with.is_empty() {
-                    String::new()
-                } else {
-                    format!(
-                        "; AMBIGUOUS with {}",
-                        st.ambiguous_with
-                            .iter()
-                            .map(|k| k.name())
-                            .collect::<Vec<_>>()
-                            .join(", ")
-                    )
-                }
+                listed("; AMBIGUOUS with ", &st.ambiguous_with)
             );
         }
         println!("    stop: {}", t.stop);
@@ -165,6 +132,15 @@ fn print_text(d: &Diagnosis) {
         );
     }
     println!("\n{}", d.summary);
+}
+
+/// `prefix` and the names of `kinds`, or nothing when there are none.
+fn listed(prefix: &str, kinds: &[physid::diagnose::library::Kind]) -> String {
+    if kinds.is_empty() {
+        String::new()
+    } else {
+        format!("{prefix}{}", physid::diagnose::library::names(kinds, false))
+    }
 }
 
 /// The arguments of `physid diagnose`.

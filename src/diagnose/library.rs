@@ -390,3 +390,18 @@ impl<'a> Context<'a> {
         }
     }
 }
+
+/// The names of `kinds` joined by ", " (in Markdown code spans with `code`).
+pub fn names(kinds: &[Kind], code: bool) -> String {
+    kinds
+        .iter()
+        .map(|k| {
+            if code {
+                format!("`{}`", k.name())
+            } else {
+                k.name().to_string()
+            }
+        })
+        .collect::<Vec<_>>()
+        .join(", ")
+}

@@ -362,8 +362,11 @@ fn median(v: &[f64]) -> f64 {
 pub fn magnitudes_of(kind: Kind, c: &[f64], n: usize, gravity: f64) -> Vec<f64> {
     match kind {
         Kind::TorqueGain => {
-            let m = median(c);
-            c.iter().map(|x| x - m).collect()
+            // The column is the nominal prediction, which already carries the gain:
+            // τ = Y θ + β τ̂ with τ̂ ≈ τ gives 1 + g = 1/(1 − β).
+            let g: Vec<f64> = c.iter().map(|b| b / (1.0 - b)).collect();
+            let m = median(&g);
+            g.iter().map(|x| x - m).collect()
         }
         Kind::TimeDelay => vec![c[0]],
         Kind::Spring => c[..n].to_vec(),
@@ -373,15 +376,15 @@ pub fn magnitudes_of(kind: Kind, c: &[f64], n: usize, gravity: f64) -> Vec<f64> 
     }
 }
 
-/// First-order standard error of a one-value magnitude from its coefficients' errors.
-fn magnitude_se(kind: Kind, c: &[f64], se: &[f64], n: usize, gravity: f64) -> f64 {
-    let base = magnitudes_of(kind, c, n, gravity)[0];
+/// First-order standard error of magnitude `index` from its coefficients' errors.
+fn magnitude_se(kind: Kind, c: &[f64], se: &[f64], n: usize, gravity: f64, index: usize) -> f64 {
+    let base = magnitudes_of(kind, c, n, gravity)[index];
     let mut v = 0.0;
     for i in 0..c.len() {
-        let h = 1e-6 * c[i].abs().max(1e-9);
+        let h = 1e-6 * c[i].abs().max(1e-6);
         let mut cp = c.to_vec();
         cp[i] += h;
-        let d = (magnitudes_of(kind, &cp, n, gravity)[0] - base) / h;
+        let d = (magnitudes_of(kind, &cp, n, gravity)[index] - base) / h;
         v += (d * se[i]).powi(2);
     }
     v.sqrt()
@@ -729,11 +732,7 @@ pub fn diagnose(
             .iter()
             .enumerate()
             .map(|(i, &value)| {
-                let se = if single {
-                    magnitude_se(v.kind, &st.beta, &st.se, n, g)
-                } else {
-                    st.se[i]
-                };
+                let se = magnitude_se(v.kind, &st.beta, &st.se, n, g, i);
                 Magnitude {
                     joint: joint_of(single, i),
                     value,
@@ -843,8 +842,8 @@ pub fn diagnose(
         if e.ambiguous_with.is_empty() {
             e.kind.name().to_string()
         } else {
-            let g: Vec<&str> = e.group().map(|k| k.name()).collect();
-            format!("one of {{{}}} (ambiguous)", g.join(", "))
+            let g: Vec<Kind> = e.group().collect();
+            format!("one of {{{}}} (ambiguous)", library::names(&g, false))
         }
     };
     let names: Vec<String> = effects[..n_cv].iter().map(name_of).collect();

@@ -211,11 +211,7 @@ pub fn markdown(d: &Diagnosis) -> String {
         if !st.ambiguous_with.is_empty() {
             s += &format!(
                 "**Ambiguous** with {}: the data fit them equally well.\n\n",
-                st.ambiguous_with
-                    .iter()
-                    .map(|k| format!("`{}`", k.name()))
-                    .collect::<Vec<_>>()
-                    .join(", ")
+                super::library::names(&st.ambiguous_with, true)
             );
         }
         s +=
@@ -252,11 +248,7 @@ pub fn markdown(d: &Diagnosis) -> String {
                 } else {
                     format!(
                         "; **ambiguous** with {}",
-                        st.ambiguous_with
-                            .iter()
-                            .map(|k| format!("`{}`", k.name()))
-                            .collect::<Vec<_>>()
-                            .join(", ")
+                        super::library::names(&st.ambiguous_with, true)
                     )
                 }
             );
