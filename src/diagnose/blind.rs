@@ -6,8 +6,9 @@
 //! Case `i` draws from `ChaCha8(seed, stream i)`: its category cycles through sixteen slots
 //! (four clean, one per kind of [`SINGLE_KINDS`], one with two effects, one out of the library),
 //! its magnitudes are uniform in the ranges of [`draw`], and the excitation seed differs per
-//! case. The model given to the diagnosis is the simulated robot's description, without its
-//! rotors for `rotor_inertia`.
+//! case. The model given to the diagnosis is the simulated robot's description with
+//! inertial-parameter errors drawn from the description prior ([`super::anchor`]), and, for
+//! `rotor_inertia`, its rotors frozen into the links they sit on.
 
 use super::library::Kind;
 use super::{Diagnosis, Verdict};
