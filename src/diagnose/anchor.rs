@@ -51,7 +51,7 @@ pub const CONFIRM_ALPHA: f64 = 1e-2;
 /// test, is robust to what the model still misses).
 pub const ABSORBED: f64 = 0.2;
 /// Batch length of the autocorrelation estimate (s).
-const BATCH: f64 = 1.0;
+pub const BATCH: f64 = 1.0;
 
 /// The 10×10 prior precision of one body's `π` for a relative uncertainty `eps` of its
 /// description `pi`: the affine-invariant metric on pseudo-inertias (the Hessian of the log-det

@@ -6,7 +6,7 @@
 //! - [`forward_dynamics`]: `q̈ = H⁻¹ (τ − C q̇ − g)` by Cholesky (RBDA §6.1, "FDcrb");
 //! - [`regressor`]: `Y(q, q̇, q̈)` with `τ + friction = Y θ` exactly, θ as in
 //!   [`crate::model::ParamLayout`];
-//! - [`energy`]: kinetic and potential energy, from body velocities and poses;
+//! - `energy`: kinetic and potential energy, from body velocities and poses;
 //! - [`kinematics`]: world poses, points and point Jacobians.
 //!
 //! Every function takes the immutable [`Model`] and a mutable [`Data`] workspace (pinocchio's

@@ -251,7 +251,7 @@ impl Log {
     }
 }
 
-/// Reads a log written by [`write`] (or any MCAP with `sensor_msgs/msg/JointState` on
+/// Reads a log written by [`write()`] (or any MCAP with `sensor_msgs/msg/JointState` on
 /// `/joint_states`). Errors name the file and the message.
 pub fn read(path: &Path) -> Result<Log, IoError> {
     let bytes = std::fs::read(path).map_err(|source| IoError::Fs {
