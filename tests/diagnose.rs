@@ -442,3 +442,36 @@ fn a_tilted_base_is_revealed_by_the_description_and_clean_data_claim_nothing() {
         assert!(rep.correlation_samples >= 1.0 && rep.correlation_samples < 50.0);
     }
 }
+
+#[test]
+fn a_payload_on_the_last_body_is_revealed_by_the_description() {
+    let m = physid::model::cheetah3::leg();
+    let tip = m.bodies[2].bounding.as_ref().unwrap().center * 2.0;
+    let com = tip * 0.8;
+    let d = diagnosed_against_description(
+        vec![EffectSpec::Payload {
+            mass: 0.6,
+            com: [com.x, com.y, com.z],
+            radius: 0.03,
+        }],
+        9,
+        Some(0.1),
+    );
+    eprintln!(
+        "{}\n{}",
+        d.summary,
+        serde_json::to_string_pretty(&d.description_test).unwrap()
+    );
+    // The last body's parameters express a payload exactly: no gap, nothing cross-validated.
+    assert!(d.selection.steps.is_empty(), "{}", d.summary);
+    let e = &d.effects[0];
+    assert_eq!(e.kind, Kind::Payload, "{}", d.summary);
+    assert_eq!(e.evidence, physid::diagnose::Evidence::Description);
+    let mass = &e.magnitudes[0];
+    assert!(
+        (mass.value - 0.6).abs() < 3.0 * mass.se && mass.se < 0.2,
+        "payload {} ± {} kg vs 0.6",
+        mass.value,
+        mass.se
+    );
+}

@@ -91,16 +91,16 @@ enum Command {
         report: Option<std::path::PathBuf>,
         /// How far the description's inertial parameters can be trusted (relative, 0.1 =
         /// 10 %): tests the identified parameters against it for effects that identification
-        /// absorbs (torque gain, tilt). Off without it.
+        /// absorbs (torque gain, tilt, payload). Off without it.
         #[arg(long)]
         description_uncertainty: Option<f64>,
     },
     /// The blind benchmark: simulated cases with withheld effects, diagnosed from files only,
     /// scored against what was injected.
     Blind {
-        /// Number of cases (categories cycle in 16: 4 clean, 10 single effects, 1 two, 1 out of
+        /// Number of cases (categories cycle in 17: 4 clean, 11 single effects, 1 two, 1 out of
         /// the library).
-        #[arg(long, default_value_t = 96)]
+        #[arg(long, default_value_t = 102)]
         cases: usize,
         /// Seed of every draw.
         #[arg(long, default_value_t = 1)]

@@ -2,7 +2,7 @@
 //!
 //! Some effects change the torques in ways the inertial parameters mimic almost exactly: one
 //! joint's torque gain scales what its row of `Y θ` sees; a tilted base rotates gravity, which
-//! the first moments `h` follow. Identification then absorbs them: the identified model predicts
+//! the first moments `h` follow; a payload on the last body is a change of its parameters. Identification then absorbs them: the identified model predicts
 //! the torques as well with or without the effect (no validation gap, nothing for the
 //! cross-validation of [`super::select`] to find), but its parameters are biased away from the
 //! description's in the pattern the effect dictates.
@@ -326,7 +326,7 @@ pub struct Step {
     pub threshold: f64,
     /// Equally simple kinds within `tie` of its statistic that also pass.
     pub ambiguous_with: Vec<Kind>,
-    /// Every kind's best test in this step, largest statistic over threshold first.
+    /// Every kind's best test in this step, largest `Δ − 2d` first.
     pub tests: Vec<Test>,
     /// Posterior coefficients of its columns.
     #[serde(skip)]
@@ -356,8 +356,9 @@ pub struct Report {
 
 /// Forward selection by the description test over the variants of `folds` that are absorbed
 /// (every column at most [`ABSORBED`] visible against the model and `chosen`) and not of a kind
-/// in `exclude`, after the effects `chosen` (free columns), adding at most `max` kinds. Ties
-/// within `tie` of the winner's `Δ` resolve by fewest columns, then are reported as ambiguous.
+/// in `exclude`, after the effects `chosen` (free columns), adding at most `max` kinds. Of the
+/// kinds that pass their threshold, the one with the largest `Δ − 2d` (Akaike) is taken; those
+/// within `tie` of its score resolve by fewest columns, then are reported as ambiguous.
 pub fn select(
     anchor: &Anchor,
     folds: &Folds,
@@ -419,8 +420,10 @@ pub fn select(
         if best.is_empty() {
             break "no candidate left".into();
         }
-        let excess = |t: &Test| t.statistic / t.threshold;
-        best.sort_by(|a, b| excess(&b.1).total_cmp(&excess(&a.1)));
+        // Best Akaike information first: `Δ` is twice the log-likelihood ratio, so `Δ − 2d`
+        // weighs what a kind explains against its columns (kinds differ in `d`).
+        let z = |t: &Test| t.statistic - 2.0 * t.columns as f64;
+        best.sort_by(|a, b| z(&b.1).total_cmp(&z(&a.1)));
         let tests: Vec<Test> = best.iter().map(|(_, t)| t.clone()).collect();
         let top = &tests[0];
         if top.statistic < top.threshold {
@@ -431,9 +434,9 @@ pub fn select(
                 top.threshold
             );
         }
-        let cut = top.statistic * (1.0 - tie);
+        let cut = z(top) * (1.0 - tie);
         let ties: Vec<usize> = (0..best.len())
-            .filter(|&i| tests[i].statistic >= tests[i].threshold && tests[i].statistic >= cut)
+            .filter(|&i| tests[i].statistic >= tests[i].threshold && z(&tests[i]) >= cut)
             .collect();
         let fewest = ties
             .iter()

@@ -3,7 +3,7 @@
 //! (`robot.urdf`, `data.csv`), diagnosed from those files only, then scored against what was
 //! injected.
 //!
-//! Case `i` draws from `ChaCha8(seed, stream i)`: its category cycles through sixteen slots
+//! Case `i` draws from `ChaCha8(seed, stream i)`: its category cycles through seventeen slots
 //! (four clean, one per kind of [`SINGLE_KINDS`], one with two effects, one out of the library),
 //! its magnitudes are uniform in the ranges of [`draw`], and the excitation seed differs per
 //! case. The model given to the diagnosis is the simulated robot's description with
@@ -14,6 +14,7 @@ use super::library::Kind;
 use super::{Diagnosis, Verdict};
 use crate::model::Model;
 use crate::sim::scenario::{EffectSpec, Scenario};
+use nalgebra::Vector3;
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use serde::Serialize;
@@ -82,7 +83,7 @@ pub struct CaseResult {
 /// quasi-static linearization misses the filtered deflection jumps that Coulomb friction
 /// causes at every reversal (it was misattributed in every case of a trial run; a known gap,
 /// documented in `docs/diagnose.md`).
-pub const SINGLE_KINDS: [Kind; 10] = [
+pub const SINGLE_KINDS: [Kind; 11] = [
     Kind::TorqueOffset,
     Kind::TorqueGain,
     Kind::TimeDelay,
@@ -93,6 +94,7 @@ pub const SINGLE_KINDS: [Kind; 10] = [
     Kind::Cogging,
     Kind::RotorInertia,
     Kind::Tilt,
+    Kind::Payload,
 ];
 
 /// The kinds paired in two-effect cases: those that act on the torque and stay visible after
@@ -239,6 +241,25 @@ pub fn draw(kind: Option<Kind>, model: &Model, rng: &mut ChaCha8Rng, rate: f64) 
                 vec![angle],
             )
         }
+        Kind::Payload => {
+            // A 0.3–1 kg sphere of 3 cm radius between the middle and the far end of the last
+            // body (taken as twice its bounding ellipsoid's centre from the joint).
+            let mass = uniform(rng, 0.3, 1.0);
+            let last = &model.bodies[n - 1];
+            let tip = last
+                .bounding
+                .as_ref()
+                .map_or(Vector3::zeros(), |e| e.center * 2.0);
+            let s = uniform(rng, 0.5, 1.0);
+            (
+                Some(EffectSpec::Payload {
+                    mass,
+                    com: [s * tip.x, s * tip.y, s * tip.z],
+                    radius: 0.03,
+                }),
+                vec![mass],
+            )
+        }
         Kind::Compliance => {
             let k = per(rng, 300.0, 1000.0);
             let kappa = k.iter().map(|k| 1.0 / k).collect();
@@ -254,10 +275,10 @@ pub fn draw(kind: Option<Kind>, model: &Model, rng: &mut ChaCha8Rng, rate: f64) 
 
 /// The category of case `i`.
 pub fn category(i: usize) -> (Category, Option<usize>) {
-    match i % 16 {
+    match i % 17 {
         0..=3 => (Category::Clean, None),
-        s @ 4..=13 => (Category::Single, Some(s - 4)),
-        14 => (Category::Two, None),
+        s @ 4..=14 => (Category::Single, Some(s - 4)),
+        15 => (Category::Two, None),
         _ => (Category::OutOfLibrary, None),
     }
 }

@@ -43,11 +43,15 @@ pub enum Kind {
     /// Compliant transmission seen by a motor-side encoder: `q_logged = q + κ τ`
     /// (κ = 1/k, rad/(N m) per joint).
     Compliance,
+    /// An unmodelled payload on the last body: ten inertial parameters `π_p` added to it (the
+    /// last body's own regressor columns; reported as its mass, kg). Its columns lie in the
+    /// model's span, so only the test against the description can find it.
+    Payload,
 }
 
 impl Kind {
     /// Every kind, in report order.
-    pub const ALL: [Kind; 11] = [
+    pub const ALL: [Kind; 12] = [
         Kind::TorqueOffset,
         Kind::TorqueGain,
         Kind::TimeDelay,
@@ -59,6 +63,7 @@ impl Kind {
         Kind::RotorInertia,
         Kind::Tilt,
         Kind::Compliance,
+        Kind::Payload,
     ];
 
     /// snake_case name (as in scenario files).
@@ -75,6 +80,7 @@ impl Kind {
             Kind::RotorInertia => "rotor_inertia",
             Kind::Tilt => "tilt",
             Kind::Compliance => "compliance",
+            Kind::Payload => "payload",
         }
     }
 
@@ -83,6 +89,7 @@ impl Kind {
         match self {
             Kind::TimeDelay => 1,
             Kind::Tilt => 2,
+            Kind::Payload => 10,
             Kind::Spring | Kind::Cogging => 2 * n,
             _ => n,
         }
@@ -112,7 +119,14 @@ impl Kind {
             Kind::RotorInertia => ("reflected inertia", "kg m^2"),
             Kind::Tilt => ("tilt angle", "rad"),
             Kind::Compliance => ("compliance 1/k", "rad/(N m)"),
+            Kind::Payload => ("payload mass on the last body", "kg"),
         }
+    }
+
+    /// Whether the columns lie in the span of the model's own (its parameters express the
+    /// effect exactly): cross-validation cannot see it and does not offer it.
+    pub fn in_model_span(&self) -> bool {
+        matches!(self, Kind::Payload)
     }
 
     /// The grid of the one-dimensional search, if any: Stribeck velocities (rad/s, ratio √2)
@@ -346,6 +360,14 @@ impl<'a> Context<'a> {
                         z[(j, c + n + j)] = a.cos();
                     }),
                     Kind::RotorInertia => (0..n).for_each(|j| z[(j, c + j)] = qdd[j]),
+                    Kind::Payload => {
+                        let last = 10 * (n - 1);
+                        for i in 0..n {
+                            for m in 0..10 {
+                                z[(i, c + m)] = z[(i, last + m)];
+                            }
+                        }
+                    }
                     Kind::Tilt => {
                         for (i, (gm, gd)) in gravity_models.iter().zip(gdata.iter_mut()).enumerate()
                         {

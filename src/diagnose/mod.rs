@@ -372,6 +372,7 @@ pub fn magnitudes_of(kind: Kind, c: &[f64], n: usize, gravity: f64) -> Vec<f64> 
         Kind::Spring => c[..n].to_vec(),
         Kind::Cogging => (0..n).map(|j| c[j].hypot(c[n + j])).collect(),
         Kind::Tilt => vec![(c[0].hypot(c[1]) / gravity).atan()],
+        Kind::Payload => vec![c[0]],
         _ => c.to_vec(),
     }
 }
@@ -814,7 +815,11 @@ pub fn diagnose(
     };
     // Held-out confirmation of cross-validation evidence: the validation error falls.
     // Description evidence was confirmed on the validation data before it was kept.
-    let confirmed: Vec<bool> = overall.windows(2).map(|w| w[1] < w[0]).collect();
+    let confirmed: Vec<bool> = overall
+        .windows(2)
+        .enumerate()
+        .map(|(i, w)| i >= n_cv || w[1] < w[0])
+        .collect();
     let confirmed_only = if confirmed.iter().all(|c| *c) {
         None
     } else {

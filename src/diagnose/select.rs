@@ -278,7 +278,7 @@ pub fn forward_select(
         // Best variant of each kind not yet used.
         let mut best: Vec<(usize, Cv)> = vec![];
         for kind in Kind::ALL {
-            if used.contains(&kind) {
+            if used.contains(&kind) || kind.in_model_span() {
                 continue;
             }
             let mut top: Option<(usize, Cv)> = None;
