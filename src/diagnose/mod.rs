@@ -391,6 +391,22 @@ fn magnitude_se(kind: Kind, c: &[f64], se: &[f64], n: usize, gravity: f64, index
     v.sqrt()
 }
 
+/// The residual `res` (sample-major over `tr`) with the joint-samples slower than `min_speed`
+/// set to NaN (left out of every fit and error).
+fn mask_slow(tr: &Trajectory, res: &[f64], min_speed: f64) -> Vec<f64> {
+    let n = tr.dof();
+    res.iter()
+        .enumerate()
+        .map(|(i, r)| {
+            if library::slow(tr.qd_at(i / n)[i % n], min_speed) {
+                f64::NAN
+            } else {
+                *r
+            }
+        })
+        .collect()
+}
+
 /// Sample rate of `tr` (Hz) from its first and last time stamps.
 fn sample_rate(tr: &Trajectory) -> f64 {
     let m = tr.len();
@@ -541,17 +557,7 @@ pub fn diagnose(
     let description_test = match opts.description_uncertainty {
         Some(eps) if selection.chosen.is_empty() => {
             let (_, res) = residual_rms(&ctx_train, train, &[], &theta0, ms);
-            let masked: Vec<f64> = res
-                .iter()
-                .enumerate()
-                .map(|(i, r)| {
-                    if library::slow(train.qd_at(i / n)[i % n], ms) {
-                        f64::NAN
-                    } else {
-                        *r
-                    }
-                })
-                .collect();
+            let masked = mask_slow(train, &res, ms);
             let fast: Vec<f64> = masked.iter().copied().filter(|r| r.is_finite()).collect();
             let s2 = fast.iter().map(|r| r * r).sum::<f64>() / fast.len().max(1) as f64;
             let tau_c = anchor::correlation_time(&masked, n, sample_rate(train));
@@ -762,18 +768,8 @@ pub fn diagnose(
     let final_vs: Vec<_> = chosen.iter().map(|&v| folds.variants[v]).collect();
     let (_, train_res) = residual_rms(&ctx_train, train, &final_vs, &final_theta, ms);
     let both = concatenate(vec![train.clone(), validate.clone()]);
-    let masked_res: Vec<f64> = train_res
-        .iter()
-        .chain(&final_res)
-        .enumerate()
-        .map(|(i, r)| {
-            if library::slow(both.qd_at(i / n)[i % n], ms) {
-                f64::NAN
-            } else {
-                *r
-            }
-        })
-        .collect();
+    let joined: Vec<f64> = train_res.iter().chain(&final_res).copied().collect();
+    let masked_res = mask_slow(&both, &joined, ms);
     let floor_var = noise::gamma_test(&both, 0..both.len(), &masked_res, exclude);
     let gap: Vec<JointGap> = (0..n)
         .map(|j| {
