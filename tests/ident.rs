@@ -234,26 +234,16 @@ fn extra_columns_are_free_unless_declared_non_negative() {
     let tr = exact_data(&m, 400, 3);
     let (n, p) = (m.dof(), m.layout().len);
     let mut ne = NormalEquations::new(n, p + 1);
-    let mut d = Data::new(&m);
-    let mut y = DMatrix::zeros(n, p);
     let mut z = DMatrix::zeros(n, p + 1);
-    for k in 0..tr.len() {
-        regressor(
-            &m,
-            &mut d,
-            tr.q_at(k),
-            tr.qd_at(k),
-            tr.qdd_at(k).unwrap(),
-            &mut y,
-        );
-        z.columns_mut(0, p).copy_from(&y);
+    physid::ident::normal::for_each_regressor(&m, &tr, 0..tr.len(), &mut |k, y| {
+        z.columns_mut(0, p).copy_from(y);
         let r: Vec<f64> = (0..n).map(|j| ((k * 7 + j * 3) as f64).sin()).collect();
         let tau: Vec<f64> = (0..n).map(|j| tr.tau_at(k)[j] - 0.5 * r[j]).collect();
         for j in 0..n {
             z[(j, p)] = r[j];
         }
         ne.add(&z, &tau);
-    }
+    });
     let ne = ne.finish();
     let mut prior = DVector::zeros(p + 1);
     prior.rows_mut(0, p).copy_from(&m.parameters());

@@ -372,14 +372,15 @@ pub fn select(
         let d = folds.variants[vi].kind.columns(folds.n);
         (folds.offsets[vi]..folds.offsets[vi] + d).collect()
     };
+    // The first step's fits decide which variants are absorbed; they are kept for that step.
+    let mut first: Vec<Option<Fit>> = (0..folds.variants.len())
+        .map(|v| (!exclude.contains(&folds.variants[v].kind)).then(|| anchor.fit(&base, &cols(v))))
+        .collect();
     let candidates: Vec<usize> = (0..folds.variants.len())
-        .filter(|&v| !exclude.contains(&folds.variants[v].kind))
         .filter(|&v| {
-            anchor
-                .fit(&base, &cols(v))
-                .visible
-                .iter()
-                .all(|f| *f <= ABSORBED)
+            first[v]
+                .as_ref()
+                .is_some_and(|f| f.visible.iter().all(|x| *x <= ABSORBED))
         })
         .collect();
     let per_test = ALPHA / candidates.len().max(1) as f64;
@@ -389,12 +390,12 @@ pub fn select(
         if steps.len() >= max {
             break format!("reached the maximum of {max} effects");
         }
-        let mut best: Vec<(usize, Test)> = vec![];
+        let mut best: Vec<(usize, Test, Fit)> = vec![];
         for kind in Kind::ALL {
             if used.contains(&kind) {
                 continue;
             }
-            let mut top: Option<(usize, Test)> = None;
+            let mut top: Option<(usize, Test, Fit)> = None;
             for &vi in candidates
                 .iter()
                 .filter(|&&v| folds.variants[v].kind == kind)
@@ -402,7 +403,10 @@ pub fn select(
                 let v = folds.variants[vi];
                 let cand = cols(vi);
                 let d = cand.len();
-                let f = anchor.fit(&base, &cand);
+                let f = match first[vi].take() {
+                    Some(f) if steps.is_empty() => f,
+                    _ => anchor.fit(&base, &cand),
+                };
                 let t = Test {
                     kind,
                     param: v.param,
@@ -411,8 +415,11 @@ pub fn select(
                     columns: d,
                     visible: f.visible.iter().copied().fold(0.0, f64::max),
                 };
-                if top.as_ref().is_none_or(|(_, b)| t.statistic > b.statistic) {
-                    top = Some((vi, t));
+                if top
+                    .as_ref()
+                    .is_none_or(|(_, b, _)| t.statistic > b.statistic)
+                {
+                    top = Some((vi, t, f));
                 }
             }
             best.extend(top);
@@ -424,7 +431,7 @@ pub fn select(
         // weighs what a kind explains against its columns (kinds differ in `d`).
         let z = |t: &Test| t.statistic - 2.0 * t.columns as f64;
         best.sort_by(|a, b| z(&b.1).total_cmp(&z(&a.1)));
-        let tests: Vec<Test> = best.iter().map(|(_, t)| t.clone()).collect();
+        let tests: Vec<Test> = best.iter().map(|(_, t, _)| t.clone()).collect();
         let top = &tests[0];
         if top.statistic < top.threshold {
             break format!(
@@ -447,13 +454,11 @@ pub fn select(
             .into_iter()
             .filter(|&i| tests[i].columns == fewest)
             .collect();
-        let (vi, t) = best[simplest[0]].clone();
         let ambiguous_with: Vec<Kind> = simplest[1..].iter().map(|&i| tests[i].kind).collect();
+        let (vi, t, f) = best.swap_remove(simplest[0]);
         used.push(t.kind);
         used.extend(&ambiguous_with);
-        let cand = cols(vi);
-        let f = anchor.fit(&base, &cand);
-        base.extend(cand);
+        base.extend(cols(vi));
         steps.push(Step {
             beta: f.beta,
             se: f.se,

@@ -4,7 +4,8 @@
 //! injected.
 //!
 //! Case `i` draws from `ChaCha8(seed, stream i)`: its category cycles through seventeen slots
-//! (four clean, one per kind of [`SINGLE_KINDS`], one with two effects, one out of the library),
+//! ([`category`]: four clean, one per kind of [`SINGLE_KINDS`], one with two effects, one out of
+//! the library),
 //! its magnitudes are uniform in the ranges of [`draw`], and the excitation seed differs per
 //! case. The model given to the diagnosis is the simulated robot's description with
 //! inertial-parameter errors drawn from the description prior ([`super::anchor`]), and, for
@@ -273,12 +274,17 @@ pub fn draw(kind: Option<Kind>, model: &Model, rng: &mut ChaCha8Rng, rate: f64) 
     }
 }
 
-/// The category of case `i`.
+/// Clean slots at the start of each cycle of categories.
+const CLEAN_SLOTS: usize = 4;
+
+/// The category of case `i`: cycles of four clean slots, one per kind of [`SINGLE_KINDS`],
+/// one with two effects and one out of the library.
 pub fn category(i: usize) -> (Category, Option<usize>) {
-    match i % 17 {
-        0..=3 => (Category::Clean, None),
-        s @ 4..=14 => (Category::Single, Some(s - 4)),
-        15 => (Category::Two, None),
+    let singles = SINGLE_KINDS.len();
+    match i % (CLEAN_SLOTS + singles + 2) {
+        s if s < CLEAN_SLOTS => (Category::Clean, None),
+        s if s < CLEAN_SLOTS + singles => (Category::Single, Some(s - CLEAN_SLOTS)),
+        s if s == CLEAN_SLOTS + singles => (Category::Two, None),
         _ => (Category::OutOfLibrary, None),
     }
 }
@@ -298,15 +304,11 @@ fn nominal_validation_ms(
     let ctx = super::library::Context::new(model, &fit.theta, &val, opts.processing_cutoff);
     let (_, res) = super::residual_rms(&ctx, &val, &[], &fit.theta, opts.min_speed);
     // Pooled over every joint-sample at or above the speed threshold.
-    let n = model.dof();
-    let (mut s, mut c) = (0.0, 0usize);
-    for (i, r) in res.iter().enumerate() {
-        if !super::library::slow(val.qd_at(i / n)[i % n], opts.min_speed) {
-            s += r * r;
-            c += 1;
-        }
-    }
-    Ok(s / c.max(1) as f64)
+    Ok(super::finite_mean_square(&super::mask_slow(
+        &val,
+        &res,
+        opts.min_speed,
+    )))
 }
 
 /// Smallest identifiable fraction of a magnitude that is scored (its column's part outside the

@@ -407,6 +407,15 @@ fn mask_slow(tr: &Trajectory, res: &[f64], min_speed: f64) -> Vec<f64> {
         .collect()
 }
 
+/// The mean square of the finite entries of `v` (0 without any).
+fn finite_mean_square(v: &[f64]) -> f64 {
+    let (s, c) = v
+        .iter()
+        .filter(|x| x.is_finite())
+        .fold((0.0, 0usize), |(s, c), x| (s + x * x, c + 1));
+    s / c.max(1) as f64
+}
+
 /// Sample rate of `tr` (Hz) from its first and last time stamps.
 fn sample_rate(tr: &Trajectory) -> f64 {
     let m = tr.len();
@@ -558,8 +567,7 @@ pub fn diagnose(
         Some(eps) if selection.chosen.is_empty() => {
             let (_, res) = residual_rms(&ctx_train, train, &[], &theta0, ms);
             let masked = mask_slow(train, &res, ms);
-            let fast: Vec<f64> = masked.iter().copied().filter(|r| r.is_finite()).collect();
-            let s2 = fast.iter().map(|r| r * r).sum::<f64>() / fast.len().max(1) as f64;
+            let s2 = finite_mean_square(&masked);
             let tau_c = anchor::correlation_time(&masked, n, sample_rate(train));
             let anchor = anchor::Anchor {
                 ne: &all,
