@@ -55,10 +55,7 @@ fn benches(c: &mut Criterion) {
         "cheetah3 leg links only",
         &cheetah3::leg().without_rotors(),
     );
-    let kuka = concat!(
-        env!("CARGO_MANIFEST_DIR"),
-        "/../shared/data/real/kuka_lwr4/kuka_lwr4.urdf"
-    );
+    let kuka = concat!(env!("CARGO_MANIFEST_DIR"), "/data/kuka_lwr4/kuka_lwr4.urdf");
     if let Ok(m) = physid::io::load_robot(kuka) {
         bench_model(c, "kuka lwr4", &m);
     }

@@ -46,7 +46,7 @@ def main():
         leg = ["--robot", "cheetah3", "--no-rotors"]
         urdf = export(binary, leg, "urdf", d)
         check(report, "link-only Cheetah-3 leg", urdf, dynamics(binary, ["--robot", urdf]))
-    check(report, "KUKA LWR4+ (shared URDF)", KUKA_URDF, dynamics(binary, ["--robot", KUKA_URDF]))
+    check(report, "KUKA LWR4+ (data/kuka_lwr4 URDF)", KUKA_URDF, dynamics(binary, ["--robot", KUKA_URDF]))
     report.finish()
 
 

@@ -10,7 +10,7 @@ import tempfile
 PIN_FROM_PAPER = [0, 1, 2, 3, 4, 5, 7, 6, 8, 9]
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
-KUKA_URDF = os.path.join(ROOT, "..", "shared", "data", "real", "kuka_lwr4", "kuka_lwr4.urdf")
+KUKA_URDF = os.path.join(ROOT, "data", "kuka_lwr4", "kuka_lwr4.urdf")
 
 
 def physid_bin(argv):
@@ -55,6 +55,11 @@ class Report:
         ok = err <= tol
         self.rows.append(ok)
         print(f"{'ok  ' if ok else 'FAIL'} {case:<58} max rel. error {err:.2e} (tol {tol:.0e})")
+
+    def check(self, case, ok):
+        """A pass/fail check without a numeric error."""
+        self.rows.append(bool(ok))
+        print(f"{'ok  ' if ok else 'FAIL'} {case}")
 
     def finish(self):
         failed = self.rows.count(False)

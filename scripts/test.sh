@@ -1,35 +1,19 @@
 #!/usr/bin/env bash
 # Runs every physid test on a fresh machine: formatting, lints, the Rust test suite, and the
-# Python cross-checks against pinocchio and MuJoCo. Installs what it needs (Debian packages,
-# the Python venv) when missing. Build outputs go to $CARGO_TARGET_DIR (default
+# Python cross-checks against pinocchio, MuJoCo and CVXPY, and the README's main command
+# (scripts/run.sh into a temporary directory, its outputs parsed). Installs what it needs
+# (scripts/setup.sh: Debian packages, the Python venv) when missing. Build outputs go to $CARGO_TARGET_DIR (default
 # ~/.cache/physid-target) so that repeated runs build incrementally.
 set -euo pipefail
 cd "$(dirname "$0")/.."
-export CARGO_TARGET_DIR="${CARGO_TARGET_DIR:-$HOME/.cache/physid-target}"
-VENV="${PHYSID_VENV:-$HOME/.cache/physid-venv}"
+source scripts/setup.sh
 step() { printf '\n== %s\n' "$*"; }
 
-step "system packages"
-missing=()
-for p in libopenblas-dev libgfortran-12-dev; do
-  dpkg -s "$p" >/dev/null 2>&1 || missing+=("$p")
-done
-if [ ${#missing[@]} -gt 0 ]; then
-  if [ "$(id -u)" = 0 ]; then
-    apt-get update -qq && DEBIAN_FRONTEND=noninteractive apt-get install -y -qq "${missing[@]}" >/dev/null
-  else
-    echo "missing Debian packages: ${missing[*]} (run as root or install them)" >&2; exit 1
-  fi
-fi
-echo "ok"
-
-step "python venv ($VENV)"
-if ! "$VENV/bin/python" -c "import numpy, mujoco, pinocchio, cvxpy, clarabel, scs" 2>/dev/null; then
-  python3 -m venv "$VENV"
-  "$VENV/bin/pip" install -q --upgrade pip
-  "$VENV/bin/pip" install -q -r scripts/requirements.txt
-fi
-"$VENV/bin/python" -c "import numpy, mujoco, pinocchio; print('numpy', numpy.__version__, 'mujoco', mujoco.__version__, 'pinocchio', pinocchio.__version__)"
+step "setup (system packages, Python venv $PHYSID_VENV)"
+setup_rust
+setup_system
+setup_python
+"$PHYSID_VENV/bin/python" -c "import numpy, mujoco, pinocchio; print('numpy', numpy.__version__, 'mujoco', mujoco.__version__, 'pinocchio', pinocchio.__version__)"
 
 step "cargo fmt --check"
 cargo fmt --check
@@ -44,12 +28,21 @@ if grep -qE 'test result: FAILED|error(\[E[0-9]+\])?:' "$CARGO_TARGET_DIR/physid
 fi
 rust_passed=$(grep -oE 'test result: ok\. [0-9]+ passed' "$CARGO_TARGET_DIR/physid-test.log" | awk '{s+=$4} END {print s+0}')
 
-step "python cross-checks (pinocchio, MuJoCo, CVXPY)"
+step "python cross-checks (pinocchio, MuJoCo, CVXPY) and the main command"
 cargo build --quiet --release --bin physid
 export PHYSID_BIN="$CARGO_TARGET_DIR/release/physid"
 py_passed=0; py_failed=0
-for s in check_pinocchio check_mujoco check_cvxpy; do
-  out=$("$VENV/bin/python" "scripts/$s.py" 2>&1) && rc=0 || rc=$?
+main_out=$(mktemp -d)
+trap 'rm -rf "$main_out"' EXIT
+for s in check_pinocchio check_mujoco check_cvxpy check_main_outputs; do
+  if [ "$s" = check_main_outputs ]; then
+    step "the README's main command (bash scripts/run.sh), outputs parsed"
+    out=$( { bash scripts/run.sh --out "$main_out/sample_size" >"$main_out/run.log" 2>&1 ||
+               { tail -n 20 "$main_out/run.log"; exit 1; }; } &&
+           "$PHYSID_VENV/bin/python" scripts/check_main_outputs.py "$main_out/sample_size" 2>&1 ) && rc=0 || rc=$?
+  else
+    out=$("$PHYSID_VENV/bin/python" "scripts/$s.py" 2>&1) && rc=0 || rc=$?
+  fi
   echo "$out"
   p=$(echo "$out" | grep -oE '[0-9]+ passed' | tail -1 | awk '{print $1}')
   f=$(echo "$out" | grep -oE '[0-9]+ failed' | tail -1 | awk '{print $1}')

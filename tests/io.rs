@@ -8,7 +8,7 @@ use physid::model::{cheetah3, Model};
 use std::path::{Path, PathBuf};
 
 fn kuka_path() -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("../shared/data/real/kuka_lwr4/kuka_lwr4.urdf")
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("data/kuka_lwr4/kuka_lwr4.urdf")
 }
 
 /// Two models describe the same dynamics: equal torques and regressors on random states.

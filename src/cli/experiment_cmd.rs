@@ -153,7 +153,6 @@ fn dependency_versions() -> serde_json::Value {
         "polars",
         "rayon",
         "mcap",
-        "openblas-src",
     ];
     let mut out = serde_json::Map::new();
     let mut name = "";
@@ -169,5 +168,10 @@ fn dependency_versions() -> serde_json::Value {
             }
         }
     }
+    // The BLAS/LAPACK is the system's, linked by build.rs: record which library file.
+    out.insert(
+        "openblas".to_string(),
+        serde_json::Value::String(env!("PHYSID_OPENBLAS").to_string()),
+    );
     serde_json::Value::Object(out)
 }

@@ -1,7 +1,7 @@
 //! Rigid-body dynamics with geared rotors, one algorithm per file, in RBDA's notation:
 //!
 //! - [`rnea`]: inverse dynamics `τ = H(q) q̈ + C(q, q̇) q̇ + g(q)` (RBDA Table 5.1), with rotors
-//!   as in design.md §1;
+//!   as in architecture.md §2;
 //! - [`crba`]: the joint-space mass matrix `H(q)` (RBDA Table 6.2) with rotor terms;
 //! - [`forward_dynamics`]: `q̈ = H⁻¹ (τ − C q̇ − g)` by Cholesky (RBDA §6.1, "FDcrb");
 //! - [`regressor`]: `Y(q, q̇, q̈)` with `τ + friction = Y θ` exactly, θ as in
@@ -130,7 +130,7 @@ pub fn base_acceleration(model: &Model) -> Motion {
 
 /// Joint and rotor transforms for configuration `q`: fills `x_up`, `s`, `x_rot`, `s_rot`.
 ///
-/// Rotor `i` (design.md §1), full model: `X_rot = X_J(N q_i) X_rot,0` and
+/// Rotor `i` (architecture.md §2), full model: `X_rot = X_J(N q_i) X_rot,0` and
 /// `S_rot = N [axis; 0]`; reflected model: `X_rot = X_rot,0` (frozen) and `S_rot = 0`.
 pub fn update_transforms(model: &Model, data: &mut Data, q: &[f64]) {
     debug_assert!(data.fits(model));

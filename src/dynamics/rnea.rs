@@ -1,4 +1,4 @@
-//! Recursive Newton–Euler inverse dynamics with geared rotors (RBDA Table 5.1; design.md §1).
+//! Recursive Newton–Euler inverse dynamics with geared rotors (RBDA Table 5.1; architecture.md §2).
 
 use super::{armature, check_len, forward_pass, Data};
 use crate::model::{Model, RotorModel};

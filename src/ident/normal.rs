@@ -1,5 +1,5 @@
 //! Streaming least-squares data: `YᵀY`, `Yᵀτ`, `τᵀτ` and the sample count, accumulated in one
-//! pass (design.md §4), so memory and the cone program's size do not grow with the number of
+//! pass (architecture.md §5), so memory and the cone program's size do not grow with the number of
 //! samples. Rows are buffered in blocks and added with one matrix product per block.
 
 use crate::dynamics::{regressor, Data};

@@ -1,4 +1,4 @@
-//! Time series of joint data (`Trajectory`) and the CSV format of design.md §5:
+//! Time series of joint data (`Trajectory`) and the CSV format of docs/scenario-format.md ("Outputs of `physid simulate`"):
 //! a header row, then `t, q1..qn, dq1..dqn, [ddq1..ddqn,] tau1..taun` (s, rad, rad/s, rad/s²,
 //! N m). Extra columns are ignored on reading (the KUKA logs carry set-points too).
 

@@ -1,8 +1,8 @@
-//! The built-in Cheetah-3-like leg (design.md §2): three links (ab/ad, hip/thigh, knee/shank)
+//! The built-in Cheetah-3-like leg (architecture.md §4): three links (ab/ad, hip/thigh, knee/shank)
 //! and three rotors behind 10.6:1 gearboxes, fixed base.
 //!
 //! Geometry and mass properties follow the open MIT Cheetah-Software `Cheetah3.h` (values about
-//! each body's joint frame, design.md §6). Because those identified values are degenerate (flat,
+//! each body's joint frame, architecture.md §4). Because those identified values are degenerate (flat,
 //! on the boundary `J ⪰ 0`), the default ground truth **thickens** every body by `d = 1 cm`
 //! (`Σ_C ← Σ_C + m d² 1`), see [`Truth`]; the published set remains available.
 //!
@@ -98,7 +98,7 @@ impl Default for LegOptions {
 }
 
 /// `Cheetah3.h` parameters in Cheetah-Software order `[m, hx, hy, hz, Ixx, Iyy, Izz, Iyz, Ixz,
-/// Ixy]`, about each body's joint frame (design.md §6). Digits are kept verbatim as published,
+/// Ixy]`, about each body's joint frame (architecture.md §4). Digits are kept verbatim as published,
 /// trailing zeros included.
 #[allow(clippy::excessive_precision)]
 pub mod published {
@@ -342,7 +342,7 @@ mod tests {
 
     #[test]
     fn published_values_are_flat_and_thickened_truth_is_not() {
-        // design.md trap 1: every published body has a zero eigenvalue of Σ_C (rms < 1 mm).
+        // architecture.md §4, trap 1: every published body has a zero eigenvalue of Σ_C (rms < 1 mm).
         let all = [
             published::ABAD,
             published::HIP,
@@ -398,7 +398,7 @@ mod tests {
 
     #[test]
     fn published_shank_escapes_the_matlab_ellipsoid() {
-        // design.md trap 2, reproduced: semi-axes (0.042, 0.042, 0.290) at (0, 0, -0.1725).
+        // architecture.md §4, trap 2, reproduced: semi-axes (0.042, 0.042, 0.290) at (0, 0, -0.1725).
         let e = Ellipsoid::axis_aligned(
             Vector3::new(0.0, 0.0, -0.1725),
             Vector3::new(0.042, 0.042, 0.29),

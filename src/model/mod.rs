@@ -6,7 +6,7 @@
 //! transform from the parent's frame to joint `i`'s frame at `q_i = 0`; each body's inertial
 //! parameters are expressed in its own joint frame.
 //!
-//! A rotor (design.md §1, as in the open MIT Cheetah software) sits on the **parent** of body `i`
+//! A rotor (architecture.md §2, as in the open MIT Cheetah software) sits on the **parent** of body `i`
 //! at the fixed transform `x_rot` from the parent frame, spins about its own `axis` by `N q_i`
 //! (motion subspace `S_rot = N [axis; 0]`) and carries its own ten inertial parameters. Joint
 //! torques are at the gearbox output. [`RotorModel::Reflected`] replaces the spinning rotor by

@@ -9,7 +9,7 @@ use nalgebra::{DVector, Vector3};
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 
-/// The shell target (design.md §3): the azimuth `φ` and a polar phase `θ` integrate
+/// The shell target (architecture.md §3): the azimuth `φ` and a polar phase `θ` integrate
 /// `φ̇ = A_φ sin(ω_φ t)`, `θ̇ = A_θ sin(ω_θ t)` from zero; the polar angle from straight down is
 /// `θ_p = polar_mid + polar_amplitude sin θ`, which keeps the target in a band of the shell that
 /// a leg with joint limits can reach; the target is `c + r ∘ [sin θ_p cos φ, sin θ_p sin φ,

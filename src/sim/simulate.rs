@@ -1,5 +1,5 @@
 //! The ground-truth simulator: closed-loop excitation with friction, torque limits, effects,
-//! sensors and offline processing, as on the robot (design.md §3).
+//! sensors and offline processing, as on the robot (architecture.md §3).
 //!
 //! Per control period `[t_k, t_k+1)` (default 1 kHz):
 //! 1. the encoder reads `q_enc = round((q + n_q) / step) · step`; the controller's velocity is
