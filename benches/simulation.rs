@@ -10,7 +10,7 @@ use std::hint::black_box;
 
 fn benches(c: &mut Criterion) {
     let path = concat!(env!("CARGO_MANIFEST_DIR"), "/scenarios/cheetah3_shell.toml");
-    let (mut sc, m, _) = physid::io::load_scenario(std::path::Path::new(path)).unwrap();
+    let (mut sc, m, _) = physid::sim::scenario::load(std::path::Path::new(path)).unwrap();
     sc.simulation.duration = 1.0;
     let mut g = c.benchmark_group("shell experiment, 1 simulated second");
     for (label, engine, substeps) in [

@@ -3,7 +3,7 @@
 //! `cargo run --release --example substeps`
 fn main() {
     let path = std::path::Path::new("scenarios/cheetah3_shell.toml");
-    let (mut sc, m, _) = physid::io::load_scenario(path).unwrap();
+    let (mut sc, m, _) = physid::sim::scenario::load(path).unwrap();
     sc.sensors.torque_noise = 0.0;
     sc.sensors.encoder_step = 0.0;
     sc.sensors.velocity_feedback = physid::sim::scenario::VelocityFeedback::True;

@@ -8,7 +8,7 @@ use physid::sim::scenario::EffectSpec;
 fn run(effects: Vec<EffectSpec>) -> physid::diagnose::Breakdown {
     let path =
         std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("scenarios/cheetah3_shell.toml");
-    let (mut sc, m, _) = physid::io::load_scenario(&path).unwrap();
+    let (mut sc, m, _) = physid::sim::scenario::load(&path).unwrap();
     sc.simulation.duration = 12.0;
     sc.effects = effects;
     let rec = physid::sim::run(&m, &sc, &mut |_| {}).unwrap();
@@ -93,7 +93,7 @@ use physid::diagnose::{diagnose, Diagnosis, Options as DiagOptions, Verdict};
 /// The blind benchmark's scenario, 20 s, with `effects`; diagnosed on the first 70 % / last 30 %.
 fn diagnosed(effects: Vec<EffectSpec>, seed: u64) -> Diagnosis {
     let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("scenarios/blind.toml");
-    let (mut sc, m, _) = physid::io::load_scenario(&path).unwrap();
+    let (mut sc, m, _) = physid::sim::scenario::load(&path).unwrap();
     sc.simulation.seed = seed;
     sc.effects = effects;
     let rec = physid::sim::run(&m, &sc, &mut |_| {}).unwrap();
@@ -194,7 +194,7 @@ fn the_gamma_test_recovers_the_noise_of_a_periodic_motion() {
     use rand_distr::{Distribution, Normal};
     let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(9);
     let noise = Normal::new(0.0, 0.2).unwrap();
-    let mut tr = physid::io::samples::Trajectory::new(vec!["a".into(), "b".into()], true);
+    let mut tr = physid::trajectory::Trajectory::new(vec!["a".into(), "b".into()], true);
     let mut res = vec![];
     for k in 0..8000 {
         let t = k as f64 * 1e-3;
@@ -215,16 +215,16 @@ fn the_gamma_test_recovers_the_noise_of_a_periodic_motion() {
 #[test]
 fn blind_cases_are_diagnosed_from_files_and_scored() {
     let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("scenarios/blind.toml");
-    let (sc, m, _) = physid::io::load_scenario(&path).unwrap();
+    let (sc, m, _) = physid::sim::scenario::load(&path).unwrap();
     let dir = tempfile::tempdir().unwrap();
-    let e = physid::diagnose::blind::DESCRIPTION_ERROR;
+    let e = physid::experiment::blind::DESCRIPTION_ERROR;
     let opts = DiagOptions {
         description_uncertainty: Some(e),
         ..Default::default()
     };
     // Case 0 is clean, case 7 a spring (slot 3), case 12 rotor inertia left out (slot 8).
     let run = |i: usize, sub: &str| {
-        physid::diagnose::blind::run_case(i, 3, &sc, &m, e, &opts, &dir.path().join(sub)).unwrap()
+        physid::experiment::blind::run_case(i, 3, &sc, &m, e, &opts, &dir.path().join(sub)).unwrap()
     };
     let clean = run(0, "a");
     assert!(clean.found.is_empty(), "{clean:?}");
@@ -243,7 +243,7 @@ fn blind_cases_are_diagnosed_from_files_and_scored() {
         let rel = (b.inertia.mass() - t.inertia.mass()) / t.inertia.mass();
         assert!(rel != 0.0 && rel.abs() < 5.0 * e, "{}: {rel}", b.name);
     }
-    let s = physid::diagnose::blind::score(&[clean, spring, rotor]);
+    let s = physid::experiment::blind::score(&[clean, spring, rotor]);
     assert_eq!((s.clean, s.single), (1, 2));
     assert_eq!(s.clean_no_claim, 1.0);
 }
@@ -253,7 +253,7 @@ fn the_cli_diagnoses_a_file_and_names_bad_input() {
     let dir = tempfile::tempdir().unwrap();
     let exe = env!("CARGO_BIN_EXE_physid");
     let sc = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("scenarios/blind.toml");
-    let (mut s, m, _) = physid::io::load_scenario(&sc).unwrap();
+    let (mut s, m, _) = physid::sim::scenario::load(&sc).unwrap();
     s.simulation.duration = 8.0;
     s.effects = vec![EffectSpec::Spring {
         stiffness: vec![6.0, 6.0, 6.0],
@@ -321,7 +321,7 @@ fn the_cli_diagnoses_a_file_and_names_bad_input() {
 #[test]
 fn several_training_runs_are_cross_validated_one_run_out() {
     let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("scenarios/blind.toml");
-    let (mut sc, m, _) = physid::io::load_scenario(&path).unwrap();
+    let (mut sc, m, _) = physid::sim::scenario::load(&path).unwrap();
     sc.simulation.duration = 6.0;
     sc.effects = vec![EffectSpec::Spring {
         stiffness: vec![6.0, 6.0, 6.0],
@@ -335,7 +335,8 @@ fn several_training_runs_are_cross_validated_one_run_out() {
         })
         .collect();
     let lens = vec![runs[0].len(), runs[1].len()];
-    let train = physid::diagnose::concatenate(vec![runs[0].clone(), runs[1].clone()]);
+    let train = physid::trajectory::Trajectory::concatenate(vec![runs[0].clone(), runs[1].clone()])
+        .expect("two runs");
     let opts = DiagOptions {
         train_runs: lens,
         ..Default::default()
@@ -359,7 +360,7 @@ fn diagnosed_against_description(
     told: Option<f64>,
 ) -> Diagnosis {
     let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("scenarios/blind.toml");
-    let (mut sc, m, _) = physid::io::load_scenario(&path).unwrap();
+    let (mut sc, m, _) = physid::sim::scenario::load(&path).unwrap();
     sc.simulation.seed = seed;
     sc.effects = effects;
     let rec = physid::sim::run(&m, &sc, &mut |_| {}).unwrap();

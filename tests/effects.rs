@@ -5,12 +5,12 @@
 use physid::dynamics::{rnea, Data};
 use physid::model::Model;
 use physid::sim::scenario::{EffectSpec, Scenario};
-use physid::sim::simulate::Recording;
+use physid::trajectory::Recording;
 
 fn clean() -> (Scenario, Model) {
     let path =
         std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("scenarios/cheetah3_shell.toml");
-    let (mut sc, m, _) = physid::io::load_scenario(&path).unwrap();
+    let (mut sc, m, _) = physid::sim::scenario::load(&path).unwrap();
     sc.simulation.duration = 1.5;
     sc.sensors.torque_noise = 0.0;
     (sc, m)

@@ -7,7 +7,7 @@ use physid::ident::ConstraintSet;
 
 fn setup() -> (physid::sim::scenario::Scenario, physid::model::Model) {
     let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("scenarios/sample_size.toml");
-    let (sc, m, _) = physid::io::load_scenario(&path).unwrap();
+    let (sc, m, _) = physid::sim::scenario::load(&path).unwrap();
     (sc, m)
 }
 

@@ -5,8 +5,8 @@
 use nalgebra::{DMatrix, DVector, SymmetricEigen};
 use physid::dynamics::{regressor, rnea_with_friction, Data};
 use physid::ident::{self, analysis, ConstraintSet, NormalEquations, Options};
-use physid::io::samples::Trajectory;
 use physid::model::{cheetah3, random::random_state, Model};
+use physid::trajectory::Trajectory;
 
 /// Noise-free samples with exact `sign` friction: τ = Y θ exactly.
 fn exact_data(m: &Model, count: usize, seed: u64) -> Trajectory {
@@ -104,7 +104,7 @@ fn direct_and_cone_least_squares_agree() {
 fn noisy_data_constrained_estimates_satisfy_their_constraints_and_ols_does_not() {
     let path =
         std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("scenarios/cheetah3_shell.toml");
-    let (mut sc, m, _) = physid::io::load_scenario(&path).unwrap();
+    let (mut sc, m, _) = physid::sim::scenario::load(&path).unwrap();
     sc.simulation.duration = 4.0;
     let rec = physid::sim::run(&m, &sc, &mut |_| {}).unwrap();
     let data = &rec.processed;

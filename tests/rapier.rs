@@ -115,7 +115,7 @@ fn rapier_engine_rejects_what_it_cannot_map() {
 fn rapier_closed_loop_with_geared_rotors_matches_physid_full_rotor_model() {
     let path =
         std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("scenarios/cheetah3_shell.toml");
-    let (mut sc, m, _) = physid::io::load_scenario(&path).unwrap();
+    let (mut sc, m, _) = physid::sim::scenario::load(&path).unwrap();
     sc.simulation.duration = 2.0;
     sc.simulation.engine = physid::sim::scenario::Engine::Rapier;
     let rec = physid::sim::run(&m, &sc, &mut |_| {}).unwrap();

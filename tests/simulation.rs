@@ -6,7 +6,7 @@ use nalgebra::DMatrix;
 use physid::dynamics::{regressor, Data};
 use physid::io::{self, mcap_log, samples};
 use physid::sim::scenario::Scenario;
-use physid::sim::simulate::Recording;
+use physid::trajectory::Recording;
 use std::path::{Path, PathBuf};
 
 fn scenario_path(name: &str) -> PathBuf {
@@ -16,7 +16,7 @@ fn scenario_path(name: &str) -> PathBuf {
 }
 
 fn load(name: &str) -> (Scenario, physid::model::Model, String) {
-    io::load_scenario(&scenario_path(name)).unwrap()
+    physid::sim::scenario::load(&scenario_path(name)).unwrap()
 }
 
 fn run(sc: &Scenario, m: &physid::model::Model) -> Recording {
@@ -31,7 +31,7 @@ fn from_text(
 ) -> Result<(Scenario, physid::model::Model, String), io::IoError> {
     let p = dir.join(name);
     std::fs::write(&p, text).unwrap();
-    io::load_scenario(&p)
+    physid::sim::scenario::load(&p)
 }
 
 #[test]
@@ -255,7 +255,7 @@ fn a_diverging_run_names_time_and_joint_and_writes_nothing() {
     .unwrap();
     // Effort limits would tame it; lift them with an explicit robot is heavy, so check the
     // library error directly and the CLI contract (no output file) through the binary.
-    let (mut sc, m, _) = io::load_scenario(&p).unwrap();
+    let (mut sc, m, _) = physid::sim::scenario::load(&p).unwrap();
     let m = {
         let mut bodies = m.bodies.clone();
         for b in &mut bodies {

@@ -1,7 +1,8 @@
 //! `physid diagnose` and `physid blind`.
 
 use anyhow::Context as _;
-use physid::diagnose::{self, blind, Diagnosis};
+use physid::diagnose::{self, Diagnosis};
+use physid::experiment::blind;
 use physid::ident::ConstraintSet;
 use physid::model::Model;
 use rayon::prelude::*;
@@ -105,7 +106,7 @@ fn print_text(d: &Diagnosis) {
                 m.value,
                 m.se,
                 m.unit,
-                if m.identifiable < physid::diagnose::blind::IDENTIFIABLE {
+                if m.identifiable < physid::diagnose::IDENTIFIABLE {
                     " (not identifiable: absorbed by the inertial parameters)"
                 } else {
                     ""
@@ -194,7 +195,13 @@ pub fn run(a: Args) -> anyhow::Result<()> {
         description_uncertainty,
         ..Default::default()
     };
-    let d = diagnose::diagnose_files(&model, data, validate, holdout, &opts)?;
+    let load = |files: &[std::path::PathBuf]| -> anyhow::Result<Vec<_>> {
+        files
+            .iter()
+            .map(|f| super::identify_cmd::load_data(f, &model))
+            .collect()
+    };
+    let d = diagnose::diagnose_runs(&model, load(data)?, load(validate)?, holdout, &opts)?;
     if let Some(dir) = report {
         diagnose::report::write(dir, &d)
             .with_context(|| format!("writing the report to {}", dir.display()))?;
@@ -247,7 +254,7 @@ pub fn blind(a: BlindArgs) -> anyhow::Result<()> {
         stated.is_finite() && stated >= 0.0,
         "--description-uncertainty must be >= 0, got {stated}"
     );
-    let (base, model, _) = physid::io::load_scenario(scenario)?;
+    let (base, model, _) = physid::sim::scenario::load(scenario)?;
     let work = tempfile::tempdir()?;
     let opts = diagnose::Options {
         description_uncertainty: (stated > 0.0).then_some(stated),
@@ -289,14 +296,14 @@ pub fn blind(a: BlindArgs) -> anyhow::Result<()> {
                 }
                 r
             })
-            .collect::<anyhow::Result<Vec<_>>>()
+            .collect::<Result<Vec<_>, blind::BlindError>>()
     })?;
     let scores = blind::score(&results);
     let wall = start.elapsed().as_secs_f64();
     println!("{}", serde_json::to_string_pretty(&scores)?);
     eprintln!("{cases} cases in {wall:.1} s");
     if let Some(dir) = out {
-        diagnose::report::write_blind(
+        blind::write_blind(
             dir,
             &results,
             &scores,

@@ -15,8 +15,9 @@ pub fn run(
     seeds: Option<usize>,
     threads: Option<usize>,
 ) -> anyhow::Result<()> {
-    let (sc, model, text) = physid::io::load_scenario(path)?;
-    let mut spec = sc.experiment.clone().unwrap_or_default();
+    let (sc, model, text) = physid::sim::scenario::load(path)?;
+    let mut spec = experiment::ExperimentSpec::from_scenario(&sc)
+        .map_err(|e| anyhow::anyhow!("{}: [experiment]: {e}", path.display()))?;
     if let Some(n) = seeds {
         spec.seeds = n;
     }

@@ -2,8 +2,9 @@
 
 use anyhow::{bail, Context};
 use physid::ident::{self, analysis, ConstraintSet, NormalEquations, Options};
-use physid::io::samples::Trajectory;
+use physid::io::samples;
 use physid::model::Model;
+use physid::trajectory::Trajectory;
 use serde_json::json;
 use std::ops::Range;
 use std::path::Path;
@@ -33,7 +34,15 @@ pub fn parse_range(s: &str, len: usize, what: &str) -> anyhow::Result<Range<usiz
 
 /// Loads identification data (see [`physid::io::load_trajectory`]).
 pub fn load_data(path: &Path, model: &Model) -> anyhow::Result<Trajectory> {
-    physid::io::load_trajectory(path, model)
+    let loaded = physid::io::load_trajectory(path, model)?;
+    if loaded.derived_qdd {
+        eprintln!(
+            "note: {} has no ddq columns; q̈ = zero-phase {} Hz Butterworth of the central difference of q̇",
+            path.display(),
+            physid::signal::DERIVED_QDD_CUTOFF
+        );
+    }
+    Ok(loaded.trajectory)
 }
 
 /// Identification data: in memory, or a CSV with q̈ streamed from disk (memory independent of
@@ -65,7 +74,9 @@ impl Data {
     fn normal_equations(&self, m: &Model, r: Range<usize>) -> anyhow::Result<NormalEquations> {
         Ok(match self {
             Data::Memory(t) => NormalEquations::from_trajectory(m, t, r),
-            Data::Csv(p, _) => NormalEquations::from_csv(m, p, r)?.0,
+            Data::Csv(p, _) => {
+                NormalEquations::from_stream(m, |sink| samples::stream_csv(p, m.dof(), r, sink))?.0
+            }
         })
     }
     fn rms(
@@ -76,7 +87,9 @@ impl Data {
     ) -> anyhow::Result<(Vec<f64>, f64)> {
         Ok(match self {
             Data::Memory(t) => analysis::rms_error(m, theta, t, r),
-            Data::Csv(p, _) => analysis::rms_error_csv(m, theta, p, r)?,
+            Data::Csv(p, _) => analysis::rms_error_stream(m, theta, |sink| {
+                samples::stream_csv(p, m.dof(), r, sink)
+            })?,
         })
     }
 }

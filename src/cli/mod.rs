@@ -115,7 +115,7 @@ enum Command {
         #[arg(long, default_value_t = 0)]
         threads: usize,
         /// Relative error drawn into each case's description's inertial parameters.
-        #[arg(long, default_value_t = physid::diagnose::blind::DESCRIPTION_ERROR)]
+        #[arg(long, default_value_t = physid::experiment::blind::DESCRIPTION_ERROR)]
         description_error: f64,
         /// The description uncertainty the diagnosis is told (default: the error drawn; 0
         /// turns the description test off).

@@ -15,7 +15,7 @@ pub fn run(
     seed: Option<u64>,
     json: bool,
 ) -> anyhow::Result<()> {
-    let (mut sc, model, text) = physid::io::load_scenario(path)?;
+    let (mut sc, model, text) = physid::sim::scenario::load(path)?;
     if let Some(e) = engine {
         sc.simulation.engine = e;
     }

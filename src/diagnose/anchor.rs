@@ -32,8 +32,9 @@
 
 use super::library::Kind;
 use super::select::Folds;
-use crate::ident::analysis::{least_squares, min_norm_solve};
+use super::{finite_mean_square, mask_slow, residual_rms, Stage};
 use crate::ident::NormalEquations;
+use crate::linalg::{least_squares, min_norm_solve};
 use crate::model::Model;
 use crate::spatial::InertialParams;
 use nalgebra::{DMatrix, DVector};
@@ -472,6 +473,76 @@ pub fn select(
         });
     };
     (steps, stop)
+}
+
+/// The test against the description (docs/diagnose.md, "Absorbed effects"): candidates that
+/// identification absorbs are tested in-sample against the description's prior of relative
+/// uncertainty `eps`; each step must then pass again on the held-out data alone, or it is
+/// dropped with the reason in [`Report::stop`].
+pub(crate) fn test_description(stage: &Stage, eps: f64) -> Report {
+    let (model, train, validate, opts) = (stage.model, stage.train, stage.validate, stage.opts);
+    let n = model.dof();
+    let ms = opts.min_speed;
+    let (_, res) = residual_rms(&stage.ctx_train, train, &[], &stage.theta0, ms);
+    let masked = mask_slow(train, &res, ms);
+    let s2 = finite_mean_square(&masked);
+    let tau_c = correlation_time(&masked, n, train.sample_rate().unwrap_or(1.0));
+    let anchor = Anchor {
+        ne: &stage.all,
+        weight: 1.0 / (s2 * tau_c).max(1e-300),
+        mean: model.parameters(),
+        precision: prior_precision(model, eps),
+    };
+    // A kind that is one of the model's parameters (rotor inertia, when the model
+    // has rotors) would test the description, not an unmodelled effect.
+    let exclude: Vec<Kind> = if model.rotor_count() > 0 {
+        vec![Kind::RotorInertia]
+    } else {
+        vec![]
+    };
+    let (mut steps, mut stop) = select(
+        &anchor,
+        &stage.folds,
+        &[],
+        &exclude,
+        opts.selection.max_effects,
+        opts.selection.tie,
+    );
+    // The test is in-sample: each step must pass again on the held-out data alone.
+    if !steps.is_empty() {
+        let vs: Vec<_> = steps
+            .iter()
+            .map(|st| stage.folds.variants[st.variant])
+            .collect();
+        let vfolds = Folds::build(&stage.ctx_val, validate, 0..validate.len(), vs, 2, &[], ms);
+        let vall = vfolds.sum_except(usize::MAX);
+        let held = Anchor {
+            ne: &vall,
+            ..anchor
+        };
+        let passed = (0..steps.len())
+            .take_while(|&k| {
+                let base = vfolds.columns(&(0..k).collect::<Vec<_>>());
+                let d = steps[k].kind.columns(n);
+                let cand: Vec<usize> = (vfolds.offsets[k]..vfolds.offsets[k] + d).collect();
+                held.fit(&base, &cand).statistic >= chi2_upper_quantile(d, CONFIRM_ALPHA)
+            })
+            .count();
+        if passed < steps.len() {
+            stop = format!(
+                "{} passed on the training data but not again on the held-out data (dropped)",
+                steps[passed].kind.name()
+            );
+            steps.truncate(passed);
+        }
+    }
+    Report {
+        uncertainty: eps,
+        residual_ms: s2,
+        correlation_samples: tau_c,
+        steps,
+        stop,
+    }
 }
 
 #[cfg(test)]

@@ -10,8 +10,8 @@
 //! motor torque must overcome it.
 
 use crate::dynamics::{regressor, Data};
-use crate::io::samples::Trajectory;
 use crate::model::Model;
+use crate::trajectory::Trajectory;
 use nalgebra::{DMatrix, DVector, Vector3};
 use serde::Serialize;
 
@@ -193,17 +193,13 @@ pub struct Context<'a> {
 /// `x` (sample-major, `n` columns) processed like an encoder angle: `F(x)`, `F(D x)`,
 /// `F(D F(D x))` with `F` the zero-phase 2nd-order Butterworth low-pass at `cutoff` and `D` the
 /// central difference; unfiltered differences if the filter cannot be built.
-fn processed_like_encoder(x: &[f64], t: &[f64], n: usize, cutoff: f64) -> [Vec<f64>; 3] {
-    let m = t.len();
-    let dt = if m > 1 {
-        (t[m - 1] - t[0]) / (m - 1) as f64
-    } else {
-        1e-3
-    };
+fn processed_like_encoder(x: &[f64], tr: &Trajectory, cutoff: f64) -> [Vec<f64>; 3] {
+    let (m, n) = (tr.len(), tr.dof());
+    let dt = tr.sample_period().unwrap_or(1e-3);
     let fs = 1.0 / dt;
-    let sos = crate::sim::signal::butterworth_lowpass(2, cutoff.min(0.4 * fs), fs).ok();
+    let sos = crate::signal::butterworth_lowpass(2, cutoff.min(0.4 * fs), fs).ok();
     let filt = |v: &[f64]| sos.as_ref().map_or_else(|| v.to_vec(), |s| s.filtfilt(v));
-    let diff = |v: &[f64]| crate::sim::signal::differentiate(v, dt);
+    let diff = |v: &[f64]| crate::signal::differentiate(v, dt);
     let mut out = [vec![0.0; x.len()], vec![0.0; x.len()], vec![0.0; x.len()]];
     for j in 0..n {
         let col: Vec<f64> = (0..m).map(|k| x[k * n + j]).collect();
@@ -258,7 +254,7 @@ impl<'a> Context<'a> {
         // Without the Coulomb jumps: a delayed jump only matters within the masked slow rows,
         // and differencing it would put spikes into every fitted row next to a reversal.
         let pred_d = derivative(&smooth, &tr.t, n);
-        let defl = processed_like_encoder(&pred, &tr.t, n, cutoff);
+        let defl = processed_like_encoder(&pred, tr, cutoff);
         let g = model.gravity.try_normalize(1e-12).unwrap_or(-Vector3::z());
         let a = if g.x.abs() < 0.9 {
             Vector3::x()

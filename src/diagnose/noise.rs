@@ -8,7 +8,7 @@
 //! closer in time than `exclude` samples are skipped (filtered noise is correlated in time), so
 //! on a periodic excitation the neighbours are the same phase of other periods.
 
-use crate::io::samples::Trajectory;
+use crate::trajectory::Trajectory;
 
 /// At most this many samples enter the test (evenly spaced).
 const MAX_POINTS: usize = 2500;

@@ -1,13 +1,9 @@
 //! Reports: a diagnosis as Markdown, JSON and SVG plots (residual by regime, residual spectrum
-//! before and after, validation RMS per joint before and after each effect); the blind
-//! benchmark's case table (polars: CSV, Parquet, Markdown) and scores.
+//! before and after, validation RMS per joint before and after each effect).
 
-use super::blind::{CaseResult, Scores};
 use super::Diagnosis;
-use crate::experiment::plots::{colour, legend};
-use crate::experiment::tables;
+use crate::io::plot::{colour, legend};
 use plotters::prelude::*;
-use polars::prelude::*;
 use std::path::Path;
 
 fn plot_err(e: impl std::fmt::Display) -> anyhow::Error {
@@ -405,82 +401,6 @@ pub fn write(dir: &Path, d: &Diagnosis) -> anyhow::Result<()> {
         "RMS (N m)",
         &d.joints,
         &steps,
-    )?;
-    Ok(())
-}
-
-/// The case table as a polars frame.
-pub fn case_table(results: &[CaseResult]) -> PolarsResult<DataFrame> {
-    let opt_bool = |v: Option<bool>| v.map(|b| if b { "yes" } else { "no" }).unwrap_or("");
-    df!(
-        "case" => results.iter().map(|r| r.case as u32).collect::<Vec<_>>(),
-        "category" => results.iter().map(|r| format!("{:?}", r.category).to_lowercase()).collect::<Vec<_>>(),
-        "injected" => results.iter().map(|r| r.injected.join(" + ")).collect::<Vec<_>>(),
-        "visible_gap" => results.iter().map(|r| r.visible_gap).collect::<Vec<_>>(),
-        "found" => results.iter().map(|r| r.found.join(" + ")).collect::<Vec<_>>(),
-        "verdict" => results.iter().map(|r| format!("{:?}", r.verdict)).collect::<Vec<_>>(),
-        "top1" => results.iter().map(|r| opt_bool(r.top1)).collect::<Vec<_>>(),
-        "both_found" => results.iter().map(|r| opt_bool(r.both_found)).collect::<Vec<_>>(),
-        "magnitude_error" => results.iter().map(|r| r.magnitude_error).collect::<Vec<_>>(),
-        "gap_closed" => results.iter().map(|r| r.gap_closed).collect::<Vec<_>>(),
-        "rms_before" => results.iter().map(|r| r.rms[0]).collect::<Vec<_>>(),
-        "rms_after" => results.iter().map(|r| r.rms[1]).collect::<Vec<_>>(),
-        "noise_floor" => results.iter().map(|r| r.rms[2]).collect::<Vec<_>>(),
-    )
-}
-
-/// Writes the blind benchmark's case table (CSV, Parquet, Markdown with the scores) and
-/// `scores.json` into `dir`.
-pub fn write_blind(
-    dir: &Path,
-    results: &[CaseResult],
-    scores: &Scores,
-    seed: u64,
-    scenario: &Path,
-    description: [f64; 2],
-    wall: f64,
-) -> anyhow::Result<()> {
-    std::fs::create_dir_all(dir)?;
-    let mut df = case_table(results)?;
-    tables::write_csv(&dir.join("cases.csv"), &mut df)?;
-    tables::write_parquet(&dir.join("cases.parquet"), &mut df)?;
-    // Per injected kind (single cases): count, top-1, median magnitude error.
-    let per_kind = df
-        .clone()
-        .lazy()
-        .filter(col("category").eq(lit("single")))
-        .group_by([col("injected")])
-        .agg([
-            len().alias("cases"),
-            col("top1")
-                .eq(lit("yes"))
-                .cast(DataType::Float64)
-                .mean()
-                .alias("top1"),
-            col("magnitude_error")
-                .median()
-                .alias("median_magnitude_error"),
-            col("gap_closed").median().alias("median_gap_closed"),
-            col("visible_gap").median().alias("median_visible_gap"),
-        ])
-        .sort(["injected"], Default::default())
-        .collect()?;
-    let mut md = format!(
-        "# Blind benchmark\n\n`physid blind --cases {} --seed {seed} --description-error {} --description-uncertainty {}` on `{}` ({:.0} s wall).\n\nEach case's description carries inertial-parameter errors of relative size `--description-error`; the diagnosis is told `--description-uncertainty` (0: no test against the description).\n\n## Scores\n\n```json\n{}\n```\n\n## Single effects by kind\n\n{}\n## Cases\n\n{}",
-        scores.cases,
-        description[0],
-        description[1],
-        scenario.display(),
-        wall,
-        serde_json::to_string_pretty(scores)?,
-        tables::markdown(&per_kind),
-        tables::markdown(&df)
-    );
-    md = md.replace("| null |", "|  |");
-    crate::io::write_atomic(&dir.join("README.md"), md.as_bytes())?;
-    crate::io::write_atomic(
-        &dir.join("scores.json"),
-        serde_json::to_string_pretty(scores)?.as_bytes(),
     )?;
     Ok(())
 }

@@ -16,8 +16,8 @@
 
 use super::library::{slow, Context, Kind, Variant};
 use crate::ident::{identify, IdentError, NormalEquations, Options};
-use crate::io::samples::Trajectory;
 use crate::model::Model;
+use crate::trajectory::Trajectory;
 use nalgebra::DVector;
 use serde::Serialize;
 

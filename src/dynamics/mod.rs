@@ -26,7 +26,7 @@ pub use fd::{forward_dynamics, FdError};
 pub use regressor::{inertia_bilinear, regressor};
 pub use rnea::{friction_torque, rnea, rnea_with_friction, sign};
 
-use crate::model::{Joint, Model, RotorModel};
+use crate::model::{Joint, Model, Rotor, RotorModel};
 use crate::spatial::{Force, Motion, RigidInertia, Transform};
 use nalgebra::{DMatrix, DVector};
 
@@ -193,12 +193,11 @@ pub fn forward_pass(
     }
 }
 
-/// Armature `N² (axisᵀ Ī_rot axis)` (kg m²) of joint `i`'s rotor in the reflected model.
+/// Armature (kg m²) of joint `i`'s rotor in the reflected model, 0 without a rotor
+/// ([`Rotor::armature`]).
 #[inline]
 pub fn armature(model: &Model, i: usize) -> f64 {
-    model.bodies[i].rotor.as_ref().map_or(0.0, |r| {
-        r.gear_ratio * r.gear_ratio * r.axis.dot(&(r.inertia.ibar() * r.axis))
-    })
+    model.bodies[i].rotor.as_ref().map_or(0.0, Rotor::armature)
 }
 
 /// Checks that joint vectors have the model's length (a programming error otherwise).

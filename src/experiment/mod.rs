@@ -17,6 +17,7 @@ use rand::SeedableRng;
 use rand_distr::{Distribution, Normal};
 use rayon::prelude::*;
 
+pub mod blind;
 pub mod plots;
 pub mod sweep;
 pub mod tables;
@@ -61,6 +62,17 @@ pub struct ExperimentSpec {
     /// `1 + e·n` and the CoM moved by `e/10` m·n, `n ~ N(0, 1)` drawn from the prior seed.
     #[serde(default = "prior_error")]
     pub prior_error: f64,
+}
+
+impl ExperimentSpec {
+    /// The `[experiment]` table of a scenario (defaults when it has none); unknown keys are
+    /// errors naming the key.
+    pub fn from_scenario(sc: &Scenario) -> Result<Self, toml::de::Error> {
+        match &sc.experiment {
+            None => Ok(Self::default()),
+            Some(table) => table.clone().try_into(),
+        }
+    }
 }
 
 /// Where the training window starts.

@@ -3,70 +3,11 @@
 
 use super::NormalEquations;
 use crate::dynamics::{regressor, Data};
-use crate::io::samples::Trajectory;
+use crate::linalg::{unit_diagonal_scale, RANK_TOL};
 use crate::model::Model;
+use crate::trajectory::{SampleSink, Trajectory};
 use nalgebra::{DMatrix, DVector, SymmetricEigen};
 use serde::Serialize;
-
-/// Relative eigenvalue threshold below which a direction of the (column-scaled) normal matrix
-/// counts as unidentifiable.
-pub const RANK_TOL: f64 = 1e-9;
-
-/// Column scaling to unit diagonal: `1/√m_ii`, or `fallback` where `m_ii <= 0` (an
-/// unexcited column).
-pub fn unit_diagonal_scale(m: &DMatrix<f64>, fallback: f64) -> Vec<f64> {
-    (0..m.nrows())
-        .map(|i| {
-            if m[(i, i)] > 0.0 {
-                1.0 / m[(i, i)].sqrt()
-            } else {
-                fallback
-            }
-        })
-        .collect()
-}
-
-/// `argmin θᵀ H θ − 2 gᵀ θ` for symmetric positive semidefinite `H`: Cholesky when `H` is
-/// positive definite, otherwise the minimum-norm solution on `H`'s range (column-scaled
-/// eigen-decomposition, directions below [`RANK_TOL`] dropped).
-pub fn least_squares(h: &DMatrix<f64>, g: &DVector<f64>) -> DVector<f64> {
-    if let Some(ch) = h.clone().cholesky() {
-        let x = ch.solve(g);
-        if x.iter().all(|v| v.is_finite()) {
-            return x;
-        }
-    }
-    min_norm_solve(h, &DMatrix::from_column_slice(g.len(), 1, g.as_slice()))
-        .column(0)
-        .into()
-}
-
-/// The minimum-norm solutions `X` of `H X = G` on the range of symmetric positive semidefinite
-/// `H` (column-scaled eigen-decomposition, directions below [`RANK_TOL`] dropped), for every
-/// column of `G` at once.
-pub fn min_norm_solve(h: &DMatrix<f64>, g: &DMatrix<f64>) -> DMatrix<f64> {
-    let p = h.nrows();
-    let d = unit_diagonal_scale(h, 0.0);
-    let hs = DMatrix::from_fn(p, p, |i, j| d[i] * h[(i, j)] * d[j]);
-    let eig = SymmetricEigen::new(hs);
-    let lmax = eig.eigenvalues.max();
-    let mut x = DMatrix::zeros(p, g.ncols());
-    for c in 0..g.ncols() {
-        let gs = DVector::from_iterator(p, (0..p).map(|i| d[i] * g[(i, c)]));
-        let mut xs = DVector::zeros(p);
-        for k in 0..p {
-            let l = eig.eigenvalues[k];
-            if l > RANK_TOL * lmax {
-                let v = eig.eigenvectors.column(k);
-                xs += v * (v.dot(&gs) / l);
-            }
-        }
-        for i in 0..p {
-            x[(i, c)] = d[i] * xs[i];
-        }
-    }
-    x
-}
 
 /// The residual `τ − Y θ` (N m) of samples `range`, sample-major.
 pub fn residuals(
@@ -101,19 +42,19 @@ pub fn rms_error(
     (per, overall)
 }
 
-/// Per-joint RMS of `Y θ − τ` over samples `range` of a CSV file, streamed (N m).
-pub fn rms_error_csv(
+/// Per-joint and overall RMS of `Y θ − τ` (N m) over the samples a source streams (e.g. a CSV
+/// read from disk by `io::samples::stream_csv`).
+pub fn rms_error_stream<E>(
     model: &Model,
     theta: &DVector<f64>,
-    path: &std::path::Path,
-    range: std::ops::Range<usize>,
-) -> Result<(Vec<f64>, f64), crate::io::IoError> {
+    source: impl FnOnce(&mut SampleSink) -> Result<usize, E>,
+) -> Result<(Vec<f64>, f64), E> {
     let (n, p) = (model.dof(), model.layout().len);
     let mut d = Data::new(model);
     let mut y = DMatrix::zeros(n, p);
     let mut ss = vec![0.0; n];
     let mut count = 0usize;
-    crate::io::samples::stream_csv(path, n, range, &mut |_, s| {
+    source(&mut |_, s| {
         regressor(model, &mut d, s.q, s.qd, s.qdd, &mut y);
         let pred = &y * theta;
         for j in 0..n {

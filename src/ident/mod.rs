@@ -332,7 +332,7 @@ pub fn identify(
             seconds: 0.0,
             residuals: [0.0; 2],
         };
-        (analysis::least_squares(&h, &g), info)
+        (crate::linalg::least_squares(&h, &g), info)
     } else {
         solve_cone(model, &h, &g, prior, opts)?
     };
@@ -471,7 +471,7 @@ fn solve_cone(
     // Log-det extra variables per body: 10 entries of a lower-triangular L, then 4 of u.
     let extra = if logdet { 14 * nb } else { 0 };
     let nv = p + extra;
-    let d: Vec<f64> = analysis::unit_diagonal_scale(h, 1.0)
+    let d: Vec<f64> = crate::linalg::unit_diagonal_scale(h, 1.0)
         .into_iter()
         .chain(std::iter::repeat_n(1.0, extra))
         .collect();

@@ -3,8 +3,8 @@
 //! samples. Rows are buffered in blocks and added with one matrix product per block.
 
 use crate::dynamics::{regressor, Data};
-use crate::io::samples::Trajectory;
 use crate::model::Model;
+use crate::trajectory::{SampleSink, Trajectory};
 use nalgebra::{DMatrix, DVector};
 
 /// Rows per block before the `YᵀY` update (a multiple of every joint count up to 8).
@@ -152,18 +152,18 @@ impl NormalEquations {
         ne.finish()
     }
 
-    /// Accumulates samples `range` of a CSV file (with `ddq` columns) by streaming it: memory
-    /// does not depend on the file's length. Returns the sums and the file's sample count.
-    pub fn from_csv(
+    /// Accumulates the samples a source streams (e.g. a CSV read from disk by
+    /// `io::samples::stream_csv`): memory does not depend on the source's length. Returns the
+    /// sums and what the source returns (its sample count).
+    pub fn from_stream<E>(
         model: &Model,
-        path: &std::path::Path,
-        range: std::ops::Range<usize>,
-    ) -> Result<(Self, usize), crate::io::IoError> {
+        source: impl FnOnce(&mut SampleSink) -> Result<usize, E>,
+    ) -> Result<(Self, usize), E> {
         let (n, p) = (model.dof(), model.layout().len);
         let mut ne = Self::new(n, p);
         let mut d = Data::new(model);
         let mut y = DMatrix::zeros(n, p);
-        let total = crate::io::samples::stream_csv(path, n, range, &mut |_, s| {
+        let total = source(&mut |_, s| {
             regressor(model, &mut d, s.q, s.qd, s.qdd, &mut y);
             ne.add(&y, s.tau);
         })?;

@@ -14,7 +14,7 @@
 
 use super::samples::Trajectory;
 use super::IoError;
-use crate::sim::simulate::Recording;
+use crate::trajectory::Recording;
 use serde::{Deserialize, Serialize};
 use std::collections::BTreeMap;
 use std::path::Path;

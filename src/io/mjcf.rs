@@ -7,8 +7,7 @@
 //! reflected mode. Friction, damping and limits are left out so that `mj_inverse` gives the pure
 //! rigid-body torque; no geoms are written (inertias are explicit).
 
-use crate::dynamics::armature;
-use crate::model::{Joint, Model};
+use crate::model::{Joint, Model, Rotor};
 use crate::spatial::InertialParams;
 use nalgebra::{Rotation3, UnitQuaternion, Vector3};
 use std::fmt::Write;
@@ -84,7 +83,7 @@ pub fn to_string(model: &Model) -> String {
             "{pad}  <joint name=\"{}\" type=\"{kind}\" axis=\"{}\" armature=\"{}\" damping=\"0\" frictionloss=\"0\" limited=\"false\"/>",
             b.joint_name,
             v3(&axis),
-            armature(model, i)
+            model.bodies[i].rotor.as_ref().map_or(0.0, Rotor::armature)
         );
         for c in (0..model.dof()).filter(|&c| model.bodies[c].parent == Some(i)) {
             body(model, inertias, c, depth + 1, s);

@@ -4,11 +4,14 @@
 
 pub mod mcap_log;
 pub mod mjcf;
+pub mod plot;
+pub mod robot_spec;
 pub mod robot_toml;
 pub mod samples;
 pub mod urdf;
 
 use crate::model::{cheetah3, Model, ModelError};
+use crate::trajectory::Trajectory;
 use std::path::{Path, PathBuf};
 
 /// An input or output failure, naming the file and what in it is wrong.
@@ -70,6 +73,14 @@ pub fn read_to_string(path: &Path) -> Result<String, IoError> {
     })
 }
 
+/// Creates a directory and its parents, naming it on failure.
+pub fn create_dir_all(dir: &Path) -> Result<(), IoError> {
+    std::fs::create_dir_all(dir).map_err(|source| IoError::Fs {
+        path: dir.to_path_buf(),
+        source,
+    })
+}
+
 /// Writes `contents` to `path` atomically: a temporary file in the same directory, then a rename,
 /// so a reader never sees half a file and a failure leaves any old file intact.
 pub fn write_atomic(path: &Path, contents: &[u8]) -> Result<(), IoError> {
@@ -83,20 +94,6 @@ pub fn write_atomic(path: &Path, contents: &[u8]) -> Result<(), IoError> {
     tmp.as_file().sync_all().map_err(fs_err)?;
     tmp.persist(path).map_err(|e| fs_err(e.error))?;
     Ok(())
-}
-
-/// Reads a scenario file: the scenario, its robot (the ground truth), and the file's text.
-/// Errors name the file, the line and the key.
-pub fn load_scenario(
-    path: &Path,
-) -> Result<(crate::sim::scenario::Scenario, Model, String), IoError> {
-    let text = read_to_string(path)?;
-    let sc: crate::sim::scenario::Scenario =
-        toml::from_str(&text).map_err(|e| robot_toml::toml_error(path, e))?;
-    let model = robot_toml::from_spec(&sc.robot, path)?;
-    sc.validate(model.dof())
-        .map_err(|e| IoError::invalid(path, e.to_string()))?;
-    Ok((sc, model, text))
 }
 
 /// A temporary file in the directory of `path` (so the final rename stays on one file system),
@@ -127,55 +124,51 @@ pub fn load_robot(arg: &str) -> Result<Model, IoError> {
     let path = Path::new(arg);
     match path.extension().and_then(|e| e.to_str()) {
         _ if arg == "cheetah3" => Ok(cheetah3::leg()),
-        Some("urdf") => urdf::load(path, &robot_toml::RobotExtras::default(), path.parent()),
+        Some("urdf") => urdf::load(path, &robot_spec::RobotExtras::default(), path.parent()),
         Some("toml") => robot_toml::load(path),
         _ => Err(IoError::UnknownRobot(arg.to_string())),
     }
 }
 
+/// Identification data read from one file.
+#[derive(Clone, Debug)]
+pub struct LoadedData {
+    /// The samples, validated (lengths, finite values, increasing time).
+    pub trajectory: Trajectory,
+    /// The file had no accelerations: they were derived from the velocities
+    /// ([`crate::signal::derive_acceleration`]).
+    pub derived_qdd: bool,
+}
+
 /// Loads identification data: the processed signals of a physid MCAP, the joint states of another
-/// MCAP, or a CSV; q̈ is derived (zero-phase 20 Hz Butterworth, central differences) if absent.
-pub fn load_trajectory(path: &Path, model: &Model) -> anyhow::Result<samples::Trajectory> {
+/// MCAP, or a CSV, for `model`'s joints; q̈ is derived ([`crate::signal::derive_acceleration`])
+/// if the file has none. Errors name the file and the sample.
+pub fn load_trajectory(path: &Path, model: &Model) -> Result<LoadedData, IoError> {
     let names: Vec<String> = model.bodies.iter().map(|b| b.joint_name.clone()).collect();
     let mut tr = match path.extension().and_then(|e| e.to_str()) {
-        Some("mcap") => crate::io::mcap_log::read(path)?
-            .identification_input()
-            .clone(),
-        Some("csv") => crate::io::samples::read_csv(path, Some(&names))?,
-        _ => anyhow::bail!("{}: give a .mcap or .csv file", path.display()),
+        Some("mcap") => mcap_log::read(path)?.identification_input().clone(),
+        Some("csv") => samples::read_csv(path, Some(&names))?,
+        _ => return Err(IoError::invalid(path, "give a .mcap or .csv file")),
     };
     if tr.dof() != model.dof() {
-        anyhow::bail!(
-            "{}: the data have {} joints, the robot has {}",
-            path.display(),
+        let message = format!(
+            "the data have {} joints, the robot has {}",
             tr.dof(),
             model.dof()
         );
+        return Err(IoError::invalid(path, message));
     }
     tr.validate()
-        .map_err(|e| anyhow::anyhow!("{}: {e}", path.display()))?;
-    if tr.qdd.is_none() {
-        let dts: Vec<f64> = tr.t.windows(2).map(|w| w[1] - w[0]).collect();
-        let mut sorted = dts.clone();
-        sorted.sort_by(f64::total_cmp);
-        let dt = sorted.get(sorted.len() / 2).copied().unwrap_or(1e-3);
-        let fs = 1.0 / dt;
-        let sos = crate::sim::signal::butterworth_lowpass(2, (20.0f64).min(0.4 * fs), fs)?;
-        let n = tr.dof();
-        let m = tr.len();
-        let mut qdd = vec![0.0; m * n];
-        for j in 0..n {
-            let qd: Vec<f64> = (0..m).map(|k| tr.qd[k * n + j]).collect();
-            for (k, v) in sos
-                .filtfilt(&crate::sim::signal::differentiate(&qd, dt))
-                .into_iter()
-                .enumerate()
-            {
-                qdd[k * n + j] = v;
-            }
-        }
+        .map_err(|e| IoError::invalid(path, e.to_string()))?;
+    let derived_qdd = tr.qdd.is_none();
+    if derived_qdd {
+        let dt = tr.sample_period().unwrap_or(1e-3);
+        let qdd = crate::signal::derive_acceleration(&tr.qd, tr.dof(), dt)
+            .map_err(|e| IoError::invalid(path, format!("deriving q̈: {e}")))?;
         tr.qdd = Some(qdd);
-        eprintln!("note: {} has no ddq columns; q̈ = zero-phase 20 Hz Butterworth of the central difference of q̇", path.display());
     }
-    Ok(tr)
+    Ok(LoadedData {
+        trajectory: tr,
+        derived_qdd,
+    })
 }

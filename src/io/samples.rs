@@ -1,196 +1,10 @@
-//! Time series of joint data (`Trajectory`) and the CSV format of docs/scenario-format.md ("Outputs of `physid simulate`"):
+//! The CSV format of joint data ([`Trajectory`]) of docs/scenario-format.md ("Outputs of `physid simulate`"):
 //! a header row, then `t, q1..qn, dq1..dqn, [ddq1..ddqn,] tau1..taun` (s, rad, rad/s, rad/s²,
 //! N m). Extra columns are ignored on reading (the KUKA logs carry set-points too).
 
 use super::IoError;
+pub use crate::trajectory::{SampleError, SampleRef, SampleSink, Trajectory};
 use std::path::Path;
-
-/// Joint data sampled in time, stored sample-major (`q[k * n + j]`).
-#[derive(Clone, Debug, PartialEq)]
-pub struct Trajectory {
-    /// Joint names (length `n`).
-    pub joint_names: Vec<String>,
-    /// Sample times (s), increasing.
-    pub t: Vec<f64>,
-    /// Positions (rad).
-    pub q: Vec<f64>,
-    /// Velocities (rad/s).
-    pub qd: Vec<f64>,
-    /// Accelerations (rad/s²), if known.
-    pub qdd: Option<Vec<f64>>,
-    /// Joint torques (N m).
-    pub tau: Vec<f64>,
-}
-
-/// A bad sample, naming its index and field.
-#[derive(Debug, thiserror::Error, PartialEq)]
-pub enum SampleError {
-    /// A non-finite value.
-    #[error("sample {sample} (t = {t} s): {field} is {value}")]
-    NotFinite {
-        /// Sample index (0-based).
-        sample: usize,
-        /// Its time stamp.
-        t: f64,
-        /// e.g. `q2`.
-        field: String,
-        /// The value.
-        value: f64,
-    },
-    /// Time does not increase.
-    #[error("sample {sample}: time {t} s does not increase (previous {previous} s)")]
-    NonMonotonicTime {
-        /// Sample index.
-        sample: usize,
-        /// Its time.
-        t: f64,
-        /// The previous time.
-        previous: f64,
-    },
-    /// No samples at all.
-    #[error("no samples")]
-    Empty,
-    /// Inconsistent array lengths.
-    #[error("{field} has {got} values, expected {expected}")]
-    Length {
-        /// The array.
-        field: &'static str,
-        /// Its length.
-        got: usize,
-        /// The expected length.
-        expected: usize,
-    },
-}
-
-impl Trajectory {
-    /// An empty trajectory for `joint_names`.
-    pub fn new(joint_names: Vec<String>, with_qdd: bool) -> Self {
-        Self {
-            joint_names,
-            t: vec![],
-            q: vec![],
-            qd: vec![],
-            qdd: with_qdd.then(Vec::new),
-            tau: vec![],
-        }
-    }
-    /// Number of joints.
-    pub fn dof(&self) -> usize {
-        self.joint_names.len()
-    }
-    /// Number of samples.
-    pub fn len(&self) -> usize {
-        self.t.len()
-    }
-    /// No samples.
-    pub fn is_empty(&self) -> bool {
-        self.t.is_empty()
-    }
-    /// Appends one sample.
-    pub fn push(&mut self, t: f64, q: &[f64], qd: &[f64], qdd: Option<&[f64]>, tau: &[f64]) {
-        self.t.push(t);
-        self.q.extend_from_slice(q);
-        self.qd.extend_from_slice(qd);
-        if let (Some(v), Some(a)) = (self.qdd.as_mut(), qdd) {
-            v.extend_from_slice(a);
-        }
-        self.tau.extend_from_slice(tau);
-    }
-    fn row<'a>(&self, v: &'a [f64], k: usize) -> &'a [f64] {
-        let n = self.dof();
-        &v[k * n..(k + 1) * n]
-    }
-    /// Positions of sample `k`.
-    pub fn q_at(&self, k: usize) -> &[f64] {
-        self.row(&self.q, k)
-    }
-    /// Velocities of sample `k`.
-    pub fn qd_at(&self, k: usize) -> &[f64] {
-        self.row(&self.qd, k)
-    }
-    /// Accelerations of sample `k`, if present.
-    pub fn qdd_at(&self, k: usize) -> Option<&[f64]> {
-        self.qdd.as_ref().map(|v| self.row(v, k))
-    }
-    /// Torques of sample `k`.
-    pub fn tau_at(&self, k: usize) -> &[f64] {
-        self.row(&self.tau, k)
-    }
-    /// Samples `range` as a new trajectory.
-    pub fn slice(&self, range: std::ops::Range<usize>) -> Trajectory {
-        let n = self.dof();
-        let cut = |v: &Vec<f64>| v[range.start * n..range.end * n].to_vec();
-        Trajectory {
-            joint_names: self.joint_names.clone(),
-            t: self.t[range.clone()].to_vec(),
-            q: cut(&self.q),
-            qd: cut(&self.qd),
-            qdd: self.qdd.as_ref().map(cut),
-            tau: cut(&self.tau),
-        }
-    }
-
-    /// Checks lengths, finiteness and increasing time, naming the first bad sample.
-    pub fn validate(&self) -> Result<(), SampleError> {
-        let (m, n) = (self.len(), self.dof());
-        if m == 0 {
-            return Err(SampleError::Empty);
-        }
-        let arrays: [(&'static str, Option<&Vec<f64>>); 4] = [
-            ("q", Some(&self.q)),
-            ("qd", Some(&self.qd)),
-            ("qdd", self.qdd.as_ref()),
-            ("tau", Some(&self.tau)),
-        ];
-        for (field, v) in arrays {
-            if let Some(v) = v {
-                if v.len() != m * n {
-                    return Err(SampleError::Length {
-                        field,
-                        got: v.len(),
-                        expected: m * n,
-                    });
-                }
-            }
-        }
-        for k in 0..m {
-            let t = self.t[k];
-            if !t.is_finite() {
-                return Err(SampleError::NotFinite {
-                    sample: k,
-                    t,
-                    field: "t".into(),
-                    value: t,
-                });
-            }
-            if k > 0 && t <= self.t[k - 1] {
-                return Err(SampleError::NonMonotonicTime {
-                    sample: k,
-                    t,
-                    previous: self.t[k - 1],
-                });
-            }
-            for (name, v) in [
-                ("q", Some(&self.q)),
-                ("dq", Some(&self.qd)),
-                ("ddq", self.qdd.as_ref()),
-                ("tau", Some(&self.tau)),
-            ] {
-                if let Some(v) = v {
-                    if let Some(j) = (0..n).find(|&j| !v[k * n + j].is_finite()) {
-                        return Err(SampleError::NotFinite {
-                            sample: k,
-                            t,
-                            field: format!("{name}{}", j + 1),
-                            value: v[k * n + j],
-                        });
-                    }
-                }
-            }
-        }
-        Ok(())
-    }
-}
 
 /// Shortest text that reads back as the same `f64`, in exponent form for very small or large
 /// magnitudes.
@@ -346,20 +160,6 @@ pub fn read_csv(path: &Path, joint_names: Option<&[String]>) -> Result<Trajector
     Ok(tr)
 }
 
-/// One sample while streaming.
-pub struct SampleRef<'a> {
-    /// Time (s).
-    pub t: f64,
-    /// Positions.
-    pub q: &'a [f64],
-    /// Velocities.
-    pub qd: &'a [f64],
-    /// Accelerations.
-    pub qdd: &'a [f64],
-    /// Torques.
-    pub tau: &'a [f64],
-}
-
 /// Streams a CSV with `ddq` columns sample by sample without loading it, checking each sample
 /// (finite values, increasing time) as it goes; `f(k, sample)` sees samples `range` only.
 /// Returns the number of samples in the file. Memory does not grow with the file.
@@ -367,7 +167,7 @@ pub fn stream_csv(
     path: &Path,
     n: usize,
     range: std::ops::Range<usize>,
-    f: &mut dyn FnMut(usize, &SampleRef),
+    f: &mut SampleSink,
 ) -> Result<usize, IoError> {
     let file = std::fs::File::open(path).map_err(|source| IoError::Fs {
         path: path.to_path_buf(),

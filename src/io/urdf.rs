@@ -15,7 +15,7 @@
 //! - where an element appears twice (for example two `<origin>` in one joint), urdfdom and
 //!   so pinocchio and ROS use the first; physid does the same and reports a warning.
 
-use super::robot_toml::RobotExtras;
+use super::robot_spec::RobotExtras;
 use super::IoError;
 use crate::model::{Body, Joint, JointFriction, JointLimits, Model, Rotor, STANDARD_GRAVITY};
 use crate::spatial::{rpy_to_matrix, InertialParams, Transform};

@@ -90,6 +90,14 @@ pub struct Rotor {
     pub bounding: Option<Ellipsoid>,
 }
 
+impl Rotor {
+    /// Armature `N² (axisᵀ Ī_rot axis)` (kg m², at the joint): the rotor's spin inertia
+    /// reflected through the gearbox, as the reflected model and MuJoCo's `armature` use it.
+    pub fn armature(&self) -> f64 {
+        self.gear_ratio * self.gear_ratio * self.axis.dot(&(self.inertia.ibar() * self.axis))
+    }
+}
+
 /// Joint friction `τ_f = B q̇ + B_c sign(q̇)` (paper eq. 9), at the joint (gearbox output).
 #[derive(Clone, Copy, Debug, Default, PartialEq, serde::Serialize, serde::Deserialize)]
 #[serde(deny_unknown_fields)]

@@ -5,7 +5,6 @@ pub mod excitation;
 pub mod rapier;
 pub mod report;
 pub mod scenario;
-pub mod signal;
 pub mod simulate;
 
 use crate::dynamics::{forward_dynamics, Data, FdError};
@@ -17,7 +16,7 @@ pub fn run(
     model: &Model,
     scenario: &scenario::Scenario,
     progress: &mut dyn FnMut(f64),
-) -> Result<simulate::Recording, simulate::SimError> {
+) -> Result<crate::trajectory::Recording, simulate::SimError> {
     simulate::simulate(model, scenario, progress)
 }
 

@@ -2,8 +2,8 @@
 //! condition number of the stacked regressor.
 
 use crate::dynamics::{regressor, Data};
-use crate::io::samples::Trajectory;
 use crate::model::Model;
+use crate::trajectory::Trajectory;
 use nalgebra::{DMatrix, SymmetricEigen};
 
 /// Excitation summary of a trajectory.
@@ -45,7 +45,7 @@ pub fn excitation(model: &Model, tr: &Trajectory, stride: usize) -> Excitation {
         yty.gemm_tr(1.0, &y, &y, 1.0);
     }
     // Column scaling: Y D with D = diag(1/‖Y_c‖).
-    let scale = crate::ident::analysis::unit_diagonal_scale(&yty, 0.0);
+    let scale = crate::linalg::unit_diagonal_scale(&yty, 0.0);
     let scaled = DMatrix::from_fn(p, p, |i, j| yty[(i, j)] * scale[i] * scale[j]);
     let ev = SymmetricEigen::new(scaled).eigenvalues;
     let smax = ev.iter().cloned().fold(0.0f64, f64::max).max(0.0).sqrt();
@@ -81,7 +81,7 @@ pub fn excitation(model: &Model, tr: &Trajectory, stride: usize) -> Excitation {
 /// same trajectory.
 pub fn engine_consistency(
     model: &Model,
-    rec: &crate::sim::simulate::Recording,
+    rec: &crate::trajectory::Recording,
 ) -> (Vec<f64>, Vec<f64>) {
     let n = model.dof();
     let mut d = Data::new(model);

@@ -2,6 +2,7 @@
 //! processing, effects, duration, rates, seed). Unknown keys are errors; every key, its unit
 //! and its default are listed in `docs/scenario-format.md`.
 
+use crate::io::{robot_toml, IoError};
 use serde::{Deserialize, Serialize};
 
 /// The numerical simulation.
@@ -341,7 +342,7 @@ pub enum EffectSpec {
 #[serde(deny_unknown_fields)]
 pub struct Scenario {
     /// The robot (see `docs/robot-format.md`).
-    pub robot: crate::io::robot_toml::RobotSpec,
+    pub robot: robot_toml::RobotSpec,
     /// Numerical simulation.
     pub simulation: SimulationSpec,
     /// Excitation and controller.
@@ -355,8 +356,9 @@ pub struct Scenario {
     /// Injected effects.
     #[serde(default)]
     pub effects: Vec<EffectSpec>,
-    /// The sample-size experiment (`physid experiment`).
-    pub experiment: Option<crate::experiment::ExperimentSpec>,
+    /// The sample-size experiment's `[experiment]` table, kept as read: the experiment floor
+    /// above parses it (`experiment::ExperimentSpec::from_scenario`).
+    pub experiment: Option<toml::Table>,
 }
 
 /// A scenario value that cannot be simulated, with the key and the reason.
@@ -578,4 +580,15 @@ impl Scenario {
         }
         Ok(())
     }
+}
+
+/// Reads a scenario file: the scenario, its robot (the ground truth), and the file's text.
+/// Errors name the file, the line and the key.
+pub fn load(path: &std::path::Path) -> Result<(Scenario, crate::model::Model, String), IoError> {
+    let text = crate::io::read_to_string(path)?;
+    let sc: Scenario = toml::from_str(&text).map_err(|e| robot_toml::toml_error(path, e))?;
+    let model = robot_toml::from_spec(&sc.robot, path)?;
+    sc.validate(model.dof())
+        .map_err(|e| IoError::invalid(path, e.to_string()))?;
+    Ok((sc, model, text))
 }

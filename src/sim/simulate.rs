@@ -19,10 +19,10 @@
 
 use super::excitation::Controller;
 use super::scenario::{Engine, Processing, Scenario, ScenarioError, VelocityFeedback};
-use super::signal::{butterworth_lowpass, differentiate};
 use crate::dynamics::{forward_dynamics, Data};
-use crate::io::samples::Trajectory;
 use crate::model::Model;
+use crate::signal::{butterworth_lowpass, differentiate};
+use crate::trajectory::{Recording, Trajectory};
 use nalgebra::DVector;
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
@@ -47,22 +47,6 @@ pub enum SimError {
     /// The other engine refused the model.
     #[error("{0}")]
     Engine(String),
-}
-
-/// Everything one simulated experiment produces.
-#[derive(Clone, Debug)]
-pub struct Recording {
-    /// True state, accelerations and the torque the actuators delivered (τ_mot).
-    pub truth: Trajectory,
-    /// True friction torque per sample (N m, sample-major).
-    pub friction: Vec<f64>,
-    /// True torque of the injected physical effects per sample (N m, sample-major).
-    pub effects: Vec<f64>,
-    /// What the robot logs: encoder positions, the controller's velocity, its difference as
-    /// acceleration, and the logged torque.
-    pub measured: Trajectory,
-    /// Offline-processed q, q̇, q̈ and torque: the identification input.
-    pub processed: Trajectory,
 }
 
 /// Joint torque limit for the motor torque-speed curve: at motor speed `ω = N q̇`, a motor with

@@ -200,6 +200,30 @@ pub fn differentiate(x: &[f64], h: f64) -> Vec<f64> {
     }
 }
 
+/// Cutoff (Hz) of the low-pass applied when accelerations are derived from velocities.
+pub const DERIVED_QDD_CUTOFF: f64 = 20.0;
+
+/// Accelerations of sample-major velocities `qd` (`n` columns, step `dt` s): the zero-phase
+/// 2nd-order Butterworth at [`DERIVED_QDD_CUTOFF`] (at most 0.4 of the sample rate) of the
+/// central difference, per joint.
+pub fn derive_acceleration(qd: &[f64], n: usize, dt: f64) -> Result<Vec<f64>, FilterError> {
+    let fs = 1.0 / dt;
+    let sos = butterworth_lowpass(2, DERIVED_QDD_CUTOFF.min(0.4 * fs), fs)?;
+    let m = qd.len().checked_div(n).unwrap_or(0);
+    let mut qdd = vec![0.0; m * n];
+    for j in 0..n {
+        let column: Vec<f64> = (0..m).map(|k| qd[k * n + j]).collect();
+        for (k, v) in sos
+            .filtfilt(&differentiate(&column, dt))
+            .into_iter()
+            .enumerate()
+        {
+            qdd[k * n + j] = v;
+        }
+    }
+    Ok(qdd)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -8,14 +8,16 @@
 //! the library),
 //! its magnitudes are uniform in the ranges of [`draw`], and the excitation seed differs per
 //! case. The model given to the diagnosis is the simulated robot's description with
-//! inertial-parameter errors drawn from the description prior ([`super::anchor`]), and, for
+//! inertial-parameter errors drawn from the description prior ([`diagnose::anchor`]), and, for
 //! `rotor_inertia`, its rotors frozen into the links they sit on.
 
-use super::library::Kind;
-use super::{Diagnosis, Verdict};
+use crate::diagnose::library::Kind;
+use crate::diagnose::{self, Diagnosis, Verdict};
+use crate::experiment::tables;
 use crate::model::Model;
 use crate::sim::scenario::{EffectSpec, Scenario};
 use nalgebra::Vector3;
+use polars::prelude::*;
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use serde::Serialize;
@@ -42,7 +44,7 @@ pub struct Injected {
     pub kind: Option<Kind>,
     /// The scenario effect (`None` for rotor inertia left out, which is a model change).
     pub spec: Option<EffectSpec>,
-    /// True magnitudes in the diagnosis's convention ([`super::magnitudes_of`]).
+    /// True magnitudes in the diagnosis's convention ([`diagnose::magnitudes_of`]).
     pub magnitudes: Vec<f64>,
 }
 
@@ -152,7 +154,7 @@ pub fn draw(kind: Option<Kind>, model: &Model, rng: &mut ChaCha8Rng, rate: f64) 
             let j = rng.random_range(0..n);
             let mut gain = vec![1.0; n];
             gain[j] += signed(rng, 0.15, 0.3);
-            let m = super::median(&gain);
+            let m = diagnose::median(&gain);
             let mags = gain.iter().map(|g| g - m).collect();
             (Some(EffectSpec::TorqueGain { gain }), mags)
         }
@@ -292,28 +294,74 @@ pub fn category(i: usize) -> (Category, Option<usize>) {
 /// The fraction of each case's data the diagnosis holds out for validation.
 const HOLDOUT: f64 = 0.3;
 
+/// A blind case or the benchmark's report that could not be made, naming the case.
+#[derive(Debug, thiserror::Error)]
+pub enum BlindError {
+    /// The case's scenario is invalid.
+    #[error("case {case}: {source}")]
+    Scenario {
+        /// Case index.
+        case: usize,
+        /// What is wrong.
+        source: crate::sim::scenario::ScenarioError,
+    },
+    /// The case's simulation failed (`twin`: the clean twin without the effects).
+    #[error("case {case}: {}simulation: {source}", if *twin { "clean twin " } else { "" })]
+    Simulation {
+        /// Case index.
+        case: usize,
+        /// The clean twin's simulation.
+        twin: bool,
+        /// The failure.
+        source: crate::sim::simulate::SimError,
+    },
+    /// The case's files could not be written or read back.
+    #[error("case {case}: {source}")]
+    Io {
+        /// Case index.
+        case: usize,
+        /// The file error.
+        source: crate::io::IoError,
+    },
+    /// The diagnosis (or the nominal fit of the yardstick) failed.
+    #[error("case {case}: {source}")]
+    Diagnose {
+        /// Case index.
+        case: usize,
+        /// The failure.
+        source: diagnose::DiagnoseError,
+    },
+    /// Writing the benchmark's tables.
+    #[error("{0}")]
+    Report(#[from] crate::io::IoError),
+    /// Building the case table.
+    #[error("case table: {0}")]
+    Table(#[from] PolarsError),
+    /// Serializing the scores.
+    #[error("scores: {0}")]
+    Json(#[from] serde_json::Error),
+}
+
 /// The nominal model's validation mean square (the last [`HOLDOUT`]), fitted as the diagnosis
 /// does.
 fn nominal_validation_ms(
     model: &Model,
-    tr: &crate::io::samples::Trajectory,
-    opts: &super::Options,
-) -> anyhow::Result<f64> {
-    let (train, val) = super::holdout_split(tr, HOLDOUT);
-    let fit = super::fit_nominal(model, &train, opts)?;
-    let ctx = super::library::Context::new(model, &fit.theta, &val, opts.processing_cutoff);
-    let (_, res) = super::residual_rms(&ctx, &val, &[], &fit.theta, opts.min_speed);
+    tr: &crate::trajectory::Trajectory,
+    opts: &diagnose::Options,
+) -> Result<f64, diagnose::DiagnoseError> {
+    let (train, val) = tr.holdout_split(HOLDOUT);
+    let fit = diagnose::fit_nominal(model, &train, opts)?;
+    let ctx = diagnose::library::Context::new(model, &fit.theta, &val, opts.processing_cutoff);
+    let (_, res) = diagnose::residual_rms(&ctx, &val, &[], &fit.theta, opts.min_speed);
     // Pooled over every joint-sample at or above the speed threshold.
-    Ok(super::finite_mean_square(&super::mask_slow(
+    Ok(diagnose::finite_mean_square(&diagnose::mask_slow(
         &val,
         &res,
         opts.min_speed,
     )))
 }
 
-/// Smallest identifiable fraction of a magnitude that is scored (its column's part outside the
-/// rigid-body regressor's span carries at least 3 % of its RMS).
-pub const IDENTIFIABLE: f64 = 1e-3;
+pub use crate::diagnose::IDENTIFIABLE;
 
 /// Relative error over the joints whose estimate is identifiable (see [`IDENTIFIABLE`]).
 fn magnitude_error(d: &Diagnosis, kind: Kind, truth: &[f64]) -> Option<f64> {
@@ -329,7 +377,7 @@ fn magnitude_error(d: &Diagnosis, kind: Kind, truth: &[f64]) -> Option<f64> {
 }
 
 /// The relative error of the inertial parameters of the description the benchmark gives by
-/// default (drawn by [`super::anchor::perturbed_description`]); the diagnosis is told the
+/// default (drawn by [`diagnose::anchor::perturbed_description`]); the diagnosis is told the
 /// same uncertainty unless said otherwise.
 pub const DESCRIPTION_ERROR: f64 = 0.1;
 
@@ -343,9 +391,11 @@ pub fn run_case(
     base: &Scenario,
     model: &Model,
     description_error: f64,
-    opts: &super::Options,
+    opts: &diagnose::Options,
     dir: &Path,
-) -> anyhow::Result<CaseResult> {
+) -> Result<CaseResult, BlindError> {
+    let io_err = |source| BlindError::Io { case: i, source };
+    let diag_err = |source| BlindError::Diagnose { case: i, source };
     let mut rng = ChaCha8Rng::seed_from_u64(seed);
     rng.set_stream(i as u64);
     let rate = base.simulation.rate;
@@ -377,9 +427,13 @@ pub fn run_case(
     sc.simulation.seed = seed.wrapping_mul(1_000_003).wrapping_add(i as u64);
     sc.effects = injected.iter().filter_map(|x| x.spec.clone()).collect();
     sc.validate(model.dof())
-        .map_err(|e| anyhow::anyhow!("case {i}: {e}"))?;
-    let rec = crate::sim::run(model, &sc, &mut |_| {})
-        .map_err(|e| anyhow::anyhow!("case {i}: simulation: {e}"))?;
+        .map_err(|source| BlindError::Scenario { case: i, source })?;
+    let rec =
+        crate::sim::run(model, &sc, &mut |_| {}).map_err(|source| BlindError::Simulation {
+            case: i,
+            twin: false,
+            source,
+        })?;
     // The description the user gives: without the rotors' spin when their inertia is left out
     // (their mass frozen into the bodies they sit on), with errors in its inertial parameters.
     let exact = if injected.iter().any(|x| x.kind == Some(Kind::RotorInertia)) {
@@ -390,7 +444,7 @@ pub fn run_case(
     let description = if description_error > 0.0 {
         let mut drng = ChaCha8Rng::seed_from_u64(seed ^ 0x00de_5c41_b710);
         drng.set_stream(i as u64);
-        super::anchor::perturbed_description(&exact, description_error, &mut drng)
+        diagnose::anchor::perturbed_description(&exact, description_error, &mut drng)
     } else {
         exact
     };
@@ -401,27 +455,38 @@ pub fn run_case(
     } else {
         let mut twin = sc.clone();
         twin.effects.clear();
-        let clean = crate::sim::run(model, &twin, &mut |_| {})
-            .map_err(|e| anyhow::anyhow!("case {i}: clean twin: {e}"))?;
-        let with = nominal_validation_ms(&description, &rec.processed, opts)?;
+        let clean = crate::sim::run(model, &twin, &mut |_| {}).map_err(|source| {
+            BlindError::Simulation {
+                case: i,
+                twin: true,
+                source,
+            }
+        })?;
+        let with = nominal_validation_ms(&description, &rec.processed, opts).map_err(diag_err)?;
         // Rotor inertia left out changes the description, not the data.
         let without = if description.rotor_count() < model.rotor_count() {
-            nominal_validation_ms(model, &rec.processed, opts)?
+            nominal_validation_ms(model, &rec.processed, opts)
         } else {
-            nominal_validation_ms(&description, &clean.processed, opts)?
-        };
+            nominal_validation_ms(&description, &clean.processed, opts)
+        }
+        .map_err(diag_err)?;
         (with - without).max(0.0).sqrt()
     };
     // The files a user would give.
-    std::fs::create_dir_all(dir)?;
+    crate::io::create_dir_all(dir).map_err(io_err)?;
     let robot = dir.join("robot.urdf");
     let data = dir.join("data.csv");
-    crate::io::write_atomic(&robot, crate::io::urdf::to_string(&description).as_bytes())?;
-    crate::io::samples::write_csv(&data, &rec.processed)?;
+    crate::io::write_atomic(&robot, crate::io::urdf::to_string(&description).as_bytes())
+        .map_err(io_err)?;
+    crate::io::samples::write_csv(&data, &rec.processed).map_err(io_err)?;
     drop(rec);
     let start = std::time::Instant::now();
-    let given = crate::io::load_robot(robot.to_str().expect("utf-8 path"))?;
-    let d = super::diagnose_files(&given, std::slice::from_ref(&data), &[], HOLDOUT, opts)?;
+    let given = crate::io::load_robot(&robot.to_string_lossy()).map_err(io_err)?;
+    let given_data = crate::io::load_trajectory(&data, &given)
+        .map_err(io_err)?
+        .trajectory;
+    let d = diagnose::diagnose_runs(&given, vec![given_data], vec![], HOLDOUT, opts)
+        .map_err(diag_err)?;
     let seconds = start.elapsed().as_secs_f64();
     let found: Vec<String> = d
         .effects
@@ -543,8 +608,8 @@ pub fn score(results: &[CaseResult]) -> Scores {
                 .filter_map(|r| r.top1)
                 .collect(),
         ),
-        median_magnitude_error: super::median(&std::mem::take(&mut mags)),
-        median_gap_closed: super::median(&std::mem::take(&mut gaps)),
+        median_magnitude_error: diagnose::median(&std::mem::take(&mut mags)),
+        median_gap_closed: diagnose::median(&std::mem::take(&mut gaps)),
         clean: of(Category::Clean).count(),
         clean_no_claim: frac(of(Category::Clean).map(|r| r.found.is_empty()).collect()),
         two: of(Category::Two).count(),
@@ -556,4 +621,80 @@ pub fn score(results: &[CaseResult]) -> Scores {
                 .collect(),
         ),
     }
+}
+
+/// The case table as a polars frame.
+pub fn case_table(results: &[CaseResult]) -> PolarsResult<DataFrame> {
+    let opt_bool = |v: Option<bool>| v.map(|b| if b { "yes" } else { "no" }).unwrap_or("");
+    df!(
+        "case" => results.iter().map(|r| r.case as u32).collect::<Vec<_>>(),
+        "category" => results.iter().map(|r| format!("{:?}", r.category).to_lowercase()).collect::<Vec<_>>(),
+        "injected" => results.iter().map(|r| r.injected.join(" + ")).collect::<Vec<_>>(),
+        "visible_gap" => results.iter().map(|r| r.visible_gap).collect::<Vec<_>>(),
+        "found" => results.iter().map(|r| r.found.join(" + ")).collect::<Vec<_>>(),
+        "verdict" => results.iter().map(|r| format!("{:?}", r.verdict)).collect::<Vec<_>>(),
+        "top1" => results.iter().map(|r| opt_bool(r.top1)).collect::<Vec<_>>(),
+        "both_found" => results.iter().map(|r| opt_bool(r.both_found)).collect::<Vec<_>>(),
+        "magnitude_error" => results.iter().map(|r| r.magnitude_error).collect::<Vec<_>>(),
+        "gap_closed" => results.iter().map(|r| r.gap_closed).collect::<Vec<_>>(),
+        "rms_before" => results.iter().map(|r| r.rms[0]).collect::<Vec<_>>(),
+        "rms_after" => results.iter().map(|r| r.rms[1]).collect::<Vec<_>>(),
+        "noise_floor" => results.iter().map(|r| r.rms[2]).collect::<Vec<_>>(),
+    )
+}
+
+/// Writes the blind benchmark's case table (CSV, Parquet, Markdown with the scores) and
+/// `scores.json` into `dir`.
+pub fn write_blind(
+    dir: &Path,
+    results: &[CaseResult],
+    scores: &Scores,
+    seed: u64,
+    scenario: &Path,
+    description: [f64; 2],
+    wall: f64,
+) -> Result<(), BlindError> {
+    crate::io::create_dir_all(dir)?;
+    let mut df = case_table(results)?;
+    tables::write_csv(&dir.join("cases.csv"), &mut df)?;
+    tables::write_parquet(&dir.join("cases.parquet"), &mut df)?;
+    // Per injected kind (single cases): count, top-1, median magnitude error.
+    let per_kind = df
+        .clone()
+        .lazy()
+        .filter(col("category").eq(lit("single")))
+        .group_by([col("injected")])
+        .agg([
+            len().alias("cases"),
+            col("top1")
+                .eq(lit("yes"))
+                .cast(DataType::Float64)
+                .mean()
+                .alias("top1"),
+            col("magnitude_error")
+                .median()
+                .alias("median_magnitude_error"),
+            col("gap_closed").median().alias("median_gap_closed"),
+            col("visible_gap").median().alias("median_visible_gap"),
+        ])
+        .sort(["injected"], Default::default())
+        .collect()?;
+    let mut md = format!(
+        "# Blind benchmark\n\n`physid blind --cases {} --seed {seed} --description-error {} --description-uncertainty {}` on `{}` ({:.0} s wall).\n\nEach case's description carries inertial-parameter errors of relative size `--description-error`; the diagnosis is told `--description-uncertainty` (0: no test against the description).\n\n## Scores\n\n```json\n{}\n```\n\n## Single effects by kind\n\n{}\n## Cases\n\n{}",
+        scores.cases,
+        description[0],
+        description[1],
+        scenario.display(),
+        wall,
+        serde_json::to_string_pretty(scores)?,
+        tables::markdown(&per_kind),
+        tables::markdown(&df)
+    );
+    md = md.replace("| null |", "|  |");
+    crate::io::write_atomic(&dir.join("README.md"), md.as_bytes())?;
+    crate::io::write_atomic(
+        &dir.join("scores.json"),
+        serde_json::to_string_pretty(scores)?.as_bytes(),
+    )?;
+    Ok(())
 }

@@ -1,0 +1,149 @@
+//! **Where** the residual lies: per joint and motion regime (near-zero velocity and reversals,
+//! speed, acceleration and torque terciles, configuration quartiles), and over frequency (the
+//! residual's spectrum and its coherence with the motion, [`super::spectrum`]).
+
+use super::spectrum;
+use crate::model::Model;
+use crate::trajectory::Trajectory;
+use serde::Serialize;
+
+/// One regime of one joint.
+#[derive(Clone, Debug, Serialize, PartialEq)]
+pub struct Regime {
+    /// Joint name.
+    pub joint: String,
+    /// Regime, e.g. `"|qd| low (<= 0.4 rad/s)"`.
+    pub regime: String,
+    /// Samples in the regime.
+    pub samples: usize,
+    /// RMS residual in the regime (N m).
+    pub rms: f64,
+    /// The regime's share of the joint's residual energy (0..1).
+    pub share: f64,
+}
+
+/// Where a residual lies.
+#[derive(Clone, Debug, Serialize, PartialEq)]
+pub struct Breakdown {
+    /// RMS residual per joint (N m).
+    pub rms: Vec<f64>,
+    /// RMS over all joints (N m).
+    pub overall: f64,
+    /// Regimes per joint.
+    pub regimes: Vec<Regime>,
+}
+
+fn terciles(v: &[f64]) -> (f64, f64) {
+    let mut s = v.to_vec();
+    s.sort_by(f64::total_cmp);
+    let at = |f: f64| s[((s.len() - 1) as f64 * f).round() as usize];
+    (at(1.0 / 3.0), at(2.0 / 3.0))
+}
+
+/// Breaks the residual `res` (sample-major, as from [`residuals`]) of samples `range` of `tr`
+/// down per joint and regime. Regimes per joint: near-zero velocity (`|q̇|` below 5 % of its
+/// peak), reversals (a velocity sign change within ±10 samples), `|q̇|`, `|q̈|` and `|τ|` in
+/// terciles, and `q` in quartiles.
+pub fn breakdown(tr: &Trajectory, range: std::ops::Range<usize>, res: &[f64]) -> Breakdown {
+    let n = tr.dof();
+    let m = range.len();
+    assert_eq!(res.len(), m * n, "one residual per joint and sample");
+    let col = |f: &dyn Fn(usize) -> f64| (0..m).map(f).collect::<Vec<f64>>();
+    let mut regimes = vec![];
+    let mut rms = vec![];
+    for j in 0..n {
+        let r = col(&|k| res[k * n + j]);
+        let energy: f64 = r.iter().map(|x| x * x).sum();
+        rms.push((energy / m.max(1) as f64).sqrt());
+        let qd = col(&|k| tr.qd_at(range.start + k)[j]);
+        let qdd = col(&|k| tr.qdd_at(range.start + k).map_or(0.0, |a| a[j]));
+        let tau = col(&|k| tr.tau_at(range.start + k)[j]);
+        let q = col(&|k| tr.q_at(range.start + k)[j]);
+        let mut add = |name: String, member: &dyn Fn(usize) -> bool| {
+            let idx: Vec<usize> = (0..m).filter(|&k| member(k)).collect();
+            let e: f64 = idx.iter().map(|&k| r[k] * r[k]).sum();
+            regimes.push(Regime {
+                joint: tr.joint_names[j].clone(),
+                regime: name,
+                samples: idx.len(),
+                rms: if idx.is_empty() {
+                    0.0
+                } else {
+                    (e / idx.len() as f64).sqrt()
+                },
+                share: if energy > 0.0 { e / energy } else { 0.0 },
+            });
+        };
+        let peak = qd.iter().fold(0.0f64, |a, v| a.max(v.abs()));
+        let slow = 0.05 * peak;
+        add(
+            format!("near-zero velocity (|qd| < {slow:.3} rad/s)"),
+            &|k| qd[k].abs() < slow,
+        );
+        let flips: Vec<bool> = (0..m).map(|k| k > 0 && qd[k] * qd[k - 1] < 0.0).collect();
+        add("velocity reversal (±10 samples)".into(), &|k| {
+            flips[k.saturating_sub(10)..(k + 11).min(m)]
+                .iter()
+                .any(|f| *f)
+        });
+        for (name, v, unit) in [
+            ("|qd|", &qd, "rad/s"),
+            ("|qdd|", &qdd, "rad/s^2"),
+            ("|tau|", &tau, "N m"),
+        ] {
+            let a: Vec<f64> = v.iter().map(|x| x.abs()).collect();
+            let (t1, t2) = terciles(&a);
+            add(format!("{name} low (<= {t1:.3} {unit})"), &|k| a[k] <= t1);
+            add(format!("{name} mid"), &|k| a[k] > t1 && a[k] <= t2);
+            add(format!("{name} high (> {t2:.3} {unit})"), &|k| a[k] > t2);
+        }
+        let mut s = q.clone();
+        s.sort_by(f64::total_cmp);
+        let qs: Vec<f64> = (1..4).map(|i| s[(m - 1) * i / 4]).collect();
+        for b in 0..4 {
+            let lo = if b == 0 { f64::NEG_INFINITY } else { qs[b - 1] };
+            let hi = if b == 3 { f64::INFINITY } else { qs[b] };
+            add(
+                format!(
+                    "q quartile {} ({:.3}..{:.3} rad)",
+                    b + 1,
+                    lo.max(s[0]),
+                    hi.min(s[m - 1])
+                ),
+                &|k| q[k] > lo && q[k] <= hi,
+            );
+        }
+    }
+    let overall = (res.iter().map(|x| x * x).sum::<f64>() / res.len().max(1) as f64).sqrt();
+    Breakdown {
+        rms,
+        overall,
+        regimes,
+    }
+}
+
+/// Spectra of a residual per joint with the coherence signals of `tr`.
+pub(crate) fn spectra(model: &Model, tr: &Trajectory, res: &[f64]) -> Vec<spectrum::Spectrum> {
+    let n = tr.dof();
+    let m = tr.len();
+    let fs = tr.sample_rate().unwrap_or(1.0);
+    (0..n)
+        .map(|j| {
+            let col = |f: &dyn Fn(usize) -> f64| (0..m).map(f).collect::<Vec<f64>>();
+            let gear = model.bodies[j].rotor.as_ref().map_or(1.0, |r| r.gear_ratio);
+            let signals = vec![
+                ("q".to_string(), col(&|k| tr.q_at(k)[j])),
+                ("qd".to_string(), col(&|k| tr.qd_at(k)[j])),
+                (
+                    "qdd".to_string(),
+                    col(&|k| tr.qdd_at(k).map_or(0.0, |a| a[j])),
+                ),
+                (
+                    "sin(N q)".to_string(),
+                    col(&|k| (gear * tr.q_at(k)[j]).sin()),
+                ),
+            ];
+            spectrum::spectrum(&tr.joint_names[j], &col(&|k| res[k * n + j]), &signals, fs)
+        })
+        .collect()
+}

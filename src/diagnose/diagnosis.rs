@@ -1,0 +1,157 @@
+//! What a diagnosis reports: the selected effects with their magnitudes, the gap per joint, the
+//! verdict, and the whole [`Diagnosis`] (serialized as `report.json` and `--json`).
+
+use super::anchor;
+use super::library::Kind;
+use super::select;
+use super::spectrum;
+use super::Breakdown;
+use crate::ident::ConstraintSet;
+use serde::Serialize;
+
+/// One estimated magnitude.
+#[derive(Clone, Debug, Serialize)]
+pub struct Magnitude {
+    /// Joint name, or `"robot"` for one value for the whole robot.
+    pub joint: String,
+    /// Value in `unit`.
+    pub value: f64,
+    /// Standard error: block jackknife (cross-validation evidence) or posterior (description
+    /// evidence).
+    pub se: f64,
+    /// Unit.
+    pub unit: String,
+    /// Fraction of the effect's column not explained by the rigid-body regressor (1: fully
+    /// identifiable; near 0: absorbed by the inertial parameters, the value is meaningless).
+    /// Absorbed effects found against the description are identified through it: 1, their
+    /// precision is in `se`.
+    pub identifiable: f64,
+}
+
+/// What an effect was found by.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Evidence {
+    /// It lowers the cross-validated torque error ([`select`]).
+    CrossValidation,
+    /// Identification absorbs it, but the identified parameters depart from the description
+    /// as it dictates ([`anchor`]).
+    Description,
+}
+
+/// One selected effect with its magnitudes.
+#[derive(Clone, Debug, Serialize)]
+pub struct EffectEstimate {
+    /// The kind.
+    pub kind: Kind,
+    /// What it was found by.
+    pub evidence: Evidence,
+    /// Its grid value (Stribeck velocity in rad/s, cogging harmonic), 0 otherwise.
+    pub param: f64,
+    /// What the magnitude is.
+    pub magnitude_name: String,
+    /// Magnitudes per joint (or one for the robot).
+    pub magnitudes: Vec<Magnitude>,
+    /// Kinds the data cannot tell apart from this one.
+    pub ambiguous_with: Vec<Kind>,
+    /// What data would separate them.
+    pub separate_by: Option<String>,
+}
+
+impl EffectEstimate {
+    /// The kept kind, then those the data cannot tell apart from it.
+    pub fn group(&self) -> impl Iterator<Item = Kind> + '_ {
+        std::iter::once(self.kind).chain(self.ambiguous_with.iter().copied())
+    }
+}
+
+/// Validation error of one joint along the selection.
+#[derive(Clone, Debug, Serialize)]
+pub struct JointGap {
+    /// Joint name.
+    pub joint: String,
+    /// Nominal model's validation RMS (N m).
+    pub nominal: f64,
+    /// RMS after each selected effect, cumulatively (N m).
+    pub after: Vec<f64>,
+    /// Estimated noise floor (N m RMS).
+    pub noise_floor: f64,
+    /// Fraction of the gap `nominal² − floor²` closed by all selected effects.
+    pub gap_closed: f64,
+}
+
+/// The verdict.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Verdict {
+    /// No effect selected and the residual is at the noise floor.
+    NoEffect,
+    /// Effects selected and what remains is at the noise floor.
+    Explained,
+    /// Effects selected but a residual above the noise floor remains.
+    PartiallyExplained,
+    /// Nothing in the library explains a residual above the noise floor.
+    Unexplained,
+    /// The residual is at the noise floor, but identification absorbs an effect that the
+    /// description reveals.
+    Absorbed,
+}
+
+/// A whole diagnosis.
+#[derive(Clone, Debug, Serialize)]
+pub struct Diagnosis {
+    /// Robot name.
+    pub robot: String,
+    /// Joint names.
+    pub joints: Vec<String>,
+    /// Training and validation samples.
+    pub samples: [usize; 2],
+    /// Constraint set.
+    pub constraints: ConstraintSet,
+    /// Whether the nominal model satisfies its constraints.
+    pub nominal_constraints_hold: bool,
+    /// Where: the nominal validation residual by regime.
+    pub breakdown: Breakdown,
+    /// Where in frequency: the nominal validation residual per joint.
+    pub spectra: Vec<spectrum::Spectrum>,
+    /// Spectra of the final residual (after the selected effects).
+    pub spectra_after: Vec<spectrum::Spectrum>,
+    /// Which: the selection.
+    pub selection: select::Selection,
+    /// Which, for absorbed effects: the description test (with a stated uncertainty).
+    pub description_test: Option<anchor::Report>,
+    /// The selected effects and their magnitudes.
+    pub effects: Vec<EffectEstimate>,
+    /// How far: per joint.
+    pub gap: Vec<JointGap>,
+    /// Validation RMS over all joints: nominal, then after each effect (N m).
+    pub overall: Vec<f64>,
+    /// Per selected effect: whether adding it lowered the validation RMS (held-out data, not
+    /// used by the selection); an unconfirmed effect fits the training runs only.
+    pub confirmed: Vec<bool>,
+    /// Noise floor over all joints (N m RMS).
+    pub noise_floor: f64,
+    /// Fraction of the overall gap closed.
+    pub gap_closed: f64,
+    /// Validation RMS per joint and overall (N m) with the confirmed effects only (refitted),
+    /// when some selected effect is not confirmed.
+    pub confirmed_only: Option<(Vec<f64>, f64)>,
+    /// The verdict.
+    pub verdict: Verdict,
+    /// The verdict in words.
+    pub summary: String,
+}
+
+/// What data separates two kinds the data could not tell apart.
+pub fn separate_by(a: Kind, b: Kind) -> String {
+    use Kind::*;
+    let pair = if a <= b { (a, b) } else { (b, a) };
+    match pair {
+        (TorqueOffset, AsymmetricCoulomb) => "rests under load (q̇ = 0 with τ ≠ 0): an offset persists at rest, direction-dependent friction vanishes; without rests δ·max(0, sign q̇) = δ/2 + (δ/2) sign q̇ is an offset plus Coulomb friction".into(),
+        (TorqueOffset, Spring) => "a wider range of joint angles (the spring's torque varies with q, an offset does not)".into(),
+        (TorqueGain, LoadDependentFriction) => "braking motion (τ and q̇ of opposite sign) as often as driving".into(),
+        (Stribeck, AsymmetricCoulomb) | (TorqueOffset, Stribeck) => "slow motion in both directions (q̇ within the Stribeck velocity)".into(),
+        (RotorInertia, Compliance) | (TimeDelay, Compliance) | (TimeDelay, RotorInertia) => "faster excitation (the terms scale with q̈, τ̇ and τ̈ differently with frequency)".into(),
+        _ => "an excitation on which their regressor columns differ more (other joint ranges, speeds and torque levels)".into(),
+    }
+}

@@ -1,0 +1,196 @@
+//! **Magnitudes** of the selected effects in physical units: from the final fit with
+//! block-jackknife standard errors (cross-validation evidence), or from the description test's
+//! posterior with first-order propagated errors (description evidence); each with the fraction
+//! of its columns that the rigid-body regressor does not explain.
+
+use super::anchor;
+use super::library::Kind;
+use super::select::Selection;
+use super::{median, separate_by, EffectEstimate, Evidence, Magnitude, Stage};
+use nalgebra::{DMatrix, DVector};
+
+/// The physical magnitudes of an effect from its coefficients `c` (in column order).
+pub fn magnitudes_of(kind: Kind, c: &[f64], n: usize, gravity: f64) -> Vec<f64> {
+    match kind {
+        Kind::TorqueGain => {
+            // The column is the nominal prediction, which already carries the gain:
+            // τ = Y θ + β τ̂ with τ̂ ≈ τ gives 1 + g = 1/(1 − β).
+            let g: Vec<f64> = c.iter().map(|b| b / (1.0 - b)).collect();
+            let m = median(&g);
+            g.iter().map(|x| x - m).collect()
+        }
+        Kind::TimeDelay => vec![c[0]],
+        Kind::Spring => c[..n].to_vec(),
+        Kind::Cogging => (0..n).map(|j| c[j].hypot(c[n + j])).collect(),
+        Kind::Tilt => vec![(c[0].hypot(c[1]) / gravity).atan()],
+        Kind::Payload => vec![c[0]],
+        _ => c.to_vec(),
+    }
+}
+
+/// First-order standard error of magnitude `index` from its coefficients' errors.
+fn magnitude_se(kind: Kind, c: &[f64], se: &[f64], n: usize, gravity: f64, index: usize) -> f64 {
+    let base = magnitudes_of(kind, c, n, gravity)[index];
+    let mut v = 0.0;
+    for i in 0..c.len() {
+        let h = 1e-6 * c[i].abs().max(1e-6);
+        let mut cp = c.to_vec();
+        cp[i] += h;
+        let d = (magnitudes_of(kind, &cp, n, gravity)[index] - base) / h;
+        v += (d * se[i]).powi(2);
+    }
+    v.sqrt()
+}
+
+/// Fraction of the energy of each column `col` of the summed normal equations that lies outside
+/// the span of the model's first `p0` columns (1: fully identifiable; 0: absorbed).
+struct Identifiable<'a> {
+    yty: &'a DMatrix<f64>,
+    hyy: DMatrix<f64>,
+    p0: usize,
+}
+
+impl<'a> Identifiable<'a> {
+    fn new(yty: &'a DMatrix<f64>, p0: usize) -> Self {
+        let hyy = yty.view((0, 0), (p0, p0)).into_owned()
+            + DMatrix::identity(p0, p0) * (1e-12 * yty.diagonal().max());
+        Self { yty, hyy, p0 }
+    }
+
+    fn fraction(&self, col: usize) -> f64 {
+        let zc = self.yty.column(col).rows(0, self.p0).into_owned();
+        let x = crate::linalg::least_squares(&self.hyy, &zc);
+        let zz = self.yty[(col, col)];
+        if zz > 0.0 {
+            ((zz - zc.dot(&x)) / zz).clamp(0.0, 1.0)
+        } else {
+            0.0
+        }
+    }
+}
+
+/// The joint a magnitude belongs to, or `"robot"` for a single robot-wide value.
+fn joint_label(stage: &Stage, single: bool, i: usize) -> String {
+    if single {
+        "robot".to_string()
+    } else {
+        stage.model.bodies[i].joint_name.clone()
+    }
+}
+
+/// The estimates of the effects cross-validation selected, from the final parameters
+/// `final_theta` (effect coefficients after the model's), with block-jackknife errors from the
+/// selection's per-fold fits.
+pub(crate) fn cross_validated(
+    stage: &Stage,
+    selection: &Selection,
+    final_theta: &DVector<f64>,
+) -> Vec<EffectEstimate> {
+    let n = stage.model.dof();
+    let g = stage.model.gravity.norm().max(1e-12);
+    let folds = &stage.folds;
+    let p0 = stage.model.layout().len;
+    let identifiable = Identifiable::new(&stage.all.yty, p0);
+    let fold_thetas = selection
+        .final_cv
+        .as_ref()
+        .map(|c| c.thetas.clone())
+        .unwrap_or_default();
+    let mut effects = vec![];
+    let mut offset = p0;
+    for (si, &vi) in selection.chosen.iter().enumerate() {
+        let v = folds.variants[vi];
+        let columns = v.kind.columns(n);
+        let coefficients = |t: &DVector<f64>| t.as_slice()[offset..offset + columns].to_vec();
+        let values = magnitudes_of(v.kind, &coefficients(final_theta), n, g);
+        let jackknife: Vec<Vec<f64>> = fold_thetas
+            .iter()
+            .map(|t| magnitudes_of(v.kind, &coefficients(t), n, g))
+            .collect();
+        let (name, unit) = v.kind.magnitude();
+        let single = values.len() == 1;
+        let magnitudes = values
+            .iter()
+            .enumerate()
+            .map(|(i, &value)| {
+                let cols: Vec<usize> = if single {
+                    (0..columns).map(|c| folds.offsets[vi] + c).collect()
+                } else {
+                    let mut c = vec![folds.offsets[vi] + i];
+                    // Cogging's magnitude needs both of its columns; a spring's stiffness only
+                    // its q column (the constant is its rest position).
+                    if v.kind == Kind::Cogging {
+                        c.push(folds.offsets[vi] + n + i);
+                    }
+                    c
+                };
+                Magnitude {
+                    joint: joint_label(stage, single, i),
+                    value,
+                    se: jackknife_se(&jackknife, i),
+                    unit: unit.into(),
+                    identifiable: cols
+                        .iter()
+                        .map(|&c| identifiable.fraction(c))
+                        .fold(1.0, f64::min),
+                }
+            })
+            .collect();
+        let step = &selection.steps[si];
+        effects.push(EffectEstimate {
+            kind: v.kind,
+            evidence: Evidence::CrossValidation,
+            param: v.param,
+            magnitude_name: name.into(),
+            magnitudes,
+            separate_by: step.ambiguous_with.first().map(|&b| separate_by(v.kind, b)),
+            ambiguous_with: step.ambiguous_with.clone(),
+        });
+        offset += columns;
+    }
+    effects
+}
+
+/// Block-jackknife standard error of entry `i` over the per-fold values.
+fn jackknife_se(per_fold: &[Vec<f64>], i: usize) -> f64 {
+    let folds = per_fold.len() as f64;
+    let mean = per_fold.iter().map(|m| m[i]).sum::<f64>() / folds.max(1.0);
+    ((folds - 1.0) / folds.max(1.0) * per_fold.iter().map(|m| (m[i] - mean).powi(2)).sum::<f64>())
+        .sqrt()
+}
+
+/// The estimates of the effects found against the description: posterior magnitudes, errors
+/// propagated to first order, identified through the description (identifiable fraction 1).
+pub(crate) fn against_description(stage: &Stage, steps: &[anchor::Step]) -> Vec<EffectEstimate> {
+    let n = stage.model.dof();
+    let g = stage.model.gravity.norm().max(1e-12);
+    steps
+        .iter()
+        .map(|st| {
+            let v = stage.folds.variants[st.variant];
+            let (name, unit) = v.kind.magnitude();
+            let values = magnitudes_of(v.kind, &st.beta, n, g);
+            let single = values.len() == 1;
+            let magnitudes = values
+                .iter()
+                .enumerate()
+                .map(|(i, &value)| Magnitude {
+                    joint: joint_label(stage, single, i),
+                    value,
+                    se: magnitude_se(v.kind, &st.beta, &st.se, n, g, i),
+                    unit: unit.into(),
+                    identifiable: 1.0,
+                })
+                .collect();
+            EffectEstimate {
+                kind: v.kind,
+                evidence: Evidence::Description,
+                param: v.param,
+                magnitude_name: name.into(),
+                magnitudes,
+                separate_by: st.ambiguous_with.first().map(|&b| separate_by(v.kind, b)),
+                ambiguous_with: st.ambiguous_with.clone(),
+            }
+        })
+        .collect()
+}

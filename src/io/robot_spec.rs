@@ -1,0 +1,252 @@
+//! The robot-description keys shared by the robot TOML format and URDF sidecars: frame
+//! placements, inertials, ellipsoids, rotors and friction ([`RobotExtras`], applied to a tree
+//! read from either format). Key reference: [`super::robot_toml`] and docs/robot-format.md.
+
+use super::IoError;
+use crate::model::{Body, JointFriction, RotorModel};
+use crate::spatial::{rpy_to_matrix, Ellipsoid, InertialParams, Transform};
+use nalgebra::{Matrix3, Vector3};
+use serde::Deserialize;
+use std::path::Path;
+
+/// A frame placement: `xyz` (m) and URDF roll-pitch-yaw `rpy` (rad).
+#[derive(Clone, Debug, Default, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct OriginSpec {
+    /// Position (m).
+    #[serde(default)]
+    pub xyz: [f64; 3],
+    /// Roll, pitch, yaw (rad).
+    #[serde(default)]
+    pub rpy: [f64; 3],
+}
+
+impl OriginSpec {
+    pub(crate) fn transform(&self) -> Transform {
+        Transform::from_pose(
+            &rpy_to_matrix(&Vector3::from(self.rpy)),
+            &Vector3::from(self.xyz),
+        )
+    }
+}
+
+/// Inertial parameters, see the module docs.
+#[derive(Clone, Debug, Default, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct InertialSpec {
+    /// The ten parameters in the paper's order.
+    pub pi: Option<[f64; 10]>,
+    /// Mass (kg).
+    pub mass: Option<f64>,
+    /// Centre of mass (m).
+    pub com: Option<[f64; 3]>,
+    /// `[Ixx, Ixy, Ixz, Iyy, Iyz, Izz]` about the CoM (kg m²).
+    pub inertia: Option<[f64; 6]>,
+    /// Added rms extent (m).
+    pub thicken: Option<f64>,
+}
+
+impl InertialSpec {
+    pub(crate) fn params(&self, what: &str) -> Result<InertialParams, String> {
+        let p = match (self.pi, self.mass, self.com, self.inertia) {
+            (Some(pi), None, None, None) => {
+                InertialParams::from_slice(&pi).map_err(|e| format!("{what}.inertial.pi: {e}"))?
+            }
+            (None, Some(m), Some(c), Some(i)) => {
+                let ic = Matrix3::new(i[0], i[1], i[2], i[1], i[3], i[4], i[2], i[4], i[5]);
+                InertialParams::from_mass_com_inertia(m, &Vector3::from(c), &ic)
+            }
+            _ => {
+                return Err(format!(
+                    "{what}.inertial: give either `pi` or all of `mass`, `com`, `inertia`"
+                ))
+            }
+        };
+        match self.thicken {
+            Some(d) if !(d.is_finite() && d >= 0.0) => {
+                Err(format!("{what}.inertial.thicken: {d} m must be >= 0"))
+            }
+            Some(d) => Ok(p.thickened(d)),
+            None => Ok(p),
+        }
+    }
+}
+
+/// An ellipsoid in a body frame.
+#[derive(Clone, Debug, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct EllipsoidSpec {
+    /// Body or rotor name (sidecar form only).
+    pub body: Option<String>,
+    /// Centre (m).
+    pub center: [f64; 3],
+    /// Semi-axes (m), along the axes rotated by `rpy`.
+    pub semi_axes: [f64; 3],
+    /// Orientation of the semi-axes (rad).
+    #[serde(default)]
+    pub rpy: [f64; 3],
+}
+
+impl EllipsoidSpec {
+    pub(crate) fn ellipsoid(&self, what: &str) -> Result<Ellipsoid, String> {
+        if self.semi_axes.iter().any(|a| !(a.is_finite() && *a > 0.0)) {
+            return Err(format!(
+                "{what}.ellipsoid.semi_axes: {:?} must all be positive",
+                self.semi_axes
+            ));
+        }
+        let r = rpy_to_matrix(&Vector3::from(self.rpy));
+        let a = Vector3::from(self.semi_axes);
+        let qs = r * Matrix3::from_diagonal(&a.component_mul(&a)) * r.transpose();
+        Ok(Ellipsoid {
+            center: Vector3::from(self.center),
+            qs,
+        })
+    }
+}
+
+/// A rotor driven by a joint.
+#[derive(Clone, Debug, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct RotorSpec {
+    /// The driving joint (sidecar form only).
+    pub joint: Option<String>,
+    /// Rotor name (default `<joint>_rotor`).
+    pub name: Option<String>,
+    /// Gear ratio N.
+    pub gear_ratio: f64,
+    /// Rotor frame in the parent body's frame.
+    #[serde(default)]
+    pub origin: OriginSpec,
+    /// Spin axis in the rotor frame (default: the joint axis).
+    pub axis: Option<[f64; 3]>,
+    /// Rotor inertial parameters, rotor frame.
+    pub inertial: InertialSpec,
+    /// Bounding ellipsoid, rotor frame.
+    pub ellipsoid: Option<EllipsoidSpec>,
+}
+
+/// Friction of one joint (sidecar form).
+#[derive(Clone, Debug, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct FrictionSpec {
+    /// Joint name.
+    pub joint: String,
+    /// Viscous coefficient (N m s/rad).
+    #[serde(default)]
+    pub viscous: f64,
+    /// Coulomb coefficient (N m).
+    #[serde(default)]
+    pub coulomb: f64,
+}
+
+/// Additions that apply to any robot: sidecar rotors, friction, ellipsoids, gravity, rotor model.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct RobotExtras {
+    /// Gravity (m/s², base frame).
+    pub gravity: Option<[f64; 3]>,
+    /// Rotor treatment.
+    pub rotor_model: Option<RotorModel>,
+    /// Sidecar rotors (`joint` names the driving joint).
+    pub rotor: Vec<RotorSpec>,
+    /// Friction per joint.
+    pub friction: Vec<FrictionSpec>,
+    /// Bounding ellipsoids by body or rotor name.
+    pub ellipsoid: Vec<EllipsoidSpec>,
+}
+
+pub(crate) fn rotor_from_spec(
+    spec: &RotorSpec,
+    joint_name: &str,
+    joint_axis: Vector3<f64>,
+    x_parent: &Transform,
+) -> Result<crate::model::Rotor, String> {
+    let name = spec
+        .name
+        .clone()
+        .unwrap_or_else(|| format!("{joint_name}_rotor"));
+    let what = format!("rotor '{name}'");
+    Ok(crate::model::Rotor {
+        x_rot: spec.origin.transform().compose(x_parent),
+        axis: spec.axis.map_or(joint_axis, Vector3::from),
+        gear_ratio: spec.gear_ratio,
+        inertia: spec.inertial.params(&what)?,
+        bounding: spec
+            .ellipsoid
+            .as_ref()
+            .map(|e| e.ellipsoid(&what))
+            .transpose()?,
+        name,
+    })
+}
+
+impl RobotExtras {
+    /// Applies sidecar rotors, friction and ellipsoids to `bodies`. `x_parent_link[i]` is the
+    /// transform from body `i`'s parent body frame to its URDF parent link frame (identity for
+    /// explicit trees), so sidecar rotor origins are given relative to the parent link.
+    pub fn apply(
+        &self,
+        bodies: &mut [Body],
+        x_parent_link: &[Transform],
+        path: &Path,
+    ) -> Result<(), IoError> {
+        let find = |bodies: &[Body], joint: &str, what: &str| {
+            bodies
+                .iter()
+                .position(|b| b.joint_name == joint)
+                .ok_or_else(|| {
+                    IoError::invalid(
+                        path,
+                        format!("{what} names joint '{joint}', which the robot does not have"),
+                    )
+                })
+        };
+        for r in &self.rotor {
+            let joint = r.joint.as_deref().ok_or_else(|| {
+                IoError::invalid(path, "robot.rotor: each sidecar rotor needs `joint`")
+            })?;
+            let k = find(bodies, joint, "robot.rotor")?;
+            if bodies[k].rotor.is_some() {
+                return Err(IoError::invalid(
+                    path,
+                    format!("robot.rotor: joint '{joint}' already has a rotor"),
+                ));
+            }
+            let axis = bodies[k].joint.axis();
+            bodies[k].rotor = Some(
+                rotor_from_spec(r, joint, axis, &x_parent_link[k])
+                    .map_err(|m| IoError::invalid(path, m))?,
+            );
+        }
+        for f in &self.friction {
+            let k = find(bodies, &f.joint, "robot.friction")?;
+            bodies[k].friction = JointFriction {
+                viscous: f.viscous,
+                coulomb: f.coulomb,
+            };
+        }
+        for e in &self.ellipsoid {
+            let name = e.body.as_deref().ok_or_else(|| {
+                IoError::invalid(path, "robot.ellipsoid: each entry needs `body`")
+            })?;
+            let ell = e
+                .ellipsoid(&format!("ellipsoid of '{name}'"))
+                .map_err(|m| IoError::invalid(path, m))?;
+            if let Some(b) = bodies.iter_mut().find(|b| b.name == name) {
+                b.bounding = Some(ell);
+            } else if let Some(r) = bodies
+                .iter_mut()
+                .filter_map(|b| b.rotor.as_mut())
+                .find(|r| r.name == name)
+            {
+                r.bounding = Some(ell);
+            } else {
+                return Err(IoError::invalid(
+                    path,
+                    format!("robot.ellipsoid names '{name}', which is neither a body nor a rotor"),
+                ));
+            }
+        }
+        Ok(())
+    }
+}

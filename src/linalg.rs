@@ -1,0 +1,67 @@
+//! Dense linear algebra shared by identification, simulation reports and the diagnosis:
+//! column scaling to unit diagonal, and least squares that stay defined on rank-deficient
+//! normal equations (minimum-norm solutions on the range).
+//!
+//! Floor 1 (architecture.md §6): imports nothing from physid.
+
+use nalgebra::{DMatrix, DVector, SymmetricEigen};
+
+/// Relative eigenvalue threshold below which a direction of the (column-scaled) normal matrix
+/// counts as unidentifiable.
+pub const RANK_TOL: f64 = 1e-9;
+
+/// Column scaling to unit diagonal: `1/√m_ii`, or `fallback` where `m_ii <= 0` (an
+/// unexcited column).
+pub fn unit_diagonal_scale(m: &DMatrix<f64>, fallback: f64) -> Vec<f64> {
+    (0..m.nrows())
+        .map(|i| {
+            if m[(i, i)] > 0.0 {
+                1.0 / m[(i, i)].sqrt()
+            } else {
+                fallback
+            }
+        })
+        .collect()
+}
+
+/// `argmin θᵀ H θ − 2 gᵀ θ` for symmetric positive semidefinite `H`: Cholesky when `H` is
+/// positive definite, otherwise the minimum-norm solution on `H`'s range (column-scaled
+/// eigen-decomposition, directions below [`RANK_TOL`] dropped).
+pub fn least_squares(h: &DMatrix<f64>, g: &DVector<f64>) -> DVector<f64> {
+    if let Some(ch) = h.clone().cholesky() {
+        let x = ch.solve(g);
+        if x.iter().all(|v| v.is_finite()) {
+            return x;
+        }
+    }
+    min_norm_solve(h, &DMatrix::from_column_slice(g.len(), 1, g.as_slice()))
+        .column(0)
+        .into()
+}
+
+/// The minimum-norm solutions `X` of `H X = G` on the range of symmetric positive semidefinite
+/// `H` (column-scaled eigen-decomposition, directions below [`RANK_TOL`] dropped), for every
+/// column of `G` at once.
+pub fn min_norm_solve(h: &DMatrix<f64>, g: &DMatrix<f64>) -> DMatrix<f64> {
+    let p = h.nrows();
+    let d = unit_diagonal_scale(h, 0.0);
+    let hs = DMatrix::from_fn(p, p, |i, j| d[i] * h[(i, j)] * d[j]);
+    let eig = SymmetricEigen::new(hs);
+    let lmax = eig.eigenvalues.max();
+    let mut x = DMatrix::zeros(p, g.ncols());
+    for c in 0..g.ncols() {
+        let gs = DVector::from_iterator(p, (0..p).map(|i| d[i] * g[(i, c)]));
+        let mut xs = DVector::zeros(p);
+        for k in 0..p {
+            let l = eig.eigenvalues[k];
+            if l > RANK_TOL * lmax {
+                let v = eig.eigenvectors.column(k);
+                xs += v * (v.dot(&gs) / l);
+            }
+        }
+        for i in 0..p {
+            x[(i, c)] = d[i] * xs[i];
+        }
+    }
+    x
+}

@@ -1,0 +1,298 @@
+//! Joint data sampled in time: the [`Trajectory`] every floor above reads and writes, the
+//! [`Recording`] of one simulated experiment, and the operations on them that must have one
+//! definition (sample period, hold-out split, concatenation of runs).
+//!
+//! Floor 1 (architecture.md §6): imports nothing from physid.
+
+/// Joint data sampled in time, stored sample-major (`q[k * n + j]`).
+#[derive(Clone, Debug, PartialEq)]
+pub struct Trajectory {
+    /// Joint names (length `n`).
+    pub joint_names: Vec<String>,
+    /// Sample times (s), increasing.
+    pub t: Vec<f64>,
+    /// Positions (rad).
+    pub q: Vec<f64>,
+    /// Velocities (rad/s).
+    pub qd: Vec<f64>,
+    /// Accelerations (rad/s²), if known.
+    pub qdd: Option<Vec<f64>>,
+    /// Joint torques (N m).
+    pub tau: Vec<f64>,
+}
+
+/// A bad sample, naming its index and field.
+#[derive(Debug, thiserror::Error, PartialEq)]
+pub enum SampleError {
+    /// A non-finite value.
+    #[error("sample {sample} (t = {t} s): {field} is {value}")]
+    NotFinite {
+        /// Sample index (0-based).
+        sample: usize,
+        /// Its time stamp.
+        t: f64,
+        /// e.g. `q2`.
+        field: String,
+        /// The value.
+        value: f64,
+    },
+    /// Time does not increase.
+    #[error("sample {sample}: time {t} s does not increase (previous {previous} s)")]
+    NonMonotonicTime {
+        /// Sample index.
+        sample: usize,
+        /// Its time.
+        t: f64,
+        /// The previous time.
+        previous: f64,
+    },
+    /// No samples at all.
+    #[error("no samples")]
+    Empty,
+    /// Inconsistent array lengths.
+    #[error("{field} has {got} values, expected {expected}")]
+    Length {
+        /// The array.
+        field: &'static str,
+        /// Its length.
+        got: usize,
+        /// The expected length.
+        expected: usize,
+    },
+}
+
+impl Trajectory {
+    /// An empty trajectory for `joint_names`.
+    pub fn new(joint_names: Vec<String>, with_qdd: bool) -> Self {
+        Self {
+            joint_names,
+            t: vec![],
+            q: vec![],
+            qd: vec![],
+            qdd: with_qdd.then(Vec::new),
+            tau: vec![],
+        }
+    }
+    /// Number of joints.
+    pub fn dof(&self) -> usize {
+        self.joint_names.len()
+    }
+    /// Number of samples.
+    pub fn len(&self) -> usize {
+        self.t.len()
+    }
+    /// No samples.
+    pub fn is_empty(&self) -> bool {
+        self.t.is_empty()
+    }
+    /// Appends one sample.
+    pub fn push(&mut self, t: f64, q: &[f64], qd: &[f64], qdd: Option<&[f64]>, tau: &[f64]) {
+        self.t.push(t);
+        self.q.extend_from_slice(q);
+        self.qd.extend_from_slice(qd);
+        if let (Some(v), Some(a)) = (self.qdd.as_mut(), qdd) {
+            v.extend_from_slice(a);
+        }
+        self.tau.extend_from_slice(tau);
+    }
+    fn row<'a>(&self, v: &'a [f64], k: usize) -> &'a [f64] {
+        let n = self.dof();
+        &v[k * n..(k + 1) * n]
+    }
+    /// Positions of sample `k`.
+    pub fn q_at(&self, k: usize) -> &[f64] {
+        self.row(&self.q, k)
+    }
+    /// Velocities of sample `k`.
+    pub fn qd_at(&self, k: usize) -> &[f64] {
+        self.row(&self.qd, k)
+    }
+    /// Accelerations of sample `k`, if present.
+    pub fn qdd_at(&self, k: usize) -> Option<&[f64]> {
+        self.qdd.as_ref().map(|v| self.row(v, k))
+    }
+    /// Torques of sample `k`.
+    pub fn tau_at(&self, k: usize) -> &[f64] {
+        self.row(&self.tau, k)
+    }
+    /// Samples `range` as a new trajectory.
+    pub fn slice(&self, range: std::ops::Range<usize>) -> Trajectory {
+        let n = self.dof();
+        let cut = |v: &Vec<f64>| v[range.start * n..range.end * n].to_vec();
+        Trajectory {
+            joint_names: self.joint_names.clone(),
+            t: self.t[range.clone()].to_vec(),
+            q: cut(&self.q),
+            qd: cut(&self.qd),
+            qdd: self.qdd.as_ref().map(cut),
+            tau: cut(&self.tau),
+        }
+    }
+
+    /// Checks lengths, finiteness and increasing time, naming the first bad sample.
+    pub fn validate(&self) -> Result<(), SampleError> {
+        let (m, n) = (self.len(), self.dof());
+        if m == 0 {
+            return Err(SampleError::Empty);
+        }
+        let arrays: [(&'static str, Option<&Vec<f64>>); 4] = [
+            ("q", Some(&self.q)),
+            ("qd", Some(&self.qd)),
+            ("qdd", self.qdd.as_ref()),
+            ("tau", Some(&self.tau)),
+        ];
+        for (field, v) in arrays {
+            if let Some(v) = v {
+                if v.len() != m * n {
+                    return Err(SampleError::Length {
+                        field,
+                        got: v.len(),
+                        expected: m * n,
+                    });
+                }
+            }
+        }
+        for k in 0..m {
+            let t = self.t[k];
+            if !t.is_finite() {
+                return Err(SampleError::NotFinite {
+                    sample: k,
+                    t,
+                    field: "t".into(),
+                    value: t,
+                });
+            }
+            if k > 0 && t <= self.t[k - 1] {
+                return Err(SampleError::NonMonotonicTime {
+                    sample: k,
+                    t,
+                    previous: self.t[k - 1],
+                });
+            }
+            for (name, v) in [
+                ("q", Some(&self.q)),
+                ("dq", Some(&self.qd)),
+                ("ddq", self.qdd.as_ref()),
+                ("tau", Some(&self.tau)),
+            ] {
+                if let Some(v) = v {
+                    if let Some(j) = (0..n).find(|&j| !v[k * n + j].is_finite()) {
+                        return Err(SampleError::NotFinite {
+                            sample: k,
+                            t,
+                            field: format!("{name}{}", j + 1),
+                            value: v[k * n + j],
+                        });
+                    }
+                }
+            }
+        }
+        Ok(())
+    }
+
+    /// Mean sample period (s) from the first and last time stamps, `None` with fewer than two
+    /// samples. The one definition of a trajectory's sampling used by every analysis.
+    pub fn sample_period(&self) -> Option<f64> {
+        let m = self.len();
+        (m > 1).then(|| (self.t[m - 1] - self.t[0]) / (m - 1) as f64)
+    }
+
+    /// Mean sample rate (Hz): samples per second between the first and last time stamps, the
+    /// reciprocal of [`Self::sample_period`] (computed directly, as `(m − 1) / span`).
+    pub fn sample_rate(&self) -> Option<f64> {
+        let m = self.len();
+        (m > 1).then(|| (m - 1) as f64 / (self.t[m - 1] - self.t[0]))
+    }
+
+    /// Splits into the first `1 − holdout` of the samples (training) and the last `holdout`
+    /// (validation), `holdout` in (0, 1).
+    pub fn holdout_split(&self, holdout: f64) -> (Trajectory, Trajectory) {
+        let cut = ((1.0 - holdout) * self.len() as f64).round() as usize;
+        (self.slice(0..cut), self.slice(cut..self.len()))
+    }
+
+    /// Joins runs end to end; each run's times are shifted to continue the joined ones by their
+    /// mean sample period (1 ms after a single sample). `None` for no runs.
+    pub fn concatenate(parts: Vec<Trajectory>) -> Option<Trajectory> {
+        let mut it = parts.into_iter();
+        let mut out = it.next()?;
+        for p in it {
+            let m = out.len();
+            if m == 0 {
+                out = p;
+                continue;
+            }
+            let dt = out.sample_period().unwrap_or(1e-3);
+            let shift = out.t[m - 1] + dt - p.t[0];
+            for k in 0..p.len() {
+                out.push(
+                    p.t[k] + shift,
+                    p.q_at(k),
+                    p.qd_at(k),
+                    p.qdd_at(k),
+                    p.tau_at(k),
+                );
+            }
+        }
+        Some(out)
+    }
+}
+
+/// One sample while streaming (a file read sample by sample, so that memory does not grow
+/// with its length): units as in [`Trajectory`].
+pub struct SampleRef<'a> {
+    /// Time (s).
+    pub t: f64,
+    /// Positions.
+    pub q: &'a [f64],
+    /// Velocities.
+    pub qd: &'a [f64],
+    /// Accelerations.
+    pub qdd: &'a [f64],
+    /// Torques.
+    pub tau: &'a [f64],
+}
+
+/// A source of samples given one at a time: called with a sink, it passes each sample to it
+/// as `(index, sample)` and returns the source's total sample count. A CSV streamed from disk is
+/// one (`io::samples::stream_csv`); a [`Trajectory`] is another ([`Trajectory::stream`]).
+pub type SampleSink<'s> = dyn FnMut(usize, &SampleRef) + 's;
+
+impl Trajectory {
+    /// Passes samples `range` (which must carry q̈) to `sink` one at a time; returns the
+    /// trajectory's length. The in-memory counterpart of a streamed file.
+    pub fn stream(&self, range: std::ops::Range<usize>, sink: &mut SampleSink) -> usize {
+        let qdd = self
+            .qdd
+            .as_ref()
+            .expect("streamed samples carry accelerations");
+        let n = self.dof();
+        for k in range {
+            let sample = SampleRef {
+                t: self.t[k],
+                q: self.q_at(k),
+                qd: self.qd_at(k),
+                qdd: &qdd[k * n..(k + 1) * n],
+                tau: self.tau_at(k),
+            };
+            sink(k, &sample);
+        }
+        self.len()
+    }
+}
+
+/// Everything one simulated experiment produces.
+#[derive(Clone, Debug)]
+pub struct Recording {
+    /// True state, accelerations and the torque the actuators delivered (τ_mot).
+    pub truth: Trajectory,
+    /// True friction torque per sample (N m, sample-major).
+    pub friction: Vec<f64>,
+    /// True torque of the injected physical effects per sample (N m, sample-major).
+    pub effects: Vec<f64>,
+    /// What the robot logs: encoder positions, the controller's velocity, its difference as
+    /// acceleration, and the logged torque.
+    pub measured: Trajectory,
+    /// Offline-processed q, q̇, q̈ and torque: the identification input.
+    pub processed: Trajectory,
+}

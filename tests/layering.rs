@@ -1,0 +1,161 @@
+//! The crate's layering (docs/architecture.md §6): every module imports only from floors below
+//! its own. Checked on the source text: each `crate::m` path outside comments and outside
+//! `#[cfg(test)]` modules (which may build fixtures with anything) names a module `m` of a lower
+//! floor, or the module itself.
+
+use std::path::{Path, PathBuf};
+
+/// The floor of each top-level module of the library (the binary's `cli` is floor 7).
+const FLOORS: [(&str, u8); 13] = [
+    ("spatial", 1),
+    ("signal", 1),
+    ("linalg", 1),
+    ("trajectory", 1),
+    ("model", 2),
+    ("io", 3),
+    ("dynamics", 3),
+    ("sim", 4),
+    ("ident", 4),
+    ("diagnose", 5),
+    ("experiment", 6),
+    ("cli", 7),
+    ("main", 7),
+];
+
+fn floor(module: &str) -> Option<u8> {
+    FLOORS.iter().find(|(m, _)| *m == module).map(|(_, f)| *f)
+}
+
+fn rust_files(dir: &Path, out: &mut Vec<PathBuf>) {
+    for entry in std::fs::read_dir(dir).unwrap() {
+        let path = entry.unwrap().path();
+        if path.is_dir() {
+            rust_files(&path, out);
+        } else if path.extension().is_some_and(|e| e == "rs") {
+            out.push(path);
+        }
+    }
+}
+
+/// The source without comments and without `#[cfg(test)]` items (everything after the first
+/// `#[cfg(test)]`, where physid keeps its unit tests).
+fn code(text: &str) -> String {
+    let text = text.split("#[cfg(test)]").next().unwrap_or("");
+    text.lines()
+        .map(|l| l.split("//").next().unwrap_or(""))
+        .collect::<Vec<_>>()
+        .join("\n")
+}
+
+/// The top-level modules a file's code names as `crate::m`.
+fn imports(code: &str) -> Vec<String> {
+    code.match_indices("crate::")
+        .map(|(i, _)| {
+            code[i + 7..]
+                .chars()
+                .take_while(|c| c.is_alphanumeric() || *c == '_')
+                .collect()
+        })
+        .collect()
+}
+
+#[test]
+fn every_module_imports_only_from_lower_floors() {
+    let src = Path::new(env!("CARGO_MANIFEST_DIR")).join("src");
+    let mut files = vec![];
+    rust_files(&src, &mut files);
+    let mut violations = vec![];
+    let mut checked = 0;
+    for file in &files {
+        let rel = file.strip_prefix(&src).unwrap();
+        let first = rel
+            .components()
+            .next()
+            .unwrap()
+            .as_os_str()
+            .to_string_lossy();
+        let module = first.trim_end_matches(".rs").to_string();
+        if module == "lib" {
+            continue;
+        }
+        let own =
+            floor(&module).unwrap_or_else(|| panic!("{}: module without a floor", rel.display()));
+        let text = std::fs::read_to_string(file).unwrap();
+        for target in imports(&code(&text)) {
+            checked += 1;
+            let target_floor = floor(&target)
+                .unwrap_or_else(|| panic!("{}: crate::{target} has no floor", rel.display()));
+            if target != module && target_floor >= own {
+                violations.push(format!(
+                    "{} (floor {own}) imports crate::{target} (floor {target_floor})",
+                    rel.display()
+                ));
+            }
+        }
+    }
+    violations.sort();
+    violations.dedup();
+    assert!(
+        checked > 100,
+        "only {checked} imports found: the scan is broken"
+    );
+    assert!(
+        violations.is_empty(),
+        "imports from the same or a higher floor:\n{}",
+        violations.join("\n")
+    );
+}
+
+#[test]
+fn no_library_function_is_longer_than_120_lines() {
+    let src = Path::new(env!("CARGO_MANIFEST_DIR")).join("src");
+    let mut files = vec![];
+    rust_files(&src, &mut files);
+    let mut long = vec![];
+    for file in &files {
+        let text = std::fs::read_to_string(file).unwrap();
+        let lines: Vec<&str> = text.lines().collect();
+        for (i, line) in lines.iter().enumerate() {
+            let t = line.trim_start();
+            let is_fn = t.starts_with("fn ")
+                || t.starts_with("pub fn ")
+                || t.starts_with("pub(crate) fn ")
+                || t.starts_with("pub(super) fn ");
+            if !is_fn {
+                continue;
+            }
+            let indent = line.len() - t.len();
+            // The function ends at the first line that closes its brace at its own indentation.
+            let end = lines[i..]
+                .iter()
+                .position(|l| {
+                    l.starts_with(&" ".repeat(indent))
+                        && l.trim_end() == format!("{}}}", " ".repeat(indent))
+                })
+                .map(|k| i + k);
+            if let Some(end) = end {
+                if end - i + 1 > 120 {
+                    long.push(format!(
+                        "{}:{} {} lines",
+                        file.strip_prefix(&src).unwrap().display(),
+                        i + 1,
+                        end - i + 1
+                    ));
+                }
+            }
+        }
+    }
+    assert!(
+        long.is_empty(),
+        "functions over 120 lines:\n{}",
+        long.join("\n")
+    );
+}
+
+#[test]
+fn the_scan_sees_a_violation_when_there_is_one() {
+    // The checker itself: a floor-3 file naming a floor-4 module is caught, comments are not.
+    let code = code("use crate::sim::simulate;\n// crate::experiment in a comment\nfn f() {}\n");
+    assert_eq!(imports(&code), vec!["sim".to_string()]);
+    assert!(floor("sim").unwrap() > floor("io").unwrap());
+}
