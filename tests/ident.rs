@@ -4,7 +4,7 @@
 
 use nalgebra::{DMatrix, DVector, SymmetricEigen};
 use physid::dynamics::{regressor, rnea_with_friction, Data};
-use physid::ident::{self, analysis, ConstraintSet, NormalEquations, Options};
+use physid::ident::{self, analysis, ConstraintSet, NormalEquations, Options, SolveStatus};
 use physid::model::{cheetah3, random::random_state, Model};
 use physid::trajectory::Trajectory;
 
@@ -77,7 +77,7 @@ fn every_constraint_set_recovers_the_identifiable_parameters_from_clean_data() {
             "{set:?}: the truth satisfies the set, so must the estimate"
         );
         assert!(
-            r.solver.status == "direct" || r.solver.status == "Solved",
+            r.solver.status == SolveStatus::Direct || r.solver.status == SolveStatus::Solved,
             "{:?}",
             r.solver
         );
@@ -220,7 +220,7 @@ fn log_det_regularizer_recovers_clean_data_and_pulls_to_the_prior() {
     let few = NormalEquations::from_trajectory(&m, &train, 0..3);
     o.prior_weight = 1e4;
     let r = ident::identify(&m, &few, &prior, &o).unwrap();
-    assert_eq!(r.solver.status, "Solved");
+    assert_eq!(r.solver.status, SolveStatus::Solved);
     let rel = (&r.theta - &prior).norm() / prior.norm();
     assert!(rel < 1e-3, "heavy prior: {rel:e}");
     assert!(ident::bregman_logdet(&m, &r.theta, &prior).unwrap() < 1e-4);
@@ -262,7 +262,7 @@ fn extra_columns_are_free_unless_declared_non_negative() {
             "{set:?}: {}",
             held.theta[p]
         );
-        assert_ne!(held.solver.status, "direct");
+        assert_ne!(held.solver.status, SolveStatus::Direct);
     }
     // A non-negative index outside θ is a named error, not a panic.
     let mut o = Options::new(ConstraintSet::Consistent);

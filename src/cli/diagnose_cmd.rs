@@ -1,14 +1,92 @@
-//! `physid diagnose` and `physid blind`.
+//! `physid diagnose`: the sim-to-real diagnosis of a robot description against its data.
 
+use super::RobotArgs;
 use anyhow::Context as _;
 use physid::diagnose::{self, Diagnosis};
-use physid::experiment::blind;
 use physid::ident::ConstraintSet;
-use physid::model::Model;
-use rayon::prelude::*;
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 
+/// Diagnose the gap between a robot model and its data: where the residual lies (joints, motion
+/// regimes, frequency), which unmodelled effect causes it (cross-validated forward selection over
+/// the effect library), and how far it shrinks once modelled.
+#[derive(clap::Args, Debug)]
+pub struct Args {
+    /// Training data (CSV with ddq, or MCAP); repeat for several runs.
+    #[arg(long = "data", required = true, num_args = 1..)]
+    data: Vec<PathBuf>,
+    /// Validation data; without it the last --holdout of the data is held out.
+    #[arg(long = "validate", num_args = 1..)]
+    validate: Vec<PathBuf>,
+    #[command(flatten)]
+    robot: RobotArgs,
+    /// Constraint set of the nominal model.
+    #[arg(long, default_value = "consistent")]
+    constraints: ConstraintSet,
+    /// Fraction held out for validation when no --validate is given.
+    #[arg(long, default_value_t = 0.3)]
+    holdout: f64,
+    /// Low-pass cutoff (Hz) the data were processed with (for the compliance terms).
+    #[arg(long, default_value_t = 20.0)]
+    cutoff: f64,
+    /// Print the diagnosis as JSON.
+    #[arg(long)]
+    json: bool,
+    /// Write a report (report.md, report.json, SVG plots) into this directory.
+    #[arg(long)]
+    report: Option<PathBuf>,
+    /// How far the description's inertial parameters can be trusted (relative, 0.1 = 10 %):
+    /// tests the identified parameters against it for effects that identification absorbs
+    /// (torque gain, tilt, payload). Off without it.
+    #[arg(long)]
+    description_uncertainty: Option<f64>,
+}
+
+/// `physid diagnose`.
+pub fn run(a: Args) -> anyhow::Result<()> {
+    let opts = diagnose::Options {
+        constraints: a.constraints,
+        processing_cutoff: a.cutoff,
+        description_uncertainty: a.description_uncertainty,
+        ..Default::default()
+    };
+    opts.validate().map_err(|e| match e {
+        diagnose::DiagnoseError::InvalidOption {
+            option,
+            expected,
+            value,
+        } => super::flag_error(option, expected, value),
+        e => e.into(),
+    })?;
+    let model = a.robot.load()?;
+    let load = |files: &[PathBuf]| -> anyhow::Result<Vec<_>> {
+        files
+            .iter()
+            .map(|f| super::identify_cmd::load_data(f, &model))
+            .collect()
+    };
+    let d = diagnose::diagnose_runs(&model, load(&a.data)?, load(&a.validate)?, a.holdout, &opts)?;
+    if let Some(dir) = &a.report {
+        diagnose::report::write(dir, &d)
+            .with_context(|| format!("writing the report to {}", dir.display()))?;
+        eprintln!("wrote the report to {}", dir.display());
+    }
+    if a.json {
+        println!("{}", serde_json::to_string_pretty(&d)?);
+    } else {
+        print_text(&d);
+    }
+    Ok(())
+}
+
+/// The diagnosis as text: where, which, how far, and the summary.
 fn print_text(d: &Diagnosis) {
+    print_where(d);
+    print_which(d);
+    print_how_far(d);
+}
+
+/// WHERE: the nominal model's validation residual per joint, its spectrum and worst regimes.
+fn print_where(d: &Diagnosis) {
     println!(
         "robot {} ({} joints), {} training / {} validation samples, constraints {}",
         d.robot,
@@ -48,6 +126,10 @@ fn print_text(d: &Diagnosis) {
             );
         }
     }
+}
+
+/// WHICH: the selection's steps, the description test, and each effect's magnitudes.
+fn print_which(d: &Diagnosis) {
     println!(
         "\nWHICH (cross-validated over {} {}; nominal CV RMS {:.3} N m)",
         d.selection.blocks,
@@ -117,6 +199,10 @@ fn print_text(d: &Diagnosis) {
             println!("      to separate: {s}");
         }
     }
+}
+
+/// HOW FAR: validation RMS per joint along the selection, and the summary.
+fn print_how_far(d: &Diagnosis) {
     println!("\nHOW FAR (validation RMS, N m)");
     for g in &d.gap {
         println!(
@@ -142,177 +228,4 @@ fn listed(prefix: &str, kinds: &[physid::diagnose::library::Kind]) -> String {
     } else {
         format!("{prefix}{}", physid::diagnose::library::names(kinds, false))
     }
-}
-
-/// The arguments of `physid diagnose`.
-pub struct Args<'a> {
-    /// The robot description.
-    pub model: Model,
-    /// Training files.
-    pub data: &'a [PathBuf],
-    /// Validation files (empty: hold out the end of the training data).
-    pub validate: &'a [PathBuf],
-    /// Constraint set of the nominal model.
-    pub constraints: ConstraintSet,
-    /// Held-out fraction without validation files.
-    pub holdout: f64,
-    /// Processing low-pass (Hz).
-    pub cutoff: f64,
-    /// Print JSON.
-    pub json: bool,
-    /// Report directory.
-    pub report: Option<&'a Path>,
-    /// Relative uncertainty of the description's inertial parameters (absorbed-effect test).
-    pub description_uncertainty: Option<f64>,
-}
-
-/// `physid diagnose`.
-pub fn run(a: Args) -> anyhow::Result<()> {
-    let Args {
-        model,
-        data,
-        validate,
-        constraints,
-        holdout,
-        cutoff,
-        json,
-        report,
-        description_uncertainty,
-    } = a;
-    if let Some(e) = description_uncertainty {
-        anyhow::ensure!(
-            e.is_finite() && e > 0.0,
-            "--description-uncertainty must be a positive fraction (0.1 = 10 %), got {e}"
-        );
-    }
-    anyhow::ensure!(
-        cutoff.is_finite() && cutoff > 0.0,
-        "--cutoff must be a positive frequency in Hz, got {cutoff}"
-    );
-    let opts = diagnose::Options {
-        constraints,
-        processing_cutoff: cutoff,
-        description_uncertainty,
-        ..Default::default()
-    };
-    let load = |files: &[std::path::PathBuf]| -> anyhow::Result<Vec<_>> {
-        files
-            .iter()
-            .map(|f| super::identify_cmd::load_data(f, &model))
-            .collect()
-    };
-    let d = diagnose::diagnose_runs(&model, load(data)?, load(validate)?, holdout, &opts)?;
-    if let Some(dir) = report {
-        diagnose::report::write(dir, &d)
-            .with_context(|| format!("writing the report to {}", dir.display()))?;
-        eprintln!("wrote the report to {}", dir.display());
-    }
-    if json {
-        println!("{}", serde_json::to_string_pretty(&d)?);
-    } else {
-        print_text(&d);
-    }
-    Ok(())
-}
-
-/// The arguments of `physid blind`.
-pub struct BlindArgs<'a> {
-    /// Number of cases.
-    pub cases: usize,
-    /// Seed of every draw.
-    pub seed: u64,
-    /// Base scenario.
-    pub scenario: &'a Path,
-    /// Output directory.
-    pub out: Option<&'a Path>,
-    /// Worker threads (0: all cores).
-    pub threads: usize,
-    /// Relative error of the description's inertial parameters.
-    pub description_error: f64,
-    /// The uncertainty the diagnosis is told (None: the error itself; 0: no description test).
-    pub description_uncertainty: Option<f64>,
-}
-
-/// `physid blind`.
-pub fn blind(a: BlindArgs) -> anyhow::Result<()> {
-    let BlindArgs {
-        cases,
-        seed,
-        scenario,
-        out,
-        threads,
-        description_error,
-        description_uncertainty,
-    } = a;
-    anyhow::ensure!(cases > 0, "--cases must be at least 1");
-    anyhow::ensure!(
-        description_error.is_finite() && (0.0..1.0).contains(&description_error),
-        "--description-error must lie in [0, 1), got {description_error}"
-    );
-    let stated = description_uncertainty.unwrap_or(description_error);
-    anyhow::ensure!(
-        stated.is_finite() && stated >= 0.0,
-        "--description-uncertainty must be >= 0, got {stated}"
-    );
-    let (base, model, _) = physid::sim::scenario::load(scenario)?;
-    let work = tempfile::tempdir()?;
-    let opts = diagnose::Options {
-        description_uncertainty: (stated > 0.0).then_some(stated),
-        ..Default::default()
-    };
-    let pool = rayon::ThreadPoolBuilder::new()
-        .num_threads(threads)
-        .build()?;
-    let start = std::time::Instant::now();
-    let results: Vec<blind::CaseResult> = pool.install(|| {
-        (0..cases)
-            .into_par_iter()
-            .map(|i| {
-                let r = blind::run_case(
-                    i,
-                    seed,
-                    &base,
-                    &model,
-                    description_error,
-                    &opts,
-                    &work.path().join(format!("case{i}")),
-                );
-                if let Ok(r) = &r {
-                    eprintln!(
-                        "case {:>3} {:<14} injected [{}] visible {:.3} found [{}] {:?} top1 {:?} mag {:?} rms {:.3}->{:.3} floor {:.3} ({:.1} s)",
-                        r.case,
-                        format!("{:?}", r.category),
-                        r.injected.join(", "),
-                        r.visible_gap,
-                        r.found.join(", "),
-                        r.verdict,
-                        r.top1,
-                        r.magnitude_error.map(|m| (m * 1000.0).round() / 1000.0),
-                        r.rms[0],
-                        r.rms[1],
-                        r.rms[2],
-                        r.seconds
-                    );
-                }
-                r
-            })
-            .collect::<Result<Vec<_>, blind::BlindError>>()
-    })?;
-    let scores = blind::score(&results);
-    let wall = start.elapsed().as_secs_f64();
-    println!("{}", serde_json::to_string_pretty(&scores)?);
-    eprintln!("{cases} cases in {wall:.1} s");
-    if let Some(dir) = out {
-        blind::write_blind(
-            dir,
-            &results,
-            &scores,
-            seed,
-            scenario,
-            [description_error, stated],
-            wall,
-        )?;
-        eprintln!("wrote {}", dir.display());
-    }
-    Ok(())
 }

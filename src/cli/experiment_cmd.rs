@@ -3,18 +3,30 @@
 use anyhow::Context;
 use physid::experiment::{self, plots, tables};
 use std::fmt::Write;
-use std::path::Path;
+use std::path::PathBuf;
+
+/// The sample-size experiment of a scenario file (its [experiment] table), in parallel.
+#[derive(clap::Args, Debug)]
+pub struct Args {
+    /// Scenario file (TOML).
+    scenario: PathBuf,
+    /// Output directory.
+    #[arg(long, default_value = "results/sample_size")]
+    out: PathBuf,
+    /// Override the number of seeds.
+    #[arg(long)]
+    seeds: Option<usize>,
+    /// Worker threads (default: all cores). Results do not depend on it.
+    #[arg(long)]
+    threads: Option<usize>,
+}
 
 /// Runs the experiment of a scenario file and writes the results directory: `rows.parquet` and
 /// `rows.csv` (the long table), `summary.parquet` and `summary.csv` (median and quartiles over
 /// seeds per n_s × set), `summary.md` (pivots), `validation_error.svg`, `parameter_error.svg`
 /// and `provenance.json`.
-pub fn run(
-    path: &Path,
-    out: &Path,
-    seeds: Option<usize>,
-    threads: Option<usize>,
-) -> anyhow::Result<()> {
+pub fn run(a: Args) -> anyhow::Result<()> {
+    let (path, out, seeds, threads) = (&a.scenario, &a.out, a.seeds, a.threads);
     let (sc, model, text) = physid::sim::scenario::load(path)?;
     let mut spec = experiment::ExperimentSpec::from_scenario(&sc)
         .map_err(|e| anyhow::anyhow!("{}: [experiment]: {e}", path.display()))?;

@@ -1,5 +1,6 @@
 //! `physid identify`.
 
+use super::RobotArgs;
 use anyhow::{bail, Context};
 use physid::ident::{self, analysis, ConstraintSet, NormalEquations, Options};
 use physid::io::samples;
@@ -7,7 +8,7 @@ use physid::model::Model;
 use physid::trajectory::Trajectory;
 use serde_json::json;
 use std::ops::Range;
-use std::path::Path;
+use std::path::{Path, PathBuf};
 
 /// Parses `a:b` (sample indices, end exclusive; either side may be empty).
 pub fn parse_range(s: &str, len: usize, what: &str) -> anyhow::Result<Range<usize>> {
@@ -94,33 +95,73 @@ impl Data {
     }
 }
 
-/// Arguments of `identify`.
-pub struct Args<'a> {
-    pub data: &'a Path,
-    pub model: Model,
-    pub constraints: ConstraintSet,
-    pub train: Option<&'a str>,
-    pub validate: Option<&'a str>,
-    pub validate_data: Option<&'a Path>,
-    pub prior_weight: f64,
-    pub eps: f64,
-    pub json: bool,
-    pub out_urdf: Option<&'a Path>,
-    pub export_problem: Option<&'a Path>,
-    pub allow_few_samples: bool,
-    pub regularizer: ident::Regularizer,
+/// Identify inertial and friction parameters under a constraint set.
+#[derive(clap::Args, Debug)]
+pub struct Args {
+    /// Samples: a physid MCAP (its processed signals), another MCAP with JointState, or CSV.
+    #[arg(long)]
+    data: PathBuf,
+    #[command(flatten)]
+    robot: RobotArgs,
+    /// Constraint set: none, semi, consistent, ellipsoid.
+    #[arg(long, default_value = "ellipsoid")]
+    constraints: ConstraintSet,
+    /// Training samples, `a:b` (indices, end exclusive); default all.
+    #[arg(long)]
+    train: Option<String>,
+    /// Validation samples of the same file, `a:b`.
+    #[arg(long)]
+    validate: Option<String>,
+    /// Validate on another file (all its samples).
+    #[arg(long)]
+    validate_data: Option<PathBuf>,
+    /// Weight of the prior term w ‖θ − θ̂‖² (θ̂: the robot description's parameters).
+    #[arg(long, default_value_t = 1e-6)]
+    prior_weight: f64,
+    /// Margin ε of the strict matrix inequalities.
+    #[arg(long, default_value_t = 1e-6)]
+    eps: f64,
+    /// Print JSON (schema: docs/identify-json.md).
+    #[arg(long)]
+    json: bool,
+    /// Write the identified model as URDF.
+    #[arg(long)]
+    out_urdf: Option<PathBuf>,
+    /// Write the optimization problem as JSON (for scripts/check_cvxpy.py).
+    #[arg(long)]
+    export_problem: Option<PathBuf>,
+    /// Accept fewer equations than parameters (the prior then decides the rest).
+    #[arg(long)]
+    allow_few_samples: bool,
+    /// Prior term: euclidean (w ‖θ − θ̂‖², the paper) or logdet (w Σ Bregman divergence of
+    /// −log det between J and the prior's J; Lee, Wensing & Park).
+    #[arg(long, default_value = "euclidean")]
+    regularizer: ident::Regularizer,
 }
 
 /// Runs the identification and prints the report.
 pub fn run(a: Args) -> anyhow::Result<()> {
-    let m = &a.model;
-    let tr = Data::open(a.data, m)?;
-    let train = match a.train {
+    let mut opts = Options::new(a.constraints);
+    opts.prior_weight = a.prior_weight;
+    opts.eps = a.eps;
+    opts.regularizer = a.regularizer;
+    opts.validate().map_err(|e| match e {
+        ident::IdentError::InvalidOption {
+            option,
+            expected,
+            value,
+        } => super::flag_error(option, expected, value),
+        e => e.into(),
+    })?;
+    let model = a.robot.load()?;
+    let m = &model;
+    let tr = Data::open(&a.data, m)?;
+    let train = match a.train.as_deref() {
         Some(s) => parse_range(s, tr.len(), "--train")?,
         None => 0..tr.len(),
     };
     let vdata;
-    let (vtr, vrange) = match (a.validate, a.validate_data) {
+    let (vtr, vrange) = match (a.validate.as_deref(), a.validate_data.as_deref()) {
         (Some(_), Some(_)) => bail!("give --validate or --validate-data, not both"),
         (Some(s), None) => (Some(&tr), Some(parse_range(s, tr.len(), "--validate")?)),
         (None, Some(p)) => {
@@ -141,10 +182,6 @@ pub fn run(a: Args) -> anyhow::Result<()> {
     }
     let start = std::time::Instant::now();
     let ne = tr.normal_equations(m, train.clone())?;
-    let mut opts = Options::new(a.constraints);
-    opts.prior_weight = a.prior_weight;
-    opts.eps = a.eps;
-    opts.regularizer = a.regularizer;
     let prior = m.parameters();
     let r = ident::identify(m, &ne, &prior, &opts)?;
     let total = start.elapsed().as_secs_f64();
@@ -155,7 +192,7 @@ pub fn run(a: Args) -> anyhow::Result<()> {
     };
     let idf = analysis::identifiability(m, &ne, &r.theta);
     // Against the ground truth, when the data are a physid log that carries it.
-    let truth_errors = ground_truth(a.data, m).map(|truth| {
+    let truth_errors = ground_truth(&a.data, m).map(|truth| {
         let tm = m.with_parameters(&truth).expect("same layout");
         let errs = physid::experiment::body_errors(&tm, &r.theta);
         physid::ident::bodies(m)
@@ -164,7 +201,7 @@ pub fn run(a: Args) -> anyhow::Result<()> {
             .map(|((name, _, _), e)| json!({"name": name, "mass_rel": e[0], "com_m": e[1], "inertia_rel": e[2], "j_rel": e[3]}))
             .collect::<Vec<_>>()
     });
-    if let Some(p) = a.out_urdf {
+    if let Some(p) = &a.out_urdf {
         let im = m.with_parameters(&r.theta)?;
         physid::io::write_atomic(p, physid::io::urdf::to_string(&im).as_bytes())?;
         if !r.constraints_hold || !ident::constraints_hold(m, &r.theta, ConstraintSet::Consistent) {
@@ -176,7 +213,7 @@ pub fn run(a: Args) -> anyhow::Result<()> {
         }
     }
     let names = m.parameter_names();
-    if let Some(p) = a.export_problem {
+    if let Some(p) = &a.export_problem {
         // The problem as data, for independent solvers (scripts/check_cvxpy.py): the objective
         // θᵀ H θ − 2 gᵀ θ + c and, per body, its parameter columns and ellipsoid.
         let ns = ne.samples as f64;

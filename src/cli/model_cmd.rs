@@ -1,8 +1,7 @@
-//! `physid model` and `physid dynamics`.
+//! `physid model`: a robot's bodies, rotors, mass properties and consistency margins.
 
-use nalgebra::DMatrix;
-use physid::dynamics::{crba, regressor, rnea, Data};
-use physid::model::random::random_state;
+use super::RobotArgs;
+use physid::dynamics::{crba, rnea, Data};
 use physid::model::Model;
 use physid::spatial::{ConsistencyReport, Ellipsoid, InertialParams};
 use serde_json::json;
@@ -17,6 +16,22 @@ fn body_json(name: &str, p: &InertialParams, e: Option<&Ellipsoid>) -> serde_jso
         "principal_moments": p.principal_moments().map(|(v, _)| v.as_slice().to_vec()),
         "consistency": r,
     })
+}
+
+/// Describe a robot: bodies, rotors, mass properties, consistency margins, and its dynamics at
+/// a reference configuration.
+#[derive(clap::Args, Debug)]
+pub struct Args {
+    #[command(flatten)]
+    robot: RobotArgs,
+    /// Print JSON instead of text.
+    #[arg(long)]
+    json: bool,
+}
+
+/// `physid model`.
+pub fn run(a: Args) -> anyhow::Result<()> {
+    describe(&a.robot.load()?, a.json)
 }
 
 /// Prints the model summary.
@@ -120,41 +135,4 @@ pub fn print_bodies(rows: &[(String, InertialParams, ConsistencyReport)]) {
                 .map_or("-".into(), |t| format!("{t:.3}"))
         );
     }
-}
-
-/// Writes random-state dynamics as JSON for the check scripts.
-pub fn dynamics_json(
-    m: &Model,
-    samples: usize,
-    seed: u64,
-    scale: f64,
-    out: &std::path::Path,
-) -> anyhow::Result<()> {
-    let mut d = Data::new(m);
-    let mut y = DMatrix::zeros(m.dof(), m.layout().len);
-    let rows = |x: &DMatrix<f64>| -> Vec<Vec<f64>> {
-        x.row_iter().map(|r| r.iter().copied().collect()).collect()
-    };
-    let mut states = vec![];
-    for s in 0..samples {
-        let [q, qd, qdd] = random_state(
-            seed.wrapping_mul(1_000_003).wrapping_add(s as u64),
-            m.dof(),
-            scale,
-        );
-        let tau = rnea(m, &mut d, &q, &qd, &qdd).clone();
-        regressor(m, &mut d, &q, &qd, &qdd, &mut y);
-        let h = crba(m, &mut d, &q).clone();
-        states.push(json!({"q": q, "qd": qd, "qdd": qdd, "tau": tau.as_slice(), "Y": rows(&y), "H": rows(&h)}));
-    }
-    let v = json!({
-        "model": m.name, "rotor_model": m.rotor_model,
-        "joint_names": m.bodies.iter().map(|b| b.joint_name.clone()).collect::<Vec<_>>(),
-        "body_names": m.bodies.iter().map(|b| b.name.clone()).collect::<Vec<_>>(),
-        "parameter_names": m.parameter_names(), "theta": m.parameters().as_slice(),
-        "samples": states,
-    });
-    physid::io::write_atomic(out, serde_json::to_string(&v)?.as_bytes())?;
-    eprintln!("wrote {} states to {}", samples, out.display());
-    Ok(())
 }

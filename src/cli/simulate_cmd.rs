@@ -3,18 +3,47 @@
 use anyhow::Context;
 use physid::io::{mcap_log, samples};
 use physid::sim::scenario::Engine;
-use std::path::Path;
+use std::path::PathBuf;
+
+/// Simulate a scenario's excitation experiment and log it to MCAP (and CSV).
+#[derive(clap::Args, Debug)]
+pub struct Args {
+    /// Scenario file (TOML).
+    scenario: PathBuf,
+    /// Output MCAP file.
+    #[arg(long)]
+    out: PathBuf,
+    /// Also write the processed samples (t, q, dq, ddq, tau) as CSV.
+    #[arg(long)]
+    csv: Option<PathBuf>,
+    /// Override the engine.
+    #[arg(long, value_enum)]
+    engine: Option<EngineArg>,
+    /// Override the duration (s).
+    #[arg(long)]
+    duration: Option<f64>,
+    /// Override the seed.
+    #[arg(long)]
+    seed: Option<u64>,
+    /// Print the summary as JSON.
+    #[arg(long)]
+    json: bool,
+}
+
+#[derive(clap::ValueEnum, Debug, Clone, Copy)]
+enum EngineArg {
+    Physid,
+    Rapier,
+}
 
 /// Simulates, writes the MCAP (and CSV) and prints a summary.
-pub fn run(
-    path: &Path,
-    out: &Path,
-    csv: Option<&Path>,
-    engine: Option<Engine>,
-    duration: Option<f64>,
-    seed: Option<u64>,
-    json: bool,
-) -> anyhow::Result<()> {
+pub fn run(a: Args) -> anyhow::Result<()> {
+    let (path, out, csv, json) = (&a.scenario, &a.out, a.csv.as_deref(), a.json);
+    let engine = a.engine.map(|e| match e {
+        EngineArg::Physid => Engine::Physid,
+        EngineArg::Rapier => Engine::Rapier,
+    });
+    let (duration, seed) = (a.duration, a.seed);
     let (mut sc, model, text) = physid::sim::scenario::load(path)?;
     if let Some(e) = engine {
         sc.simulation.engine = e;

@@ -3,7 +3,7 @@
 use anyhow::{bail, Context};
 use physid::experiment::{sweep, tables};
 use rayon::prelude::*;
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 
 /// Parses `K/N`.
 pub fn parse_shard(s: &str) -> anyhow::Result<(usize, usize)> {
@@ -20,13 +20,27 @@ pub fn parse_shard(s: &str) -> anyhow::Result<(usize, usize)> {
     Ok((k, n))
 }
 
-/// Runs (this shard of) a sweep, then merges if every cell is present.
-pub fn run(
-    path: &Path,
+/// A parameter sweep (docs/sweeps.md): a grid over scenario keys crossed with the constraint
+/// sets; resumable (finished cells are skipped) and shardable across machines.
+#[derive(clap::Args, Debug)]
+pub struct Args {
+    /// Sweep file (TOML).
+    sweep: PathBuf,
+    /// Output directory (default results/<sweep file name>).
+    #[arg(long)]
     out: Option<PathBuf>,
-    shard: Option<(usize, usize)>,
+    /// Run only cells with index ≡ K (mod N), e.g. a job array's task: `--shard 3/16`.
+    #[arg(long)]
+    shard: Option<String>,
+    /// Worker threads (default: all cores).
+    #[arg(long)]
     threads: Option<usize>,
-) -> anyhow::Result<()> {
+}
+
+/// Runs (this shard of) a sweep, then merges if every cell is present.
+pub fn run(a: Args) -> anyhow::Result<()> {
+    let shard = a.shard.as_deref().map(parse_shard).transpose()?;
+    let (path, out, threads) = (a.sweep.as_path(), a.out, a.threads);
     let (spec, scenario_path, base) = sweep::load(path)?;
     spec.experiment
         .validate()

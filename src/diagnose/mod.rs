@@ -82,6 +82,57 @@ impl Default for Options {
     }
 }
 
+impl Options {
+    /// Checks every value against its range (the CLI relies on this, and so can any caller).
+    pub fn validate(&self) -> Result<(), DiagnoseError> {
+        let invalid = |option, expected, value| DiagnoseError::InvalidOption {
+            option,
+            expected,
+            value,
+        };
+        if let Some(e) = self.description_uncertainty {
+            if !(e.is_finite() && e > 0.0) {
+                return Err(invalid(
+                    "description_uncertainty",
+                    "a positive fraction (0.1 = 10 %)",
+                    e,
+                ));
+            }
+        }
+        let cutoff = self.processing_cutoff;
+        if !(cutoff.is_finite() && cutoff > 0.0) {
+            return Err(invalid(
+                "the processing cutoff",
+                "a positive frequency in Hz",
+                cutoff,
+            ));
+        }
+        if !(self.min_speed.is_finite() && self.min_speed >= 0.0) {
+            return Err(invalid(
+                "the minimum speed",
+                "a finite speed >= 0 (rad/s)",
+                self.min_speed,
+            ));
+        }
+        if !(self.unexplained_ratio.is_finite() && self.unexplained_ratio >= 1.0) {
+            let ratio = self.unexplained_ratio;
+            return Err(invalid(
+                "the unexplained ratio",
+                "a finite number >= 1",
+                ratio,
+            ));
+        }
+        if self.kinds.is_empty() {
+            return Err(invalid(
+                "the number of effect kinds offered",
+                "at least 1",
+                0.0,
+            ));
+        }
+        Ok(())
+    }
+}
+
 /// A diagnosis failed.
 #[derive(Debug, thiserror::Error)]
 pub enum DiagnoseError {
@@ -128,6 +179,16 @@ pub enum DiagnoseError {
     /// The held-out fraction is outside (0, 1).
     #[error("the held-out fraction {0} must lie strictly between 0 and 1")]
     Holdout(f64),
+    /// An option value out of its range.
+    #[error("{option} must be {expected}, got {value}")]
+    InvalidOption {
+        /// The option (its field in [`Options`]).
+        option: &'static str,
+        /// Its valid range.
+        expected: &'static str,
+        /// The value given.
+        value: f64,
+    },
 }
 
 /// Smallest identifiable fraction of a magnitude worth reporting as a number (its column's part
@@ -168,6 +229,7 @@ pub fn diagnose(
     validate: &Trajectory,
     opts: &Options,
 ) -> Result<Diagnosis, DiagnoseError> {
+    opts.validate()?;
     check_data(model, train, validate)?;
     let nominal = fit_nominal(model, train, opts)?;
     let stage = Stage::new(model, train, validate, opts, nominal.theta.clone());

@@ -294,6 +294,57 @@ pub fn category(i: usize) -> (Category, Option<usize>) {
 /// The fraction of each case's data the diagnosis holds out for validation.
 const HOLDOUT: f64 = 0.3;
 
+/// What a blind benchmark run is asked for.
+#[derive(Clone, Debug, PartialEq)]
+pub struct BlindOptions {
+    /// Number of cases (at least 1).
+    pub cases: usize,
+    /// Seed of every draw.
+    pub seed: u64,
+    /// Relative error drawn into each case's description's inertial parameters, in [0, 1).
+    pub description_error: f64,
+    /// The uncertainty the diagnosis is told (`None`: the error drawn; 0: no description test).
+    pub description_uncertainty: Option<f64>,
+}
+
+impl BlindOptions {
+    /// Checks every value against its range.
+    pub fn validate(&self) -> Result<(), BlindError> {
+        let invalid = |option, expected, value| BlindError::InvalidOption {
+            option,
+            expected,
+            value,
+        };
+        if self.cases == 0 {
+            return Err(invalid("cases", "at least 1", 0.0));
+        }
+        let e = self.description_error;
+        if !(e.is_finite() && (0.0..1.0).contains(&e)) {
+            return Err(invalid("description_error", "in [0, 1)", e));
+        }
+        let stated = self.stated_uncertainty();
+        if !(stated.is_finite() && stated >= 0.0) {
+            return Err(invalid("description_uncertainty", ">= 0", stated));
+        }
+        Ok(())
+    }
+
+    /// The description uncertainty the diagnosis is told (0: none).
+    pub fn stated_uncertainty(&self) -> f64 {
+        self.description_uncertainty
+            .unwrap_or(self.description_error)
+    }
+
+    /// The diagnosis's options for every case.
+    pub fn diagnose_options(&self) -> diagnose::Options {
+        let stated = self.stated_uncertainty();
+        diagnose::Options {
+            description_uncertainty: (stated > 0.0).then_some(stated),
+            ..Default::default()
+        }
+    }
+}
+
 /// A blind case or the benchmark's report that could not be made, naming the case.
 #[derive(Debug, thiserror::Error)]
 pub enum BlindError {
@@ -340,6 +391,16 @@ pub enum BlindError {
     /// Serializing the scores.
     #[error("scores: {0}")]
     Json(#[from] serde_json::Error),
+    /// An option value out of its range.
+    #[error("{option} must be {expected}, got {value}")]
+    InvalidOption {
+        /// The option.
+        option: &'static str,
+        /// Its valid range.
+        expected: &'static str,
+        /// The value given.
+        value: f64,
+    },
 }
 
 /// The nominal model's validation mean square (the last [`HOLDOUT`]), fitted as the diagnosis

@@ -403,7 +403,7 @@ pub fn run_seed(
                 j_err,
                 body_errors: per_body,
                 consistent: ident::constraints_hold(model, &r.theta, ConstraintSet::Consistent),
-                status: r.solver.status.clone(),
+                status: r.solver.status.to_string(),
                 solve_s: r.solver.seconds,
             });
         }

@@ -160,21 +160,96 @@ pub enum IdentError {
     /// The solver stopped without an answer.
     #[error("the cone solver stopped with status {status} after {iterations} iterations")]
     SolverFailed {
-        /// Clarabel's status.
+        /// Clarabel's status, as Clarabel spells it.
         status: String,
         /// Iterations.
         iterations: u32,
     },
-    /// A bad option.
-    #[error("{0}")]
-    BadOption(String),
+    /// An option value out of its range.
+    #[error("{option} must be {expected}, got {value}")]
+    InvalidOption {
+        /// The option.
+        option: &'static str,
+        /// Its valid range.
+        expected: &'static str,
+        /// The value given.
+        value: f64,
+    },
+    /// The normal equations or the prior do not match the model.
+    #[error("normal equations have {columns} columns and the prior {prior} for a model of {params} parameters")]
+    Shape {
+        /// Columns of the normal equations.
+        columns: usize,
+        /// Length of the prior.
+        prior: usize,
+        /// The model's parameters.
+        params: usize,
+    },
+    /// A non-negative column index outside the parameters.
+    #[error("non-negative column {column} outside the {params} parameters")]
+    NonNegativeColumn {
+        /// The column.
+        column: usize,
+        /// Parameters.
+        params: usize,
+    },
+    /// The log-det regularizer needs a physically consistent prior.
+    #[error("log-det regularizer: the prior of '{0}' is not physically consistent (J not positive definite)")]
+    InconsistentPrior(String),
+    /// Clarabel refused the problem's data.
+    #[error("cone program rejected: {0}")]
+    Rejected(String),
+}
+
+/// How the optimum was reached (serialized as before: `"direct"`, or Clarabel's own spelling).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
+pub enum SolveStatus {
+    /// Least squares solved directly, without the cone solver.
+    #[serde(rename = "direct")]
+    Direct,
+    /// Clarabel: solved to its full tolerances.
+    Solved,
+    /// Clarabel: solved to its reduced tolerances.
+    AlmostSolved,
+}
+
+impl std::fmt::Display for SolveStatus {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(match self {
+            SolveStatus::Direct => "direct",
+            SolveStatus::Solved => "Solved",
+            SolveStatus::AlmostSolved => "AlmostSolved",
+        })
+    }
+}
+
+impl Options {
+    /// Checks every value against its range (the CLI relies on this, and so can any caller).
+    pub fn validate(&self) -> Result<(), IdentError> {
+        let w = self.prior_weight;
+        if !(w.is_finite() && w >= 0.0) {
+            return Err(IdentError::InvalidOption {
+                option: "prior_weight",
+                expected: "a finite number >= 0",
+                value: w,
+            });
+        }
+        if !(self.eps.is_finite() && self.eps >= 0.0) {
+            return Err(IdentError::InvalidOption {
+                option: "eps",
+                expected: "a finite number >= 0",
+                value: self.eps,
+            });
+        }
+        Ok(())
+    }
 }
 
 /// Solver information.
 #[derive(Clone, Debug, Serialize)]
 pub struct SolverInfo {
-    /// `"direct"` for least squares without the cone solver, else Clarabel's status.
-    pub status: String,
+    /// How the optimum was reached.
+    pub status: SolveStatus,
     /// Interior-point iterations (0 for direct).
     pub iterations: u32,
     /// Solve time (s), setup included.
@@ -269,25 +344,15 @@ pub fn identify(
 ) -> Result<Identified, IdentError> {
     let p = ne.yty.nrows();
     if p < model.layout().len || prior.len() != p {
-        return Err(IdentError::BadOption(format!(
-            "normal equations have {p} columns and the prior {} for a model of {} parameters",
-            prior.len(),
-            model.layout().len
-        )));
+        return Err(IdentError::Shape {
+            columns: p,
+            prior: prior.len(),
+            params: model.layout().len,
+        });
     }
+    opts.validate()?;
     let ns = ne.samples;
     let w = opts.prior_weight;
-    if !(w.is_finite() && w >= 0.0) {
-        return Err(IdentError::BadOption(format!(
-            "prior weight {w} must be >= 0"
-        )));
-    }
-    if !(opts.eps.is_finite() && opts.eps >= 0.0) {
-        return Err(IdentError::BadOption(format!(
-            "eps {} must be >= 0",
-            opts.eps
-        )));
-    }
     if ns == 0 || (w == 0.0 && ns * model.dof() < p) {
         return Err(IdentError::TooFewSamples {
             samples: ns,
@@ -317,9 +382,10 @@ pub fn identify(
     }
     let start = std::time::Instant::now();
     if let Some(&c) = opts.nonnegative.iter().find(|&&c| c >= p) {
-        return Err(IdentError::BadOption(format!(
-            "non-negative column {c} outside the {p} parameters"
-        )));
+        return Err(IdentError::NonNegativeColumn {
+            column: c,
+            params: p,
+        });
     }
     let direct = opts.constraints == ConstraintSet::None
         && !opts.force_cone_solver
@@ -327,7 +393,7 @@ pub fn identify(
         && opts.nonnegative.is_empty();
     let (theta, solver) = if direct {
         let info = SolverInfo {
-            status: "direct".into(),
+            status: SolveStatus::Direct,
             iterations: 0,
             seconds: 0.0,
             residuals: [0.0; 2],
@@ -486,17 +552,34 @@ fn solve_cone(
         .map(|i| if i < p { -2.0 * d[i] * g[i] } else { 0.0 })
         .collect();
     let mut rows = ConeRows::default();
+    let nonneg = physical_rows(model, opts, &d, &mut rows)?;
+    if logdet {
+        logdet_rows(model, prior, opts.prior_weight, &d, &mut q, &mut rows)?;
+    }
+    nonnegative_rows(&nonneg, &d, &mut rows);
+    run_clarabel(&ps, &q, rows, p, &d)
+}
+
+/// The constraint rows of the set `opts.constraints` per body (`I ⪰ ε1`, `J ⪰ ε1`, the CoM
+/// LMI), appended to `rows`; returns the rows that must be non-negative (`tr(JQ)`, friction,
+/// `opts.nonnegative`) as linear forms over θ.
+fn physical_rows(
+    model: &Model,
+    opts: &Options,
+    d: &[f64],
+    rows: &mut ConeRows,
+) -> Result<Vec<Vec<(usize, f64)>>, IdentError> {
     let set = opts.constraints;
     let mut nonneg: Vec<Vec<(usize, f64)>> = vec![];
     for (name, col, ell) in bodies(model) {
         match set {
             ConstraintSet::None => {}
-            ConstraintSet::Semi => rows.lmi(Lmi::Spatial, col, opts.eps, &d),
-            ConstraintSet::Consistent => rows.lmi(Lmi::Pseudo, col, opts.eps, &d),
+            ConstraintSet::Semi => rows.lmi(Lmi::Spatial, col, opts.eps, d),
+            ConstraintSet::Consistent => rows.lmi(Lmi::Pseudo, col, opts.eps, d),
             ConstraintSet::Ellipsoid => {
                 let e = ell.ok_or_else(|| IdentError::MissingEllipsoid(name.clone()))?;
-                rows.lmi(Lmi::Pseudo, col, opts.eps, &d);
-                rows.lmi(Lmi::Com(e), col, 0.0, &d);
+                rows.lmi(Lmi::Pseudo, col, opts.eps, d);
+                rows.lmi(Lmi::Com(e), col, 0.0, d);
                 let form = lmi::trace_jq_form(&e);
                 nonneg.push((0..10).map(|k| (col + k, form[k])).collect());
             }
@@ -507,82 +590,107 @@ fn solve_cone(
         nonneg.extend((l.viscous_col..l.len).map(|c| vec![(c, 1.0)]));
     }
     nonneg.extend(opts.nonnegative.iter().map(|&c| vec![(c, 1.0)]));
-    if logdet {
-        // Per body: w (tr(Ĵ⁻¹ J) − Σ u_i) in the objective, with
-        // [[J, L], [Lᵀ, diag L]] ⪰ 0 (8×8) and (u_i, 1, L_ii) in the exponential cone, so that
-        // Σ u_i ≤ log det J.
-        let w = opts.prior_weight;
-        let s2 = std::f64::consts::SQRT_2;
-        let jbasis = Lmi::Pseudo.basis();
-        // L's lower-triangular entries (i >= j) in order; `lpos(i, j)` is the variable offset.
-        let lentries: Vec<(usize, usize)> =
-            (0..4).flat_map(|j| (j..4).map(move |i| (i, j))).collect();
-        let lpos = |i: usize, j: usize| {
-            lentries
-                .iter()
-                .position(|&x| x == (i, j))
-                .expect("lower-triangular entry")
-        };
-        for (bi, (name, col, _)) in bodies(model).iter().enumerate() {
-            let j0 = InertialParams(prior.fixed_rows::<10>(*col).into_owned()).pseudo_inertia();
-            let j0inv = j0.try_inverse().filter(|_| j0.cholesky().is_some()).ok_or_else(|| {
-                IdentError::BadOption(format!("log-det regularizer: the prior of '{name}' is not physically consistent (J not positive definite)"))
-            })?;
-            for k in 0..10 {
-                let mut e = nalgebra::SVector::<f64, 10>::zeros();
-                e[k] = 1.0;
-                q[col + k] += w * (j0inv * InertialParams(e).pseudo_inertia()).trace() * d[col + k];
-            }
-            let base = p + 14 * bi;
-            for i in 0..4 {
-                q[base + 10 + i] = -w;
-            }
-            // svec of the 8×8 matrix: entry (r, c) with r <= c, column by column.
-            let r0 = rows.next_row();
-            let mut idx = 0usize;
-            for c in 0..8 {
-                for r in 0..=c {
-                    let row = r0 + idx;
-                    if c < 4 {
-                        // J block: linear in π.
-                        let jidx = c * (c + 1) / 2 + r;
-                        for (k, colv) in jbasis.iter().enumerate() {
-                            rows.entry(row, col + k, -colv[jidx] * d[col + k]);
-                        }
-                    } else if r < 4 && r >= c - 4 {
-                        // Off-diagonal block (r, c−4) = L[r][c−4] (lower triangular), ×√2.
-                        rows.entry(row, base + lpos(r, c - 4), -s2);
-                    } else if r == c {
-                        // diag(L).
-                        rows.entry(row, base + lpos(r - 4, r - 4), -1.0);
-                    }
-                    idx += 1;
-                }
-            }
-            rows.close(idx, 0.0, SupportedConeT::PSDTriangleConeT(8));
-            for i in 0..4 {
-                // s = (u_i, 1, L_ii) in K_exp.
-                let row = rows.next_row();
-                rows.entry(row, base + 10 + i, -1.0);
-                rows.entry(row + 2, base + lpos(i, i), -1.0);
-                rows.b.extend([0.0, 1.0, 0.0]);
-                rows.cones.push(SupportedConeT::ExponentialConeT());
-            }
+    Ok(nonneg)
+}
+
+/// The log-det regularizer's variables and cones for every body (Lee, Wensing & Park): per
+/// body `w (tr(Ĵ⁻¹ J) − Σ u_i)` in the objective `q`, `[[J, L], [Lᵀ, diag L]] ⪰ 0` (8×8) and
+/// `(u_i, 1, L_ii)` in the exponential cone, so that `Σ u_i ≤ log det J`.
+/// The extra variables follow θ's `p` entries, 14 per body (L's ten, then the four `u`).
+fn logdet_rows(
+    model: &Model,
+    prior: &DVector<f64>,
+    w: f64,
+    d: &[f64],
+    q: &mut [f64],
+    rows: &mut ConeRows,
+) -> Result<(), IdentError> {
+    let p = prior.len();
+    let s2 = std::f64::consts::SQRT_2;
+    let jbasis = Lmi::Pseudo.basis();
+    // L's lower-triangular entries (i >= j) in order; `lpos(i, j)` is the variable offset.
+    let lentries: Vec<(usize, usize)> = (0..4).flat_map(|j| (j..4).map(move |i| (i, j))).collect();
+    let lpos = |i: usize, j: usize| {
+        lentries
+            .iter()
+            .position(|&x| x == (i, j))
+            .expect("lower-triangular entry")
+    };
+    for (bi, (name, col, _)) in bodies(model).iter().enumerate() {
+        let j0 = InertialParams(prior.fixed_rows::<10>(*col).into_owned()).pseudo_inertia();
+        let j0inv = j0
+            .try_inverse()
+            .filter(|_| j0.cholesky().is_some())
+            .ok_or_else(|| IdentError::InconsistentPrior(name.clone()))?;
+        for k in 0..10 {
+            let mut e = nalgebra::SVector::<f64, 10>::zeros();
+            e[k] = 1.0;
+            q[col + k] += w * (j0inv * InertialParams(e).pseudo_inertia()).trace() * d[col + k];
         }
-    }
-    if !nonneg.is_empty() {
+        let base = p + 14 * bi;
+        for i in 0..4 {
+            q[base + 10 + i] = -w;
+        }
+        // svec of the 8×8 matrix: entry (r, c) with r <= c, column by column.
         let r0 = rows.next_row();
-        for (r, terms) in nonneg.iter().enumerate() {
-            for &(c, v) in terms {
-                rows.entry(r0 + r, c, -v * d[c]);
+        let mut idx = 0usize;
+        for c in 0..8 {
+            for r in 0..=c {
+                let row = r0 + idx;
+                if c < 4 {
+                    // J block: linear in π.
+                    let jidx = c * (c + 1) / 2 + r;
+                    for (k, colv) in jbasis.iter().enumerate() {
+                        rows.entry(row, col + k, -colv[jidx] * d[col + k]);
+                    }
+                } else if r < 4 && r >= c - 4 {
+                    // Off-diagonal block (r, c−4) = L[r][c−4] (lower triangular), ×√2.
+                    rows.entry(row, base + lpos(r, c - 4), -s2);
+                } else if r == c {
+                    // diag(L).
+                    rows.entry(row, base + lpos(r - 4, r - 4), -1.0);
+                }
+                idx += 1;
             }
         }
-        rows.close(
-            nonneg.len(),
-            0.0,
-            SupportedConeT::NonnegativeConeT(nonneg.len()),
-        );
+        rows.close(idx, 0.0, SupportedConeT::PSDTriangleConeT(8));
+        for i in 0..4 {
+            // s = (u_i, 1, L_ii) in K_exp.
+            let row = rows.next_row();
+            rows.entry(row, base + 10 + i, -1.0);
+            rows.entry(row + 2, base + lpos(i, i), -1.0);
+            rows.b.extend([0.0, 1.0, 0.0]);
+            rows.cones.push(SupportedConeT::ExponentialConeT());
+        }
     }
+    Ok(())
+}
+
+/// One non-negative cone over the linear forms `nonneg` (none when empty).
+fn nonnegative_rows(nonneg: &[Vec<(usize, f64)>], d: &[f64], rows: &mut ConeRows) {
+    let r0 = rows.next_row();
+    for (r, terms) in nonneg.iter().enumerate() {
+        for &(c, v) in terms {
+            rows.entry(r0 + r, c, -v * d[c]);
+        }
+    }
+    rows.close(
+        nonneg.len(),
+        0.0,
+        SupportedConeT::NonnegativeConeT(nonneg.len()),
+    );
+}
+
+/// Solves the scaled cone program `min ½ xᵀ P x + qᵀ x` s.t. `rows` with Clarabel and maps its
+/// status: θ = D x on success, an [`IdentError`] otherwise. No Clarabel type leaves here.
+fn run_clarabel(
+    ps: &DMatrix<f64>,
+    q: &[f64],
+    rows: ConeRows,
+    p: usize,
+    d: &[f64],
+) -> Result<(DVector<f64>, SolverInfo), IdentError> {
+    let nv = q.len();
     let ConeRows {
         ai,
         aj,
@@ -596,20 +704,25 @@ fn solve_cone(
         max_iter: 200,
         ..DefaultSettings::default()
     };
-    let mut solver = DefaultSolver::new(&upper_csc(&ps), &q, &a, &b, &cones, settings)
-        .map_err(|e| IdentError::BadOption(format!("cone program rejected: {e}")))?;
+    let mut solver = DefaultSolver::new(&upper_csc(ps), q, &a, &b, &cones, settings)
+        .map_err(|e| IdentError::Rejected(e.to_string()))?;
     solver.solve();
     let sol = &solver.solution;
-    let info = |status: SolverStatus| SolverInfo {
-        status: format!("{status:?}"),
+    let info = |status: SolveStatus| SolverInfo {
+        status,
         iterations: sol.iterations,
         seconds: sol.solve_time,
         residuals: [sol.r_prim, sol.r_dual],
     };
     match sol.status {
         SolverStatus::Solved | SolverStatus::AlmostSolved => {
-            let theta = DVector::from_iterator(p, sol.x.iter().zip(&d).take(p).map(|(x, s)| x * s));
-            Ok((theta, info(sol.status)))
+            let theta = DVector::from_iterator(p, sol.x.iter().zip(d).take(p).map(|(x, s)| x * s));
+            let status = if sol.status == SolverStatus::Solved {
+                SolveStatus::Solved
+            } else {
+                SolveStatus::AlmostSolved
+            };
+            Ok((theta, info(status)))
         }
         SolverStatus::PrimalInfeasible | SolverStatus::AlmostPrimalInfeasible => {
             Err(IdentError::Infeasible(format!("{:?}", sol.status)))

@@ -222,86 +222,7 @@ impl Model {
         let mut joint_names = std::collections::HashSet::new();
         let mut bodies = bodies;
         for (i, b) in bodies.iter_mut().enumerate() {
-            if !names.insert(b.name.clone()) {
-                return Err(ModelError::DuplicateName {
-                    what: "body",
-                    name: b.name.clone(),
-                });
-            }
-            if !joint_names.insert(b.joint_name.clone()) {
-                return Err(ModelError::DuplicateName {
-                    what: "joint",
-                    name: b.joint_name.clone(),
-                });
-            }
-            if let Some(p) = b.parent {
-                if p >= i {
-                    return Err(ModelError::BadParent {
-                        body: b.name.clone(),
-                        index: i,
-                        parent: p,
-                    });
-                }
-            }
-            let jn = format!("joint '{}'", b.joint_name);
-            b.joint = b
-                .joint
-                .normalized()
-                .map_err(|reason| ModelError::BadValue {
-                    element: jn.clone(),
-                    field: "axis",
-                    reason,
-                })?;
-            check_transform(&jn, "origin", &b.x_tree)?;
-            check_params(&format!("body '{}'", b.name), &b.inertia)?;
-            let f = &b.friction;
-            for (field, v) in [
-                ("friction.viscous", f.viscous),
-                ("friction.coulomb", f.coulomb),
-            ] {
-                if !v.is_finite() || v < 0.0 {
-                    return Err(ModelError::BadValue {
-                        element: jn.clone(),
-                        field,
-                        reason: format!("{v} is not a finite non-negative number"),
-                    });
-                }
-            }
-            let l = &b.limits;
-            if l.lower.is_nan() || l.upper.is_nan() || l.lower > l.upper {
-                return Err(ModelError::BadValue {
-                    element: jn.clone(),
-                    field: "limits",
-                    reason: format!("lower {} must not exceed upper {}", l.lower, l.upper),
-                });
-            }
-            if let Some(r) = &mut b.rotor {
-                let rn = format!("rotor '{}'", r.name);
-                if !r.gear_ratio.is_finite() || r.gear_ratio == 0.0 {
-                    return Err(ModelError::BadValue {
-                        element: rn,
-                        field: "gear_ratio",
-                        reason: format!("{} must be finite and non-zero", r.gear_ratio),
-                    });
-                }
-                let n = r.axis.norm();
-                if !n.is_finite() || n < 1e-9 {
-                    return Err(ModelError::BadValue {
-                        element: rn,
-                        field: "axis",
-                        reason: "must be a non-zero finite vector".into(),
-                    });
-                }
-                r.axis /= n;
-                check_transform(&rn, "origin", &r.x_rot)?;
-                check_params(&rn, &r.inertia)?;
-                if !names.insert(r.name.clone()) {
-                    return Err(ModelError::DuplicateName {
-                        what: "body",
-                        name: r.name.clone(),
-                    });
-                }
-            }
+            check_body(i, b, &mut names, &mut joint_names)?;
         }
         if !gravity.iter().all(|g| g.is_finite()) {
             return Err(ModelError::BadValue {
@@ -310,32 +231,8 @@ impl Model {
                 reason: "not finite".into(),
             });
         }
-        let n = bodies.len();
-        let mut rotor_col = vec![None; n];
-        let mut col = 10 * n;
-        for (i, b) in bodies.iter().enumerate() {
-            if b.rotor.is_some() {
-                rotor_col[i] = Some(col);
-                col += 10;
-            }
-        }
-        let layout = ParamLayout {
-            rotor_col,
-            viscous_col: col,
-            coulomb_col: col + n,
-            len: col + 2 * n,
-        };
-        let support = (0..n)
-            .map(|i| {
-                let mut s = vec![i];
-                let mut j = i;
-                while let Some(p) = bodies[j].parent {
-                    s.push(p);
-                    j = p;
-                }
-                s
-            })
-            .collect();
+        let layout = ParamLayout::of(&bodies);
+        let support = support_of(&bodies);
         Ok(Self {
             name: name.into(),
             bodies,
@@ -587,4 +484,141 @@ fn check_params(element: &str, p: &InertialParams) -> Result<(), ModelError> {
         });
     }
     Ok(())
+}
+
+/// Checks body `i` (names unique, parent before it, joint axis and origin, inertia, friction,
+/// limits, rotor) and normalizes its joint and rotor axes.
+fn check_body(
+    i: usize,
+    b: &mut Body,
+    names: &mut std::collections::HashSet<String>,
+    joint_names: &mut std::collections::HashSet<String>,
+) -> Result<(), ModelError> {
+    if !names.insert(b.name.clone()) {
+        return Err(ModelError::DuplicateName {
+            what: "body",
+            name: b.name.clone(),
+        });
+    }
+    if !joint_names.insert(b.joint_name.clone()) {
+        return Err(ModelError::DuplicateName {
+            what: "joint",
+            name: b.joint_name.clone(),
+        });
+    }
+    if let Some(p) = b.parent {
+        if p >= i {
+            return Err(ModelError::BadParent {
+                body: b.name.clone(),
+                index: i,
+                parent: p,
+            });
+        }
+    }
+    let jn = format!("joint '{}'", b.joint_name);
+    b.joint = b
+        .joint
+        .normalized()
+        .map_err(|reason| ModelError::BadValue {
+            element: jn.clone(),
+            field: "axis",
+            reason,
+        })?;
+    check_transform(&jn, "origin", &b.x_tree)?;
+    check_params(&format!("body '{}'", b.name), &b.inertia)?;
+    let f = &b.friction;
+    for (field, v) in [
+        ("friction.viscous", f.viscous),
+        ("friction.coulomb", f.coulomb),
+    ] {
+        if !v.is_finite() || v < 0.0 {
+            return Err(ModelError::BadValue {
+                element: jn.clone(),
+                field,
+                reason: format!("{v} is not a finite non-negative number"),
+            });
+        }
+    }
+    let l = &b.limits;
+    if l.lower.is_nan() || l.upper.is_nan() || l.lower > l.upper {
+        return Err(ModelError::BadValue {
+            element: jn.clone(),
+            field: "limits",
+            reason: format!("lower {} must not exceed upper {}", l.lower, l.upper),
+        });
+    }
+    if let Some(r) = &mut b.rotor {
+        check_rotor(r, names)?;
+    }
+    Ok(())
+}
+
+/// Checks a rotor (gear ratio, axis, origin, inertia, unique name) and normalizes its axis.
+fn check_rotor(
+    r: &mut Rotor,
+    names: &mut std::collections::HashSet<String>,
+) -> Result<(), ModelError> {
+    let rn = format!("rotor '{}'", r.name);
+    if !r.gear_ratio.is_finite() || r.gear_ratio == 0.0 {
+        return Err(ModelError::BadValue {
+            element: rn,
+            field: "gear_ratio",
+            reason: format!("{} must be finite and non-zero", r.gear_ratio),
+        });
+    }
+    let n = r.axis.norm();
+    if !n.is_finite() || n < 1e-9 {
+        return Err(ModelError::BadValue {
+            element: rn,
+            field: "axis",
+            reason: "must be a non-zero finite vector".into(),
+        });
+    }
+    r.axis /= n;
+    check_transform(&rn, "origin", &r.x_rot)?;
+    check_params(&rn, &r.inertia)?;
+    if !names.insert(r.name.clone()) {
+        return Err(ModelError::DuplicateName {
+            what: "body",
+            name: r.name.clone(),
+        });
+    }
+    Ok(())
+}
+
+impl ParamLayout {
+    /// The layout of θ for `bodies`: ten columns per link, ten per rotor, then viscous and
+    /// Coulomb friction per joint (architecture.md §1).
+    fn of(bodies: &[Body]) -> Self {
+        let n = bodies.len();
+        let mut rotor_col = vec![None; n];
+        let mut col = 10 * n;
+        for (i, b) in bodies.iter().enumerate() {
+            if b.rotor.is_some() {
+                rotor_col[i] = Some(col);
+                col += 10;
+            }
+        }
+        ParamLayout {
+            rotor_col,
+            viscous_col: col,
+            coulomb_col: col + n,
+            len: col + 2 * n,
+        }
+    }
+}
+
+/// `support[i]`: joint `i` and its ancestors, nearest first.
+fn support_of(bodies: &[Body]) -> Vec<Vec<usize>> {
+    (0..bodies.len())
+        .map(|i| {
+            let mut s = vec![i];
+            let mut j = i;
+            while let Some(p) = bodies[j].parent {
+                s.push(p);
+                j = p;
+            }
+            s
+        })
+        .collect()
 }

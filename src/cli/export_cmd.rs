@@ -1,0 +1,35 @@
+//! `physid export`: a robot as MJCF and/or URDF.
+
+use super::RobotArgs;
+use std::path::PathBuf;
+
+/// Export a robot to MJCF (rotors as armature) and/or URDF (rotors as mimic joints).
+#[derive(clap::Args, Debug)]
+pub struct Args {
+    #[command(flatten)]
+    robot: RobotArgs,
+    /// Write MJCF here.
+    #[arg(long)]
+    mjcf: Option<PathBuf>,
+    /// Write URDF here.
+    #[arg(long)]
+    urdf: Option<PathBuf>,
+}
+
+/// `physid export`.
+pub fn run(a: Args) -> anyhow::Result<()> {
+    let m = a.robot.load()?;
+    anyhow::ensure!(
+        a.mjcf.is_some() || a.urdf.is_some(),
+        "give --mjcf FILE and/or --urdf FILE"
+    );
+    if let Some(p) = &a.mjcf {
+        physid::io::write_atomic(p, physid::io::mjcf::to_string(&m).as_bytes())?;
+        eprintln!("wrote {}", p.display());
+    }
+    if let Some(p) = &a.urdf {
+        physid::io::write_atomic(p, physid::io::urdf::to_string(&m).as_bytes())?;
+        eprintln!("wrote {}", p.display());
+    }
+    Ok(())
+}
