@@ -4,17 +4,25 @@
 //! The method is Wensing, Kim & Slotine, "Linear Matrix Inequalities for Physically-Consistent
 //! Inertial Parameter Identification" (RA-L 2018).
 //!
-//! Data flows `io → model → spatial/dynamics → sim | ident → experiment → diagnose → io`:
-//! - [`spatial`]: Featherstone's spatial algebra and the inertial parameters `π` with their
-//!   consistency conditions;
-//! - [`model`]: the immutable robot model (tree, joints, rotors, friction, ellipsoids), the
-//!   built-in Cheetah-3 leg;
-//! - [`dynamics`]: RNEA, CRBA, forward dynamics, the regressor, energy and kinematics;
-//! - [`sim`]: scenario files, the closed-loop excitation simulator, signal processing, rapier;
-//! - [`ident`]: identification under the paper's four constraint sets with Clarabel;
-//! - [`experiment`]: the validation-error-versus-sample-size experiment, in parallel;
-//! - [`diagnose`]: where the residual of a model lies (sim-to-real gap, in progress);
-//! - [`io`]: robot descriptions (URDF, TOML) in, MJCF/URDF out, MCAP and CSV logs.
+//! The crate is built in floors; each module imports only from the floors below its own
+//! (checked by `tests/layering.rs`; docs/architecture.md §6):
+//!
+//! 1. [`spatial`] (Featherstone's spatial algebra, the inertial parameters `π` with `I(π)`,
+//!    `J(π)` and the ellipsoid conditions), [`signal`] (filters, differentiation), [`linalg`]
+//!    (scaling, least squares, minimum-norm solves), [`trajectory`] (joint time series,
+//!    recordings, sample rate, hold-out split, concatenation);
+//! 2. [`model`]: the immutable robot (tree, joints, rotors with their armature, friction,
+//!    limits, ellipsoids), the built-in Cheetah-3 leg;
+//! 3. [`io`] (URDF, robot TOML, MJCF, CSV, MCAP, plot style) and [`dynamics`] (RNEA, CRBA,
+//!    forward dynamics, the regressor `Y θ` of the paper's eq. 9, energy, kinematics);
+//! 4. [`sim`] (scenarios, the closed-loop ground-truth simulator, rapier) and [`ident`] (the
+//!    four constraint sets of the paper's eq. 10, solved with Clarabel from samples, never
+//!    from files);
+//! 5. [`diagnose`]: the sim-to-real diagnosis as named steps (breakdown, selection, the
+//!    description test, magnitudes, gap, verdict);
+//! 6. [`experiment`]: the sample-size experiment of the paper's last figure, sweeps, the blind
+//!    benchmark;
+//! 7. the `physid` binary (`src/cli`): one clap `Args` per command, errors printed once.
 #![warn(missing_docs)]
 
 pub mod diagnose;

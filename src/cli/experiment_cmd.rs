@@ -3,7 +3,7 @@
 use anyhow::Context;
 use physid::experiment::{self, plots, tables};
 use std::fmt::Write;
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 
 /// The sample-size experiment of a scenario file (its [experiment] table), in parallel.
 #[derive(clap::Args, Debug)]
@@ -64,6 +64,31 @@ pub fn run(a: Args) -> anyhow::Result<()> {
     tables::write_parquet(&out.join("summary.parquet"), &mut summary)?;
     tables::write_csv(&out.join("summary.csv"), &mut summary)?;
     let sets: Vec<&str> = spec.constraints.iter().map(|s| s.name()).collect();
+    let threads = pool.current_num_threads();
+    let md = summary_markdown(path, &spec, &summary, &sets, wall, threads)?;
+    physid::io::write_atomic(&out.join("summary.md"), md.as_bytes())?;
+    write_plots(&summary, &sets, out)?;
+    write_provenance(path, &text, &spec, out, threads, wall)?;
+    println!(
+        "{cells} cells in {wall:.1} s on {} threads; wrote {}/",
+        threads,
+        out.display()
+    );
+    let p = tables::pivot(&summary, "val_rms_median", &sets)?;
+    println!("median validation RMS (N m):\n{}", tables::markdown(&p));
+    Ok(())
+}
+
+/// `summary.md`: the pivots of the summary over sets and sizes.
+fn summary_markdown(
+    path: &Path,
+    spec: &experiment::ExperimentSpec,
+    summary: &polars::prelude::DataFrame,
+    sets: &[&str],
+    wall: f64,
+    threads: usize,
+) -> anyhow::Result<String> {
+    let cells = spec.seeds * spec.grid().len() * spec.constraints.len();
     let mut md = String::new();
     let _ = writeln!(
         md,
@@ -86,7 +111,7 @@ pub fn run(a: Args) -> anyhow::Result<()> {
         ),
     ];
     for (value, label) in iqr_tables {
-        let p = tables::pivot_with_iqr(&summary, value, &sets)?;
+        let p = tables::pivot_with_iqr(summary, value, sets)?;
         let _ = writeln!(md, "## {label}\n\n{}", tables::markdown(&p));
     }
     let plain_tables = [
@@ -97,7 +122,7 @@ pub fn run(a: Args) -> anyhow::Result<()> {
         ("solve_ms_median", "Solve time (ms), median"),
     ];
     for (value, label) in plain_tables {
-        let p = tables::pivot(&summary, value, &sets)?;
+        let p = tables::pivot(summary, value, sets)?;
         let _ = writeln!(md, "## {label}\n\n{}", tables::markdown(&p));
     }
     let _ = writeln!(
@@ -110,25 +135,45 @@ pub fn run(a: Args) -> anyhow::Result<()> {
         spec.seeds,
         spec.grid().len(),
         spec.constraints.len(),
-        pool.current_num_threads()
+        threads
     );
-    physid::io::write_atomic(&out.join("summary.md"), md.as_bytes())?;
+    Ok(md)
+}
+
+/// The validation-error and parameter-error plots.
+fn write_plots(
+    summary: &polars::prelude::DataFrame,
+    sets: &[&str],
+    out: &Path,
+) -> anyhow::Result<()> {
     plots::plot_vs_ns(
-        &summary,
+        summary,
         "val_rms",
-        &sets,
+        sets,
         "Validation error vs training samples (median, IQR band)",
         "validation RMS torque error [N m]",
         &out.join("validation_error.svg"),
     )?;
     plots::plot_vs_ns(
-        &summary,
+        summary,
         "j_err",
-        &sets,
+        sets,
         "Pseudo-inertia error vs training samples (median, IQR band)",
         "‖Ĵ − J‖ / ‖J‖ (mean over bodies)",
         &out.join("parameter_error.svg"),
     )?;
+    Ok(())
+}
+
+/// `provenance.json`: the scenario, seeds, git revision, versions, threads and wall time.
+fn write_provenance(
+    path: &Path,
+    text: &str,
+    spec: &experiment::ExperimentSpec,
+    out: &Path,
+    threads: usize,
+    wall: f64,
+) -> anyhow::Result<()> {
     let git = std::process::Command::new("git")
         .args(["rev-parse", "HEAD"])
         .output()
@@ -140,19 +185,12 @@ pub fn run(a: Args) -> anyhow::Result<()> {
         "scenario_file": path, "scenario": text, "experiment": spec,
         "seeds": (spec.first_seed..spec.first_seed + spec.seeds as u64).collect::<Vec<_>>(),
         "git_revision": git, "physid_version": env!("CARGO_PKG_VERSION"), "dependencies": dependency_versions(),
-        "threads": pool.current_num_threads(), "wall_seconds": wall,
+        "threads": threads, "wall_seconds": wall,
     });
     physid::io::write_atomic(
         &out.join("provenance.json"),
         serde_json::to_string_pretty(&prov)?.as_bytes(),
     )?;
-    println!(
-        "{cells} cells in {wall:.1} s on {} threads; wrote {}/",
-        pool.current_num_threads(),
-        out.display()
-    );
-    let p = tables::pivot(&summary, "val_rms_median", &sets)?;
-    println!("median validation RMS (N m):\n{}", tables::markdown(&p));
     Ok(())
 }
 

@@ -141,18 +141,7 @@ pub struct Args {
 
 /// Runs the identification and prints the report.
 pub fn run(a: Args) -> anyhow::Result<()> {
-    let mut opts = Options::new(a.constraints);
-    opts.prior_weight = a.prior_weight;
-    opts.eps = a.eps;
-    opts.regularizer = a.regularizer;
-    opts.validate().map_err(|e| match e {
-        ident::IdentError::InvalidOption {
-            option,
-            expected,
-            value,
-        } => super::flag_error(option, expected, value),
-        e => e.into(),
-    })?;
+    let opts = options(&a)?;
     let model = a.robot.load()?;
     let m = &model;
     let tr = Data::open(&a.data, m)?;
@@ -190,79 +179,150 @@ pub fn run(a: Args) -> anyhow::Result<()> {
         Some((v, rg)) => Some(v.rms(m, &r.theta, rg)?),
         None => None,
     };
-    let idf = analysis::identifiability(m, &ne, &r.theta);
-    // Against the ground truth, when the data are a physid log that carries it.
-    let truth_errors = ground_truth(&a.data, m).map(|truth| {
+    let report = Report {
+        idf: analysis::identifiability(m, &ne, &r.theta),
+        truth_errors: truth_errors(&a.data, m, &r.theta),
+        r,
+        train,
+        train_rms,
+        train_all,
+        vrange,
+        val,
+        total,
+    };
+    if let Some(p) = &a.out_urdf {
+        write_urdf(p, &a, m, &report.r)?;
+    }
+    if let Some(p) = &a.export_problem {
+        export_problem(p, &a, m, &ne, &prior, &opts, &report.r)?;
+    }
+    if a.json {
+        print_json(&a, m, &report)
+    } else {
+        print_text(&a, m, &report);
+        Ok(())
+    }
+}
+
+/// The identification's options from the flags, checked.
+fn options(a: &Args) -> anyhow::Result<Options> {
+    let mut opts = Options::new(a.constraints);
+    opts.prior_weight = a.prior_weight;
+    opts.eps = a.eps;
+    opts.regularizer = a.regularizer;
+    opts.validate().map_err(|e| match e {
+        ident::IdentError::InvalidOption {
+            option,
+            expected,
+            value,
+        } => super::flag_error(option, expected, value),
+        e => e.into(),
+    })?;
+    Ok(opts)
+}
+
+/// What one identification found, for the outputs.
+struct Report {
+    r: ident::Identified,
+    train: Range<usize>,
+    train_rms: Vec<f64>,
+    train_all: f64,
+    vrange: Option<Range<usize>>,
+    val: Option<(Vec<f64>, f64)>,
+    idf: analysis::Identifiability,
+    truth_errors: Option<Vec<serde_json::Value>>,
+    total: f64,
+}
+
+/// Per-body errors against the ground truth, when the data are a physid log that carries it.
+fn truth_errors(
+    data: &Path,
+    m: &Model,
+    theta: &nalgebra::DVector<f64>,
+) -> Option<Vec<serde_json::Value>> {
+    ground_truth(data, m).map(|truth| {
         let tm = m.with_parameters(&truth).expect("same layout");
-        let errs = physid::experiment::body_errors(&tm, &r.theta);
+        let errs = physid::experiment::body_errors(&tm, theta);
         physid::ident::bodies(m)
             .into_iter()
             .zip(errs)
             .map(|((name, _, _), e)| json!({"name": name, "mass_rel": e[0], "com_m": e[1], "inertia_rel": e[2], "j_rel": e[3]}))
             .collect::<Vec<_>>()
+    })
+}
+
+/// Writes the identified model as URDF, warning when its inertias are not consistent.
+fn write_urdf(p: &Path, a: &Args, m: &Model, r: &ident::Identified) -> anyhow::Result<()> {
+    let im = m.with_parameters(&r.theta)?;
+    physid::io::write_atomic(p, physid::io::urdf::to_string(&im).as_bytes())?;
+    if !r.constraints_hold || !ident::constraints_hold(m, &r.theta, ConstraintSet::Consistent) {
+        eprintln!(
+            "warning: {} holds physically inconsistent inertias (identified with '{}')",
+            p.display(),
+            a.constraints.name()
+        );
+    }
+    Ok(())
+}
+
+/// The problem as data, for independent solvers (scripts/check_cvxpy.py): the objective
+/// `θᵀ H θ − 2 gᵀ θ + c` as identification builds it ([`ident::objective`]) and, per body, its
+/// parameter columns and ellipsoid.
+fn export_problem(
+    p: &Path,
+    a: &Args,
+    m: &Model,
+    ne: &NormalEquations,
+    prior: &nalgebra::DVector<f64>,
+    opts: &Options,
+    r: &ident::Identified,
+) -> anyhow::Result<()> {
+    let ident::Objective { h, g, c } = ident::objective(m, ne, prior, opts);
+    let rows: Vec<Vec<f64>> = h.row_iter().map(|r| r.iter().copied().collect()).collect();
+    let bodies: Vec<_> = ident::bodies(m)
+        .into_iter()
+        .map(|(name, col, e)| json!({"name": name, "col": col, "ellipsoid": e.map(|e| json!({"center": e.center.as_slice(), "qs": e.qs.as_slice()}))}))
+        .collect();
+    let l = m.layout();
+    let v = json!({
+        "constraints": a.constraints, "eps": a.eps, "H": rows, "g": g.as_slice(), "c": c,
+        "regularizer": a.regularizer, "w": a.prior_weight, "prior": prior.as_slice(),
+        "bodies": bodies, "friction_cols": (l.viscous_col..l.len).collect::<Vec<_>>(),
+        "physid": {"objective": r.objective, "theta": r.theta.as_slice(), "status": r.solver.status},
     });
-    if let Some(p) = &a.out_urdf {
-        let im = m.with_parameters(&r.theta)?;
-        physid::io::write_atomic(p, physid::io::urdf::to_string(&im).as_bytes())?;
-        if !r.constraints_hold || !ident::constraints_hold(m, &r.theta, ConstraintSet::Consistent) {
-            eprintln!(
-                "warning: {} holds physically inconsistent inertias (identified with '{}')",
-                p.display(),
-                a.constraints.name()
-            );
-        }
-    }
-    let names = m.parameter_names();
-    if let Some(p) = &a.export_problem {
-        // The problem as data, for independent solvers (scripts/check_cvxpy.py): the objective
-        // θᵀ H θ − 2 gᵀ θ + c and, per body, its parameter columns and ellipsoid.
-        let ns = ne.samples as f64;
-        let logdet = a.regularizer == ident::Regularizer::LogDet;
-        let first_friction = m.layout().viscous_col;
-        let wi = |i: usize| {
-            if !logdet || i >= first_friction {
-                a.prior_weight
-            } else {
-                0.0
-            }
-        };
-        let mut h = &ne.yty / ns;
-        let mut g = &ne.ytt / ns;
-        let mut c = ne.tt / ns;
-        for i in 0..h.nrows() {
-            h[(i, i)] += wi(i);
-            g[i] += wi(i) * prior[i];
-            c += wi(i) * prior[i] * prior[i];
-        }
-        let rows: Vec<Vec<f64>> = h.row_iter().map(|r| r.iter().copied().collect()).collect();
-        let bodies: Vec<_> = ident::bodies(m)
-            .into_iter()
-            .map(|(name, col, e)| json!({"name": name, "col": col, "ellipsoid": e.map(|e| json!({"center": e.center.as_slice(), "qs": e.qs.as_slice()}))}))
-            .collect();
-        let l = m.layout();
-        let v = json!({
-            "constraints": a.constraints, "eps": a.eps, "H": rows, "g": g.as_slice(), "c": c,
-            "regularizer": a.regularizer, "w": a.prior_weight, "prior": prior.as_slice(),
-            "bodies": bodies, "friction_cols": (l.viscous_col..l.len).collect::<Vec<_>>(),
-            "physid": {"objective": r.objective, "theta": r.theta.as_slice(), "status": r.solver.status},
-        });
-        physid::io::write_atomic(p, serde_json::to_string(&v)?.as_bytes())?;
-    }
-    if a.json {
-        let v = json!({
-            "data": a.data, "robot": m.name, "constraints": a.constraints,
-            "train": { "range": [train.start, train.end], "rms": train_rms, "rms_overall": train_all },
-            "validation": val.as_ref().map(|(rms, all)| json!({ "range": vrange.as_ref().map(|r| [r.start, r.end]), "rms": rms, "rms_overall": all })),
-            "bodies": r.bodies, "friction": { "viscous": r.viscous, "coulomb": r.coulomb },
-            "objective": r.objective, "constraints_hold": r.constraints_hold,
-            "solver": r.solver, "end_to_end_seconds": total,
-            "identifiability": idf,
-            "parameter_names": names, "theta": r.theta.as_slice(),
-            "truth_errors": truth_errors,
-        });
-        println!("{}", serde_json::to_string_pretty(&v)?);
-        return Ok(());
-    }
+    physid::io::write_atomic(p, serde_json::to_string(&v)?.as_bytes())?;
+    Ok(())
+}
+
+/// The JSON report (docs/identify-json.md).
+fn print_json(a: &Args, m: &Model, rep: &Report) -> anyhow::Result<()> {
+    let r = &rep.r;
+    let v = json!({
+        "data": a.data, "robot": m.name, "constraints": a.constraints,
+        "train": { "range": [rep.train.start, rep.train.end], "rms": rep.train_rms, "rms_overall": rep.train_all },
+        "validation": rep.val.as_ref().map(|(rms, all)| json!({ "range": rep.vrange.as_ref().map(|r| [r.start, r.end]), "rms": rms, "rms_overall": all })),
+        "bodies": r.bodies, "friction": { "viscous": r.viscous, "coulomb": r.coulomb },
+        "objective": r.objective, "constraints_hold": r.constraints_hold,
+        "solver": r.solver, "end_to_end_seconds": rep.total,
+        "identifiability": rep.idf,
+        "parameter_names": m.parameter_names(), "theta": r.theta.as_slice(),
+        "truth_errors": rep.truth_errors,
+    });
+    println!("{}", serde_json::to_string_pretty(&v)?);
+    Ok(())
+}
+
+/// The text report: bodies, friction, errors, consistency, identifiability, truth.
+fn print_text(a: &Args, m: &Model, rep: &Report) {
+    let (r, idf, train, train_rms, train_all, val) = (
+        &rep.r,
+        &rep.idf,
+        &rep.train,
+        &rep.train_rms,
+        rep.train_all,
+        &rep.val,
+    );
+    let (names, total, truth_errors) = (m.parameter_names(), rep.total, &rep.truth_errors);
     println!(
         "{}: '{}' on samples {}..{} of {} ({} parameters), {} in {:.1} ms ({} iterations, {:.1} ms end to end)",
         m.name,
@@ -352,7 +412,6 @@ pub fn run(a: Args) -> anyhow::Result<()> {
             );
         }
     }
-    Ok(())
 }
 
 /// The ground-truth θ in a physid MCAP's metadata, if its parameter names match the model's.

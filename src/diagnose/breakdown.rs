@@ -40,7 +40,7 @@ fn terciles(v: &[f64]) -> (f64, f64) {
     (at(1.0 / 3.0), at(2.0 / 3.0))
 }
 
-/// Breaks the residual `res` (sample-major, as from [`residuals`]) of samples `range` of `tr`
+/// Breaks the residual `res` (sample-major, as from [`super::residuals`]) of samples `range` of `tr`
 /// down per joint and regime. Regimes per joint: near-zero velocity (`|q̇|` below 5 % of its
 /// peak), reversals (a velocity sign change within ±10 samples), `|q̇|`, `|q̈|` and `|τ|` in
 /// terciles, and `q` in quartiles.

@@ -1,7 +1,7 @@
 //! Sim-to-real gap diagnosis: where the residual of a model lies, which unmodelled effect causes
 //! it, and how far it shrinks once modelled.
 //!
-//! - **Where** ([`breakdown`], [`spectrum`]): the validation residual `τ − Y θ̂₀` of the nominal
+//! - **Where** ([`mod@breakdown`], [`spectrum`]): the validation residual `τ − Y θ̂₀` of the nominal
 //!   constrained model per joint, per motion regime (near-zero velocity and reversals, speed,
 //!   acceleration and torque levels, configuration) and over frequency (spectrum, coherence with
 //!   the motion).
@@ -9,11 +9,14 @@
 //!   columns, scored by the cross-validated reduction of the error, forward selection with a
 //!   stopping rule; magnitudes with block-jackknife standard errors; effects the data cannot tell
 //!   apart reported together.
-//! - **How far**: per-joint validation RMS before and after each added effect, the fraction of
-//!   the gap to the noise floor ([`noise`]) closed, and whether something unexplained remains.
+//! - **Absorbed** ([`anchor`]): effects identification absorbs, tested against the description.
+//! - **How far** (`gap`): per-joint validation RMS before and after each added effect, the
+//!   fraction of the gap to the noise floor ([`noise`]) closed, whether each effect is confirmed
+//!   on the held-out data, and the verdict (`verdict`).
 //!
-//! [`diagnose`] runs all three on a training and a validation trajectory; [`blind`] is the
-//! benchmark on simulated data with withheld effects.
+//! [`diagnose`] runs the steps in that order on a training and a validation trajectory, over a
+//! shared `Stage` (the data, the nominal fit and the effect columns); [`diagnose_runs`] joins
+//! runs first. The blind benchmark that scores it is `experiment::blind`.
 
 pub mod anchor;
 pub mod breakdown;
@@ -102,32 +105,24 @@ impl Options {
         let cutoff = self.processing_cutoff;
         if !(cutoff.is_finite() && cutoff > 0.0) {
             return Err(invalid(
-                "the processing cutoff",
+                "processing_cutoff",
                 "a positive frequency in Hz",
                 cutoff,
             ));
         }
         if !(self.min_speed.is_finite() && self.min_speed >= 0.0) {
             return Err(invalid(
-                "the minimum speed",
+                "min_speed",
                 "a finite speed >= 0 (rad/s)",
                 self.min_speed,
             ));
         }
         if !(self.unexplained_ratio.is_finite() && self.unexplained_ratio >= 1.0) {
             let ratio = self.unexplained_ratio;
-            return Err(invalid(
-                "the unexplained ratio",
-                "a finite number >= 1",
-                ratio,
-            ));
+            return Err(invalid("unexplained_ratio", "a finite number >= 1", ratio));
         }
         if self.kinds.is_empty() {
-            return Err(invalid(
-                "the number of effect kinds offered",
-                "at least 1",
-                0.0,
-            ));
+            return Err(invalid("kinds", "at least one effect kind", 0.0));
         }
         Ok(())
     }

@@ -165,6 +165,17 @@ pub fn markdown(d: &Diagnosis) -> String {
         d.constraints.name(),
         d.nominal_constraints_hold
     );
+    s += &where_section(d);
+    s += &which_section(d);
+    s += &description_section(d);
+    s += &effects_section(d);
+    s += &how_far_section(d);
+    s
+}
+
+/// The Markdown "Where" section: residual per joint and regime, spectrum peaks.
+fn where_section(d: &Diagnosis) -> String {
+    let mut s = String::new();
     s += "## Where\n\nValidation residual of the nominal model per joint and regime (RMS in N m, share of the joint's residual energy). Plot: `where.svg`; spectrum: `spectrum.svg`.\n\n| joint | regime | samples | RMS | share |\n|---|---|---|---|---|\n";
     for r in &d.breakdown.regimes {
         s += &format!(
@@ -185,6 +196,12 @@ pub fn markdown(d: &Diagnosis) -> String {
                 .join(", ")
         );
     }
+    s
+}
+
+/// The "Which" section: the cross-validated selection, step by step.
+fn which_section(d: &Diagnosis) -> String {
+    let mut s = String::new();
     s += &format!(
         "\n## Which\n\nCross-validated forward selection over {} {} (nominal CV RMS {:.3} N m).\n\n",
         d.selection.blocks,
@@ -225,6 +242,12 @@ pub fn markdown(d: &Diagnosis) -> String {
         s += "\n";
     }
     s += &format!("Stopped: {}.\n\n", d.selection.stop);
+    s
+}
+
+/// The test against the description, when it ran.
+fn description_section(d: &Diagnosis) -> String {
+    let mut s = String::new();
     if let Some(t) = &d.description_test {
         s += &format!(
             "### Absorbed effects: the test against the description (stated uncertainty {:.0} %)\n\nResidual mean square {:.4} N² m², correlation time {:.1} samples.\n\n",
@@ -262,6 +285,12 @@ pub fn markdown(d: &Diagnosis) -> String {
         }
         s += &format!("Stopped: {}.\n\n", t.stop);
     }
+    s
+}
+
+/// Each selected effect with its magnitudes.
+fn effects_section(d: &Diagnosis) -> String {
+    let mut s = String::new();
     for e in &d.effects {
         s += &format!(
             "### `{}`{}: {}\n\n| joint | value | std. error | unit | identifiable |\n|---|---|---|---|---|\n",
@@ -288,6 +317,12 @@ pub fn markdown(d: &Diagnosis) -> String {
         }
         s += "\n";
     }
+    s
+}
+
+/// The "How far" section: validation RMS along the selection, the confirmed-only refit.
+fn how_far_section(d: &Diagnosis) -> String {
+    let mut s = String::new();
     s += "## How far\n\nValidation RMS per joint (N m), nominal then after each effect (cumulative); plot `how_far.svg`.\n\n| joint | nominal |";
     for st in &d.selection.steps {
         s += &format!(" + {} |", st.kind.name());

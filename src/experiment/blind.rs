@@ -134,9 +134,7 @@ fn signed(rng: &mut ChaCha8Rng, lo: f64, hi: f64) -> f64 {
 /// friction parameters and leave a residual below the 0.3 N m torque noise.
 pub fn draw(kind: Option<Kind>, model: &Model, rng: &mut ChaCha8Rng, rate: f64) -> Injected {
     let n = model.dof();
-    let per = |rng: &mut ChaCha8Rng, lo: f64, hi: f64| -> Vec<f64> {
-        (0..n).map(|_| uniform(rng, lo, hi)).collect()
-    };
+    let per = |rng: &mut ChaCha8Rng, lo: f64, hi: f64| per_joint(rng, n, lo, hi);
     let Some(kind) = kind else {
         let c = per(rng, 0.5, 1.5);
         return Injected {
@@ -165,28 +163,7 @@ pub fn draw(kind: Option<Kind>, model: &Model, rng: &mut ChaCha8Rng, rate: f64) 
                 vec![samples as f64 / rate],
             )
         }
-        Kind::Spring => {
-            let k = per(rng, 3.0, 10.0);
-            let rest = model
-                .bodies
-                .iter()
-                .map(|b| {
-                    let mid = if b.limits.lower.is_finite() && b.limits.upper.is_finite() {
-                        0.5 * (b.limits.lower + b.limits.upper)
-                    } else {
-                        0.0
-                    };
-                    mid + uniform(rng, -0.3, 0.3)
-                })
-                .collect();
-            (
-                Some(EffectSpec::Spring {
-                    stiffness: k.clone(),
-                    rest,
-                }),
-                k,
-            )
-        }
+        Kind::Spring => draw_spring(model, rng),
         Kind::Stribeck => {
             let fs = per(rng, 0.5, 2.0);
             let v = uniform(rng, 0.1, 0.4);
@@ -211,19 +188,7 @@ pub fn draw(kind: Option<Kind>, model: &Model, rng: &mut ChaCha8Rng, rate: f64) 
                 mu,
             )
         }
-        Kind::Cogging => {
-            let a = per(rng, 0.2, 0.8);
-            let h = rng.random_range(1..=8u32) as f64;
-            let phase = per(rng, 0.0, std::f64::consts::TAU);
-            (
-                Some(EffectSpec::Cogging {
-                    amplitude: a.clone(),
-                    harmonic: vec![h; n],
-                    phase,
-                }),
-                a,
-            )
-        }
+        Kind::Cogging => draw_cogging(model, rng),
         Kind::RotorInertia => {
             let m = model
                 .bodies
@@ -233,36 +198,8 @@ pub fn draw(kind: Option<Kind>, model: &Model, rng: &mut ChaCha8Rng, rate: f64) 
                 .collect();
             (None, m)
         }
-        Kind::Tilt => {
-            let angle = uniform(rng, 0.2, 0.35);
-            let dir = uniform(rng, 0.0, std::f64::consts::TAU);
-            (
-                Some(EffectSpec::Tilt {
-                    roll: angle * dir.cos(),
-                    pitch: angle * dir.sin(),
-                }),
-                vec![angle],
-            )
-        }
-        Kind::Payload => {
-            // A 0.3–1 kg sphere of 3 cm radius between the middle and the far end of the last
-            // body (taken as twice its bounding ellipsoid's centre from the joint).
-            let mass = uniform(rng, 0.3, 1.0);
-            let last = &model.bodies[n - 1];
-            let tip = last
-                .bounding
-                .as_ref()
-                .map_or(Vector3::zeros(), |e| e.center * 2.0);
-            let s = uniform(rng, 0.5, 1.0);
-            (
-                Some(EffectSpec::Payload {
-                    mass,
-                    com: [s * tip.x, s * tip.y, s * tip.z],
-                    radius: 0.03,
-                }),
-                vec![mass],
-            )
-        }
+        Kind::Tilt => draw_tilt(rng),
+        Kind::Payload => draw_payload(model, rng),
         Kind::Compliance => {
             let k = per(rng, 300.0, 1000.0);
             let kappa = k.iter().map(|k| 1.0 / k).collect();
@@ -274,6 +211,88 @@ pub fn draw(kind: Option<Kind>, model: &Model, rng: &mut ChaCha8Rng, rate: f64) 
         spec,
         magnitudes,
     }
+}
+
+/// `n` independent uniform draws in `[lo, hi)`.
+fn per_joint(rng: &mut ChaCha8Rng, n: usize, lo: f64, hi: f64) -> Vec<f64> {
+    (0..n).map(|_| uniform(rng, lo, hi)).collect()
+}
+
+/// A spring per joint: stiffness 3–10 N m/rad about a rest angle within ±0.3 rad of
+/// the middle of the joint range.
+fn draw_spring(model: &Model, rng: &mut ChaCha8Rng) -> (Option<EffectSpec>, Vec<f64>) {
+    let n = model.dof();
+    let k = per_joint(rng, n, 3.0, 10.0);
+    let rest = model
+        .bodies
+        .iter()
+        .map(|b| {
+            let mid = if b.limits.lower.is_finite() && b.limits.upper.is_finite() {
+                0.5 * (b.limits.lower + b.limits.upper)
+            } else {
+                0.0
+            };
+            mid + uniform(rng, -0.3, 0.3)
+        })
+        .collect();
+    (
+        Some(EffectSpec::Spring {
+            stiffness: k.clone(),
+            rest,
+        }),
+        k,
+    )
+}
+
+/// Cogging of amplitude 0.2–0.8 N m at one harmonic 1–8 of N q, random phases.
+fn draw_cogging(model: &Model, rng: &mut ChaCha8Rng) -> (Option<EffectSpec>, Vec<f64>) {
+    let n = model.dof();
+    let a = per_joint(rng, n, 0.2, 0.8);
+    let h = rng.random_range(1..=8u32) as f64;
+    let phase = per_joint(rng, n, 0.0, std::f64::consts::TAU);
+    (
+        Some(EffectSpec::Cogging {
+            amplitude: a.clone(),
+            harmonic: vec![h; n],
+            phase,
+        }),
+        a,
+    )
+}
+
+/// A base tilt of 0.2–0.35 rad in a random direction.
+fn draw_tilt(rng: &mut ChaCha8Rng) -> (Option<EffectSpec>, Vec<f64>) {
+    let angle = uniform(rng, 0.2, 0.35);
+    let dir = uniform(rng, 0.0, std::f64::consts::TAU);
+    (
+        Some(EffectSpec::Tilt {
+            roll: angle * dir.cos(),
+            pitch: angle * dir.sin(),
+        }),
+        vec![angle],
+    )
+}
+
+/// A 0.3–1 kg payload on the last body.
+fn draw_payload(model: &Model, rng: &mut ChaCha8Rng) -> (Option<EffectSpec>, Vec<f64>) {
+    let n = model.dof();
+    // A 0.3–1 kg sphere of 3 cm radius between the middle and the far end of the last
+    // body (taken as twice its bounding ellipsoid's centre from the joint).
+    let mass = uniform(rng, 0.3, 1.0);
+    let last = &model.bodies[n - 1];
+    let tip = last
+        .bounding
+        .as_ref()
+        .map_or(Vector3::zeros(), |e| e.center * 2.0);
+    let s = uniform(rng, 0.5, 1.0);
+    (
+        Some(EffectSpec::Payload {
+            mass,
+            com: [s * tip.x, s * tip.y, s * tip.z],
+            radius: 0.03,
+        }),
+        vec![mass],
+    )
 }
 
 /// Clean slots at the start of each cycle of categories.
@@ -442,24 +461,10 @@ fn magnitude_error(d: &Diagnosis, kind: Kind, truth: &[f64]) -> Option<f64> {
 /// same uncertainty unless said otherwise.
 pub const DESCRIPTION_ERROR: f64 = 0.1;
 
-/// Runs case `i` of the benchmark with base scenario `base` and its robot `model`, writing its
-/// files into `dir`. The description given to the diagnosis carries inertial-parameter errors
-/// of relative size `description_error` (0: the simulated robot's own parameters), drawn from
-/// their own random stream.
-pub fn run_case(
-    i: usize,
-    seed: u64,
-    base: &Scenario,
-    model: &Model,
-    description_error: f64,
-    opts: &diagnose::Options,
-    dir: &Path,
-) -> Result<CaseResult, BlindError> {
-    let io_err = |source| BlindError::Io { case: i, source };
-    let diag_err = |source| BlindError::Diagnose { case: i, source };
+/// Case `i`'s category and the effects drawn for it (from the case's own random stream).
+fn injections(i: usize, seed: u64, model: &Model, rate: f64) -> (Category, Vec<Injected>) {
     let mut rng = ChaCha8Rng::seed_from_u64(seed);
     rng.set_stream(i as u64);
-    let rate = base.simulation.rate;
     let (category, slot) = category(i);
     let injected: Vec<Injected> = match category {
         Category::Clean => vec![],
@@ -484,6 +489,49 @@ pub fn run_case(
         }
         Category::OutOfLibrary => vec![draw(None, model, &mut rng, rate)],
     };
+    (category, injected)
+}
+
+/// The description the user gives for case `i`: without the rotors' spin when their inertia
+/// is left out (their mass frozen into the bodies they sit on), with errors of relative size
+/// `description_error` in its inertial parameters (from their own random stream).
+fn description(
+    i: usize,
+    seed: u64,
+    model: &Model,
+    injected: &[Injected],
+    description_error: f64,
+) -> Model {
+    let exact = if injected.iter().any(|x| x.kind == Some(Kind::RotorInertia)) {
+        model.with_rotors_frozen()
+    } else {
+        model.clone()
+    };
+    if description_error > 0.0 {
+        let mut drng = ChaCha8Rng::seed_from_u64(seed ^ 0x00de_5c41_b710);
+        drng.set_stream(i as u64);
+        diagnose::anchor::perturbed_description(&exact, description_error, &mut drng)
+    } else {
+        exact
+    }
+}
+
+/// Runs case `i` of the benchmark with base scenario `base` and its robot `model`, writing its
+/// files into `dir`. The description given to the diagnosis carries inertial-parameter errors
+/// of relative size `description_error` (0: the simulated robot's own parameters), drawn from
+/// their own random stream.
+pub fn run_case(
+    i: usize,
+    seed: u64,
+    base: &Scenario,
+    model: &Model,
+    description_error: f64,
+    opts: &diagnose::Options,
+    dir: &Path,
+) -> Result<CaseResult, BlindError> {
+    let io_err = |source| BlindError::Io { case: i, source };
+    let diag_err = |source| BlindError::Diagnose { case: i, source };
+    let (category, injected) = injections(i, seed, model, base.simulation.rate);
     let mut sc = base.clone();
     sc.simulation.seed = seed.wrapping_mul(1_000_003).wrapping_add(i as u64);
     sc.effects = injected.iter().filter_map(|x| x.spec.clone()).collect();
@@ -495,20 +543,7 @@ pub fn run_case(
             twin: false,
             source,
         })?;
-    // The description the user gives: without the rotors' spin when their inertia is left out
-    // (their mass frozen into the bodies they sit on), with errors in its inertial parameters.
-    let exact = if injected.iter().any(|x| x.kind == Some(Kind::RotorInertia)) {
-        model.with_rotors_frozen()
-    } else {
-        model.clone()
-    };
-    let description = if description_error > 0.0 {
-        let mut drng = ChaCha8Rng::seed_from_u64(seed ^ 0x00de_5c41_b710);
-        drng.set_stream(i as u64);
-        diagnose::anchor::perturbed_description(&exact, description_error, &mut drng)
-    } else {
-        exact
-    };
+    let description = description(i, seed, model, &injected, description_error);
     // The benchmark's own yardstick (the diagnosis never sees it): how much the effect raises
     // the nominal model's validation error over the same experiment without it.
     let visible_gap = if injected.is_empty() {

@@ -245,6 +245,49 @@ impl Options {
     }
 }
 
+/// The quadratic part of the identification objective, `θᵀ H θ − 2 gᵀ θ + c` with
+/// `H = YᵀY/n_s + W`, `g = Yᵀτ/n_s + W θ̂`, `c = τᵀτ/n_s + θ̂ᵀ W θ̂` (`W = w 1`; under the
+/// log-det regularizer `W` weighs only the friction coefficients). What independent solvers
+/// are given to check physid's optimum (`identify --export-problem`).
+#[derive(Clone, Debug)]
+pub struct Objective {
+    /// `H` (p × p).
+    pub h: DMatrix<f64>,
+    /// `g` (p).
+    pub g: DVector<f64>,
+    /// `c`.
+    pub c: f64,
+}
+
+/// The objective's quadratic part for `ne` with `prior` and `opts` (see [`Objective`]).
+pub fn objective(
+    model: &Model,
+    ne: &NormalEquations,
+    prior: &DVector<f64>,
+    opts: &Options,
+) -> Objective {
+    let m = ne.samples as f64;
+    let logdet = opts.regularizer == Regularizer::LogDet;
+    // The Euclidean prior weight applies to every parameter, or only to friction under log-det.
+    let first_friction = model.layout().viscous_col;
+    let w = |i: usize| {
+        if !logdet || i >= first_friction {
+            opts.prior_weight
+        } else {
+            0.0
+        }
+    };
+    let mut h = &ne.yty / m;
+    let mut g = &ne.ytt / m;
+    let mut c = ne.tt / m;
+    for i in 0..h.nrows() {
+        h[(i, i)] += w(i);
+        g[i] += w(i) * prior[i];
+        c += w(i) * prior[i] * prior[i];
+    }
+    Objective { h, g, c }
+}
+
 /// Solver information.
 #[derive(Clone, Debug, Serialize)]
 pub struct SolverInfo {
@@ -360,26 +403,8 @@ pub fn identify(
             params: p,
         });
     }
-    let m = ns as f64;
     let logdet = opts.regularizer == Regularizer::LogDet;
-    // The Euclidean prior weight applies to every parameter, or only to friction under log-det.
-    let l = model.layout();
-    let euclid_w = |i: usize| {
-        if !logdet || i >= l.viscous_col {
-            w
-        } else {
-            0.0
-        }
-    };
-    // H = YᵀY/n_s + W (the objective's Hessian / 2), g = Yᵀτ/n_s + W θ̂.
-    let mut h = &ne.yty / m;
-    let mut g = &ne.ytt / m;
-    let mut constant = ne.tt / m;
-    for i in 0..p {
-        h[(i, i)] += euclid_w(i);
-        g[i] += euclid_w(i) * prior[i];
-        constant += euclid_w(i) * prior[i] * prior[i];
-    }
+    let Objective { h, g, c: constant } = objective(model, ne, prior, opts);
     let start = std::time::Instant::now();
     if let Some(&c) = opts.nonnegative.iter().find(|&&c| c >= p) {
         return Err(IdentError::NonNegativeColumn {

@@ -223,55 +223,8 @@ pub fn from_spec(spec: &RobotSpec, path: &Path) -> Result<Model, IoError> {
     } else {
         let mut bodies: Vec<Body> = vec![];
         for (k, b) in spec.body.iter().enumerate() {
-            let what = format!("robot.body[{k}] '{}'", b.name);
-            let e = |m: String| IoError::invalid(path, m);
-            let parent = match b.parent.as_str() {
-                "base" => None,
-                p => Some(bodies.iter().position(|x| x.name == p).ok_or_else(|| {
-                    e(format!(
-                        "{what}: parent '{p}' is not 'base' or an earlier body"
-                    ))
-                })?),
-            };
-            let axis = Vector3::from(b.axis);
-            let joint = match b.joint_type.as_str() {
-                "revolute" => Joint::Revolute { axis },
-                "prismatic" => Joint::Prismatic { axis },
-                t => {
-                    return Err(e(format!(
-                        "{what}: type '{t}' is not 'revolute' or 'prismatic'"
-                    )))
-                }
-            };
-            let l = b.limits.clone().unwrap_or_default();
-            let d = JointLimits::default();
-            bodies.push(Body {
-                name: b.name.clone(),
-                joint_name: b.joint.clone(),
-                parent,
-                joint,
-                x_tree: b.origin.transform(),
-                inertia: b.inertial.params(&what).map_err(e)?,
-                bounding: b
-                    .ellipsoid
-                    .as_ref()
-                    .map(|x| x.ellipsoid(&what))
-                    .transpose()
-                    .map_err(e)?,
-                rotor: b
-                    .rotor
-                    .as_ref()
-                    .map(|r| rotor_from_spec(r, &b.joint, axis, &Transform::identity()))
-                    .transpose()
-                    .map_err(e)?,
-                friction: b.friction.unwrap_or_default(),
-                limits: JointLimits {
-                    lower: l.lower.unwrap_or(d.lower),
-                    upper: l.upper.unwrap_or(d.upper),
-                    velocity: l.velocity.unwrap_or(d.velocity),
-                    effort: l.effort.unwrap_or(d.effort),
-                },
-            });
+            let body = body_from_spec(k, b, &bodies, path)?;
+            bodies.push(body);
         }
         let ident = vec![Transform::identity(); bodies.len()];
         extras.apply(&mut bodies, &ident, path)?;
@@ -291,4 +244,57 @@ pub fn from_spec(spec: &RobotSpec, path: &Path) -> Result<Model, IoError> {
             format!("robot.ellipsoid_scale: {s} must be > 0"),
         )),
     }
+}
+
+/// Body `k` of an explicit tree; its parent must be `base` or one of the `earlier` bodies.
+fn body_from_spec(k: usize, b: &BodySpec, earlier: &[Body], path: &Path) -> Result<Body, IoError> {
+    let what = format!("robot.body[{k}] '{}'", b.name);
+    let e = |m: String| IoError::invalid(path, m);
+    let parent = match b.parent.as_str() {
+        "base" => None,
+        p => Some(earlier.iter().position(|x| x.name == p).ok_or_else(|| {
+            e(format!(
+                "{what}: parent '{p}' is not 'base' or an earlier body"
+            ))
+        })?),
+    };
+    let axis = Vector3::from(b.axis);
+    let joint = match b.joint_type.as_str() {
+        "revolute" => Joint::Revolute { axis },
+        "prismatic" => Joint::Prismatic { axis },
+        t => {
+            return Err(e(format!(
+                "{what}: type '{t}' is not 'revolute' or 'prismatic'"
+            )))
+        }
+    };
+    let l = b.limits.clone().unwrap_or_default();
+    let d = JointLimits::default();
+    Ok(Body {
+        name: b.name.clone(),
+        joint_name: b.joint.clone(),
+        parent,
+        joint,
+        x_tree: b.origin.transform(),
+        inertia: b.inertial.params(&what).map_err(e)?,
+        bounding: b
+            .ellipsoid
+            .as_ref()
+            .map(|x| x.ellipsoid(&what))
+            .transpose()
+            .map_err(e)?,
+        rotor: b
+            .rotor
+            .as_ref()
+            .map(|r| rotor_from_spec(r, &b.joint, axis, &Transform::identity()))
+            .transpose()
+            .map_err(e)?,
+        friction: b.friction.unwrap_or_default(),
+        limits: JointLimits {
+            lower: l.lower.unwrap_or(d.lower),
+            upper: l.upper.unwrap_or(d.upper),
+            velocity: l.velocity.unwrap_or(d.velocity),
+            effort: l.effort.unwrap_or(d.effort),
+        },
+    })
 }

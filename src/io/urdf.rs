@@ -114,8 +114,38 @@ pub fn from_str(
         path: path.to_path_buf(),
         message: format!("not a valid URDF: {e}"),
     })?;
-    let bad = |m: String| IoError::invalid(path, m);
+    let link_idx = link_index(&robot, path)?;
+    let (children, root) = tree(&robot, &link_idx, path)?;
+    let Walk {
+        mut bodies,
+        body_parent_link_x,
+        mimics,
+    } = walk(&robot, &link_idx, &children, root, path)?;
+    attach_rotors(&mut bodies, mimics, path)?;
+    extras.apply(&mut bodies, &body_parent_link_x, path)?;
+    check_subtree_masses(&bodies, path)?;
+    let gravity = extras
+        .gravity
+        .map_or(Vector3::new(0.0, 0.0, -STANDARD_GRAVITY), Vector3::from);
+    let model = Model::new(robot.name.clone(), bodies, gravity)
+        .map_err(|source| IoError::Model {
+            path: path.to_path_buf(),
+            source,
+        })?
+        .with_rotor_model(extras.rotor_model.unwrap_or_default());
+    model.check_physical().map_err(|source| IoError::Model {
+        path: path.to_path_buf(),
+        source,
+    })?;
+    Ok((model, warnings))
+}
 
+/// Link name → index; every link defined once with a finite non-negative mass.
+fn link_index<'r>(
+    robot: &'r urdf_rs::Robot,
+    path: &Path,
+) -> Result<HashMap<&'r str, usize>, IoError> {
+    let bad = |m: String| IoError::invalid(path, m);
     let mut link_idx = HashMap::new();
     for (i, l) in robot.links.iter().enumerate() {
         if link_idx.insert(l.name.as_str(), i).is_some() {
@@ -129,6 +159,17 @@ pub fn from_str(
             )));
         }
     }
+    Ok(link_idx)
+}
+
+/// The joint tree: each link's child joints, and the one root link. Every joint names defined
+/// links; no link is the child of two joints.
+fn tree<'r>(
+    robot: &'r urdf_rs::Robot,
+    link_idx: &HashMap<&str, usize>,
+    path: &Path,
+) -> Result<(HashMap<&'r str, Vec<usize>>, &'r str), IoError> {
+    let bad = |m: String| IoError::invalid(path, m);
     // Each link has at most one parent joint; every joint names existing links.
     let mut parent_joint: HashMap<&str, usize> = HashMap::new();
     let mut children: HashMap<&str, Vec<usize>> = HashMap::new();
@@ -171,6 +212,38 @@ pub fn from_str(
         }
     };
 
+    Ok((children, root))
+}
+
+/// A mimic joint waiting to become the rotor of the joint it mimics: the joint, its mimic
+/// element, the body it is mounted on, its placement on that body, its inertial parameters.
+type PendingRotor<'r> = (
+    &'r urdf_rs::Joint,
+    &'r urdf_rs::Mimic,
+    Option<usize>,
+    Transform,
+    InertialParams,
+);
+
+/// The bodies found by walking the tree from the root.
+struct Walk<'r> {
+    bodies: Vec<Body>,
+    /// Per body: its parent link's frame from its parent body's frame.
+    body_parent_link_x: Vec<Transform>,
+    mimics: Vec<PendingRotor<'r>>,
+}
+
+/// Walks the joints in file order, each once its parent link is placed (a topological order
+/// that keeps the file's order where it already lists parents first): moving joints become
+/// bodies, fixed links are merged into their parent body, mimic joints are set aside as rotors.
+fn walk<'r>(
+    robot: &'r urdf_rs::Robot,
+    link_idx: &HashMap<&str, usize>,
+    children: &HashMap<&str, Vec<usize>>,
+    root: &'r str,
+    path: &Path,
+) -> Result<Walk<'r>, IoError> {
+    let bad = |m: String| IoError::invalid(path, m);
     // Joints in file order, each once its parent link is placed (a topological order that keeps
     // the file's order where it already lists parents first). attach[link] = (body index or None
     // for the base, link_X_body).
@@ -223,37 +296,7 @@ pub fn from_str(
                 attach.insert(child, (pb, x_origin));
                 continue;
             }
-            let lim = &jt.limit;
-            let inf_if_zero = |v: f64| if v > 0.0 { v } else { f64::INFINITY };
-            let (lower, upper) = match jt.joint_type {
-                T::Continuous => (f64::NEG_INFINITY, f64::INFINITY),
-                _ if lim.lower == 0.0 && lim.upper == 0.0 => (f64::NEG_INFINITY, f64::INFINITY),
-                _ => (lim.lower, lim.upper),
-            };
-            let friction =
-                jt.dynamics
-                    .as_ref()
-                    .map_or(JointFriction::default(), |d| JointFriction {
-                        viscous: d.damping,
-                        coulomb: d.friction,
-                    });
-            bodies.push(Body {
-                name: child.to_string(),
-                joint_name: jt.name.clone(),
-                parent: pb,
-                joint,
-                x_tree: x_origin,
-                inertia: child_params,
-                bounding: None,
-                rotor: None,
-                friction,
-                limits: JointLimits {
-                    lower,
-                    upper,
-                    velocity: inf_if_zero(lim.velocity),
-                    effort: inf_if_zero(lim.effort),
-                },
-            });
+            bodies.push(moving_body(jt, pb, joint, x_origin, child_params));
             body_parent_link_x.push(x_p);
             attach.insert(child, (Some(bodies.len() - 1), Transform::identity()));
         }
@@ -274,7 +317,64 @@ pub fn from_str(
         return Err(bad("the robot has no moving joints".to_string()));
     }
 
-    // Mimic joints become rotors.
+    Ok(Walk {
+        bodies,
+        body_parent_link_x,
+        mimics,
+    })
+}
+
+/// A moving joint's body: its child link's inertia, the joint's limits (0/0 or continuous:
+/// unlimited; a zero velocity or effort limit: unknown) and friction.
+fn moving_body(
+    jt: &urdf_rs::Joint,
+    parent: Option<usize>,
+    joint: Joint,
+    x_tree: Transform,
+    inertia: InertialParams,
+) -> Body {
+    use urdf_rs::JointType as T;
+    let lim = &jt.limit;
+    let inf_if_zero = |v: f64| if v > 0.0 { v } else { f64::INFINITY };
+    let (lower, upper) = match jt.joint_type {
+        T::Continuous => (f64::NEG_INFINITY, f64::INFINITY),
+        _ if lim.lower == 0.0 && lim.upper == 0.0 => (f64::NEG_INFINITY, f64::INFINITY),
+        _ => (lim.lower, lim.upper),
+    };
+    let friction = jt
+        .dynamics
+        .as_ref()
+        .map_or(JointFriction::default(), |d| JointFriction {
+            viscous: d.damping,
+            coulomb: d.friction,
+        });
+    Body {
+        name: jt.child.link.clone(),
+        joint_name: jt.name.clone(),
+        parent,
+        joint,
+        x_tree,
+        inertia,
+        bounding: None,
+        rotor: None,
+        friction,
+        limits: JointLimits {
+            lower,
+            upper,
+            velocity: inf_if_zero(lim.velocity),
+            effort: inf_if_zero(lim.effort),
+        },
+    }
+}
+
+/// Mimic joints become the rotors of the joints they mimic: mounted on that joint's parent
+/// body, no offset, one rotor per joint.
+fn attach_rotors(
+    bodies: &mut [Body],
+    mimics: Vec<PendingRotor>,
+    path: &Path,
+) -> Result<(), IoError> {
+    let bad = |m: String| IoError::invalid(path, m);
     for (jt, mimic, pb, x_rot, params) in mimics {
         let k = bodies
             .iter()
@@ -310,9 +410,12 @@ pub fn from_str(
         });
     }
 
-    extras.apply(&mut bodies, &body_parent_link_x, path)?;
+    Ok(())
+}
 
-    // A joint whose subtree (and rotor) has no mass cannot be accelerated.
+/// A joint whose subtree (and rotor) has no mass cannot be accelerated.
+fn check_subtree_masses(bodies: &[Body], path: &Path) -> Result<(), IoError> {
+    let bad = |m: String| IoError::invalid(path, m);
     let n = bodies.len();
     let mut subtree_mass: Vec<f64> = bodies
         .iter()
@@ -329,20 +432,7 @@ pub fn from_str(
             bodies[i].joint_name, bodies[i].name
         )));
     }
-    let gravity = extras
-        .gravity
-        .map_or(Vector3::new(0.0, 0.0, -STANDARD_GRAVITY), Vector3::from);
-    let model = Model::new(robot.name.clone(), bodies, gravity)
-        .map_err(|source| IoError::Model {
-            path: path.to_path_buf(),
-            source,
-        })?
-        .with_rotor_model(extras.rotor_model.unwrap_or_default());
-    model.check_physical().map_err(|source| IoError::Model {
-        path: path.to_path_buf(),
-        source,
-    })?;
-    Ok((model, warnings))
+    Ok(())
 }
 
 fn pose(x: &Transform) -> urdf_rs::Pose {

@@ -411,7 +411,20 @@ fn per_joint_non_negative(v: &[f64], n: usize, key: &str) -> Result<(), Scenario
 impl Scenario {
     /// Checks every value against the robot's joint count `n`.
     pub fn validate(&self, n: usize) -> Result<(), ScenarioError> {
-        let s = &self.simulation;
+        self.simulation.validate(n)?;
+        self.sensors.validate()?;
+        self.processing.validate(self.simulation.rate)?;
+        self.excitation.validate(n)?;
+        for (i, e) in self.effects.iter().enumerate() {
+            e.validate(i, n)?;
+        }
+        Ok(())
+    }
+}
+
+impl SimulationSpec {
+    fn validate(&self, n: usize) -> Result<(), ScenarioError> {
+        let s = self;
         positive(s.duration, "simulation.duration")?;
         positive(s.rate, "simulation.rate")?;
         check(s.substeps >= 1, "simulation.substeps", || {
@@ -428,7 +441,13 @@ impl Scenario {
         if let Some(q) = &s.initial_q {
             per_joint(q, n, "simulation.initial_q")?;
         }
-        let se = &self.sensors;
+        Ok(())
+    }
+}
+
+impl SensorSpec {
+    fn validate(&self) -> Result<(), ScenarioError> {
+        let se = self;
         non_negative(se.encoder_step, "sensors.encoder_step")?;
         non_negative(se.encoder_noise, "sensors.encoder_noise")?;
         non_negative(se.torque_noise, "sensors.torque_noise")?;
@@ -447,19 +466,32 @@ impl Scenario {
                 positive(*v, key)?;
             }
         }
-        let p = &self.processing;
+        Ok(())
+    }
+}
+
+impl ProcessingSpec {
+    /// Checks the filter against the sample `rate` (Hz).
+    fn validate(&self, rate: f64) -> Result<(), ScenarioError> {
+        let p = self;
         positive(p.cutoff, "processing.cutoff")?;
-        check(p.cutoff < 0.5 * s.rate, "processing.cutoff", || {
+        check(p.cutoff < 0.5 * rate, "processing.cutoff", || {
             format!(
                 "{} Hz must be below the Nyquist frequency {} Hz",
                 p.cutoff,
-                0.5 * s.rate
+                0.5 * rate
             )
         })?;
         check((1..=8).contains(&p.order), "processing.order", || {
             format!("{} must be 1 to 8", p.order)
         })?;
-        match &self.excitation {
+        Ok(())
+    }
+}
+
+impl ExcitationSpec {
+    fn validate(&self, n: usize) -> Result<(), ScenarioError> {
+        match self {
             ExcitationSpec::Shell {
                 radii,
                 kp,
@@ -506,76 +538,79 @@ impl Scenario {
             }
             ExcitationSpec::Passive => {}
         }
-        for (i, e) in self.effects.iter().enumerate() {
-            let k = |f: &str| format!("effects[{i}].{f}");
-            match e {
-                EffectSpec::TorqueOffset { offset } => per_joint(offset, n, &k("offset"))?,
-                EffectSpec::TorqueGain { gain } => {
-                    per_joint(gain, n, &k("gain"))?;
-                    check(gain.iter().all(|g| *g > 0.0), &k("gain"), || {
-                        "gains must be > 0".into()
-                    })?;
+        Ok(())
+    }
+}
+
+impl EffectSpec {
+    /// Checks effect `i` (its keys are named `effects[i].…`).
+    fn validate(&self, i: usize, n: usize) -> Result<(), ScenarioError> {
+        let e = self;
+        let k = |f: &str| format!("effects[{i}].{f}");
+        match e {
+            EffectSpec::TorqueOffset { offset } => per_joint(offset, n, &k("offset"))?,
+            EffectSpec::TorqueGain { gain } => {
+                per_joint(gain, n, &k("gain"))?;
+                check(gain.iter().all(|g| *g > 0.0), &k("gain"), || {
+                    "gains must be > 0".into()
+                })?;
+            }
+            EffectSpec::TimeDelay { samples } => {
+                check(*samples >= 1, &k("samples"), || "must be at least 1".into())?
+            }
+            EffectSpec::Spring { stiffness, rest } => {
+                per_joint(stiffness, n, &k("stiffness"))?;
+                per_joint(rest, n, &k("rest"))?;
+            }
+            EffectSpec::Stribeck {
+                static_extra,
+                velocity,
+            } => {
+                per_joint(static_extra, n, &k("static_extra"))?;
+                per_joint(velocity, n, &k("velocity"))?;
+                check(velocity.iter().all(|v| *v > 0.0), &k("velocity"), || {
+                    "Stribeck velocities must be > 0".into()
+                })?;
+            }
+            EffectSpec::AsymmetricCoulomb { delta } => per_joint(delta, n, &k("delta"))?,
+            EffectSpec::LoadDependentFriction { coefficient } => {
+                per_joint_non_negative(coefficient, n, &k("coefficient"))?
+            }
+            EffectSpec::Cogging {
+                amplitude,
+                harmonic,
+                phase,
+            } => {
+                per_joint(amplitude, n, &k("amplitude"))?;
+                per_joint(harmonic, n, &k("harmonic"))?;
+                if !phase.is_empty() {
+                    per_joint(phase, n, &k("phase"))?;
                 }
-                EffectSpec::TimeDelay { samples } => {
-                    check(*samples >= 1, &k("samples"), || "must be at least 1".into())?
-                }
-                EffectSpec::Spring { stiffness, rest } => {
-                    per_joint(stiffness, n, &k("stiffness"))?;
-                    per_joint(rest, n, &k("rest"))?;
-                }
-                EffectSpec::Stribeck {
-                    static_extra,
-                    velocity,
-                } => {
-                    per_joint(static_extra, n, &k("static_extra"))?;
-                    per_joint(velocity, n, &k("velocity"))?;
-                    check(velocity.iter().all(|v| *v > 0.0), &k("velocity"), || {
-                        "Stribeck velocities must be > 0".into()
-                    })?;
-                }
-                EffectSpec::AsymmetricCoulomb { delta } => per_joint(delta, n, &k("delta"))?,
-                EffectSpec::LoadDependentFriction { coefficient } => {
-                    per_joint_non_negative(coefficient, n, &k("coefficient"))?
-                }
-                EffectSpec::Cogging {
-                    amplitude,
-                    harmonic,
-                    phase,
-                } => {
-                    per_joint(amplitude, n, &k("amplitude"))?;
-                    per_joint(harmonic, n, &k("harmonic"))?;
-                    if !phase.is_empty() {
-                        per_joint(phase, n, &k("phase"))?;
-                    }
-                }
-                EffectSpec::Compliance { stiffness } => {
-                    check(stiffness.len() == n, &k("stiffness"), || {
-                        format!("has {} entries for {n} joints", stiffness.len())
-                    })?;
-                    check(stiffness.iter().all(|s| *s > 0.0), &k("stiffness"), || {
-                        "stiffnesses must be > 0 (inf for a rigid joint)".into()
-                    })?;
-                }
-                EffectSpec::QuadraticDamping { coefficient } => {
-                    per_joint_non_negative(coefficient, n, &k("coefficient"))?
-                }
-                EffectSpec::Tilt { roll, pitch } => {
-                    check(
-                        roll.is_finite()
-                            && pitch.is_finite()
-                            && roll.abs() < 1.0
-                            && pitch.abs() < 1.0,
-                        &k("roll"),
-                        || "roll and pitch must be finite and below 1 rad".into(),
-                    )?;
-                }
-                EffectSpec::Payload { mass, com, radius } => {
-                    positive(*mass, &k("mass"))?;
-                    non_negative(*radius, &k("radius"))?;
-                    check(com.iter().all(|c| c.is_finite()), &k("com"), || {
-                        "not finite".into()
-                    })?;
-                }
+            }
+            EffectSpec::Compliance { stiffness } => {
+                check(stiffness.len() == n, &k("stiffness"), || {
+                    format!("has {} entries for {n} joints", stiffness.len())
+                })?;
+                check(stiffness.iter().all(|s| *s > 0.0), &k("stiffness"), || {
+                    "stiffnesses must be > 0 (inf for a rigid joint)".into()
+                })?;
+            }
+            EffectSpec::QuadraticDamping { coefficient } => {
+                per_joint_non_negative(coefficient, n, &k("coefficient"))?
+            }
+            EffectSpec::Tilt { roll, pitch } => {
+                check(
+                    roll.is_finite() && pitch.is_finite() && roll.abs() < 1.0 && pitch.abs() < 1.0,
+                    &k("roll"),
+                    || "roll and pitch must be finite and below 1 rad".into(),
+                )?;
+            }
+            EffectSpec::Payload { mass, com, radius } => {
+                positive(*mass, &k("mass"))?;
+                non_negative(*radius, &k("radius"))?;
+                check(com.iter().all(|c| c.is_finite()), &k("com"), || {
+                    "not finite".into()
+                })?;
             }
         }
         Ok(())

@@ -18,7 +18,9 @@
 //! beside it.
 
 use super::excitation::Controller;
-use super::scenario::{Engine, Processing, Scenario, ScenarioError, VelocityFeedback};
+use super::scenario::{
+    Engine, Processing, Scenario, ScenarioError, SimulationSpec, VelocityFeedback,
+};
 use crate::dynamics::{forward_dynamics, Data};
 use crate::model::Model;
 use crate::signal::{butterworth_lowpass, differentiate};
@@ -78,37 +80,12 @@ pub fn simulate(
     let samples = (s.duration * s.rate).round() as usize;
     let controller = Controller::new(model, &scenario.excitation, s.seed)?;
     let mut cdata = Data::new(model);
-    let guess: Vec<f64> = match &s.initial_q {
-        Some(q) => q.clone(),
-        None => model
-            .bodies
-            .iter()
-            .enumerate()
-            .map(|(i, b)| {
-                (if i % 2 == 0 { 0.3f64 } else { -0.6 }).clamp(b.limits.lower, b.limits.upper)
-            })
-            .collect(),
-    };
+    let guess = initial_guess(model, s);
     let (q0, qd0) = controller.initial_state(model, &mut cdata, &guess)?;
     // The robot as it really is (tilted base, payload); the controller keeps the nominal model.
     let real = super::effects::true_robot(model, &scenario.effects);
     let real = &real;
-    let mut engine: Box<dyn Integrator + '_> = match s.engine {
-        Engine::Physid => Box::new(PhysidIntegrator {
-            model: real,
-            data: Data::new(real),
-            q: q0,
-            qd: qd0,
-            h,
-            substeps: s.substeps,
-        }),
-        Engine::Rapier => Box::new(RapierIntegrator {
-            sim: super::rapier::RapierSim::new(real, &q0, &qd0, h)
-                .map_err(|e| SimError::Engine(e.to_string()))?,
-            substeps: s.substeps,
-            h,
-        }),
-    };
+    let mut engine = integrator(real, s, q0, qd0, h)?;
     let mut rng = ChaCha8Rng::seed_from_u64(s.seed);
     let se = &scenario.sensors;
     let enc_noise = Normal::new(0.0, se.encoder_noise).expect("validated");
@@ -154,16 +131,7 @@ pub fn simulate(
         };
         // 2. Controller and actuators.
         let cmd = controller.torque(model, &mut cdata, t, &q_enc, &qd_fb);
-        let tau_mot: Vec<f64> = (0..n)
-            .map(|j| {
-                let b = &model.bodies[j];
-                let mut lim = b.limits.effort;
-                if let (Some((kt, r, v)), Some(rot)) = (motor, &b.rotor) {
-                    lim = lim.min(back_emf_limit(cmd[j], qd[j], rot.gear_ratio, kt, r, v));
-                }
-                cmd[j].clamp(-lim, lim)
-            })
-            .collect();
+        let tau_mot = actuate(model, cmd.as_slice(), &qd, motor);
         // 3. Integrate the period with τ_mot held; the truth at t_k.
         let (q, qd) = engine.state();
         let f = loads.friction(&qd);
@@ -186,19 +154,7 @@ pub fn simulate(
         let q_log = super::effects::logged_angle(&scenario.effects, &q_enc, &tau_mot);
         measured.push(t, &q_log, &qd_fb, Some(&vec![0.0; n]), &logged);
         q_enc_prev = Some(q_enc);
-        let (q1, qd1) = engine.state();
-        for j in 0..n {
-            if !q1[j].is_finite() || !qd1[j].is_finite() || qd1[j].abs() > s.max_speed {
-                return Err(SimError::Diverged {
-                    t: t + dt,
-                    joint: model.bodies[j].joint_name.clone(),
-                    what: format!(
-                        "reached q = {:.4} rad, q̇ = {:.4} rad/s (limit {} rad/s)",
-                        q1[j], qd1[j], s.max_speed
-                    ),
-                });
-            }
-        }
+        check_state(model, engine.as_ref(), t + dt, s.max_speed)?;
         if k * 100 / samples > last_report {
             last_report = k * 100 / samples;
             progress(k as f64 / samples as f64);
@@ -216,6 +172,86 @@ pub fn simulate(
         measured,
         processed,
     })
+}
+
+/// The configuration the controller starts from without `initial_q`: alternating 0.3 and
+/// −0.6 rad, within the joint limits.
+fn initial_guess(model: &Model, s: &SimulationSpec) -> Vec<f64> {
+    match &s.initial_q {
+        Some(q) => q.clone(),
+        None => model
+            .bodies
+            .iter()
+            .enumerate()
+            .map(|(i, b)| {
+                (if i % 2 == 0 { 0.3f64 } else { -0.6 }).clamp(b.limits.lower, b.limits.upper)
+            })
+            .collect(),
+    }
+}
+
+/// The engine that integrates the real robot from `(q0, q̇0)` with step `h`.
+fn integrator<'a>(
+    real: &'a Model,
+    s: &SimulationSpec,
+    q0: Vec<f64>,
+    qd0: Vec<f64>,
+    h: f64,
+) -> Result<Box<dyn Integrator + 'a>, SimError> {
+    Ok(match s.engine {
+        Engine::Physid => Box::new(PhysidIntegrator {
+            model: real,
+            data: Data::new(real),
+            q: q0,
+            qd: qd0,
+            h,
+            substeps: s.substeps,
+        }),
+        Engine::Rapier => Box::new(RapierIntegrator {
+            sim: super::rapier::RapierSim::new(real, &q0, &qd0, h)
+                .map_err(|e| SimError::Engine(e.to_string()))?,
+            substeps: s.substeps,
+            h,
+        }),
+    })
+}
+
+/// The torque the actuators deliver for the command `cmd` (N m at the joint): clipped to the
+/// effort limit and, with motor constants `(k_t, R, V)`, to the back-EMF limit at speed `q̇`.
+fn actuate(model: &Model, cmd: &[f64], qd: &[f64], motor: Option<(f64, f64, f64)>) -> Vec<f64> {
+    (0..model.dof())
+        .map(|j| {
+            let b = &model.bodies[j];
+            let mut lim = b.limits.effort;
+            if let (Some((kt, r, v)), Some(rot)) = (motor, &b.rotor) {
+                lim = lim.min(back_emf_limit(cmd[j], qd[j], rot.gear_ratio, kt, r, v));
+            }
+            cmd[j].clamp(-lim, lim)
+        })
+        .collect()
+}
+
+/// The engine's state at time `t` is finite and below `max_speed`, or the simulation diverged.
+fn check_state(
+    model: &Model,
+    engine: &dyn Integrator,
+    t: f64,
+    max_speed: f64,
+) -> Result<(), SimError> {
+    let (q, qd) = engine.state();
+    for j in 0..model.dof() {
+        if !q[j].is_finite() || !qd[j].is_finite() || qd[j].abs() > max_speed {
+            return Err(SimError::Diverged {
+                t,
+                joint: model.bodies[j].joint_name.clone(),
+                what: format!(
+                    "reached q = {:.4} rad, q̇ = {:.4} rad/s (limit {} rad/s)",
+                    q[j], qd[j], max_speed
+                ),
+            });
+        }
+    }
+    Ok(())
 }
 
 /// Friction and physical effects, shared by the engines.
