@@ -49,49 +49,150 @@ pub enum Kind {
     Payload,
 }
 
+/// How many columns a kind adds for `n` joints.
+#[derive(Clone, Copy, Debug, PartialEq)]
+enum ColumnCount {
+    /// A fixed number, whatever the joint count.
+    Fixed(usize),
+    /// `k` per joint.
+    PerJoint(usize),
+}
+
+/// The search grid of a kind's one-dimensional parameter.
+#[derive(Clone, Copy, Debug, PartialEq)]
+enum Grid {
+    /// No parameter (one variant, `param = 0`).
+    None,
+    /// Stribeck velocities (rad/s): 0.04 · √2^i, i = 0..9.
+    StribeckVelocity,
+    /// Cogging harmonics per rotor revolution: 1..=8.
+    CoggingHarmonic,
+}
+
+/// Everything the diagnosis knows about one kind besides its columns and its simulation: one
+/// row of [`KIND_TABLE`] per kind.
+#[derive(Clone, Copy, Debug)]
+struct KindSpec {
+    kind: Kind,
+    /// snake_case name, as in scenario files.
+    name: &'static str,
+    columns: ColumnCount,
+    /// The coefficients have a physical sign (≥ 0), kept in every fit.
+    non_negative: bool,
+    /// The magnitude's name and unit.
+    magnitude: (&'static str, &'static str),
+    /// The columns lie in the span of the model's own (only the description test sees it).
+    in_model_span: bool,
+    grid: Grid,
+}
+
+/// One row per kind, in report order ([`Kind::ALL`]).
+const KIND_TABLE: [KindSpec; 12] = {
+    use ColumnCount::{Fixed, PerJoint};
+    const fn row(kind: Kind, name: &'static str, columns: ColumnCount) -> KindSpec {
+        KindSpec {
+            kind,
+            name,
+            columns,
+            non_negative: false,
+            magnitude: ("", ""),
+            in_model_span: false,
+            grid: Grid::None,
+        }
+    }
+    [
+        KindSpec {
+            magnitude: ("offset", "N m"),
+            ..row(Kind::TorqueOffset, "torque_offset", PerJoint(1))
+        },
+        KindSpec {
+            magnitude: ("gain error relative to the median joint", "-"),
+            ..row(Kind::TorqueGain, "torque_gain", PerJoint(1))
+        },
+        KindSpec {
+            magnitude: ("delay", "s"),
+            ..row(Kind::TimeDelay, "time_delay", Fixed(1))
+        },
+        KindSpec {
+            magnitude: ("stiffness", "N m/rad"),
+            ..row(Kind::Spring, "spring", PerJoint(2))
+        },
+        KindSpec {
+            non_negative: true,
+            magnitude: ("static excess F_s", "N m"),
+            grid: Grid::StribeckVelocity,
+            ..row(Kind::Stribeck, "stribeck", PerJoint(1))
+        },
+        KindSpec {
+            magnitude: ("forward excess delta", "N m"),
+            ..row(Kind::AsymmetricCoulomb, "asymmetric_coulomb", PerJoint(1))
+        },
+        KindSpec {
+            non_negative: true,
+            magnitude: ("coefficient mu", "-"),
+            ..row(
+                Kind::LoadDependentFriction,
+                "load_dependent_friction",
+                PerJoint(1),
+            )
+        },
+        KindSpec {
+            magnitude: ("amplitude", "N m"),
+            grid: Grid::CoggingHarmonic,
+            ..row(Kind::Cogging, "cogging", PerJoint(2))
+        },
+        KindSpec {
+            non_negative: true,
+            magnitude: ("reflected inertia", "kg m^2"),
+            ..row(Kind::RotorInertia, "rotor_inertia", PerJoint(1))
+        },
+        KindSpec {
+            magnitude: ("tilt angle", "rad"),
+            ..row(Kind::Tilt, "tilt", Fixed(2))
+        },
+        KindSpec {
+            non_negative: true,
+            magnitude: ("compliance 1/k", "rad/(N m)"),
+            ..row(Kind::Compliance, "compliance", PerJoint(1))
+        },
+        KindSpec {
+            magnitude: ("payload mass on the last body", "kg"),
+            in_model_span: true,
+            ..row(Kind::Payload, "payload", Fixed(10))
+        },
+    ]
+};
+
 impl Kind {
     /// Every kind, in report order.
-    pub const ALL: [Kind; 12] = [
-        Kind::TorqueOffset,
-        Kind::TorqueGain,
-        Kind::TimeDelay,
-        Kind::Spring,
-        Kind::Stribeck,
-        Kind::AsymmetricCoulomb,
-        Kind::LoadDependentFriction,
-        Kind::Cogging,
-        Kind::RotorInertia,
-        Kind::Tilt,
-        Kind::Compliance,
-        Kind::Payload,
-    ];
+    pub const ALL: [Kind; 12] = {
+        let mut all = [Kind::TorqueOffset; 12];
+        let mut i = 0;
+        while i < 12 {
+            all[i] = KIND_TABLE[i].kind;
+            i += 1;
+        }
+        all
+    };
+
+    /// The kind's row of [`KIND_TABLE`].
+    fn spec(&self) -> &'static KindSpec {
+        KIND_TABLE
+            .iter()
+            .find(|s| s.kind == *self)
+            .expect("every kind has a row")
+    }
 
     /// snake_case name (as in scenario files).
     pub fn name(&self) -> &'static str {
-        match self {
-            Kind::TorqueOffset => "torque_offset",
-            Kind::TorqueGain => "torque_gain",
-            Kind::TimeDelay => "time_delay",
-            Kind::Spring => "spring",
-            Kind::Stribeck => "stribeck",
-            Kind::AsymmetricCoulomb => "asymmetric_coulomb",
-            Kind::LoadDependentFriction => "load_dependent_friction",
-            Kind::Cogging => "cogging",
-            Kind::RotorInertia => "rotor_inertia",
-            Kind::Tilt => "tilt",
-            Kind::Compliance => "compliance",
-            Kind::Payload => "payload",
-        }
+        self.spec().name
     }
 
     /// Columns for `n` joints.
     pub fn columns(&self, n: usize) -> usize {
-        match self {
-            Kind::TimeDelay => 1,
-            Kind::Tilt => 2,
-            Kind::Payload => 10,
-            Kind::Spring | Kind::Cogging => 2 * n,
-            _ => n,
+        match self.spec().columns {
+            ColumnCount::Fixed(c) => c,
+            ColumnCount::PerJoint(k) => k * n,
         }
     }
 
@@ -99,43 +200,27 @@ impl Kind {
     /// static excess, load-dependent friction, reflected rotor inertia, compliance. A fit
     /// that needs the opposite sign is not this effect.
     pub fn non_negative(&self) -> bool {
-        matches!(
-            self,
-            Kind::Stribeck | Kind::LoadDependentFriction | Kind::RotorInertia | Kind::Compliance
-        )
+        self.spec().non_negative
     }
 
     /// The magnitude's name and unit, per joint (or for the whole robot).
     pub fn magnitude(&self) -> (&'static str, &'static str) {
-        match self {
-            Kind::TorqueOffset => ("offset", "N m"),
-            Kind::TorqueGain => ("gain error relative to the median joint", "-"),
-            Kind::TimeDelay => ("delay", "s"),
-            Kind::Spring => ("stiffness", "N m/rad"),
-            Kind::Stribeck => ("static excess F_s", "N m"),
-            Kind::AsymmetricCoulomb => ("forward excess delta", "N m"),
-            Kind::LoadDependentFriction => ("coefficient mu", "-"),
-            Kind::Cogging => ("amplitude", "N m"),
-            Kind::RotorInertia => ("reflected inertia", "kg m^2"),
-            Kind::Tilt => ("tilt angle", "rad"),
-            Kind::Compliance => ("compliance 1/k", "rad/(N m)"),
-            Kind::Payload => ("payload mass on the last body", "kg"),
-        }
+        self.spec().magnitude
     }
 
     /// Whether the columns lie in the span of the model's own (its parameters express the
     /// effect exactly): cross-validation cannot see it and does not offer it.
     pub fn in_model_span(&self) -> bool {
-        matches!(self, Kind::Payload)
+        self.spec().in_model_span
     }
 
     /// The grid of the one-dimensional search, if any: Stribeck velocities (rad/s, ratio √2)
     /// and cogging harmonics (per rotor revolution).
     pub fn grid(&self) -> Vec<f64> {
-        match self {
-            Kind::Stribeck => (0..10).map(|i| 0.04 * 2f64.powf(i as f64 / 2.0)).collect(),
-            Kind::Cogging => (1..=8).map(f64::from).collect(),
-            _ => vec![0.0],
+        match self.spec().grid {
+            Grid::StribeckVelocity => (0..10).map(|i| 0.04 * 2f64.powf(i as f64 / 2.0)).collect(),
+            Grid::CoggingHarmonic => (1..=8).map(f64::from).collect(),
+            Grid::None => vec![0.0],
         }
     }
 }
@@ -422,4 +507,28 @@ pub fn names(kinds: &[Kind], code: bool) -> String {
         })
         .collect::<Vec<_>>()
         .join(", ")
+}
+
+#[cfg(test)]
+mod table_tests {
+    use super::*;
+
+    #[test]
+    fn every_kind_has_one_row_with_a_unique_name() {
+        for k in Kind::ALL {
+            assert_eq!(KIND_TABLE.iter().filter(|s| s.kind == k).count(), 1, "{k:?}");
+            assert!(!k.magnitude().0.is_empty() && !k.magnitude().1.is_empty(), "{k:?}");
+        }
+        let mut names: Vec<&str> = Kind::ALL.iter().map(|k| k.name()).collect();
+        names.sort();
+        names.dedup();
+        assert_eq!(names.len(), Kind::ALL.len());
+        // The names are serde's: the JSON report spells kinds the same way.
+        for k in Kind::ALL {
+            assert_eq!(serde_json::to_string(&k).unwrap(), format!("\"{}\"", k.name()));
+        }
+        assert_eq!(Kind::Cogging.columns(3), 6);
+        assert_eq!(Kind::Payload.columns(7), 10);
+        assert_eq!(Kind::Stribeck.grid().len(), 10);
+    }
 }
