@@ -46,6 +46,22 @@ pub enum SampleError {
         /// The previous time.
         previous: f64,
     },
+    /// A value too large to be a measurement of a robot.
+    #[error("sample {sample} (t = {t} s): {field} is {value:e}, beyond the ±{limit:e} that a {quantity} can be")]
+    OutOfRange {
+        /// Sample index (0-based).
+        sample: usize,
+        /// Its time stamp.
+        t: f64,
+        /// e.g. `tau2`.
+        field: String,
+        /// The value.
+        value: f64,
+        /// The bound ([`max_abs`]).
+        limit: f64,
+        /// What the field measures.
+        quantity: &'static str,
+    },
     /// No samples at all.
     #[error("no samples")]
     Empty,
@@ -59,6 +75,51 @@ pub enum SampleError {
         /// The expected length.
         expected: usize,
     },
+}
+
+/// The largest magnitude a sample value of `field` (`t`, `q`, `dq`, `ddq`, `tau`) may have, and
+/// what it measures: beyond these a value is not a measurement of a robot (10⁶ rad of travel,
+/// 10⁵ rad/s, 10⁷ rad/s², 10⁷ N m; 10¹² s), and its square would swamp or overflow the sums of
+/// the normal equations.
+pub fn max_abs(field: &str) -> (f64, &'static str) {
+    match field {
+        "t" => (1e12, "time stamp (s)"),
+        "q" => (1e6, "joint position (rad or m)"),
+        "dq" => (1e5, "joint velocity (rad/s or m/s)"),
+        "ddq" => (1e7, "joint acceleration (rad/s² or m/s²)"),
+        _ => (1e7, "joint torque (N m or N)"),
+    }
+}
+
+/// Checks one value of sample `sample`: finite, and within [`max_abs`] of its field `group`
+/// (`name` is what errors call it, e.g. `tau2`).
+pub fn check_value(
+    sample: usize,
+    t: f64,
+    group: &str,
+    name: &str,
+    value: f64,
+) -> Result<(), SampleError> {
+    if !value.is_finite() {
+        return Err(SampleError::NotFinite {
+            sample,
+            t,
+            field: name.to_string(),
+            value,
+        });
+    }
+    let (limit, quantity) = max_abs(group);
+    if value.abs() > limit {
+        return Err(SampleError::OutOfRange {
+            sample,
+            t,
+            field: name.to_string(),
+            value,
+            limit,
+            quantity,
+        });
+    }
+    Ok(())
 }
 
 impl Trajectory {
@@ -129,7 +190,8 @@ impl Trajectory {
         }
     }
 
-    /// Checks lengths, finiteness and increasing time, naming the first bad sample.
+    /// Checks lengths, increasing time, and every value finite and within [`max_abs`], naming
+    /// the first bad sample.
     pub fn validate(&self) -> Result<(), SampleError> {
         let (m, n) = (self.len(), self.dof());
         if m == 0 {
@@ -154,14 +216,7 @@ impl Trajectory {
         }
         for k in 0..m {
             let t = self.t[k];
-            if !t.is_finite() {
-                return Err(SampleError::NotFinite {
-                    sample: k,
-                    t,
-                    field: "t".into(),
-                    value: t,
-                });
-            }
+            check_value(k, t, "t", "t", t)?;
             if k > 0 && t <= self.t[k - 1] {
                 return Err(SampleError::NonMonotonicTime {
                     sample: k,
@@ -176,13 +231,8 @@ impl Trajectory {
                 ("tau", Some(&self.tau)),
             ] {
                 if let Some(v) = v {
-                    if let Some(j) = (0..n).find(|&j| !v[k * n + j].is_finite()) {
-                        return Err(SampleError::NotFinite {
-                            sample: k,
-                            t,
-                            field: format!("{name}{}", j + 1),
-                            value: v[k * n + j],
-                        });
+                    for j in 0..n {
+                        check_value(k, t, name, &format!("{name}{}", j + 1), v[k * n + j])?;
                     }
                 }
             }

@@ -25,11 +25,11 @@ pub struct Args {
     #[arg(long, default_value_t = 0)]
     threads: usize,
     /// Relative error drawn into each case's description's inertial parameters.
-    #[arg(long, default_value_t = blind::DESCRIPTION_ERROR)]
+    #[arg(long, default_value_t = blind::DESCRIPTION_ERROR, allow_negative_numbers = true)]
     description_error: f64,
     /// The description uncertainty the diagnosis is told (default: the error drawn; 0
     /// turns the description test off).
-    #[arg(long)]
+    #[arg(long, allow_negative_numbers = true)]
     description_uncertainty: Option<f64>,
 }
 
@@ -71,9 +71,7 @@ pub fn run(a: Args) -> anyhow::Result<()> {
     let (base, model, _) = physid::sim::scenario::load(&a.scenario)?;
     let work = tempfile::tempdir()?;
     let diagnose_opts = opts.diagnose_options();
-    let pool = rayon::ThreadPoolBuilder::new()
-        .num_threads(a.threads)
-        .build()?;
+    let pool = super::thread_pool(Some(a.threads))?;
     let start = std::time::Instant::now();
     let results: Vec<CaseResult> = pool.install(|| {
         (0..a.cases)

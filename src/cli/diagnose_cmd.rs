@@ -23,10 +23,10 @@ pub struct Args {
     #[arg(long, default_value = "consistent")]
     constraints: ConstraintSet,
     /// Fraction held out for validation when no --validate is given.
-    #[arg(long, default_value_t = 0.3)]
+    #[arg(long, default_value_t = 0.3, allow_negative_numbers = true)]
     holdout: f64,
     /// Low-pass cutoff (Hz) the data were processed with (for the compliance terms).
-    #[arg(long, default_value_t = 20.0)]
+    #[arg(long, default_value_t = 20.0, allow_negative_numbers = true)]
     cutoff: f64,
     /// Print the diagnosis as JSON.
     #[arg(long)]
@@ -37,7 +37,7 @@ pub struct Args {
     /// How far the description's inertial parameters can be trusted (relative, 0.1 = 10 %):
     /// tests the identified parameters against it for effects that identification absorbs
     /// (torque gain, tilt, payload). Off without it.
-    #[arg(long)]
+    #[arg(long, allow_negative_numbers = true)]
     description_uncertainty: Option<f64>,
 }
 

@@ -14,14 +14,14 @@ use std::path::PathBuf;
 pub struct Args {
     #[command(flatten)]
     robot: RobotArgs,
-    /// Number of random states.
-    #[arg(long, default_value_t = 20)]
-    samples: usize,
+    /// Number of random states (at most 100,000).
+    #[arg(long, default_value_t = 20, value_parser = clap::value_parser!(u64).range(1..=100_000))]
+    samples: u64,
     /// Random seed.
     #[arg(long, default_value_t = 1)]
     seed: u64,
     /// Range of the random joint positions, velocities and accelerations (±).
-    #[arg(long, default_value_t = 2.0)]
+    #[arg(long, default_value_t = 2.0, allow_negative_numbers = true)]
     scale: f64,
     /// Output JSON file.
     #[arg(long)]
@@ -35,7 +35,13 @@ pub fn run(a: Args) -> anyhow::Result<()> {
         "--scale must be a positive number, got {}",
         a.scale
     );
-    dynamics_json(&a.robot.load()?, a.samples, a.seed, a.scale, &a.out)
+    dynamics_json(
+        &a.robot.load()?,
+        a.samples as usize,
+        a.seed,
+        a.scale,
+        &a.out,
+    )
 }
 
 /// Writes random-state dynamics as JSON for the check scripts.

@@ -35,9 +35,7 @@ pub fn run(a: Args) -> anyhow::Result<()> {
     }
     spec.validate()
         .map_err(|e| anyhow::anyhow!("{}: {e}", path.display()))?;
-    let pool = rayon::ThreadPoolBuilder::new()
-        .num_threads(threads.unwrap_or(0))
-        .build()?;
+    let pool = super::thread_pool(threads)?;
     let cells = spec.seeds * spec.grid().len() * spec.constraints.len();
     let bar = indicatif::ProgressBar::new(spec.seeds as u64);
     bar.set_style(

@@ -18,6 +18,9 @@ pub struct Args {
 
 /// `physid export`.
 pub fn run(a: Args) -> anyhow::Result<()> {
+    let outputs: Vec<&std::path::Path> =
+        a.mjcf.iter().chain(&a.urdf).map(|p| p.as_path()).collect();
+    physid::io::check_outputs(&outputs, &[std::path::Path::new(&a.robot.robot)])?;
     let m = a.robot.load()?;
     anyhow::ensure!(
         a.mjcf.is_some() || a.urdf.is_some(),

@@ -107,19 +107,19 @@ pub struct Args {
     #[arg(long, default_value = "ellipsoid")]
     constraints: ConstraintSet,
     /// Training samples, `a:b` (indices, end exclusive); default all.
-    #[arg(long)]
+    #[arg(long, allow_hyphen_values = true)]
     train: Option<String>,
     /// Validation samples of the same file, `a:b`.
-    #[arg(long)]
+    #[arg(long, allow_hyphen_values = true)]
     validate: Option<String>,
     /// Validate on another file (all its samples).
     #[arg(long)]
     validate_data: Option<PathBuf>,
     /// Weight of the prior term w ‖θ − θ̂‖² (θ̂: the robot description's parameters).
-    #[arg(long, default_value_t = 1e-6)]
+    #[arg(long, default_value_t = 1e-6, allow_negative_numbers = true)]
     prior_weight: f64,
     /// Margin ε of the strict matrix inequalities.
-    #[arg(long, default_value_t = 1e-6)]
+    #[arg(long, default_value_t = 1e-6, allow_negative_numbers = true)]
     eps: f64,
     /// Print JSON (schema: docs/identify-json.md).
     #[arg(long)]
@@ -142,6 +142,16 @@ pub struct Args {
 /// Runs the identification and prints the report.
 pub fn run(a: Args) -> anyhow::Result<()> {
     let opts = options(&a)?;
+    let robot_file = std::path::Path::new(&a.robot.robot);
+    let mut inputs = vec![a.data.as_path(), robot_file];
+    inputs.extend(a.validate_data.as_deref());
+    let outputs: Vec<&Path> = a
+        .out_urdf
+        .iter()
+        .chain(&a.export_problem)
+        .map(|p| p.as_path())
+        .collect();
+    physid::io::check_outputs(&outputs, &inputs)?;
     let model = a.robot.load()?;
     let m = &model;
     let tr = Data::open(&a.data, m)?;

@@ -85,6 +85,23 @@ fn flag_error(option: &str, expected: &str, value: f64) -> anyhow::Error {
     anyhow::anyhow!("--{flag} must be {expected}, got {value}")
 }
 
+/// A worker pool of `requested` threads (0 or none: all cores), never more than the machine's
+/// cores: more threads than cores only add contention (and a huge count would hang the start).
+fn thread_pool(requested: Option<usize>) -> anyhow::Result<rayon::ThreadPool> {
+    let cores = std::thread::available_parallelism().map_or(1, |n| n.get());
+    let threads = match requested {
+        None | Some(0) => cores,
+        Some(t) if t > cores => {
+            eprintln!("note: {t} threads requested, using the {cores} cores");
+            cores
+        }
+        Some(t) => t,
+    };
+    Ok(rayon::ThreadPoolBuilder::new()
+        .num_threads(threads)
+        .build()?)
+}
+
 /// Runs one command.
 pub fn run(cli: Cli) -> anyhow::Result<()> {
     match cli.command {

@@ -20,7 +20,7 @@ pub struct Args {
     #[arg(long, value_enum)]
     engine: Option<EngineArg>,
     /// Override the duration (s).
-    #[arg(long)]
+    #[arg(long, allow_negative_numbers = true)]
     duration: Option<f64>,
     /// Override the seed.
     #[arg(long)]
@@ -44,6 +44,8 @@ pub fn run(a: Args) -> anyhow::Result<()> {
         EngineArg::Rapier => Engine::Rapier,
     });
     let (duration, seed) = (a.duration, a.seed);
+    let outputs: Vec<&std::path::Path> = std::iter::once(out.as_path()).chain(csv).collect();
+    physid::io::check_outputs(&outputs, &[path])?;
     let (mut sc, model, text) = physid::sim::scenario::load(path)?;
     if let Some(e) = engine {
         sc.simulation.engine = e;

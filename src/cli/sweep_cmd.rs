@@ -75,9 +75,7 @@ pub fn run(a: Args) -> anyhow::Result<()> {
         mine.len() - todo.len(),
         todo.len()
     );
-    let pool = rayon::ThreadPoolBuilder::new()
-        .num_threads(threads.unwrap_or(0))
-        .build()?;
+    let pool = super::thread_pool(threads)?;
     let bar = indicatif::ProgressBar::new(todo.len() as u64);
     bar.set_style(
         indicatif::ProgressStyle::with_template(

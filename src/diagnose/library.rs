@@ -516,8 +516,15 @@ mod table_tests {
     #[test]
     fn every_kind_has_one_row_with_a_unique_name() {
         for k in Kind::ALL {
-            assert_eq!(KIND_TABLE.iter().filter(|s| s.kind == k).count(), 1, "{k:?}");
-            assert!(!k.magnitude().0.is_empty() && !k.magnitude().1.is_empty(), "{k:?}");
+            assert_eq!(
+                KIND_TABLE.iter().filter(|s| s.kind == k).count(),
+                1,
+                "{k:?}"
+            );
+            assert!(
+                !k.magnitude().0.is_empty() && !k.magnitude().1.is_empty(),
+                "{k:?}"
+            );
         }
         let mut names: Vec<&str> = Kind::ALL.iter().map(|k| k.name()).collect();
         names.sort();
@@ -525,7 +532,10 @@ mod table_tests {
         assert_eq!(names.len(), Kind::ALL.len());
         // The names are serde's: the JSON report spells kinds the same way.
         for k in Kind::ALL {
-            assert_eq!(serde_json::to_string(&k).unwrap(), format!("\"{}\"", k.name()));
+            assert_eq!(
+                serde_json::to_string(&k).unwrap(),
+                format!("\"{}\"", k.name())
+            );
         }
         assert_eq!(Kind::Cogging.columns(3), 6);
         assert_eq!(Kind::Payload.columns(7), 10);

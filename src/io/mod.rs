@@ -49,6 +49,16 @@ pub enum IoError {
         /// The model error, naming the body, joint or rotor.
         source: ModelError,
     },
+    /// An output would overwrite an input (or another output of the same run).
+    #[error("{output}: refusing to write over {what} {input}")]
+    OutputIsInput {
+        /// The output given.
+        output: PathBuf,
+        /// The file it would replace.
+        input: PathBuf,
+        /// `the input` or `another output`.
+        what: &'static str,
+    },
     /// An unknown robot name.
     #[error(
         "unknown robot '{0}': give 'cheetah3', a .urdf file or a .toml file with a [robot] table"
@@ -71,6 +81,43 @@ pub fn read_to_string(path: &Path) -> Result<String, IoError> {
         path: path.to_path_buf(),
         source,
     })
+}
+
+/// Whether `a` and `b` name the same file: by canonical path when both exist, else by their
+/// absolute form (canonical parent directory and file name).
+pub fn same_file(a: &Path, b: &Path) -> bool {
+    let absolute = |p: &Path| -> Option<PathBuf> {
+        if let Ok(c) = p.canonicalize() {
+            return Some(c);
+        }
+        let parent = match p.parent() {
+            Some(d) if !d.as_os_str().is_empty() => d.canonicalize().ok()?,
+            _ => std::env::current_dir().ok()?,
+        };
+        Some(parent.join(p.file_name()?))
+    };
+    match (absolute(a), absolute(b)) {
+        (Some(x), Some(y)) => x == y,
+        _ => false,
+    }
+}
+
+/// Refuses, before any work, outputs that would overwrite one of `inputs` or each other.
+pub fn check_outputs(outputs: &[&Path], inputs: &[&Path]) -> Result<(), IoError> {
+    for (i, out) in outputs.iter().enumerate() {
+        let clash = |input: &Path, what| IoError::OutputIsInput {
+            output: out.to_path_buf(),
+            input: input.to_path_buf(),
+            what,
+        };
+        if let Some(input) = inputs.iter().find(|input| same_file(out, input)) {
+            return Err(clash(input, "the input"));
+        }
+        if let Some(other) = outputs[..i].iter().find(|o| same_file(out, o)) {
+            return Err(clash(other, "another output"));
+        }
+    }
+    Ok(())
 }
 
 /// Creates a directory and its parents, naming it on failure.

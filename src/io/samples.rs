@@ -208,17 +208,18 @@ pub fn stream_csv(
                     header[c]
                 ))
             })?;
-            if v.is_finite() {
-                Ok(v)
-            } else {
-                Err(bad(format!(
-                    "sample {k} (line {}): {} is {v}",
-                    k + 2,
-                    header[c]
-                )))
-            }
+            Ok(v)
+        };
+        // The value of column `c` in group `g` (t, q, dq, ddq, tau), checked like a trajectory's.
+        let checked = |g: &str, c: usize, t: f64| -> Result<f64, IoError> {
+            let v = get(c)?;
+            crate::trajectory::check_value(k, t, g, &header[c], v)
+                .map_err(|e| bad(format!("line {}: {e}", k + 2)))?;
+            Ok(v)
         };
         let t = get(t_col)?;
+        crate::trajectory::check_value(k, t, "t", &header[t_col], t)
+            .map_err(|e| bad(format!("line {}: {e}", k + 2)))?;
         if t <= prev {
             return Err(bad(format!(
                 "sample {k}: time {t} s does not increase (previous {prev} s)"
@@ -228,7 +229,7 @@ pub fn stream_csv(
         if range.contains(&k) {
             for (g, cs) in cols.iter().enumerate() {
                 for (j, &c) in cs.iter().enumerate() {
-                    vals[g * n + j] = get(c)?;
+                    vals[g * n + j] = checked(["q", "dq", "ddq", "tau"][g], c, t)?;
                 }
             }
             f(

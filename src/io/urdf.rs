@@ -335,7 +335,8 @@ fn moving_body(
 ) -> Body {
     use urdf_rs::JointType as T;
     let lim = &jt.limit;
-    let inf_if_zero = |v: f64| if v > 0.0 { v } else { f64::INFINITY };
+    // 0 means "not given" in URDF; a negative limit is kept for the model to refuse by name.
+    let inf_if_zero = |v: f64| if v == 0.0 { f64::INFINITY } else { v };
     let (lower, upper) = match jt.joint_type {
         T::Continuous => (f64::NEG_INFINITY, f64::INFINITY),
         _ if lim.lower == 0.0 && lim.upper == 0.0 => (f64::NEG_INFINITY, f64::INFINITY),

@@ -547,6 +547,16 @@ fn check_body(
             reason: format!("lower {} must not exceed upper {}", l.lower, l.upper),
         });
     }
+    for (field, v) in [("limits.velocity", l.velocity), ("limits.effort", l.effort)] {
+        // Positive, or infinite where unknown; a zero or negative limit stops the joint.
+        if v.is_nan() || v <= 0.0 {
+            return Err(ModelError::BadValue {
+                element: jn.clone(),
+                field,
+                reason: format!("{v} must be > 0 (or left out when unknown)"),
+            });
+        }
+    }
     if let Some(r) = &mut b.rotor {
         check_rotor(r, names)?;
     }

@@ -361,6 +361,16 @@ pub struct Scenario {
     pub experiment: Option<toml::Table>,
 }
 
+/// Most RK4 steps per control period (a finer step than 1e4 per period buys no accuracy and
+/// only time).
+pub const MAX_SUBSTEPS: usize = 10_000;
+/// Longest torque-to-kinematics lag of a `time_delay` effect, in samples.
+pub const MAX_DELAY_SAMPLES: usize = 100_000;
+/// Largest payload CoM offset from its body's frame (m).
+pub const MAX_PAYLOAD_OFFSET: f64 = 100.0;
+/// Heaviest payload (kg).
+pub const MAX_PAYLOAD_MASS: f64 = 1e6;
+
 /// A scenario value that cannot be simulated, with the key and the reason.
 #[derive(Debug, thiserror::Error, PartialEq)]
 #[error("{key}: {reason}")]
@@ -427,9 +437,11 @@ impl SimulationSpec {
         let s = self;
         positive(s.duration, "simulation.duration")?;
         positive(s.rate, "simulation.rate")?;
-        check(s.substeps >= 1, "simulation.substeps", || {
-            "must be at least 1".into()
-        })?;
+        check(
+            (1..=MAX_SUBSTEPS).contains(&s.substeps),
+            "simulation.substeps",
+            || format!("{} must be 1 to {MAX_SUBSTEPS}", s.substeps),
+        )?;
         positive(s.friction_velocity, "simulation.friction_velocity")?;
         positive(s.max_speed, "simulation.max_speed")?;
         check(s.duration * s.rate >= 2.0, "simulation.duration", || {
@@ -555,9 +567,11 @@ impl EffectSpec {
                     "gains must be > 0".into()
                 })?;
             }
-            EffectSpec::TimeDelay { samples } => {
-                check(*samples >= 1, &k("samples"), || "must be at least 1".into())?
-            }
+            EffectSpec::TimeDelay { samples } => check(
+                (1..=MAX_DELAY_SAMPLES).contains(samples),
+                &k("samples"),
+                || format!("{samples} must be 1 to {MAX_DELAY_SAMPLES}"),
+            )?,
             EffectSpec::Spring { stiffness, rest } => {
                 per_joint(stiffness, n, &k("stiffness"))?;
                 per_joint(rest, n, &k("rest"))?;
@@ -608,8 +622,14 @@ impl EffectSpec {
             EffectSpec::Payload { mass, com, radius } => {
                 positive(*mass, &k("mass"))?;
                 non_negative(*radius, &k("radius"))?;
-                check(com.iter().all(|c| c.is_finite()), &k("com"), || {
-                    "not finite".into()
+                check(
+                    com.iter()
+                        .all(|c| c.is_finite() && c.abs() <= MAX_PAYLOAD_OFFSET),
+                    &k("com"),
+                    || format!("each coordinate must be finite and within ±{MAX_PAYLOAD_OFFSET} m"),
+                )?;
+                check(*mass <= MAX_PAYLOAD_MASS, &k("mass"), || {
+                    format!("{mass} kg exceeds {MAX_PAYLOAD_MASS} kg")
                 })?;
             }
         }

@@ -1,0 +1,176 @@
+//! Bad input ends in a clear error naming the file, field or sample: never a panic, a hang, a
+//! huge allocation, or an output written over an input. Each case here was a crash, a hang or
+//! silent damage before (issue 13's list).
+
+use physid::io;
+use physid::sim::scenario::{self, EffectSpec};
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+fn root() -> PathBuf {
+    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+}
+
+fn physid(args: &[&str]) -> (bool, String) {
+    let out = Command::new(env!("CARGO_BIN_EXE_physid"))
+        .args(args)
+        .output()
+        .unwrap();
+    (
+        out.status.success(),
+        String::from_utf8_lossy(&out.stderr).into_owned(),
+    )
+}
+
+const ONE_JOINT_URDF: &str = r#"<robot name="r">
+  <link name="base"/>
+  <link name="arm"><inertial><mass value="1"/><origin xyz="0.1 0 0"/>
+    <inertia ixx="0.01" ixy="0" ixz="0" iyy="0.01" iyz="0" izz="0.01"/></inertial></link>
+  <joint name="j1" type="revolute"><parent link="base"/><child link="arm"/><axis xyz="0 0 1"/>
+    <limit lower="-1" upper="1" effort="EFFORT" velocity="2"/></joint>
+</robot>"#;
+
+#[test]
+fn a_negative_effort_limit_is_refused_by_name() {
+    // Before: accepted, then `simulate` panicked in f64::clamp.
+    let xml = ONE_JOINT_URDF.replace("EFFORT", "-5");
+    let err = io::urdf::from_str(&xml, Path::new("r.urdf"), &Default::default()).unwrap_err();
+    let msg = err.to_string();
+    assert!(msg.contains("limits.effort") && msg.contains("-5"), "{msg}");
+    let ok = ONE_JOINT_URDF.replace("EFFORT", "5");
+    assert!(io::urdf::from_str(&ok, Path::new("r.urdf"), &Default::default()).is_ok());
+}
+
+#[test]
+fn scenario_values_that_hung_or_panicked_are_refused_by_key() {
+    let (base, model, _) = scenario::load(&root().join("scenarios/cheetah3_shell.toml")).unwrap();
+    let n = model.dof();
+    // Before: capacity overflow panic (2^63 − 1) or a 2.4 TB allocation (1e11).
+    for samples in [usize::MAX / 2, 100_000_000_000] {
+        let mut sc = base.clone();
+        sc.effects = vec![EffectSpec::TimeDelay { samples }];
+        let e = sc.validate(n).unwrap_err();
+        assert_eq!(e.key, "effects[0].samples", "{e}");
+    }
+    // Before: a hang (1e9 RK4 steps per period).
+    let mut sc = base.clone();
+    sc.simulation.substeps = 1_000_000_000;
+    assert_eq!(sc.validate(n).unwrap_err().key, "simulation.substeps");
+    // Before: a panic on an `expect` in the payload's inertia.
+    let mut sc = base.clone();
+    sc.effects = vec![EffectSpec::Payload {
+        mass: 1.0,
+        com: [0.0, 1e200, 0.0],
+        radius: 0.03,
+    }];
+    assert_eq!(sc.validate(n).unwrap_err().key, "effects[0].com");
+    assert!(base.validate(n).is_ok());
+}
+
+/// A CSV of `rows` samples of the one-joint robot with `tau` in the row `bad`.
+fn csv_with(dir: &Path, rows: usize, bad: usize, tau: &str) -> PathBuf {
+    let mut text = String::from("t,q1,dq1,ddq1,tau1\n");
+    for k in 0..rows {
+        let x = k as f64 * 0.01;
+        let t = if k == bad {
+            tau.to_string()
+        } else {
+            format!("{}", x.sin())
+        };
+        text += &format!("{x},{},{},{},{t}\n", x.sin(), x.cos(), -x.sin());
+    }
+    let p = dir.join("data.csv");
+    std::fs::write(&p, text).unwrap();
+    p
+}
+
+#[test]
+fn an_absurd_sample_is_an_error_naming_it_whether_read_or_streamed() {
+    // Before: 1e300 made Clarabel panic ("Eigval error") or gave NaN objectives and RMS.
+    let dir = tempfile::tempdir().unwrap();
+    let p = csv_with(dir.path(), 50, 17, "1e300");
+    let names = vec!["j1".to_string()];
+    let msg = io::samples::read_csv(&p, Some(&names))
+        .unwrap_err()
+        .to_string();
+    assert!(msg.contains("sample 17") && msg.contains("tau1"), "{msg}");
+    let streamed = io::samples::stream_csv(&p, 1, 0..50, &mut |_, _| {}).unwrap_err();
+    let msg = streamed.to_string();
+    assert!(msg.contains("sample 17") && msg.contains("tau1"), "{msg}");
+    // An ordinary torque passes.
+    let p = csv_with(dir.path(), 50, 17, "12.5");
+    assert_eq!(
+        io::samples::stream_csv(&p, 1, 0..50, &mut |_, _| {}).unwrap(),
+        50
+    );
+}
+
+#[test]
+fn an_output_never_replaces_an_input() {
+    let dir = tempfile::tempdir().unwrap();
+    // simulate SC.toml --out SC.toml: before, the scenario was replaced by the MCAP.
+    let sc = dir.path().join("sc.toml");
+    std::fs::copy(root().join("scenarios/cheetah3_shell.toml"), &sc).unwrap();
+    let before = std::fs::read(&sc).unwrap();
+    let sc_s = sc.to_str().unwrap();
+    let (ok, err) = physid(&["simulate", sc_s, "--out", sc_s, "--duration", "0.1"]);
+    assert!(
+        !ok && err.contains("refusing to write over the input"),
+        "{err}"
+    );
+    assert_eq!(std::fs::read(&sc).unwrap(), before);
+    // --out X --csv X: before, the MCAP was lost.
+    let x = dir.path().join("x.out");
+    let x_s = x.to_str().unwrap();
+    let (ok, err) = physid(&["simulate", sc_s, "--out", x_s, "--csv", x_s]);
+    assert!(!ok && err.contains("another output"), "{err}");
+    assert!(!x.exists());
+    // identify --out-urdf onto the robot's URDF or onto the data.
+    let urdf = dir.path().join("r.urdf");
+    std::fs::write(&urdf, ONE_JOINT_URDF.replace("EFFORT", "5")).unwrap();
+    let data = csv_with(dir.path(), 200, usize::MAX, "");
+    let (u, d) = (urdf.to_str().unwrap(), data.to_str().unwrap());
+    for target in [u, d] {
+        let before = std::fs::read(target).unwrap();
+        let (ok, err) = physid(&[
+            "identify",
+            "--robot",
+            u,
+            "--data",
+            d,
+            "--constraints",
+            "none",
+            "--out-urdf",
+            target,
+        ]);
+        assert!(
+            !ok && err.contains("refusing to write over the input"),
+            "{err}"
+        );
+        assert_eq!(std::fs::read(target).unwrap(), before);
+    }
+}
+
+#[test]
+fn negative_option_values_reach_the_option_check() {
+    // Before: "unexpected argument '-1' found" without naming the option's rule.
+    let (ok, err) = physid(&["identify", "--data", "x.csv", "--eps", "-1"]);
+    assert!(
+        !ok && err.contains("--eps must be a finite number >= 0, got -1"),
+        "{err}"
+    );
+    let (ok, err) = physid(&["identify", "--data", "x.csv", "--prior-weight", "-1"]);
+    assert!(!ok && err.contains("--prior-weight"), "{err}");
+    let (ok, err) = physid(&["diagnose", "--data", "x.csv", "--cutoff", "-5"]);
+    assert!(
+        !ok && err.contains("--cutoff must be a positive frequency"),
+        "{err}"
+    );
+    let (ok, err) = physid(&["blind", "--description-error", "-1"]);
+    assert!(
+        !ok && err.contains("--description-error must be in [0, 1)"),
+        "{err}"
+    );
+    let (ok, err) = physid(&["dynamics", "--samples", "1000000000000", "--out", "x.json"]);
+    assert!(!ok && err.contains("--samples"), "{err}");
+}
