@@ -56,6 +56,91 @@ struct JointSample {
     effects: Vec<f64>,
 }
 
+/// Walks every record of an MCAP file, chunks decompressed, with each record's length bounded
+/// (by 100 times the file's size, at least 64 MiB) before anything is allocated for it: a
+/// corrupt length inside a chunk would otherwise make the message stream reserve exabytes and
+/// abort. The stream that reads the messages afterwards meets the same, checked records.
+fn prevalidate(bytes: &[u8]) -> Result<(), mcap::McapError> {
+    use mcap::sans_io::{LinearReadEvent, LinearReader, LinearReaderOptions};
+    let limit = bytes.len().saturating_mul(100).max(64 << 20);
+    let mut reader = LinearReader::new_with_options(
+        LinearReaderOptions::default().with_record_length_limit(limit),
+    );
+    let mut pos = 0;
+    while let Some(event) = reader.next_event() {
+        if let LinearReadEvent::ReadRequest(wanted) = event? {
+            let n = wanted.min(bytes.len() - pos).min(1 << 20);
+            reader.insert(n).copy_from_slice(&bytes[pos..pos + n]);
+            reader.notify_read(n);
+            pos += n;
+        }
+    }
+    Ok(())
+}
+
+/// Checks every length of a CDR-encoded `JointState`-like message (header, names, then
+/// `float_sequences` sequences of `float64`) against the bytes that remain, before the decoder
+/// allocates anything: a corrupt length would otherwise make it reserve up to 4 GB for one
+/// string. Alignment follows CDR: each primitive at a multiple of its size from the start of
+/// the payload (after the 4-byte encapsulation header).
+fn check_cdr_lengths(data: &[u8], float_sequences: usize) -> Result<(), String> {
+    let payload = data
+        .get(4..)
+        .ok_or("shorter than its CDR encapsulation header")?;
+    let little = match data[..2] {
+        [0, 1] | [0, 3] => true,
+        [0, 0] | [0, 2] => false,
+        _ => return Err(format!("unknown CDR encapsulation {:02x?}", &data[..2])),
+    };
+    let mut pos = 0usize;
+    let u32_at = |pos: &mut usize, what: &str| -> Result<usize, String> {
+        *pos = pos.next_multiple_of(4);
+        let bytes: [u8; 4] = payload
+            .get(*pos..*pos + 4)
+            .and_then(|b| b.try_into().ok())
+            .ok_or_else(|| format!("ends before the {what}"))?;
+        *pos += 4;
+        Ok(if little {
+            u32::from_le_bytes(bytes)
+        } else {
+            u32::from_be_bytes(bytes)
+        } as usize)
+    };
+    let skip = |pos: &mut usize, len: usize, what: &str| -> Result<(), String> {
+        let remaining = payload.len().saturating_sub(*pos);
+        if len > remaining {
+            return Err(format!(
+                "its {what} claims {len} bytes, but only {remaining} remain"
+            ));
+        }
+        *pos += len;
+        Ok(())
+    };
+    u32_at(&mut pos, "time stamp")?;
+    u32_at(&mut pos, "time stamp")?;
+    let len = u32_at(&mut pos, "frame id")?;
+    skip(&mut pos, len, "frame id")?;
+    let names = u32_at(&mut pos, "joint names")?;
+    if names > payload.len() / 4 {
+        return Err(format!(
+            "it claims {names} joint names in {} bytes",
+            payload.len()
+        ));
+    }
+    for _ in 0..names {
+        let len = u32_at(&mut pos, "joint name")?;
+        skip(&mut pos, len, "joint name")?;
+    }
+    for _ in 0..float_sequences {
+        let count = u32_at(&mut pos, "array length")?;
+        if count > 0 {
+            pos = pos.next_multiple_of(8);
+        }
+        skip(&mut pos, count.saturating_mul(8), "array")?;
+    }
+    Ok(())
+}
+
 const SEP: &str =
     "================================================================================";
 
@@ -262,6 +347,7 @@ pub fn read(path: &Path) -> Result<Log, IoError> {
     let mut measured: Option<Trajectory> = None;
     let mut processed: Option<Trajectory> = None;
     let mut truth: Option<Trajectory> = None;
+    prevalidate(&bytes).map_err(|e| bad(format!("not a readable MCAP file: {e}")))?;
     let stream =
         mcap::MessageStream::new(&bytes).map_err(|e| bad(format!("not an MCAP file: {e}")))?;
     for (i, m) in stream.enumerate() {
@@ -269,6 +355,8 @@ pub fn read(path: &Path) -> Result<Log, IoError> {
         let t = m.log_time as f64 / 1e9;
         match m.channel.topic.as_str() {
             TOPIC_MEASURED => {
+                check_cdr_lengths(&m.data, 3)
+                    .map_err(|e| bad(format!("{TOPIC_MEASURED} message {}: {e}", m.sequence)))?;
                 let js: JointState = cdr::deserialize(&m.data)
                     .map_err(|e| bad(format!("{TOPIC_MEASURED} message {}: {e}", m.sequence)))?;
                 let tr = measured.get_or_insert_with(|| Trajectory::new(js.name.clone(), false));
@@ -284,6 +372,8 @@ pub fn read(path: &Path) -> Result<Log, IoError> {
                 tr.push(t, &js.position, &js.velocity, None, &js.effort);
             }
             topic @ (TOPIC_PROCESSED | TOPIC_TRUTH) => {
+                check_cdr_lengths(&m.data, 6)
+                    .map_err(|e| bad(format!("{topic} message {}: {e}", m.sequence)))?;
                 let s: JointSample = cdr::deserialize(&m.data)
                     .map_err(|e| bad(format!("{topic} message {}: {e}", m.sequence)))?;
                 let slot = if topic == TOPIC_PROCESSED {
@@ -329,4 +419,59 @@ pub fn read(path: &Path) -> Result<Log, IoError> {
         truth,
         metadata,
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn state(names: &[&str]) -> JointState {
+        JointState {
+            header: Header {
+                stamp: Time { sec: 3, nanosec: 7 },
+                frame_id: "base".into(),
+            },
+            name: names.iter().map(|s| s.to_string()).collect(),
+            position: vec![0.5; names.len()],
+            velocity: vec![-1.0; names.len()],
+            effort: vec![2.0; names.len()],
+        }
+    }
+
+    #[test]
+    fn valid_messages_pass_the_length_check_in_both_byte_orders() {
+        for names in [&[][..], &["a"], &["hip", "knee_joint", "x"]] {
+            let s = state(names);
+            let le = cdr::serialize::<_, _, cdr::CdrLe>(&s, cdr::Infinite).unwrap();
+            let be = cdr::serialize::<_, _, cdr::CdrBe>(&s, cdr::Infinite).unwrap();
+            assert_eq!(check_cdr_lengths(&le, 3), Ok(()));
+            assert_eq!(check_cdr_lengths(&be, 3), Ok(()));
+        }
+        let sample = JointSample {
+            header: state(&[]).header,
+            name: vec!["a".into(), "bc".into()],
+            position: vec![1.0; 2],
+            velocity: vec![1.0; 2],
+            acceleration: vec![],
+            effort: vec![1.0; 2],
+            friction: vec![1.0; 2],
+            effects: vec![1.0; 2],
+        };
+        let bytes = cdr::serialize::<_, _, cdr::CdrLe>(&sample, cdr::Infinite).unwrap();
+        assert_eq!(check_cdr_lengths(&bytes, 6), Ok(()));
+    }
+
+    #[test]
+    fn a_corrupt_string_length_is_refused_before_decoding() {
+        // Before: cdr's decoder reserved the claimed 4.2 GB for the frame id.
+        let mut bytes = cdr::serialize::<_, _, cdr::CdrLe>(&state(&["a"]), cdr::Infinite).unwrap();
+        bytes[4 + 8..4 + 12].copy_from_slice(&u32::MAX.to_le_bytes());
+        let err = check_cdr_lengths(&bytes, 3).unwrap_err();
+        assert!(err.contains("frame id claims 4294967295 bytes"), "{err}");
+        // A truncated message and a wrong encapsulation are named too.
+        let whole = cdr::serialize::<_, _, cdr::CdrLe>(&state(&["a"]), cdr::Infinite).unwrap();
+        assert!(check_cdr_lengths(&whole[..whole.len() - 3], 3).is_err());
+        assert!(check_cdr_lengths(&[9, 9, 0, 0, 0], 3).is_err());
+        assert!(check_cdr_lengths(&[0, 1], 3).is_err());
+    }
 }
