@@ -26,7 +26,7 @@ pub struct Args {
 /// seeds per n_s × set), `summary.md` (pivots), `validation_error.svg`, `parameter_error.svg`
 /// and `provenance.json`.
 pub fn run(a: Args) -> anyhow::Result<()> {
-    let (path, out, seeds, threads) = (&a.scenario, &a.out, a.seeds, a.threads);
+    let (path, seeds, threads) = (&a.scenario, a.seeds, a.threads);
     let (sc, model, text) = physid::sim::scenario::load(path)?;
     let mut spec = experiment::ExperimentSpec::from_scenario(&sc)
         .map_err(|e| anyhow::anyhow!("{}: [experiment]: {e}", path.display()))?;
@@ -36,6 +36,9 @@ pub fn run(a: Args) -> anyhow::Result<()> {
     spec.validate()
         .map_err(|e| anyhow::anyhow!("{}: {e}", path.display()))?;
     let pool = super::thread_pool(threads)?;
+    // Checked before the run; written beside the target and moved into place whole.
+    let staging = physid::io::StagingDir::new(&a.out)?;
+    let out = staging.path();
     let cells = spec.seeds * spec.grid().len() * spec.constraints.len();
     let bar = indicatif::ProgressBar::new(spec.seeds as u64);
     bar.set_style(
@@ -49,7 +52,6 @@ pub fn run(a: Args) -> anyhow::Result<()> {
         .with_context(|| format!("running the experiment of {}", path.display()))?;
     let wall = start.elapsed().as_secs_f64();
     bar.finish_and_clear();
-    std::fs::create_dir_all(out).with_context(|| format!("creating {}", out.display()))?;
     let joints: Vec<String> = model.bodies.iter().map(|b| b.joint_name.clone()).collect();
     let body_names: Vec<String> = physid::ident::bodies(&model)
         .into_iter()
@@ -67,10 +69,11 @@ pub fn run(a: Args) -> anyhow::Result<()> {
     physid::io::write_atomic(&out.join("summary.md"), md.as_bytes())?;
     write_plots(&summary, &sets, out)?;
     write_provenance(path, &text, &spec, out, threads, wall)?;
+    staging.commit()?;
     println!(
         "{cells} cells in {wall:.1} s on {} threads; wrote {}/",
         threads,
-        out.display()
+        a.out.display()
     );
     let p = tables::pivot(&summary, "val_rms_median", &sets)?;
     println!("median validation RMS (N m):\n{}", tables::markdown(&p));

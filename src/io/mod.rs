@@ -120,6 +120,82 @@ pub fn check_outputs(outputs: &[&Path], inputs: &[&Path]) -> Result<(), IoError>
     Ok(())
 }
 
+/// A result directory built beside its final place and moved there whole by [`Self::commit`],
+/// so a reader never sees half a result or a mix of two runs: until the commit, the files live
+/// in a hidden `.NAME.partial-XXXX` directory beside the target (removed on drop, and by the
+/// next run if a kill left it behind); the commit renames it into place, replacing an older
+/// result only once the new one is complete.
+pub struct StagingDir {
+    target: PathBuf,
+    dir: tempfile::TempDir,
+}
+
+impl StagingDir {
+    /// Stages a result for `target`, checking before any work that it can be written: `target`
+    /// is a directory or absent, and its parent directory can hold a new one.
+    pub fn new(target: &Path) -> Result<Self, IoError> {
+        if target.exists() && !target.is_dir() {
+            return Err(IoError::invalid(
+                target,
+                "exists and is not a directory; give a directory for the results",
+            ));
+        }
+        let name = target
+            .file_name()
+            .ok_or_else(|| IoError::invalid(target, "has no directory name"))?
+            .to_string_lossy()
+            .into_owned();
+        let parent = match target.parent() {
+            Some(d) if !d.as_os_str().is_empty() => d.to_path_buf(),
+            _ => PathBuf::from("."),
+        };
+        create_dir_all(&parent)?;
+        let prefix = format!(".{name}.partial-");
+        // What a killed run left behind is not a result: remove it.
+        if let Ok(entries) = std::fs::read_dir(&parent) {
+            for e in entries.flatten() {
+                if e.file_name().to_string_lossy().starts_with(&prefix) {
+                    let _ = std::fs::remove_dir_all(e.path());
+                }
+            }
+        }
+        let dir = tempfile::Builder::new()
+            .prefix(&prefix)
+            .tempdir_in(&parent)
+            .map_err(|source| IoError::Fs {
+                path: parent.clone(),
+                source,
+            })?;
+        Ok(Self {
+            target: target.to_path_buf(),
+            dir,
+        })
+    }
+
+    /// Where to write the result's files.
+    pub fn path(&self) -> &Path {
+        self.dir.path()
+    }
+
+    /// Moves the complete result into place (replacing an older one).
+    pub fn commit(self) -> Result<(), IoError> {
+        let fs_err = |path: &Path| {
+            let path = path.to_path_buf();
+            move |source| IoError::Fs { path, source }
+        };
+        let staged = self.dir.keep();
+        if self.target.exists() {
+            let old = staged.with_extension("old");
+            std::fs::rename(&self.target, &old).map_err(fs_err(&self.target))?;
+            std::fs::rename(&staged, &self.target).map_err(fs_err(&self.target))?;
+            std::fs::remove_dir_all(&old).map_err(fs_err(&old))?;
+        } else {
+            std::fs::rename(&staged, &self.target).map_err(fs_err(&self.target))?;
+        }
+        Ok(())
+    }
+}
+
 /// Creates a directory and its parents, naming it on failure.
 pub fn create_dir_all(dir: &Path) -> Result<(), IoError> {
     std::fs::create_dir_all(dir).map_err(|source| IoError::Fs {

@@ -1,0 +1,120 @@
+//! `physid experiment` killed at any point leaves either no result or a complete one (the
+//! previous run's, or the new run's), never a partial directory or a mix of two runs: the
+//! result is built in a hidden staging directory beside the target and renamed into place.
+
+use std::path::Path;
+use std::process::{Command, Stdio};
+use std::time::Duration;
+
+const FILES: [&str; 8] = [
+    "rows.parquet",
+    "rows.csv",
+    "summary.parquet",
+    "summary.csv",
+    "summary.md",
+    "validation_error.svg",
+    "parameter_error.svg",
+    "provenance.json",
+];
+
+/// `Some(seeds)` when `dir` holds a complete, self-consistent result of `seeds` seeds, `None`
+/// when it does not exist; panics on anything else (a partial or mixed result).
+fn complete_result(dir: &Path) -> Option<u64> {
+    if !dir.exists() {
+        return None;
+    }
+    for f in FILES {
+        assert!(dir.join(f).is_file(), "{f} missing from {}", dir.display());
+    }
+    let prov: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.join("provenance.json")).unwrap())
+            .unwrap();
+    let seeds = prov["seeds"].as_array().unwrap().len() as u64;
+    let rows = std::fs::read_to_string(dir.join("rows.csv"))
+        .unwrap()
+        .lines()
+        .count()
+        - 1;
+    let per_seed = 12 * 4; // the scenario's 12 sizes × 4 sets
+    assert_eq!(
+        rows as u64,
+        seeds * per_seed,
+        "rows.csv does not match provenance.json"
+    );
+    let leftovers: Vec<_> = std::fs::read_dir(dir)
+        .unwrap()
+        .flatten()
+        .map(|e| e.file_name().to_string_lossy().into_owned())
+        .filter(|n| !FILES.contains(&n.as_str()))
+        .collect();
+    assert!(
+        leftovers.is_empty(),
+        "extra files in the result: {leftovers:?}"
+    );
+    Some(seeds)
+}
+
+fn experiment(out: &Path, seeds: &str) -> std::process::Child {
+    let scenario = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenarios/sample_size.toml");
+    Command::new(env!("CARGO_BIN_EXE_physid"))
+        .arg("experiment")
+        .arg(scenario)
+        .args(["--seeds", seeds, "--threads", "1", "--out"])
+        .arg(out)
+        .stdout(Stdio::null())
+        .stderr(Stdio::null())
+        .spawn()
+        .unwrap()
+}
+
+#[test]
+fn a_killed_experiment_never_leaves_a_partial_or_mixed_result() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("res");
+    let mut finished = None;
+    let mut kills = 0;
+    // Kill times spread over a run (about 0.5–1 s for one seed on one thread).
+    for k in 0..24u64 {
+        let seeds = if k % 2 == 0 { "1" } else { "2" };
+        let mut child = experiment(&out, seeds);
+        std::thread::sleep(Duration::from_millis(40 + (k * 137) % 900));
+        match child.try_wait().unwrap() {
+            Some(status) => {
+                assert!(status.success());
+                finished = complete_result(&out);
+                assert!(finished.is_some());
+            }
+            None => {
+                child.kill().unwrap();
+                child.wait().unwrap();
+                kills += 1;
+                // The previous complete result, a new complete one, or none yet.
+                let now = complete_result(&out);
+                assert!(now.is_none() == finished.is_none() || now.is_some());
+                if now.is_some() {
+                    finished = now;
+                }
+            }
+        }
+        // Nothing beside the result but hidden staging directories of killed runs.
+        for e in std::fs::read_dir(dir.path()).unwrap().flatten() {
+            let name = e.file_name().to_string_lossy().into_owned();
+            assert!(
+                name == "res" || name.starts_with(".res.partial-"),
+                "left {name}"
+            );
+        }
+    }
+    eprintln!("{kills} of 24 runs killed; complete result before the last run: {finished:?}");
+    assert!(kills >= 20, "only {kills} runs were killed");
+    // The next run clears what the killed ones left and completes.
+    let status = experiment(&out, "1").wait().unwrap();
+    assert!(status.success());
+    assert_eq!(complete_result(&out), Some(1));
+    let names: Vec<_> = std::fs::read_dir(dir.path())
+        .unwrap()
+        .flatten()
+        .map(|e| e.file_name().to_string_lossy().into_owned())
+        .collect();
+    assert_eq!(names, vec!["res".to_string()]);
+}
