@@ -174,3 +174,30 @@ fn negative_option_values_reach_the_option_check() {
     let (ok, err) = physid(&["dynamics", "--samples", "1000000000000", "--out", "x.json"]);
     assert!(!ok && err.contains("--samples"), "{err}");
 }
+
+#[test]
+fn a_recording_larger_than_memory_is_refused_before_allocating() {
+    // Before: `duration = 99999` s (inside the documented cap) asked for 2.4 GB in one block and
+    // about 44 GB in all.
+    // 1e8 samples of 3 joints need about 58 GB: more than this machine kind has (24 GB).
+    let available_gb = std::fs::read_to_string("/proc/meminfo")
+        .ok()
+        .and_then(|m| {
+            let line = m
+                .lines()
+                .find(|l| l.starts_with("MemAvailable:"))?
+                .to_string();
+            line.split_whitespace().nth(1)?.parse::<f64>().ok()
+        })
+        .map(|kb| kb * 1024.0 / 1e9);
+    assert!(
+        available_gb.is_some_and(|gb| gb < 50.0),
+        "this test needs a machine with less than 50 GB available ({available_gb:?})"
+    );
+    let (mut sc, model, _) = scenario::load(&root().join("scenarios/cheetah3_shell.toml")).unwrap();
+    sc.simulation.duration = 99_999.0;
+    let err = physid::sim::run(&model, &sc, &mut |_| {})
+        .unwrap_err()
+        .to_string();
+    assert!(err.contains("GB of memory are available"), "{err}");
+}

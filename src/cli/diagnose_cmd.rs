@@ -64,7 +64,9 @@ pub fn run(a: Args) -> anyhow::Result<()> {
             .map(|f| super::identify_cmd::load_data(f, &model))
             .collect()
     };
-    let d = diagnose::diagnose_runs(&model, load(&a.data)?, load(&a.validate)?, a.holdout, &opts)?;
+    let train_runs = load(&a.data)?;
+    warn_short(&train_runs);
+    let d = diagnose::diagnose_runs(&model, train_runs, load(&a.validate)?, a.holdout, &opts)?;
     if let Some(dir) = &a.report {
         diagnose::report::write(dir, &d)
             .with_context(|| format!("writing the report to {}", dir.display()))?;
@@ -76,6 +78,23 @@ pub fn run(a: Args) -> anyhow::Result<()> {
         print_text(&d);
     }
     Ok(())
+}
+
+/// Training data shorter than this (s) leave the diagnosis's cross-validation blocks and noise
+/// floor too few repetitions of the motion: its verdicts were measured on 20 s and more.
+const SHORT_DATA_SECONDS: f64 = 10.0;
+
+/// Warns when the training runs together last less than [`SHORT_DATA_SECONDS`].
+fn warn_short(runs: &[physid::trajectory::Trajectory]) {
+    let seconds: f64 = runs
+        .iter()
+        .filter_map(|r| r.sample_period().map(|dt| dt * r.len() as f64))
+        .sum();
+    if seconds < SHORT_DATA_SECONDS {
+        eprintln!(
+            "warning: {seconds:.1} s of training data: below {SHORT_DATA_SECONDS} s the blocks of the cross-validation and the noise floor rest on few repetitions of the motion, and a verdict of \"unexplained\" or \"no effect\" may only mean too little data"
+        );
+    }
 }
 
 /// The diagnosis as text: where, which, how far, and the summary.

@@ -189,8 +189,10 @@ pub fn run(a: Args) -> anyhow::Result<()> {
         Some((v, rg)) => Some(v.rms(m, &r.theta, rg)?),
         None => None,
     };
+    let idf = analysis::identifiability(m, &ne, &r.theta);
+    warn_weak_data(&train, vrange.as_ref(), a.validate.is_some(), &idf);
     let report = Report {
-        idf: analysis::identifiability(m, &ne, &r.theta),
+        idf,
         truth_errors: truth_errors(&a.data, m, &r.theta),
         r,
         train,
@@ -211,6 +213,34 @@ pub fn run(a: Args) -> anyhow::Result<()> {
     } else {
         print_text(&a, m, &report);
         Ok(())
+    }
+}
+
+/// Warnings where the data cannot support the answer: validation samples that are also
+/// training samples, and data that excite far fewer parameter directions than the model has.
+fn warn_weak_data(
+    train: &Range<usize>,
+    validate: Option<&Range<usize>>,
+    same_file: bool,
+    idf: &analysis::Identifiability,
+) {
+    if let Some(v) = validate.filter(|_| same_file) {
+        let overlap = v
+            .end
+            .min(train.end)
+            .saturating_sub(v.start.max(train.start));
+        if overlap > 0 {
+            eprintln!(
+                "warning: --train {}:{} and --validate {}:{} share {overlap} samples: the validation error is not a held-out error",
+                train.start, train.end, v.start, v.end
+            );
+        }
+    }
+    if 2 * idf.rank < idf.parameters {
+        eprintln!(
+            "warning: the data excite {} of {} parameter directions: the rest comes from the prior (the robot description), not from the data; record a motion that moves every joint",
+            idf.rank, idf.parameters
+        );
     }
 }
 

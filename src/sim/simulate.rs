@@ -46,6 +46,18 @@ pub enum SimError {
         /// What happened.
         what: String,
     },
+    /// The recording would not fit in the memory available.
+    #[error("{samples} samples of {joints} joints need about {needed_gb:.1} GB, but only {available_gb:.1} GB of memory are available: shorten simulation.duration or lower simulation.rate")]
+    TooLarge {
+        /// Samples asked for.
+        samples: usize,
+        /// Joints.
+        joints: usize,
+        /// Estimated need (GB).
+        needed_gb: f64,
+        /// Available memory (GB).
+        available_gb: f64,
+    },
     /// The other engine refused the model.
     #[error("{0}")]
     Engine(String),
@@ -78,6 +90,7 @@ pub fn simulate(
     let dt = 1.0 / s.rate;
     let h = dt / s.substeps as f64;
     let samples = (s.duration * s.rate).round() as usize;
+    check_memory(samples, n)?;
     let controller = Controller::new(model, &scenario.excitation, s.seed)?;
     let mut cdata = Data::new(model);
     let guess = initial_guess(model, s);
@@ -172,6 +185,32 @@ pub fn simulate(
         measured,
         processed,
     })
+}
+
+/// Joint arrays a simulation keeps per sample and joint: the truth (q, q̇, q̈, τ), friction
+/// and effects, the measurement and the processed signals (5 each), and the offline
+/// processing's working copies, with margin.
+const ARRAYS_PER_SAMPLE: usize = 24;
+
+/// Refuses, before allocating, a recording larger than the memory available (Linux's
+/// `MemAvailable`; unchecked where it cannot be read).
+fn check_memory(samples: usize, joints: usize) -> Result<(), SimError> {
+    let needed = (samples as f64) * (joints.max(1) * ARRAYS_PER_SAMPLE * 8 + 8) as f64;
+    let available = std::fs::read_to_string("/proc/meminfo").ok().and_then(|m| {
+        m.lines()
+            .find_map(|l| l.strip_prefix("MemAvailable:"))
+            .and_then(|v| v.trim().trim_end_matches("kB").trim().parse::<f64>().ok())
+            .map(|kb| kb * 1024.0)
+    });
+    match available {
+        Some(bytes) if needed > bytes => Err(SimError::TooLarge {
+            samples,
+            joints,
+            needed_gb: needed / 1e9,
+            available_gb: bytes / 1e9,
+        }),
+        _ => Ok(()),
+    }
 }
 
 /// The configuration the controller starts from without `initial_q`: alternating 0.3 and
