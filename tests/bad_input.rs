@@ -201,3 +201,19 @@ fn a_recording_larger_than_memory_is_refused_before_allocating() {
         .to_string();
     assert!(err.contains("GB of memory are available"), "{err}");
 }
+
+#[test]
+fn an_xml_file_that_is_not_a_robot_is_named_as_such() {
+    // Before: reported as a closed kinematic loop.
+    let p = Path::new("page.urdf");
+    let html = "<?xml version=\"1.0\"?>\n<!-- a page --><html><body>hi</body></html>";
+    let msg = io::urdf::from_str(html, p, &Default::default())
+        .unwrap_err()
+        .to_string();
+    assert!(msg.contains("root element is <html>, not <robot>"), "{msg}");
+    let empty = "<robot name=\"r\"></robot>";
+    let msg = io::urdf::from_str(empty, p, &Default::default())
+        .unwrap_err()
+        .to_string();
+    assert!(msg.contains("no <link> elements"), "{msg}");
+}

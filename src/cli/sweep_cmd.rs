@@ -47,17 +47,18 @@ pub fn run(a: Args) -> anyhow::Result<()> {
         .map_err(|e| anyhow::anyhow!("{}: {e}", path.display()))?;
     let out =
         out.unwrap_or_else(|| PathBuf::from("results").join(path.file_stem().unwrap_or_default()));
-    let cells_dir = out.join("cells");
-    std::fs::create_dir_all(&cells_dir)
-        .with_context(|| format!("creating {}", cells_dir.display()))?;
     let all = sweep::cells(&spec);
-    // Check every grid point before running anything: a bad value fails fast, naming it.
+    // Check every grid point before creating or running anything: a bad value fails fast,
+    // naming it, and leaves no empty result behind.
     let mut seen = std::collections::BTreeSet::new();
     for c in &all {
         if seen.insert(format!("{:?}", c.point)) {
             sweep::scenario_at(&base, &scenario_path, &c.point)?;
         }
     }
+    let cells_dir = out.join("cells");
+    std::fs::create_dir_all(&cells_dir)
+        .with_context(|| format!("creating {}", cells_dir.display()))?;
     let file = |c: &sweep::Cell| cells_dir.join(format!("{}.parquet", c.id()));
     let mine: Vec<&sweep::Cell> = all
         .iter()
@@ -107,6 +108,12 @@ pub fn run(a: Args) -> anyhow::Result<()> {
         eprintln!("{missing} of {} cells still missing (other shards); merge when all are done by running without --shard", all.len());
         return Ok(());
     }
+    // summary.md is written last and marks a complete merge: remove the old one first, so a
+    // merge killed half-way never leaves a summary beside tables of another merge.
+    let marker = out.join("summary.md");
+    if marker.exists() {
+        std::fs::remove_file(&marker).with_context(|| format!("removing {}", marker.display()))?;
+    }
     let parts = all
         .iter()
         .map(|c| tables::read_parquet(&file(c)))
@@ -127,7 +134,7 @@ pub fn run(a: Args) -> anyhow::Result<()> {
         spec.experiment.constraints.iter().map(|c| c.name()).collect::<Vec<_>>(),
         tables::markdown(&summary.select(keys.iter().map(|k| k.to_string()).chain(["n_s", "constraints", "val_rms_median", "j_err_median", "consistent_fraction"].map(String::from)))?)
     );
-    physid::io::write_atomic(&out.join("summary.md"), md.as_bytes())?;
+    physid::io::write_atomic(&marker, md.as_bytes())?;
     println!(
         "{} cells merged into {}/rows.parquet, summary.csv, summary.md",
         all.len(),

@@ -102,9 +102,18 @@ pub fn same_file(a: &Path, b: &Path) -> bool {
     }
 }
 
-/// Refuses, before any work, outputs that would overwrite one of `inputs` or each other.
+/// Refuses, before any work, outputs that would overwrite one of `inputs` or each other, or
+/// whose directory does not exist.
 pub fn check_outputs(outputs: &[&Path], inputs: &[&Path]) -> Result<(), IoError> {
     for (i, out) in outputs.iter().enumerate() {
+        if let Some(dir) = out.parent().filter(|d| !d.as_os_str().is_empty()) {
+            if !dir.is_dir() {
+                return Err(IoError::invalid(
+                    out,
+                    format!("its directory {} does not exist", dir.display()),
+                ));
+            }
+        }
         let clash = |input: &Path, what| IoError::OutputIsInput {
             output: out.to_path_buf(),
             input: input.to_path_buf(),
@@ -230,7 +239,12 @@ pub fn new_temp_beside(path: &Path) -> Result<tempfile::NamedTempFile, IoError> 
         Some(d) if !d.as_os_str().is_empty() => d.to_path_buf(),
         _ => PathBuf::from("."),
     };
-    let tmp = tempfile::NamedTempFile::new_in(&dir).map_err(fs_err)?;
+    // tempfile's errors name the temporary file; the user gave `path`.
+    let tmp = tempfile::NamedTempFile::new_in(&dir).map_err(|e| {
+        let text = e.to_string();
+        let text = text.split(" at path ").next().unwrap_or(&text).to_string();
+        fs_err(std::io::Error::new(e.kind(), text))
+    })?;
     #[cfg(unix)]
     {
         use std::os::unix::fs::PermissionsExt;

@@ -103,17 +103,46 @@ fn first_origin_only(xml: &str) -> String {
     out
 }
 
+/// The name of the document's first element (after the XML declaration, comments and
+/// doctype), if any.
+fn root_element(xml: &str) -> Option<&str> {
+    let mut rest = xml;
+    loop {
+        let start = rest.find('<')?;
+        rest = &rest[start + 1..];
+        if let Some(comment) = rest.strip_prefix("!--") {
+            rest = &comment[comment.find("-->")? + 3..];
+        } else if rest.starts_with('?') || rest.starts_with('!') {
+            rest = &rest[rest.find('>')? + 1..];
+        } else {
+            let end = rest
+                .find(|c: char| c.is_whitespace() || c == '>' || c == '/')
+                .unwrap_or(rest.len());
+            return Some(&rest[..end]);
+        }
+    }
+}
+
 /// Parses URDF text. Returns the model and warnings (e.g. duplicate elements).
 pub fn from_str(
     xml: &str,
     path: &Path,
     extras: &RobotExtras,
 ) -> Result<(Model, Vec<String>), IoError> {
+    if let Some(root) = root_element(xml).filter(|r| *r != "robot") {
+        return Err(IoError::Parse {
+            path: path.to_path_buf(),
+            message: format!("not a URDF: the document's root element is <{root}>, not <robot>"),
+        });
+    }
     let warnings = duplicate_elements(xml);
     let robot = urdf_rs::read_from_string(&first_origin_only(xml)).map_err(|e| IoError::Parse {
         path: path.to_path_buf(),
         message: format!("not a valid URDF: {e}"),
     })?;
+    if robot.links.is_empty() {
+        return Err(IoError::invalid(path, "the robot has no <link> elements"));
+    }
     let link_idx = link_index(&robot, path)?;
     let (children, root) = tree(&robot, &link_idx, path)?;
     let Walk {
