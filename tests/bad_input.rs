@@ -217,3 +217,23 @@ fn an_xml_file_that_is_not_a_robot_is_named_as_such() {
         .to_string();
     assert!(msg.contains("no <link> elements"), "{msg}");
 }
+
+#[test]
+fn non_finite_normal_equations_are_an_error_not_a_solver_panic() {
+    // Before: one torque sample of 1e300 made Clarabel panic ("Eigval error") under
+    // `consistent` and `ellipsoid`, and gave NaN objectives under `none`.
+    use physid::ident::{self, ConstraintSet, IdentError, NormalEquations, Options};
+    let model = physid::model::cheetah3::leg();
+    let p = model.layout().len;
+    let mut yty = nalgebra::DMatrix::<f64>::identity(p, p);
+    yty[(3, 3)] = f64::INFINITY;
+    let ne = NormalEquations::from_sums(model.dof(), yty, nalgebra::DVector::zeros(p), 1.0, 100);
+    for set in [
+        ConstraintSet::None,
+        ConstraintSet::Consistent,
+        ConstraintSet::Ellipsoid,
+    ] {
+        let r = ident::identify(&model, &ne, &model.parameters(), &Options::new(set));
+        assert!(matches!(r, Err(IdentError::NonFinite(_))), "{set:?}: {r:?}");
+    }
+}

@@ -196,6 +196,9 @@ pub enum IdentError {
     /// The log-det regularizer needs a physically consistent prior.
     #[error("log-det regularizer: the prior of '{0}' is not physically consistent (J not positive definite)")]
     InconsistentPrior(String),
+    /// Something that must be a finite number is not.
+    #[error("{0} are not finite: check the data for absurd values")]
+    NonFinite(&'static str),
     /// Clarabel refused the problem's data.
     #[error("cone program rejected: {0}")]
     Rejected(String),
@@ -405,6 +408,16 @@ pub fn identify(
     }
     let logdet = opts.regularizer == Regularizer::LogDet;
     let Objective { h, g, c: constant } = objective(model, ne, prior, opts);
+    // Never hand the solver non-finite data (Clarabel panics on them).
+    let finite = |x: &f64| x.is_finite();
+    if !(h.iter().all(finite) && g.iter().all(finite) && constant.is_finite()) {
+        return Err(IdentError::NonFinite("the normal equations of the data"));
+    }
+    if !prior.iter().all(finite) {
+        return Err(IdentError::NonFinite(
+            "the prior (the robot description's parameters)",
+        ));
+    }
     let start = std::time::Instant::now();
     if let Some(&c) = opts.nonnegative.iter().find(|&&c| c >= p) {
         return Err(IdentError::NonNegativeColumn {
@@ -431,6 +444,11 @@ pub fn identify(
     let mut objective = theta.dot(&(&h * &theta)) - 2.0 * theta.dot(&g) + constant;
     if logdet {
         objective += w * bregman_logdet(model, &theta, prior).unwrap_or(f64::INFINITY);
+    }
+    if !objective.is_finite() || theta.iter().any(|v| !v.is_finite()) {
+        return Err(IdentError::NonFinite(
+            "the identified parameters or their objective",
+        ));
     }
     Ok(result(
         model,
