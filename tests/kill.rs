@@ -118,3 +118,86 @@ fn a_killed_experiment_never_leaves_a_partial_or_mixed_result() {
         .collect();
     assert_eq!(names, vec!["res".to_string()]);
 }
+
+#[test]
+fn a_killed_sweep_leaves_whole_cells_and_never_a_mixed_merge() {
+    let dir = tempfile::tempdir().unwrap();
+    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
+    std::fs::copy(
+        root.join("scenarios/sample_size.toml"),
+        dir.path().join("sc.toml"),
+    )
+    .unwrap();
+    let sweep = dir.path().join("sweep.toml");
+    std::fs::write(
+        &sweep,
+        "scenario = \"sc.toml\"\n[grid]\n\"sensors.torque_noise\" = [0.3, 1.0, 3.0]\n\
+         [experiment]\nseeds = 6\nsizes = [20, 200]\nvalidation = 1000\n\
+         constraints = [\"none\", \"consistent\"]\n",
+    )
+    .unwrap();
+    let out = dir.path().join("out");
+    let run = || {
+        Command::new(env!("CARGO_BIN_EXE_physid"))
+            .arg("sweep")
+            .arg(&sweep)
+            .args(["--threads", "1", "--out"])
+            .arg(&out)
+            .stdout(Stdio::null())
+            .stderr(Stdio::null())
+            .spawn()
+            .unwrap()
+    };
+    let (mut kills, mut runs, mut merged) = (0, 0, 0);
+    // Until 20 kills (at most 60 runs): kill times spread over a whole sweep (about 0.8 s on
+    // one thread), results removed every third run so kills land before, between and after cells
+    // and during merges.
+    for k in 0..60u64 {
+        if kills >= 20 {
+            break;
+        }
+        if k % 3 == 0 {
+            let _ = std::fs::remove_dir_all(&out);
+        }
+        runs += 1;
+        let mut child = run();
+        std::thread::sleep(Duration::from_millis(10 + (k * 137) % 800));
+        if child.try_wait().unwrap().is_none() {
+            child.kill().unwrap();
+            kills += 1;
+        }
+        child.wait().unwrap();
+        // Every visible cell file is a whole table.
+        let cells = out.join("cells");
+        if let Ok(entries) = std::fs::read_dir(&cells) {
+            for e in entries.flatten() {
+                let name = e.file_name().to_string_lossy().into_owned();
+                if name.starts_with(physid::io::PARTIAL_PREFIX) {
+                    continue; // removed by the next run
+                }
+                assert!(
+                    physid::experiment::tables::read_parquet(&e.path()).is_ok(),
+                    "{name} is not a whole table"
+                );
+            }
+        }
+        // summary.md only with every merged table beside it.
+        if out.join("summary.md").exists() {
+            merged += 1;
+            for f in ["rows.parquet", "rows.csv", "summary.parquet", "summary.csv"] {
+                assert!(out.join(f).exists(), "summary.md without {f}");
+            }
+        }
+    }
+    eprintln!("{kills} of {runs} sweep runs killed; {merged} times a complete merge was present");
+    assert!(kills >= 20, "only {kills} runs were killed");
+    // A run to the end merges, and leaves no partial file anywhere.
+    assert!(run().wait().unwrap().success());
+    assert!(out.join("summary.md").exists());
+    for d in [out.clone(), out.join("cells")] {
+        for e in std::fs::read_dir(&d).unwrap().flatten() {
+            let name = e.file_name().to_string_lossy().into_owned();
+            assert!(!name.starts_with(physid::io::PARTIAL_PREFIX), "left {name}");
+        }
+    }
+}

@@ -59,6 +59,9 @@ pub fn run(a: Args) -> anyhow::Result<()> {
     let cells_dir = out.join("cells");
     std::fs::create_dir_all(&cells_dir)
         .with_context(|| format!("creating {}", cells_dir.display()))?;
+    // Cells and merged tables are renamed into place whole; what killed runs left is partial.
+    physid::io::remove_partials(&cells_dir);
+    physid::io::remove_partials(&out);
     let file = |c: &sweep::Cell| cells_dir.join(format!("{}.parquet", c.id()));
     let mine: Vec<&sweep::Cell> = all
         .iter()

@@ -228,8 +228,24 @@ pub fn write_atomic(path: &Path, contents: &[u8]) -> Result<(), IoError> {
     Ok(())
 }
 
+/// The name prefix of every file physid writes before renaming it into place.
+pub const PARTIAL_PREFIX: &str = ".physid-partial-";
+
+/// Removes what killed runs left in `dir`: files named with [`PARTIAL_PREFIX`] (never a result:
+/// a result is renamed away from that name once complete).
+pub fn remove_partials(dir: &Path) {
+    if let Ok(entries) = std::fs::read_dir(dir) {
+        for e in entries.flatten() {
+            if e.file_name().to_string_lossy().starts_with(PARTIAL_PREFIX) {
+                let _ = std::fs::remove_file(e.path());
+            }
+        }
+    }
+}
+
 /// A temporary file in the directory of `path` (so the final rename stays on one file system),
-/// readable by others like a normally created file (0644 on Unix).
+/// named with [`PARTIAL_PREFIX`], readable by others like a normally created file (0644 on
+/// Unix).
 pub fn new_temp_beside(path: &Path) -> Result<tempfile::NamedTempFile, IoError> {
     let fs_err = |source| IoError::Fs {
         path: path.to_path_buf(),
@@ -240,11 +256,14 @@ pub fn new_temp_beside(path: &Path) -> Result<tempfile::NamedTempFile, IoError> 
         _ => PathBuf::from("."),
     };
     // tempfile's errors name the temporary file; the user gave `path`.
-    let tmp = tempfile::NamedTempFile::new_in(&dir).map_err(|e| {
-        let text = e.to_string();
-        let text = text.split(" at path ").next().unwrap_or(&text).to_string();
-        fs_err(std::io::Error::new(e.kind(), text))
-    })?;
+    let tmp = tempfile::Builder::new()
+        .prefix(PARTIAL_PREFIX)
+        .tempfile_in(&dir)
+        .map_err(|e| {
+            let text = e.to_string();
+            let text = text.split(" at path ").next().unwrap_or(&text).to_string();
+            fs_err(std::io::Error::new(e.kind(), text))
+        })?;
     #[cfg(unix)]
     {
         use std::os::unix::fs::PermissionsExt;
