@@ -237,3 +237,45 @@ fn non_finite_normal_equations_are_an_error_not_a_solver_panic() {
         assert!(matches!(r, Err(IdentError::NonFinite(_))), "{set:?}: {r:?}");
     }
 }
+
+#[test]
+fn an_mcap_chunk_record_claiming_exabytes_is_an_error_naming_the_file() {
+    // tests/fuzz_readers.rs found a compressed chunk whose inner record claimed ~8e18 bytes: the
+    // mcap message stream reserved them and aborted (its deterministic inputs keep that case).
+    // Here the same length in an uncompressed chunk: refused by the record-length bound.
+    let mut buf = std::io::Cursor::new(Vec::new());
+    let mut w = mcap::WriteOptions::new()
+        .compression(None)
+        .create(&mut buf)
+        .unwrap();
+    let schema = w.add_schema("s", "ros2msg", b"int32 x").unwrap();
+    let channel = w
+        .add_channel(schema, "/joint_states", "cdr", &Default::default())
+        .unwrap();
+    let payload = b"MARKERMARKER";
+    let header = mcap::records::MessageHeader {
+        channel_id: channel,
+        sequence: 0,
+        log_time: 1,
+        publish_time: 1,
+    };
+    w.write_to_known_channel(&header, payload).unwrap();
+    w.finish().unwrap();
+    drop(w);
+    let mut bytes = buf.into_inner();
+    // The message record inside the (uncompressed) chunk: opcode 0x05, then its u64 length.
+    let at = bytes
+        .windows(payload.len())
+        .position(|x| x == payload)
+        .unwrap();
+    let record = (0..at).rev().find(|&i| bytes[i] == 0x05).unwrap();
+    bytes[record + 1..record + 9].copy_from_slice(&0x7300_0000_0000_0000u64.to_le_bytes());
+    let dir = tempfile::tempdir().unwrap();
+    let p = dir.path().join("huge.mcap");
+    std::fs::write(&p, &bytes).unwrap();
+    let err = io::mcap_log::read(&p).unwrap_err().to_string();
+    assert!(
+        err.contains("huge.mcap") && err.contains("not a readable MCAP"),
+        "{err}"
+    );
+}
