@@ -254,6 +254,34 @@ impl Trajectory {
         (m > 1).then(|| (m - 1) as f64 / (self.t[m - 1] - self.t[0]))
     }
 
+    /// The same samples with the joints in the order of `names`, every one of which the
+    /// trajectory must have (`Err` names the first it lacks); joints not named are dropped.
+    pub fn with_joints(&self, names: &[String]) -> Result<Trajectory, String> {
+        let columns: Vec<usize> = names
+            .iter()
+            .map(|n| {
+                self.joint_names
+                    .iter()
+                    .position(|x| x == n)
+                    .ok_or_else(|| n.clone())
+            })
+            .collect::<Result<_, _>>()?;
+        let (n, m) = (self.dof(), self.len());
+        let pick = |v: &Vec<f64>| -> Vec<f64> {
+            (0..m)
+                .flat_map(|k| columns.iter().map(move |&j| v[k * n + j]))
+                .collect()
+        };
+        Ok(Trajectory {
+            joint_names: names.to_vec(),
+            t: self.t.clone(),
+            q: pick(&self.q),
+            qd: pick(&self.qd),
+            qdd: self.qdd.as_ref().map(pick),
+            tau: pick(&self.tau),
+        })
+    }
+
     /// Splits into the first `1 − holdout` of the samples (training) and the last `holdout`
     /// (validation), `holdout` in (0, 1).
     pub fn holdout_split(&self, holdout: f64) -> (Trajectory, Trajectory) {

@@ -36,6 +36,13 @@ pub fn parse_range(s: &str, len: usize, what: &str) -> anyhow::Result<Range<usiz
 /// Loads identification data (see [`physid::io::load_trajectory`]).
 pub fn load_data(path: &Path, model: &Model) -> anyhow::Result<Trajectory> {
     let loaded = physid::io::load_trajectory(path, model)?;
+    if !loaded.ignored_joints.is_empty() {
+        eprintln!(
+            "note: {} has joints the robot does not have, left out: {}",
+            path.display(),
+            loaded.ignored_joints.join(", ")
+        );
+    }
     if loaded.derived_qdd {
         eprintln!(
             "note: {} has no ddq columns; q̈ = zero-phase {} Hz Butterworth of the central difference of q̇",

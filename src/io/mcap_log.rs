@@ -350,23 +350,38 @@ pub fn read(path: &Path) -> Result<Log, IoError> {
     prevalidate(&bytes).map_err(|e| bad(format!("not a readable MCAP file: {e}")))?;
     let stream =
         mcap::MessageStream::new(&bytes).map_err(|e| bad(format!("not an MCAP file: {e}")))?;
+    let mut t0: Option<u64> = None;
     for (i, m) in stream.enumerate() {
         let m = m.map_err(|e| bad(format!("record {i}: {e}")))?;
-        let t = m.log_time as f64 / 1e9;
+        // Integer nanoseconds from the first message: absolute stamps (~1.7e18 ns) would lose
+        // their last digits in an f64.
+        let first = *t0.get_or_insert(m.log_time);
+        let t = m.log_time.saturating_sub(first) as f64 / 1e9;
         match m.channel.topic.as_str() {
             TOPIC_MEASURED => {
                 check_cdr_lengths(&m.data, 3)
                     .map_err(|e| bad(format!("{TOPIC_MEASURED} message {}: {e}", m.sequence)))?;
                 let js: JointState = cdr::deserialize(&m.data)
                     .map_err(|e| bad(format!("{TOPIC_MEASURED} message {}: {e}", m.sequence)))?;
-                let tr = measured.get_or_insert_with(|| Trajectory::new(js.name.clone(), false));
-                if js.position.len() != tr.dof()
-                    || js.velocity.len() != tr.dof()
-                    || js.effort.len() != tr.dof()
-                {
+                // A writer may leave the names out: the joints are then unnamed (matched to
+                // the robot by order, when the counts agree).
+                let names = if js.name.is_empty() {
+                    vec![String::new(); js.position.len()]
+                } else {
+                    js.name.clone()
+                };
+                let tr = measured.get_or_insert_with(|| Trajectory::new(names.clone(), false));
+                let lengths = [js.position.len(), js.velocity.len(), js.effort.len()];
+                if names != tr.joint_names || lengths.iter().any(|&l| l != tr.dof()) {
                     return Err(bad(format!(
-                        "{TOPIC_MEASURED} message {}: joint count differs from the first message",
-                        m.sequence
+                        "{TOPIC_MEASURED} message {}: {} names, {} positions, {} velocities and {} efforts; the first message has {} joints ({})",
+                        m.sequence,
+                        names.len(),
+                        lengths[0],
+                        lengths[1],
+                        lengths[2],
+                        tr.dof(),
+                        tr.joint_names.join(", ")
                     )));
                 }
                 tr.push(t, &js.position, &js.velocity, None, &js.effort);

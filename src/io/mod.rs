@@ -294,28 +294,25 @@ pub struct LoadedData {
     /// The file had no accelerations: they were derived from the velocities
     /// ([`crate::signal::derive_acceleration`]).
     pub derived_qdd: bool,
+    /// Joints in the file that the robot does not have (left out).
+    pub ignored_joints: Vec<String>,
 }
 
 /// Loads identification data: the processed signals of a physid MCAP, the joint states of another
-/// MCAP, or a CSV, for `model`'s joints; q̈ is derived ([`crate::signal::derive_acceleration`])
+/// MCAP (matched to `model`'s joints by name, in any order, extra joints left out), or a CSV
+/// (columns in the robot's joint order); q̈ is derived ([`crate::signal::derive_acceleration`])
 /// if the file has none. Errors name the file and the sample.
 pub fn load_trajectory(path: &Path, model: &Model) -> Result<LoadedData, IoError> {
     let names: Vec<String> = model.bodies.iter().map(|b| b.joint_name.clone()).collect();
-    let mut tr = match path.extension().and_then(|e| e.to_str()) {
+    let read = match path.extension().and_then(|e| e.to_str()) {
         Some("mcap") => mcap_log::read(path)?.identification_input().clone(),
         Some("csv") => samples::read_csv(path, Some(&names))?,
         _ => return Err(IoError::invalid(path, "give a .mcap or .csv file")),
     };
-    if tr.dof() != model.dof() {
-        let message = format!(
-            "the data have {} joints, the robot has {}",
-            tr.dof(),
-            model.dof()
-        );
-        return Err(IoError::invalid(path, message));
-    }
-    tr.validate()
+    read.validate()
         .map_err(|e| IoError::invalid(path, e.to_string()))?;
+    let (mut tr, ignored_joints) =
+        match_joints(read, &names).map_err(|m| IoError::invalid(path, m))?;
     let derived_qdd = tr.qdd.is_none();
     if derived_qdd {
         let dt = tr.sample_period().unwrap_or(1e-3);
@@ -326,5 +323,37 @@ pub fn load_trajectory(path: &Path, model: &Model) -> Result<LoadedData, IoError
     Ok(LoadedData {
         trajectory: tr,
         derived_qdd,
+        ignored_joints,
     })
+}
+
+/// The data's joints matched to the robot's `names` by name (reordered; joints the robot does
+/// not have are dropped and returned); data that name no joints are taken in the robot's order
+/// when the counts agree. An error names a robot joint the data lack.
+fn match_joints(tr: Trajectory, names: &[String]) -> Result<(Trajectory, Vec<String>), String> {
+    if tr.joint_names.iter().all(|n| n.is_empty()) {
+        if tr.dof() != names.len() {
+            return Err(format!(
+                "the data have {} unnamed joints, the robot has {}",
+                tr.dof(),
+                names.len()
+            ));
+        }
+        let mut tr = tr;
+        tr.joint_names = names.to_vec();
+        return Ok((tr, vec![]));
+    }
+    let ignored: Vec<String> = tr
+        .joint_names
+        .iter()
+        .filter(|n| !names.contains(n))
+        .cloned()
+        .collect();
+    let matched = tr.with_joints(names).map_err(|missing| {
+        format!(
+            "the robot's joint '{missing}' is not in the data (the data have {})",
+            tr.joint_names.join(", ")
+        )
+    })?;
+    Ok((matched, ignored))
 }
