@@ -94,13 +94,13 @@ fn an_absurd_sample_is_an_error_naming_it_whether_read_or_streamed() {
         .unwrap_err()
         .to_string();
     assert!(msg.contains("sample 17") && msg.contains("tau1"), "{msg}");
-    let streamed = io::samples::stream_csv(&p, 1, 0..50, &mut |_, _| {}).unwrap_err();
+    let streamed = io::samples::stream_csv(&p, &names, 0..50, &mut |_, _| {}).unwrap_err();
     let msg = streamed.to_string();
     assert!(msg.contains("sample 17") && msg.contains("tau1"), "{msg}");
     // An ordinary torque passes.
     let p = csv_with(dir.path(), 50, 17, "12.5");
     assert_eq!(
-        io::samples::stream_csv(&p, 1, 0..50, &mut |_, _| {}).unwrap(),
+        io::samples::stream_csv(&p, &names, 0..50, &mut |_, _| {}).unwrap(),
         50
     );
 }

@@ -18,6 +18,8 @@ pub struct Args {
     #[arg(long = "validate", num_args = 1..)]
     validate: Vec<PathBuf>,
     #[command(flatten)]
+    read: super::identify_cmd::ReadArgs,
+    #[command(flatten)]
     robot: RobotArgs,
     /// Constraint set of the nominal model.
     #[arg(long, default_value = "consistent")]
@@ -61,7 +63,7 @@ pub fn run(a: Args) -> anyhow::Result<()> {
     let load = |files: &[PathBuf]| -> anyhow::Result<Vec<_>> {
         files
             .iter()
-            .map(|f| super::identify_cmd::load_data(f, &model))
+            .map(|f| super::identify_cmd::load_data(f, &model, &a.read.options()))
             .collect()
     };
     let train_runs = load(&a.data)?;

@@ -1,7 +1,9 @@
 //! `physid identify`.
 
 use super::RobotArgs;
-use anyhow::{bail, Context};
+use anyhow::{anyhow, bail, Context};
+use physid::diagnose::calibrate::{parse_term, Calibration, Options as CalOptions, Run};
+use physid::diagnose::library::Variant;
 use physid::ident::{self, analysis, ConstraintSet, NormalEquations, Options};
 use physid::io::samples;
 use physid::model::Model;
@@ -33,14 +35,48 @@ pub fn parse_range(s: &str, len: usize, what: &str) -> anyhow::Result<Range<usiz
     Ok(a..b)
 }
 
-/// Loads identification data (see [`physid::io::load_trajectory`]).
-pub fn load_data(path: &Path, model: &Model) -> anyhow::Result<Trajectory> {
-    let loaded = physid::io::load_trajectory(path, model)?;
+/// How data files are read: `--topic` and `--stamp` for MCAP files and rosbag2 directories.
+#[derive(clap::Args, Debug, Clone)]
+pub struct ReadArgs {
+    /// The `sensor_msgs/msg/JointState` topic of an MCAP file or rosbag2 directory (default:
+    /// physid's processed signals if the log has them, else /joint_states).
+    #[arg(long)]
+    topic: Option<String>,
+    /// Which time stamps a joint state: log (the recorder's receive time) or header (the
+    /// message's header.stamp, when the driver sampled the joints).
+    #[arg(long, default_value = "log")]
+    stamp: physid::io::mcap_log::Stamp,
+}
+
+impl ReadArgs {
+    /// The library's reading options.
+    pub fn options(&self) -> physid::io::DataOptions {
+        physid::io::DataOptions {
+            topic: self.topic.clone(),
+            stamp: self.stamp,
+        }
+    }
+}
+
+/// Loads identification data (see [`physid::io::load_trajectory_with`]), printing notes.
+pub fn load_data(
+    path: &Path,
+    model: &Model,
+    opts: &physid::io::DataOptions,
+) -> anyhow::Result<Trajectory> {
+    let loaded = physid::io::load_trajectory_with(path, model, opts)?;
     if !loaded.ignored_joints.is_empty() {
         eprintln!(
             "note: {} has joints the robot does not have, left out: {}",
             path.display(),
             loaded.ignored_joints.join(", ")
+        );
+    }
+    if loaded.skipped_messages > 0 {
+        eprintln!(
+            "note: {}: {} joint-state messages name none of the robot's joints (another publisher on the topic), skipped",
+            path.display(),
+            loaded.skipped_messages
         );
     }
     if loaded.derived_qdd {
@@ -53,75 +89,150 @@ pub fn load_data(path: &Path, model: &Model) -> anyhow::Result<Trajectory> {
     Ok(loaded.trajectory)
 }
 
-/// Identification data: in memory, or a CSV with q̈ streamed from disk (memory independent of
-/// its length).
+/// CSV files above this size with `ddq` columns are streamed (memory independent of length)
+/// when no effect terms are asked for; smaller files are read once into memory.
+const STREAM_ABOVE_BYTES: u64 = 64 << 20;
+
+/// One run of identification data: in memory, or a large CSV with q̈ streamed from disk.
 pub enum Data {
     /// Loaded samples.
     Memory(Trajectory),
-    /// A streamable CSV and its sample count.
-    Csv(std::path::PathBuf, usize),
+    /// A streamable CSV, the robot's joint names and its sample count.
+    Csv(PathBuf, Vec<String>, usize),
 }
 
 impl Data {
-    /// Opens `path`: CSV files with `ddq` columns stream, everything else is loaded.
-    pub fn open(path: &Path, model: &Model) -> anyhow::Result<Data> {
-        if path.extension().and_then(|e| e.to_str()) == Some("csv")
-            && physid::io::samples::csv_has_ddq(path)?
+    /// Opens `path`: large CSV files with `ddq` columns stream (unless `in_memory`),
+    /// everything else is loaded.
+    pub fn open(
+        path: &Path,
+        model: &Model,
+        read: &physid::io::DataOptions,
+        in_memory: bool,
+    ) -> anyhow::Result<Data> {
+        let large = std::fs::metadata(path).map_or(false, |m| m.len() > STREAM_ABOVE_BYTES);
+        if !in_memory
+            && large
+            && path.extension().and_then(|e| e.to_str()) == Some("csv")
+            && samples::csv_has_ddq(path)?
         {
-            let len = physid::io::samples::stream_csv(path, model.dof(), 0..0, &mut |_, _| {})?;
-            return Ok(Data::Csv(path.to_path_buf(), len));
+            let names: Vec<String> = model.bodies.iter().map(|b| b.joint_name.clone()).collect();
+            let len = samples::stream_csv(path, &names, 0..0, &mut |_, _| {})?;
+            return Ok(Data::Csv(path.to_path_buf(), names, len));
         }
-        Ok(Data::Memory(load_data(path, model)?))
+        Ok(Data::Memory(load_data(path, model, read)?))
     }
     fn len(&self) -> usize {
         match self {
             Data::Memory(t) => t.len(),
-            Data::Csv(_, n) => *n,
+            Data::Csv(_, _, n) => *n,
+        }
+    }
+    fn trajectory(&self) -> Option<&Trajectory> {
+        match self {
+            Data::Memory(t) => Some(t),
+            Data::Csv(..) => None,
         }
     }
     fn normal_equations(&self, m: &Model, r: Range<usize>) -> anyhow::Result<NormalEquations> {
         Ok(match self {
             Data::Memory(t) => NormalEquations::from_trajectory(m, t, r),
-            Data::Csv(p, _) => {
-                NormalEquations::from_stream(m, |sink| samples::stream_csv(p, m.dof(), r, sink))?.0
+            Data::Csv(p, names, _) => {
+                NormalEquations::from_stream(m, |sink| samples::stream_csv(p, names, r, sink))?.0
             }
         })
     }
-    fn rms(
+    fn squared_errors(
         &self,
         m: &Model,
         theta: &nalgebra::DVector<f64>,
         r: Range<usize>,
-    ) -> anyhow::Result<(Vec<f64>, f64)> {
-        Ok(match self {
-            Data::Memory(t) => analysis::rms_error(m, theta, t, r),
-            Data::Csv(p, _) => analysis::rms_error_stream(m, theta, |sink| {
-                samples::stream_csv(p, m.dof(), r, sink)
+    ) -> anyhow::Result<SquaredErrors> {
+        let (per, _) = match self {
+            Data::Memory(t) => analysis::rms_error(m, theta, t, r.clone()),
+            Data::Csv(p, names, _) => analysis::rms_error_stream(m, theta, |sink| {
+                samples::stream_csv(p, names, r.clone(), sink)
             })?,
-        })
+        };
+        Ok(SquaredErrors::from_rms(&per, r.len()))
+    }
+}
+
+/// Sums of squared torque errors per joint over several runs.
+#[derive(Clone, Debug)]
+struct SquaredErrors {
+    sum: Vec<f64>,
+    samples: usize,
+}
+
+impl SquaredErrors {
+    fn from_rms(rms: &[f64], samples: usize) -> Self {
+        Self {
+            sum: rms.iter().map(|r| r * r * samples as f64).collect(),
+            samples,
+        }
+    }
+    fn add(mut self, other: SquaredErrors) -> Self {
+        if self.sum.is_empty() {
+            return other;
+        }
+        for (a, b) in self.sum.iter_mut().zip(&other.sum) {
+            *a += b;
+        }
+        self.samples += other.samples;
+        self
+    }
+    /// Per-joint and overall RMS (N m).
+    fn rms(&self) -> (Vec<f64>, f64) {
+        let k = self.samples.max(1) as f64;
+        let per = self.sum.iter().map(|s| (s / k).sqrt()).collect();
+        let all = (self.sum.iter().sum::<f64>() / (k * self.sum.len().max(1) as f64)).sqrt();
+        (per, all)
     }
 }
 
 /// Identify inertial and friction parameters under a constraint set.
 #[derive(clap::Args, Debug)]
 pub struct Args {
-    /// Samples: a physid MCAP (its processed signals), another MCAP with JointState, or CSV.
-    #[arg(long)]
-    data: PathBuf,
+    /// Samples, one or more runs: physid MCAP logs (their processed signals), other MCAP files
+    /// or rosbag2 directories with JointState, or CSV. Runs are joined without differentiating
+    /// across their seams.
+    #[arg(long, num_args = 1.., required = true)]
+    data: Vec<PathBuf>,
+    #[command(flatten)]
+    read: ReadArgs,
     #[command(flatten)]
     robot: RobotArgs,
-    /// Constraint set: none, semi, consistent, ellipsoid.
-    #[arg(long, default_value = "ellipsoid")]
-    constraints: ConstraintSet,
-    /// Training samples, `a:b` (indices, end exclusive); default all.
+    /// Constraint set: none, semi, consistent, ellipsoid. Default: the tightest the
+    /// description supports (ellipsoid when every body has a bounding ellipsoid, else
+    /// consistent).
+    #[arg(long)]
+    constraints: Option<ConstraintSet>,
+    /// Training samples, `a:b` (indices, end exclusive); default all. One --data file only.
     #[arg(long, allow_hyphen_values = true)]
     train: Option<String>,
-    /// Validation samples of the same file, `a:b`.
+    /// Validation samples of the same file, `a:b`. One --data file only.
     #[arg(long, allow_hyphen_values = true)]
     validate: Option<String>,
-    /// Validate on another file (all its samples).
+    /// Validate on other runs (all their samples).
+    #[arg(long, num_args = 1..)]
+    validate_data: Vec<PathBuf>,
+    /// Friction terms per joint, comma-separated: viscous and coulomb (always; the model's own,
+    /// paper eq. 9), plus any of offset (a torque offset), direction (direction-dependent
+    /// Coulomb), stribeck:<v> (Stribeck excess with velocity v rad/s).
+    #[arg(long, value_delimiter = ',', default_value = "viscous,coulomb")]
+    friction: Vec<String>,
+    /// Effect terms from the diagnosis library, comma-separated (e.g. tilt,time_delay,
+    /// torque_gain,payload; cogging:<harmonic>); see docs/diagnose.md.
+    #[arg(long, value_delimiter = ',')]
+    effects: Vec<String>,
+    /// Take the effects a diagnosis confirmed: its report.json (`physid diagnose --out`).
     #[arg(long)]
-    validate_data: Option<PathBuf>,
+    effects_from: Option<PathBuf>,
+    /// Write the identified effects as a scenario `[[effects]]` snippet (TOML), so `simulate`
+    /// replays the calibrated robot.
+    #[arg(long)]
+    out_effects: Option<PathBuf>,
     /// Weight of the prior term w ‖θ − θ̂‖² (θ̂: the robot description's parameters).
     #[arg(long, default_value_t = 1e-6, allow_negative_numbers = true)]
     prior_weight: f64,
@@ -146,81 +257,284 @@ pub struct Args {
     regularizer: ident::Regularizer,
 }
 
+/// The constraint set: the one given, else the tightest the description supports, and why.
+fn constraint_set(given: Option<ConstraintSet>, m: &Model) -> (ConstraintSet, Option<String>) {
+    if let Some(c) = given {
+        return (c, None);
+    }
+    let missing: Vec<String> = ident::bodies(m)
+        .into_iter()
+        .filter(|(_, _, e)| e.is_none())
+        .map(|(name, _, _)| name)
+        .collect();
+    if missing.is_empty() {
+        (
+            ConstraintSet::Ellipsoid,
+            Some("every body has a bounding ellipsoid".into()),
+        )
+    } else {
+        (
+            ConstraintSet::Consistent,
+            Some(format!(
+                "no bounding ellipsoid for {} (give them in a sidecar, see docs/robot-format.md)",
+                missing.join(", ")
+            )),
+        )
+    }
+}
+
+/// The effect terms from `--friction`, `--effects` and `--effects-from`.
+fn terms(a: &Args) -> anyhow::Result<Vec<Variant>> {
+    let mut out = vec![];
+    let mut has = [false; 2];
+    for f in &a.friction {
+        match f.trim() {
+            "viscous" => has[0] = true,
+            "coulomb" => has[1] = true,
+            t @ ("offset" | "direction") => out.push(parse_term(t).map_err(|e| anyhow!("--friction: {e}"))?),
+            t if t.starts_with("stribeck") => out.push(parse_term(t).map_err(|e| anyhow!("--friction: {e}"))?),
+            t => bail!("--friction: unknown term '{t}' (viscous, coulomb, offset, direction, stribeck:<v>)"),
+        }
+    }
+    if has != [true, true] {
+        bail!("--friction: viscous and coulomb are the model's own friction (paper eq. 9) and always identified; list them, then the terms to add (e.g. viscous,coulomb,offset)");
+    }
+    for e in &a.effects {
+        out.push(parse_term(e.trim()).map_err(|e| anyhow!("--effects: {e}"))?);
+    }
+    if let Some(p) = &a.effects_from {
+        out.extend(confirmed_effects(p)?);
+    }
+    Ok(out)
+}
+
+/// The effects a diagnosis report confirmed (its `effects[i]` with `confirmed[i]` true).
+fn confirmed_effects(path: &Path) -> anyhow::Result<Vec<Variant>> {
+    let text = physid::io::read_to_string(path)?;
+    let v: serde_json::Value = serde_json::from_str(&text)
+        .with_context(|| format!("{}: not JSON", path.display()))?;
+    let (Some(effects), Some(confirmed)) = (v["effects"].as_array(), v["confirmed"].as_array())
+    else {
+        bail!(
+            "{}: not a diagnosis report (no effects and confirmed arrays; write one with `physid diagnose --out DIR`)",
+            path.display()
+        );
+    };
+    let mut out = vec![];
+    for (i, (e, ok)) in effects.iter().zip(confirmed).enumerate() {
+        if ok.as_bool() != Some(true) {
+            continue;
+        }
+        let kind = e["kind"]
+            .as_str()
+            .with_context(|| format!("{}: effects[{i}].kind is not a string", path.display()))?;
+        let term = match e["param"].as_f64() {
+            Some(p) if p > 0.0 => format!("{kind}:{p}"),
+            _ => kind.to_string(),
+        };
+        out.push(parse_term(&term).map_err(|m| anyhow!("{}: effects[{i}]: {m}", path.display()))?);
+    }
+    Ok(out)
+}
+
 /// Runs the identification and prints the report.
 pub fn run(a: Args) -> anyhow::Result<()> {
-    let opts = options(&a)?;
-    let robot_file = std::path::Path::new(&a.robot.robot);
-    let mut inputs = vec![a.data.as_path(), robot_file];
-    inputs.extend(a.validate_data.as_deref());
-    let outputs: Vec<&Path> = a
-        .out_urdf
-        .iter()
-        .chain(&a.export_problem)
-        .map(|p| p.as_path())
+    let robot_file = Path::new(&a.robot.robot);
+    let mut inputs: Vec<&Path> = a.data.iter().map(PathBuf::as_path).collect();
+    inputs.push(robot_file);
+    inputs.extend(a.validate_data.iter().map(PathBuf::as_path));
+    inputs.extend(a.effects_from.as_deref());
+    let outputs: Vec<&Path> = [&a.out_urdf, &a.export_problem, &a.out_effects]
+        .into_iter()
+        .flatten()
+        .map(PathBuf::as_path)
         .collect();
     physid::io::check_outputs(&outputs, &inputs)?;
+    if a.data.len() > 1 && (a.train.is_some() || a.validate.is_some()) {
+        bail!("--train and --validate pick samples of one --data file; with several runs, give whole runs (--validate-data for held-out runs)");
+    }
+    if a.validate.is_some() && !a.validate_data.is_empty() {
+        bail!("give --validate or --validate-data, not both");
+    }
     let model = a.robot.load()?;
     let m = &model;
-    let tr = Data::open(&a.data, m)?;
-    let train = match a.train.as_deref() {
-        Some(s) => parse_range(s, tr.len(), "--train")?,
-        None => 0..tr.len(),
+    let (set, set_note) = constraint_set(a.constraints, m);
+    let opts = options(&a, set)?;
+    let terms = terms(&a)?;
+    if a.export_problem.is_some() && !terms.is_empty() {
+        bail!("--export-problem writes the model's own problem: leave out the extra --friction terms and --effects");
+    }
+    let read = a.read.options();
+    let in_memory = !terms.is_empty();
+    let open = |p: &PathBuf| Data::open(p, m, &read, in_memory);
+    let data: Vec<Data> = a.data.iter().map(open).collect::<anyhow::Result<_>>()?;
+    let train: Vec<Range<usize>> = match a.train.as_deref() {
+        Some(s) => vec![parse_range(s, data[0].len(), "--train")?],
+        None => data.iter().map(|d| 0..d.len()).collect(),
     };
-    let vdata;
-    let (vtr, vrange) = match (a.validate.as_deref(), a.validate_data.as_deref()) {
-        (Some(_), Some(_)) => bail!("give --validate or --validate-data, not both"),
-        (Some(s), None) => (Some(&tr), Some(parse_range(s, tr.len(), "--validate")?)),
-        (None, Some(p)) => {
-            vdata = Data::open(p, m)?;
-            let r = 0..vdata.len();
-            (Some(&vdata), Some(r))
-        }
-        (None, None) => (None, None),
+    let vdata: Vec<Data> = a.validate_data.iter().map(open).collect::<anyhow::Result<_>>()?;
+    let validation: Vec<(&Data, Range<usize>)> = match a.validate.as_deref() {
+        Some(s) => vec![(&data[0], parse_range(s, data[0].len(), "--validate")?)],
+        None => vdata.iter().map(|d| (d, 0..d.len())).collect(),
     };
-    let p = m.layout().len;
-    if train.len() * m.dof() < p && !a.allow_few_samples {
+    let samples: usize = train.iter().map(Range::len).sum();
+    let p = m.layout().len + physid::diagnose::calibrate::columns(&terms, m.dof());
+    if samples * m.dof() < p && !a.allow_few_samples {
         bail!(
-            "{}: {} samples give {} equations for {p} parameters: the fit is decided by the prior; give more samples, or --allow-few-samples if that is what you want",
-            a.data.display(),
-            train.len(),
-            train.len() * m.dof()
+            "{}: {samples} samples give {} equations for {p} parameters: the fit is decided by the prior; give more samples, or --allow-few-samples if that is what you want",
+            a.data[0].display(),
+            samples * m.dof()
         );
     }
+    let runs: Vec<(&Data, Range<usize>)> = data.iter().zip(train.iter().cloned()).collect();
     let start = std::time::Instant::now();
-    let ne = tr.normal_equations(m, train.clone())?;
-    let prior = m.parameters();
-    let r = ident::identify(m, &ne, &prior, &opts)?;
-    let total = start.elapsed().as_secs_f64();
-    let (train_rms, train_all) = tr.rms(m, &r.theta, train.clone())?;
-    let val = match vtr.zip(vrange.clone()) {
-        Some((v, rg)) => Some(v.rms(m, &r.theta, rg)?),
-        None => None,
+    let fit = if terms.is_empty() {
+        fit_plain(m, &runs, &opts)?
+    } else {
+        fit_with_terms(m, &runs, &opts, terms)?
     };
-    let idf = analysis::identifiability(m, &ne, &r.theta);
-    warn_weak_data(&train, vrange.as_ref(), a.validate.is_some(), &idf);
+    let total = start.elapsed().as_secs_f64();
+    let (train_rms, train_all) = fit.errors(m, &runs)?;
+    let val = if validation.is_empty() {
+        None
+    } else {
+        Some(fit.errors(m, &validation)?)
+    };
+    let idf = analysis::identifiability(m, &fit.ne, &fit.model_theta(m));
+    let vrange = validation.first().map(|(_, r)| r).filter(|_| a.data.len() == 1);
+    warn_weak_data(&train[0], vrange, a.validate.is_some(), &idf);
+    let dt = data[0]
+        .trajectory()
+        .and_then(|t| t.sample_period())
+        .unwrap_or(1e-3);
+    let snippet = (!fit.terms.is_empty())
+        .then(|| physid::diagnose::calibrate::scenario_snippet(m, &fit.terms, dt));
     let report = Report {
         idf,
-        truth_errors: truth_errors(&a.data, m, &r.theta),
-        r,
+        truth_errors: (a.data.len() == 1)
+            .then(|| truth_errors(&a.data[0], m, &fit.r.theta))
+            .flatten(),
+        r: fit.r.clone(),
+        terms: fit.terms.clone(),
+        snippet,
+        set,
+        set_note,
         train,
         train_rms,
         train_all,
-        vrange,
+        vranges: validation.iter().map(|(_, r)| r.clone()).collect(),
         val,
         total,
     };
-    if let Some(p) = &a.out_urdf {
-        write_urdf(p, &a, m, &report.r)?;
-    }
-    if let Some(p) = &a.export_problem {
-        export_problem(p, &a, m, &ne, &prior, &opts, &report.r)?;
-    }
+    write_outputs(&a, m, &fit, &opts, &report)?;
     if a.json {
         print_json(&a, m, &report)
     } else {
         print_text(&a, m, &report);
         Ok(())
     }
+}
+
+/// `--out-urdf`, `--out-effects` and `--export-problem`.
+fn write_outputs(a: &Args, m: &Model, fit: &Fit, opts: &Options, rep: &Report) -> anyhow::Result<()> {
+    if let Some(p) = &a.out_urdf {
+        write_urdf(p, rep.set, m, &rep.r)?;
+    }
+    match (&a.out_effects, &rep.snippet) {
+        (Some(p), Some(s)) => physid::io::write_atomic(p, s.as_bytes())?,
+        (Some(p), None) => bail!(
+            "--out-effects {}: no effect terms were identified (give --friction extras, --effects or --effects-from)",
+            p.display()
+        ),
+        _ => {}
+    }
+    if let Some(p) = &a.export_problem {
+        export_problem(p, a, rep.set, m, &fit.ne, opts, &rep.r)?;
+    }
+    Ok(())
+}
+
+/// An identification and what scores it.
+struct Fit {
+    r: ident::Identified,
+    /// The model's own normal equations over the training runs.
+    ne: NormalEquations,
+    terms: Vec<physid::diagnose::calibrate::TermFit>,
+    /// The calibration (with its options), when there are effect terms.
+    calibration: Option<(Calibration, CalOptions)>,
+}
+
+impl Fit {
+    /// θ of the model's layout (without effect coefficients).
+    fn model_theta(&self, m: &Model) -> nalgebra::DVector<f64> {
+        self.r.theta.rows(0, m.layout().len).into_owned()
+    }
+    /// Per-joint and overall RMS over runs (N m), every sample scored.
+    fn errors(&self, m: &Model, runs: &[(&Data, Range<usize>)]) -> anyhow::Result<(Vec<f64>, f64)> {
+        if let Some((cal, copts)) = &self.calibration {
+            let rs = in_memory_runs(runs);
+            return Ok(physid::diagnose::calibrate::rms_error(m, cal, &rs, copts));
+        }
+        let mut acc = SquaredErrors {
+            sum: vec![],
+            samples: 0,
+        };
+        for (d, r) in runs {
+            acc = acc.add(d.squared_errors(m, &self.r.theta, r.clone())?);
+        }
+        Ok(acc.rms())
+    }
+}
+
+/// The runs as the library's (their data loaded in memory).
+fn in_memory_runs<'a>(runs: &[(&'a Data, Range<usize>)]) -> Vec<Run<'a>> {
+    runs.iter()
+        .map(|(d, r)| Run {
+            trajectory: d.trajectory().expect("data with effect terms are loaded in memory"),
+            range: r.clone(),
+        })
+        .collect()
+}
+
+/// The model's own identification, the normal equations summed over the runs.
+fn fit_plain(m: &Model, runs: &[(&Data, Range<usize>)], opts: &Options) -> anyhow::Result<Fit> {
+    let mut ne = NormalEquations::new(m.dof(), m.layout().len).finish();
+    for (d, r) in runs {
+        ne = ne.merged(&d.normal_equations(m, r.clone())?);
+    }
+    let r = ident::identify(m, &ne, &m.parameters(), opts)?;
+    Ok(Fit {
+        r,
+        ne,
+        terms: vec![],
+        calibration: None,
+    })
+}
+
+/// Identification with effect terms ([`physid::diagnose::calibrate`]).
+fn fit_with_terms(
+    m: &Model,
+    runs: &[(&Data, Range<usize>)],
+    opts: &Options,
+    terms: Vec<Variant>,
+) -> anyhow::Result<Fit> {
+    let rs = in_memory_runs(runs);
+    let copts = CalOptions {
+        ident: opts.clone(),
+        terms,
+        processing_cutoff: 20.0,
+    };
+    let cal = physid::diagnose::calibrate::calibrate(m, &rs, &copts)?;
+    let mut ne = NormalEquations::new(m.dof(), m.layout().len).finish();
+    for r in &rs {
+        ne = ne.merged(&NormalEquations::from_trajectory(m, r.trajectory, r.range.clone()));
+    }
+    Ok(Fit {
+        r: cal.identified.clone(),
+        ne,
+        terms: cal.terms.clone(),
+        calibration: Some((cal, copts)),
+    })
 }
 
 /// Warnings where the data cannot support the answer: validation samples that are also
@@ -252,8 +566,8 @@ fn warn_weak_data(
 }
 
 /// The identification's options from the flags, checked.
-fn options(a: &Args) -> anyhow::Result<Options> {
-    let mut opts = Options::new(a.constraints);
+fn options(a: &Args, set: ConstraintSet) -> anyhow::Result<Options> {
+    let mut opts = Options::new(set);
     opts.prior_weight = a.prior_weight;
     opts.eps = a.eps;
     opts.regularizer = a.regularizer;
@@ -271,10 +585,19 @@ fn options(a: &Args) -> anyhow::Result<Options> {
 /// What one identification found, for the outputs.
 struct Report {
     r: ident::Identified,
-    train: Range<usize>,
+    /// The effect terms' fits (empty without terms).
+    terms: Vec<physid::diagnose::calibrate::TermFit>,
+    /// The terms as a scenario `[[effects]]` snippet.
+    snippet: Option<String>,
+    set: ConstraintSet,
+    /// Why the default constraint set was chosen (when none was given).
+    set_note: Option<String>,
+    /// Training samples per run.
+    train: Vec<Range<usize>>,
     train_rms: Vec<f64>,
     train_all: f64,
-    vrange: Option<Range<usize>>,
+    /// Validation samples per validation run.
+    vranges: Vec<Range<usize>>,
     val: Option<(Vec<f64>, f64)>,
     idf: analysis::Identifiability,
     truth_errors: Option<Vec<serde_json::Value>>,
@@ -299,14 +622,15 @@ fn truth_errors(
 }
 
 /// Writes the identified model as URDF, warning when its inertias are not consistent.
-fn write_urdf(p: &Path, a: &Args, m: &Model, r: &ident::Identified) -> anyhow::Result<()> {
-    let im = m.with_parameters(&r.theta)?;
+fn write_urdf(p: &Path, set: ConstraintSet, m: &Model, r: &ident::Identified) -> anyhow::Result<()> {
+    let theta = r.theta.rows(0, m.layout().len).into_owned();
+    let im = m.with_parameters(&theta)?;
     physid::io::write_atomic(p, physid::io::urdf::to_string(&im).as_bytes())?;
-    if !r.constraints_hold || !ident::constraints_hold(m, &r.theta, ConstraintSet::Consistent) {
+    if !r.constraints_hold || !ident::constraints_hold(m, &theta, ConstraintSet::Consistent) {
         eprintln!(
             "warning: {} holds physically inconsistent inertias (identified with '{}')",
             p.display(),
-            a.constraints.name()
+            set.name()
         );
     }
     Ok(())
@@ -318,12 +642,13 @@ fn write_urdf(p: &Path, a: &Args, m: &Model, r: &ident::Identified) -> anyhow::R
 fn export_problem(
     p: &Path,
     a: &Args,
+    set: ConstraintSet,
     m: &Model,
     ne: &NormalEquations,
-    prior: &nalgebra::DVector<f64>,
     opts: &Options,
     r: &ident::Identified,
 ) -> anyhow::Result<()> {
+    let prior = &m.parameters();
     let ident::Objective { h, g, c } = ident::objective(m, ne, prior, opts);
     let rows: Vec<Vec<f64>> = h.row_iter().map(|r| r.iter().copied().collect()).collect();
     let bodies: Vec<_> = ident::bodies(m)
@@ -332,7 +657,7 @@ fn export_problem(
         .collect();
     let l = m.layout();
     let v = json!({
-        "constraints": a.constraints, "eps": a.eps, "H": rows, "g": g.as_slice(), "c": c,
+        "constraints": set, "eps": a.eps, "H": rows, "g": g.as_slice(), "c": c,
         "regularizer": a.regularizer, "w": a.prior_weight, "prior": prior.as_slice(),
         "bodies": bodies, "friction_cols": (l.viscous_col..l.len).collect::<Vec<_>>(),
         "physid": {"objective": r.objective, "theta": r.theta.as_slice(), "status": r.solver.status},
@@ -344,45 +669,79 @@ fn export_problem(
 /// The JSON report (docs/identify-json.md).
 fn print_json(a: &Args, m: &Model, rep: &Report) -> anyhow::Result<()> {
     let r = &rep.r;
+    let runs = |files: &[PathBuf], ranges: &[Range<usize>]| -> Vec<serde_json::Value> {
+        files
+            .iter()
+            .zip(ranges)
+            .map(|(f, r)| json!({"file": f, "range": [r.start, r.end]}))
+            .collect()
+    };
+    let vfiles: &[PathBuf] = if a.validate.is_some() {
+        &a.data[..1]
+    } else {
+        &a.validate_data
+    };
     let v = json!({
-        "data": a.data, "robot": m.name, "constraints": a.constraints,
-        "train": { "range": [rep.train.start, rep.train.end], "rms": rep.train_rms, "rms_overall": rep.train_all },
-        "validation": rep.val.as_ref().map(|(rms, all)| json!({ "range": rep.vrange.as_ref().map(|r| [r.start, r.end]), "rms": rms, "rms_overall": all })),
+        "data": a.data[0], "robot": m.name, "constraints": rep.set,
+        "constraints_default_because": rep.set_note,
+        "train": { "range": [rep.train[0].start, rep.train[0].end], "runs": runs(&a.data, &rep.train), "rms": rep.train_rms, "rms_overall": rep.train_all },
+        "validation": rep.val.as_ref().map(|(rms, all)| json!({ "range": rep.vranges.first().map(|r| [r.start, r.end]), "runs": runs(vfiles, &rep.vranges), "rms": rms, "rms_overall": all })),
         "bodies": r.bodies, "friction": { "viscous": r.viscous, "coulomb": r.coulomb },
+        "effects": rep.terms, "scenario_effects": rep.snippet,
         "objective": r.objective, "constraints_hold": r.constraints_hold,
         "solver": r.solver, "end_to_end_seconds": rep.total,
         "identifiability": rep.idf,
-        "parameter_names": m.parameter_names(), "theta": r.theta.as_slice(),
+        "parameter_names": theta_names(m, &rep.terms), "theta": r.theta.as_slice(),
         "truth_errors": rep.truth_errors,
     });
     println!("{}", serde_json::to_string_pretty(&v)?);
     Ok(())
 }
 
-/// The text report: bodies, friction, errors, consistency, identifiability, truth.
+/// The names of θ's entries: the model's, then each effect coefficient as `kind[i]`.
+fn theta_names(m: &Model, terms: &[physid::diagnose::calibrate::TermFit]) -> Vec<String> {
+    let mut names = m.parameter_names();
+    for t in terms {
+        names.extend((0..t.coefficients.len()).map(|i| format!("{}[{i}]", t.kind.name())));
+    }
+    names
+}
+
+/// The text report: bodies, friction, effects, errors, consistency, identifiability, truth.
 fn print_text(a: &Args, m: &Model, rep: &Report) {
-    let (r, idf, train, train_rms, train_all, val) = (
+    let (r, idf, train_rms, train_all, val) = (
         &rep.r,
         &rep.idf,
-        &rep.train,
         &rep.train_rms,
         rep.train_all,
         &rep.val,
     );
-    let (names, total, truth_errors) = (m.parameter_names(), rep.total, &rep.truth_errors);
+    let (total, truth_errors) = (rep.total, &rep.truth_errors);
+    let on = if a.data.len() == 1 {
+        format!(
+            "samples {}..{} of {}",
+            rep.train[0].start,
+            rep.train[0].end,
+            a.data[0].display()
+        )
+    } else {
+        let k: usize = rep.train.iter().map(Range::len).sum();
+        let files: Vec<String> = a.data.iter().map(|p| p.display().to_string()).collect();
+        format!("{k} samples of {} runs ({})", a.data.len(), files.join(", "))
+    };
     println!(
-        "{}: '{}' on samples {}..{} of {} ({} parameters), {} in {:.1} ms ({} iterations, {:.1} ms end to end)",
+        "{}: '{}' on {on} ({} parameters), {} in {:.1} ms ({} iterations, {:.1} ms end to end)",
         m.name,
-        a.constraints.name(),
-        train.start,
-        train.end,
-        a.data.display(),
-        names.len(),
+        rep.set.name(),
+        r.theta.len(),
         r.solver.status,
         r.solver.seconds * 1e3,
         r.solver.iterations,
         total * 1e3
     );
+    if let Some(why) = &rep.set_note {
+        println!("constraints '{}' by default: {why}", rep.set.name());
+    }
     let rows: Vec<_> = r
         .bodies
         .iter()
@@ -410,6 +769,7 @@ fn print_text(a: &Args, m: &Model, rep: &Report) {
                 .map_or("-".into(), |(v, _)| format!("{:.4}", v[j]))
         );
     }
+    print_terms(&rep.terms, m);
     println!(
         "overall RMS: train {train_all:.4} N m{}",
         val.as_ref()
@@ -431,8 +791,8 @@ fn print_text(a: &Args, m: &Model, rep: &Report) {
     );
     println!(
         "constraints of '{}': {}; objective {:.6e}; regressor rank {} of {}, condition {:.2e}; {} unidentifiable directions",
-        a.constraints.name(),
-        if a.constraints == ConstraintSet::None { "none imposed" } else if r.constraints_hold { "all hold" } else { "do NOT all hold" },
+        rep.set.name(),
+        if rep.set == ConstraintSet::None { "none imposed" } else if r.constraints_hold { "all hold" } else { "do NOT all hold" },
         r.objective,
         idf.rank,
         idf.parameters,
@@ -471,4 +831,31 @@ fn ground_truth(path: &Path, model: &Model) -> Option<nalgebra::DVector<f64>> {
     let names: Vec<String> = serde_json::from_str(md.get("names")?).ok()?;
     let values: Vec<f64> = serde_json::from_str(md.get("values")?).ok()?;
     (names == model.parameter_names()).then(|| nalgebra::DVector::from_vec(values))
+}
+
+/// The identified effect terms, one line per magnitude.
+fn print_terms(terms: &[physid::diagnose::calibrate::TermFit], m: &Model) {
+    if terms.is_empty() {
+        return;
+    }
+    println!("\neffect terms (identified with the model):");
+    for t in terms {
+        let (what, unit) = t.magnitude;
+        let values: Vec<String> = t.magnitudes.iter().map(|v| format!("{v:.4}")).collect();
+        let per = if t.magnitudes.len() == m.dof() {
+            "per joint"
+        } else {
+            "robot"
+        };
+        let param = if t.param > 0.0 {
+            format!(" ({})", t.param)
+        } else {
+            String::new()
+        };
+        println!(
+            "  {}{param}: {what} [{unit}], {per}: {}",
+            t.kind.name(),
+            values.join(" ")
+        );
+    }
 }

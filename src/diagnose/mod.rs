@@ -19,6 +19,7 @@
 //! runs first. The blind benchmark that scores it is `experiment::blind`.
 
 pub mod anchor;
+pub mod calibrate;
 pub mod breakdown;
 mod diagnosis;
 mod gap;

@@ -175,6 +175,14 @@ pub enum IdentError {
         /// The value given.
         value: f64,
     },
+    /// An effect term of a calibration is given twice or without its value.
+    #[error("term '{term}': {reason}")]
+    InvalidTerm {
+        /// The term as given.
+        term: String,
+        /// What it needs.
+        reason: &'static str,
+    },
     /// The normal equations or the prior do not match the model.
     #[error("normal equations have {columns} columns and the prior {prior} for a model of {params} parameters")]
     Shape {

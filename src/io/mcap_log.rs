@@ -316,10 +316,53 @@ pub fn write(path: &Path, rec: &Recording, meta: &LogMeta) -> Result<(), IoError
     Ok(())
 }
 
+/// Which time a joint-state sample gets.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum Stamp {
+    /// The MCAP record's log time (when the recorder received the message).
+    #[default]
+    Log,
+    /// The message's `header.stamp` (when the driver sampled the joints).
+    Header,
+}
+
+impl std::str::FromStr for Stamp {
+    type Err = String;
+    fn from_str(s: &str) -> Result<Self, String> {
+        match s {
+            "log" => Ok(Stamp::Log),
+            "header" => Ok(Stamp::Header),
+            _ => Err(format!("unknown stamp '{s}' (log, header)")),
+        }
+    }
+}
+
+/// How joint states are read from an MCAP file or a rosbag2 directory.
+#[derive(Clone, Debug)]
+pub struct ReadOptions {
+    /// The `sensor_msgs/msg/JointState` topic.
+    pub topic: String,
+    /// Which time stamps the samples.
+    pub stamp: Stamp,
+    /// The robot's joints, if known: `JointState` messages naming none of them (another
+    /// publisher on the same topic, e.g. a gripper) are skipped and counted.
+    pub joints: Option<Vec<String>>,
+}
+
+impl Default for ReadOptions {
+    fn default() -> Self {
+        Self {
+            topic: TOPIC_MEASURED.to_string(),
+            stamp: Stamp::Log,
+            joints: None,
+        }
+    }
+}
+
 /// An MCAP log read back.
 #[derive(Clone, Debug)]
 pub struct Log {
-    /// `/joint_states`.
+    /// The joint states (`/joint_states` or the topic asked for).
     pub measured: Trajectory,
     /// `/physid/processed`, if present.
     pub processed: Option<Trajectory>,
@@ -327,6 +370,10 @@ pub struct Log {
     pub truth: Option<Trajectory>,
     /// Metadata records by name.
     pub metadata: BTreeMap<String, BTreeMap<String, String>>,
+    /// Joint-state messages skipped because they name none of the robot's joints.
+    pub skipped_messages: usize,
+    /// The MCAP files read, in order (one, or those of a rosbag2 directory).
+    pub files: Vec<std::path::PathBuf>,
 }
 
 impl Log {
@@ -339,90 +386,47 @@ impl Log {
 /// Reads a log written by [`write()`] (or any MCAP with `sensor_msgs/msg/JointState` on
 /// `/joint_states`). Errors name the file and the message.
 pub fn read(path: &Path) -> Result<Log, IoError> {
-    let bytes = std::fs::read(path).map_err(|source| IoError::Fs {
-        path: path.to_path_buf(),
-        source,
-    })?;
+    read_with(path, &ReadOptions::default())
+}
+
+/// Reads joint states from an MCAP file or a rosbag2 directory (its `metadata.yaml` and the
+/// MCAP files it lists, in order). Times are integer nanoseconds from the first message of the
+/// whole log (absolute stamps, ~1.7e18 ns, would lose their last digits in an f64). Errors name
+/// the file, the topic and the message.
+pub fn read_with(path: &Path, opts: &ReadOptions) -> Result<Log, IoError> {
+    let files = if path.is_dir() {
+        rosbag2_files(path)?
+    } else {
+        vec![path.to_path_buf()]
+    };
+    let mut reader = Reader {
+        opts,
+        t0: None,
+        measured: None,
+        processed: None,
+        truth: None,
+        metadata: BTreeMap::new(),
+        skipped: 0,
+        first_names: None,
+    };
+    for file in &files {
+        reader.file(file)?;
+    }
     let bad = |m: String| IoError::invalid(path, m);
-    let mut measured: Option<Trajectory> = None;
-    let mut processed: Option<Trajectory> = None;
-    let mut truth: Option<Trajectory> = None;
-    prevalidate(&bytes).map_err(|e| bad(format!("not a readable MCAP file: {e}")))?;
-    let stream =
-        mcap::MessageStream::new(&bytes).map_err(|e| bad(format!("not an MCAP file: {e}")))?;
-    let mut t0: Option<u64> = None;
-    for (i, m) in stream.enumerate() {
-        let m = m.map_err(|e| bad(format!("record {i}: {e}")))?;
-        // Integer nanoseconds from the first message: absolute stamps (~1.7e18 ns) would lose
-        // their last digits in an f64.
-        let first = *t0.get_or_insert(m.log_time);
-        let t = m.log_time.saturating_sub(first) as f64 / 1e9;
-        match m.channel.topic.as_str() {
-            TOPIC_MEASURED => {
-                check_cdr_lengths(&m.data, 3)
-                    .map_err(|e| bad(format!("{TOPIC_MEASURED} message {}: {e}", m.sequence)))?;
-                let js: JointState = cdr::deserialize(&m.data)
-                    .map_err(|e| bad(format!("{TOPIC_MEASURED} message {}: {e}", m.sequence)))?;
-                // A writer may leave the names out: the joints are then unnamed (matched to
-                // the robot by order, when the counts agree).
-                let names = if js.name.is_empty() {
-                    vec![String::new(); js.position.len()]
-                } else {
-                    js.name.clone()
-                };
-                let tr = measured.get_or_insert_with(|| Trajectory::new(names.clone(), false));
-                let lengths = [js.position.len(), js.velocity.len(), js.effort.len()];
-                if names != tr.joint_names || lengths.iter().any(|&l| l != tr.dof()) {
-                    return Err(bad(format!(
-                        "{TOPIC_MEASURED} message {}: {} names, {} positions, {} velocities and {} efforts; the first message has {} joints ({})",
-                        m.sequence,
-                        names.len(),
-                        lengths[0],
-                        lengths[1],
-                        lengths[2],
-                        tr.dof(),
-                        tr.joint_names.join(", ")
-                    )));
-                }
-                tr.push(t, &js.position, &js.velocity, None, &js.effort);
-            }
-            topic @ (TOPIC_PROCESSED | TOPIC_TRUTH) => {
-                check_cdr_lengths(&m.data, 6)
-                    .map_err(|e| bad(format!("{topic} message {}: {e}", m.sequence)))?;
-                let s: JointSample = cdr::deserialize(&m.data)
-                    .map_err(|e| bad(format!("{topic} message {}: {e}", m.sequence)))?;
-                let slot = if topic == TOPIC_PROCESSED {
-                    &mut processed
-                } else {
-                    &mut truth
-                };
-                let tr = slot.get_or_insert_with(|| {
-                    Trajectory::new(s.name.clone(), !s.acceleration.is_empty())
-                });
-                tr.push(
-                    t,
-                    &s.position,
-                    &s.velocity,
-                    (!s.acceleration.is_empty()).then_some(&s.acceleration[..]),
-                    &s.effort,
-                );
-            }
-            _ => {}
-        }
-    }
-    let mut metadata = BTreeMap::new();
-    if let Ok(Some(summary)) = mcap::Summary::read(&bytes) {
-        for idx in &summary.metadata_indexes {
-            let md = mcap::read::metadata(&bytes, idx)
-                .map_err(|e| bad(format!("metadata '{}': {e}", idx.name)))?;
-            metadata.insert(md.name, md.metadata);
-        }
-    }
-    let measured = measured.ok_or_else(|| bad(format!("no {TOPIC_MEASURED} messages")))?;
+    let topic = &opts.topic;
+    let measured = reader.measured.ok_or_else(|| {
+        bad(match (reader.skipped, &opts.joints) {
+            (0, _) | (_, None) => format!("no {topic} messages (give the topic with --topic)"),
+            (k, Some(j)) => format!(
+                "none of the {k} {topic} messages names a joint of the robot ({})",
+                j.join(", ")
+            ),
+        })
+    })?;
     for (name, tr) in [
         ("measured", Some(&measured)),
-        ("processed", processed.as_ref()),
-        ("ground truth", truth.as_ref()),
+        ("processed", reader.processed.as_ref()),
+        ("ground truth", reader.truth.as_ref()),
     ] {
         if let Some(tr) = tr {
             tr.validate().map_err(|e| bad(format!("{name}: {e}")))?;
@@ -430,10 +434,242 @@ pub fn read(path: &Path) -> Result<Log, IoError> {
     }
     Ok(Log {
         measured,
-        processed,
-        truth,
-        metadata,
+        processed: reader.processed,
+        truth: reader.truth,
+        metadata: reader.metadata,
+        skipped_messages: reader.skipped,
+        files,
     })
+}
+
+/// The MCAP files of a rosbag2 directory, in the order its `metadata.yaml` lists them
+/// (`relative_file_paths`); an error names a bag stored otherwise (e.g. `sqlite3`).
+fn rosbag2_files(dir: &Path) -> Result<Vec<std::path::PathBuf>, IoError> {
+    let meta_path = dir.join("metadata.yaml");
+    if !meta_path.is_file() {
+        return Err(IoError::invalid(
+            dir,
+            "is a directory without metadata.yaml (give an MCAP file or a rosbag2 directory)",
+        ));
+    }
+    let text = super::read_to_string(&meta_path)?;
+    let (storage, listed) = rosbag2_metadata(&text);
+    if let Some(s) = storage.filter(|s| s != "mcap") {
+        return Err(IoError::invalid(
+            &meta_path,
+            format!(
+                "storage_identifier is '{s}'; physid reads MCAP bags (convert with `ros2 bag convert`)"
+            ),
+        ));
+    }
+    if listed.is_empty() {
+        return Err(IoError::invalid(
+            &meta_path,
+            "lists no relative_file_paths",
+        ));
+    }
+    let files: Vec<_> = listed.iter().map(|f| dir.join(f)).collect();
+    if let Some(missing) = files.iter().find(|f| !f.is_file()) {
+        return Err(IoError::invalid(
+            &meta_path,
+            format!("lists {}, which does not exist", missing.display()),
+        ));
+    }
+    Ok(files)
+}
+
+/// `storage_identifier` and `relative_file_paths` of a rosbag2 `metadata.yaml` (the two keys
+/// physid needs; both are plain scalars in every rosbag2 version, so a line reader suffices).
+fn rosbag2_metadata(text: &str) -> (Option<String>, Vec<String>) {
+    let unquote = |v: &str| v.trim().trim_matches(|c| c == '"' || c == '\'').to_string();
+    let mut storage = None;
+    let mut files = vec![];
+    let mut in_files: Option<usize> = None;
+    for line in text.lines() {
+        let indent = line.len() - line.trim_start().len();
+        let body = line.trim();
+        if let Some(v) = body.strip_prefix("storage_identifier:") {
+            storage = Some(unquote(v));
+        }
+        if let Some(level) = in_files {
+            match body.strip_prefix("- ") {
+                Some(v) if indent >= level => {
+                    files.push(unquote(v));
+                    continue;
+                }
+                _ => in_files = None,
+            }
+        }
+        if body.starts_with("relative_file_paths:") {
+            in_files = Some(indent);
+        }
+    }
+    (storage, files)
+}
+
+/// The running state of reading one log (possibly split over several files).
+struct Reader<'a> {
+    opts: &'a ReadOptions,
+    /// The first message's time (ns), the origin of every sample's time.
+    t0: Option<u64>,
+    measured: Option<Trajectory>,
+    processed: Option<Trajectory>,
+    truth: Option<Trajectory>,
+    metadata: BTreeMap<String, BTreeMap<String, String>>,
+    skipped: usize,
+    /// The names of the first joint-state message kept, as it gave them.
+    first_names: Option<Vec<String>>,
+}
+
+impl Reader<'_> {
+    fn file(&mut self, path: &Path) -> Result<(), IoError> {
+        let bytes = std::fs::read(path).map_err(|source| IoError::Fs {
+            path: path.to_path_buf(),
+            source,
+        })?;
+        let bad = |m: String| IoError::invalid(path, m);
+        prevalidate(&bytes).map_err(|e| bad(format!("not a readable MCAP file: {e}")))?;
+        let stream =
+            mcap::MessageStream::new(&bytes).map_err(|e| bad(format!("not an MCAP file: {e}")))?;
+        for (i, m) in stream.enumerate() {
+            let m = m.map_err(|e| bad(format!("record {i}: {e}")))?;
+            let topic = m.channel.topic.as_str();
+            let at = |e: String| bad(format!("{topic} message {}: {e}", m.sequence));
+            if topic == self.opts.topic {
+                self.joint_state(&m.data, m.log_time).map_err(at)?;
+            } else if topic == TOPIC_PROCESSED || topic == TOPIC_TRUTH {
+                self.joint_sample(topic, &m.data, m.log_time).map_err(at)?;
+            }
+        }
+        if let Ok(Some(summary)) = mcap::Summary::read(&bytes) {
+            for idx in &summary.metadata_indexes {
+                let md = mcap::read::metadata(&bytes, idx)
+                    .map_err(|e| bad(format!("metadata '{}': {e}", idx.name)))?;
+                self.metadata.insert(md.name, md.metadata);
+            }
+        }
+        Ok(())
+    }
+
+    /// Seconds since the first message for a time in ns (integer arithmetic first).
+    fn seconds(&mut self, ns: u64) -> Result<f64, String> {
+        let first = *self.t0.get_or_insert(ns);
+        let dt = ns
+            .checked_sub(first)
+            .ok_or_else(|| format!("its time ({ns} ns) is before the first message's ({first} ns)"))?;
+        Ok(dt as f64 / 1e9)
+    }
+
+    fn joint_state(&mut self, data: &[u8], log_time: u64) -> Result<(), String> {
+        check_cdr_lengths(data, 3)?;
+        let js: JointState = cdr::deserialize(data).map_err(|e| e.to_string())?;
+        if let Some(wanted) = &self.opts.joints {
+            if !js.name.is_empty() && !js.name.iter().any(|n| wanted.contains(n)) {
+                self.skipped += 1;
+                return Ok(());
+            }
+        }
+        check_arrays(&js)?;
+        let names = if js.name.is_empty() {
+            // A writer may leave the names out: the joints are then unnamed (matched to the
+            // robot by order, when the counts agree).
+            vec![String::new(); js.position.len()]
+        } else {
+            js.name.clone()
+        };
+        let first = self.first_names.get_or_insert_with(|| names.clone());
+        if *first != names {
+            return Err(format!(
+                "names joints {}; the first message named {}",
+                names.join(", "),
+                first.join(", ")
+            ));
+        }
+        let ns = match self.opts.stamp {
+            Stamp::Log => log_time,
+            Stamp::Header => header_ns(&js.header)?,
+        };
+        let t = self.seconds(ns)?;
+        let tr = self
+            .measured
+            .get_or_insert_with(|| Trajectory::new(names, false));
+        tr.push(t, &js.position, &js.velocity, None, &js.effort);
+        Ok(())
+    }
+
+    fn joint_sample(&mut self, topic: &str, data: &[u8], log_time: u64) -> Result<(), String> {
+        check_cdr_lengths(data, 6)?;
+        let s: JointSample = cdr::deserialize(data).map_err(|e| e.to_string())?;
+        let n = s.name.len();
+        let qdd_ok = s.acceleration.is_empty() || s.acceleration.len() == n;
+        if [s.position.len(), s.velocity.len(), s.effort.len()] != [n; 3] || !qdd_ok {
+            return Err(format!("arrays of other lengths than its {n} names"));
+        }
+        let t = self.seconds(log_time)?;
+        let slot = if topic == TOPIC_PROCESSED {
+            &mut self.processed
+        } else {
+            &mut self.truth
+        };
+        let tr =
+            slot.get_or_insert_with(|| Trajectory::new(s.name.clone(), !s.acceleration.is_empty()));
+        if tr.joint_names != s.name || tr.qdd.is_some() == s.acceleration.is_empty() {
+            return Err("names other joints than the first message".into());
+        }
+        tr.push(
+            t,
+            &s.position,
+            &s.velocity,
+            (!s.acceleration.is_empty()).then_some(&s.acceleration[..]),
+            &s.effort,
+        );
+        Ok(())
+    }
+}
+
+/// A `JointState` must carry a position, a velocity and an effort per joint (physid needs all
+/// three); an empty or ragged array is named.
+fn check_arrays(js: &JointState) -> Result<(), String> {
+    let n = if js.name.is_empty() {
+        js.position.len()
+    } else {
+        js.name.len()
+    };
+    for (what, len) in [
+        ("position", js.position.len()),
+        ("velocity", js.velocity.len()),
+        ("effort", js.effort.len()),
+    ] {
+        if len == 0 && n > 0 {
+            return Err(format!(
+                "its {what} array is empty (physid needs position, velocity and effort of every joint)"
+            ));
+        }
+        if len != n {
+            return Err(format!(
+                "{} names, {} positions, {} velocities and {} efforts: the {what} array has {len} entries for {n} joints",
+                js.name.len(),
+                js.position.len(),
+                js.velocity.len(),
+                js.effort.len()
+            ));
+        }
+    }
+    if n == 0 {
+        return Err("names no joints and has no positions".into());
+    }
+    Ok(())
+}
+
+/// `header.stamp` in nanoseconds; negative seconds or nanoseconds ≥ 1e9 are refused.
+fn header_ns(h: &Header) -> Result<u64, String> {
+    if h.stamp.sec < 0 || h.stamp.nanosec >= 1_000_000_000 {
+        return Err(format!(
+            "header.stamp {} s {} ns is not a valid time",
+            h.stamp.sec, h.stamp.nanosec
+        ));
+    }
+    Ok(h.stamp.sec as u64 * 1_000_000_000 + h.stamp.nanosec as u64)
 }
 
 #[cfg(test)]

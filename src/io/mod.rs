@@ -296,23 +296,66 @@ pub struct LoadedData {
     pub derived_qdd: bool,
     /// Joints in the file that the robot does not have (left out).
     pub ignored_joints: Vec<String>,
+    /// Joint-state messages naming none of the robot's joints (skipped).
+    pub skipped_messages: usize,
 }
 
-/// Loads identification data: the processed signals of a physid MCAP, the joint states of another
-/// MCAP (matched to `model`'s joints by name, in any order, extra joints left out), or a CSV
-/// (columns in the robot's joint order); q̈ is derived ([`crate::signal::derive_acceleration`])
-/// if the file has none. Errors name the file and the sample.
+/// How identification data are read ([`load_trajectory_with`]).
+#[derive(Clone, Debug, Default)]
+pub struct DataOptions {
+    /// The `JointState` topic of an MCAP file or rosbag2 directory; `None`: physid's processed
+    /// signals if the log has them, else `/joint_states`.
+    pub topic: Option<String>,
+    /// Which time stamps a joint-state sample.
+    pub stamp: mcap_log::Stamp,
+}
+
+/// [`load_trajectory_with`] with the default options.
 pub fn load_trajectory(path: &Path, model: &Model) -> Result<LoadedData, IoError> {
+    load_trajectory_with(path, model, &DataOptions::default())
+}
+
+/// Loads identification data: the processed signals of a physid MCAP, the joint states of
+/// another MCAP or of a rosbag2 directory (matched to `model`'s joints by name, in any order,
+/// extra joints left out), or a CSV (numbered columns in the robot's joint order, or columns
+/// named by joint); q̈ is derived ([`crate::signal::derive_acceleration`]) if the file has none.
+/// Errors name the file and the sample.
+pub fn load_trajectory_with(
+    path: &Path,
+    model: &Model,
+    opts: &DataOptions,
+) -> Result<LoadedData, IoError> {
     let names: Vec<String> = model.bodies.iter().map(|b| b.joint_name.clone()).collect();
-    let read = match path.extension().and_then(|e| e.to_str()) {
-        Some("mcap") => mcap_log::read(path)?.identification_input().clone(),
-        Some("csv") => samples::read_csv(path, Some(&names))?,
-        _ => return Err(IoError::invalid(path, "give a .mcap or .csv file")),
+    let is_mcap = path.is_dir() || path.extension().and_then(|e| e.to_str()) == Some("mcap");
+    let (read, mut ignored, skipped) = if is_mcap {
+        let ropts = mcap_log::ReadOptions {
+            topic: opts
+                .topic
+                .clone()
+                .unwrap_or_else(|| mcap_log::TOPIC_MEASURED.into()),
+            stamp: opts.stamp,
+            joints: Some(names.clone()),
+        };
+        let log = mcap_log::read_with(path, &ropts)?;
+        let tr = match (&opts.topic, log.processed) {
+            (None, Some(processed)) => processed,
+            _ => log.measured,
+        };
+        (tr, vec![], log.skipped_messages)
+    } else if path.extension().and_then(|e| e.to_str()) == Some("csv") {
+        let (tr, ignored) = samples::read_csv_matched(path, Some(&names))?;
+        (tr, ignored, 0)
+    } else {
+        return Err(IoError::invalid(
+            path,
+            "give a .mcap file, a rosbag2 directory or a .csv file",
+        ));
     };
     read.validate()
         .map_err(|e| IoError::invalid(path, e.to_string()))?;
-    let (mut tr, ignored_joints) =
+    let (mut tr, more_ignored) =
         match_joints(read, &names).map_err(|m| IoError::invalid(path, m))?;
+    ignored.extend(more_ignored);
     let derived_qdd = tr.qdd.is_none();
     if derived_qdd {
         let dt = tr.sample_period().unwrap_or(1e-3);
@@ -323,7 +366,8 @@ pub fn load_trajectory(path: &Path, model: &Model) -> Result<LoadedData, IoError
     Ok(LoadedData {
         trajectory: tr,
         derived_qdd,
-        ignored_joints,
+        ignored_joints: ignored,
+        skipped_messages: skipped,
     })
 }
 

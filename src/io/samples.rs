@@ -1,6 +1,8 @@
 //! The CSV format of joint data ([`Trajectory`]) of docs/scenario-format.md ("Outputs of `physid simulate`"):
 //! a header row, then `t, q1..qn, dq1..dqn, [ddq1..ddqn,] tau1..taun` (s, rad, rad/s, rad/s²,
-//! N m). Extra columns are ignored on reading (the KUKA logs carry set-points too).
+//! N m). Extra columns are ignored on reading (the KUKA logs carry set-points too). Columns may
+//! instead be named by joint, `q_<joint>, dq_<joint>, [ddq_<joint>,] tau_<joint>`, in any order:
+//! they are matched to the robot's joints by name.
 
 use super::IoError;
 pub use crate::trajectory::{SampleError, SampleRef, SampleSink, Trajectory};
@@ -50,7 +52,7 @@ pub fn write_csv(path: &Path, tr: &Trajectory) -> Result<(), IoError> {
     super::write_atomic(path, to_csv(tr).as_bytes())
 }
 
-/// Column positions of a CSV in the physid format, from its header.
+/// Column positions of a CSV in the physid format, from its header, in the robot's joint order.
 struct Columns {
     header: Vec<String>,
     t: usize,
@@ -58,11 +60,21 @@ struct Columns {
     dq: Vec<usize>,
     ddq: Option<Vec<usize>>,
     tau: Vec<usize>,
+    /// The joints' names: the robot's for named columns (or when given), else `joint1..n`.
+    names: Vec<String>,
+    /// Joints named in the columns that the robot does not have (left out).
+    ignored: Vec<String>,
 }
 
 impl Columns {
-    /// Reads the header; the joint count is the number of `q1, q2, …` columns.
-    fn parse<R: std::io::Read>(r: &mut csv::Reader<R>, path: &Path) -> Result<Columns, IoError> {
+    /// Reads the header. Columns are numbered (`q1, q2, …`: the joint count is the number of
+    /// `q` columns, taken in the robot's order) or named by joint (`q_<joint>`, `dq_<joint>`,
+    /// `ddq_<joint>`, `tau_<joint>`: matched to `robot`'s joints by name, in any order).
+    fn parse<R: std::io::Read>(
+        r: &mut csv::Reader<R>,
+        path: &Path,
+        robot: Option<&[String]>,
+    ) -> Result<Columns, IoError> {
         let bad = |m: String| IoError::invalid(path, m);
         let header: Vec<String> = r
             .headers()
@@ -71,29 +83,55 @@ impl Columns {
             .map(str::to_string)
             .collect();
         let col = |name: &str| header.iter().position(|h| h == name);
-        let n = (1..)
-            .take_while(|j| col(&format!("q{j}")).is_some())
-            .count();
-        if n == 0 {
-            return Err(bad(
-                "no q1 column: expected a header `t, q1..qn, dq1..dqn, [ddq1..ddqn,] tau1..taun`"
-                    .into(),
-            ));
-        }
+        let t = col("t").ok_or_else(|| bad("missing column t".into()))?;
+        let named: Vec<String> = header
+            .iter()
+            .filter_map(|h| h.strip_prefix("q_").map(str::to_string))
+            .collect();
+        let (keys, names, ignored) = if col("q1").is_none() && !named.is_empty() {
+            let names = robot.map_or_else(|| named.clone(), <[String]>::to_vec);
+            if let Some(missing) = names.iter().find(|j| !named.contains(j)) {
+                return Err(bad(format!(
+                    "no column q_{missing} for the robot's joint '{missing}' (the file names {})",
+                    named.join(", ")
+                )));
+            }
+            let ignored = named.into_iter().filter(|j| !names.contains(j)).collect();
+            let keys: Vec<String> = names.iter().map(|j| format!("_{j}")).collect();
+            (keys, names, ignored)
+        } else {
+            let n = (1..)
+                .take_while(|j| col(&format!("q{j}")).is_some())
+                .count();
+            if n == 0 {
+                return Err(bad(
+                    "no q1 or q_<joint> column: expected a header `t, q1..qn, dq1..dqn, [ddq1..ddqn,] tau1..taun` or columns named q_<joint>, dq_<joint>, …"
+                        .into(),
+                ));
+            }
+            if let Some(r) = robot.filter(|r| r.len() != n) {
+                return Err(bad(format!(
+                    "the file has {n} joints (q columns), the robot has {}",
+                    r.len()
+                )));
+            }
+            let names = robot.map_or_else(
+                || (1..=n).map(|j| format!("joint{j}")).collect(),
+                <[String]>::to_vec,
+            );
+            ((1..=n).map(|j| j.to_string()).collect(), names, vec![])
+        };
         let need = |g: &str| -> Result<Vec<usize>, IoError> {
-            (1..=n)
-                .map(|j| {
-                    col(&format!("{g}{j}")).ok_or_else(|| {
-                        bad(format!(
-                            "missing column {g}{j} ({n} joints from the q columns)"
-                        ))
+            keys.iter()
+                .map(|k| {
+                    col(&format!("{g}{k}")).ok_or_else(|| {
+                        bad(format!("missing column {g}{k} ({} joints)", keys.len()))
                     })
                 })
                 .collect()
         };
-        let t = col("t").ok_or_else(|| bad("missing column t".into()))?;
         let (q, dq, tau) = (need("q")?, need("dq")?, need("tau")?);
-        let ddq = if col("ddq1").is_some() {
+        let ddq = if col(&format!("ddq{}", keys[0])).is_some() {
             Some(need("ddq")?)
         } else {
             None
@@ -105,34 +143,34 @@ impl Columns {
             ddq,
             tau,
             header,
+            names,
+            ignored,
         })
     }
 }
 
-/// Reads a trajectory from CSV. Joint names are `joint1..n` unless `joint_names` is given.
-/// Errors name the file, the line and the column.
-pub fn read_csv(path: &Path, joint_names: Option<&[String]>) -> Result<Trajectory, IoError> {
+/// Reads a trajectory from CSV, its joints in `robot`'s order when given (named columns matched
+/// by name; numbered ones must be as many), else as the file has them (`joint1..n` for numbered
+/// columns). Errors name the file, the line and the column.
+pub fn read_csv(path: &Path, robot: Option<&[String]>) -> Result<Trajectory, IoError> {
+    Ok(read_csv_matched(path, robot)?.0)
+}
+
+/// [`read_csv`], also returning the joints named in the file that the robot lacks.
+pub fn read_csv_matched(
+    path: &Path,
+    robot: Option<&[String]>,
+) -> Result<(Trajectory, Vec<String>), IoError> {
     let text = super::read_to_string(path)?;
     let bad = |m: String| IoError::invalid(path, m);
     let mut r = csv::ReaderBuilder::new()
         .trim(csv::Trim::All)
         .from_reader(text.as_bytes());
-    let c = Columns::parse(&mut r, path)?;
-    let (n, header) = (c.q.len(), &c.header);
+    let c = Columns::parse(&mut r, path, robot)?;
+    let header = &c.header;
     let (t_col, qc, dqc, tauc, ddqc) =
         (c.t, c.q.clone(), c.dq.clone(), c.tau.clone(), c.ddq.clone());
-    if let Some(names) = joint_names {
-        if names.len() != n {
-            return Err(bad(format!(
-                "the file has {n} joints, the robot has {}",
-                names.len()
-            )));
-        }
-    }
-    let names = joint_names.map_or_else(
-        || (1..=n).map(|j| format!("joint{j}")).collect(),
-        |v| v.to_vec(),
-    );
+    let names = c.names.clone();
     let mut tr = Trajectory::new(names, ddqc.is_some());
     for (k, rec) in r.records().enumerate() {
         let line = k + 2;
@@ -157,15 +195,16 @@ pub fn read_csv(path: &Path, joint_names: Option<&[String]>) -> Result<Trajector
         );
     }
     tr.validate().map_err(|e| bad(e.to_string()))?;
-    Ok(tr)
+    Ok((tr, c.ignored))
 }
 
 /// Streams a CSV with `ddq` columns sample by sample without loading it, checking each sample
-/// (finite values, increasing time) as it goes; `f(k, sample)` sees samples `range` only.
+/// (finite values, increasing time) as it goes; `f(k, sample)` sees samples `range` only, the
+/// joints in `robot`'s order.
 /// Returns the number of samples in the file. Memory does not grow with the file.
 pub fn stream_csv(
     path: &Path,
-    n: usize,
+    robot: &[String],
     range: std::ops::Range<usize>,
     f: &mut SampleSink,
 ) -> Result<usize, IoError> {
@@ -177,13 +216,8 @@ pub fn stream_csv(
     let mut r = csv::ReaderBuilder::new()
         .trim(csv::Trim::All)
         .from_reader(std::io::BufReader::new(file));
-    let c = Columns::parse(&mut r, path)?;
-    if c.q.len() != n {
-        return Err(bad(format!(
-            "the file has {} joints (q columns), the robot has {n}",
-            c.q.len()
-        )));
-    }
+    let c = Columns::parse(&mut r, path, Some(robot))?;
+    let n = robot.len();
     let header = &c.header;
     let t_col = c.t;
     let ddq = c

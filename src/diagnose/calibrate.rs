@@ -1,0 +1,392 @@
+//! **Calibration**: identification of the model extended by effect terms the user chooses
+//! (friction beyond viscous + Coulomb, or the effects a diagnosis confirmed), over one or more
+//! runs: `τ_k ≈ Y_k θ + E_k c` with the library's columns `E_k` ([`library`]), the inertial
+//! parameters under the constraint set, the effect coefficients `c` free (non-negative for the
+//! kinds with a physical sign).
+//!
+//! Effects whose columns are linearized about a nominal model (gain, delay, tilt, compliance,
+//! load-dependent friction) use the nominal identification of the same data (no effect terms),
+//! as the diagnosis does. Every run keeps its own samples: nothing is differentiated or filtered
+//! across the seam between two runs.
+
+use super::library::{self, Context, Kind, Variant};
+use super::magnitudes_of;
+use crate::ident::{self, IdentError, Identified, NormalEquations};
+use crate::model::Model;
+use crate::trajectory::Trajectory;
+use nalgebra::{DVector, Vector3};
+use serde::Serialize;
+use std::ops::Range;
+
+/// One run's samples and the range of them used.
+#[derive(Clone, Debug)]
+pub struct Run<'a> {
+    /// The samples (with q̈).
+    pub trajectory: &'a Trajectory,
+    /// Sample indices used.
+    pub range: Range<usize>,
+}
+
+/// Calibration options.
+#[derive(Clone, Debug)]
+pub struct Options {
+    /// The identification's settings (constraint set, prior weight, margin, regularizer).
+    pub ident: ident::Options,
+    /// The effect terms, each a kind at a grid value (Stribeck velocity, cogging harmonic).
+    pub terms: Vec<Variant>,
+    /// Low-pass cutoff (Hz) of the data's processing, for the compliance columns.
+    pub processing_cutoff: f64,
+}
+
+impl Options {
+    /// Checks the values: the identification's, terms unique with a positive grid value where
+    /// the kind has a grid, a positive cutoff.
+    pub fn validate(&self) -> Result<(), IdentError> {
+        self.ident.validate()?;
+        let cutoff = self.processing_cutoff;
+        if !(cutoff > 0.0 && cutoff.is_finite()) {
+            return Err(IdentError::InvalidOption {
+                option: "processing_cutoff",
+                expected: "> 0 Hz",
+                value: cutoff,
+            });
+        }
+        for (i, t) in self.terms.iter().enumerate() {
+            let term = || format!("{}:{}", t.kind.name(), t.param);
+            if self.terms[..i].iter().any(|u| u.kind == t.kind) {
+                return Err(IdentError::InvalidTerm {
+                    term: term(),
+                    reason: "each kind may be given once",
+                });
+            }
+            if t.kind.grid().len() > 1 && !(t.param > 0.0 && t.param.is_finite()) {
+                return Err(IdentError::InvalidTerm {
+                    term: term(),
+                    reason: "needs a positive value (stribeck:<velocity rad/s>, cogging:<harmonic>)",
+                });
+            }
+        }
+        Ok(())
+    }
+}
+
+/// One identified effect term.
+#[derive(Clone, Debug, Serialize)]
+pub struct TermFit {
+    /// The kind.
+    pub kind: Kind,
+    /// Its grid value (Stribeck velocity in rad/s, cogging harmonic), 0 otherwise.
+    pub param: f64,
+    /// The coefficients, in column order (physical magnitudes of the injected effect, see
+    /// [`library`]).
+    pub coefficients: Vec<f64>,
+    /// What the magnitudes are, and their unit.
+    pub magnitude: (&'static str, &'static str),
+    /// The magnitudes per joint (or one for the robot), as the diagnosis reports them.
+    pub magnitudes: Vec<f64>,
+}
+
+/// A calibrated model: the identification (θ of the model's layout, then the effect
+/// coefficients) and each term's fit.
+#[derive(Clone, Debug)]
+pub struct Calibration {
+    /// The identification; `theta` carries the effect coefficients after the model's layout.
+    pub identified: Identified,
+    /// The nominal parameters the linearized columns were built about.
+    pub nominal: DVector<f64>,
+    /// Each term's coefficients and magnitudes.
+    pub terms: Vec<TermFit>,
+}
+
+/// Identifies `model` with `opts.terms` on `runs` (their normal equations summed).
+pub fn calibrate(
+    model: &Model,
+    runs: &[Run],
+    opts: &Options,
+) -> Result<Calibration, IdentError> {
+    opts.validate()?;
+    let prior = model.parameters();
+    let nominal = if opts.terms.iter().any(|t| needs_nominal(t.kind)) {
+        let ne = runs.iter().fold(
+            NormalEquations::new(model.dof(), model.layout().len).finish(),
+            |acc, r| acc.merged(&NormalEquations::from_trajectory(model, r.trajectory, r.range.clone())),
+        );
+        ident::identify(model, &ne, &prior, &opts.ident)?.theta
+    } else {
+        prior.clone()
+    };
+    let mut iopts = opts.ident.clone();
+    iopts.nonnegative = nonnegative_columns(model, &opts.terms);
+    let extra = columns(&opts.terms, model.dof());
+    let full_prior = DVector::from_iterator(
+        prior.len() + extra,
+        prior.iter().copied().chain(std::iter::repeat(0.0).take(extra)),
+    );
+    let ne = normal_equations(model, &nominal, runs, opts);
+    let identified = ident::identify(model, &ne, &full_prior, &iopts)?;
+    let terms = term_fits(model, &opts.terms, &identified.theta);
+    Ok(Calibration {
+        identified,
+        nominal,
+        terms,
+    })
+}
+
+/// The normal equations of `[Y | E]` over the runs (no rows masked).
+pub fn normal_equations(
+    model: &Model,
+    nominal: &DVector<f64>,
+    runs: &[Run],
+    opts: &Options,
+) -> NormalEquations {
+    let n = model.dof();
+    let p = model.layout().len + columns(&opts.terms, n);
+    let mut ne = NormalEquations::new(n, p);
+    for r in runs {
+        let ctx = Context::new(model, nominal, r.trajectory, opts.processing_cutoff);
+        ctx.for_each_row(r.trajectory, r.range.clone(), &opts.terms, 0.0, &mut |_, z, tau| {
+            ne.add(z, tau)
+        });
+    }
+    ne.finish()
+}
+
+/// Per-joint and overall RMS of `τ − [Y | E] θ` over the runs (N m), all samples scored.
+pub fn rms_error(
+    model: &Model,
+    calibration: &Calibration,
+    runs: &[Run],
+    opts: &Options,
+) -> (Vec<f64>, f64) {
+    let n = model.dof();
+    let theta = &calibration.identified.theta;
+    let mut sq = vec![0.0; n];
+    let mut count = 0usize;
+    for r in runs {
+        let ctx = Context::new(model, &calibration.nominal, r.trajectory, opts.processing_cutoff);
+        ctx.for_each_row(r.trajectory, r.range.clone(), &opts.terms, 0.0, &mut |_, z, tau| {
+            let pred = z * theta;
+            for j in 0..n {
+                sq[j] += (tau[j] - pred[j]).powi(2);
+            }
+            count += 1;
+        });
+    }
+    let per: Vec<f64> = sq.iter().map(|s| (s / count.max(1) as f64).sqrt()).collect();
+    let all = (sq.iter().sum::<f64>() / (count.max(1) * n) as f64).sqrt();
+    (per, all)
+}
+
+/// Extra columns of `terms` for `n` joints.
+pub fn columns(terms: &[Variant], n: usize) -> usize {
+    terms.iter().map(|t| t.kind.columns(n)).sum()
+}
+
+/// Kinds whose columns are linearized about the nominal model.
+fn needs_nominal(kind: Kind) -> bool {
+    matches!(
+        kind,
+        Kind::TorqueGain
+            | Kind::TimeDelay
+            | Kind::Tilt
+            | Kind::Compliance
+            | Kind::LoadDependentFriction
+    )
+}
+
+/// θ's columns that must be non-negative: those of the kinds with a physical sign.
+fn nonnegative_columns(model: &Model, terms: &[Variant]) -> Vec<usize> {
+    let n = model.dof();
+    let mut c = model.layout().len;
+    let mut out = vec![];
+    for t in terms {
+        let k = t.kind.columns(n);
+        if t.kind.non_negative() {
+            out.extend(c..c + k);
+        }
+        c += k;
+    }
+    out
+}
+
+fn term_fits(model: &Model, terms: &[Variant], theta: &DVector<f64>) -> Vec<TermFit> {
+    let n = model.dof();
+    let g = model.gravity.norm();
+    let mut c = model.layout().len;
+    terms
+        .iter()
+        .map(|t| {
+            let k = t.kind.columns(n);
+            let coefficients: Vec<f64> = theta.rows(c, k).iter().copied().collect();
+            c += k;
+            TermFit {
+                kind: t.kind,
+                param: t.param,
+                magnitude: t.kind.magnitude(),
+                magnitudes: magnitudes_of(t.kind, &coefficients, n, g),
+                coefficients,
+            }
+        })
+        .collect()
+}
+
+/// Parses a term: a kind's name (`torque_offset`, `tilt`, …), or one of the friction aliases
+/// `offset`, `direction` (direction-dependent Coulomb), `stribeck:<v rad/s>`; kinds with a grid
+/// take their value after `:` (`cogging:<harmonic>`).
+pub fn parse_term(s: &str) -> Result<Variant, String> {
+    let (name, value) = match s.split_once(':') {
+        Some((n, v)) => (
+            n,
+            Some(
+                v.parse::<f64>()
+                    .map_err(|_| format!("'{s}': '{v}' is not a number"))?,
+            ),
+        ),
+        None => (s, None),
+    };
+    let name = match name {
+        "offset" => "torque_offset",
+        "direction" | "direction_coulomb" => "asymmetric_coulomb",
+        other => other,
+    };
+    let kind = Kind::ALL
+        .into_iter()
+        .find(|k| k.name() == name)
+        .ok_or_else(|| {
+            format!(
+                "unknown term '{s}' (one of {}, or offset, direction)",
+                library::names(&Kind::ALL, false)
+            )
+        })?;
+    let gridded = kind.grid().len() > 1;
+    match (gridded, value) {
+        (true, Some(v)) => Ok(Variant { kind, param: v }),
+        (true, None) => Err(format!(
+            "'{s}' needs its value: {}:<{}>",
+            kind.name(),
+            if kind == Kind::Stribeck {
+                "Stribeck velocity, rad/s"
+            } else {
+                "harmonic per rotor revolution"
+            }
+        )),
+        (false, Some(_)) => Err(format!("'{s}': {} takes no value", kind.name())),
+        (false, None) => Ok(Variant { kind, param: 0.0 }),
+    }
+}
+
+/// The calibrated effects as a scenario's `[[effects]]` tables (docs/scenario-format.md), so
+/// `physid simulate` replays the calibrated robot; kinds without a scenario form (reflected rotor
+/// inertia, a payload, a tilt under a gravity not along −z) are left as comments. `dt` is the
+/// data's sample period (s), for a delay in samples.
+pub fn scenario_snippet(model: &Model, terms: &[TermFit], dt: f64) -> String {
+    let n = model.dof();
+    let list = |v: &[f64]| {
+        let items: Vec<String> = v.iter().map(|x| format!("{x:.6e}")).collect();
+        format!("[{}]", items.join(", "))
+    };
+    let mut out = String::new();
+    for t in terms {
+        let c = &t.coefficients;
+        let body = match t.kind {
+            Kind::TorqueOffset => Some(format!("offset = {}", list(c))),
+            Kind::TorqueGain => Some(format!(
+                "gain = {}",
+                list(&c.iter().map(|b| 1.0 / (1.0 - b)).collect::<Vec<_>>())
+            )),
+            Kind::TimeDelay => {
+                let samples = (c[0] / dt).round();
+                (samples >= 1.0).then(|| format!("samples = {samples}"))
+            }
+            Kind::Spring => {
+                let rest: Vec<f64> = (0..n)
+                    .map(|j| if c[j] != 0.0 { -c[n + j] / c[j] } else { 0.0 })
+                    .collect();
+                Some(format!("stiffness = {}\nrest = {}", list(&c[..n]), list(&rest)))
+            }
+            Kind::Stribeck => Some(format!(
+                "static_extra = {}\nvelocity = {}",
+                list(c),
+                list(&vec![t.param; n])
+            )),
+            Kind::AsymmetricCoulomb => Some(format!("delta = {}", list(c))),
+            Kind::LoadDependentFriction => Some(format!("coefficient = {}", list(c))),
+            Kind::Cogging => {
+                let amp: Vec<f64> = (0..n).map(|j| c[j].hypot(c[n + j])).collect();
+                let phase: Vec<f64> = (0..n).map(|j| c[n + j].atan2(c[j])).collect();
+                Some(format!(
+                    "amplitude = {}\nharmonic = {}\nphase = {}",
+                    list(&amp),
+                    list(&vec![t.param; n]),
+                    list(&phase)
+                ))
+            }
+            Kind::Compliance => Some(format!(
+                "stiffness = {}",
+                list(&c.iter().map(|k| 1.0 / k).collect::<Vec<_>>())
+            )),
+            Kind::Tilt => tilt_angles(model, c).map(|(roll, pitch)| {
+                format!("roll = {roll:.6e}\npitch = {pitch:.6e}")
+            }),
+            Kind::RotorInertia | Kind::Payload => None,
+        };
+        match body {
+            Some(b) => out.push_str(&format!("[[effects]]\nkind = \"{}\"\n{b}\n\n", t.kind.name())),
+            None => out.push_str(&format!(
+                "# {} ({}: {}) has no scenario form here\n\n",
+                t.kind.name(),
+                t.magnitude.0,
+                list(&t.magnitudes)
+            )),
+        }
+    }
+    out
+}
+
+/// Roll and pitch (rad) of the scenario's tilt that turn the model's gravity (along −z) into
+/// the calibrated one, `g + c₀ u₁ + c₁ u₂` (`u` the library's tilt directions); `None` if the
+/// model's gravity is not along −z.
+fn tilt_angles(model: &Model, c: &[f64]) -> Option<(f64, f64)> {
+    let g = model.gravity;
+    let g0 = g.norm();
+    if g0 == 0.0 || (g / g0 + Vector3::z()).norm() > 1e-9 {
+        return None;
+    }
+    // The library's directions for g along −z: u₁ = x, u₂ = ĝ × u₁ = −y.
+    let tilted = g + Vector3::new(c[0], -c[1], 0.0);
+    let d = tilted / tilted.norm();
+    // The scenario's gravity is R_xᵀ(roll) R_yᵀ(pitch) g = g₀ (sin p, −sin r cos p, −cos r cos p).
+    let pitch = d.x.asin();
+    let roll = (-d.y).atan2(-d.z);
+    Some((roll, pitch))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn tilt_angles_invert_the_simulators_tilt() {
+        let model = crate::model::cheetah3::leg();
+        for (roll, pitch) in [(0.01, -0.02), (-0.003, 0.0), (0.05, 0.04)] {
+            let spec = crate::sim::scenario::EffectSpec::Tilt { roll, pitch };
+            let tilted = crate::sim::effects::true_robot(&model, &[spec]).gravity;
+            // The library's coefficients: Δg along u₁ = x and u₂ = −y.
+            let dg = tilted - model.gravity;
+            let (r, p) = tilt_angles(&model, &[dg.x, -dg.y]).unwrap();
+            assert!((r - roll).abs() < 1e-4 * roll.abs().max(1e-3), "{r} {roll}");
+            assert!((p - pitch).abs() < 1e-4 * pitch.abs().max(1e-3), "{p} {pitch}");
+        }
+    }
+
+    #[test]
+    fn terms_parse_with_aliases_and_values() {
+        assert_eq!(parse_term("offset").unwrap().kind, Kind::TorqueOffset);
+        assert_eq!(parse_term("direction").unwrap().kind, Kind::AsymmetricCoulomb);
+        let s = parse_term("stribeck:0.1").unwrap();
+        assert_eq!((s.kind, s.param), (Kind::Stribeck, 0.1));
+        assert!(parse_term("stribeck").unwrap_err().contains("stribeck:<"));
+        assert!(parse_term("tilt:3").unwrap_err().contains("takes no value"));
+        assert!(parse_term("windage").unwrap_err().contains("unknown term"));
+    }
+}
