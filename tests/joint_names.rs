@@ -29,6 +29,31 @@ struct JointState {
     effort: Vec<f64>,
 }
 
+/// How a test bag is written.
+struct Bag<'a> {
+    topic: &'a str,
+    /// Samples written.
+    range: std::ops::Range<usize>,
+    /// `header.stamp` = start + t; the log time lags it by a jitter of up to 0.9 ms.
+    header_stamps: bool,
+    /// A gripper-only message from another publisher after every sample.
+    other_publisher: bool,
+    /// The message whose velocity array is left empty.
+    empty_velocity_at: Option<usize>,
+}
+
+impl Default for Bag<'_> {
+    fn default() -> Self {
+        Self {
+            topic: "/joint_states",
+            range: 0..usize::MAX,
+            header_stamps: false,
+            other_publisher: false,
+            empty_velocity_at: None,
+        }
+    }
+}
+
 /// Writes `tr` as JointState messages with the joints in `order` (indices into `tr`'s joints,
 /// `None` for an extra joint), stamped `start_ns` + t.
 fn write_bag(
@@ -37,21 +62,61 @@ fn write_bag(
     order: &[Option<usize>],
     start_ns: u64,
 ) {
+    write_bag_with(path, tr, order, start_ns, &Bag::default());
+}
+
+fn write_bag_with(
+    path: &Path,
+    tr: &physid::trajectory::Trajectory,
+    order: &[Option<usize>],
+    start_ns: u64,
+    bag: &Bag,
+) {
     let file = std::io::BufWriter::new(std::fs::File::create(path).unwrap());
     let mut w = mcap::WriteOptions::new().create(file).unwrap();
     let schema = w
         .add_schema("sensor_msgs/msg/JointState", "ros2msg", b"")
         .unwrap();
     let channel = w
-        .add_channel(schema, "/joint_states", "cdr", &Default::default())
+        .add_channel(schema, bag.topic, "cdr", &Default::default())
         .unwrap();
     let name_of =
         |o: &Option<usize>| o.map_or("gripper".to_string(), |j| tr.joint_names[j].clone());
-    for k in 0..tr.len() {
+    let mut sequence = 0u32;
+    let mut write = |w: &mut mcap::Writer<_>, msg: &JointState, log_time: u64| {
+        let data = cdr::serialize::<_, _, cdr::CdrLe>(msg, cdr::Infinite).unwrap();
+        let header = mcap::records::MessageHeader {
+            channel_id: channel,
+            sequence,
+            log_time,
+            publish_time: log_time,
+        };
+        sequence += 1;
+        w.write_to_known_channel(&header, &data).unwrap();
+    };
+    for k in bag.range.start..bag.range.end.min(tr.len()) {
         let col = |v: &[f64], o: &Option<usize>| o.map_or(0.01, |j| v[j]);
-        let msg = JointState {
+        let stamp_ns = start_ns + (tr.t[k] * 1e9).round() as u64;
+        let jitter = if bag.header_stamps {
+            (k as u64 * 7_919_993) % 900_000
+        } else {
+            0
+        };
+        let stamp = Time {
+            sec: if bag.header_stamps {
+                (stamp_ns / 1_000_000_000) as i32
+            } else {
+                0
+            },
+            nanosec: if bag.header_stamps {
+                (stamp_ns % 1_000_000_000) as u32
+            } else {
+                0
+            },
+        };
+        let mut msg = JointState {
             header: Header {
-                stamp: Time { sec: 0, nanosec: 0 },
+                stamp,
                 frame_id: String::new(),
             },
             name: order.iter().map(name_of).collect(),
@@ -59,15 +124,23 @@ fn write_bag(
             velocity: order.iter().map(|o| col(tr.qd_at(k), o)).collect(),
             effort: order.iter().map(|o| col(tr.tau_at(k), o)).collect(),
         };
-        let data = cdr::serialize::<_, _, cdr::CdrLe>(&msg, cdr::Infinite).unwrap();
-        let t = start_ns + (tr.t[k] * 1e9).round() as u64;
-        let header = mcap::records::MessageHeader {
-            channel_id: channel,
-            sequence: k as u32,
-            log_time: t,
-            publish_time: t,
-        };
-        w.write_to_known_channel(&header, &data).unwrap();
+        if bag.empty_velocity_at == Some(k) {
+            msg.velocity.clear();
+        }
+        write(&mut w, &msg, stamp_ns + jitter);
+        if bag.other_publisher {
+            let gripper = JointState {
+                header: Header {
+                    stamp: Time { sec: 0, nanosec: 0 },
+                    frame_id: String::new(),
+                },
+                name: vec!["gripper".into()],
+                position: vec![0.02],
+                velocity: vec![0.0],
+                effort: vec![1.0],
+            };
+            write(&mut w, &gripper, stamp_ns + jitter + 100);
+        }
     }
     w.finish().unwrap();
 }
@@ -122,4 +195,177 @@ fn a_bag_in_another_joint_order_with_an_extra_joint_reads_as_the_robot_order() {
         err.contains("missing.mcap") && err.contains("joint 'hip_joint' is not in the data"),
         "{err}"
     );
+}
+
+fn short_recording() -> (physid::model::Model, physid::trajectory::Trajectory) {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
+    let (mut sc, model, _) =
+        physid::sim::scenario::load(&root.join("scenarios/cheetah3_shell.toml")).unwrap();
+    sc.simulation.duration = 0.3;
+    let rec = physid::sim::run(&model, &sc, &mut |_| {}).unwrap();
+    (model, rec.measured)
+}
+
+#[test]
+fn a_rosbag2_directory_split_in_two_files_on_another_topic_reads_whole() {
+    let (model, measured) = short_recording();
+    let dir = tempfile::tempdir().unwrap();
+    let bag = dir.path().join("run_2026");
+    std::fs::create_dir(&bag).unwrap();
+    let order = [Some(1), Some(0), Some(2)];
+    let half = measured.len() / 2;
+    let start = 1_763_000_000_000_000_007;
+    for (file, range) in [
+        ("run_2026_0.mcap", 0..half),
+        ("run_2026_1.mcap", half..usize::MAX),
+    ] {
+        let b = Bag {
+            topic: "/leg/joint_states",
+            range,
+            ..Bag::default()
+        };
+        write_bag_with(&bag.join(file), &measured, &order, start, &b);
+    }
+    std::fs::write(
+        bag.join("metadata.yaml"),
+        "rosbag2_bagfile_information:\n  version: 5\n  storage_identifier: mcap\n  relative_file_paths:\n    - run_2026_0.mcap\n    - run_2026_1.mcap\n  duration:\n    nanoseconds: 300000000\n",
+    )
+    .unwrap();
+    let opts = io::DataOptions {
+        topic: Some("/leg/joint_states".into()),
+        ..Default::default()
+    };
+    let read = io::load_trajectory_with(&bag, &model, &opts)
+        .unwrap()
+        .trajectory;
+    assert_eq!(read.q, measured.q);
+    assert_eq!(read.tau, measured.tau);
+    assert_eq!(read.len(), measured.len());
+    // Without the topic, the default /joint_states is named as missing.
+    let err = io::load_trajectory(&bag, &model).unwrap_err().to_string();
+    assert!(
+        err.contains("no /joint_states messages") && err.contains("--topic"),
+        "{err}"
+    );
+    // A bag stored in SQLite is named as such.
+    std::fs::write(
+        bag.join("metadata.yaml"),
+        "rosbag2_bagfile_information:\n  storage_identifier: sqlite3\n  relative_file_paths:\n  - run_2026_0.db3\n",
+    )
+    .unwrap();
+    let err = io::load_trajectory_with(&bag, &model, &opts)
+        .unwrap_err()
+        .to_string();
+    assert!(
+        err.contains("metadata.yaml") && err.contains("sqlite3"),
+        "{err}"
+    );
+}
+
+#[test]
+fn header_stamps_give_the_sampling_times_and_another_publisher_is_skipped() {
+    let (model, measured) = short_recording();
+    let dir = tempfile::tempdir().unwrap();
+    let p = dir.path().join("jitter.mcap");
+    let b = Bag {
+        header_stamps: true,
+        other_publisher: true,
+        ..Bag::default()
+    };
+    write_bag_with(
+        &p,
+        &measured,
+        &[Some(0), Some(1), Some(2)],
+        1_700_000_000_000_000_000,
+        &b,
+    );
+    let header = io::DataOptions {
+        stamp: io::mcap_log::Stamp::Header,
+        ..Default::default()
+    };
+    let by_header = io::load_trajectory_with(&p, &model, &header).unwrap();
+    assert_eq!(by_header.skipped_messages, measured.len());
+    let t0 = measured.t[0];
+    let worst = by_header
+        .trajectory
+        .t
+        .iter()
+        .zip(&measured.t)
+        .map(|(a, b)| (a - (b - t0)).abs())
+        .fold(0.0, f64::max);
+    assert!(worst < 1e-9, "header times off by {worst:e} s");
+    // The log times carry the recorder's jitter (up to 0.9 ms).
+    let by_log = io::load_trajectory(&p, &model).unwrap().trajectory;
+    let off = by_log
+        .t
+        .iter()
+        .zip(&measured.t)
+        .map(|(a, b)| (a - (b - t0)).abs())
+        .fold(0.0, f64::max);
+    assert!(
+        off > 1e-4,
+        "log times should show the jitter, off by {off:e} s"
+    );
+}
+
+#[test]
+fn an_empty_velocity_array_is_named_with_its_message() {
+    let (model, measured) = short_recording();
+    let dir = tempfile::tempdir().unwrap();
+    let p = dir.path().join("novel.mcap");
+    let b = Bag {
+        empty_velocity_at: Some(5),
+        ..Bag::default()
+    };
+    write_bag_with(&p, &measured, &[Some(0), Some(1), Some(2)], 0, &b);
+    let err = io::load_trajectory(&p, &model).unwrap_err().to_string();
+    assert!(
+        err.contains("novel.mcap")
+            && err.contains("message 5")
+            && err.contains("velocity array is empty"),
+        "{err}"
+    );
+}
+
+#[test]
+fn csv_columns_named_by_joint_in_any_order_read_as_numbered_ones() {
+    let (model, measured) = short_recording();
+    let dir = tempfile::tempdir().unwrap();
+    let numbered = dir.path().join("numbered.csv");
+    io::samples::write_csv(&numbered, &measured).unwrap();
+    // The same data with columns named by joint, shuffled, and an extra joint.
+    let text = std::fs::read_to_string(&numbered).unwrap();
+    let mut rows = csv::Reader::from_reader(text.as_bytes());
+    let header: Vec<String> = rows.headers().unwrap().iter().map(String::from).collect();
+    let names = ["abad_joint", "hip_joint", "knee_joint"];
+    let renamed: Vec<String> = header
+        .iter()
+        .map(|h| {
+            let digits = h.trim_start_matches(|c: char| c.is_ascii_alphabetic());
+            match digits.parse::<usize>() {
+                Ok(j) => format!("{}_{}", &h[..h.len() - digits.len()], names[j - 1]),
+                Err(_) => h.clone(),
+            }
+        })
+        .collect();
+    let order: Vec<usize> = (0..header.len()).rev().collect();
+    let mut w = csv::Writer::from_path(dir.path().join("named.csv")).unwrap();
+    let mut head: Vec<String> = order.iter().map(|&i| renamed[i].clone()).collect();
+    head.push("q_gripper".into());
+    w.write_record(&head).unwrap();
+    for r in rows.records() {
+        let r = r.unwrap();
+        let mut rec: Vec<String> = order.iter().map(|&i| r[i].to_string()).collect();
+        rec.push("0.5".into());
+        w.write_record(&rec).unwrap();
+    }
+    w.flush().unwrap();
+    let joints: Vec<String> = model.bodies.iter().map(|b| b.joint_name.clone()).collect();
+    assert_eq!(joints, names);
+    let a = io::load_trajectory(&numbered, &model).unwrap().trajectory;
+    let b = io::load_trajectory(&dir.path().join("named.csv"), &model).unwrap();
+    assert_eq!(b.ignored_joints, vec!["gripper".to_string()]);
+    assert_eq!(a.q, b.trajectory.q);
+    assert_eq!(a.qd, b.trajectory.qd);
+    assert_eq!(a.tau, b.trajectory.tau);
 }

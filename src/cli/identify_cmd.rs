@@ -311,8 +311,8 @@ fn terms(a: &Args) -> anyhow::Result<Vec<Variant>> {
 /// The effects a diagnosis report confirmed (its `effects[i]` with `confirmed[i]` true).
 fn confirmed_effects(path: &Path) -> anyhow::Result<Vec<Variant>> {
     let text = physid::io::read_to_string(path)?;
-    let v: serde_json::Value = serde_json::from_str(&text)
-        .with_context(|| format!("{}: not JSON", path.display()))?;
+    let v: serde_json::Value =
+        serde_json::from_str(&text).with_context(|| format!("{}: not JSON", path.display()))?;
     let (Some(effects), Some(confirmed)) = (v["effects"].as_array(), v["confirmed"].as_array())
     else {
         bail!(
@@ -372,7 +372,11 @@ pub fn run(a: Args) -> anyhow::Result<()> {
         Some(s) => vec![parse_range(s, data[0].len(), "--train")?],
         None => data.iter().map(|d| 0..d.len()).collect(),
     };
-    let vdata: Vec<Data> = a.validate_data.iter().map(open).collect::<anyhow::Result<_>>()?;
+    let vdata: Vec<Data> = a
+        .validate_data
+        .iter()
+        .map(open)
+        .collect::<anyhow::Result<_>>()?;
     let validation: Vec<(&Data, Range<usize>)> = match a.validate.as_deref() {
         Some(s) => vec![(&data[0], parse_range(s, data[0].len(), "--validate")?)],
         None => vdata.iter().map(|d| (d, 0..d.len())).collect(),
@@ -401,7 +405,10 @@ pub fn run(a: Args) -> anyhow::Result<()> {
         Some(fit.errors(m, &validation)?)
     };
     let idf = analysis::identifiability(m, &fit.ne, &fit.model_theta(m));
-    let vrange = validation.first().map(|(_, r)| r).filter(|_| a.data.len() == 1);
+    let vrange = validation
+        .first()
+        .map(|(_, r)| r)
+        .filter(|_| a.data.len() == 1);
     warn_weak_data(&train[0], vrange, a.validate.is_some(), &idf);
     let dt = data[0]
         .trajectory()
@@ -436,7 +443,13 @@ pub fn run(a: Args) -> anyhow::Result<()> {
 }
 
 /// `--out-urdf`, `--out-effects` and `--export-problem`.
-fn write_outputs(a: &Args, m: &Model, fit: &Fit, opts: &Options, rep: &Report) -> anyhow::Result<()> {
+fn write_outputs(
+    a: &Args,
+    m: &Model,
+    fit: &Fit,
+    opts: &Options,
+    rep: &Report,
+) -> anyhow::Result<()> {
     if let Some(p) = &a.out_urdf {
         write_urdf(p, rep.set, m, &rep.r)?;
     }
@@ -490,7 +503,9 @@ impl Fit {
 fn in_memory_runs<'a>(runs: &[(&'a Data, Range<usize>)]) -> Vec<Run<'a>> {
     runs.iter()
         .map(|(d, r)| Run {
-            trajectory: d.trajectory().expect("data with effect terms are loaded in memory"),
+            trajectory: d
+                .trajectory()
+                .expect("data with effect terms are loaded in memory"),
             range: r.clone(),
         })
         .collect()
@@ -527,7 +542,11 @@ fn fit_with_terms(
     let cal = physid::diagnose::calibrate::calibrate(m, &rs, &copts)?;
     let mut ne = NormalEquations::new(m.dof(), m.layout().len).finish();
     for r in &rs {
-        ne = ne.merged(&NormalEquations::from_trajectory(m, r.trajectory, r.range.clone()));
+        ne = ne.merged(&NormalEquations::from_trajectory(
+            m,
+            r.trajectory,
+            r.range.clone(),
+        ));
     }
     Ok(Fit {
         r: cal.identified.clone(),
@@ -622,7 +641,12 @@ fn truth_errors(
 }
 
 /// Writes the identified model as URDF, warning when its inertias are not consistent.
-fn write_urdf(p: &Path, set: ConstraintSet, m: &Model, r: &ident::Identified) -> anyhow::Result<()> {
+fn write_urdf(
+    p: &Path,
+    set: ConstraintSet,
+    m: &Model,
+    r: &ident::Identified,
+) -> anyhow::Result<()> {
     let theta = r.theta.rows(0, m.layout().len).into_owned();
     let im = m.with_parameters(&theta)?;
     physid::io::write_atomic(p, physid::io::urdf::to_string(&im).as_bytes())?;
@@ -709,13 +733,8 @@ fn theta_names(m: &Model, terms: &[physid::diagnose::calibrate::TermFit]) -> Vec
 
 /// The text report: bodies, friction, effects, errors, consistency, identifiability, truth.
 fn print_text(a: &Args, m: &Model, rep: &Report) {
-    let (r, idf, train_rms, train_all, val) = (
-        &rep.r,
-        &rep.idf,
-        &rep.train_rms,
-        rep.train_all,
-        &rep.val,
-    );
+    let (r, idf, train_rms, train_all, val) =
+        (&rep.r, &rep.idf, &rep.train_rms, rep.train_all, &rep.val);
     let (total, truth_errors) = (rep.total, &rep.truth_errors);
     let on = if a.data.len() == 1 {
         format!(
@@ -727,7 +746,11 @@ fn print_text(a: &Args, m: &Model, rep: &Report) {
     } else {
         let k: usize = rep.train.iter().map(Range::len).sum();
         let files: Vec<String> = a.data.iter().map(|p| p.display().to_string()).collect();
-        format!("{k} samples of {} runs ({})", a.data.len(), files.join(", "))
+        format!(
+            "{k} samples of {} runs ({})",
+            a.data.len(),
+            files.join(", ")
+        )
     };
     println!(
         "{}: '{}' on {on} ({} parameters), {} in {:.1} ms ({} iterations, {:.1} ms end to end)",
@@ -833,6 +856,9 @@ fn ground_truth(path: &Path, model: &Model) -> Option<nalgebra::DVector<f64>> {
     (names == model.parameter_names()).then(|| nalgebra::DVector::from_vec(values))
 }
 
+/// Below this identifiable fraction an effect coefficient is reported as absorbed.
+const ABSORBED: f64 = 0.1;
+
 /// The identified effect terms, one line per magnitude.
 fn print_terms(terms: &[physid::diagnose::calibrate::TermFit], m: &Model) {
     if terms.is_empty() {
@@ -857,5 +883,16 @@ fn print_terms(terms: &[physid::diagnose::calibrate::TermFit], m: &Model) {
             t.kind.name(),
             values.join(" ")
         );
+        let fractions: Vec<String> = t.identifiable.iter().map(|f| format!("{f:.2}")).collect();
+        println!(
+            "    identifiable fraction per coefficient: {}",
+            fractions.join(" ")
+        );
+        if t.identifiable.iter().any(|&f| f < ABSORBED) {
+            eprintln!(
+                "warning: {} is largely absorbed by the inertial parameters on these data (identifiable fraction below {ABSORBED}): its value there is not meaningful; test it against the description with `physid diagnose --description-uncertainty`",
+                t.kind.name()
+            );
+        }
     }
 }

@@ -62,7 +62,8 @@ impl Options {
             if t.kind.grid().len() > 1 && !(t.param > 0.0 && t.param.is_finite()) {
                 return Err(IdentError::InvalidTerm {
                     term: term(),
-                    reason: "needs a positive value (stribeck:<velocity rad/s>, cogging:<harmonic>)",
+                    reason:
+                        "needs a positive value (stribeck:<velocity rad/s>, cogging:<harmonic>)",
                 });
             }
         }
@@ -84,6 +85,10 @@ pub struct TermFit {
     pub magnitude: (&'static str, &'static str),
     /// The magnitudes per joint (or one for the robot), as the diagnosis reports them.
     pub magnitudes: Vec<f64>,
+    /// Per coefficient, the fraction of its column the rigid-body regressor does not explain
+    /// on the training data (1: identifiable; near 0: absorbed by the inertial parameters, the
+    /// value is then meaningless).
+    pub identifiable: Vec<f64>,
 }
 
 /// A calibrated model: the identification (θ of the model's layout, then the effect
@@ -99,17 +104,19 @@ pub struct Calibration {
 }
 
 /// Identifies `model` with `opts.terms` on `runs` (their normal equations summed).
-pub fn calibrate(
-    model: &Model,
-    runs: &[Run],
-    opts: &Options,
-) -> Result<Calibration, IdentError> {
+pub fn calibrate(model: &Model, runs: &[Run], opts: &Options) -> Result<Calibration, IdentError> {
     opts.validate()?;
     let prior = model.parameters();
     let nominal = if opts.terms.iter().any(|t| needs_nominal(t.kind)) {
         let ne = runs.iter().fold(
             NormalEquations::new(model.dof(), model.layout().len).finish(),
-            |acc, r| acc.merged(&NormalEquations::from_trajectory(model, r.trajectory, r.range.clone())),
+            |acc, r| {
+                acc.merged(&NormalEquations::from_trajectory(
+                    model,
+                    r.trajectory,
+                    r.range.clone(),
+                ))
+            },
         );
         ident::identify(model, &ne, &prior, &opts.ident)?.theta
     } else {
@@ -120,11 +127,18 @@ pub fn calibrate(
     let extra = columns(&opts.terms, model.dof());
     let full_prior = DVector::from_iterator(
         prior.len() + extra,
-        prior.iter().copied().chain(std::iter::repeat(0.0).take(extra)),
+        prior
+            .iter()
+            .copied()
+            .chain(std::iter::repeat(0.0).take(extra)),
     );
     let ne = normal_equations(model, &nominal, runs, opts);
     let identified = ident::identify(model, &ne, &full_prior, &iopts)?;
-    let terms = term_fits(model, &opts.terms, &identified.theta);
+    let absorbed = super::magnitude::Identifiable::new(&ne.yty, prior.len());
+    let identifiable: Vec<f64> = (prior.len()..prior.len() + extra)
+        .map(|c| absorbed.fraction(c))
+        .collect();
+    let terms = term_fits(model, &opts.terms, &identified.theta, &identifiable);
     Ok(Calibration {
         identified,
         nominal,
@@ -144,9 +158,13 @@ pub fn normal_equations(
     let mut ne = NormalEquations::new(n, p);
     for r in runs {
         let ctx = Context::new(model, nominal, r.trajectory, opts.processing_cutoff);
-        ctx.for_each_row(r.trajectory, r.range.clone(), &opts.terms, 0.0, &mut |_, z, tau| {
-            ne.add(z, tau)
-        });
+        ctx.for_each_row(
+            r.trajectory,
+            r.range.clone(),
+            &opts.terms,
+            0.0,
+            &mut |_, z, tau| ne.add(z, tau),
+        );
     }
     ne.finish()
 }
@@ -163,16 +181,30 @@ pub fn rms_error(
     let mut sq = vec![0.0; n];
     let mut count = 0usize;
     for r in runs {
-        let ctx = Context::new(model, &calibration.nominal, r.trajectory, opts.processing_cutoff);
-        ctx.for_each_row(r.trajectory, r.range.clone(), &opts.terms, 0.0, &mut |_, z, tau| {
-            let pred = z * theta;
-            for j in 0..n {
-                sq[j] += (tau[j] - pred[j]).powi(2);
-            }
-            count += 1;
-        });
+        let ctx = Context::new(
+            model,
+            &calibration.nominal,
+            r.trajectory,
+            opts.processing_cutoff,
+        );
+        ctx.for_each_row(
+            r.trajectory,
+            r.range.clone(),
+            &opts.terms,
+            0.0,
+            &mut |_, z, tau| {
+                let pred = z * theta;
+                for j in 0..n {
+                    sq[j] += (tau[j] - pred[j]).powi(2);
+                }
+                count += 1;
+            },
+        );
     }
-    let per: Vec<f64> = sq.iter().map(|s| (s / count.max(1) as f64).sqrt()).collect();
+    let per: Vec<f64> = sq
+        .iter()
+        .map(|s| (s / count.max(1) as f64).sqrt())
+        .collect();
     let all = (sq.iter().sum::<f64>() / (count.max(1) * n) as f64).sqrt();
     (per, all)
 }
@@ -209,7 +241,12 @@ fn nonnegative_columns(model: &Model, terms: &[Variant]) -> Vec<usize> {
     out
 }
 
-fn term_fits(model: &Model, terms: &[Variant], theta: &DVector<f64>) -> Vec<TermFit> {
+fn term_fits(
+    model: &Model,
+    terms: &[Variant],
+    theta: &DVector<f64>,
+    identifiable: &[f64],
+) -> Vec<TermFit> {
     let n = model.dof();
     let g = model.gravity.norm();
     let mut c = model.layout().len;
@@ -218,6 +255,8 @@ fn term_fits(model: &Model, terms: &[Variant], theta: &DVector<f64>) -> Vec<Term
         .map(|t| {
             let k = t.kind.columns(n);
             let coefficients: Vec<f64> = theta.rows(c, k).iter().copied().collect();
+            let p0 = model.layout().len;
+            let identifiable = identifiable[c - p0..c - p0 + k].to_vec();
             c += k;
             TermFit {
                 kind: t.kind,
@@ -225,6 +264,7 @@ fn term_fits(model: &Model, terms: &[Variant], theta: &DVector<f64>) -> Vec<Term
                 magnitude: t.kind.magnitude(),
                 magnitudes: magnitudes_of(t.kind, &coefficients, n, g),
                 coefficients,
+                identifiable,
             }
         })
         .collect()
@@ -302,7 +342,11 @@ pub fn scenario_snippet(model: &Model, terms: &[TermFit], dt: f64) -> String {
                 let rest: Vec<f64> = (0..n)
                     .map(|j| if c[j] != 0.0 { -c[n + j] / c[j] } else { 0.0 })
                     .collect();
-                Some(format!("stiffness = {}\nrest = {}", list(&c[..n]), list(&rest)))
+                Some(format!(
+                    "stiffness = {}\nrest = {}",
+                    list(&c[..n]),
+                    list(&rest)
+                ))
             }
             Kind::Stribeck => Some(format!(
                 "static_extra = {}\nvelocity = {}",
@@ -325,13 +369,15 @@ pub fn scenario_snippet(model: &Model, terms: &[TermFit], dt: f64) -> String {
                 "stiffness = {}",
                 list(&c.iter().map(|k| 1.0 / k).collect::<Vec<_>>())
             )),
-            Kind::Tilt => tilt_angles(model, c).map(|(roll, pitch)| {
-                format!("roll = {roll:.6e}\npitch = {pitch:.6e}")
-            }),
+            Kind::Tilt => tilt_angles(model, c)
+                .map(|(roll, pitch)| format!("roll = {roll:.6e}\npitch = {pitch:.6e}")),
             Kind::RotorInertia | Kind::Payload => None,
         };
         match body {
-            Some(b) => out.push_str(&format!("[[effects]]\nkind = \"{}\"\n{b}\n\n", t.kind.name())),
+            Some(b) => out.push_str(&format!(
+                "[[effects]]\nkind = \"{}\"\n{b}\n\n",
+                t.kind.name()
+            )),
             None => out.push_str(&format!(
                 "# {} ({}: {}) has no scenario form here\n\n",
                 t.kind.name(),
@@ -375,14 +421,20 @@ mod tests {
             let dg = tilted - model.gravity;
             let (r, p) = tilt_angles(&model, &[dg.x, -dg.y]).unwrap();
             assert!((r - roll).abs() < 1e-4 * roll.abs().max(1e-3), "{r} {roll}");
-            assert!((p - pitch).abs() < 1e-4 * pitch.abs().max(1e-3), "{p} {pitch}");
+            assert!(
+                (p - pitch).abs() < 1e-4 * pitch.abs().max(1e-3),
+                "{p} {pitch}"
+            );
         }
     }
 
     #[test]
     fn terms_parse_with_aliases_and_values() {
         assert_eq!(parse_term("offset").unwrap().kind, Kind::TorqueOffset);
-        assert_eq!(parse_term("direction").unwrap().kind, Kind::AsymmetricCoulomb);
+        assert_eq!(
+            parse_term("direction").unwrap().kind,
+            Kind::AsymmetricCoulomb
+        );
         let s = parse_term("stribeck:0.1").unwrap();
         assert_eq!((s.kind, s.param), (Kind::Stribeck, 0.1));
         assert!(parse_term("stribeck").unwrap_err().contains("stribeck:<"));

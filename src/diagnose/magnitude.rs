@@ -44,20 +44,20 @@ fn magnitude_se(kind: Kind, c: &[f64], se: &[f64], n: usize, gravity: f64, index
 
 /// Fraction of the energy of each column `col` of the summed normal equations that lies outside
 /// the span of the model's first `p0` columns (1: fully identifiable; 0: absorbed).
-struct Identifiable<'a> {
+pub(crate) struct Identifiable<'a> {
     yty: &'a DMatrix<f64>,
     hyy: DMatrix<f64>,
     p0: usize,
 }
 
 impl<'a> Identifiable<'a> {
-    fn new(yty: &'a DMatrix<f64>, p0: usize) -> Self {
+    pub(crate) fn new(yty: &'a DMatrix<f64>, p0: usize) -> Self {
         let hyy = yty.view((0, 0), (p0, p0)).into_owned()
             + DMatrix::identity(p0, p0) * (1e-12 * yty.diagonal().max());
         Self { yty, hyy, p0 }
     }
 
-    fn fraction(&self, col: usize) -> f64 {
+    pub(crate) fn fraction(&self, col: usize) -> f64 {
         let zc = self.yty.column(col).rows(0, self.p0).into_owned();
         let x = crate::linalg::least_squares(&self.hyy, &zc);
         let zz = self.yty[(col, col)];

@@ -19,8 +19,8 @@
 //! runs first. The blind benchmark that scores it is `experiment::blind`.
 
 pub mod anchor;
-pub mod calibrate;
 pub mod breakdown;
+pub mod calibrate;
 mod diagnosis;
 mod gap;
 pub mod library;

@@ -463,10 +463,7 @@ fn rosbag2_files(dir: &Path) -> Result<Vec<std::path::PathBuf>, IoError> {
         ));
     }
     if listed.is_empty() {
-        return Err(IoError::invalid(
-            &meta_path,
-            "lists no relative_file_paths",
-        ));
+        return Err(IoError::invalid(&meta_path, "lists no relative_file_paths"));
     }
     let files: Vec<_> = listed.iter().map(|f| dir.join(f)).collect();
     if let Some(missing) = files.iter().find(|f| !f.is_file()) {
@@ -554,9 +551,9 @@ impl Reader<'_> {
     /// Seconds since the first message for a time in ns (integer arithmetic first).
     fn seconds(&mut self, ns: u64) -> Result<f64, String> {
         let first = *self.t0.get_or_insert(ns);
-        let dt = ns
-            .checked_sub(first)
-            .ok_or_else(|| format!("its time ({ns} ns) is before the first message's ({first} ns)"))?;
+        let dt = ns.checked_sub(first).ok_or_else(|| {
+            format!("its time ({ns} ns) is before the first message's ({first} ns)")
+        })?;
         Ok(dt as f64 / 1e9)
     }
 

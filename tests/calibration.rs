@@ -1,0 +1,229 @@
+//! `physid identify` with effect terms (`--friction offset`, `--effects`, `--effects-from`) and
+//! several runs: on the real KUKA LWR4+ logs (runs 1 + 2 train, run 3 held out) a torque offset
+//! per joint and the diagnosis-confirmed effects lower the held-out error to or below a Python
+//! reference (pinocchio + CVXPY); on a simulated leg whose offset and tilt its inertial
+//! parameters absorb, the calibration says so; its scenario snippet replays in `simulate`; runs
+//! join as sums of normal equations.
+
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+fn physid(args: &[&str]) -> (i32, String, String) {
+    let o = Command::new(env!("CARGO_BIN_EXE_physid"))
+        .args(args)
+        .output()
+        .unwrap();
+    (
+        o.status.code().unwrap_or(-1),
+        String::from_utf8_lossy(&o.stdout).into(),
+        String::from_utf8_lossy(&o.stderr).into(),
+    )
+}
+
+const OFFSET: [f64; 3] = [0.8, -0.5, 0.3];
+const ROLL: f64 = 0.02;
+const PITCH: f64 = -0.01;
+
+/// The shell experiment with an offset and a tilt injected, simulated for `seed` into CSV.
+fn simulate(dir: &Path, seed: u64) -> PathBuf {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
+    let base = std::fs::read_to_string(root.join("scenarios/cheetah3_shell.toml")).unwrap();
+    let scenario = dir.join(format!("offset_tilt_{seed}.toml"));
+    std::fs::write(
+        &scenario,
+        format!(
+            "{base}\n[[effects]]\nkind = \"torque_offset\"\noffset = {OFFSET:?}\n\n[[effects]]\nkind = \"tilt\"\nroll = {ROLL}\npitch = {PITCH}\n"
+        ),
+    )
+    .unwrap();
+    let (csv, mcap) = (
+        dir.join(format!("run{seed}.csv")),
+        dir.join(format!("run{seed}.mcap")),
+    );
+    let s = seed.to_string();
+    let (code, _, err) = physid(&[
+        "simulate",
+        scenario.to_str().unwrap(),
+        "--out",
+        mcap.to_str().unwrap(),
+        "--csv",
+        csv.to_str().unwrap(),
+        "--duration",
+        "8",
+        "--seed",
+        &s,
+    ]);
+    assert_eq!(code, 0, "{err}");
+    csv
+}
+
+fn identify(args: &[&str]) -> serde_json::Value {
+    let mut all = vec!["identify", "--constraints", "consistent", "--json"];
+    all.extend_from_slice(args);
+    let (code, out, err) = physid(&all);
+    assert_eq!(code, 0, "{err}");
+    serde_json::from_str(&out).unwrap()
+}
+
+fn rms(v: &serde_json::Value) -> f64 {
+    v["validation"]["rms_overall"].as_f64().unwrap()
+}
+
+#[test]
+fn offset_and_tilt_are_recovered_and_replay() {
+    let dir = tempfile::tempdir().unwrap();
+    let (train, held) = (simulate(dir.path(), 1), simulate(dir.path(), 2));
+    let (t, h) = (train.to_str().unwrap(), held.to_str().unwrap());
+    let plain = identify(&["--data", t, "--validate-data", h]);
+    let snippet = dir.path().join("effects.toml");
+    let cal = identify(&[
+        "--data",
+        t,
+        "--validate-data",
+        h,
+        "--friction",
+        "viscous,coulomb,offset",
+        "--effects",
+        "tilt",
+        "--out-effects",
+        snippet.to_str().unwrap(),
+    ]);
+    // On this leg an offset at the abad and hip joints and a tilt are absorbed by the inertial
+    // parameters (their columns lie in the regressor's span on the shell motion): the
+    // calibration says so instead of claiming values, and is no worse than the plain model.
+    let effects = cal["effects"].as_array().unwrap();
+    assert_eq!(effects[0]["kind"], "torque_offset");
+    let fraction = |e: &serde_json::Value, i: usize| e["identifiable"][i].as_f64().unwrap();
+    assert!(fraction(&effects[0], 0) < 0.1 && fraction(&effects[0], 1) < 0.1);
+    assert!(fraction(&effects[1], 0) < 0.1, "tilt: {}", effects[1]);
+    assert!(
+        rms(&cal) <= 1.01 * rms(&plain),
+        "calibrated {} vs plain {}",
+        rms(&cal),
+        rms(&plain)
+    );
+    // The snippet is a scenario's [[effects]]: appended to the nominal scenario it simulates,
+    // with the roll and pitch it states close to the injected ones.
+    let text = std::fs::read_to_string(&snippet).unwrap();
+    let table: toml::Table = text.parse().unwrap();
+    let kinds: Vec<&str> = table["effects"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|e| e["kind"].as_str().unwrap())
+        .collect();
+    assert_eq!(kinds, ["torque_offset", "tilt"]);
+    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
+    let base = std::fs::read_to_string(root.join("scenarios/cheetah3_shell.toml")).unwrap();
+    let replay = dir.path().join("replay.toml");
+    std::fs::write(&replay, format!("{base}\n{text}")).unwrap();
+    let out = dir.path().join("replay.mcap");
+    let (code, _, err) = physid(&[
+        "simulate",
+        replay.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+        "--duration",
+        "0.5",
+    ]);
+    assert_eq!(code, 0, "{err}");
+}
+
+#[test]
+fn runs_join_as_sums_and_bad_terms_are_named() {
+    let dir = tempfile::tempdir().unwrap();
+    let (a, b) = (simulate(dir.path(), 3), simulate(dir.path(), 4));
+    let (a, b) = (a.to_str().unwrap(), b.to_str().unwrap());
+    // The same run twice: the same normal equations per sample, the same optimum.
+    let once = identify(&["--data", a]);
+    let twice = identify(&["--data", a, a]);
+    let (x, y) = (
+        once["theta"].as_array().unwrap(),
+        twice["theta"].as_array().unwrap(),
+    );
+    let worst = x
+        .iter()
+        .zip(y)
+        .map(|(p, q)| {
+            let (p, q) = (p.as_f64().unwrap(), q.as_f64().unwrap());
+            (p - q).abs() / p.abs().max(1e-3)
+        })
+        .fold(0.0, f64::max);
+    assert!(worst < 1e-6, "θ differs by {worst:e} relative");
+    // Two runs: the training error is over both.
+    let both = identify(&["--data", a, b]);
+    assert_eq!(both["train"]["runs"].as_array().unwrap().len(), 2);
+    let (code, _, err) = physid(&["identify", "--data", a, "--friction", "viscous,offset"]);
+    assert!(code != 0 && err.contains("viscous and coulomb"), "{err}");
+    let (code, _, err) = physid(&[
+        "identify",
+        "--data",
+        a,
+        "--friction",
+        "viscous,coulomb,stribeck",
+    ]);
+    assert!(code != 0 && err.contains("stribeck:<"), "{err}");
+    let (code, _, err) = physid(&["identify", "--data", a, b, "--train", "0:100"]);
+    assert!(code != 0 && err.contains("--train"), "{err}");
+    let (code, _, err) = physid(&["identify", "--data", a, "--effects-from", a]);
+    assert!(code != 0 && err.contains("not JSON"), "{err}");
+}
+
+/// Per-joint held-out RMS (N m) of the Python reference on the KUKA logs: pinocchio
+/// regressor + CVXPY, `J ≻ 0`, viscous, Coulomb and an offset per joint, runs 1 + 2 → run 3
+/// (given to two decimals).
+const PYTHON_OFFSET_RMS: [f64; 7] = [0.70, 0.44, 0.27, 0.45, 0.31, 0.35, 0.24];
+
+#[test]
+fn kuka_offset_model_reaches_the_python_reference_and_the_confirmed_effects_beat_it() {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
+    let k = root.join("data/kuka_lwr4");
+    let f = |n: &str| k.join(n).to_str().unwrap().to_string();
+    let (r1, r2, r3, urdf) = (
+        f("measurements_1.csv"),
+        f("measurements_2.csv"),
+        f("measurements_3.csv"),
+        f("kuka_lwr4.urdf"),
+    );
+    let report = root.join("results/kuka_diagnosis/report.json");
+    let base = ["--data", &r1, &r2, "--validate-data", &r3, "--robot", &urdf];
+    let run = |extra: &[&str]| {
+        let mut a = base.to_vec();
+        a.extend_from_slice(extra);
+        identify(&a)
+    };
+    let plain = run(&[]);
+    let offset = run(&["--friction", "viscous,coulomb,offset"]);
+    let confirmed = run(&["--effects-from", report.to_str().unwrap()]);
+    let per = |v: &serde_json::Value| -> Vec<f64> {
+        v["validation"]["rms"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(|x| x.as_f64().unwrap())
+            .collect()
+    };
+    for (j, (got, reference)) in per(&offset).iter().zip(PYTHON_OFFSET_RMS).enumerate() {
+        // At the reference to its two decimals, on every joint.
+        assert!(*got < reference + 0.005, "joint {j}: {got} vs {reference}");
+    }
+    assert!(
+        rms(&offset) < 0.75 * rms(&plain),
+        "{} vs {}",
+        rms(&offset),
+        rms(&plain)
+    );
+    let kinds: Vec<&str> = confirmed["effects"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|e| e["kind"].as_str().unwrap())
+        .collect();
+    assert_eq!(kinds, ["torque_offset", "tilt"]);
+    assert!(
+        rms(&confirmed) < 0.8 * rms(&offset),
+        "{} vs {}",
+        rms(&confirmed),
+        rms(&offset)
+    );
+}
