@@ -110,7 +110,7 @@ impl Data {
         read: &physid::io::DataOptions,
         in_memory: bool,
     ) -> anyhow::Result<Data> {
-        let large = std::fs::metadata(path).map_or(false, |m| m.len() > STREAM_ABOVE_BYTES);
+        let large = std::fs::metadata(path).is_ok_and(|m| m.len() > STREAM_ABOVE_BYTES);
         if !in_memory
             && large
             && path.extension().and_then(|e| e.to_str()) == Some("csv")

@@ -127,10 +127,7 @@ pub fn calibrate(model: &Model, runs: &[Run], opts: &Options) -> Result<Calibrat
     let extra = columns(&opts.terms, model.dof());
     let full_prior = DVector::from_iterator(
         prior.len() + extra,
-        prior
-            .iter()
-            .copied()
-            .chain(std::iter::repeat(0.0).take(extra)),
+        prior.iter().copied().chain(std::iter::repeat_n(0.0, extra)),
     );
     let ne = normal_equations(model, &nominal, runs, opts);
     let identified = ident::identify(model, &ne, &full_prior, &iopts)?;
