@@ -1,6 +1,7 @@
 """Cross-check physid against pinocchio: RNEA torques, the joint-torque regressor and the
 inertial parameters read from URDF, on the link-only Cheetah-3 leg (exported by physid as URDF)
-and on the real KUKA LWR4+ URDF (read by both). Exits non-zero on disagreement.
+and on the real KUKA LWR4+ URDF (read by both); and RNEA of the full leg with its rotors, exported
+as URDF mimic joints and loaded with mimic=True. Exits non-zero on disagreement.
 
 usage: python scripts/check_pinocchio.py [--physid PATH]
 """
@@ -39,6 +40,22 @@ def check(report, label, urdf_path, dyn):
     report.add(f"{label}: joint torque regressor (link columns)", e_y, TOL)
 
 
+def check_rotors(report, binary, directory):
+    """The full leg exported as URDF (rotors as revolute joints mimicking theirs with the gear
+    ratio as multiplier), loaded by pinocchio with mimic=True: its RNEA is physid's full rotor
+    model (rotor bodies spinning at N q', gyroscopic coupling kept)."""
+    urdf = export(binary, ["--robot", "cheetah3"], "urdf", directory)
+    model = pin.buildModelFromUrdf(urdf, mimic=True)
+    data = model.createData()
+    dyn = dynamics(binary, ["--robot", "cheetah3"])
+    assert model.nv == len(dyn["joint_names"]), f"pinocchio has {model.nv} velocities"
+    e_tau = 0.0
+    for s in dyn["samples"]:
+        q, v, a = (np.asarray(s[k]) for k in ("q", "qd", "qdd"))
+        e_tau = max(e_tau, rel_err(s["tau"], pin.rnea(model, data, q, v, a)))
+    report.add("Cheetah-3 leg with rotors (URDF mimic=True): rnea", e_tau, TOL)
+
+
 def main():
     binary = physid_bin(sys.argv)
     report = Report("check_pinocchio")
@@ -46,6 +63,7 @@ def main():
         leg = ["--robot", "cheetah3", "--no-rotors"]
         urdf = export(binary, leg, "urdf", d)
         check(report, "link-only Cheetah-3 leg", urdf, dynamics(binary, ["--robot", urdf]))
+        check_rotors(report, binary, d)
     check(report, "KUKA LWR4+ (data/kuka_lwr4 URDF)", KUKA_URDF, dynamics(binary, ["--robot", KUKA_URDF]))
     report.finish()
 

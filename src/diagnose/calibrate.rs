@@ -386,18 +386,22 @@ pub fn scenario_snippet(model: &Model, terms: &[TermFit], dt: f64) -> String {
     out
 }
 
-/// Roll and pitch (rad) of the scenario's tilt that turn the model's gravity (along −z) into
-/// the calibrated one, `g + c₀ u₁ + c₁ u₂` (`u` the library's tilt directions); `None` if the
-/// model's gravity is not along −z.
+/// Roll and pitch (rad) of the scenario's tilt whose gravity has the calibrated components
+/// `c₀, c₁` (m/s²) along the library's tilt directions `u₁, u₂`; `None` if the model's gravity
+/// is not along −z.
 fn tilt_angles(model: &Model, c: &[f64]) -> Option<(f64, f64)> {
     let g = model.gravity;
     let g0 = g.norm();
     if g0 == 0.0 || (g / g0 + Vector3::z()).norm() > 1e-9 {
         return None;
     }
-    // The library's directions for g along −z: u₁ = x, u₂ = ĝ × u₁ = −y.
-    let tilted = g + Vector3::new(c[0], -c[1], 0.0);
-    let d = tilted / tilted.norm();
+    // The library's directions for g along −z: u₁ = x, u₂ = ĝ × u₁ = −y; the coefficients are
+    // the tilted gravity's components along them (m/s²).
+    let (dx, dy) = (c[0] / g0, -c[1] / g0);
+    if dx * dx + dy * dy >= 1.0 {
+        return None;
+    }
+    let d = Vector3::new(dx, dy, -(1.0 - dx * dx - dy * dy).sqrt());
     // The scenario's gravity is R_xᵀ(roll) R_yᵀ(pitch) g = g₀ (sin p, −sin r cos p, −cos r cos p).
     let pitch = d.x.asin();
     let roll = (-d.y).atan2(-d.z);
@@ -417,7 +421,7 @@ mod tests {
             // The library's coefficients: Δg along u₁ = x and u₂ = −y.
             let dg = tilted - model.gravity;
             let (r, p) = tilt_angles(&model, &[dg.x, -dg.y]).unwrap();
-            assert!((r - roll).abs() < 1e-4 * roll.abs().max(1e-3), "{r} {roll}");
+            assert!((r - roll).abs() < 1e-12, "{r} {roll}");
             assert!(
                 (p - pitch).abs() < 1e-4 * pitch.abs().max(1e-3),
                 "{p} {pitch}"

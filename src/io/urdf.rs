@@ -526,7 +526,7 @@ pub fn to_string(model: &Model) -> String {
         };
         joints.push(urdf_rs::Joint {
             name: b.joint_name.clone(),
-            joint_type: jt,
+            joint_type: jt.clone(),
             origin: pose(&b.x_tree),
             parent: urdf_rs::LinkName {
                 link: parent_link(b.parent),
@@ -554,9 +554,21 @@ pub fn to_string(model: &Model) -> String {
         });
         if let Some(r) = &b.rotor {
             links.push(link(&r.name, &r.inertia));
+            // The rotor's joint has its joint's type (pinocchio's mimic needs equal
+            // configuration sizes: a `continuous` rotor on a `revolute` joint is refused) and
+            // its limits scaled by the gear ratio.
+            let n = r.gear_ratio;
+            let (lo, hi) = (n * b.limits.lower, n * b.limits.upper);
             joints.push(urdf_rs::Joint {
                 name: format!("{}_joint", r.name),
-                joint_type: urdf_rs::JointType::Continuous,
+                joint_type: jt.clone(),
+                limit: urdf_rs::JointLimit {
+                    lower: finite_or(lo.min(hi), 0.0),
+                    upper: finite_or(lo.max(hi), 0.0),
+                    effort: finite_or(b.limits.effort / n.abs(), 0.0),
+                    velocity: finite_or(b.limits.velocity * n.abs(), 0.0),
+                    ..Default::default()
+                },
                 origin: pose(&r.x_rot),
                 parent: urdf_rs::LinkName {
                     link: parent_link(b.parent),
@@ -567,7 +579,6 @@ pub fn to_string(model: &Model) -> String {
                 axis: urdf_rs::Axis {
                     xyz: urdf_rs::Vec3([r.axis.x, r.axis.y, r.axis.z]),
                 },
-                limit: Default::default(),
                 calibration: None,
                 dynamics: None,
                 mimic: Some(urdf_rs::Mimic {
