@@ -6,19 +6,9 @@
 //! join as sums of normal equations.
 
 use std::path::{Path, PathBuf};
-use std::process::Command;
 
-fn physid(args: &[&str]) -> (i32, String, String) {
-    let o = Command::new(env!("CARGO_BIN_EXE_physid"))
-        .args(args)
-        .output()
-        .unwrap();
-    (
-        o.status.code().unwrap_or(-1),
-        String::from_utf8_lossy(&o.stdout).into(),
-        String::from_utf8_lossy(&o.stderr).into(),
-    )
-}
+mod common;
+use common::physid;
 
 const OFFSET: [f64; 3] = [0.8, -0.5, 0.3];
 const ROLL: f64 = 0.02;

@@ -2,19 +2,10 @@
 //! 2, never a panic; and the happy path's JSON schema.
 
 use std::path::Path;
-use std::process::Command;
 
-fn physid(args: &[&str]) -> (i32, String, String) {
-    let o = Command::new(env!("CARGO_BIN_EXE_physid"))
-        .args(args)
-        .output()
-        .unwrap();
-    (
-        o.status.code().unwrap_or(-1),
-        String::from_utf8_lossy(&o.stdout).into(),
-        String::from_utf8_lossy(&o.stderr).into(),
-    )
-}
+mod common;
+use common::physid;
+use std::process::Command;
 
 const HEADER: &str = "t,q1,q2,q3,dq1,dq2,dq3,ddq1,ddq2,ddq3,tau1,tau2,tau3";
 

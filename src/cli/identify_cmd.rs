@@ -540,17 +540,9 @@ fn fit_with_terms(
         processing_cutoff: 20.0,
     };
     let cal = physid::diagnose::calibrate::calibrate(m, &rs, &copts)?;
-    let mut ne = NormalEquations::new(m.dof(), m.layout().len).finish();
-    for r in &rs {
-        ne = ne.merged(&NormalEquations::from_trajectory(
-            m,
-            r.trajectory,
-            r.range.clone(),
-        ));
-    }
     Ok(Fit {
         r: cal.identified.clone(),
-        ne,
+        ne: cal.rigid.clone(),
         terms: cal.terms.clone(),
         calibration: Some((cal, copts)),
     })

@@ -99,6 +99,9 @@ pub struct Calibration {
     pub identified: Identified,
     /// The nominal parameters the linearized columns were built about.
     pub nominal: DVector<f64>,
+    /// The rigid-body model's own normal equations over the runs (no effect columns), for its
+    /// identifiability.
+    pub rigid: NormalEquations,
     /// Each term's coefficients and magnitudes.
     pub terms: Vec<TermFit>,
 }
@@ -107,18 +110,18 @@ pub struct Calibration {
 pub fn calibrate(model: &Model, runs: &[Run], opts: &Options) -> Result<Calibration, IdentError> {
     opts.validate()?;
     let prior = model.parameters();
+    let rigid = runs.iter().fold(
+        NormalEquations::new(model.dof(), model.layout().len).finish(),
+        |acc, r| {
+            acc.merged(&NormalEquations::from_trajectory(
+                model,
+                r.trajectory,
+                r.range.clone(),
+            ))
+        },
+    );
     let nominal = if opts.terms.iter().any(|t| needs_nominal(t.kind)) {
-        let ne = runs.iter().fold(
-            NormalEquations::new(model.dof(), model.layout().len).finish(),
-            |acc, r| {
-                acc.merged(&NormalEquations::from_trajectory(
-                    model,
-                    r.trajectory,
-                    r.range.clone(),
-                ))
-            },
-        );
-        ident::identify(model, &ne, &prior, &opts.ident)?.theta
+        ident::identify(model, &rigid, &prior, &opts.ident)?.theta
     } else {
         prior.clone()
     };
@@ -139,6 +142,7 @@ pub fn calibrate(model: &Model, runs: &[Run], opts: &Options) -> Result<Calibrat
     Ok(Calibration {
         identified,
         nominal,
+        rigid,
         terms,
     })
 }

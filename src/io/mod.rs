@@ -351,8 +351,7 @@ pub fn load_trajectory_with(
             "give a .mcap file, a rosbag2 directory or a .csv file",
         ));
     };
-    read.validate()
-        .map_err(|e| IoError::invalid(path, e.to_string()))?;
+    // Both readers have validated the samples (lengths, finite values, increasing time).
     let (mut tr, more_ignored) =
         match_joints(read, &names).map_err(|m| IoError::invalid(path, m))?;
     ignored.extend(more_ignored);
