@@ -166,6 +166,13 @@ struct SquaredErrors {
 }
 
 impl SquaredErrors {
+    /// Nothing summed yet, for `n` joints.
+    fn new(n: usize) -> Self {
+        Self {
+            sum: vec![0.0; n],
+            samples: 0,
+        }
+    }
     fn from_rms(rms: &[f64], samples: usize) -> Self {
         Self {
             sum: rms.iter().map(|r| r * r * samples as f64).collect(),
@@ -173,9 +180,6 @@ impl SquaredErrors {
         }
     }
     fn add(mut self, other: SquaredErrors) -> Self {
-        if self.sum.is_empty() {
-            return other;
-        }
         for (a, b) in self.sum.iter_mut().zip(&other.sum) {
             *a += b;
         }
@@ -291,8 +295,9 @@ fn terms(a: &Args) -> anyhow::Result<Vec<Variant>> {
         match f.trim() {
             "viscous" => has[0] = true,
             "coulomb" => has[1] = true,
-            t @ ("offset" | "direction") => out.push(parse_term(t).map_err(|e| anyhow!("--friction: {e}"))?),
-            t if t.starts_with("stribeck") => out.push(parse_term(t).map_err(|e| anyhow!("--friction: {e}"))?),
+            t if t == "offset" || t == "direction" || t.starts_with("stribeck") => {
+                out.push(parse_term(t).map_err(|e| anyhow!("--friction: {e}"))?)
+            }
             t => bail!("--friction: unknown term '{t}' (viscous, coulomb, offset, direction, stribeck:<v>)"),
         }
     }
@@ -488,10 +493,7 @@ impl Fit {
             let rs = in_memory_runs(runs);
             return Ok(physid::diagnose::calibrate::rms_error(m, cal, &rs, copts));
         }
-        let mut acc = SquaredErrors {
-            sum: vec![],
-            samples: 0,
-        };
+        let mut acc = SquaredErrors::new(m.dof());
         for (d, r) in runs {
             acc = acc.add(d.squared_errors(m, &self.r.theta, r.clone())?);
         }

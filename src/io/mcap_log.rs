@@ -321,9 +321,9 @@ pub fn write(path: &Path, rec: &Recording, meta: &LogMeta) -> Result<(), IoError
 pub enum Stamp {
     /// The MCAP record's log time (when the recorder received the message).
     #[default]
-    Log,
+    Log = 0,
     /// The message's `header.stamp` (when the driver sampled the joints).
-    Header,
+    Header = 1,
 }
 
 impl std::str::FromStr for Stamp {
@@ -401,13 +401,12 @@ pub fn read_with(path: &Path, opts: &ReadOptions) -> Result<Log, IoError> {
     };
     let mut reader = Reader {
         opts,
-        t0: None,
+        t0: [None; 2],
         measured: None,
         processed: None,
         truth: None,
         metadata: BTreeMap::new(),
         skipped: 0,
-        first_names: None,
     };
     for file in &files {
         reader.file(file)?;
@@ -507,15 +506,14 @@ fn rosbag2_metadata(text: &str) -> (Option<String>, Vec<String>) {
 /// The running state of reading one log (possibly split over several files).
 struct Reader<'a> {
     opts: &'a ReadOptions,
-    /// The first message's time (ns), the origin of every sample's time.
-    t0: Option<u64>,
+    /// The first time (ns) seen on each clock, [log time, header stamp]: the origin of every
+    /// sample's time on that clock (the two clocks need not agree).
+    t0: [Option<u64>; 2],
     measured: Option<Trajectory>,
     processed: Option<Trajectory>,
     truth: Option<Trajectory>,
     metadata: BTreeMap<String, BTreeMap<String, String>>,
     skipped: usize,
-    /// The names of the first joint-state message kept, as it gave them.
-    first_names: Option<Vec<String>>,
 }
 
 impl Reader<'_> {
@@ -548,9 +546,10 @@ impl Reader<'_> {
         Ok(())
     }
 
-    /// Seconds since the first message for a time in ns (integer arithmetic first).
-    fn seconds(&mut self, ns: u64) -> Result<f64, String> {
-        let first = *self.t0.get_or_insert(ns);
+    /// Seconds since the first message on the clock `stamp` for a time in ns (integer
+    /// arithmetic first).
+    fn seconds(&mut self, stamp: Stamp, ns: u64) -> Result<f64, String> {
+        let first = *self.t0[stamp as usize].get_or_insert(ns);
         let dt = ns.checked_sub(first).ok_or_else(|| {
             format!("its time ({ns} ns) is before the first message's ({first} ns)")
         })?;
@@ -574,19 +573,20 @@ impl Reader<'_> {
         } else {
             js.name.clone()
         };
-        let first = self.first_names.get_or_insert_with(|| names.clone());
-        if *first != names {
-            return Err(format!(
-                "names joints {}; the first message named {}",
-                names.join(", "),
-                first.join(", ")
-            ));
+        if let Some(first) = self.measured.as_ref().map(|t| &t.joint_names) {
+            if *first != names {
+                return Err(format!(
+                    "names joints {}; the first message named {}",
+                    names.join(", "),
+                    first.join(", ")
+                ));
+            }
         }
         let ns = match self.opts.stamp {
             Stamp::Log => log_time,
             Stamp::Header => header_ns(&js.header)?,
         };
-        let t = self.seconds(ns)?;
+        let t = self.seconds(self.opts.stamp, ns)?;
         let tr = self
             .measured
             .get_or_insert_with(|| Trajectory::new(names, false));
@@ -602,7 +602,7 @@ impl Reader<'_> {
         if [s.position.len(), s.velocity.len(), s.effort.len()] != [n; 3] || !qdd_ok {
             return Err(format!("arrays of other lengths than its {n} names"));
         }
-        let t = self.seconds(log_time)?;
+        let t = self.seconds(Stamp::Log, log_time)?;
         let slot = if topic == TOPIC_PROCESSED {
             &mut self.processed
         } else {
@@ -707,6 +707,30 @@ mod tests {
         };
         let bytes = cdr::serialize::<_, _, cdr::CdrLe>(&sample, cdr::Infinite).unwrap();
         assert_eq!(check_cdr_lengths(&bytes, 6), Ok(()));
+    }
+
+    #[test]
+    fn log_times_and_header_stamps_each_count_from_their_own_first_value() {
+        // physid's processed channel runs on log time while the joint states may be read by
+        // header stamps from the epoch: one shared origin would put them 1.7e9 s apart.
+        let opts = ReadOptions::default();
+        let mut r = Reader {
+            opts: &opts,
+            t0: [None; 2],
+            measured: None,
+            processed: None,
+            truth: None,
+            metadata: BTreeMap::new(),
+            skipped: 0,
+        };
+        assert_eq!(r.seconds(Stamp::Log, 5_000), Ok(0.0));
+        assert_eq!(r.seconds(Stamp::Header, 1_700_000_000_000_000_000), Ok(0.0));
+        assert_eq!(r.seconds(Stamp::Log, 1_005_000), Ok(0.001));
+        assert_eq!(
+            r.seconds(Stamp::Header, 1_700_000_000_002_000_000),
+            Ok(0.002)
+        );
+        assert!(r.seconds(Stamp::Log, 4_999).is_err());
     }
 
     #[test]

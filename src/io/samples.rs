@@ -291,9 +291,8 @@ pub fn csv_has_ddq(path: &Path) -> Result<bool, IoError> {
         path: path.to_path_buf(),
         source,
     })?;
-    let mut r = csv::Reader::from_reader(std::io::BufReader::new(file));
-    let h = r
-        .headers()
-        .map_err(|e| IoError::invalid(path, format!("header: {e}")))?;
-    Ok(h.iter().any(|c| c.trim() == "ddq1"))
+    let mut r = csv::ReaderBuilder::new()
+        .trim(csv::Trim::All)
+        .from_reader(std::io::BufReader::new(file));
+    Ok(Columns::parse(&mut r, path, None)?.ddq.is_some())
 }
