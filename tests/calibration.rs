@@ -216,4 +216,15 @@ fn kuka_offset_model_reaches_the_python_reference_and_the_confirmed_effects_beat
         rms(&confirmed),
         rms(&offset)
     );
+    // identify's default on this URDF: `ellipsoid`, with each body's bound from its own
+    // geometry. The confirmed model is then below the reference on every joint.
+    let mut args = vec!["identify", "--json", "--effects-from", report.to_str().unwrap()];
+    args.extend_from_slice(&base);
+    let (code, out, err) = physid(&args);
+    assert_eq!(code, 0, "{err}");
+    let bounded: serde_json::Value = serde_json::from_str(&out).unwrap();
+    assert_eq!(bounded["constraints"], "ellipsoid");
+    for (j, (got, reference)) in per(&bounded).iter().zip(PYTHON_OFFSET_RMS).enumerate() {
+        assert!(*got < reference - 0.005, "joint {j}: {got} vs {reference}");
+    }
 }

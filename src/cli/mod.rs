@@ -38,6 +38,17 @@ pub struct RobotArgs {
     /// Drop the rotors (the link-only model).
     #[arg(long)]
     no_rotors: bool,
+    /// URDF robots: lengthen every semi-axis of the bounding ellipsoids computed from the
+    /// geometry by this much (m).
+    #[arg(long, value_name = "M")]
+    ellipsoid_margin: Option<f64>,
+    /// URDF robots: a folder holding ROS packages, for `package://` meshes (repeatable; the
+    /// URDF's own folders and ROS_PACKAGE_PATH are searched first).
+    #[arg(long, value_name = "DIR")]
+    package_dir: Vec<std::path::PathBuf>,
+    /// URDF robots: take no bounding ellipsoids from the geometry (only a sidecar's).
+    #[arg(long)]
+    no_geometry_ellipsoids: bool,
 }
 
 #[derive(ValueEnum, Debug, Clone, Copy)]
@@ -48,7 +59,15 @@ enum RotorArg {
 
 impl RobotArgs {
     fn load(&self) -> anyhow::Result<Model> {
-        let mut m = physid::io::load_robot(&self.robot)?;
+        let opts = physid::io::robot_spec::RobotOptions {
+            ellipsoid_margin: self.ellipsoid_margin,
+            package_dirs: self.package_dir.clone(),
+            geometry_ellipsoids: self.no_geometry_ellipsoids.then_some(false),
+        };
+        let (mut m, warnings) = physid::io::load_robot_with(&self.robot, &opts)?;
+        for w in warnings {
+            eprintln!("warning: {}: {w}", self.robot);
+        }
         if self.no_rotors {
             m = m.without_rotors();
         }

@@ -6,9 +6,19 @@ use physid::model::Model;
 use physid::spatial::{ConsistencyReport, Ellipsoid, InertialParams};
 use serde_json::json;
 
+/// An ellipsoid as JSON: centre (m), semi-axes (m, ascending), `Q_s` (m²).
+fn ellipsoid_json(e: &Ellipsoid) -> serde_json::Value {
+    json!({
+        "center": e.center.as_slice(),
+        "semi_axes": e.semi_axes().as_slice(),
+        "qs": (0..3).map(|i| (0..3).map(|j| e.qs[(i, j)]).collect::<Vec<_>>()).collect::<Vec<_>>(),
+    })
+}
+
 fn body_json(name: &str, p: &InertialParams, e: Option<&Ellipsoid>) -> serde_json::Value {
     let r: ConsistencyReport = p.consistency(e);
     json!({
+        "ellipsoid": e.map(ellipsoid_json),
         "name": name,
         "pi": p.0.as_slice(),
         "mass": p.mass(),
@@ -89,6 +99,7 @@ pub fn describe(m: &Model, as_json: bool) -> anyhow::Result<()> {
         }
     }
     print_bodies(&rows);
+    print_ellipsoids(m);
     println!(
         "\n{:<14} {:>8} {:>12} {:>12} {:>22}",
         "joint", "N", "B [Nms/rad]", "Bc [Nm]", "limits [rad]"
@@ -111,6 +122,32 @@ pub fn describe(m: &Model, as_json: bool) -> anyhow::Result<()> {
     );
     println!("mass matrix H(q) [kg m^2]:{h:.5}");
     Ok(())
+}
+
+/// Prints each body's and rotor's bounding ellipsoid (centre and semi-axes, body frame), or
+/// that it has none.
+fn print_ellipsoids(m: &Model) {
+    println!(
+        "\n{:<12} {:>30} {:>30}",
+        "ellipsoid", "centre [m]", "semi-axes [m]"
+    );
+    let row = |name: &str, e: Option<&Ellipsoid>| match e {
+        Some(e) => {
+            let (c, a) = (e.center, e.semi_axes());
+            println!(
+                "{name:<12} {:>30} {:>30}",
+                format!("({:.4}, {:.4}, {:.4})", c.x, c.y, c.z),
+                format!("({:.4}, {:.4}, {:.4})", a.x, a.y, a.z)
+            );
+        }
+        None => println!("{name:<12} {:>30}", "none"),
+    };
+    for b in &m.bodies {
+        row(&b.name, b.bounding.as_ref());
+        if let Some(r) = &b.rotor {
+            row(&r.name, r.bounding.as_ref());
+        }
+    }
 }
 
 /// Prints one line per body: mass, CoM, principal moments about the CoM and the consistency

@@ -2,6 +2,7 @@
 //! place that touches the file system. Every error names the file and the element at fault;
 //! every file is written atomically (temporary file, then rename).
 
+pub mod geometry;
 pub mod mcap_log;
 pub mod mjcf;
 pub mod plot;
@@ -277,11 +278,28 @@ pub fn new_temp_beside(path: &Path) -> Result<tempfile::NamedTempFile, IoError> 
 /// Resolves a `--robot` argument: `cheetah3` (the built-in leg), a `.urdf` file, or a `.toml`
 /// file whose `[robot]` table describes the robot (see [`robot_toml`]).
 pub fn load_robot(arg: &str) -> Result<Model, IoError> {
+    load_robot_with(arg, &robot_spec::RobotOptions::default()).map(|(m, _)| m)
+}
+
+/// [`load_robot`] with options (bounding ellipsoids from geometry: margin, package folders),
+/// returning the loader's warnings too (for example a body whose meshes were not found, so
+/// that it has no bounding ellipsoid).
+pub fn load_robot_with(
+    arg: &str,
+    opts: &robot_spec::RobotOptions,
+) -> Result<(Model, Vec<String>), IoError> {
     let path = Path::new(arg);
+    opts.validate().map_err(|m| IoError::invalid(path, m))?;
     match path.extension().and_then(|e| e.to_str()) {
-        _ if arg == "cheetah3" => Ok(cheetah3::leg()),
-        Some("urdf") => urdf::load(path, &robot_spec::RobotExtras::default(), path.parent()),
-        Some("toml") => robot_toml::load(path),
+        _ if arg == "cheetah3" => Ok((cheetah3::leg(), vec![])),
+        Some("urdf") => {
+            let extras = robot_spec::RobotExtras {
+                geometry: opts.over(&Default::default()),
+                ..Default::default()
+            };
+            urdf::load(path, &extras)
+        }
+        Some("toml") => robot_toml::load_with(path, opts),
         _ => Err(IoError::UnknownRobot(arg.to_string())),
     }
 }

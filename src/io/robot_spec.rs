@@ -2,6 +2,7 @@
 //! placements, inertials, ellipsoids, rotors and friction ([`RobotExtras`], applied to a tree
 //! read from either format). Key reference: [`super::robot_toml`] and docs/robot-format.md.
 
+use super::geometry::GeometryOptions;
 use super::IoError;
 use crate::model::{Body, JointFriction, RotorModel};
 use crate::spatial::{rpy_to_matrix, Ellipsoid, InertialParams, Transform};
@@ -140,9 +141,52 @@ pub struct FrictionSpec {
     pub coulomb: f64,
 }
 
-/// Additions that apply to any robot: sidecar rotors, friction, ellipsoids, gravity, rotor model.
+/// How a robot is loaded, beyond its files: bounding ellipsoids from its geometry. Given on
+/// the command line; each set field overrides the robot TOML's key of the same name.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct RobotOptions {
+    /// Added to every semi-axis of an ellipsoid computed from geometry (m).
+    pub ellipsoid_margin: Option<f64>,
+    /// Extra folders holding ROS packages, for `package://` meshes.
+    pub package_dirs: Vec<std::path::PathBuf>,
+    /// `false`: no ellipsoids from geometry (only the sidecar's).
+    pub geometry_ellipsoids: Option<bool>,
+}
+
+impl RobotOptions {
+    /// Checks the margin (finite, ≥ 0).
+    pub fn validate(&self) -> Result<(), String> {
+        match self.ellipsoid_margin {
+            Some(m) if !(m.is_finite() && m >= 0.0) => Err(format!(
+                "ellipsoid margin {m} m must be a finite number >= 0"
+            )),
+            _ => Ok(()),
+        }
+    }
+
+    /// `self` over `base`: fields set here win, package folders add up.
+    pub(crate) fn over(&self, base: &GeometryOptions) -> GeometryOptions {
+        GeometryOptions {
+            package_dirs: base
+                .package_dirs
+                .iter()
+                .chain(&self.package_dirs)
+                .cloned()
+                .collect(),
+            margin: self.ellipsoid_margin.unwrap_or(base.margin),
+            ignore_geometry: self
+                .geometry_ellipsoids
+                .map_or(base.ignore_geometry, |g| !g),
+        }
+    }
+}
+
+/// Additions that apply to any robot: sidecar rotors, friction, ellipsoids, gravity, rotor
+/// model, and how geometry becomes bounding ellipsoids.
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct RobotExtras {
+    /// Bounding ellipsoids from the description's geometry.
+    pub geometry: GeometryOptions,
     /// Gravity (m/s², base frame).
     pub gravity: Option<[f64; 3]>,
     /// Rotor treatment.

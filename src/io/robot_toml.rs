@@ -28,8 +28,10 @@
 //! A `rotor` has optional `name`, `gear_ratio`, `origin` (in the parent body frame), optional
 //! `axis` (rotor frame, default the joint axis), `inertial` (rotor frame) and `ellipsoid`.
 
+use super::geometry::GeometryOptions;
 use super::robot_spec::{
-    rotor_from_spec, EllipsoidSpec, FrictionSpec, InertialSpec, OriginSpec, RobotExtras, RotorSpec,
+    rotor_from_spec, EllipsoidSpec, FrictionSpec, InertialSpec, OriginSpec, RobotExtras,
+    RobotOptions, RotorSpec,
 };
 use super::IoError;
 use crate::model::cheetah3::{self, LegOptions, Truth};
@@ -119,12 +121,27 @@ pub struct RobotSpec {
     /// consistency check: below 1 the identification's ellipsoids may cut into the true mass
     /// distribution (a sweep axis: how tight is too tight).
     pub ellipsoid_scale: Option<f64>,
+    /// URDF robots: added to every semi-axis of an ellipsoid computed from the URDF's geometry
+    /// (m, default 0).
+    pub ellipsoid_margin: Option<f64>,
+    /// URDF robots: folders holding ROS packages for `package://` meshes (relative to this
+    /// file).
+    #[serde(default)]
+    pub package_dirs: Vec<PathBuf>,
+    /// URDF robots: `false` takes no ellipsoids from geometry, only from `[[robot.ellipsoid]]`
+    /// (default true).
+    pub geometry_ellipsoids: Option<bool>,
 }
 
 impl RobotSpec {
     /// The keys that apply to any robot.
     pub fn extras(&self) -> RobotExtras {
         RobotExtras {
+            geometry: GeometryOptions {
+                package_dirs: self.package_dirs.clone(),
+                margin: self.ellipsoid_margin.unwrap_or(0.0),
+                ignore_geometry: self.geometry_ellipsoids == Some(false),
+            },
             gravity: self.gravity,
             rotor_model: self.rotor_model,
             rotor: self.rotor.clone(),
@@ -145,6 +162,12 @@ pub(crate) fn toml_error(path: &Path, e: toml::de::Error) -> IoError {
 /// Loads the `[robot]` table of a TOML file; other top-level tables (a scenario's) are ignored
 /// here and checked by their own readers.
 pub fn load(path: &Path) -> Result<Model, IoError> {
+    load_with(path, &RobotOptions::default()).map(|(m, _)| m)
+}
+
+/// [`load`] with command-line options over the file's keys; also returns the loader's
+/// warnings (URDF elements given twice, geometry that gave no bounding ellipsoid).
+pub fn load_with(path: &Path, opts: &RobotOptions) -> Result<(Model, Vec<String>), IoError> {
     let text = super::read_to_string(path)?;
     #[derive(Deserialize)]
     struct Doc {
@@ -154,17 +177,50 @@ pub fn load(path: &Path) -> Result<Model, IoError> {
     let spec = doc
         .robot
         .ok_or_else(|| IoError::invalid(path, "no [robot] table"))?;
-    from_spec(&spec, path)
+    from_spec_with(&spec, path, opts)
 }
 
 /// Builds the model a `[robot]` table describes; `path` is the TOML file (for relative paths
 /// and error messages).
 pub fn from_spec(spec: &RobotSpec, path: &Path) -> Result<Model, IoError> {
+    from_spec_with(spec, path, &RobotOptions::default()).map(|(m, _)| m)
+}
+
+/// [`from_spec`] with command-line options over the table's keys, and the loader's warnings.
+pub fn from_spec_with(
+    spec: &RobotSpec,
+    path: &Path,
+    opts: &RobotOptions,
+) -> Result<(Model, Vec<String>), IoError> {
     let model_err = |source| IoError::Model {
         path: path.to_path_buf(),
         source,
     };
-    let extras = spec.extras();
+    let mut extras = spec.extras();
+    let dir = path.parent().unwrap_or(Path::new("."));
+    extras.geometry.package_dirs = extras
+        .geometry
+        .package_dirs
+        .iter()
+        .map(|d| dir.join(d))
+        .collect();
+    extras.geometry = opts.over(&extras.geometry);
+    RobotOptions {
+        ellipsoid_margin: Some(extras.geometry.margin),
+        ..Default::default()
+    }
+    .validate()
+    .map_err(|m| IoError::invalid(path, format!("robot.ellipsoid_margin: {m}")))?;
+    if spec.urdf.is_none()
+        && (spec.ellipsoid_margin.is_some()
+            || !spec.package_dirs.is_empty()
+            || spec.geometry_ellipsoids.is_some())
+    {
+        return Err(IoError::invalid(
+            path,
+            "robot: `ellipsoid_margin`, `package_dirs` and `geometry_ellipsoids` apply to URDF robots only",
+        ));
+    }
     let ways = [
         spec.builtin.is_some(),
         spec.urdf.is_some(),
@@ -209,17 +265,20 @@ pub fn from_spec(spec: &RobotSpec, path: &Path) -> Result<Model, IoError> {
         Model::new(m.name.clone(), bodies, gravity).map_err(model_err)?
     } else if let Some(u) = &spec.urdf {
         let upath = path.parent().unwrap_or(Path::new(".")).join(u);
-        let m = super::urdf::load(&upath, &extras, upath.parent())?;
-        return Ok(match spec.ellipsoid_scale {
-            Some(s) if s.is_finite() && s > 0.0 => m.with_ellipsoids_scaled(s),
-            Some(s) => {
-                return Err(IoError::invalid(
-                    path,
-                    format!("robot.ellipsoid_scale: {s} must be > 0"),
-                ))
-            }
-            None => m,
-        });
+        let (m, warnings) = super::urdf::load(&upath, &extras)?;
+        return Ok((
+            match spec.ellipsoid_scale {
+                Some(s) if s.is_finite() && s > 0.0 => m.with_ellipsoids_scaled(s),
+                Some(s) => {
+                    return Err(IoError::invalid(
+                        path,
+                        format!("robot.ellipsoid_scale: {s} must be > 0"),
+                    ))
+                }
+                None => m,
+            },
+            warnings,
+        ));
     } else {
         let mut bodies: Vec<Body> = vec![];
         for (k, b) in spec.body.iter().enumerate() {
@@ -237,8 +296,8 @@ pub fn from_spec(spec: &RobotSpec, path: &Path) -> Result<Model, IoError> {
     let model = model.with_rotor_model(extras.rotor_model.unwrap_or_default());
     model.check_physical().map_err(model_err)?;
     match spec.ellipsoid_scale {
-        None => Ok(model),
-        Some(s) if s.is_finite() && s > 0.0 => Ok(model.with_ellipsoids_scaled(s)),
+        None => Ok((model, vec![])),
+        Some(s) if s.is_finite() && s > 0.0 => Ok((model.with_ellipsoids_scaled(s), vec![])),
         Some(s) => Err(IoError::invalid(
             path,
             format!("robot.ellipsoid_scale: {s} must be > 0"),

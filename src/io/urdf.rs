@@ -15,20 +15,22 @@
 //! - where an element appears twice (for example two `<origin>` in one joint), urdfdom and
 //!   so pinocchio and ROS use the first; physid does the same and reports a warning.
 
+use super::geometry::{self, Lookup};
 use super::robot_spec::RobotExtras;
 use super::IoError;
 use crate::model::{Body, Joint, JointFriction, JointLimits, Model, Rotor, STANDARD_GRAVITY};
+use crate::spatial::bounding::Piece;
 use crate::spatial::{rpy_to_matrix, InertialParams, Transform};
 use nalgebra::{Matrix3, Vector3};
 use std::collections::HashMap;
 use std::path::Path;
 
-/// Loads a URDF file, applying the sidecar `extras` (rotors, friction, ellipsoids).
-/// `base_dir` resolves nothing yet (meshes are not read) and is kept for symmetry.
-pub fn load(path: &Path, extras: &RobotExtras, _base_dir: Option<&Path>) -> Result<Model, IoError> {
+/// Loads a URDF file, applying the sidecar `extras` (rotors, friction, ellipsoids, how
+/// geometry becomes bounding ellipsoids). Returns the model and warnings (elements that appear
+/// twice, geometry that gave no bounding ellipsoid). Meshes are found relative to `path`.
+pub fn load(path: &Path, extras: &RobotExtras) -> Result<(Model, Vec<String>), IoError> {
     let xml = super::read_to_string(path)?;
-    let (model, _warnings) = from_str(&xml, path, extras)?;
-    Ok(model)
+    from_str(&xml, path, extras)
 }
 
 /// The inertial parameters of a URDF `<inertial>` in its link frame.
@@ -123,7 +125,10 @@ fn root_element(xml: &str) -> Option<&str> {
     }
 }
 
-/// Parses URDF text. Returns the model and warnings (e.g. duplicate elements).
+/// Parses URDF text; `path` names it in errors and locates its meshes. Each body's bounding
+/// ellipsoid is the minimum-volume ellipsoid of its geometry (its link's and those fixed to it,
+/// [`super::geometry`]) unless the sidecar gives one. Returns the model and warnings
+/// (duplicate elements, geometry that gave no bound).
 pub fn from_str(
     xml: &str,
     path: &Path,
@@ -145,12 +150,25 @@ pub fn from_str(
     }
     let link_idx = link_index(&robot, path)?;
     let (children, root) = tree(&robot, &link_idx, path)?;
+    let lookup = Lookup {
+        urdf: path,
+        opts: &extras.geometry,
+    };
     let Walk {
         mut bodies,
         body_parent_link_x,
+        shapes,
         mimics,
-    } = walk(&robot, &link_idx, &children, root, path)?;
-    attach_rotors(&mut bodies, mimics, path)?;
+    } = walk(&robot, &link_idx, &children, root, &lookup)?;
+    let mut warnings = warnings;
+    for (b, s) in bodies.iter_mut().zip(&shapes) {
+        b.bounding = s.bound(&b.name, &lookup).unwrap_or_else(|w| {
+            warnings.push(w);
+            None
+        });
+    }
+    attach_rotors(&mut bodies, mimics, &lookup, &mut warnings)?;
+    // The sidecar's ellipsoids come last: they override the geometry's.
     extras.apply(&mut bodies, &body_parent_link_x, path)?;
     check_subtree_masses(&bodies, path)?;
     let gravity = extras
@@ -162,10 +180,13 @@ pub fn from_str(
             source,
         })?
         .with_rotor_model(extras.rotor_model.unwrap_or_default());
-    model.check_physical().map_err(|source| IoError::Model {
-        path: path.to_path_buf(),
-        source,
-    })?;
+    model
+        .check_physical_with(false)
+        .map_err(|source| IoError::Model {
+            path: path.to_path_buf(),
+            source,
+        })?;
+    check_bounds(&model, extras, path, &mut warnings)?;
     Ok((model, warnings))
 }
 
@@ -245,20 +266,76 @@ fn tree<'r>(
 }
 
 /// A mimic joint waiting to become the rotor of the joint it mimics: the joint, its mimic
-/// element, the body it is mounted on, its placement on that body, its inertial parameters.
+/// element, the body it is mounted on, its placement on that body, its inertial parameters,
+/// its geometry.
 type PendingRotor<'r> = (
     &'r urdf_rs::Joint,
     &'r urdf_rs::Mimic,
     Option<usize>,
     Transform,
     InertialParams,
+    Shapes,
 );
+
+/// The geometry gathered for one body (its link and the links fixed to it) or rotor, in its
+/// frame: the pieces, and the links whose geometry could not be used (with why).
+#[derive(Default)]
+struct Shapes {
+    pieces: Vec<Piece>,
+    missing: Vec<String>,
+    sources: Vec<&'static str>,
+}
+
+impl Shapes {
+    /// Adds a link's geometry, placed in the body frame by `x_link` (link from body). A link
+    /// with mass but no usable geometry makes the body's bound unknown.
+    fn add(&mut self, link: &urdf_rs::Link, x_link: &Transform, lookup: &Lookup) {
+        if lookup.opts.ignore_geometry {
+            return;
+        }
+        let (rot, pos) = x_link.to_pose();
+        match geometry::link_pieces(link, lookup) {
+            Ok(Some((pieces, source))) => {
+                self.pieces
+                    .extend(geometry::into_frame(&pieces, &rot, &pos));
+                self.sources.push(source);
+            }
+            Ok(None) if link.inertial.mass.value > 0.0 => self
+                .missing
+                .push(format!("link '{}' has mass but no geometry", link.name)),
+            Ok(None) => {}
+            Err(e) => self.missing.push(format!("link '{}': {e}", link.name)),
+        }
+    }
+
+    /// The bounding ellipsoid, or a warning naming the element and why there is none.
+    fn bound(
+        &self,
+        element: &str,
+        lookup: &Lookup,
+    ) -> Result<Option<crate::spatial::Ellipsoid>, String> {
+        if lookup.opts.ignore_geometry || (self.pieces.is_empty() && self.missing.is_empty()) {
+            return Ok(None);
+        }
+        if !self.missing.is_empty() {
+            return Err(format!(
+                "no bounding ellipsoid for '{element}' from geometry: {}",
+                self.missing.join("; ")
+            ));
+        }
+        geometry::bound(&self.pieces, lookup.opts)
+            .map(Some)
+            .map_err(|e| format!("no bounding ellipsoid for '{element}' from geometry: {e}"))
+    }
+}
 
 /// The bodies found by walking the tree from the root.
 struct Walk<'r> {
     bodies: Vec<Body>,
     /// Per body: its parent link's frame from its parent body's frame.
     body_parent_link_x: Vec<Transform>,
+    /// Per body: its geometry.
+    shapes: Vec<Shapes>,
     mimics: Vec<PendingRotor<'r>>,
 }
 
@@ -270,8 +347,9 @@ fn walk<'r>(
     link_idx: &HashMap<&str, usize>,
     children: &HashMap<&str, Vec<usize>>,
     root: &'r str,
-    path: &Path,
+    lookup: &Lookup,
 ) -> Result<Walk<'r>, IoError> {
+    let path = lookup.urdf;
     let bad = |m: String| IoError::invalid(path, m);
     // Joints in file order, each once its parent link is placed (a topological order that keeps
     // the file's order where it already lists parents first). attach[link] = (body index or None
@@ -280,6 +358,7 @@ fn walk<'r>(
     attach.insert(root, (None, Transform::identity()));
     let mut bodies: Vec<Body> = vec![];
     let mut body_parent_link_x: Vec<Transform> = vec![]; // parent link frame from parent body frame
+    let mut shapes: Vec<Shapes> = vec![];
     let mut mimics = vec![];
     let mut done = vec![false; robot.joints.len()];
     let mut progress = true;
@@ -293,7 +372,8 @@ fn walk<'r>(
             progress = true;
             let child = jt.child.link.as_str();
             let x_origin = origin_transform(&jt.origin).compose(&x_p);
-            let child_params = link_params(&robot.links[link_idx[child]]);
+            let child_link = &robot.links[link_idx[child]];
+            let child_params = link_params(child_link);
             let axis = Vector3::from(jt.axis.xyz.0);
             use urdf_rs::JointType as T;
             let joint = match jt.joint_type {
@@ -301,6 +381,7 @@ fn walk<'r>(
                     if let Some(b) = pb {
                         let merged = child_params.transformed(&x_origin.inverse());
                         bodies[b].inertia = InertialParams(bodies[b].inertia.0 + merged.0);
+                        shapes[b].add(child_link, &x_origin, lookup);
                     }
                     attach.insert(child, (pb, x_origin));
                     continue;
@@ -321,12 +402,17 @@ fn walk<'r>(
                         jt.name, mimic.joint
                     )));
                 }
-                mimics.push((jt, mimic, pb, x_origin, child_params));
+                let mut rotor_shapes = Shapes::default();
+                rotor_shapes.add(child_link, &Transform::identity(), lookup);
+                mimics.push((jt, mimic, pb, x_origin, child_params, rotor_shapes));
                 attach.insert(child, (pb, x_origin));
                 continue;
             }
             bodies.push(moving_body(jt, pb, joint, x_origin, child_params));
             body_parent_link_x.push(x_p);
+            let mut own = Shapes::default();
+            own.add(child_link, &Transform::identity(), lookup);
+            shapes.push(own);
             attach.insert(child, (Some(bodies.len() - 1), Transform::identity()));
         }
     }
@@ -349,6 +435,7 @@ fn walk<'r>(
     Ok(Walk {
         bodies,
         body_parent_link_x,
+        shapes,
         mimics,
     })
 }
@@ -402,10 +489,11 @@ fn moving_body(
 fn attach_rotors(
     bodies: &mut [Body],
     mimics: Vec<PendingRotor>,
-    path: &Path,
+    lookup: &Lookup,
+    warnings: &mut Vec<String>,
 ) -> Result<(), IoError> {
-    let bad = |m: String| IoError::invalid(path, m);
-    for (jt, mimic, pb, x_rot, params) in mimics {
+    let bad = |m: String| IoError::invalid(lookup.urdf, m);
+    for (jt, mimic, pb, x_rot, params, shapes) in mimics {
         let k = bodies
             .iter()
             .position(|b| b.joint_name == mimic.joint)
@@ -436,10 +524,56 @@ fn attach_rotors(
             axis: Vector3::from(jt.axis.xyz.0),
             gear_ratio: mimic.multiplier.unwrap_or(1.0),
             inertia: params,
-            bounding: None,
+            bounding: shapes.bound(&jt.child.link, lookup).unwrap_or_else(|w| {
+                warnings.push(w);
+                None
+            }),
         });
     }
 
+    Ok(())
+}
+
+/// The description's inertia of each body and rotor against its bounding ellipsoid: outside a
+/// sidecar's ellipsoid is an error (the user stated both); outside the ellipsoid of the body's
+/// own geometry a warning (the description's inertial tags are often rough, while the
+/// geometry bounds where mass can be; identification then holds the estimate to the geometry).
+fn check_bounds(
+    model: &Model,
+    extras: &RobotExtras,
+    path: &Path,
+    warnings: &mut Vec<String>,
+) -> Result<(), IoError> {
+    let given = |name: &str| {
+        extras
+            .ellipsoid
+            .iter()
+            .any(|e| e.body.as_deref() == Some(name))
+    };
+    let elements = model.bodies.iter().flat_map(|b| {
+        std::iter::once((&b.name, &b.inertia, b.bounding.as_ref())).chain(
+            b.rotor
+                .as_ref()
+                .map(|r| (&r.name, &r.inertia, r.bounding.as_ref())),
+        )
+    });
+    for (name, p, e) in elements {
+        let Some(t) = e.and_then(|e| p.consistency(Some(e)).trace_jq_per_mass) else {
+            continue;
+        };
+        if t >= 0.0 || p.mass() == 0.0 {
+            continue;
+        }
+        if given(name) {
+            return Err(IoError::invalid(
+                path,
+                format!("'{name}': the inertia lies outside the sidecar's bounding ellipsoid (tr(JQ)/m = {t:.4})"),
+            ));
+        }
+        warnings.push(format!(
+            "'{name}': the description's own inertia is not inside the bounding ellipsoid of its geometry (tr(JQ)/m = {t:.4}); the ellipsoid is kept for identification"
+        ));
+    }
     Ok(())
 }
 

@@ -378,6 +378,13 @@ impl Model {
     /// its whole inertia is zero) and a pseudo-inertia `J(π) ⪰ 0` up to a round-off tolerance of
     /// `1e-12 · ‖J‖`, and that each has a bounding ellipsoid containing it when one is given.
     pub fn check_physical(&self) -> Result<(), ModelError> {
+        self.check_physical_with(true)
+    }
+
+    /// [`Model::check_physical`], checking containment in the bounding ellipsoids only when
+    /// `bounds` is true (a description whose nominal inertia escapes the ellipsoid of its own
+    /// geometry is still a valid model; the loader warns instead).
+    pub fn check_physical_with(&self, bounds: bool) -> Result<(), ModelError> {
         let check = |element: String,
                      p: &InertialParams,
                      e: Option<&Ellipsoid>|
@@ -397,7 +404,7 @@ impl Model {
                 }
                 return Ok(());
             }
-            let r = p.consistency(e);
+            let r = p.consistency(e.filter(|_| bounds));
             let tol = 1e-12 * p.pseudo_inertia().norm();
             if r.min_eig_pseudo < -tol {
                 let why = if r.min_eig_spatial < 0.0 {

@@ -12,6 +12,7 @@
 //! - Inertial parameters of a body are `π = [m, hx, hy, hz, Ixx, Ixy, Ixz, Iyy, Iyz, Izz]`
 //!   (the paper's order; `h = m c`, inertia about the frame origin): see [`InertialParams`].
 
+pub mod bounding;
 mod ellipsoid;
 mod inertia;
 mod motion;

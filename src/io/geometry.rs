@@ -1,0 +1,186 @@
+//! A URDF link's geometry as bounding pieces ([`crate::spatial::bounding`]), for the paper's
+//! "bounding ellipsoids from CAD geometry".
+//!
+//! - A link's `<collision>` shapes are used; if it has none, or one of them cannot be read, its
+//!   `<visual>` shapes; if neither can be read the link contributes nothing and a warning says
+//!   why.
+//! - Primitives are exact: a box by its corners, a cylinder by its end discs, a capsule by its
+//!   end balls, a sphere as a ball.
+//! - Meshes (STL, COLLADA, OBJ; mesh-loader) by the vertices of their convex hull, scaled by the
+//!   mesh's `scale`. `package://pkg/rel` is looked up as `<dir>/pkg/rel` (and `<dir>/rel` when
+//!   `<dir>` itself is named `pkg`) for the URDF's folder and each folder above it, then for the
+//!   folders of `ROS_PACKAGE_PATH` and [`GeometryOptions::package_dirs`]; `file://` and plain
+//!   paths are absolute or relative to the URDF's folder.
+
+use crate::spatial::bounding::{self, Piece};
+use crate::spatial::{rpy_to_matrix, Ellipsoid};
+use nalgebra::{Matrix3, Vector3};
+use std::path::{Path, PathBuf};
+
+/// How bounding ellipsoids are taken from a description's geometry.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct GeometryOptions {
+    /// Extra folders that hold ROS packages (searched after the URDF's own folders and
+    /// `ROS_PACKAGE_PATH`).
+    pub package_dirs: Vec<PathBuf>,
+    /// Added to every semi-axis of an ellipsoid computed from geometry (m, ≥ 0).
+    pub margin: f64,
+    /// Do not compute ellipsoids from geometry at all.
+    pub ignore_geometry: bool,
+}
+
+/// Where the URDF file lives and how to search for meshes.
+pub(crate) struct Lookup<'a> {
+    pub urdf: &'a Path,
+    pub opts: &'a GeometryOptions,
+}
+
+/// The pieces of one link in its own frame, and where they came from (`"collision"` or
+/// `"visual"`). `Err` explains why neither could be read.
+pub(crate) fn link_pieces(
+    link: &urdf_rs::Link,
+    lookup: &Lookup,
+) -> Result<Option<(Vec<Piece>, &'static str)>, String> {
+    let collision: Vec<(&urdf_rs::Pose, &urdf_rs::Geometry)> = link
+        .collision
+        .iter()
+        .map(|c| (&c.origin, &c.geometry))
+        .collect();
+    let visual: Vec<(&urdf_rs::Pose, &urdf_rs::Geometry)> = link
+        .visual
+        .iter()
+        .map(|v| (&v.origin, &v.geometry))
+        .collect();
+    let mut why = vec![];
+    for (shapes, source) in [(collision, "collision"), (visual, "visual")] {
+        if shapes.is_empty() {
+            continue;
+        }
+        match shapes
+            .iter()
+            .map(|(origin, g)| shape_pieces(origin, g, lookup))
+            .collect::<Result<Vec<_>, String>>()
+        {
+            Ok(pieces) => return Ok(Some((pieces.concat(), source))),
+            Err(e) => why.push(format!("{source}: {e}")),
+        }
+    }
+    if why.is_empty() {
+        Ok(None)
+    } else {
+        Err(why.join("; "))
+    }
+}
+
+/// One `<geometry>` placed by its `<origin>`, in the link frame.
+fn shape_pieces(
+    origin: &urdf_rs::Pose,
+    g: &urdf_rs::Geometry,
+    lookup: &Lookup,
+) -> Result<Vec<Piece>, String> {
+    use urdf_rs::Geometry as G;
+    let positive = |what: &str, v: f64| {
+        if v.is_finite() && v >= 0.0 {
+            Ok(v)
+        } else {
+            Err(format!("{what} {v} is not a finite non-negative size"))
+        }
+    };
+    let local = match g {
+        G::Box { size } => {
+            for v in size.0 {
+                positive("box size", v)?;
+            }
+            bounding::box_corners(&Vector3::from(size.0))
+        }
+        G::Cylinder { radius, length } => bounding::cylinder_ends(
+            positive("cylinder radius", *radius)?,
+            positive("cylinder length", *length)?,
+        ),
+        G::Capsule { radius, length } => bounding::capsule_ends(
+            positive("capsule radius", *radius)?,
+            positive("capsule length", *length)?,
+        ),
+        G::Sphere { radius } => vec![Piece::Ball {
+            center: Vector3::zeros(),
+            radius: positive("sphere radius", *radius)?,
+        }],
+        G::Mesh { filename, scale } => {
+            let path = resolve(filename, lookup)?;
+            let s = scale.map_or(Vector3::repeat(1.0), |s| Vector3::from(s.0));
+            mesh_pieces(&path, &s)?
+        }
+    };
+    let rot = rpy_to_matrix(&Vector3::from(origin.rpy.0));
+    let pos = Vector3::from(origin.xyz.0);
+    Ok(local.iter().map(|p| p.moved(&rot, &pos)).collect())
+}
+
+/// The file a mesh `filename` names (see the module docs), or why it was not found.
+fn resolve(filename: &str, lookup: &Lookup) -> Result<PathBuf, String> {
+    let base = lookup.urdf.parent().unwrap_or(Path::new("."));
+    let candidates: Vec<PathBuf> = if let Some(rest) = filename.strip_prefix("package://") {
+        let (pkg, rel) = rest.split_once('/').unwrap_or((rest, ""));
+        let ros = std::env::var_os("ROS_PACKAGE_PATH").unwrap_or_default();
+        let roots = base
+            .ancestors()
+            .map(Path::to_path_buf)
+            .chain(std::env::split_paths(&ros))
+            .chain(lookup.opts.package_dirs.iter().cloned());
+        roots
+            .flat_map(|d| {
+                let inside = (d.file_name().is_some_and(|n| n == pkg)).then(|| d.join(rel));
+                [Some(d.join(pkg).join(rel)), inside]
+            })
+            .flatten()
+            .collect()
+    } else {
+        let p = filename.strip_prefix("file://").unwrap_or(filename);
+        vec![base.join(p)]
+    };
+    candidates
+        .iter()
+        .find(|p| p.is_file())
+        .cloned()
+        .ok_or_else(|| {
+            format!("mesh '{filename}' not found (looked in the URDF's folder and those above it, ROS_PACKAGE_PATH and the given package folders)")
+        })
+}
+
+/// A mesh file's vertices, scaled, reduced to its convex hull.
+fn mesh_pieces(path: &Path, scale: &Vector3<f64>) -> Result<Vec<Piece>, String> {
+    let scene = mesh_loader::Loader::default()
+        .load(path)
+        .map_err(|e| format!("{}: {e}", path.display()))?;
+    let points: Vec<Vector3<f64>> = scene
+        .meshes
+        .iter()
+        .flat_map(|m| m.vertices.iter())
+        .map(|v| Vector3::new(v[0] as f64, v[1] as f64, v[2] as f64).component_mul(scale))
+        .collect();
+    if points.is_empty() {
+        return Err(format!("{}: the mesh has no vertices", path.display()));
+    }
+    if points.iter().any(|p| !p.iter().all(|x| x.is_finite())) {
+        return Err(format!(
+            "{}: the mesh has non-finite vertices",
+            path.display()
+        ));
+    }
+    Ok(bounding::hull_vertices(&points)
+        .into_iter()
+        .map(Piece::Point)
+        .collect())
+}
+
+/// The minimum-volume ellipsoid of `pieces`, grown by the margin, or why there is none.
+pub(crate) fn bound(pieces: &[Piece], opts: &GeometryOptions) -> Result<Ellipsoid, String> {
+    bounding::minimum_volume_ellipsoid(pieces)
+        .map(|e| bounding::with_margin(&e, opts.margin))
+        .map_err(|e| e.to_string())
+}
+
+/// Pieces of a link moved into a body's frame by the link's pose in that frame.
+pub(crate) fn into_frame(pieces: &[Piece], rot: &Matrix3<f64>, pos: &Vector3<f64>) -> Vec<Piece> {
+    pieces.iter().map(|p| p.moved(rot, pos)).collect()
+}
