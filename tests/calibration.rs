@@ -218,7 +218,12 @@ fn kuka_offset_model_reaches_the_python_reference_and_the_confirmed_effects_beat
     );
     // identify's default on this URDF: `ellipsoid`, with each body's bound from its own
     // geometry. The confirmed model is then below the reference on every joint.
-    let mut args = vec!["identify", "--json", "--effects-from", report.to_str().unwrap()];
+    let mut args = vec![
+        "identify",
+        "--json",
+        "--effects-from",
+        report.to_str().unwrap(),
+    ];
     args.extend_from_slice(&base);
     let (code, out, err) = physid(&args);
     assert_eq!(code, 0, "{err}");

@@ -11,7 +11,9 @@ pub struct Args {
     /// Write MJCF here.
     #[arg(long)]
     mjcf: Option<PathBuf>,
-    /// Write URDF here.
+    /// Write URDF here (a URDF robot's own file with its `<inertial>` and `<dynamics>`
+    /// rewritten, else a new file), and beside it `<name>.physid.toml` (bounding ellipsoids,
+    /// rotor model, sidecar rotors).
     #[arg(long)]
     urdf: Option<PathBuf>,
 }
@@ -31,8 +33,12 @@ pub fn run(a: Args) -> anyhow::Result<()> {
         eprintln!("wrote {}", p.display());
     }
     if let Some(p) = &a.urdf {
-        physid::io::write_atomic(p, physid::io::urdf::to_string(&m).as_bytes())?;
-        eprintln!("wrote {}", p.display());
+        physid::io::export_urdf(p, &a.robot.robot, &m, &m, None)?;
+        eprintln!(
+            "wrote {} and {}",
+            p.display(),
+            physid::io::sidecar_path(p).display()
+        );
     }
     Ok(())
 }

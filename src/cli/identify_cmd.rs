@@ -246,7 +246,9 @@ pub struct Args {
     /// Print JSON (schema: docs/identify-json.md).
     #[arg(long)]
     json: bool,
-    /// Write the identified model as URDF.
+    /// Write the identified model as URDF: the robot's own URDF with only its `<inertial>` and
+    /// `<dynamics>` changed (a new file for a built-in robot), plus a sidecar `<name>.physid.toml`
+    /// with what URDF cannot carry (bounding ellipsoids, sidecar rotors, identified effects).
     #[arg(long)]
     out_urdf: Option<PathBuf>,
     /// Write the optimization problem as JSON (for scripts/check_cvxpy.py).
@@ -349,7 +351,10 @@ pub fn run(a: Args) -> anyhow::Result<()> {
     inputs.push(robot_file);
     inputs.extend(a.validate_data.iter().map(PathBuf::as_path));
     inputs.extend(a.effects_from.as_deref());
-    let outputs: Vec<&Path> = [&a.out_urdf, &a.export_problem, &a.out_effects]
+    let source_urdf = physid::io::robot_urdf(&a.robot.robot)?;
+    inputs.extend(source_urdf.as_deref());
+    let sidecar = a.out_urdf.as_deref().map(physid::io::sidecar_path);
+    let outputs: Vec<&Path> = [&a.out_urdf, &a.export_problem, &a.out_effects, &sidecar]
         .into_iter()
         .flatten()
         .map(PathBuf::as_path)
@@ -456,7 +461,7 @@ fn write_outputs(
     rep: &Report,
 ) -> anyhow::Result<()> {
     if let Some(p) = &a.out_urdf {
-        write_urdf(p, rep.set, m, &rep.r)?;
+        write_urdf(p, &a.robot.robot, rep, m)?;
     }
     match (&a.out_effects, &rep.snippet) {
         (Some(p), Some(s)) => physid::io::write_atomic(p, s.as_bytes())?,
@@ -635,20 +640,20 @@ fn truth_errors(
 }
 
 /// Writes the identified model as URDF, warning when its inertias are not consistent.
-fn write_urdf(
-    p: &Path,
-    set: ConstraintSet,
-    m: &Model,
-    r: &ident::Identified,
-) -> anyhow::Result<()> {
+fn write_urdf(p: &Path, robot: &str, rep: &Report, m: &Model) -> anyhow::Result<()> {
+    let r = &rep.r;
     let theta = r.theta.rows(0, m.layout().len).into_owned();
-    let im = m.with_parameters(&theta)?;
-    physid::io::write_atomic(p, physid::io::urdf::to_string(&im).as_bytes())?;
+    let mut im = m.with_parameters(&theta)?;
+    for (j, b) in im.bodies.iter_mut().enumerate() {
+        b.friction.viscous = r.viscous[j];
+        b.friction.coulomb = r.coulomb[j];
+    }
+    physid::io::export_urdf(p, robot, m, &im, rep.snippet.as_deref())?;
     if !r.constraints_hold || !ident::constraints_hold(m, &theta, ConstraintSet::Consistent) {
         eprintln!(
             "warning: {} holds physically inconsistent inertias (identified with '{}')",
             p.display(),
-            set.name()
+            rep.set.name()
         );
     }
     Ok(())

@@ -10,6 +10,7 @@ pub mod robot_spec;
 pub mod robot_toml;
 pub mod samples;
 pub mod urdf;
+pub mod urdf_patch;
 
 use crate::model::{cheetah3, Model, ModelError};
 use crate::trajectory::Trajectory;
@@ -302,6 +303,67 @@ pub fn load_robot_with(
         Some("toml") => robot_toml::load_with(path, opts),
         _ => Err(IoError::UnknownRobot(arg.to_string())),
     }
+}
+
+/// The URDF file behind a `--robot` argument: the file itself, or a robot TOML's `urdf`; `None`
+/// for the built-in leg and explicit trees.
+pub fn robot_urdf(arg: &str) -> Result<Option<PathBuf>, IoError> {
+    let path = Path::new(arg);
+    match path.extension().and_then(|e| e.to_str()) {
+        Some("urdf") if arg != "cheetah3" => Ok(Some(path.to_path_buf())),
+        Some("toml") => {
+            #[derive(serde::Deserialize)]
+            struct Doc {
+                robot: Option<robot_toml::RobotSpec>,
+            }
+            let text = read_to_string(path)?;
+            let doc: Doc = toml::from_str(&text).map_err(|e| robot_toml::toml_error(path, e))?;
+            Ok(doc
+                .robot
+                .and_then(|r| r.urdf)
+                .map(|u| path.parent().unwrap_or(Path::new(".")).join(u)))
+        }
+        _ => Ok(None),
+    }
+}
+
+/// The sidecar written beside an exported URDF: `arm.urdf` → `arm.physid.toml`.
+pub fn sidecar_path(urdf: &Path) -> PathBuf {
+    let stem = urdf
+        .file_stem()
+        .map_or("robot".into(), |s| s.to_string_lossy().into_owned());
+    urdf.with_file_name(format!("{stem}.physid.toml"))
+}
+
+/// Writes `identified` (a model with `model`'s structure) as URDF at `out`: the URDF behind
+/// `robot` patched in place ([`urdf_patch::patch`]) when there is one, else a new file
+/// ([`urdf::to_string`]); and beside it the sidecar ([`sidecar_path`], [`urdf_patch::sidecar`])
+/// with `effects` (scenario `[[effects]]` text) if given. Neither output may be an input.
+pub fn export_urdf(
+    out: &Path,
+    robot: &str,
+    model: &Model,
+    identified: &Model,
+    effects: Option<&str>,
+) -> Result<(), IoError> {
+    let source = robot_urdf(robot)?;
+    let side = sidecar_path(out);
+    let inputs: Vec<&Path> = [Path::new(robot)]
+        .into_iter()
+        .chain(source.as_deref())
+        .collect();
+    check_outputs(&[out, side.as_path()], &inputs)?;
+    let text = match &source {
+        Some(src) => urdf_patch::patch(&read_to_string(src)?, src, model, identified)?,
+        None => urdf::to_string(identified),
+    };
+    let name = out
+        .file_name()
+        .map_or("robot.urdf".into(), |n| n.to_string_lossy().into_owned());
+    let side_text =
+        urdf_patch::sidecar(identified, &name, &urdf_patch::mimic_links(&text), effects);
+    write_atomic(out, text.as_bytes())?;
+    write_atomic(&side, side_text.as_bytes())
 }
 
 /// Identification data read from one file.
