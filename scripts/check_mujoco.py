@@ -6,6 +6,8 @@ on disagreement.
 
 usage: python scripts/check_mujoco.py [--physid PATH]
 """
+import json
+import subprocess
 import sys
 import tempfile
 
@@ -17,8 +19,29 @@ from physid_common import KUKA_URDF, Report, dynamics, export, physid_bin, rel_e
 TOL = 1e-9
 
 
-def mj_compare(report, label, xml_path, dyn):
+def physid_model(binary, robot_args):
+    out = subprocess.run([binary, "model", *robot_args, "--json"], check=True, capture_output=True, text=True)
+    return json.loads(out.stdout)
+
+
+def mj_compare(report, label, xml_path, dyn, described=None):
     model = mujoco.MjModel.from_xml_path(xml_path)
+    if described is not None:
+        # The file carries the model's mass (world-mounted rotors included), viscous friction
+        # as damping and Coulomb friction as frictionloss; zeroed below so that mj_inverse is
+        # the rigid-body torque physid's `dynamics` reports.
+        report.add(f"{label}: total mass (world-mounted rotor kept)",
+                   abs(model.body_mass.sum() - described["total_mass"]) / described["total_mass"], 1e-12)
+        fr = described["joints"]
+        want = np.array([[j["friction"]["viscous"], j["friction"]["coulomb"]] for j in fr])
+        got = np.stack([model.dof_damping, model.dof_frictionloss], axis=1)
+        report.add(f"{label}: damping and frictionloss = physid friction", float(np.abs(got - want).max()), 1e-12)
+        lim = np.array([j["limits"][:2] for j in fr], dtype=float)
+        finite = np.isfinite(lim).all(axis=1)
+        report.add(f"{label}: joint ranges = physid limits",
+                   float(np.abs(model.jnt_range[finite] - lim[finite]).max()) if finite.any() else 0.0, 1e-12)
+    model.dof_damping[:] = 0
+    model.dof_frictionloss[:] = 0
     data = mujoco.MjData(model)
     assert model.nv == len(dyn["joint_names"])
     e_tau = e_h = 0.0
@@ -42,7 +65,8 @@ def main():
     with tempfile.TemporaryDirectory() as d:
         xml = export(binary, ["--robot", "cheetah3"], "mjcf", d)
         refl = dynamics(binary, ["--robot", "cheetah3", "--rotor-model", "reflected"])
-        mj_tau = mj_compare(report, "Cheetah-3 leg, rotors as armature", xml, refl)
+        mj_tau = mj_compare(report, "Cheetah-3 leg, rotors as armature", xml, refl,
+                            physid_model(binary, ["--robot", "cheetah3"]))
         full = dynamics(binary, ["--robot", "cheetah3"])
         gyro = np.abs(np.array([s["tau"] for s in full["samples"]]) - mj_tau).max(axis=0)
         print(f"     rotor coupling dropped by the armature model: max |tau_full - tau_mujoco| = {np.round(gyro, 4)} N m")
@@ -51,7 +75,12 @@ def main():
         xml = export(binary, ["--robot", "cheetah3", "--no-rotors"], "mjcf", d)
         mj_compare(report, "link-only Cheetah-3 leg", xml, dynamics(binary, ["--robot", "cheetah3", "--no-rotors"]))
         xml = export(binary, ["--robot", KUKA_URDF], "mjcf", d)
-        mj_compare(report, "KUKA LWR4+ (physid import -> MJCF)", xml, dynamics(binary, ["--robot", KUKA_URDF]))
+        kuka = mujoco.MjModel.from_xml_path(xml)
+        n_geoms = int((kuka.geom_group == 1).sum())
+        report.add(f"KUKA LWR4+: {n_geoms} shape geoms from the URDF (spheres, cylinders, the wrist mesh)",
+                   0.0 if n_geoms >= 17 else 1.0, 0.0)
+        mj_compare(report, "KUKA LWR4+ (physid import -> MJCF)", xml, dynamics(binary, ["--robot", KUKA_URDF]),
+                   physid_model(binary, ["--robot", KUKA_URDF]))
     report.finish()
 
 

@@ -107,7 +107,10 @@ fn urdf_export_round_trips_links_rotors_and_friction() {
 fn mjcf_export_lumps_rotors_and_writes_armature() {
     let m = cheetah3::leg();
     let text = io::mjcf::to_string(&m);
-    assert_eq!(text.matches("<body ").count(), 3);
+    // Three moving bodies and the ab/ad rotor welded to the world (the file's mass is the
+    // model's: 5.199 kg, not 4.699).
+    assert_eq!(text.matches("<body ").count(), 4);
+    assert!(text.contains("<body name=\"abad_rotor\""), "{text}");
     assert_eq!(text.matches("armature=").count(), 3);
     // Knee armature N² I_yy of the knee rotor, about 10.6² × 1.4e-3 kg m².
     let r = m.bodies[2].rotor.as_ref().unwrap();

@@ -184,3 +184,51 @@ pub(crate) fn bound(pieces: &[Piece], opts: &GeometryOptions) -> Result<Ellipsoi
 pub(crate) fn into_frame(pieces: &[Piece], rot: &Matrix3<f64>, pos: &Vector3<f64>) -> Vec<Piece> {
     pieces.iter().map(|p| p.moved(rot, pos)).collect()
 }
+
+/// A link's shapes for export (collision, else visual), each placed in the link frame; meshes
+/// that cannot be found are left out.
+pub(crate) fn link_shapes(link: &urdf_rs::Link, lookup: &Lookup) -> Vec<crate::model::Shape> {
+    use crate::model::{Shape, ShapeKind};
+    use urdf_rs::Geometry as G;
+    let collision: Vec<_> = link
+        .collision
+        .iter()
+        .map(|c| (&c.origin, &c.geometry))
+        .collect();
+    let visual: Vec<_> = link
+        .visual
+        .iter()
+        .map(|v| (&v.origin, &v.geometry))
+        .collect();
+    let chosen = if collision.is_empty() {
+        visual
+    } else {
+        collision
+    };
+    chosen
+        .into_iter()
+        .filter_map(|(origin, g)| {
+            let kind = match g {
+                G::Box { size } => ShapeKind::Box { size: size.0 },
+                G::Cylinder { radius, length } => ShapeKind::Cylinder {
+                    radius: *radius,
+                    length: *length,
+                },
+                G::Capsule { radius, length } => ShapeKind::Capsule {
+                    radius: *radius,
+                    length: *length,
+                },
+                G::Sphere { radius } => ShapeKind::Sphere { radius: *radius },
+                G::Mesh { filename, scale } => ShapeKind::Mesh {
+                    path: resolve(filename, lookup).ok()?,
+                    scale: scale.map_or([1.0; 3], |s| s.0),
+                },
+            };
+            let pose = crate::spatial::Transform::from_pose(
+                &rpy_to_matrix(&Vector3::from(origin.rpy.0)),
+                &Vector3::from(origin.xyz.0),
+            );
+            Some(Shape { pose, kind })
+        })
+        .collect()
+}

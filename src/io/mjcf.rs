@@ -3,13 +3,21 @@
 //! MuJoCo has no geared rotor body, so each rotor is exported as physid's
 //! [`RotorModel::Reflected`](crate::model::RotorModel::Reflected): the rotor's inertia is lumped
 //! into its parent body (frozen at zero rotor angle) and its spin inertia becomes the joint's
-//! `armature = N² I_axis`. MuJoCo's `mj_inverse` on this file therefore equals physid's RNEA in
-//! reflected mode. Friction, damping and limits are left out so that `mj_inverse` gives the pure
-//! rigid-body torque; no geoms are written (inertias are explicit).
+//! `armature = N² I_axis`; a rotor on the fixed base (the leg's ab/ad rotor) is a static body
+//! welded to the world, so the file's total mass is the model's. MuJoCo's `mj_inverse` on this
+//! file, with damping and friction loss zeroed, equals physid's RNEA in reflected mode. What it
+//! cannot carry: the rotors' gyroscopic coupling (physid's full model), Coulomb friction as
+//! physid models it (`frictionloss` is MuJoCo's dry-friction constraint, not `B_c sign(q̇)`),
+//! and bounding ellipsoids as constraints (they are drawn as group-3 geoms).
+//!
+//! Written: inertias (explicit, `inertiafromgeom="false"`), joints with `armature`,
+//! `damping` (viscous), `frictionloss` (Coulomb), `range` and `actuatorfrcrange` where finite,
+//! the description's shapes as visual geoms (group 1, no contacts, so `mj_inverse` never sees a
+//! contact force; STL and OBJ meshes by absolute path, other mesh formats left out).
 
-use crate::model::{Joint, Model, Rotor};
-use crate::spatial::InertialParams;
-use nalgebra::{Rotation3, UnitQuaternion, Vector3};
+use crate::model::{Joint, Model, Rotor, Shape, ShapeKind};
+use crate::spatial::{Ellipsoid, InertialParams, Transform};
+use nalgebra::{Rotation3, SymmetricEigen, UnitQuaternion, Vector3};
 use std::fmt::Write;
 
 fn v3(v: &Vector3<f64>) -> String {
@@ -27,6 +35,165 @@ pub fn lumped_inertias(model: &Model) -> Vec<InertialParams> {
     out
 }
 
+/// A pose as MJCF `pos` and `quat` attributes.
+fn pose_attrs(x: &Transform) -> String {
+    let (rot, pos) = x.to_pose();
+    let q = UnitQuaternion::from_rotation_matrix(&Rotation3::from_matrix_unchecked(rot));
+    format!(
+        "pos=\"{}\" quat=\"{} {} {} {}\"",
+        v3(&pos),
+        q.w,
+        q.i,
+        q.j,
+        q.k
+    )
+}
+
+/// An `<inertial>` element.
+fn inertial(p: &InertialParams) -> String {
+    let (c, ic) = (
+        p.com().unwrap_or_default(),
+        p.inertia_about_com().unwrap_or_default(),
+    );
+    format!(
+        "<inertial pos=\"{}\" mass=\"{}\" fullinertia=\"{} {} {} {} {} {}\"/>",
+        v3(&c),
+        p.mass(),
+        ic[(0, 0)],
+        ic[(1, 1)],
+        ic[(2, 2)],
+        ic[(0, 1)],
+        ic[(0, 2)],
+        ic[(1, 2)]
+    )
+}
+
+/// Mesh files MuJoCo reads (STL, OBJ): asset name → file, scale.
+fn mesh_assets(model: &Model) -> Vec<(String, String, [f64; 3])> {
+    let mut out = vec![];
+    for b in &model.bodies {
+        for (k, sh) in b.shapes.iter().enumerate() {
+            if let ShapeKind::Mesh { path, scale } = &sh.kind {
+                let ext = path.extension().map(|e| e.to_string_lossy().to_lowercase());
+                if matches!(ext.as_deref(), Some("stl" | "obj")) {
+                    let file = std::fs::canonicalize(path).unwrap_or(path.clone());
+                    out.push((
+                        format!("{}_mesh{k}", b.name),
+                        file.display().to_string(),
+                        *scale,
+                    ));
+                }
+            }
+        }
+    }
+    out
+}
+
+/// The `<geom>` of a shape: visual only (`contype = conaffinity = 0`, group 1), so that
+/// contacts never enter `mj_inverse`; `None` for a mesh MuJoCo cannot read.
+fn shape_geom(body: &str, k: usize, sh: &Shape) -> Option<String> {
+    let (kind, size) = match &sh.kind {
+        ShapeKind::Box { size } => (
+            "box",
+            format!("{} {} {}", size[0] / 2.0, size[1] / 2.0, size[2] / 2.0),
+        ),
+        ShapeKind::Cylinder { radius, length } => {
+            ("cylinder", format!("{radius} {}", length / 2.0))
+        }
+        ShapeKind::Capsule { radius, length } => ("capsule", format!("{radius} {}", length / 2.0)),
+        ShapeKind::Sphere { radius } => ("sphere", format!("{radius}")),
+        ShapeKind::Mesh { path, .. } => {
+            let ext = path.extension().map(|e| e.to_string_lossy().to_lowercase());
+            if !matches!(ext.as_deref(), Some("stl" | "obj")) {
+                return None;
+            }
+            return Some(format!(
+                "<geom type=\"mesh\" mesh=\"{body}_mesh{k}\" {} contype=\"0\" conaffinity=\"0\" group=\"1\"/>",
+                pose_attrs(&sh.pose)
+            ));
+        }
+    };
+    Some(format!(
+        "<geom type=\"{kind}\" size=\"{size}\" {} contype=\"0\" conaffinity=\"0\" group=\"1\"/>",
+        pose_attrs(&sh.pose)
+    ))
+}
+
+/// The bounding ellipsoid as a geom (group 3, visual only).
+fn ellipsoid_geom(e: &Ellipsoid) -> String {
+    let eig = SymmetricEigen::new(e.qs);
+    let mut r = eig.eigenvectors;
+    if r.determinant() < 0.0 {
+        r.column_mut(2).neg_mut();
+    }
+    let a = eig.eigenvalues.map(|l| l.max(0.0).sqrt());
+    let q = UnitQuaternion::from_rotation_matrix(&Rotation3::from_matrix_unchecked(r));
+    format!(
+        "<geom type=\"ellipsoid\" size=\"{}\" pos=\"{}\" quat=\"{} {} {} {}\" contype=\"0\" conaffinity=\"0\" group=\"3\" rgba=\"0.2 0.6 1 0.15\"/>",
+        v3(&a),
+        v3(&e.center),
+        q.w,
+        q.i,
+        q.j,
+        q.k
+    )
+}
+
+/// A joint with its armature, friction and limits.
+fn joint(b: &crate::model::Body) -> String {
+    let (kind, axis) = match b.joint {
+        Joint::Revolute { axis } => ("hinge", axis),
+        Joint::Prismatic { axis } => ("slide", axis),
+    };
+    let l = &b.limits;
+    let range = if l.lower.is_finite() && l.upper.is_finite() {
+        format!(" limited=\"true\" range=\"{} {}\"", l.lower, l.upper)
+    } else {
+        " limited=\"false\"".into()
+    };
+    let effort = if l.effort.is_finite() {
+        format!(
+            " actuatorfrclimited=\"true\" actuatorfrcrange=\"{} {}\"",
+            -l.effort, l.effort
+        )
+    } else {
+        String::new()
+    };
+    format!(
+        "<joint name=\"{}\" type=\"{kind}\" axis=\"{}\" armature=\"{}\" damping=\"{}\" frictionloss=\"{}\"{range}{effort}/>",
+        b.joint_name,
+        v3(&axis),
+        b.rotor.as_ref().map_or(0.0, Rotor::armature),
+        b.friction.viscous,
+        b.friction.coulomb
+    )
+}
+
+fn body(model: &Model, inertias: &[InertialParams], i: usize, depth: usize, s: &mut String) {
+    let b = &model.bodies[i];
+    let pad = "  ".repeat(depth + 2);
+    let _ = writeln!(
+        s,
+        "{pad}<body name=\"{}\" {}>",
+        b.name,
+        pose_attrs(&b.x_tree)
+    );
+    let _ = writeln!(s, "{pad}  {}", inertial(&inertias[i]));
+    let _ = writeln!(s, "{pad}  {}", joint(b));
+    for (k, sh) in b.shapes.iter().enumerate() {
+        if let Some(g) = shape_geom(&b.name, k, sh) {
+            let _ = writeln!(s, "{pad}  {g}");
+        }
+    }
+    if let Some(e) = &b.bounding {
+        let _ = writeln!(s, "{pad}  {}", ellipsoid_geom(e));
+    }
+    for c in (0..model.dof()).filter(|&c| model.bodies[c].parent == Some(i)) {
+        body(model, inertias, c, depth + 1, s);
+    }
+    let _ = writeln!(s, "{pad}</body>");
+}
+
 /// The model as MJCF text (see the module docs).
 pub fn to_string(model: &Model) -> String {
     let inertias = lumped_inertias(model);
@@ -41,54 +208,27 @@ pub fn to_string(model: &Model) -> String {
         "  <option gravity=\"{}\" timestep=\"0.001\" integrator=\"RK4\"/>",
         v3(&model.gravity)
     );
-    let _ = writeln!(s, "  <worldbody>");
-    fn body(model: &Model, inertias: &[InertialParams], i: usize, depth: usize, s: &mut String) {
-        let b = &model.bodies[i];
-        let pad = "  ".repeat(depth + 2);
-        let (rot, pos) = b.x_tree.to_pose();
-        let q = UnitQuaternion::from_rotation_matrix(&Rotation3::from_matrix_unchecked(rot));
-        let _ = writeln!(
-            s,
-            "{pad}<body name=\"{}\" pos=\"{}\" quat=\"{} {} {} {}\">",
-            b.name,
-            v3(&pos),
-            q.w,
-            q.i,
-            q.j,
-            q.k
-        );
-        let p = &inertias[i];
-        let (c, ic) = (
-            p.com().unwrap_or_default(),
-            p.inertia_about_com().unwrap_or_default(),
-        );
-        let _ = writeln!(
-            s,
-            "{pad}  <inertial pos=\"{}\" mass=\"{}\" fullinertia=\"{} {} {} {} {} {}\"/>",
-            v3(&c),
-            p.mass(),
-            ic[(0, 0)],
-            ic[(1, 1)],
-            ic[(2, 2)],
-            ic[(0, 1)],
-            ic[(0, 2)],
-            ic[(1, 2)]
-        );
-        let (kind, axis) = match b.joint {
-            Joint::Revolute { axis } => ("hinge", axis),
-            Joint::Prismatic { axis } => ("slide", axis),
-        };
-        let _ = writeln!(
-            s,
-            "{pad}  <joint name=\"{}\" type=\"{kind}\" axis=\"{}\" armature=\"{}\" damping=\"0\" frictionloss=\"0\" limited=\"false\"/>",
-            b.joint_name,
-            v3(&axis),
-            model.bodies[i].rotor.as_ref().map_or(0.0, Rotor::armature)
-        );
-        for c in (0..model.dof()).filter(|&c| model.bodies[c].parent == Some(i)) {
-            body(model, inertias, c, depth + 1, s);
+    let meshes = mesh_assets(model);
+    if !meshes.is_empty() {
+        let _ = writeln!(s, "  <asset>");
+        for (name, file, sc) in &meshes {
+            let _ = writeln!(
+                s,
+                "    <mesh name=\"{name}\" file=\"{file}\" scale=\"{} {} {}\"/>",
+                sc[0], sc[1], sc[2]
+            );
         }
-        let _ = writeln!(s, "{pad}</body>");
+        let _ = writeln!(s, "  </asset>");
+    }
+    let _ = writeln!(s, "  <worldbody>");
+    // Rotors on the fixed base: static bodies welded to the world, so that the model's mass
+    // is complete; their spin inertia acts through their joint's armature.
+    for b in model.bodies.iter().filter(|b| b.parent.is_none()) {
+        if let Some(r) = &b.rotor {
+            let _ = writeln!(s, "    <body name=\"{}\" {}>", r.name, pose_attrs(&r.x_rot));
+            let _ = writeln!(s, "      {}", inertial(&r.inertia));
+            let _ = writeln!(s, "    </body>");
+        }
     }
     for i in (0..model.dof()).filter(|&i| model.bodies[i].parent.is_none()) {
         body(model, &inertias, i, 0, &mut s);

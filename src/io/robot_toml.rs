@@ -342,6 +342,7 @@ fn body_from_spec(k: usize, b: &BodySpec, earlier: &[Body], path: &Path) -> Resu
             .map(|x| x.ellipsoid(&what))
             .transpose()
             .map_err(e)?,
+        shapes: vec![],
         rotor: b
             .rotor
             .as_ref()

@@ -162,6 +162,7 @@ pub fn from_str(
     } = walk(&robot, &link_idx, &children, root, &lookup)?;
     let mut warnings = warnings;
     for (b, s) in bodies.iter_mut().zip(&shapes) {
+        b.shapes = s.shapes.clone();
         b.bounding = s.bound(&b.name, &lookup).unwrap_or_else(|w| {
             warnings.push(w);
             None
@@ -281,6 +282,8 @@ type PendingRotor<'r> = (
 /// frame: the pieces, and the links whose geometry could not be used (with why).
 #[derive(Default)]
 struct Shapes {
+    /// The shapes themselves, for export.
+    shapes: Vec<crate::model::Shape>,
     pieces: Vec<Piece>,
     missing: Vec<String>,
     sources: Vec<&'static str>,
@@ -290,6 +293,15 @@ impl Shapes {
     /// Adds a link's geometry, placed in the body frame by `x_link` (link from body). A link
     /// with mass but no usable geometry makes the body's bound unknown.
     fn add(&mut self, link: &urdf_rs::Link, x_link: &Transform, lookup: &Lookup) {
+        self.shapes
+            .extend(
+                geometry::link_shapes(link, lookup)
+                    .into_iter()
+                    .map(|s| crate::model::Shape {
+                        pose: s.pose.compose(x_link),
+                        kind: s.kind,
+                    }),
+            );
         if lookup.opts.ignore_geometry {
             return;
         }
@@ -473,6 +485,7 @@ fn moving_body(
         x_tree,
         inertia,
         bounding: None,
+        shapes: vec![],
         rotor: None,
         friction,
         limits: JointLimits {

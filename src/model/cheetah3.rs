@@ -260,6 +260,7 @@ pub fn leg_with(o: &LegOptions) -> Result<Model, ModelError> {
             x_tree: Transform::identity(),
             inertia: params(&published::ABAD, o.truth),
             bounding: Some(ell[0]),
+            shapes: vec![],
             rotor: rotor(
                 "abad_rotor",
                 Transform::translation(&Vector3::new(0.0, -0.128, 0.0)),
@@ -284,6 +285,7 @@ pub fn leg_with(o: &LegOptions) -> Result<Model, ModelError> {
             x_tree: hip_origin,
             inertia: params(&published::HIP, o.truth),
             bounding: Some(ell[1]),
+            shapes: vec![],
             rotor: rotor(
                 "hip_rotor",
                 hip_origin,
@@ -308,6 +310,7 @@ pub fn leg_with(o: &LegOptions) -> Result<Model, ModelError> {
             x_tree: Transform::translation(&Vector3::new(0.0, 0.0, -THIGH_LENGTH)),
             inertia: params(&published::KNEE, o.truth),
             bounding: Some(ell[2]),
+            shapes: vec![],
             rotor: rotor(
                 "knee_rotor",
                 Transform::identity(),

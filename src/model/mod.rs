@@ -150,12 +150,60 @@ pub struct Body {
     pub inertia: InertialParams,
     /// Bounding ellipsoid in this body's frame, if known.
     pub bounding: Option<Ellipsoid>,
+    /// The description's shapes (collision, else visual) in this body's frame, for export only
+    /// (dynamics never reads them).
+    pub shapes: Vec<Shape>,
     /// The rotor this joint drives, if any.
     pub rotor: Option<Rotor>,
     /// Joint friction (the truth, for simulation; identified otherwise).
     pub friction: JointFriction,
     /// Joint limits.
     pub limits: JointLimits,
+}
+
+/// A shape of a body as the description gives it, placed in the body's frame.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Shape {
+    /// The shape's frame: its pose in the body frame (`from_pose` convention).
+    pub pose: Transform,
+    /// What it is.
+    pub kind: ShapeKind,
+}
+
+/// URDF's geometry kinds (m).
+#[derive(Clone, Debug, PartialEq)]
+pub enum ShapeKind {
+    /// A box of full side lengths `size`, centred.
+    Box {
+        /// Full side lengths (m).
+        size: [f64; 3],
+    },
+    /// A cylinder along z, centred.
+    Cylinder {
+        /// Radius (m).
+        radius: f64,
+        /// Full length (m).
+        length: f64,
+    },
+    /// A capsule along z (cylinder part of `length`), centred.
+    Capsule {
+        /// Radius (m).
+        radius: f64,
+        /// Length of the cylinder part (m).
+        length: f64,
+    },
+    /// A sphere, centred.
+    Sphere {
+        /// Radius (m).
+        radius: f64,
+    },
+    /// A mesh file (found on disk), scaled.
+    Mesh {
+        /// The resolved file.
+        path: std::path::PathBuf,
+        /// Scale per axis.
+        scale: [f64; 3],
+    },
 }
 
 /// How rotors enter the dynamics.

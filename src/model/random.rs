@@ -88,6 +88,7 @@ pub fn random_tree(seed: u64, n: usize) -> Model {
                 x_tree: pose(&mut rng, 0.3),
                 inertia: random_body(&mut rng, &com, 0.15),
                 bounding: None,
+                shapes: vec![],
                 rotor,
                 friction: JointFriction {
                     viscous: rng.random_range(0.0..0.5),
