@@ -1,7 +1,8 @@
 """Cross-check physid against pinocchio: RNEA torques, the joint-torque regressor and the
 inertial parameters read from URDF, on the link-only Cheetah-3 leg (exported by physid as URDF)
 and on the real KUKA LWR4+ URDF (read by both); and RNEA of the full leg with its rotors, exported
-as URDF mimic joints and loaded with mimic=True. Exits non-zero on disagreement.
+as URDF mimic joints and loaded with mimic=True; and a KUKA model identified on its real logs,
+written into the KUKA's own URDF by `identify --out-urdf`. Exits non-zero on disagreement.
 
 usage: python scripts/check_pinocchio.py [--physid PATH]
 """
@@ -56,6 +57,27 @@ def check_rotors(report, binary, directory):
     report.add("Cheetah-3 leg with rotors (URDF mimic=True): rnea", e_tau, TOL)
 
 
+def check_identified_kuka(report, binary, directory):
+    """`identify --out-urdf` on the KUKA logs patches the KUKA's own URDF (geometry, meshes,
+    transmissions kept): pinocchio reads exactly the identified inertias from it, and its RNEA
+    equals physid's on the exported pair (URDF + sidecar)."""
+    import json
+    import os
+    import subprocess
+    out = os.path.join(directory, "kuka_identified.urdf")
+    data = os.path.join(os.path.dirname(KUKA_URDF), "measurements_1.csv")
+    res = subprocess.run([binary, "identify", "--robot", KUKA_URDF, "--data", data, "--json",
+                          "--friction", "viscous,coulomb,offset", "--out-urdf", out],
+                         check=True, capture_output=True, text=True)
+    pi = np.concatenate([b["pi"] for b in json.loads(res.stdout)["bodies"]])
+    model = pin.buildModelFromUrdf(out)
+    n = model.nv
+    pin_pi = np.concatenate([model.inertias[i + 1].toDynamicParameters()[PIN_FROM_PAPER] for i in range(n)])
+    report.add("identified KUKA, patched URDF: pinocchio's inertias = identify's", rel_err(pi, pin_pi), 1e-12)
+    sidecar = os.path.join(directory, "kuka_identified.physid.toml")
+    check(report, "identified KUKA (patched URDF + sidecar)", out, dynamics(binary, ["--robot", sidecar]))
+
+
 def main():
     binary = physid_bin(sys.argv)
     report = Report("check_pinocchio")
@@ -64,6 +86,7 @@ def main():
         urdf = export(binary, leg, "urdf", d)
         check(report, "link-only Cheetah-3 leg", urdf, dynamics(binary, ["--robot", urdf]))
         check_rotors(report, binary, d)
+        check_identified_kuka(report, binary, d)
     check(report, "KUKA LWR4+ (data/kuka_lwr4 URDF)", KUKA_URDF, dynamics(binary, ["--robot", KUKA_URDF]))
     report.finish()
 

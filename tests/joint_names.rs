@@ -40,6 +40,8 @@ struct Bag<'a> {
     other_publisher: bool,
     /// The message whose velocity array is left empty.
     empty_velocity_at: Option<usize>,
+    /// Rotate the joint order by one more place in every message.
+    rotate_each: bool,
 }
 
 impl Default for Bag<'_> {
@@ -50,6 +52,7 @@ impl Default for Bag<'_> {
             header_stamps: false,
             other_publisher: false,
             empty_velocity_at: None,
+            rotate_each: false,
         }
     }
 }
@@ -95,6 +98,12 @@ fn write_bag_with(
         w.write_to_known_channel(&header, &data).unwrap();
     };
     for k in bag.range.start..bag.range.end.min(tr.len()) {
+        let mut order = order.to_vec();
+        if bag.rotate_each {
+            let shift = k % order.len();
+            order.rotate_left(shift);
+        }
+        let order = &order[..];
         let col = |v: &[f64], o: &Option<usize>| o.map_or(0.01, |j| v[j]);
         let stamp_ns = start_ns + (tr.t[k] * 1e9).round() as u64;
         let jitter = if bag.header_stamps {
@@ -368,4 +377,23 @@ fn csv_columns_named_by_joint_in_any_order_read_as_numbered_ones() {
     assert_eq!(a.q, b.trajectory.q);
     assert_eq!(a.qd, b.trajectory.qd);
     assert_eq!(a.tau, b.trajectory.tau);
+}
+
+#[test]
+fn a_joint_order_that_changes_from_message_to_message_reads_the_same() {
+    let (model, measured) = short_recording();
+    let dir = tempfile::tempdir().unwrap();
+    let (steady, rotating) = (dir.path().join("a.mcap"), dir.path().join("b.mcap"));
+    let order = [Some(2), None, Some(0), Some(1)];
+    write_bag(&steady, &measured, &order, 1_700_000_000_000_000_000);
+    let b = Bag {
+        rotate_each: true,
+        ..Bag::default()
+    };
+    write_bag_with(&rotating, &measured, &order, 1_700_000_000_000_000_000, &b);
+    let a = io::load_trajectory(&steady, &model).unwrap().trajectory;
+    let r = io::load_trajectory(&rotating, &model).unwrap().trajectory;
+    assert_eq!(a.q, r.q);
+    assert_eq!(a.qd, r.qd);
+    assert_eq!(a.tau, r.tau);
 }

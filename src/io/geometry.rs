@@ -185,8 +185,9 @@ pub(crate) fn into_frame(pieces: &[Piece], rot: &Matrix3<f64>, pos: &Vector3<f64
     pieces.iter().map(|p| p.moved(rot, pos)).collect()
 }
 
-/// A link's shapes for export (collision, else visual), each placed in the link frame; meshes
-/// that cannot be found are left out.
+/// A link's shapes for export, each placed in the link frame: its collision shapes, or its
+/// visual ones when a collision mesh cannot be found (as [`link_pieces`] does); meshes that
+/// cannot be found are left out.
 pub(crate) fn link_shapes(link: &urdf_rs::Link, lookup: &Lookup) -> Vec<crate::model::Shape> {
     use crate::model::{Shape, ShapeKind};
     use urdf_rs::Geometry as G;
@@ -200,10 +201,18 @@ pub(crate) fn link_shapes(link: &urdf_rs::Link, lookup: &Lookup) -> Vec<crate::m
         .iter()
         .map(|v| (&v.origin, &v.geometry))
         .collect();
-    let chosen = if collision.is_empty() {
-        visual
-    } else {
+    let readable = |shapes: &[(&urdf_rs::Pose, &urdf_rs::Geometry)]| {
+        !shapes.is_empty()
+            && shapes.iter().all(|(_, g)| match g {
+                G::Mesh { filename, .. } => resolve(filename, lookup).is_ok(),
+                _ => true,
+            })
+    };
+    // As for the bounds: the collision shapes if they can all be read, else the visual ones.
+    let chosen = if readable(&collision) || !readable(&visual) {
         collision
+    } else {
+        visual
     };
     chosen
         .into_iter()

@@ -573,15 +573,41 @@ impl Reader<'_> {
         } else {
             js.name.clone()
         };
-        if let Some(first) = self.measured.as_ref().map(|t| &t.joint_names) {
-            if *first != names {
-                return Err(format!(
-                    "names joints {}; the first message named {}",
-                    names.join(", "),
-                    first.join(", ")
-                ));
+        // Publishers may list the joints in another order from one message to the next: each
+        // message's arrays are put in the first message's order; a different set is an error.
+        let (names, position, velocity, effort) = match self.measured.as_ref() {
+            Some(t) if t.joint_names != names => {
+                let first = &t.joint_names;
+                let index: Option<Vec<usize>> = (names.len() == first.len())
+                    .then(|| {
+                        first
+                            .iter()
+                            .map(|f| names.iter().position(|n| n == f))
+                            .collect()
+                    })
+                    .flatten();
+                let Some(index) = index.filter(|_| !names.iter().any(String::is_empty)) else {
+                    return Err(format!(
+                        "names joints {}; the first message named {}",
+                        names.join(", "),
+                        first.join(", ")
+                    ));
+                };
+                let pick = |v: &[f64]| index.iter().map(|&i| v[i]).collect::<Vec<f64>>();
+                (
+                    first.clone(),
+                    pick(&js.position),
+                    pick(&js.velocity),
+                    pick(&js.effort),
+                )
             }
-        }
+            _ => (
+                names,
+                js.position.clone(),
+                js.velocity.clone(),
+                js.effort.clone(),
+            ),
+        };
         let ns = match self.opts.stamp {
             Stamp::Log => log_time,
             Stamp::Header => header_ns(&js.header)?,
@@ -590,7 +616,7 @@ impl Reader<'_> {
         let tr = self
             .measured
             .get_or_insert_with(|| Trajectory::new(names, false));
-        tr.push(t, &js.position, &js.velocity, None, &js.effort);
+        tr.push(t, &position, &velocity, None, &effort);
         Ok(())
     }
 
