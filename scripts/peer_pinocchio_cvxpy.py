@@ -11,7 +11,13 @@ would, timed on the same data in the same run as physid.
 Prints both times and the ratio, and checks that both reach the same optimum (objective to
 1e-6 relative): the same problem, solved twice. Exits non-zero if not.
 
-usage: python scripts/peer_pinocchio_cvxpy.py [--physid PATH] [--samples N]
+With `--kuka`, the same on real data: the KUKA LWR4+ URDF and its logged runs 1 and 2
+(10,054 samples of CSV, `identify`'s default `ellipsoid` set with each body's bound from its
+URDF geometry), pinocchio's regressor plus viscous and Coulomb columns; the peer's time covers
+reading the CSVs, the regressor, the normal equations and the solve (not Python's start-up and
+imports), physid's the whole `identify` command.
+
+usage: python scripts/peer_pinocchio_cvxpy.py [--physid PATH] [--samples N] [--kuka]
 """
 import json
 import os
@@ -111,8 +117,89 @@ def regressor_rows(model, data, rotors, link_of, q, v, a, n_rot_cols):
 joint_axes = []
 
 
+def solve_like_physid(problem, y, tau, samples):
+    """The exported problem with H, g, c rebuilt from the peer's own regressor and torques
+    (physid's prior recovered from its exported g); returns (objective, status, solve time)."""
+    w = 1e-6
+    h_np = y.T @ y / samples + w * np.eye(y.shape[1])
+    theta_prior = (np.array(problem["g"]) - y.T @ tau / samples) / w
+    problem_py = dict(problem)
+    problem_py["H"] = h_np.tolist()
+    problem_py["g"] = (y.T @ tau / samples + w * theta_prior).tolist()
+    problem_py["c"] = float(tau @ tau / samples + w * theta_prior @ theta_prior)
+    t1 = time.perf_counter()
+    value, status = solve(problem_py, "CLARABEL")
+    return value, status, time.perf_counter() - t1
+
+
+def seconds_since_process_start():
+    """Wall time since this Python process started (Linux /proc; interpreter start-up and
+    imports included)."""
+    with open("/proc/self/stat") as f:
+        start_ticks = int(f.read().rsplit(")", 1)[1].split()[19])
+    with open("/proc/uptime") as f:
+        uptime = float(f.read().split()[0])
+    return uptime - start_ticks / os.sysconf("SC_CLK_TCK")
+
+
+def kuka(binary):
+    """The comparison on the real KUKA logs (see the module docs)."""
+    from physid_common import KUKA_URDF
+    runs = [os.path.join(ROOT, "data", "kuka_lwr4", f"measurements_{i}.csv") for i in (1, 2)]
+    with tempfile.TemporaryDirectory() as d:
+        problem_path = os.path.join(d, "problem.json")
+        base = ["identify", "--robot", KUKA_URDF, "--data", *runs, "--constraints", "ellipsoid", "--json"]
+        t_before_physid = time.perf_counter()
+        ours = json.loads(run(binary, *base, "--export-problem", problem_path))
+        with open(problem_path) as f:
+            problem = json.load(f)
+        t0 = time.perf_counter()
+        run(binary, *base)
+        t_physid_cmd = time.perf_counter() - t0
+        t_physid_runs = time.perf_counter() - t_before_physid
+
+        t0 = time.perf_counter()
+        model = pin.buildModelFromUrdf(KUKA_URDF)
+        pdata = model.createData()
+        n = model.nv
+        perm = np.concatenate([10 * i + np.array(PIN_FROM_PAPER) for i in range(n)])
+        ys, taus = [], []
+        for path in runs:
+            with open(path) as f:
+                header = f.readline().strip().split(",")
+            cols = lambda p: [header.index(f"{p}{j + 1}") for j in range(n)]
+            data_np = np.loadtxt(path, delimiter=",", skiprows=1)
+            for s in data_np:
+                q, v, a, tau = s[cols("q")], s[cols("dq")], s[cols("ddq")], s[cols("tau")]
+                y = np.zeros((n, 12 * n))
+                y[:, :10 * n] = pin.computeJointTorqueRegressor(model, pdata, q, v, a)[:, perm]
+                y[np.arange(n), 10 * n + np.arange(n)] = v
+                y[np.arange(n), 11 * n + np.arange(n)] = np.sign(v)
+                ys.append(y)
+                taus.append(tau)
+        y, tau = np.vstack(ys), np.concatenate(taus)
+        samples = len(taus)
+        value, status, t_solve = solve_like_physid(problem, y, tau, samples)
+        t_peer = time.perf_counter() - t0
+        t_peer_process = seconds_since_process_start() - t_physid_runs
+        ref = problem["physid"]["objective"]
+        err = abs(value - ref) / max(1.0, abs(ref))
+        print(f"KUKA LWR4+ real logs, runs 1 + 2 ({samples} samples), 'ellipsoid' from the URDF geometry:")
+        print(f"  peer (CSV read, pinocchio regressor, numpy, CVXPY/Clarabel): {t_peer * 1e3:.0f} ms (solve {t_solve * 1e3:.0f} ms, {status})")
+        print(f"  physid identify, whole command: {t_physid_cmd * 1e3:.0f} ms; in-library end to end {ours['end_to_end_seconds'] * 1e3:.1f} ms")
+        print(f"  peer as a whole process (interpreter start-up and imports included): {t_peer_process * 1e3:.0f} ms")
+        print(f"ratio peer / physid, whole processes: {t_peer_process / t_physid_cmd:.1f}x; peer's work alone / physid whole command: "
+              f"{t_peer / t_physid_cmd:.1f}x; in-library: {t_peer / ours['end_to_end_seconds']:.0f}x")
+        print(f"same optimum: physid {ref:.9f}, peer {value:.9f}, rel. diff {err:.1e}")
+        ok = err < 1e-6
+        print(f"peer_pinocchio_cvxpy: {1 if ok else 0} passed, {0 if ok else 1} failed")
+        sys.exit(0 if ok else 1)
+
+
 def main():
     binary = physid_bin(sys.argv)
+    if "--kuka" in sys.argv:
+        return kuka(binary)
     samples = int(sys.argv[sys.argv.index("--samples") + 1]) if "--samples" in sys.argv else 10000
     scenario = os.path.join(ROOT, "scenarios", "cheetah3_shell.toml")
     with tempfile.TemporaryDirectory() as d:

@@ -10,17 +10,6 @@ use nalgebra::{DMatrix, DVector};
 /// Rows per block before the `YᵀY` update (a multiple of every joint count up to 8).
 const BLOCK_SAMPLES: usize = 128;
 
-/// OpenBLAS threads by default; one thread keeps results independent of the machine's thread
-/// count (and the parallelism belongs to the experiment level).
-fn single_threaded_blas() {
-    static ONCE: std::sync::Once = std::sync::Once::new();
-    extern "C" {
-        fn openblas_set_num_threads(n: std::ffi::c_int);
-    }
-    // SAFETY: a plain setter of OpenBLAS, linked through clarabel's `sdp-openblas`.
-    ONCE.call_once(|| unsafe { openblas_set_num_threads(1) });
-}
-
 /// Calls `f(k, Y_k)` with the regressor of every sample `k` in `range` of `tr`, which must carry
 /// q̈ (one workspace and one output matrix for the whole range).
 pub fn for_each_regressor(
@@ -101,7 +90,7 @@ impl NormalEquations {
         let m = self.filled * self.n;
         let p = self.yty.ncols();
         let lda = self.rows.nrows();
-        single_threaded_blas();
+        crate::spatial::single_threaded_blas();
         // SAFETY: `rows` is column-major lda×p with m <= lda valid rows; `yty` is p×p.
         unsafe {
             blas::dsyrk(

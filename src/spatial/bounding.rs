@@ -379,6 +379,7 @@ fn push_piece(c: &Vector3<f64>, f: &[Vector3<f64>], lambda: usize, rows: &mut Ro
 /// frame. Errors: no pieces, non-finite coordinates, flat geometry, solver failure.
 pub fn minimum_volume_ellipsoid(pieces: &[Piece]) -> Result<Ellipsoid, BoundingError> {
     check(pieces)?;
+    super::single_threaded_blas();
     // Work in a frame centred on the geometry and scaled to unit size, so that the program is
     // well conditioned whatever the units of the description.
     let pts: Vec<Vector3<f64>> = pieces.iter().flat_map(|p| p.sample_boundary(8)).collect();

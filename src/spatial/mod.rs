@@ -30,3 +30,15 @@ use nalgebra::{Matrix3, Vector3};
 pub fn skew(x: &Vector3<f64>) -> Matrix3<f64> {
     Matrix3::new(0.0, -x.z, x.y, x.z, 0.0, -x.x, -x.y, x.x, 0.0)
 }
+
+/// Clarabel's PSD cones call OpenBLAS, which starts as many threads as cores by default and
+/// spins them on every small product. One thread keeps results independent of the machine's
+/// thread count, and the parallelism belongs to the experiment level (rayon).
+pub(crate) fn single_threaded_blas() {
+    static ONCE: std::sync::Once = std::sync::Once::new();
+    extern "C" {
+        fn openblas_set_num_threads(n: std::ffi::c_int);
+    }
+    // SAFETY: a plain setter of OpenBLAS, linked through clarabel's `sdp-openblas`.
+    ONCE.call_once(|| unsafe { openblas_set_num_threads(1) });
+}
