@@ -116,11 +116,11 @@ fn print_where(d: &Diagnosis) {
         d.samples[1],
         d.constraints.name()
     );
-    println!("\nWHERE (nominal model, validation residual)");
+    println!("\nWHERE (nominal model, validation residual, all samples; HOW FAR below leaves out slow joint-samples)");
     for (j, name) in d.joints.iter().enumerate() {
         let sp = &d.spectra[j];
         println!(
-            "  {name:<12} RMS {:.3} N m; spectrum peak {:.2} Hz; coherence {}",
+            "  {name:<12} RMS (all samples) {:.3} N m; spectrum peak {:.2} Hz; coherence {}",
             d.breakdown.rms[j],
             sp.peak_frequency,
             sp.signals
@@ -191,6 +191,9 @@ fn print_which(d: &Diagnosis) {
         }
         println!("    stop: {}", t.stop);
     }
+    if let Some(why) = &d.description_test_skipped {
+        println!("  against the description: {why}");
+    }
     for e in &d.effects {
         println!(
             "  {}{}: {}",
@@ -224,11 +227,14 @@ fn print_which(d: &Diagnosis) {
 
 /// HOW FAR: validation RMS per joint along the selection, and the summary.
 fn print_how_far(d: &Diagnosis) {
-    println!("\nHOW FAR (validation RMS, N m)");
+    println!(
+        "\nHOW FAR (validation RMS, N m, joint-samples slower than the speed threshold left out): the description as given -> re-identified (nominal) -> + each effect"
+    );
     for g in &d.gap {
         println!(
-            "  {:<12} {:.3} -> {} (noise floor {:.3}, {:.0} % of the gap closed)",
+            "  {:<12} {:.3} -> {:.3} -> {} (noise floor {:.3}, {:.0} % of the gap closed)",
             g.joint,
+            g.description,
             g.nominal,
             g.after
                 .iter()

@@ -70,7 +70,10 @@ impl EffectEstimate {
 pub struct JointGap {
     /// Joint name.
     pub joint: String,
-    /// Nominal model's validation RMS (N m).
+    /// The description's validation RMS as given, before any fit (N m): the sim-to-real gap.
+    pub description: f64,
+    /// Nominal model's validation RMS: the description's structure with its inertial
+    /// parameters and friction re-identified on the training data (N m).
     pub nominal: f64,
     /// RMS after each selected effect, cumulatively (N m).
     pub after: Vec<f64>,
@@ -120,10 +123,16 @@ pub struct Diagnosis {
     pub selection: select::Selection,
     /// Which, for absorbed effects: the description test (with a stated uncertainty).
     pub description_test: Option<anchor::Report>,
+    /// Why the description test did not run although an uncertainty was stated (`None` when
+    /// it ran or was not asked for).
+    pub description_test_skipped: Option<String>,
     /// The selected effects and their magnitudes.
     pub effects: Vec<EffectEstimate>,
     /// How far: per joint.
     pub gap: Vec<JointGap>,
+    /// Validation RMS over all joints of the description as given (N m): the sim-to-real gap
+    /// before anything is re-identified.
+    pub description_overall: f64,
     /// Validation RMS over all joints: nominal, then after each effect (N m).
     pub overall: Vec<f64>,
     /// Per selected effect: whether adding it lowered the validation RMS (held-out data, not

@@ -160,6 +160,7 @@ fn joint_gaps(stage: &Stage, per_step_rms: &[Vec<f64>], floor_var: &[f64]) -> Ve
             let den = nominal * nominal - floor;
             JointGap {
                 joint: stage.model.bodies[j].joint_name.clone(),
+                description: f64::NAN, // filled by `diagnose` (the description as given)
                 nominal,
                 after: per_step_rms[1..].iter().map(|r| r[j]).collect(),
                 noise_floor: floor.sqrt(), // NaN: the joint never moved fast enough

@@ -239,6 +239,26 @@ pub fn diagnose(
         Some(eps) if selection.chosen.is_empty() => Some(anchor::test_description(&stage, eps)),
         _ => None,
     };
+    let description_test_skipped = (opts.description_uncertainty.is_some()
+        && description_test.is_none())
+    .then(|| {
+        format!(
+            "not run: cross-validation selected {}, and the test against the description runs only when it selects nothing (a visible effect's linearized columns would bias the parameters the test compares)",
+            library::names(
+                &selection.steps.iter().map(|s| s.kind).collect::<Vec<_>>(),
+                false
+            )
+        )
+    });
+    // The sim-to-real gap itself: the description as given (its own parameters and friction)
+    // on the validation data, masked like every other step.
+    let (description_rms, _) = residual_rms(
+        &stage.ctx_val,
+        validate,
+        &[],
+        &model.parameters(),
+        opts.min_speed,
+    );
     let anchored: &[anchor::Step] = description_test.as_ref().map_or(&[], |r| &r.steps);
     let n_cv = selection.chosen.len();
     let chosen: Vec<usize> = selection
@@ -250,14 +270,22 @@ pub fn diagnose(
     let ladder = gap::ladder(&stage, &chosen)?;
     let mut effects = magnitude::cross_validated(&stage, &selection, &ladder.final_theta);
     effects.extend(magnitude::against_description(&stage, anchored));
-    let how_far = gap::how_far(&stage, &chosen, n_cv, &ladder)?;
+    let mut how_far = gap::how_far(&stage, &chosen, n_cv, &ladder)?;
+    for (g, d) in how_far.gap.iter_mut().zip(&description_rms) {
+        g.description = *d;
+    }
     let verdict = verdict::verdict(
         selection.steps.len(),
         anchored.len(),
         &how_far,
         opts.unexplained_ratio,
     );
-    let summary = verdict::summary(verdict, &effects, n_cv, &how_far, description_test.as_ref());
+    let summary = format!(
+        "the description as given predicts the validation data with {:.3} N m RMS (re-identified: {:.3} N m); {}",
+        mean_square(&description_rms).sqrt(),
+        how_far.overall[0],
+        verdict::summary(verdict, &effects, n_cv, &how_far, description_test.as_ref())
+    );
     Ok(Diagnosis {
         confirmed: how_far.confirmed,
         confirmed_only: how_far.confirmed_only,
@@ -271,8 +299,10 @@ pub fn diagnose(
         spectra_after: breakdown::spectra(model, validate, &ladder.final_res),
         selection,
         description_test,
+        description_test_skipped,
         effects,
         gap: how_far.gap,
+        description_overall: mean_square(&description_rms).sqrt(),
         overall: how_far.overall,
         noise_floor: how_far.floor_ms.sqrt(),
         gap_closed: how_far.gap_closed,

@@ -176,7 +176,7 @@ pub fn markdown(d: &Diagnosis) -> String {
 /// The Markdown "Where" section: residual per joint and regime, spectrum peaks.
 fn where_section(d: &Diagnosis) -> String {
     let mut s = String::new();
-    s += "## Where\n\nValidation residual of the nominal model per joint and regime (RMS in N m, share of the joint's residual energy). Plot: `where.svg`; spectrum: `spectrum.svg`.\n\n| joint | regime | samples | RMS | share |\n|---|---|---|---|---|\n";
+    s += "## Where\n\nValidation residual of the nominal model per joint and regime, over all samples (RMS in N m, share of the joint's residual energy; *How far* leaves out joint-samples slower than the speed threshold, so its RMS differs). Plot: `where.svg`; spectrum: `spectrum.svg`.\n\n| joint | regime | samples | RMS | share |\n|---|---|---|---|---|\n";
     for r in &d.breakdown.regimes {
         s += &format!(
             "| {} | {} | {} | {:.3} | {:.2} |\n",
@@ -245,9 +245,14 @@ fn which_section(d: &Diagnosis) -> String {
     s
 }
 
-/// The test against the description, when it ran.
+/// The test against the description, when it ran (or why it did not).
 fn description_section(d: &Diagnosis) -> String {
     let mut s = String::new();
+    if let Some(why) = &d.description_test_skipped {
+        s += &format!(
+            "### Absorbed effects: the test against the description\n\nThe test was {why}.\n\n"
+        );
+    }
     if let Some(t) = &d.description_test {
         s += &format!(
             "### Absorbed effects: the test against the description (stated uncertainty {:.0} %)\n\nResidual mean square {:.4} N² m², correlation time {:.1} samples.\n\n",
@@ -323,22 +328,23 @@ fn effects_section(d: &Diagnosis) -> String {
 /// The "How far" section: validation RMS along the selection, the confirmed-only refit.
 fn how_far_section(d: &Diagnosis) -> String {
     let mut s = String::new();
-    s += "## How far\n\nValidation RMS per joint (N m), nominal then after each effect (cumulative); plot `how_far.svg`.\n\n| joint | nominal |";
+    s += "## How far\n\nValidation RMS per joint (N m; joint-samples slower than the speed threshold left out): the description as given (the sim-to-real gap), the description re-identified on the training data (nominal), then after each effect (cumulative); plot `how_far.svg`.\n\n| joint | description | nominal |";
     for st in &d.selection.steps {
         s += &format!(" + {} |", st.kind.name());
     }
-    s += " noise floor | gap closed |\n|---|---|";
+    s += " noise floor | gap closed |\n|---|---|---|";
     s += &"---|".repeat(d.selection.steps.len() + 2);
     s += "\n";
     for g in &d.gap {
-        s += &format!("| {} | {:.3} |", g.joint, g.nominal);
+        s += &format!("| {} | {:.3} | {:.3} |", g.joint, g.description, g.nominal);
         for a in &g.after {
             s += &format!(" {a:.3} |");
         }
         s += &format!(" {:.3} | {:.0} % |\n", g.noise_floor, 100.0 * g.gap_closed);
     }
     s += &format!(
-        "| all | {} | {:.3} | {:.0} % |\n",
+        "| all | {:.3} | {} | {:.3} | {:.0} % |\n",
+        d.description_overall,
         d.overall
             .iter()
             .map(|v| format!("{v:.3}"))
