@@ -513,3 +513,42 @@ fn a_requested_description_test_that_cannot_run_says_why() {
     // The ladder starts at the description as given.
     assert!(report.contains("| joint | description | nominal |"));
 }
+
+#[test]
+fn joined_runs_of_one_motion_keep_their_difference_out_of_the_noise_floor() {
+    // The same excitation twice (same seed: same motion, same sensor noise), unloaded and
+    // with a 2 kg payload, joined as training runs; a loaded run with other noise validates.
+    // Across the two runs every sample's nearest neighbour is the same instant of the other
+    // run, whose residual differs by the payload's torque: the noise floor must come from
+    // neighbours within a run and stay at the sensor noise (0.3 N m).
+    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("scenarios/blind.toml");
+    let (mut sc, m, _) = physid::sim::scenario::load(&path).unwrap();
+    sc.simulation.duration = 8.0;
+    let payload = EffectSpec::Payload {
+        mass: 2.0,
+        com: [0.0, 0.0, -0.2],
+        radius: 0.03,
+    };
+    let mut run = |seed: u64, effects: Vec<EffectSpec>| {
+        sc.simulation.seed = seed;
+        sc.effects = effects;
+        physid::sim::run(&m, &sc, &mut |_| {}).unwrap().processed
+    };
+    let unloaded = run(21, vec![]);
+    let loaded = run(21, vec![payload.clone()]);
+    let validate = run(22, vec![payload]);
+    let opts = DiagOptions {
+        train_runs: vec![unloaded.len(), loaded.len()],
+        ..Default::default()
+    };
+    let train = physid::trajectory::Trajectory::concatenate(vec![unloaded, loaded]).unwrap();
+    let d = diagnose(&m, &train, &validate, &opts).unwrap();
+    eprintln!("floor {:.3}; {}", d.noise_floor, d.summary);
+    assert!(
+        d.noise_floor > 0.2 && d.noise_floor < 0.45,
+        "floor {}",
+        d.noise_floor
+    );
+    // And the description as given shows the payload's gap on the validation run.
+    assert!(d.description_overall > 1.5 * d.noise_floor, "{}", d.summary);
+}

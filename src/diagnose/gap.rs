@@ -135,8 +135,8 @@ pub(crate) fn how_far(
 }
 
 /// Noise-floor variance per joint (N² m², NaN for a joint that never moves fast enough) of the
-/// final residual, on training and validation data together: more repetitions of each motion,
-/// so closer neighbours (the fit's own training samples bias it by p/N, negligible here).
+/// final residual, on training and validation data, each run on its own (the fit's own
+/// training samples bias it by p/N, negligible here).
 fn noise_floor(stage: &Stage, chosen: &[usize], ladder: &Ladder) -> Vec<f64> {
     let (train, validate, ms) = (stage.train, stage.validate, stage.opts.min_speed);
     let rate = validate.sample_rate().unwrap_or(1.0);
@@ -147,7 +147,41 @@ fn noise_floor(stage: &Stage, chosen: &[usize], ladder: &Ladder) -> Vec<f64> {
         Trajectory::concatenate(vec![train.clone(), validate.clone()]).expect("two trajectories");
     let joined: Vec<f64> = train_res.iter().chain(&ladder.final_res).copied().collect();
     let masked = mask_slow(&both, &joined, ms);
-    noise::gamma_test(&both, 0..both.len(), &masked, exclude)
+    // Neighbours only within one run: two runs of the same motion under different conditions
+    // (unloaded, loaded) put the same instant of the other run next to each sample, and the
+    // difference between the runs, the very gap in question, would count as noise.
+    let mut bounds = vec![0];
+    let runs = &stage.opts.train_runs;
+    if runs.iter().sum::<usize>() == train.len() && !runs.is_empty() {
+        bounds.extend(runs.iter().scan(0, |acc, r| {
+            *acc += r;
+            Some(*acc)
+        }));
+    } else {
+        bounds.push(train.len());
+    }
+    bounds.push(both.len());
+    pooled_gamma(&both, &bounds, &masked, exclude)
+}
+
+/// The Gamma test within each segment `bounds[i]..bounds[i + 1]`, pooled per joint by the
+/// segments' lengths (segments too short for neighbours are left out).
+fn pooled_gamma(tr: &Trajectory, bounds: &[usize], res: &[f64], exclude: usize) -> Vec<f64> {
+    let n = tr.dof();
+    let (mut sum, mut weight) = (vec![0.0; n], vec![0.0; n]);
+    for w in bounds.windows(2).filter(|w| w[1] > w[0]) {
+        let g = noise::gamma_test(tr, w[0]..w[1], res, exclude);
+        for j in 0..n {
+            if g[j].is_finite() {
+                sum[j] += g[j] * (w[1] - w[0]) as f64;
+                weight[j] += (w[1] - w[0]) as f64;
+            }
+        }
+    }
+    sum.iter()
+        .zip(&weight)
+        .map(|(s, w)| if *w > 0.0 { s / w } else { f64::NAN })
+        .collect()
 }
 
 /// The gap of each joint: nominal RMS, RMS after each step, floor, fraction closed.
