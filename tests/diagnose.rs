@@ -552,3 +552,43 @@ fn joined_runs_of_one_motion_keep_their_difference_out_of_the_noise_floor() {
     // And the description as given shows the payload's gap on the validation run.
     assert!(d.description_overall > 1.5 * d.noise_floor, "{}", d.summary);
 }
+
+#[test]
+fn three_seconds_of_clean_data_are_undecided_not_unexplained() {
+    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("scenarios/blind.toml");
+    let (mut sc, m, _) = physid::sim::scenario::load(&path).unwrap();
+    sc.simulation.seed = 3;
+    let rec = physid::sim::run(&m, &sc, &mut |_| {}).unwrap();
+    let d = &rec.processed;
+    // 3 s to train, 2 s to validate (1 kHz).
+    let short = diagnose(
+        &m,
+        &d.slice(0..3000),
+        &d.slice(3000..5000),
+        &DiagOptions::default(),
+    )
+    .unwrap();
+    eprintln!("{}", short.summary);
+    assert!(short.effects.is_empty(), "{:?}", short.effects);
+    assert_eq!(short.verdict, Verdict::Undecided, "{}", short.summary);
+    assert!(
+        short.summary.contains("3.0 s of training data"),
+        "{}",
+        short.summary
+    );
+    // The same data with the threshold lowered give the plain verdict, for the record.
+    let opts = DiagOptions {
+        min_decisive_seconds: 0.0,
+        ..Default::default()
+    };
+    let plain = diagnose(&m, &d.slice(0..3000), &d.slice(3000..5000), &opts).unwrap();
+    assert!(matches!(
+        plain.verdict,
+        Verdict::Unexplained | Verdict::NoEffect
+    ));
+    let bad = DiagOptions {
+        min_decisive_seconds: f64::NAN,
+        ..Default::default()
+    };
+    assert!(diagnose(&m, &d.slice(0..3000), &d.slice(3000..5000), &bad).is_err());
+}

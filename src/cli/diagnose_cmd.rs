@@ -82,19 +82,17 @@ pub fn run(a: Args) -> anyhow::Result<()> {
     Ok(())
 }
 
-/// Training data shorter than this (s) leave the diagnosis's cross-validation blocks and noise
-/// floor too few repetitions of the motion: its verdicts were measured on 20 s and more.
-const SHORT_DATA_SECONDS: f64 = 10.0;
-
-/// Warns when the training runs together last less than [`SHORT_DATA_SECONDS`].
+/// Warns when the training runs together last less than the library's `min_decisive_seconds`
+/// (the cross-validation blocks and the noise floor then rest on few repetitions of the motion).
 fn warn_short(runs: &[physid::trajectory::Trajectory]) {
+    let min = physid::diagnose::Options::default().min_decisive_seconds;
     let seconds: f64 = runs
         .iter()
         .filter_map(|r| r.sample_period().map(|dt| dt * r.len() as f64))
         .sum();
-    if seconds < SHORT_DATA_SECONDS {
+    if seconds < min {
         eprintln!(
-            "warning: {seconds:.1} s of training data: below {SHORT_DATA_SECONDS} s the blocks of the cross-validation and the noise floor rest on few repetitions of the motion, and a verdict of \"unexplained\" or \"no effect\" may only mean too little data"
+            "warning: {seconds:.1} s of training data: below {min} s the blocks of the cross-validation and the noise floor rest on few repetitions of the motion, and a verdict of \"unexplained\" or \"no effect\" becomes \"undecided\""
         );
     }
 }

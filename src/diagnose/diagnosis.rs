@@ -98,6 +98,9 @@ pub enum Verdict {
     /// The residual is at the noise floor, but identification absorbs an effect that the
     /// description reveals.
     Absorbed,
+    /// Nothing was selected, and the data are too short to tell "unexplained" from "no
+    /// effect" ([`super::Options::min_decisive_seconds`]).
+    Undecided,
 }
 
 /// A whole diagnosis.

@@ -69,6 +69,11 @@ pub struct Options {
     /// Relative uncertainty `ε` of the description's inertial parameters: when given, effects
     /// that identification absorbs are tested against the description ([`anchor`]).
     pub description_uncertainty: Option<f64>,
+    /// Training data shorter than this (s) cannot support "unexplained" or "no effect": the
+    /// cross-validation blocks and the noise floor rest on too few repetitions of the motion
+    /// (the verdicts were measured on 20 s and more). Such a verdict becomes
+    /// [`Verdict::Undecided`].
+    pub min_decisive_seconds: f64,
 }
 
 impl Default for Options {
@@ -82,6 +87,7 @@ impl Default for Options {
             train_runs: vec![],
             unexplained_ratio: 1.45,
             description_uncertainty: None,
+            min_decisive_seconds: 10.0,
         }
     }
 }
@@ -116,6 +122,14 @@ impl Options {
                 "min_speed",
                 "a finite speed >= 0 (rad/s)",
                 self.min_speed,
+            ));
+        }
+        if !(self.min_decisive_seconds.is_finite() && self.min_decisive_seconds >= 0.0) {
+            let s = self.min_decisive_seconds;
+            return Err(invalid(
+                "min_decisive_seconds",
+                "a finite duration >= 0 (s)",
+                s,
             ));
         }
         if !(self.unexplained_ratio.is_finite() && self.unexplained_ratio >= 1.0) {
@@ -280,12 +294,26 @@ pub fn diagnose(
         &how_far,
         opts.unexplained_ratio,
     );
-    let summary = format!(
+    let train_seconds = train
+        .sample_period()
+        .map_or(0.0, |dt| dt * train.len() as f64);
+    let short = train_seconds < opts.min_decisive_seconds;
+    let verdict = match verdict {
+        Verdict::Unexplained | Verdict::NoEffect if short => Verdict::Undecided,
+        v => v,
+    };
+    let mut summary = format!(
         "the description as given predicts the validation data with {:.3} N m RMS (re-identified: {:.3} N m); {}",
         mean_square(&description_rms).sqrt(),
         how_far.overall[0],
         verdict::summary(verdict, &effects, n_cv, &how_far, description_test.as_ref())
     );
+    if verdict == Verdict::Undecided {
+        summary += &format!(
+            " (only {train_seconds:.1} s of training data, below the {} s on which a verdict of \"unexplained\" or \"no effect\" can be trusted: record longer runs)",
+            opts.min_decisive_seconds
+        );
+    }
     Ok(Diagnosis {
         confirmed: how_far.confirmed,
         confirmed_only: how_far.confirmed_only,

@@ -76,6 +76,10 @@ pub(crate) fn summary(
             "unexplained: the validation RMS {:.3} N m lies above the noise floor {floor:.3} N m and no effect in the library lowers the cross-validated error enough",
             overall[0],
         ),
+        Verdict::Undecided => format!(
+            "cannot decide: no effect selected, validation RMS {:.3} N m against a noise floor of {floor:.3} N m",
+            overall[0],
+        ),
     };
     if let Some(rep) = description_test.filter(|r| !r.steps.is_empty()) {
         let absorbed: Vec<String> = effects[n_cv..].iter().map(name_of).collect();
