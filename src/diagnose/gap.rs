@@ -135,8 +135,9 @@ pub(crate) fn how_far(
 }
 
 /// Noise-floor variance per joint (N² m², NaN for a joint that never moves fast enough) of the
-/// final residual, on training and validation data, each run on its own (the fit's own
-/// training samples bias it by p/N, negligible here).
+/// final residual, on training and validation data, each run on its own when the training
+/// runs are given (`train_runs`; the validation data then are runs of their own), else as one
+/// recording (the fit's own training samples bias it by p/N, negligible here).
 fn noise_floor(stage: &Stage, chosen: &[usize], ladder: &Ladder) -> Vec<f64> {
     let (train, validate, ms) = (stage.train, stage.validate, stage.opts.min_speed);
     let rate = validate.sample_rate().unwrap_or(1.0);
@@ -150,15 +151,15 @@ fn noise_floor(stage: &Stage, chosen: &[usize], ladder: &Ladder) -> Vec<f64> {
     // Neighbours only within one run: two runs of the same motion under different conditions
     // (unloaded, loaded) put the same instant of the other run next to each sample, and the
     // difference between the runs, the very gap in question, would count as noise.
+    // Without `train_runs`, training and validation data are the two parts of one recording
+    // (a hold-out split): one segment.
     let mut bounds = vec![0];
     let runs = &stage.opts.train_runs;
-    if runs.iter().sum::<usize>() == train.len() && !runs.is_empty() {
+    if !runs.is_empty() && runs.iter().sum::<usize>() == train.len() {
         bounds.extend(runs.iter().scan(0, |acc, r| {
             *acc += r;
             Some(*acc)
         }));
-    } else {
-        bounds.push(train.len());
     }
     bounds.push(both.len());
     pooled_gamma(&both, &bounds, &masked, exclude)
