@@ -223,6 +223,7 @@ fn needs_nominal(kind: Kind) -> bool {
             | Kind::TimeDelay
             | Kind::Tilt
             | Kind::Compliance
+            | Kind::Backlash
             | Kind::LoadDependentFriction
     )
 }
@@ -369,6 +370,10 @@ pub fn scenario_snippet(model: &Model, terms: &[TermFit], dt: f64) -> String {
             Kind::Compliance => Some(format!(
                 "stiffness = {}",
                 list(&c.iter().map(|k| 1.0 / k).collect::<Vec<_>>())
+            )),
+            Kind::Backlash => Some(format!(
+                "width = {}",
+                list(&c.iter().map(|b| b.max(0.0)).collect::<Vec<_>>())
             )),
             Kind::Tilt => tilt_angles(model, c)
                 .map(|(roll, pitch)| format!("roll = {roll:.6e}\npitch = {pitch:.6e}")),

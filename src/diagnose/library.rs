@@ -43,6 +43,9 @@ pub enum Kind {
     /// Compliant transmission seen by a motor-side encoder: `q_logged = q + κ τ`
     /// (κ = 1/k, rad/(N m) per joint).
     Compliance,
+    /// Backlash read by a motor-side encoder: `q_logged = q + (b/2) sign(τ)` (b = dead-zone
+    /// width, rad per joint; the sign from the nominal prediction).
+    Backlash,
     /// An unmodelled payload on the last body: ten inertial parameters `π_p` added to it (the
     /// last body's own regressor columns; reported as its mass, kg). Its columns lie in the
     /// model's span, so only the test against the description can find it.
@@ -87,7 +90,7 @@ struct KindSpec {
 }
 
 /// One row per kind, in report order ([`Kind::ALL`]).
-const KIND_TABLE: [KindSpec; 12] = {
+const KIND_TABLE: [KindSpec; 13] = {
     use ColumnCount::{Fixed, PerJoint};
     const fn row(kind: Kind, name: &'static str, columns: ColumnCount) -> KindSpec {
         KindSpec {
@@ -156,6 +159,11 @@ const KIND_TABLE: [KindSpec; 12] = {
             ..row(Kind::Compliance, "compliance", PerJoint(1))
         },
         KindSpec {
+            non_negative: true,
+            magnitude: ("dead-zone width b", "rad"),
+            ..row(Kind::Backlash, "backlash", PerJoint(1))
+        },
+        KindSpec {
             magnitude: ("payload mass on the last body", "kg"),
             in_model_span: true,
             ..row(Kind::Payload, "payload", Fixed(10))
@@ -165,10 +173,10 @@ const KIND_TABLE: [KindSpec; 12] = {
 
 impl Kind {
     /// Every kind, in report order.
-    pub const ALL: [Kind; 12] = {
-        let mut all = [Kind::TorqueOffset; 12];
+    pub const ALL: [Kind; 13] = {
+        let mut all = [Kind::TorqueOffset; 13];
         let mut i = 0;
-        while i < 12 {
+        while i < 13 {
             all[i] = KIND_TABLE[i].kind;
             i += 1;
         }
@@ -270,6 +278,9 @@ pub struct Context<'a> {
     /// The prediction processed like the encoder signal (filtered; filtered derivative;
     /// filtered derivative of that), for the deflection of a compliant transmission.
     defl: [Vec<f64>; 3],
+    /// Half the sign of the prediction processed like the encoder signal, for the offset of a
+    /// motor-side encoder across a backlash dead zone.
+    slack: [Vec<f64>; 3],
     /// Two unit vectors perpendicular to gravity (the tilt directions).
     perp: [Vector3<f64>; 2],
     gear: Vec<f64>,
@@ -340,6 +351,14 @@ impl<'a> Context<'a> {
         // and differencing it would put spikes into every fitted row next to a reversal.
         let pred_d = derivative(&smooth, &tr.t, n);
         let defl = processed_like_encoder(&pred, tr, cutoff);
+        // The side of the dead zone follows the torque actually delivered: the logged torque,
+        // low-passed like the encoder so that its noise does not flip the sign.
+        let half_sign: Vec<f64> = tr
+            .tau
+            .iter()
+            .map(|t| 0.5 * crate::dynamics::sign(*t))
+            .collect();
+        let slack = processed_like_encoder(&half_sign, tr, cutoff);
         let g = model.gravity.try_normalize(1e-12).unwrap_or(-Vector3::z());
         let a = if g.x.abs() < 0.9 {
             Vector3::x()
@@ -360,6 +379,7 @@ impl<'a> Context<'a> {
             pred,
             pred_d,
             defl,
+            slack,
             perp: [u1, u2],
             gear,
         }
@@ -368,6 +388,43 @@ impl<'a> Context<'a> {
     /// The model.
     pub fn model(&self) -> &'a Model {
         self.model
+    }
+
+    /// The columns `−∂ID/∂ε_j` of inverse dynamics with joint `j`'s encoder signals shifted by
+    /// `ε_j · shift_j` (angle, velocity, acceleration of sample `k`), one per joint: how a
+    /// motor-side encoder offset (compliance, backlash) enters the rigid-body prediction.
+    fn encoder_shift_columns(
+        &self,
+        shift: &[Vec<f64>; 3],
+        k: usize,
+        q: &[f64],
+        qd: &[f64],
+        qdd: &[f64],
+        data: &mut Data,
+    ) -> DMatrix<f64> {
+        let model = self.model;
+        let n = model.dof();
+        let eps = 1e-7;
+        let mut yg = DMatrix::zeros(n, model.layout().len);
+        let mut out = DMatrix::zeros(n, n);
+        for j in 0..n {
+            let s = [
+                shift[0][k * n + j],
+                shift[1][k * n + j],
+                shift[2][k * n + j],
+            ];
+            let mut at = |h: f64| {
+                let (mut a, mut b, mut c) = (q.to_vec(), qd.to_vec(), qdd.to_vec());
+                a[j] -= h * s[0];
+                b[j] -= h * s[1];
+                c[j] -= h * s[2];
+                regressor(model, data, &a, &b, &c, &mut yg);
+                &yg * &self.theta_smooth
+            };
+            let d = (at(eps) - at(-eps)) / (2.0 * eps);
+            out.column_mut(j).copy_from(&d);
+        }
+        out
     }
 
     /// Calls `f(k, Z_k, τ_k)` for every sample `k` in `range` with `Z_k = [Y_k | E_k]`, the
@@ -459,25 +516,16 @@ impl<'a> Context<'a> {
                     }
                     Kind::Compliance => {
                         // −d/dκ_j ID(q − κ_j τ_j e_j, q̇ − κ_j τ̇_j e_j, q̈ − κ_j τ̈_j e_j).
-                        let eps = 1e-7;
-                        for j in 0..n {
-                            let shift = [
-                                self.defl[0][k * n + j],
-                                self.defl[1][k * n + j],
-                                self.defl[2][k * n + j],
-                            ];
-                            let mut at = |s: f64| {
-                                let (mut a, mut b, mut cc) =
-                                    (q.to_vec(), qd.to_vec(), qdd.to_vec());
-                                a[j] -= s * shift[0];
-                                b[j] -= s * shift[1];
-                                cc[j] -= s * shift[2];
-                                regressor(model, &mut data, &a, &b, &cc, &mut yg);
-                                &yg * &self.theta_smooth
-                            };
-                            let d = (at(eps) - at(-eps)) / (2.0 * eps);
-                            (0..n).for_each(|i| z[(i, c + j)] = d[i]);
-                        }
+                        let cols = self.encoder_shift_columns(&self.defl, k, q, qd, qdd, &mut data);
+                        z.columns_mut(c, n).copy_from(&cols);
+                    }
+                    Kind::Backlash => {
+                        // −d/db_j ID(q − b_j s_j, q̇ − b_j ṡ_j, q̈ − b_j s̈_j), s = ½ sign(τ)
+                        // processed like the encoder: a motor-side encoder leads the link by
+                        // half the dead zone in the direction of the torque.
+                        let cols =
+                            self.encoder_shift_columns(&self.slack, k, q, qd, qdd, &mut data);
+                        z.columns_mut(c, n).copy_from(&cols);
                     }
                 }
                 c += v.kind.columns(n);

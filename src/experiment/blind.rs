@@ -205,6 +205,10 @@ pub fn draw(kind: Option<Kind>, model: &Model, rng: &mut ChaCha8Rng, rate: f64) 
             let kappa = k.iter().map(|k| 1.0 / k).collect();
             (Some(EffectSpec::Compliance { stiffness: k }), kappa)
         }
+        Kind::Backlash => {
+            let b = per(rng, 0.01, 0.03);
+            (Some(EffectSpec::Backlash { width: b.clone() }), b)
+        }
     };
     Injected {
         kind: Some(kind),

@@ -53,7 +53,8 @@ pub fn physical_torque(
             EffectSpec::TorqueOffset { .. }
             | EffectSpec::TorqueGain { .. }
             | EffectSpec::TimeDelay { .. }
-            | EffectSpec::Compliance { .. } => {}
+            | EffectSpec::Compliance { .. }
+            | EffectSpec::Backlash { .. } => {}
             EffectSpec::Tilt { .. } | EffectSpec::Payload { .. } => {}
         }
     }
@@ -76,16 +77,26 @@ pub fn logged_torque(effects: &[EffectSpec], tau: &[f64]) -> Vec<f64> {
 }
 
 /// The logged encoder angle for link angle `q` under delivered torque `tau_mot`: `q + τ/k`
-/// with a `compliance` effect, else `q`.
+/// with a `compliance` effect, `q + (b/2) sign(τ)` with `backlash`, else `q`.
 pub fn logged_angle(effects: &[EffectSpec], q: &[f64], tau_mot: &[f64]) -> Vec<f64> {
     let mut out = q.to_vec();
     for e in effects {
-        if let EffectSpec::Compliance { stiffness } = e {
-            for (j, o) in out.iter_mut().enumerate() {
-                if stiffness[j].is_finite() {
-                    *o += tau_mot[j] / stiffness[j];
+        match e {
+            EffectSpec::Compliance { stiffness } => {
+                for (j, o) in out.iter_mut().enumerate() {
+                    if stiffness[j].is_finite() {
+                        *o += tau_mot[j] / stiffness[j];
+                    }
                 }
             }
+            EffectSpec::Backlash { width } => {
+                for (j, o) in out.iter_mut().enumerate() {
+                    if tau_mot[j] != 0.0 {
+                        *o += 0.5 * width[j] * tau_mot[j].signum();
+                    }
+                }
+            }
+            _ => {}
         }
     }
     out

@@ -310,6 +310,14 @@ pub enum EffectSpec {
         /// Transmission stiffness per joint (N m/rad); `inf` for a rigid joint.
         stiffness: Vec<f64>,
     },
+    /// Backlash (a dead zone of `width` in the transmission) read on the motor side: the motor
+    /// leads the link by half the width in the direction of the delivered torque, so the
+    /// logged encoder reads `q + (b/2) sign(τ_mot)`; a sensor effect like compliance (the
+    /// free flight across the dead zone at a torque reversal is not simulated).
+    Backlash {
+        /// Dead-zone width per joint (rad, motor side seen at the joint, ≥ 0).
+        width: Vec<f64>,
+    },
     /// Quadratic (fluid) damping `−c q̇ |q̇|` (N m s²/rad²): not in the diagnosis's library,
     /// for testing that an unexplained residual is reported as such.
     QuadraticDamping {
@@ -608,6 +616,16 @@ impl EffectSpec {
                 check(stiffness.iter().all(|s| *s > 0.0), &k("stiffness"), || {
                     "stiffnesses must be > 0 (inf for a rigid joint)".into()
                 })?;
+            }
+            EffectSpec::Backlash { width } => {
+                check(width.len() == n, &k("width"), || {
+                    format!("has {} entries for {n} joints", width.len())
+                })?;
+                check(
+                    width.iter().all(|b| b.is_finite() && *b >= 0.0 && *b < 1.0),
+                    &k("width"),
+                    || "widths must be finite, >= 0 and < 1 rad".into(),
+                )?;
             }
             EffectSpec::QuadraticDamping { coefficient } => {
                 per_joint_non_negative(coefficient, n, &k("coefficient"))?
