@@ -196,7 +196,8 @@ pub fn hull_vertices(points: &[Vector3<f64>]) -> Vec<Vector3<f64>> {
 }
 
 /// Checks finiteness and that the pieces span a volume.
-fn check(pieces: &[Piece]) -> Result<(), BoundingError> {
+/// Returns boundary samples of every piece (eight per disc rim, six poles per ball).
+fn check(pieces: &[Piece]) -> Result<Vec<Vector3<f64>>, BoundingError> {
     if pieces.is_empty() {
         return Err(BoundingError::Empty);
     }
@@ -233,7 +234,7 @@ fn check(pieces: &[Piece]) -> Result<(), BoundingError> {
             extent: 2.0 * lo.sqrt(),
         });
     }
-    Ok(())
+    Ok(pts)
 }
 
 /// Variable layout of the program: `A` (6, upper triangle), `b` (3), `Z` (6, lower triangle),
@@ -375,22 +376,30 @@ fn push_piece(c: &Vector3<f64>, f: &[Vector3<f64>], lambda: usize, rows: &mut Ro
     m.push_psd(rows);
 }
 
-/// The minimum-volume ellipsoid containing every piece (see the module docs), in the pieces'
-/// frame. Errors: no pieces, non-finite coordinates, flat geometry, solver failure.
-pub fn minimum_volume_ellipsoid(pieces: &[Piece]) -> Result<Ellipsoid, BoundingError> {
-    check(pieces)?;
-    super::single_threaded_blas();
-    // Work in a frame centred on the geometry and scaled to unit size, so that the program is
-    // well conditioned whatever the units of the description.
-    let pts: Vec<Vector3<f64>> = pieces.iter().flat_map(|p| p.sample_boundary(8)).collect();
-    let mean: Vector3<f64> = pts.iter().sum::<Vector3<f64>>() / pts.len() as f64;
-    let scale = pts.iter().map(|p| (p - mean).norm()).fold(0.0, f64::max);
-    let shifted: Vec<Piece> = pieces.iter().map(|p| p.normalized(&mean, scale)).collect();
+/// Indices of the points extreme along the 26 directions of a cube's faces, edges and corners.
+fn extreme_points(points: &[Vector3<f64>]) -> Vec<usize> {
+    let mut out: Vec<usize> = vec![];
+    for d in (0..27).filter(|&k| k != 13) {
+        let dir = Vector3::new(
+            (d % 3) as f64 - 1.0,
+            (d / 3 % 3) as f64 - 1.0,
+            (d / 9) as f64 - 1.0,
+        );
+        let best =
+            (0..points.len()).max_by(|&i, &j| points[i].dot(&dir).total_cmp(&points[j].dot(&dir)));
+        if let Some(i) = best.filter(|i| !out.contains(i)) {
+            out.push(i);
+        }
+    }
+    out
+}
 
+/// Solves the program of the module docs for `pieces` (normalized coordinates): `(A, b)`.
+fn solve_program(pieces: &[Piece]) -> Result<(Matrix3<f64>, Vector3<f64>), BoundingError> {
     let mut rows = Rows::default();
     push_log_det(&mut rows);
     let mut lambdas = 0;
-    for p in &shifted {
+    for p in pieces {
         let (c, f) = p.center_and_span();
         if f.is_empty() {
             push_point(&c, &mut rows);
@@ -430,8 +439,52 @@ pub fn minimum_volume_ellipsoid(pieces: &[Piece]) -> Result<Ellipsoid, BoundingE
         return Err(BoundingError::Solver(format!("{:?}", sol.status)));
     }
     let x = &sol.x;
-    let a_unit = Matrix3::from_fn(|i, j| x[a_var(i, j)]);
-    let b_unit = Vector3::new(x[B0], x[B0 + 1], x[B0 + 2]);
+    Ok((
+        Matrix3::from_fn(|i, j| x[a_var(i, j)]),
+        Vector3::new(x[B0], x[B0 + 1], x[B0 + 2]),
+    ))
+}
+
+/// The minimum-volume ellipsoid containing every piece (see the module docs), in the pieces'
+/// frame. Errors: no pieces, non-finite coordinates, flat geometry, solver failure.
+pub fn minimum_volume_ellipsoid(pieces: &[Piece]) -> Result<Ellipsoid, BoundingError> {
+    let pts = check(pieces)?;
+    super::single_threaded_blas();
+    // Work in a frame centred on the geometry and scaled to unit size, so that the program is
+    // well conditioned whatever the units of the description.
+    let mean: Vector3<f64> = pts.iter().sum::<Vector3<f64>>() / pts.len() as f64;
+    let scale = pts.iter().map(|p| (p - mean).norm()).fold(0.0, f64::max);
+    let shifted: Vec<Piece> = pieces.iter().map(|p| p.normalized(&mean, scale)).collect();
+    // Active set over the points (a mesh's hull may have hundreds of vertices, while at most
+    // nine points touch the optimum): start from the extreme points in 26 directions, solve,
+    // add the points left outside, until none is.
+    let (points, others): (Vec<&Piece>, Vec<&Piece>) =
+        shifted.iter().partition(|p| matches!(p, Piece::Point(_)));
+    let points: Vec<Vector3<f64>> = points.iter().map(|p| p.center_and_span().0).collect();
+    let mut active = extreme_points(&points);
+    let (a_unit, b_unit) = loop {
+        let mut set: Vec<Piece> = others.iter().map(|p| (*p).clone()).collect();
+        set.extend(active.iter().map(|&i| Piece::Point(points[i])));
+        let (a, b) = match solve_program(&set) {
+            Ok(ab) => ab,
+            // A flat start (unbounded program) falls back to every point.
+            Err(_) if active.len() < points.len() => {
+                active = (0..points.len()).collect();
+                continue;
+            }
+            Err(e) => return Err(e),
+        };
+        let mut outside: Vec<(f64, usize)> = (0..points.len())
+            .filter(|i| !active.contains(i))
+            .map(|i| ((a * points[i] + b).norm(), i))
+            .filter(|(r, _)| *r > 1.0 + 1e-9)
+            .collect();
+        if outside.is_empty() {
+            break (a, b);
+        }
+        outside.sort_by(|x, y| y.0.total_cmp(&x.0));
+        active.extend(outside.iter().take(32).map(|(_, i)| *i));
+    };
     let a_inv = a_unit
         .try_inverse()
         .ok_or_else(|| BoundingError::Solver("singular shape matrix".into()))?;
