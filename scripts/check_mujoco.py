@@ -7,21 +7,19 @@ on disagreement.
 usage: python scripts/check_mujoco.py [--physid PATH]
 """
 import json
-import subprocess
 import sys
 import tempfile
 
 import mujoco
 import numpy as np
 
-from physid_common import KUKA_URDF, Report, dynamics, export, physid_bin, rel_err
+from physid_common import KUKA_URDF, Report, dynamics, export, physid_bin, rel_err, run
 
 TOL = 1e-9
 
 
 def physid_model(binary, robot_args):
-    out = subprocess.run([binary, "model", *robot_args, "--json"], check=True, capture_output=True, text=True)
-    return json.loads(out.stdout)
+    return json.loads(run(binary, "model", *robot_args, "--json"))
 
 
 def mj_compare(report, label, xml_path, dyn, described=None):

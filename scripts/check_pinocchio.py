@@ -12,7 +12,7 @@ import tempfile
 import numpy as np
 import pinocchio as pin
 
-from physid_common import KUKA_URDF, PIN_FROM_PAPER, Report, dynamics, export, physid_bin, rel_err
+from physid_common import KUKA_URDF, PIN_FROM_PAPER, Report, dynamics, export, physid_bin, rel_err, run
 
 TOL = 1e-9
 
@@ -63,13 +63,11 @@ def check_identified_kuka(report, binary, directory):
     equals physid's on the exported pair (URDF + sidecar)."""
     import json
     import os
-    import subprocess
     out = os.path.join(directory, "kuka_identified.urdf")
     data = os.path.join(os.path.dirname(KUKA_URDF), "measurements_1.csv")
-    res = subprocess.run([binary, "identify", "--robot", KUKA_URDF, "--data", data, "--json",
-                          "--friction", "viscous,coulomb,offset", "--out-urdf", out],
-                         check=True, capture_output=True, text=True)
-    pi = np.concatenate([b["pi"] for b in json.loads(res.stdout)["bodies"]])
+    stdout = run(binary, "identify", "--robot", KUKA_URDF, "--data", data, "--json",
+                 "--friction", "viscous,coulomb,offset", "--out-urdf", out)
+    pi = np.concatenate([b["pi"] for b in json.loads(stdout)["bodies"]])
     model = pin.buildModelFromUrdf(out)
     n = model.nv
     pin_pi = np.concatenate([model.inertias[i + 1].toDynamicParameters()[PIN_FROM_PAPER] for i in range(n)])

@@ -240,19 +240,10 @@ def main():
         t_reg = time.perf_counter() - t0
         y = np.vstack([r[0] for r in rows])
         tau = np.concatenate([r[1] for r in rows])
-        w = 1e-6
-        h_np = y.T @ y / samples + w * np.eye(y.shape[1])
-        t_asm = time.perf_counter() - t0
-        # Same prior as physid (the model's parameters): recover it from the exported g.
-        theta_prior = (np.array(problem["g"]) - y.T @ tau / samples) / w
-        problem_py = dict(problem)
-        problem_py["H"] = h_np.tolist()
-        problem_py["g"] = (y.T @ tau / samples + w * theta_prior).tolist()
-        problem_py["c"] = float(tau @ tau / samples + w * theta_prior @ theta_prior)
-        t1 = time.perf_counter()
-        value, status = solve(problem_py, "CLARABEL")
-        t_solve = time.perf_counter() - t1
-        t_peer = t_asm + t_solve
+        # Same prior as physid (the model's parameters): recovered from the exported g.
+        value, status, t_solve = solve_like_physid(problem, y, tau, samples)
+        t_peer = time.perf_counter() - t0
+        t_asm = t_peer - t_solve
         ref = problem["physid"]["objective"]
         err = abs(value - ref) / max(1.0, abs(ref))
         print(f"peer (pinocchio regressor + numpy rotors/friction + CVXPY/Clarabel), {samples} samples:")

@@ -399,15 +399,7 @@ pub fn read_with(path: &Path, opts: &ReadOptions) -> Result<Log, IoError> {
     } else {
         vec![path.to_path_buf()]
     };
-    let mut reader = Reader {
-        opts,
-        t0: [None; 2],
-        measured: None,
-        processed: None,
-        truth: None,
-        metadata: BTreeMap::new(),
-        skipped: 0,
-    };
+    let mut reader = Reader::new(opts);
     for file in &files {
         reader.file(file)?;
     }
@@ -516,7 +508,20 @@ struct Reader<'a> {
     skipped: usize,
 }
 
-impl Reader<'_> {
+impl<'a> Reader<'a> {
+    /// A reader that has seen nothing yet.
+    fn new(opts: &'a ReadOptions) -> Self {
+        Self {
+            opts,
+            t0: [None; 2],
+            measured: None,
+            processed: None,
+            truth: None,
+            metadata: BTreeMap::new(),
+            skipped: 0,
+        }
+    }
+
     fn file(&mut self, path: &Path) -> Result<(), IoError> {
         let bytes = std::fs::read(path).map_err(|source| IoError::Fs {
             path: path.to_path_buf(),
@@ -740,15 +745,7 @@ mod tests {
         // physid's processed channel runs on log time while the joint states may be read by
         // header stamps from the epoch: one shared origin would put them 1.7e9 s apart.
         let opts = ReadOptions::default();
-        let mut r = Reader {
-            opts: &opts,
-            t0: [None; 2],
-            measured: None,
-            processed: None,
-            truth: None,
-            metadata: BTreeMap::new(),
-            skipped: 0,
-        };
+        let mut r = Reader::new(&opts);
         assert_eq!(r.seconds(Stamp::Log, 5_000), Ok(0.0));
         assert_eq!(r.seconds(Stamp::Header, 1_700_000_000_000_000_000), Ok(0.0));
         assert_eq!(r.seconds(Stamp::Log, 1_005_000), Ok(0.001));

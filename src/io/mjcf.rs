@@ -68,14 +68,19 @@ fn inertial(p: &InertialParams) -> String {
     )
 }
 
-/// Mesh files MuJoCo reads (STL, OBJ): asset name → file, scale.
+/// Whether MuJoCo reads this mesh file (STL, OBJ).
+fn mujoco_reads(path: &std::path::Path) -> bool {
+    let ext = path.extension().map(|e| e.to_string_lossy().to_lowercase());
+    matches!(ext.as_deref(), Some("stl" | "obj"))
+}
+
+/// Mesh files MuJoCo reads: asset name → file, scale.
 fn mesh_assets(model: &Model) -> Vec<(String, String, [f64; 3])> {
     let mut out = vec![];
     for b in &model.bodies {
         for (k, sh) in b.shapes.iter().enumerate() {
             if let ShapeKind::Mesh { path, scale } = &sh.kind {
-                let ext = path.extension().map(|e| e.to_string_lossy().to_lowercase());
-                if matches!(ext.as_deref(), Some("stl" | "obj")) {
+                if mujoco_reads(path) {
                     let file = std::fs::canonicalize(path).unwrap_or(path.clone());
                     out.push((
                         format!("{}_mesh{k}", b.name),
@@ -103,8 +108,7 @@ fn shape_geom(body: &str, k: usize, sh: &Shape) -> Option<String> {
         ShapeKind::Capsule { radius, length } => ("capsule", format!("{radius} {}", length / 2.0)),
         ShapeKind::Sphere { radius } => ("sphere", format!("{radius}")),
         ShapeKind::Mesh { path, .. } => {
-            let ext = path.extension().map(|e| e.to_string_lossy().to_lowercase());
-            if !matches!(ext.as_deref(), Some("stl" | "obj")) {
+            if !mujoco_reads(path) {
                 return None;
             }
             return Some(format!(

@@ -311,18 +311,9 @@ pub fn robot_urdf(arg: &str) -> Result<Option<PathBuf>, IoError> {
     let path = Path::new(arg);
     match path.extension().and_then(|e| e.to_str()) {
         Some("urdf") if arg != "cheetah3" => Ok(Some(path.to_path_buf())),
-        Some("toml") => {
-            #[derive(serde::Deserialize)]
-            struct Doc {
-                robot: Option<robot_toml::RobotSpec>,
-            }
-            let text = read_to_string(path)?;
-            let doc: Doc = toml::from_str(&text).map_err(|e| robot_toml::toml_error(path, e))?;
-            Ok(doc
-                .robot
-                .and_then(|r| r.urdf)
-                .map(|u| path.parent().unwrap_or(Path::new(".")).join(u)))
-        }
+        Some("toml") => Ok(robot_toml::read_spec(path)?
+            .urdf
+            .map(|u| path.parent().unwrap_or(Path::new(".")).join(u))),
         _ => Ok(None),
     }
 }

@@ -168,16 +168,19 @@ pub fn load(path: &Path) -> Result<Model, IoError> {
 /// [`load`] with command-line options over the file's keys; also returns the loader's
 /// warnings (URDF elements given twice, geometry that gave no bounding ellipsoid).
 pub fn load_with(path: &Path, opts: &RobotOptions) -> Result<(Model, Vec<String>), IoError> {
+    from_spec_with(&read_spec(path)?, path, opts)
+}
+
+/// The `[robot]` table of a TOML file, unbuilt.
+pub fn read_spec(path: &Path) -> Result<RobotSpec, IoError> {
     let text = super::read_to_string(path)?;
     #[derive(Deserialize)]
     struct Doc {
         robot: Option<RobotSpec>,
     }
     let doc: Doc = toml::from_str(&text).map_err(|e| toml_error(path, e))?;
-    let spec = doc
-        .robot
-        .ok_or_else(|| IoError::invalid(path, "no [robot] table"))?;
-    from_spec_with(&spec, path, opts)
+    doc.robot
+        .ok_or_else(|| IoError::invalid(path, "no [robot] table"))
 }
 
 /// Builds the model a `[robot]` table describes; `path` is the TOML file (for relative paths

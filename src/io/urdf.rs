@@ -326,7 +326,8 @@ impl Shapes {
         element: &str,
         lookup: &Lookup,
     ) -> Result<Option<crate::spatial::Ellipsoid>, String> {
-        if lookup.opts.ignore_geometry || (self.pieces.is_empty() && self.missing.is_empty()) {
+        // Without geometry (or with `ignore_geometry`, where `add` collects none): no bound.
+        if self.pieces.is_empty() && self.missing.is_empty() {
             return Ok(None);
         }
         if !self.missing.is_empty() {
