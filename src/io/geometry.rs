@@ -35,12 +35,12 @@ pub(crate) struct Lookup<'a> {
     pub opts: &'a GeometryOptions,
 }
 
-/// The pieces of one link in its own frame, and where they came from (`"collision"` or
-/// `"visual"`). `Err` explains why neither could be read.
+/// The pieces of one link in its own frame: its collision shapes, else its visual ones.
+/// `Err` explains why neither could be read.
 pub(crate) fn link_pieces(
     link: &urdf_rs::Link,
     lookup: &Lookup,
-) -> Result<Option<(Vec<Piece>, &'static str)>, String> {
+) -> Result<Option<Vec<Piece>>, String> {
     let collision: Vec<(&urdf_rs::Pose, &urdf_rs::Geometry)> = link
         .collision
         .iter()
@@ -61,7 +61,7 @@ pub(crate) fn link_pieces(
             .map(|(origin, g)| shape_pieces(origin, g, lookup))
             .collect::<Result<Vec<_>, String>>()
         {
-            Ok(pieces) => return Ok(Some((pieces.concat(), source))),
+            Ok(pieces) => return Ok(Some(pieces.concat())),
             Err(e) => why.push(format!("{source}: {e}")),
         }
     }

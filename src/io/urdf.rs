@@ -286,7 +286,6 @@ struct Shapes {
     shapes: Vec<crate::model::Shape>,
     pieces: Vec<Piece>,
     missing: Vec<String>,
-    sources: Vec<&'static str>,
 }
 
 impl Shapes {
@@ -307,11 +306,9 @@ impl Shapes {
         }
         let (rot, pos) = x_link.to_pose();
         match geometry::link_pieces(link, lookup) {
-            Ok(Some((pieces, source))) => {
-                self.pieces
-                    .extend(geometry::into_frame(&pieces, &rot, &pos));
-                self.sources.push(source);
-            }
+            Ok(Some(pieces)) => self
+                .pieces
+                .extend(geometry::into_frame(&pieces, &rot, &pos)),
             Ok(None) if link.inertial.mass.value > 0.0 => self
                 .missing
                 .push(format!("link '{}' has mass but no geometry", link.name)),
