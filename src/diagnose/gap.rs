@@ -12,6 +12,9 @@ const NEIGHBOUR_EXCLUSION: f64 = 0.2;
 
 /// The validation residuals along the selection: the nominal model, then each effect added.
 pub(crate) struct Ladder {
+    /// Validation RMS per joint (N m) of the description as given (its own parameters and
+    /// friction, nothing refitted): the sim-to-real gap itself.
+    pub description_rms: Vec<f64>,
     /// Validation RMS per joint (N m), one entry per step (nominal first).
     pub per_step_rms: Vec<Vec<f64>>,
     /// The nominal model's validation residual (sample-major, N m).
@@ -22,8 +25,8 @@ pub(crate) struct Ladder {
     pub final_theta: DVector<f64>,
 }
 
-/// Refits on all training data with the first `i` of `chosen` effects, for every `i`, and
-/// scores each fit on the validation data.
+/// Scores the description as given on the validation data, then refits on all training data
+/// with the first `i` of `chosen` effects, for every `i`, and scores each fit.
 pub(crate) fn ladder(stage: &Stage, chosen: &[usize]) -> Result<Ladder, DiagnoseError> {
     let (folds, validate) = (&stage.folds, stage.validate);
     let mut per_step_rms = vec![];
@@ -53,7 +56,15 @@ pub(crate) fn ladder(stage: &Stage, chosen: &[usize]) -> Result<Ladder, Diagnose
             final_theta = theta;
         }
     }
+    let (description_rms, _) = residual_rms(
+        &stage.ctx_val,
+        validate,
+        &[],
+        &stage.model.parameters(),
+        stage.opts.min_speed,
+    );
     Ok(Ladder {
+        description_rms,
         per_step_rms,
         nominal_res,
         final_res,
@@ -88,7 +99,7 @@ pub(crate) fn how_far(
     ladder: &Ladder,
 ) -> Result<HowFar, DiagnoseError> {
     let floor_var = noise_floor(stage, chosen, ladder);
-    let gap = joint_gaps(stage, &ladder.per_step_rms, &floor_var);
+    let gap = joint_gaps(stage, ladder, &floor_var);
     let overall: Vec<f64> = ladder
         .per_step_rms
         .iter()
@@ -186,7 +197,8 @@ fn pooled_gamma(tr: &Trajectory, bounds: &[usize], res: &[f64], exclude: usize) 
 }
 
 /// The gap of each joint: nominal RMS, RMS after each step, floor, fraction closed.
-fn joint_gaps(stage: &Stage, per_step_rms: &[Vec<f64>], floor_var: &[f64]) -> Vec<JointGap> {
+fn joint_gaps(stage: &Stage, ladder: &Ladder, floor_var: &[f64]) -> Vec<JointGap> {
+    let per_step_rms = &ladder.per_step_rms;
     (0..stage.model.dof())
         .map(|j| {
             let nominal = per_step_rms[0][j];
@@ -195,7 +207,7 @@ fn joint_gaps(stage: &Stage, per_step_rms: &[Vec<f64>], floor_var: &[f64]) -> Ve
             let den = nominal * nominal - floor;
             JointGap {
                 joint: stage.model.bodies[j].joint_name.clone(),
-                description: f64::NAN, // filled by `diagnose` (the description as given)
+                description: ladder.description_rms[j],
                 nominal,
                 after: per_step_rms[1..].iter().map(|r| r[j]).collect(),
                 noise_floor: floor.sqrt(), // NaN: the joint never moved fast enough

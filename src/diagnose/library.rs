@@ -44,7 +44,7 @@ pub enum Kind {
     /// (κ = 1/k, rad/(N m) per joint).
     Compliance,
     /// Backlash read by a motor-side encoder: `q_logged = q + (b/2) sign(τ)` (b = dead-zone
-    /// width, rad per joint; the sign from the nominal prediction).
+    /// width, rad per joint; the sign from the logged torque).
     Backlash,
     /// An unmodelled payload on the last body: ten inertial parameters `π_p` added to it (the
     /// last body's own regressor columns; reported as its mass, kg). Its columns lie in the
@@ -278,8 +278,8 @@ pub struct Context<'a> {
     /// The prediction processed like the encoder signal (filtered; filtered derivative;
     /// filtered derivative of that), for the deflection of a compliant transmission.
     defl: [Vec<f64>; 3],
-    /// Half the sign of the prediction processed like the encoder signal, for the offset of a
-    /// motor-side encoder across a backlash dead zone.
+    /// Half the sign of the logged torque processed like the encoder signal, for the offset of
+    /// a motor-side encoder across a backlash dead zone.
     slack: [Vec<f64>; 3],
     /// Two unit vectors perpendicular to gravity (the tilt directions).
     perp: [Vector3<f64>; 2],
@@ -351,8 +351,9 @@ impl<'a> Context<'a> {
         // and differencing it would put spikes into every fitted row next to a reversal.
         let pred_d = derivative(&smooth, &tr.t, n);
         let defl = processed_like_encoder(&pred, tr, cutoff);
-        // The side of the dead zone follows the torque actually delivered: the logged torque,
-        // low-passed like the encoder so that its noise does not flip the sign.
+        // The side of the dead zone follows the torque actually delivered: the logged torque's
+        // sign, a step that is then filtered and differenced like the encoder signal (the
+        // prediction's sign switches a few samples off and lost the attribution).
         let half_sign: Vec<f64> = tr
             .tau
             .iter()
@@ -391,21 +392,20 @@ impl<'a> Context<'a> {
     }
 
     /// The columns `−∂ID/∂ε_j` of inverse dynamics with joint `j`'s encoder signals shifted by
-    /// `ε_j · shift_j` (angle, velocity, acceleration of sample `k`), one per joint: how a
+    /// `ε_j · shift_j` (angle, velocity, acceleration of sample `k`, whose state is `[q, q̇, q̈]`;
+    /// `data`, `yg` the caller's workspaces), one per joint: how a
     /// motor-side encoder offset (compliance, backlash) enters the rigid-body prediction.
     fn encoder_shift_columns(
         &self,
         shift: &[Vec<f64>; 3],
         k: usize,
-        q: &[f64],
-        qd: &[f64],
-        qdd: &[f64],
+        [q, qd, qdd]: [&[f64]; 3],
         data: &mut Data,
+        yg: &mut DMatrix<f64>,
     ) -> DMatrix<f64> {
         let model = self.model;
         let n = model.dof();
         let eps = 1e-7;
-        let mut yg = DMatrix::zeros(n, model.layout().len);
         let mut out = DMatrix::zeros(n, n);
         for j in 0..n {
             let s = [
@@ -418,8 +418,8 @@ impl<'a> Context<'a> {
                 a[j] -= h * s[0];
                 b[j] -= h * s[1];
                 c[j] -= h * s[2];
-                regressor(model, data, &a, &b, &c, &mut yg);
-                &yg * &self.theta_smooth
+                regressor(model, data, &a, &b, &c, yg);
+                &*yg * &self.theta_smooth
             };
             let d = (at(eps) - at(-eps)) / (2.0 * eps);
             out.column_mut(j).copy_from(&d);
@@ -516,15 +516,26 @@ impl<'a> Context<'a> {
                     }
                     Kind::Compliance => {
                         // −d/dκ_j ID(q − κ_j τ_j e_j, q̇ − κ_j τ̇_j e_j, q̈ − κ_j τ̈_j e_j).
-                        let cols = self.encoder_shift_columns(&self.defl, k, q, qd, qdd, &mut data);
+                        let cols = self.encoder_shift_columns(
+                            &self.defl,
+                            k,
+                            [q, qd, qdd],
+                            &mut data,
+                            &mut yg,
+                        );
                         z.columns_mut(c, n).copy_from(&cols);
                     }
                     Kind::Backlash => {
                         // −d/db_j ID(q − b_j s_j, q̇ − b_j ṡ_j, q̈ − b_j s̈_j), s = ½ sign(τ)
                         // processed like the encoder: a motor-side encoder leads the link by
                         // half the dead zone in the direction of the torque.
-                        let cols =
-                            self.encoder_shift_columns(&self.slack, k, q, qd, qdd, &mut data);
+                        let cols = self.encoder_shift_columns(
+                            &self.slack,
+                            k,
+                            [q, qd, qdd],
+                            &mut data,
+                            &mut yg,
+                        );
                         z.columns_mut(c, n).copy_from(&cols);
                     }
                 }

@@ -264,15 +264,6 @@ pub fn diagnose(
             )
         )
     });
-    // The sim-to-real gap itself: the description as given (its own parameters and friction)
-    // on the validation data, masked like every other step.
-    let (description_rms, _) = residual_rms(
-        &stage.ctx_val,
-        validate,
-        &[],
-        &model.parameters(),
-        opts.min_speed,
-    );
     let anchored: &[anchor::Step] = description_test.as_ref().map_or(&[], |r| &r.steps);
     let n_cv = selection.chosen.len();
     let chosen: Vec<usize> = selection
@@ -284,10 +275,7 @@ pub fn diagnose(
     let ladder = gap::ladder(&stage, &chosen)?;
     let mut effects = magnitude::cross_validated(&stage, &selection, &ladder.final_theta);
     effects.extend(magnitude::against_description(&stage, anchored));
-    let mut how_far = gap::how_far(&stage, &chosen, n_cv, &ladder)?;
-    for (g, d) in how_far.gap.iter_mut().zip(&description_rms) {
-        g.description = *d;
-    }
+    let how_far = gap::how_far(&stage, &chosen, n_cv, &ladder)?;
     let verdict = verdict::verdict(
         selection.steps.len(),
         anchored.len(),
@@ -304,7 +292,7 @@ pub fn diagnose(
     };
     let mut summary = format!(
         "the description as given predicts the validation data with {:.3} N m RMS (re-identified: {:.3} N m); {}",
-        mean_square(&description_rms).sqrt(),
+        mean_square(&ladder.description_rms).sqrt(),
         how_far.overall[0],
         verdict::summary(verdict, &effects, n_cv, &how_far, description_test.as_ref())
     );
@@ -330,7 +318,7 @@ pub fn diagnose(
         description_test_skipped,
         effects,
         gap: how_far.gap,
-        description_overall: mean_square(&description_rms).sqrt(),
+        description_overall: mean_square(&ladder.description_rms).sqrt(),
         overall: how_far.overall,
         noise_floor: how_far.floor_ms.sqrt(),
         gap_closed: how_far.gap_closed,
