@@ -159,3 +159,54 @@ fn the_scan_sees_a_violation_when_there_is_one() {
     assert_eq!(imports(&code), vec!["sim".to_string()]);
     assert!(floor("sim").unwrap() > floor("io").unwrap());
 }
+
+#[test]
+fn the_entry_modules_stay_short() {
+    // The diagnosis is a sequence of named steps and the CLI a dispatcher: their module roots
+    // stay under the sizes docs/architecture.md §6 states.
+    let src = Path::new(env!("CARGO_MANIFEST_DIR")).join("src");
+    for (file, limit) in [("diagnose/mod.rs", 400), ("cli/mod.rs", 120)] {
+        let lines = std::fs::read_to_string(src.join(file))
+            .unwrap()
+            .lines()
+            .count();
+        assert!(
+            lines < limit,
+            "src/{file} has {lines} lines (limit {limit})"
+        );
+    }
+}
+
+#[test]
+fn effect_kinds_are_matched_only_in_their_table() {
+    // A new effect kind is one row of the diagnosis's table (src/diagnose/kinds.rs): no other
+    // library file names a particular kind (tests and the CLI's flag names aside).
+    let src = Path::new(env!("CARGO_MANIFEST_DIR")).join("src");
+    let mut files = vec![];
+    rust_files(&src, &mut files);
+    let mut branching = vec![];
+    for file in &files {
+        let rel = file.strip_prefix(&src).unwrap();
+        if rel == Path::new("diagnose/kinds.rs") || rel.starts_with("cli") {
+            continue;
+        }
+        let text = code(&std::fs::read_to_string(file).unwrap());
+        for (i, line) in text.lines().enumerate() {
+            let named = line.match_indices("Kind::").any(|(at, _)| {
+                let before = &line[..at];
+                let after = &line[at + 6..];
+                !before.ends_with("Shape")
+                    && !after.starts_with("ALL")
+                    && after.starts_with(|c: char| c.is_ascii_uppercase() || c == '*')
+            });
+            if named {
+                branching.push(format!("{}:{}: {}", rel.display(), i + 1, line.trim()));
+            }
+        }
+    }
+    assert!(
+        branching.is_empty(),
+        "kind-specific branches outside the table:\n{}",
+        branching.join("\n")
+    );
+}

@@ -495,11 +495,10 @@ pub(crate) fn test_description(stage: &Stage, eps: f64) -> Report {
     };
     // A kind that is one of the model's parameters (rotor inertia, when the model
     // has rotors) would test the description, not an unmodelled effect.
-    let exclude: Vec<Kind> = if model.rotor_count() > 0 {
-        vec![Kind::RotorInertia]
-    } else {
-        vec![]
-    };
+    let exclude: Vec<Kind> = Kind::ALL
+        .into_iter()
+        .filter(|k| k.is_rotor_parameter() && model.rotor_count() > 0)
+        .collect();
     let (mut steps, mut stop) = select(
         &anchor,
         &stage.folds,

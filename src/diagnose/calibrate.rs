@@ -10,11 +10,10 @@
 //! across the seam between two runs.
 
 use super::library::{self, Context, Kind, Variant};
-use super::magnitudes_of;
 use crate::ident::{self, IdentError, Identified, NormalEquations};
 use crate::model::Model;
 use crate::trajectory::Trajectory;
-use nalgebra::{DVector, Vector3};
+use nalgebra::DVector;
 use serde::Serialize;
 use std::ops::Range;
 
@@ -120,7 +119,7 @@ pub fn calibrate(model: &Model, runs: &[Run], opts: &Options) -> Result<Calibrat
             ))
         },
     );
-    let nominal = if opts.terms.iter().any(|t| needs_nominal(t.kind)) {
+    let nominal = if opts.terms.iter().any(|t| t.kind.linearized()) {
         ident::identify(model, &rigid, &prior, &opts.ident)?.theta
     } else {
         prior.clone()
@@ -215,19 +214,6 @@ pub fn columns(terms: &[Variant], n: usize) -> usize {
     terms.iter().map(|t| t.kind.columns(n)).sum()
 }
 
-/// Kinds whose columns are linearized about the nominal model.
-fn needs_nominal(kind: Kind) -> bool {
-    matches!(
-        kind,
-        Kind::TorqueGain
-            | Kind::TimeDelay
-            | Kind::Tilt
-            | Kind::Compliance
-            | Kind::Backlash
-            | Kind::LoadDependentFriction
-    )
-}
-
 /// θ's columns that must be non-negative: those of the kinds with a physical sign.
 fn nonnegative_columns(model: &Model, terms: &[Variant]) -> Vec<usize> {
     let n = model.dof();
@@ -264,7 +250,7 @@ fn term_fits(
                 kind: t.kind,
                 param: t.param,
                 magnitude: t.kind.magnitude(),
-                magnitudes: magnitudes_of(t.kind, &coefficients, n, g),
+                magnitudes: t.kind.magnitudes(&coefficients, n, g),
                 coefficients,
                 identifiable,
             }
@@ -306,11 +292,7 @@ pub fn parse_term(s: &str) -> Result<Variant, String> {
         (true, None) => Err(format!(
             "'{s}' needs its value: {}:<{}>",
             kind.name(),
-            if kind == Kind::Stribeck {
-                "Stribeck velocity, rad/s"
-            } else {
-                "harmonic per rotor revolution"
-            }
+            kind.grid_meaning()
         )),
         (false, Some(_)) => Err(format!("'{s}': {} takes no value", kind.name())),
         (false, None) => Ok(Variant { kind, param: 0.0 }),
@@ -322,99 +304,23 @@ pub fn parse_term(s: &str) -> Result<Variant, String> {
 /// inertia, a payload, a tilt under a gravity not along −z) are left as comments. `dt` is the
 /// data's sample period (s), for a delay in samples.
 pub fn scenario_snippet(model: &Model, terms: &[TermFit], dt: f64) -> String {
-    let n = model.dof();
-    let list = |v: &[f64]| {
-        let items: Vec<String> = v.iter().map(|x| format!("{x:.6e}")).collect();
-        format!("[{}]", items.join(", "))
-    };
     let mut out = String::new();
     for t in terms {
-        let c = &t.coefficients;
-        let body = match t.kind {
-            Kind::TorqueOffset => Some(format!("offset = {}", list(c))),
-            Kind::TorqueGain => Some(format!(
-                "gain = {}",
-                list(&c.iter().map(|b| 1.0 / (1.0 - b)).collect::<Vec<_>>())
-            )),
-            Kind::TimeDelay => {
-                let samples = (c[0] / dt).round();
-                (samples >= 1.0).then(|| format!("samples = {samples}"))
-            }
-            Kind::Spring => {
-                let rest: Vec<f64> = (0..n)
-                    .map(|j| if c[j] != 0.0 { -c[n + j] / c[j] } else { 0.0 })
-                    .collect();
-                Some(format!(
-                    "stiffness = {}\nrest = {}",
-                    list(&c[..n]),
-                    list(&rest)
-                ))
-            }
-            Kind::Stribeck => Some(format!(
-                "static_extra = {}\nvelocity = {}",
-                list(c),
-                list(&vec![t.param; n])
-            )),
-            Kind::AsymmetricCoulomb => Some(format!("delta = {}", list(c))),
-            Kind::LoadDependentFriction => Some(format!("coefficient = {}", list(c))),
-            Kind::Cogging => {
-                let amp: Vec<f64> = (0..n).map(|j| c[j].hypot(c[n + j])).collect();
-                let phase: Vec<f64> = (0..n).map(|j| c[n + j].atan2(c[j])).collect();
-                Some(format!(
-                    "amplitude = {}\nharmonic = {}\nphase = {}",
-                    list(&amp),
-                    list(&vec![t.param; n]),
-                    list(&phase)
-                ))
-            }
-            Kind::Compliance => Some(format!(
-                "stiffness = {}",
-                list(&c.iter().map(|k| 1.0 / k).collect::<Vec<_>>())
-            )),
-            Kind::Backlash => Some(format!(
-                "width = {}",
-                list(&c.iter().map(|b| b.max(0.0)).collect::<Vec<_>>())
-            )),
-            Kind::Tilt => tilt_angles(model, c)
-                .map(|(roll, pitch)| format!("roll = {roll:.6e}\npitch = {pitch:.6e}")),
-            Kind::RotorInertia | Kind::Payload => None,
-        };
-        match body {
-            Some(b) => out.push_str(&format!(
-                "[[effects]]\nkind = \"{}\"\n{b}\n\n",
-                t.kind.name()
+        match t.kind.replay(model, &t.coefficients, t.param, dt) {
+            Some(effect) => out.push_str(&format!(
+                "[[effects]]\nkind = \"{}\"\n{}\n\n",
+                t.kind.name(),
+                effect.toml_body()
             )),
             None => out.push_str(&format!(
                 "# {} ({}: {}) has no scenario form here\n\n",
                 t.kind.name(),
                 t.magnitude.0,
-                list(&t.magnitudes)
+                crate::sim::scenario::toml_list(&t.magnitudes)
             )),
         }
     }
     out
-}
-
-/// Roll and pitch (rad) of the scenario's tilt whose gravity has the calibrated components
-/// `c₀, c₁` (m/s²) along the library's tilt directions `u₁, u₂`; `None` if the model's gravity
-/// is not along −z.
-fn tilt_angles(model: &Model, c: &[f64]) -> Option<(f64, f64)> {
-    let g = model.gravity;
-    let g0 = g.norm();
-    if g0 == 0.0 || (g / g0 + Vector3::z()).norm() > 1e-9 {
-        return None;
-    }
-    // The library's directions for g along −z: u₁ = x, u₂ = ĝ × u₁ = −y; the coefficients are
-    // the tilted gravity's components along them (m/s²).
-    let (dx, dy) = (c[0] / g0, -c[1] / g0);
-    if dx * dx + dy * dy >= 1.0 {
-        return None;
-    }
-    let d = Vector3::new(dx, dy, -(1.0 - dx * dx - dy * dy).sqrt());
-    // The scenario's gravity is R_xᵀ(roll) R_yᵀ(pitch) g = g₀ (sin p, −sin r cos p, −cos r cos p).
-    let pitch = d.x.asin();
-    let roll = (-d.y).atan2(-d.z);
-    Some((roll, pitch))
 }
 
 #[cfg(test)]
@@ -429,7 +335,11 @@ mod tests {
             let tilted = crate::sim::effects::true_robot(&model, &[spec]).gravity;
             // The library's coefficients: Δg along u₁ = x and u₂ = −y.
             let dg = tilted - model.gravity;
-            let (r, p) = tilt_angles(&model, &[dg.x, -dg.y]).unwrap();
+            let Some(crate::sim::scenario::EffectSpec::Tilt { roll: r, pitch: p }) =
+                Kind::Tilt.replay(&model, &[dg.x, -dg.y], 0.0, 1e-3)
+            else {
+                panic!("no tilt replayed")
+            };
             assert!((r - roll).abs() < 1e-12, "{r} {roll}");
             assert!(
                 (p - pitch).abs() < 1e-4 * pitch.abs().max(1e-3),

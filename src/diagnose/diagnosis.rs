@@ -153,17 +153,3 @@ pub struct Diagnosis {
     /// The verdict in words.
     pub summary: String,
 }
-
-/// What data separates two kinds the data could not tell apart.
-pub fn separate_by(a: Kind, b: Kind) -> String {
-    use Kind::*;
-    let pair = if a <= b { (a, b) } else { (b, a) };
-    match pair {
-        (TorqueOffset, AsymmetricCoulomb) => "rests under load (q̇ = 0 with τ ≠ 0): an offset persists at rest, direction-dependent friction vanishes; without rests δ·max(0, sign q̇) = δ/2 + (δ/2) sign q̇ is an offset plus Coulomb friction".into(),
-        (TorqueOffset, Spring) => "a wider range of joint angles (the spring's torque varies with q, an offset does not)".into(),
-        (TorqueGain, LoadDependentFriction) => "braking motion (τ and q̇ of opposite sign) as often as driving".into(),
-        (Stribeck, AsymmetricCoulomb) | (TorqueOffset, Stribeck) => "slow motion in both directions (q̇ within the Stribeck velocity)".into(),
-        (RotorInertia, Compliance) | (TimeDelay, Compliance) | (TimeDelay, RotorInertia) => "faster excitation (the terms scale with q̈, τ̇ and τ̈ differently with frequency)".into(),
-        _ => "an excitation on which their regressor columns differ more (other joint ranges, speeds and torque levels)".into(),
-    }
-}

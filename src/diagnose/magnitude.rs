@@ -6,26 +6,13 @@
 use super::anchor;
 use super::library::Kind;
 use super::select::Selection;
-use super::{median, separate_by, EffectEstimate, Evidence, Magnitude, Stage};
+use super::{separate_by, EffectEstimate, Evidence, Magnitude, Stage};
 use nalgebra::{DMatrix, DVector};
 
-/// The physical magnitudes of an effect from its coefficients `c` (in column order).
+/// The physical magnitudes of `kind` from its coefficients `c` for `n` joints under gravity of
+/// norm `gravity` (m/s²) (each kind's rule is its row in `kinds`).
 pub fn magnitudes_of(kind: Kind, c: &[f64], n: usize, gravity: f64) -> Vec<f64> {
-    match kind {
-        Kind::TorqueGain => {
-            // The column is the nominal prediction, which already carries the gain:
-            // τ = Y θ + β τ̂ with τ̂ ≈ τ gives 1 + g = 1/(1 − β).
-            let g: Vec<f64> = c.iter().map(|b| b / (1.0 - b)).collect();
-            let m = median(&g);
-            g.iter().map(|x| x - m).collect()
-        }
-        Kind::TimeDelay => vec![c[0]],
-        Kind::Spring => c[..n].to_vec(),
-        Kind::Cogging => (0..n).map(|j| c[j].hypot(c[n + j])).collect(),
-        Kind::Tilt => vec![(c[0].hypot(c[1]) / gravity).atan()],
-        Kind::Payload => vec![c[0]],
-        _ => c.to_vec(),
-    }
+    kind.magnitudes(c, n, gravity)
 }
 
 /// First-order standard error of magnitude `index` from its coefficients' errors.
@@ -116,13 +103,13 @@ pub(crate) fn cross_validated(
                 let cols: Vec<usize> = if single {
                     (0..columns).map(|c| folds.offsets[vi] + c).collect()
                 } else {
-                    let mut c = vec![folds.offsets[vi] + i];
                     // Cogging's magnitude needs both of its columns; a spring's stiffness only
                     // its q column (the constant is its rest position).
-                    if v.kind == Kind::Cogging {
-                        c.push(folds.offsets[vi] + n + i);
-                    }
-                    c
+                    v.kind
+                        .magnitude_columns(i, n)
+                        .into_iter()
+                        .map(|c| folds.offsets[vi] + c)
+                        .collect()
                 };
                 Magnitude {
                     joint: joint_label(stage, single, i),

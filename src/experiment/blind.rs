@@ -4,7 +4,7 @@
 //! injected.
 //!
 //! Case `i` draws from `ChaCha8(seed, stream i)`: its category cycles through seventeen slots
-//! ([`category`]: four clean, one per kind of [`SINGLE_KINDS`], one with two effects, one out of
+//! ([`category`]: four clean, one per kind the effect table draws alone (`Kind::blind_singles`), one with two effects, one out of
 //! the library),
 //! its magnitudes are uniform in the ranges of [`draw`], and the excitation seed differs per
 //! case. The model given to the diagnosis is the simulated robot's description with
@@ -16,7 +16,6 @@ use crate::diagnose::{self, Diagnosis, Verdict};
 use crate::experiment::tables;
 use crate::model::Model;
 use crate::sim::scenario::{EffectSpec, Scenario};
-use nalgebra::Vector3;
 use polars::prelude::*;
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
@@ -82,134 +81,20 @@ pub struct CaseResult {
     pub visible_gap: f64,
 }
 
-/// The kinds drawn for single-effect cases: the library without `compliance`, whose
-/// quasi-static linearization misses the filtered deflection jumps that Coulomb friction
-/// causes at every reversal (it was misattributed in every case of a trial run; a known gap,
-/// documented in `docs/diagnose.md`).
-pub const SINGLE_KINDS: [Kind; 11] = [
-    Kind::TorqueOffset,
-    Kind::TorqueGain,
-    Kind::TimeDelay,
-    Kind::Spring,
-    Kind::Stribeck,
-    Kind::AsymmetricCoulomb,
-    Kind::LoadDependentFriction,
-    Kind::Cogging,
-    Kind::RotorInertia,
-    Kind::Tilt,
-    Kind::Payload,
-];
-
-/// The kinds paired in two-effect cases: those that act on the torque and stay visible after
-/// identification at the benchmark's magnitudes.
-const PAIR_KINDS: [Kind; 6] = [
-    Kind::TorqueOffset,
-    Kind::TimeDelay,
-    Kind::Spring,
-    Kind::Stribeck,
-    Kind::LoadDependentFriction,
-    Kind::Cogging,
-];
-
-fn uniform(rng: &mut ChaCha8Rng, lo: f64, hi: f64) -> f64 {
-    lo + (hi - lo) * rng.random::<f64>()
-}
-
-fn signed(rng: &mut ChaCha8Rng, lo: f64, hi: f64) -> f64 {
-    let v = uniform(rng, lo, hi);
-    if rng.random::<bool>() {
-        v
-    } else {
-        -v
-    }
-}
-
-/// Draws one effect of `kind` for `model` (the simulated robot, with rotors). Ranges, per
-/// joint unless said: offset ±1–3 N m; one joint's gain 1 ± 0.15–0.3; delay 10–30 samples;
-/// spring 3–10 N m/rad about the middle ± 0.3 rad; Stribeck 0.5–2 N m at one velocity
-/// 0.1–0.4 rad/s; forward Coulomb excess 1–3 N m; load-dependent 0.1–0.25; cogging
-/// 0.2–0.8 N m at one harmonic 1–8 with random phases; tilt 0.2–0.35 rad in a random
-/// direction; compliance 300–1000 N m/rad; quadratic damping (outside the library)
-/// 0.5–1.5 N m s²/rad². Smaller effects are mostly absorbed by the identified inertial and
-/// friction parameters and leave a residual below the 0.3 N m torque noise.
+/// Draws one effect of `kind` (its row of the effect table, `Kind::draw`, gives the ranges) or,
+/// for `None`, one outside the library: quadratic damping 0.5–1.5 N m s²/rad² per joint.
 pub fn draw(kind: Option<Kind>, model: &Model, rng: &mut ChaCha8Rng, rate: f64) -> Injected {
-    let n = model.dof();
-    let per = |rng: &mut ChaCha8Rng, lo: f64, hi: f64| per_joint(rng, n, lo, hi);
     let Some(kind) = kind else {
-        let c = per(rng, 0.5, 1.5);
+        let c: Vec<f64> = (0..model.dof())
+            .map(|_| 0.5 + rng.random::<f64>())
+            .collect();
         return Injected {
             kind: None,
             magnitudes: c.clone(),
             spec: Some(EffectSpec::QuadraticDamping { coefficient: c }),
         };
     };
-    let (spec, magnitudes) = match kind {
-        Kind::TorqueOffset => {
-            let o: Vec<f64> = (0..n).map(|_| signed(rng, 1.0, 3.0)).collect();
-            (Some(EffectSpec::TorqueOffset { offset: o.clone() }), o)
-        }
-        Kind::TorqueGain => {
-            let j = rng.random_range(0..n);
-            let mut gain = vec![1.0; n];
-            gain[j] += signed(rng, 0.15, 0.3);
-            let m = diagnose::median(&gain);
-            let mags = gain.iter().map(|g| g - m).collect();
-            (Some(EffectSpec::TorqueGain { gain }), mags)
-        }
-        Kind::TimeDelay => {
-            let samples = rng.random_range(10..=30usize);
-            (
-                Some(EffectSpec::TimeDelay { samples }),
-                vec![samples as f64 / rate],
-            )
-        }
-        Kind::Spring => draw_spring(model, rng),
-        Kind::Stribeck => {
-            let fs = per(rng, 0.5, 2.0);
-            let v = uniform(rng, 0.1, 0.4);
-            (
-                Some(EffectSpec::Stribeck {
-                    static_extra: fs.clone(),
-                    velocity: vec![v; n],
-                }),
-                fs,
-            )
-        }
-        Kind::AsymmetricCoulomb => {
-            let d = per(rng, 1.0, 3.0);
-            (Some(EffectSpec::AsymmetricCoulomb { delta: d.clone() }), d)
-        }
-        Kind::LoadDependentFriction => {
-            let mu = per(rng, 0.1, 0.25);
-            (
-                Some(EffectSpec::LoadDependentFriction {
-                    coefficient: mu.clone(),
-                }),
-                mu,
-            )
-        }
-        Kind::Cogging => draw_cogging(model, rng),
-        Kind::RotorInertia => {
-            let m = model
-                .bodies
-                .iter()
-                .enumerate()
-                .map(|(i, _)| crate::dynamics::armature(model, i))
-                .collect();
-            (None, m)
-        }
-        Kind::Tilt => draw_tilt(rng),
-        Kind::Payload => draw_payload(model, rng),
-        Kind::Compliance => {
-            let k = per(rng, 300.0, 1000.0);
-            let kappa = k.iter().map(|k| 1.0 / k).collect();
-            (Some(EffectSpec::Compliance { stiffness: k }), kappa)
-        }
-        Kind::Backlash => {
-            let b = per(rng, 0.01, 0.03);
-            (Some(EffectSpec::Backlash { width: b.clone() }), b)
-        }
-    };
+    let (spec, magnitudes) = kind.draw(model, rng, rate);
     Injected {
         kind: Some(kind),
         spec,
@@ -217,95 +102,13 @@ pub fn draw(kind: Option<Kind>, model: &Model, rng: &mut ChaCha8Rng, rate: f64) 
     }
 }
 
-/// `n` independent uniform draws in `[lo, hi)`.
-fn per_joint(rng: &mut ChaCha8Rng, n: usize, lo: f64, hi: f64) -> Vec<f64> {
-    (0..n).map(|_| uniform(rng, lo, hi)).collect()
-}
-
-/// A spring per joint: stiffness 3–10 N m/rad about a rest angle within ±0.3 rad of
-/// the middle of the joint range.
-fn draw_spring(model: &Model, rng: &mut ChaCha8Rng) -> (Option<EffectSpec>, Vec<f64>) {
-    let n = model.dof();
-    let k = per_joint(rng, n, 3.0, 10.0);
-    let rest = model
-        .bodies
-        .iter()
-        .map(|b| {
-            let mid = if b.limits.lower.is_finite() && b.limits.upper.is_finite() {
-                0.5 * (b.limits.lower + b.limits.upper)
-            } else {
-                0.0
-            };
-            mid + uniform(rng, -0.3, 0.3)
-        })
-        .collect();
-    (
-        Some(EffectSpec::Spring {
-            stiffness: k.clone(),
-            rest,
-        }),
-        k,
-    )
-}
-
-/// Cogging of amplitude 0.2–0.8 N m at one harmonic 1–8 of N q, random phases.
-fn draw_cogging(model: &Model, rng: &mut ChaCha8Rng) -> (Option<EffectSpec>, Vec<f64>) {
-    let n = model.dof();
-    let a = per_joint(rng, n, 0.2, 0.8);
-    let h = rng.random_range(1..=8u32) as f64;
-    let phase = per_joint(rng, n, 0.0, std::f64::consts::TAU);
-    (
-        Some(EffectSpec::Cogging {
-            amplitude: a.clone(),
-            harmonic: vec![h; n],
-            phase,
-        }),
-        a,
-    )
-}
-
-/// A base tilt of 0.2–0.35 rad in a random direction.
-fn draw_tilt(rng: &mut ChaCha8Rng) -> (Option<EffectSpec>, Vec<f64>) {
-    let angle = uniform(rng, 0.2, 0.35);
-    let dir = uniform(rng, 0.0, std::f64::consts::TAU);
-    (
-        Some(EffectSpec::Tilt {
-            roll: angle * dir.cos(),
-            pitch: angle * dir.sin(),
-        }),
-        vec![angle],
-    )
-}
-
-/// A 0.3–1 kg payload on the last body.
-fn draw_payload(model: &Model, rng: &mut ChaCha8Rng) -> (Option<EffectSpec>, Vec<f64>) {
-    let n = model.dof();
-    // A 0.3–1 kg sphere of 3 cm radius between the middle and the far end of the last
-    // body (taken as twice its bounding ellipsoid's centre from the joint).
-    let mass = uniform(rng, 0.3, 1.0);
-    let last = &model.bodies[n - 1];
-    let tip = last
-        .bounding
-        .as_ref()
-        .map_or(Vector3::zeros(), |e| e.center * 2.0);
-    let s = uniform(rng, 0.5, 1.0);
-    (
-        Some(EffectSpec::Payload {
-            mass,
-            com: [s * tip.x, s * tip.y, s * tip.z],
-            radius: 0.03,
-        }),
-        vec![mass],
-    )
-}
-
 /// Clean slots at the start of each cycle of categories.
 const CLEAN_SLOTS: usize = 4;
 
-/// The category of case `i`: cycles of four clean slots, one per kind of [`SINGLE_KINDS`],
+/// The category of case `i`: cycles of four clean slots, one per kind the effect table draws alone (`Kind::blind_singles`),
 /// one with two effects and one out of the library.
 pub fn category(i: usize) -> (Category, Option<usize>) {
-    let singles = SINGLE_KINDS.len();
+    let singles = Kind::blind_singles().len();
     match i % (CLEAN_SLOTS + singles + 2) {
         s if s < CLEAN_SLOTS => (Category::Clean, None),
         s if s < CLEAN_SLOTS + singles => (Category::Single, Some(s - CLEAN_SLOTS)),
@@ -473,14 +276,14 @@ fn injections(i: usize, seed: u64, model: &Model, rate: f64) -> (Category, Vec<I
     let injected: Vec<Injected> = match category {
         Category::Clean => vec![],
         Category::Single => vec![draw(
-            Some(SINGLE_KINDS[slot.expect("single")]),
+            Some(Kind::blind_singles()[slot.expect("single")]),
             model,
             &mut rng,
             rate,
         )],
         Category::Two => {
             // Two effects that act on the torque (no model change), distinct.
-            let pool = PAIR_KINDS;
+            let pool = Kind::blind_pairs();
             let a = pool[rng.random_range(0..pool.len())];
             let mut b = a;
             while b == a {
@@ -506,11 +309,10 @@ fn description(
     injected: &[Injected],
     description_error: f64,
 ) -> Model {
-    let exact = if injected.iter().any(|x| x.kind == Some(Kind::RotorInertia)) {
-        model.with_rotors_frozen()
-    } else {
-        model.clone()
-    };
+    let exact = injected
+        .iter()
+        .filter_map(|x| x.kind)
+        .fold(model.clone(), |m, k| k.description(&m));
     if description_error > 0.0 {
         let mut drng = ChaCha8Rng::seed_from_u64(seed ^ 0x00de_5c41_b710);
         drng.set_stream(i as u64);

@@ -562,7 +562,57 @@ impl ExcitationSpec {
     }
 }
 
+/// A TOML array of numbers in the scenario snippets physid writes (`[1.000000e0, …]`, six
+/// significant decimals).
+pub fn toml_list(v: &[f64]) -> String {
+    let items: Vec<String> = v.iter().map(|x| format!("{x:.6e}")).collect();
+    format!("[{}]", items.join(", "))
+}
+
 impl EffectSpec {
+    /// The effect's keys as the lines of a scenario's `[[effects]]` table, without its
+    /// `kind = …` line (numbers as [`toml_list`] writes them).
+    pub fn toml_body(&self) -> String {
+        let l = toml_list;
+        match self {
+            EffectSpec::TorqueOffset { offset } => format!("offset = {}", l(offset)),
+            EffectSpec::TorqueGain { gain } => format!("gain = {}", l(gain)),
+            EffectSpec::TimeDelay { samples } => format!("samples = {samples}"),
+            EffectSpec::Spring { stiffness, rest } => {
+                format!("stiffness = {}\nrest = {}", l(stiffness), l(rest))
+            }
+            EffectSpec::Stribeck {
+                static_extra,
+                velocity,
+            } => format!(
+                "static_extra = {}\nvelocity = {}",
+                l(static_extra),
+                l(velocity)
+            ),
+            EffectSpec::AsymmetricCoulomb { delta } => format!("delta = {}", l(delta)),
+            EffectSpec::LoadDependentFriction { coefficient }
+            | EffectSpec::QuadraticDamping { coefficient } => {
+                format!("coefficient = {}", l(coefficient))
+            }
+            EffectSpec::Cogging {
+                amplitude,
+                harmonic,
+                phase,
+            } => format!(
+                "amplitude = {}\nharmonic = {}\nphase = {}",
+                l(amplitude),
+                l(harmonic),
+                l(phase)
+            ),
+            EffectSpec::Compliance { stiffness } => format!("stiffness = {}", l(stiffness)),
+            EffectSpec::Backlash { width } => format!("width = {}", l(width)),
+            EffectSpec::Tilt { roll, pitch } => format!("roll = {roll:.6e}\npitch = {pitch:.6e}"),
+            EffectSpec::Payload { mass, com, radius } => {
+                format!("mass = {mass:.6e}\ncom = {}\nradius = {radius:.6e}", l(com))
+            }
+        }
+    }
+
     /// Checks effect `i` (its keys are named `effects[i].…`).
     fn validate(&self, i: usize, n: usize) -> Result<(), ScenarioError> {
         let e = self;

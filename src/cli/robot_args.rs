@@ -1,0 +1,59 @@
+//! The robot options every command that loads a robot shares.
+
+use clap::ValueEnum;
+use physid::model::{Model, RotorModel};
+
+/// Which robot, and how its rotors are modelled.
+#[derive(clap::Args, Debug, Clone)]
+pub struct RobotArgs {
+    /// `cheetah3` (built-in leg), a .urdf file, or a .toml file with a [robot] table.
+    #[arg(long, default_value = "cheetah3")]
+    pub(super) robot: String,
+    /// Override the rotor treatment: full (spinning rotor bodies) or reflected (armature).
+    #[arg(long, value_enum)]
+    rotor_model: Option<RotorArg>,
+    /// Drop the rotors (the link-only model).
+    #[arg(long)]
+    no_rotors: bool,
+    /// URDF robots: lengthen every semi-axis of the bounding ellipsoids computed from the
+    /// geometry by this much (m).
+    #[arg(long, value_name = "M")]
+    ellipsoid_margin: Option<f64>,
+    /// URDF robots: a folder holding ROS packages, for `package://` meshes (repeatable; the
+    /// URDF's own folders and ROS_PACKAGE_PATH are searched first).
+    #[arg(long, value_name = "DIR")]
+    package_dir: Vec<std::path::PathBuf>,
+    /// URDF robots: take no bounding ellipsoids from the geometry (only a sidecar's).
+    #[arg(long)]
+    no_geometry_ellipsoids: bool,
+}
+
+#[derive(ValueEnum, Debug, Clone, Copy)]
+enum RotorArg {
+    Full,
+    Reflected,
+}
+
+impl RobotArgs {
+    pub(super) fn load(&self) -> anyhow::Result<Model> {
+        let opts = physid::io::robot_spec::RobotOptions {
+            ellipsoid_margin: self.ellipsoid_margin,
+            package_dirs: self.package_dir.clone(),
+            geometry_ellipsoids: self.no_geometry_ellipsoids.then_some(false),
+        };
+        let (mut m, warnings) = physid::io::load_robot_with(&self.robot, &opts)?;
+        for w in warnings {
+            eprintln!("warning: {}: {w}", self.robot);
+        }
+        if self.no_rotors {
+            m = m.without_rotors();
+        }
+        if let Some(r) = self.rotor_model {
+            m = m.with_rotor_model(match r {
+                RotorArg::Full => RotorModel::Full,
+                RotorArg::Reflected => RotorModel::Reflected,
+            });
+        }
+        Ok(m)
+    }
+}
