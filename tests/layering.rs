@@ -210,3 +210,29 @@ fn effect_kinds_are_matched_only_in_their_table() {
         branching.join("\n")
     );
 }
+
+#[test]
+fn anyhow_and_printing_stay_in_the_binary() {
+    // The library returns typed errors and never prints; anyhow and the one error print live
+    // in src/cli and src/main.rs.
+    let src = Path::new(env!("CARGO_MANIFEST_DIR")).join("src");
+    let mut files = vec![];
+    rust_files(&src, &mut files);
+    let mut found = vec![];
+    for file in &files {
+        let rel = file.strip_prefix(&src).unwrap();
+        if rel.starts_with("cli") || rel == Path::new("main.rs") {
+            continue;
+        }
+        let text = code(&std::fs::read_to_string(file).unwrap());
+        for (i, line) in text.lines().enumerate() {
+            if ["anyhow", "println!", "eprintln!"]
+                .iter()
+                .any(|w| line.contains(w))
+            {
+                found.push(format!("{}:{}: {}", rel.display(), i + 1, line.trim()));
+            }
+        }
+    }
+    assert!(found.is_empty(), "in the library:\n{}", found.join("\n"));
+}

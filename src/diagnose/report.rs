@@ -3,11 +3,32 @@
 
 use super::Diagnosis;
 use crate::io::plot::{colour, legend};
+use crate::io::IoError;
 use plotters::prelude::*;
-use std::path::Path;
+use std::path::{Path, PathBuf};
 
-fn plot_err(e: impl std::fmt::Display) -> anyhow::Error {
-    anyhow::anyhow!("plot: {e}")
+/// Writing a report failed.
+#[derive(Debug, thiserror::Error)]
+pub enum ReportError {
+    /// A file or the folder could not be written.
+    #[error(transparent)]
+    Io(#[from] IoError),
+    /// A plot could not be drawn.
+    #[error("{path}: plot: {message}")]
+    Plot {
+        /// The plot's file.
+        path: PathBuf,
+        /// What the plotting library reported.
+        message: String,
+    },
+}
+
+/// The error of drawing the plot at `path`.
+fn plot_err<E: std::fmt::Display>(path: &Path) -> impl Fn(E) -> ReportError + '_ {
+    move |e| ReportError::Plot {
+        path: path.to_path_buf(),
+        message: e.to_string(),
+    }
 }
 
 /// Grouped bars: one group per label, one bar per series.
@@ -17,7 +38,7 @@ fn bars(
     ylabel: &str,
     labels: &[String],
     series: &[(String, Vec<f64>)],
-) -> anyhow::Result<()> {
+) -> Result<(), ReportError> {
     let ymax = series
         .iter()
         .flat_map(|(_, v)| v.iter().copied())
@@ -30,14 +51,14 @@ fn bars(
     {
         let width = (140 + 60 * groups * per).clamp(640, 1400) as u32;
         let root = SVGBackend::with_string(&mut svg, (width, 620)).into_drawing_area();
-        root.fill(&WHITE).map_err(plot_err)?;
+        root.fill(&WHITE).map_err(plot_err(path))?;
         let mut chart = ChartBuilder::on(&root)
             .caption(title, ("sans-serif", 18))
             .margin(15)
             .x_label_area_size(40)
             .y_label_area_size(70)
             .build_cartesian_2d(0.0..groups as f64, -0.45 * ymax..ymax * 1.2)
-            .map_err(plot_err)?;
+            .map_err(plot_err(path))?;
         chart
             .configure_mesh()
             .disable_x_mesh()
@@ -52,7 +73,7 @@ fn bars(
             })
             .y_desc(ylabel)
             .draw()
-            .map_err(plot_err)?;
+            .map_err(plot_err(path))?;
         // Group labels inside the plot, below the zero line, written downwards.
         let style = ("sans-serif", 12)
             .into_font()
@@ -64,7 +85,7 @@ fn bars(
                     Text::new(l.clone(), (g as f64 + 0.45, -0.01 * ymax), style.clone())
                 }),
             )
-            .map_err(plot_err)?;
+            .map_err(plot_err(path))?;
         let w = 0.8 / per as f64;
         for (s, (name, vals)) in series.iter().enumerate() {
             let c = colour(s);
@@ -73,19 +94,19 @@ fn bars(
                     let x0 = g as f64 + 0.1 + s as f64 * w;
                     Rectangle::new([(x0, 0.0), (x0 + w * 0.9, v.max(0.0))], c.filled())
                 }))
-                .map_err(plot_err)?
+                .map_err(plot_err(path))?
                 .label(name.clone())
                 .legend(move |(x, y)| Rectangle::new([(x, y - 5), (x + 12, y + 5)], c.filled()));
         }
-        legend(&mut chart).map_err(plot_err)?;
-        root.present().map_err(plot_err)?;
+        legend(&mut chart).map_err(plot_err(path))?;
+        root.present().map_err(plot_err(path))?;
     }
     crate::io::write_atomic(path, svg.as_bytes())?;
     Ok(())
 }
 
 /// Residual PSD per joint, before (solid) and after (thin) the selected effects, log-log.
-fn spectrum_plot(path: &Path, d: &Diagnosis) -> anyhow::Result<()> {
+fn spectrum_plot(path: &Path, d: &Diagnosis) -> Result<(), ReportError> {
     let pos = |v: f64| v.is_finite() && v > 0.0;
     let all: Vec<(f64, f64)> = d
         .spectra
@@ -104,7 +125,7 @@ fn spectrum_plot(path: &Path, d: &Diagnosis) -> anyhow::Result<()> {
     let mut svg = String::new();
     {
         let root = SVGBackend::with_string(&mut svg, (900, 540)).into_drawing_area();
-        root.fill(&WHITE).map_err(plot_err)?;
+        root.fill(&WHITE).map_err(plot_err(path))?;
         let mut chart = ChartBuilder::on(&root)
             .caption(
                 "validation residual spectrum: nominal (thick), with effects (thin)",
@@ -117,14 +138,14 @@ fn spectrum_plot(path: &Path, d: &Diagnosis) -> anyhow::Result<()> {
                 (fmin..fmax).log_scale(),
                 (pmin * 0.5..pmax * 2.0).log_scale(),
             )
-            .map_err(plot_err)?;
+            .map_err(plot_err(path))?;
         chart
             .configure_mesh()
             .x_desc("frequency (Hz)")
             .y_desc("PSD (N^2 m^2 / Hz)")
             .y_label_formatter(&|v| format!("{v:.0e}"))
             .draw()
-            .map_err(plot_err)?;
+            .map_err(plot_err(path))?;
         for (j, (a, b)) in d.spectra.iter().zip(&d.spectra_after).enumerate() {
             let c = colour(j);
             let pts = |s: &super::spectrum::Spectrum| -> Vec<(f64, f64)> {
@@ -137,17 +158,17 @@ fn spectrum_plot(path: &Path, d: &Diagnosis) -> anyhow::Result<()> {
             };
             chart
                 .draw_series(LineSeries::new(pts(a), c.stroke_width(2)))
-                .map_err(plot_err)?
+                .map_err(plot_err(path))?
                 .label(a.joint.clone())
                 .legend(move |(x, y)| {
                     PathElement::new(vec![(x, y), (x + 20, y)], c.stroke_width(2))
                 });
             chart
                 .draw_series(LineSeries::new(pts(b), c.mix(0.6).stroke_width(1)))
-                .map_err(plot_err)?;
+                .map_err(plot_err(path))?;
         }
-        legend(&mut chart).map_err(plot_err)?;
-        root.present().map_err(plot_err)?;
+        legend(&mut chart).map_err(plot_err(path))?;
+        root.present().map_err(plot_err(path))?;
     }
     crate::io::write_atomic(path, svg.as_bytes())?;
     Ok(())
@@ -375,12 +396,13 @@ fn how_far_section(d: &Diagnosis) -> String {
 }
 
 /// Writes `report.json`, `report.md`, `where.svg`, `spectrum.svg` and `how_far.svg` into `dir`.
-pub fn write(dir: &Path, d: &Diagnosis) -> anyhow::Result<()> {
-    std::fs::create_dir_all(dir)?;
-    crate::io::write_atomic(
-        &dir.join("report.json"),
-        serde_json::to_string_pretty(d)?.as_bytes(),
-    )?;
+pub fn write(dir: &Path, d: &Diagnosis) -> Result<(), ReportError> {
+    std::fs::create_dir_all(dir).map_err(|source| IoError::Fs {
+        path: dir.to_path_buf(),
+        source,
+    })?;
+    let json = serde_json::to_string_pretty(d).expect("a diagnosis serializes");
+    crate::io::write_atomic(&dir.join("report.json"), json.as_bytes())?;
     crate::io::write_atomic(&dir.join("report.md"), markdown(d).as_bytes())?;
     // Where: RMS per regime kind (rows) and joint (series), regimes in the breakdown's order.
     let mut regimes: Vec<String> = vec![];
