@@ -495,19 +495,19 @@ fn a_payload_on_the_last_body_is_revealed_by_the_description() {
 
 #[test]
 fn a_requested_description_test_that_cannot_run_says_why() {
-    // A visible effect (cogging at the third harmonic): cross-validation selects it, so the
-    // test against the description (asked for with a stated uncertainty) does not run, and
-    // the diagnosis says why, in its fields and its report.
-    let effects = vec![EffectSpec::Cogging {
-        amplitude: vec![0.0, 1.5, 0.0],
-        harmonic: vec![3.0; 3],
-        phase: vec![0.3, 1.0, 2.0],
-    }];
+    // A visible effect whose columns are linearized (a 25-sample delay): cross-validation
+    // selects it, so the test against the description (asked for with a stated uncertainty)
+    // does not run beside it, and the diagnosis says why, in its fields and its report.
+    let effects = vec![EffectSpec::TimeDelay { samples: 25 }];
     let d = diagnosed_against_description(effects, 5, Some(0.1));
     eprintln!("{}", d.summary);
+    assert_eq!(d.effects[0].kind, Kind::TimeDelay, "{}", d.summary);
     assert!(d.description_test.is_none());
     let why = d.description_test_skipped.as_deref().unwrap_or("");
-    assert!(why.contains("cogging") && why.contains("not run"), "{why}");
+    assert!(
+        why.contains("time_delay") && why.contains("not run"),
+        "{why}"
+    );
     let report = physid::diagnose::report::markdown(&d);
     assert!(report.contains("The test was not run"), "{report}");
     // The ladder starts at the description as given.
@@ -621,4 +621,141 @@ fn backlash_read_on_the_motor_side_is_attributed() {
             "seed {seed}: not confirmed on held-out data"
         );
     }
+}
+
+#[test]
+fn a_payload_beside_a_visible_effect_is_still_tested_against_the_description() {
+    // Cogging (visible: cross-validation selects it) and a 0.6 kg payload (absorbed): the test
+    // against the description runs beside the cogging's exact columns and finds the payload.
+    let m = physid::model::cheetah3::leg();
+    let com = m.bodies[2].bounding.as_ref().unwrap().center * 1.6;
+    let effects = vec![
+        EffectSpec::Cogging {
+            amplitude: vec![0.0, 1.5, 0.0],
+            harmonic: vec![3.0; 3],
+            phase: vec![0.3, 1.0, 2.0],
+        },
+        EffectSpec::Payload {
+            mass: 0.6,
+            com: [com.x, com.y, com.z],
+            radius: 0.03,
+        },
+    ];
+    let d = diagnosed_against_description(effects, 5, Some(0.1));
+    eprintln!("{}", d.summary);
+    let kinds: Vec<(Kind, physid::diagnose::Evidence)> =
+        d.effects.iter().map(|e| (e.kind, e.evidence)).collect();
+    assert_eq!(
+        kinds,
+        vec![
+            (Kind::Cogging, physid::diagnose::Evidence::CrossValidation),
+            (Kind::Payload, physid::diagnose::Evidence::Description)
+        ],
+        "{}",
+        d.summary
+    );
+    let mass = &d.effects[1].magnitudes[0];
+    assert!(
+        (mass.value - 0.6).abs() < 3.0 * mass.se && mass.se < 0.2,
+        "payload {} ± {} kg vs 0.6",
+        mass.value,
+        mass.se
+    );
+}
+
+/// The KUKA LWR4+ URDF as the description; the simulated robot is that URDF with `payload`
+/// (kg, on the last link) and Stribeck friction, 30 s of Fourier excitation at 500 Hz (seed
+/// `seed`).
+fn kuka_twin(payload: Option<f64>, seed: u64) -> physid::trajectory::Trajectory {
+    let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR"));
+    let urdf = root.join("data/kuka_lwr4/kuka_lwr4.urdf");
+    let payload = payload.map_or(String::new(), |mass| {
+        format!("[[effects]]\nkind = \"payload\"\nmass = {mass}\ncom = [0.0, 0.0, 0.05]\nradius = 0.04\n")
+    });
+    let text = format!(
+        r#"[robot]
+urdf = "{}"
+[simulation]
+duration = 30.0
+rate = 500.0
+substeps = 4
+seed = {seed}
+[excitation]
+kind = "fourier"
+harmonics = 5
+base_frequency = 0.1
+amplitude = [0.8, 0.6, 0.8, 0.7, 0.8, 0.6, 0.8]
+offset = [0.0, 0.3, 0.0, -0.6, 0.0, 0.4, 0.0]
+kp = [400.0, 400.0, 400.0, 400.0, 400.0, 400.0, 400.0]
+kd = [40.0, 40.0, 40.0, 40.0, 40.0, 40.0, 40.0]
+computed_torque = true
+[sensors]
+encoder_step = 1e-5
+torque_noise = 0.15
+[processing]
+cutoff = 10.0
+[[effects]]
+kind = "stribeck"
+static_extra = [0.8, 0.8, 0.5, 0.5, 0.3, 0.2, 0.2]
+velocity = [0.1, 0.1, 0.1, 0.1, 0.1, 0.1, 0.1]
+{payload}"#,
+        urdf.display()
+    );
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("twin.toml");
+    std::fs::write(&path, text).unwrap();
+    let (sc, m, _) = physid::sim::scenario::load(&path).unwrap();
+    physid::sim::run(&m, &sc, &mut |_| {}).unwrap().processed
+}
+
+#[test]
+fn the_kuka_twin_finds_its_withheld_payload_and_claims_none_without() {
+    // The real case's simulated twin: the KUKA URDF is the description, the robot carries a
+    // 2.5 kg payload on its last link and Stribeck friction; trained on one run, validated on
+    // another. The payload explains most of the description's gap, so it comes first in the
+    // ladder from the description; without the payload, none is claimed.
+    let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR"));
+    let (description, _) = physid::io::load_robot_with(
+        root.join("data/kuka_lwr4/kuka_lwr4.urdf").to_str().unwrap(),
+        &Default::default(),
+    )
+    .unwrap();
+    let opts = DiagOptions {
+        description_uncertainty: Some(0.1),
+        ..Default::default()
+    };
+    let d = diagnose(
+        &description,
+        &kuka_twin(Some(2.5), 3),
+        &kuka_twin(Some(2.5), 4),
+        &opts,
+    )
+    .unwrap();
+    eprintln!("{}", d.summary);
+    let payload = d
+        .effects
+        .iter()
+        .find(|e| e.kind == Kind::Payload)
+        .unwrap_or_else(|| panic!("no payload: {}", d.summary));
+    let mass = payload.magnitudes[0].value;
+    assert!((mass - 2.5).abs() < 0.25, "payload {mass} kg vs 2.5");
+    assert_eq!(
+        d.explained_from_description[0].kind,
+        Some(Kind::Payload),
+        "{}",
+        d.summary
+    );
+    let clean = diagnose(
+        &description,
+        &kuka_twin(None, 3),
+        &kuka_twin(None, 4),
+        &opts,
+    )
+    .unwrap();
+    eprintln!("{}", clean.summary);
+    assert!(
+        clean.effects.iter().all(|e| e.kind != Kind::Payload),
+        "{}",
+        clean.summary
+    );
 }

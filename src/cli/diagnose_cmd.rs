@@ -223,8 +223,28 @@ fn print_which(d: &Diagnosis) {
     }
 }
 
+/// FROM THE DESCRIPTION: the description's gap explained step by step.
+fn print_from_description(d: &Diagnosis) {
+    println!(
+        "\nFROM THE DESCRIPTION (validation RMS, N m, joint-samples slower than the speed threshold left out; its inertial parameters pinned until the last step)"
+    );
+    let row = |label: &str, rms: &[f64], all: f64| {
+        let per: Vec<String> = rms.iter().map(|v| format!("{v:.3}")).collect();
+        println!("  {label:<36} {} (all {all:.3})", per.join(" "));
+    };
+    row(
+        "description as given",
+        &d.gap.iter().map(|g| g.description).collect::<Vec<_>>(),
+        d.description_overall,
+    );
+    for st in &d.explained_from_description {
+        row(&st.step, &st.rms, st.overall);
+    }
+}
+
 /// HOW FAR: validation RMS per joint along the selection, and the summary.
 fn print_how_far(d: &Diagnosis) {
+    print_from_description(d);
     println!(
         "\nHOW FAR (validation RMS, N m, joint-samples slower than the speed threshold left out): the description as given -> re-identified (nominal) -> + each effect"
     );

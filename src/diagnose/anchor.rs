@@ -385,7 +385,13 @@ pub fn select(
         })
         .collect();
     let per_test = ALPHA / candidates.len().max(1) as f64;
-    let mut used: Vec<Kind> = exclude.to_vec();
+    // A kind already chosen is not offered again (at another grid value, it would fit what
+    // the chosen variant's grid point misses).
+    let mut used: Vec<Kind> = exclude
+        .iter()
+        .copied()
+        .chain(chosen.iter().map(|&v| folds.variants[v].kind))
+        .collect();
     let mut steps = vec![];
     let stop = loop {
         if steps.len() >= max {
@@ -477,13 +483,27 @@ pub fn select(
 
 /// The test against the description (docs/diagnose.md, "Absorbed effects"): candidates that
 /// identification absorbs are tested in-sample against the description's prior of relative
-/// uncertainty `eps`; each step must then pass again on the held-out data alone, or it is
-/// dropped with the reason in [`Report::stop`].
-pub(crate) fn test_description(stage: &Stage, eps: f64) -> Report {
+/// uncertainty `eps`, beside the effects `chosen` by cross-validation (free columns, variants of
+/// `stage.folds`); each step must then pass again on the held-out data alone, or it is dropped
+/// with the reason in [`Report::stop`].
+pub(crate) fn test_description(
+    stage: &Stage,
+    eps: f64,
+    chosen: &[usize],
+) -> Result<Report, crate::ident::IdentError> {
     let (model, train, validate, opts) = (stage.model, stage.train, stage.validate, stage.opts);
     let n = model.dof();
     let ms = opts.min_speed;
-    let (_, res) = residual_rms(&stage.ctx_train, train, &[], &stage.theta0, ms);
+    // The data term's noise: the residual of the model with the chosen effects.
+    let chosen_variants: Vec<_> = chosen.iter().map(|&v| stage.folds.variants[v]).collect();
+    let theta = if chosen.is_empty() {
+        stage.theta0.clone()
+    } else {
+        stage
+            .folds
+            .fit(model, &stage.all, chosen, &stage.ident_opts)?
+    };
+    let (_, res) = residual_rms(&stage.ctx_train, train, &chosen_variants, &theta, ms);
     let masked = mask_slow(train, &res, ms);
     let s2 = finite_mean_square(&masked);
     let tau_c = correlation_time(&masked, n, train.sample_rate().unwrap_or(1.0));
@@ -502,16 +522,19 @@ pub(crate) fn test_description(stage: &Stage, eps: f64) -> Report {
     let (mut steps, mut stop) = select(
         &anchor,
         &stage.folds,
-        &[],
+        chosen,
         &exclude,
         opts.selection.max_effects,
         opts.selection.tie,
     );
     // The test is in-sample: each step must pass again on the held-out data alone.
     if !steps.is_empty() {
-        let vs: Vec<_> = steps
+        // Held-out variants: the chosen effects first, then the steps.
+        let nc = chosen.len();
+        let vs: Vec<_> = chosen_variants
             .iter()
-            .map(|st| stage.folds.variants[st.variant])
+            .copied()
+            .chain(steps.iter().map(|st| stage.folds.variants[st.variant]))
             .collect();
         let vfolds = Folds::build(&stage.ctx_val, validate, 0..validate.len(), vs, 2, &[], ms);
         let vall = vfolds.sum_except(usize::MAX);
@@ -521,9 +544,10 @@ pub(crate) fn test_description(stage: &Stage, eps: f64) -> Report {
         };
         let passed = (0..steps.len())
             .take_while(|&k| {
-                let base = vfolds.columns(&(0..k).collect::<Vec<_>>());
+                let base = vfolds.columns(&(0..nc + k).collect::<Vec<_>>());
                 let d = steps[k].kind.columns(n);
-                let cand: Vec<usize> = (vfolds.offsets[k]..vfolds.offsets[k] + d).collect();
+                let at = vfolds.offsets[nc + k];
+                let cand: Vec<usize> = (at..at + d).collect();
                 held.fit(&base, &cand).statistic >= chi2_upper_quantile(d, CONFIRM_ALPHA)
             })
             .count();
@@ -535,13 +559,13 @@ pub(crate) fn test_description(stage: &Stage, eps: f64) -> Report {
             steps.truncate(passed);
         }
     }
-    Report {
+    Ok(Report {
         uncertainty: eps,
         residual_ms: s2,
         correlation_samples: tau_c,
         steps,
         stop,
-    }
+    })
 }
 
 #[cfg(test)]

@@ -65,6 +65,23 @@ impl EffectEstimate {
     }
 }
 
+/// One step of the gap from the description explained ([`super::explain`]): what it adds to
+/// the description (whose inertial parameters stay pinned until the last step) and the
+/// validation RMS with everything added so far.
+#[derive(Clone, Debug, Serialize)]
+pub struct DescriptionStep {
+    /// `+ <effect>`, `friction re-identified` or `inertial parameters re-identified`.
+    pub step: String,
+    /// The effect added (`None` for the friction and the inertial parameters).
+    pub kind: Option<Kind>,
+    /// Its grid value (0 without a grid).
+    pub param: f64,
+    /// Validation RMS per joint (N m).
+    pub rms: Vec<f64>,
+    /// Over all joints (N m).
+    pub overall: f64,
+}
+
 /// Validation error of one joint along the selection.
 #[derive(Clone, Debug, Serialize)]
 pub struct JointGap {
@@ -136,6 +153,10 @@ pub struct Diagnosis {
     /// Validation RMS over all joints of the description as given (N m): the sim-to-real gap
     /// before anything is re-identified.
     pub description_overall: f64,
+    /// The description's gap explained step by step, largest first (the description pinned,
+    /// then each selected effect or the friction freed; last, the inertial parameters
+    /// re-identified).
+    pub explained_from_description: Vec<DescriptionStep>,
     /// Validation RMS over all joints: nominal, then after each effect (N m).
     pub overall: Vec<f64>,
     /// Per selected effect: whether adding it lowered the validation RMS (held-out data, not

@@ -115,6 +115,9 @@ pub(super) struct KindSpec {
     pub linearized: bool,
     /// A model with rotors carries this effect among its own parameters (the rotors' inertia).
     pub rotor_parameter: bool,
+    /// The columns approximate the effect by more than a linearization (reflected inertia
+    /// without the rotor's gyroscopic terms).
+    pub approximate: bool,
     pub grid: Grid,
     pub fill: Fill,
     pub magnitudes: Magnitudes,
@@ -137,6 +140,7 @@ const fn row(kind: Kind, name: &'static str, columns: ColumnCount, fill: Fill) -
         in_model_span: false,
         linearized: false,
         rotor_parameter: false,
+        approximate: false,
         grid: Grid::None,
         fill,
         magnitudes: same,
@@ -305,6 +309,7 @@ pub(super) const KIND_TABLE: [KindSpec; 13] = {
             non_negative: true,
             magnitude: ("reflected inertia", "kg m^2"),
             rotor_parameter: true,
+            approximate: true,
             description: Some(Model::with_rotors_frozen),
             blind: Blind::Single,
             draw: |m, _, _| {
@@ -462,6 +467,13 @@ impl Kind {
     /// Whether the columns are linearized about the nominal model (they need `θ̂₀`).
     pub fn linearized(&self) -> bool {
         self.spec().linearized
+    }
+
+    /// Whether the columns only approximate the effect (linearized about the nominal model, or
+    /// reflected rotor inertia without gyroscopic terms): what they miss biases the parameters,
+    /// so the test against the description does not run beside such an effect.
+    pub fn approximate(&self) -> bool {
+        self.spec().linearized || self.spec().approximate
     }
 
     /// Whether a model with rotors carries this effect among its own parameters (reflected

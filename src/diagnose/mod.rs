@@ -22,6 +22,7 @@ pub mod anchor;
 pub mod breakdown;
 pub mod calibrate;
 mod diagnosis;
+mod explain;
 mod gap;
 mod kinds;
 pub mod library;
@@ -37,12 +38,14 @@ mod verdict;
 use crate::ident::{self, NormalEquations};
 use crate::model::Model;
 use crate::trajectory::Trajectory;
-use library::Context;
+use library::{Context, Kind};
 use nalgebra::DVector;
 
 pub use crate::ident::analysis::residuals;
 pub use breakdown::{breakdown, Breakdown, Regime};
-pub use diagnosis::{Diagnosis, EffectEstimate, Evidence, JointGap, Magnitude, Verdict};
+pub use diagnosis::{
+    DescriptionStep, Diagnosis, EffectEstimate, Evidence, JointGap, Magnitude, Verdict,
+};
 pub use kinds::separate_by;
 pub use magnitude::magnitudes_of;
 pub use options::{DiagnoseError, Options};
@@ -92,23 +95,28 @@ pub fn diagnose(
     let stage = Stage::new(model, train, validate, opts, nominal.theta.clone());
     let selection =
         select::forward_select(&stage.folds, model, &stage.ident_opts, &opts.selection)?;
-    // Absorbed effects, against the description when its uncertainty is stated and the
-    // cross-validation claims nothing: a visible effect's columns are linearized (a delay to
-    // first order, a rotor without its gyroscopic terms), and what they miss biases θ in ways
-    // the prior test would misread as an absorbed effect.
+    // Absorbed effects, against the description when its uncertainty is stated, beside what
+    // cross-validation chose, unless a chosen effect's columns only approximate it (a delay to
+    // first order, a rotor without its gyroscopic terms): what they miss biases θ in ways the
+    // prior test would misread as an absorbed effect.
+    let linearized: Vec<Kind> = selection
+        .chosen
+        .iter()
+        .map(|&v| stage.folds.variants[v].kind)
+        .filter(|k| k.approximate())
+        .collect();
     let description_test = match opts.description_uncertainty {
-        Some(eps) if selection.chosen.is_empty() => Some(anchor::test_description(&stage, eps)),
+        Some(eps) if linearized.is_empty() => {
+            Some(anchor::test_description(&stage, eps, &selection.chosen)?)
+        }
         _ => None,
     };
     let description_test_skipped = (opts.description_uncertainty.is_some()
         && description_test.is_none())
     .then(|| {
         format!(
-            "not run: cross-validation selected {}, and the test against the description runs only when it selects nothing (a visible effect's linearized columns would bias the parameters the test compares)",
-            library::names(
-                &selection.steps.iter().map(|s| s.kind).collect::<Vec<_>>(),
-                false
-            )
+            "not run: cross-validation selected {}, whose columns only approximate it (linearized about the nominal model, or a rotor without its gyroscopic terms); what they miss would bias the parameters the test compares",
+            library::names(&linearized, false)
         )
     });
     let anchored: &[anchor::Step] = description_test.as_ref().map_or(&[], |r| &r.steps);
@@ -123,6 +131,7 @@ pub fn diagnose(
     let mut effects = magnitude::cross_validated(&stage, &selection, &ladder.final_theta);
     effects.extend(magnitude::against_description(&stage, anchored));
     let how_far = gap::how_far(&stage, &chosen, n_cv, &ladder)?;
+    let explained_from_description = explain::from_description(&stage, &chosen, &ladder);
     let verdict = verdict::verdict(
         selection.steps.len(),
         anchored.len(),
@@ -137,12 +146,14 @@ pub fn diagnose(
         Verdict::Unexplained | Verdict::NoEffect if short => Verdict::Undecided,
         v => v,
     };
+    let description_overall = mean_square(&ladder.description_rms).sqrt();
     let mut summary = format!(
         "the description as given predicts the validation data with {:.3} N m RMS (re-identified: {:.3} N m); {}",
-        mean_square(&ladder.description_rms).sqrt(),
+        description_overall,
         how_far.overall[0],
         verdict::summary(verdict, &effects, n_cv, &how_far, description_test.as_ref())
     );
+    summary += &explain::summary(&explained_from_description, description_overall);
     if verdict == Verdict::Undecided {
         summary += &format!(
             " (only {train_seconds:.1} s of training data, below the {} s on which a verdict of \"unexplained\" or \"no effect\" can be trusted: record longer runs)",
@@ -165,7 +176,8 @@ pub fn diagnose(
         description_test_skipped,
         effects,
         gap: how_far.gap,
-        description_overall: mean_square(&ladder.description_rms).sqrt(),
+        description_overall,
+        explained_from_description,
         overall: how_far.overall,
         noise_floor: how_far.floor_ms.sqrt(),
         gap_closed: how_far.gap_closed,
