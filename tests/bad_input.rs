@@ -62,6 +62,7 @@ fn scenario_values_that_hung_or_panicked_are_refused_by_key() {
         mass: 1.0,
         com: [0.0, 1e200, 0.0],
         radius: 0.03,
+        body: None,
     }];
     assert_eq!(sc.validate(n).unwrap_err().key, "effects[0].com");
     assert!(base.validate(n).is_ok());

@@ -470,6 +470,7 @@ fn a_payload_on_the_last_body_is_revealed_by_the_description() {
             mass: 0.6,
             com: [com.x, com.y, com.z],
             radius: 0.03,
+            body: None,
         }],
         9,
         Some(0.1),
@@ -528,6 +529,7 @@ fn joined_runs_of_one_motion_keep_their_difference_out_of_the_noise_floor() {
         mass: 2.0,
         com: [0.0, 0.0, -0.2],
         radius: 0.03,
+        body: None,
     };
     let mut run = |seed: u64, effects: Vec<EffectSpec>| {
         sc.simulation.seed = seed;
@@ -639,6 +641,7 @@ fn a_payload_beside_a_visible_effect_is_still_tested_against_the_description() {
             mass: 0.6,
             com: [com.x, com.y, com.z],
             radius: 0.03,
+            body: None,
         },
     ];
     let d = diagnosed_against_description(effects, 5, Some(0.1));
@@ -663,14 +666,17 @@ fn a_payload_beside_a_visible_effect_is_still_tested_against_the_description() {
     );
 }
 
-/// The KUKA LWR4+ URDF as the description; the simulated robot is that URDF with `payload`
-/// (kg, on the last link) and Stribeck friction, 30 s of Fourier excitation at 500 Hz (seed
-/// `seed`).
-fn kuka_twin(payload: Option<f64>, seed: u64) -> physid::trajectory::Trajectory {
+/// The KUKA LWR4+ URDF as the description; the simulated robot is that URDF with a payload
+/// (`(kg, body number, centre in the body's frame)`) and Stribeck friction, 30 s of Fourier
+/// excitation at 500 Hz (seed `seed`).
+fn kuka_twin(payload: Option<(f64, usize, [f64; 3])>, seed: u64) -> physid::trajectory::Trajectory {
     let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR"));
     let urdf = root.join("data/kuka_lwr4/kuka_lwr4.urdf");
-    let payload = payload.map_or(String::new(), |mass| {
-        format!("[[effects]]\nkind = \"payload\"\nmass = {mass}\ncom = [0.0, 0.0, 0.05]\nradius = 0.04\n")
+    let payload = payload.map_or(String::new(), |(mass, body, c)| {
+        format!(
+            "[[effects]]\nkind = \"payload\"\nmass = {mass}\nbody = {body}\ncom = [{}, {}, {}]\nradius = 0.04\n",
+            c[0], c[1], c[2]
+        )
     });
     let text = format!(
         r#"[robot]
@@ -724,10 +730,11 @@ fn the_kuka_twin_finds_its_withheld_payload_and_claims_none_without() {
         description_uncertainty: Some(0.1),
         ..Default::default()
     };
+    let load = Some((2.5, 7, [0.0, 0.0, 0.05]));
     let d = diagnose(
         &description,
-        &kuka_twin(Some(2.5), 3),
-        &kuka_twin(Some(2.5), 4),
+        &kuka_twin(load, 3),
+        &kuka_twin(load, 4),
         &opts,
     )
     .unwrap();
@@ -757,5 +764,47 @@ fn the_kuka_twin_finds_its_withheld_payload_and_claims_none_without() {
         clean.effects.iter().all(|e| e.kind != Kind::Payload),
         "{}",
         clean.summary
+    );
+}
+
+#[test]
+fn a_payload_on_an_inner_link_of_the_kuka_twin_is_found_on_that_link() {
+    // The description test searches the payload over the bodies: 2 kg on the fifth link
+    // (lwr_4_link, of seven) is attributed to it, with its mass. (On links whose mass the
+    // motion does not separate from their neighbours', e.g. the third here, the link is found
+    // but the mass's standard error says it is not identified.)
+    let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR"));
+    let (description, _) = physid::io::load_robot_with(
+        root.join("data/kuka_lwr4/kuka_lwr4.urdf").to_str().unwrap(),
+        &Default::default(),
+    )
+    .unwrap();
+    let opts = DiagOptions {
+        description_uncertainty: Some(0.1),
+        every_body: true,
+        ..Default::default()
+    };
+    let load = Some((2.0, 5, [0.0, 0.05, 0.1]));
+    let d = diagnose(
+        &description,
+        &kuka_twin(load, 3),
+        &kuka_twin(load, 4),
+        &opts,
+    )
+    .unwrap();
+    eprintln!("{}", d.summary);
+    let e = d
+        .effects
+        .iter()
+        .find(|e| e.kind == Kind::Payload)
+        .unwrap_or_else(|| panic!("no payload: {}", d.summary));
+    assert_eq!(e.param, 5.0, "body {}: {}", e.param, d.summary);
+    let mass = &e.magnitudes[0];
+    assert_eq!(mass.joint, description.bodies[4].joint_name);
+    assert!(
+        (mass.value - 2.0).abs() < 0.3 && mass.se < 0.5,
+        "payload {} ± {} kg vs 2",
+        mass.value,
+        mass.se
     );
 }

@@ -157,6 +157,7 @@ fn tilt_and_payload_change_the_robot_not_the_model() {
             mass: 0.5,
             com: [0.0, 0.0, -0.345],
             radius: 0.03,
+            body: None,
         },
     ] {
         let (rec, nominal, sc) = with(vec![effect.clone()]);

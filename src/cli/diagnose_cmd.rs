@@ -41,6 +41,10 @@ pub struct Args {
     /// (torque gain, tilt, payload). Off without it.
     #[arg(long, allow_negative_numbers = true)]
     description_uncertainty: Option<f64>,
+    /// Search a payload over every body, not only the last (with --description-uncertainty;
+    /// inner bodies are found only where the motion separates their parameters).
+    #[arg(long)]
+    payload_any_body: bool,
 }
 
 /// `physid diagnose`.
@@ -49,6 +53,7 @@ pub fn run(a: Args) -> anyhow::Result<()> {
         constraints: a.constraints,
         processing_cutoff: a.cutoff,
         description_uncertainty: a.description_uncertainty,
+        every_body: a.payload_any_body,
         ..Default::default()
     };
     opts.validate().map_err(|e| match e {

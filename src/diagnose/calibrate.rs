@@ -41,6 +41,11 @@ impl Options {
     /// Checks the values: the identification's, terms unique with a positive grid value where
     /// the kind has a grid, a positive cutoff.
     pub fn validate(&self) -> Result<(), IdentError> {
+        self.validate_for(usize::MAX)
+    }
+
+    /// [`Options::validate`] for a robot of `n` joints (a payload's body number at most `n`).
+    pub fn validate_for(&self, n: usize) -> Result<(), IdentError> {
         self.ident.validate()?;
         let cutoff = self.processing_cutoff;
         if !(cutoff > 0.0 && cutoff.is_finite()) {
@@ -58,11 +63,10 @@ impl Options {
                     reason: "each kind may be given once",
                 });
             }
-            if t.kind.grid().len() > 1 && !(t.param > 0.0 && t.param.is_finite()) {
+            if t.kind.gridded() && !t.kind.valid_param(t.param, n) {
                 return Err(IdentError::InvalidTerm {
                     term: term(),
-                    reason:
-                        "needs a positive value (stribeck:<velocity rad/s>, cogging:<harmonic>)",
+                    reason: "needs a valid value (stribeck:<velocity rad/s > 0>, cogging:<harmonic > 0>, payload:<body number 1..n>)",
                 });
             }
         }
@@ -107,7 +111,7 @@ pub struct Calibration {
 
 /// Identifies `model` with `opts.terms` on `runs` (their normal equations summed).
 pub fn calibrate(model: &Model, runs: &[Run], opts: &Options) -> Result<Calibration, IdentError> {
-    opts.validate()?;
+    opts.validate_for(model.dof())?;
     let prior = model.parameters();
     let rigid = runs.iter().fold(
         NormalEquations::new(model.dof(), model.layout().len).finish(),
@@ -286,9 +290,12 @@ pub fn parse_term(s: &str) -> Result<Variant, String> {
                 library::names(&Kind::ALL, false)
             )
         })?;
-    let gridded = kind.grid().len() > 1;
-    match (gridded, value) {
+    match (kind.gridded(), value) {
         (true, Some(v)) => Ok(Variant { kind, param: v }),
+        (true, None) if kind.default_param().is_some() => Ok(Variant {
+            kind,
+            param: kind.default_param().unwrap_or(0.0),
+        }),
         (true, None) => Err(format!(
             "'{s}' needs its value: {}:<{}>",
             kind.name(),

@@ -48,9 +48,10 @@ pub enum Kind {
     /// Backlash read by a motor-side encoder: `q_logged = q + (b/2) sign(τ)` (b = dead-zone
     /// width, rad per joint; the sign from the logged torque).
     Backlash,
-    /// An unmodelled payload on the last body: ten inertial parameters `π_p` added to it (the
-    /// last body's own regressor columns; reported as its mass, kg). Its columns lie in the
-    /// model's span, so only the test against the description can find it.
+    /// An unmodelled payload on one body (searched over the bodies): ten inertial parameters
+    /// `π_p` added to it (that body's own regressor columns; reported as its mass, kg), so also
+    /// any change of one body's parameters. Its columns lie in the model's span, so only the
+    /// test against the description can find it.
     Payload,
 }
 
@@ -72,6 +73,8 @@ pub(super) enum Grid {
     StribeckVelocity,
     /// Cogging harmonics per rotor revolution: 1..=8.
     CoggingHarmonic,
+    /// The body it acts on, numbered from 1 in body order (0, the default: the last body).
+    Body,
 }
 
 /// Where the blind benchmark draws a kind.
@@ -381,16 +384,18 @@ pub(super) const KIND_TABLE: [KindSpec; 13] = {
             })
         },
         KindSpec {
-            magnitude: ("payload mass on the last body", "kg"),
+            magnitude: ("payload mass", "kg"),
             in_model_span: true,
+            grid: Grid::Body,
             magnitudes: |c, _, _| vec![c[0]],
             blind: Blind::Single,
             draw: draw_payload,
+            // The body's own columns (links come first in θ, ten each).
             ..row(Kind::Payload, "payload", Fixed(10), |_, s, _, z, c| {
-                let last = 10 * (s.n - 1);
+                let at = 10 * body_index(s.param, s.n);
                 for i in 0..s.n {
                     for m in 0..10 {
-                        z[(i, c + m)] = z[(i, last + m)];
+                        z[(i, c + m)] = z[(i, at + m)];
                     }
                 }
             })
@@ -482,13 +487,37 @@ impl Kind {
         self.spec().rotor_parameter
     }
 
-    /// The grid of the one-dimensional search, if any: Stribeck velocities (rad/s, ratio √2)
-    /// and cogging harmonics (per rotor revolution).
-    pub fn grid(&self) -> Vec<f64> {
+    /// The grid of the one-dimensional search for a robot of `n` joints, if any: Stribeck
+    /// velocities (rad/s, ratio √2), cogging harmonics (per rotor revolution), bodies (numbered
+    /// from 1).
+    pub fn grid(&self, n: usize) -> Vec<f64> {
         match self.spec().grid {
             Grid::StribeckVelocity => (0..10).map(|i| 0.04 * 2f64.powf(i as f64 / 2.0)).collect(),
             Grid::CoggingHarmonic => (1..=8).map(f64::from).collect(),
+            Grid::Body => (1..=n).map(|b| b as f64).collect(),
             Grid::None => vec![0.0],
+        }
+    }
+
+    /// Whether the kind has a grid.
+    pub fn gridded(&self) -> bool {
+        self.spec().grid != Grid::None
+    }
+
+    /// The grid value a term takes when none is given (`None`: one must be given).
+    pub fn default_param(&self) -> Option<f64> {
+        match self.spec().grid {
+            Grid::None | Grid::Body => Some(0.0),
+            Grid::StribeckVelocity | Grid::CoggingHarmonic => None,
+        }
+    }
+
+    /// Whether `param` is a valid grid value of this kind for `n` joints.
+    pub fn valid_param(&self, param: f64, n: usize) -> bool {
+        match self.spec().grid {
+            Grid::None => param == 0.0,
+            Grid::Body => param.fract() == 0.0 && param >= 0.0 && param <= n as f64,
+            Grid::StribeckVelocity | Grid::CoggingHarmonic => param.is_finite() && param > 0.0,
         }
     }
 
@@ -497,8 +526,14 @@ impl Kind {
         match self.spec().grid {
             Grid::StribeckVelocity => "Stribeck velocity, rad/s",
             Grid::CoggingHarmonic => "harmonic per rotor revolution",
+            Grid::Body => "body number from 1, default the last",
             Grid::None => "",
         }
+    }
+
+    /// The body (index) a single magnitude belongs to, for kinds searched over bodies.
+    pub fn body(&self, param: f64, n: usize) -> Option<usize> {
+        (self.spec().grid == Grid::Body).then(|| body_index(param, n))
     }
 
     /// The scenario effect that replays calibrated coefficients `c` (grid value `param`, data
@@ -565,6 +600,15 @@ pub fn separate_by(a: Kind, b: Kind) -> String {
         (Stribeck, AsymmetricCoulomb) | (TorqueOffset, Stribeck) => "slow motion in both directions (q̇ within the Stribeck velocity)".into(),
         (RotorInertia, Compliance) | (TimeDelay, Compliance) | (TimeDelay, RotorInertia) => "faster excitation (the terms scale with q̈, τ̇ and τ̈ differently with frequency)".into(),
         _ => "an excitation on which their regressor columns differ more (other joint ranges, speeds and torque levels)".into(),
+    }
+}
+
+/// The body index of a body-grid value (numbered from 1; 0: the last of `n`).
+fn body_index(param: f64, n: usize) -> usize {
+    if param >= 1.0 {
+        (param as usize - 1).min(n - 1)
+    } else {
+        n - 1
     }
 }
 
@@ -723,13 +767,15 @@ fn draw_tilt(_: &Model, rng: &mut ChaCha8Rng, _: f64) -> (Option<EffectSpec>, Ve
     (Some(spec), vec![angle])
 }
 
-/// A 0.3–1 kg sphere of 3 cm radius between the middle and the far end of the last body
-/// (taken as twice its bounding ellipsoid's centre from the joint).
+/// A 0.3–1 kg sphere of 3 cm radius on the last body, between the middle and the far end of
+/// it (taken as twice its bounding ellipsoid's centre from the joint). (Inner bodies are not
+/// drawn: on the leg their payloads are mostly not separable from the neighbours' parameters,
+/// docs/diagnose.md.)
 fn draw_payload(model: &Model, rng: &mut ChaCha8Rng, _: f64) -> (Option<EffectSpec>, Vec<f64>) {
     let n = model.dof();
     let mass = uniform(rng, 0.3, 1.0);
-    let last = &model.bodies[n - 1];
-    let tip = last
+    let body = n;
+    let tip = model.bodies[body - 1]
         .bounding
         .as_ref()
         .map_or(Vector3::zeros(), |e| e.center * 2.0);
@@ -738,6 +784,7 @@ fn draw_payload(model: &Model, rng: &mut ChaCha8Rng, _: f64) -> (Option<EffectSp
         mass,
         com: [s * tip.x, s * tip.y, s * tip.z],
         radius: 0.03,
+        body: None,
     };
     (Some(spec), vec![mass])
 }
@@ -772,7 +819,15 @@ mod tests {
         }
         assert_eq!(Kind::Cogging.columns(3), 6);
         assert_eq!(Kind::Payload.columns(7), 10);
-        assert_eq!(Kind::Stribeck.grid().len(), 10);
+        assert_eq!(Kind::Stribeck.grid(3).len(), 10);
+        assert_eq!(
+            Kind::Payload.grid(7),
+            vec![1.0, 2.0, 3.0, 4.0, 5.0, 6.0, 7.0]
+        );
+        assert_eq!(
+            (body_index(0.0, 7), body_index(1.0, 7), body_index(7.0, 7)),
+            (6, 0, 6)
+        );
     }
 
     #[test]

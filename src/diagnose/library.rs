@@ -59,11 +59,11 @@ pub struct Variant {
 }
 
 /// Every variant of `kinds`.
-pub fn variants(kinds: &[Kind]) -> Vec<Variant> {
+pub fn variants(kinds: &[Kind], n: usize) -> Vec<Variant> {
     kinds
         .iter()
         .flat_map(|&kind| {
-            kind.grid()
+            kind.grid(n)
                 .into_iter()
                 .map(move |param| Variant { kind, param })
         })

@@ -4,7 +4,7 @@
 //! of its columns that the rigid-body regressor does not explain.
 
 use super::anchor;
-use super::library::Kind;
+use super::library::{Kind, Variant};
 use super::select::Selection;
 use super::{separate_by, EffectEstimate, Evidence, Magnitude, Stage};
 use nalgebra::{DMatrix, DVector};
@@ -57,11 +57,14 @@ impl<'a> Identifiable<'a> {
 }
 
 /// The joint a magnitude belongs to, or `"robot"` for a single robot-wide value.
-fn joint_label(stage: &Stage, single: bool, i: usize) -> String {
-    if single {
-        "robot".to_string()
-    } else {
-        stage.model.bodies[i].joint_name.clone()
+/// A single magnitude of a kind searched over bodies belongs to that body (named by its
+/// joint).
+fn joint_label(stage: &Stage, single: bool, i: usize, variant: Variant) -> String {
+    let n = stage.model.dof();
+    match (single, variant.kind.body(variant.param, n)) {
+        (true, Some(b)) => stage.model.bodies[b].joint_name.clone(),
+        (true, None) => "robot".to_string(),
+        (false, _) => stage.model.bodies[i].joint_name.clone(),
     }
 }
 
@@ -112,7 +115,7 @@ pub(crate) fn cross_validated(
                         .collect()
                 };
                 Magnitude {
-                    joint: joint_label(stage, single, i),
+                    joint: joint_label(stage, single, i, v),
                     value,
                     se: jackknife_se(&jackknife, i),
                     unit: unit.into(),
@@ -162,7 +165,7 @@ pub(crate) fn against_description(stage: &Stage, steps: &[anchor::Step]) -> Vec<
                 .iter()
                 .enumerate()
                 .map(|(i, &value)| Magnitude {
-                    joint: joint_label(stage, single, i),
+                    joint: joint_label(stage, single, i, v),
                     value,
                     se: magnitude_se(v.kind, &st.beta, &st.se, n, g, i),
                     unit: unit.into(),

@@ -250,7 +250,7 @@ impl<'a> Stage<'a> {
             &ctx_train,
             train,
             0..train.len(),
-            library::variants(&opts.kinds),
+            offered_variants(opts, model.dof()),
             opts.selection.folds.max(2),
             &opts.train_runs,
             opts.min_speed,
@@ -269,6 +269,19 @@ impl<'a> Stage<'a> {
             all,
         }
     }
+}
+
+/// The variants of `opts.kinds` offered for a robot of `n` joints: kinds that act on one body
+/// on the last body only unless `opts.every_body`.
+fn offered_variants(opts: &Options, n: usize) -> Vec<library::Variant> {
+    library::variants(&opts.kinds, n)
+        .into_iter()
+        .filter(|v| {
+            v.kind
+                .body(v.param, n)
+                .is_none_or(|b| opts.every_body || b == n - 1)
+        })
+        .collect()
 }
 
 /// The diagnosis of runs as a user gives them: training runs and validation runs, each joined

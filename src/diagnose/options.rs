@@ -32,6 +32,10 @@ pub struct Options {
     /// (the verdicts were measured on 20 s and more). Such a verdict becomes
     /// [`super::Verdict::Undecided`].
     pub min_decisive_seconds: f64,
+    /// Search effects that act on one body (a payload) over every body; otherwise only the
+    /// last body is offered (inner bodies' parameters are often not separable from their
+    /// neighbours', and the search then claims more falsely: docs/diagnose.md).
+    pub every_body: bool,
 }
 
 impl Default for Options {
@@ -46,6 +50,7 @@ impl Default for Options {
             unexplained_ratio: 1.45,
             description_uncertainty: None,
             min_decisive_seconds: 10.0,
+            every_body: false,
         }
     }
 }

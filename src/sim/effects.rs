@@ -126,15 +126,20 @@ pub fn true_robot(model: &Model, effects: &[EffectSpec]) -> Model {
                     rot_axis_angle(&Vector3::y(), *pitch) * rot_axis_angle(&Vector3::x(), *roll);
                 m = m.clone().with_gravity(r.transpose() * m.gravity);
             }
-            EffectSpec::Payload { mass, com, radius } => {
-                let last = m.dof() - 1;
+            EffectSpec::Payload {
+                mass,
+                com,
+                radius,
+                body,
+            } => {
+                let on = body.map_or(m.dof() - 1, |b| b - 1);
                 let sphere = InertialParams::from_mass_com_inertia(
                     *mass,
                     &Vector3::from(*com),
                     &(Matrix3::identity() * (0.4 * mass * radius * radius)),
                 );
                 let mut bodies = m.bodies.clone();
-                bodies[last].inertia = InertialParams(bodies[last].inertia.0 + sphere.0);
+                bodies[on].inertia = InertialParams(bodies[on].inertia.0 + sphere.0);
                 m = Model::new(m.name.clone(), bodies, m.gravity)
                     .expect("adding a payload keeps the model valid")
                     .with_rotor_model(m.rotor_model);

@@ -332,8 +332,8 @@ pub enum EffectSpec {
         /// Pitch (rad).
         pitch: f64,
     },
-    /// An unmodelled payload on the last body: a solid sphere of `mass` (kg) and `radius` (m)
-    /// centred at `com` (m, last body frame).
+    /// An unmodelled payload: a solid sphere of `mass` (kg) and `radius` (m) centred at `com`
+    /// (m, in the frame of body number `body`, 1 = the first moving body; default the last).
     Payload {
         /// Mass (kg).
         mass: f64,
@@ -342,6 +342,9 @@ pub enum EffectSpec {
         /// Radius (m).
         #[serde(default)]
         radius: f64,
+        /// The body carrying it, numbered from 1 in body order (default: the last).
+        #[serde(default)]
+        body: Option<usize>,
     },
 }
 
@@ -607,8 +610,17 @@ impl EffectSpec {
             EffectSpec::Compliance { stiffness } => format!("stiffness = {}", l(stiffness)),
             EffectSpec::Backlash { width } => format!("width = {}", l(width)),
             EffectSpec::Tilt { roll, pitch } => format!("roll = {roll:.6e}\npitch = {pitch:.6e}"),
-            EffectSpec::Payload { mass, com, radius } => {
-                format!("mass = {mass:.6e}\ncom = {}\nradius = {radius:.6e}", l(com))
+            EffectSpec::Payload {
+                mass,
+                com,
+                radius,
+                body,
+            } => {
+                let on = body.map_or(String::new(), |b| format!("\nbody = {b}"));
+                format!(
+                    "mass = {mass:.6e}\ncom = {}\nradius = {radius:.6e}{on}",
+                    l(com)
+                )
             }
         }
     }
@@ -687,7 +699,17 @@ impl EffectSpec {
                     || "roll and pitch must be finite and below 1 rad".into(),
                 )?;
             }
-            EffectSpec::Payload { mass, com, radius } => {
+            EffectSpec::Payload {
+                mass,
+                com,
+                radius,
+                body,
+            } => {
+                if let Some(b) = body {
+                    check((1..=n).contains(b), &k("body"), || {
+                        format!("{b} is not a body number 1 to {n}")
+                    })?;
+                }
                 positive(*mass, &k("mass"))?;
                 non_negative(*radius, &k("radius"))?;
                 check(
