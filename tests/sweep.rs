@@ -117,3 +117,45 @@ fn bad_grid_values_fail_before_running_and_name_the_key() {
     ]);
     assert!(code == 2 && out.contains("torque_nois"), "{out}");
 }
+
+#[test]
+fn a_changed_configuration_never_reuses_a_cell() {
+    // The same --out, sizes changed from [30, 300] to [50]: the new cells are computed, the
+    // old ones are reported as another configuration's and left out of the merged table.
+    let dir = tempfile::tempdir().unwrap();
+    let sweep = sweep_file(dir.path(), "\"sensors.torque_noise\" = [0.3]");
+    let out_dir = dir.path().join("out");
+    let out = out_dir.to_str().unwrap();
+    let (code, log) = physid(&["sweep", &sweep, "--out", out, "--threads", "1"]);
+    assert!(
+        code == 0 && log.contains("2 cells, 0 already done, 2 to run"),
+        "{log}"
+    );
+    let text = std::fs::read_to_string(&sweep)
+        .unwrap()
+        .replace("sizes = [30, 300]", "sizes = [50]");
+    std::fs::write(&sweep, text).unwrap();
+    let (code, log) = physid(&["sweep", &sweep, "--out", out, "--threads", "1"]);
+    assert!(
+        code == 0
+            && log.contains("2 cells, 0 already done, 2 to run")
+            && log.contains("2 cell files")
+            && log.contains("another configuration"),
+        "{log}"
+    );
+    let rows = std::fs::read_to_string(out_dir.join("rows.csv")).unwrap();
+    let header: Vec<&str> = rows.lines().next().unwrap().split(',').collect();
+    let n_s = header.iter().position(|h| *h == "n_s").unwrap();
+    let sizes: std::collections::BTreeSet<&str> = rows
+        .lines()
+        .skip(1)
+        .map(|l| l.split(',').nth(n_s).unwrap())
+        .collect();
+    assert_eq!(sizes.into_iter().collect::<Vec<_>>(), vec!["50"], "{rows}");
+    // Run again unchanged: everything is reused.
+    let (code, log) = physid(&["sweep", &sweep, "--out", out, "--threads", "1"]);
+    assert!(
+        code == 0 && log.contains("2 already done, 0 to run"),
+        "{log}"
+    );
+}

@@ -47,15 +47,9 @@ pub fn run(a: Args) -> anyhow::Result<()> {
         .map_err(|e| anyhow::anyhow!("{}: {e}", path.display()))?;
     let out =
         out.unwrap_or_else(|| PathBuf::from("results").join(path.file_stem().unwrap_or_default()));
-    let all = sweep::cells(&spec);
-    // Check every grid point before creating or running anything: a bad value fails fast,
-    // naming it, and leaves no empty result behind.
-    let mut seen = std::collections::BTreeSet::new();
-    for c in &all {
-        if seen.insert(format!("{:?}", c.point)) {
-            sweep::scenario_at(&base, &scenario_path, &c.point)?;
-        }
-    }
+    // Every grid point is resolved (and checked) before anything is created or run: a bad
+    // value fails fast, naming it, and leaves no empty result behind.
+    let all = sweep::cells(&spec, &base, &scenario_path)?;
     let cells_dir = out.join("cells");
     std::fs::create_dir_all(&cells_dir)
         .with_context(|| format!("creating {}", cells_dir.display()))?;
@@ -68,6 +62,18 @@ pub fn run(a: Args) -> anyhow::Result<()> {
         .filter(|c| shard.is_none_or(|(k, n)| c.index % n == k))
         .collect();
     let todo: Vec<&sweep::Cell> = mine.iter().copied().filter(|c| !file(c).exists()).collect();
+    let current: std::collections::BTreeSet<std::path::PathBuf> = all.iter().map(file).collect();
+    let stale = std::fs::read_dir(&cells_dir)
+        .with_context(|| format!("reading {}", cells_dir.display()))?
+        .filter_map(|e| e.ok().map(|e| e.path()))
+        .filter(|p| p.extension().is_some_and(|x| x == "parquet") && !current.contains(p))
+        .count();
+    if stale > 0 {
+        eprintln!(
+            "note: {stale} cell files in {} belong to another configuration (changed sweep, scenario, robot or physid version): not used",
+            cells_dir.display()
+        );
+    }
     eprintln!(
         "{}: {} cells{}, {} already done, {} to run",
         path.display(),

@@ -16,7 +16,10 @@
 //!
 //! Each cell (one grid point and one seed) is independent and deterministic; its rows are written
 //! to `cells/<cell id>.parquet` when it finishes, so an interrupted sweep resumes by skipping the
-//! cells already present, and `--shard K/N` runs only the cells with index ≡ K (mod N), which is
+//! cells already present. A cell's id ends in a hash of everything that determines it (the
+//! resolved scenario and robot at its grid point, the experiment settings, the seed, physid's
+//! version): a changed configuration never reuses a cell, and the merge reads only the current
+//! configuration's cells (stale ones are counted and left alone); and `--shard K/N` runs only the cells with index ≡ K (mod N), which is
 //! how a cluster job array splits a large sweep (see docs/sweeps.md). The final merge reads every
 //! cell file with polars.
 
@@ -51,17 +54,37 @@ pub struct Cell {
     pub point: Point,
     /// The seed.
     pub seed: u64,
+    /// Hash (hex, 16 digits) of everything that determines the cell's rows ([`cell_key`]).
+    pub key: String,
+}
+
+/// The hash of what determines a cell's rows: the resolved scenario and robot at its grid
+/// point, the experiment settings, the seed and physid's version (BLAKE3, first 16 hex digits).
+pub fn cell_key(sc: &Scenario, model: &crate::model::Model, spec: &SweepSpec, seed: u64) -> String {
+    let text = format!(
+        "{sc:?}\n{model:?}\n{:?}\nseed {seed}\nphysid {}",
+        spec.experiment,
+        env!("CARGO_PKG_VERSION")
+    );
+    blake3::hash(text.as_bytes()).to_hex()[..16].to_string()
 }
 
 impl Cell {
-    /// A stable file-name-safe id, e.g. `0007_sensors.torque_noise=1_seed=2`.
+    /// A stable file-name-safe id, e.g. `0007_sensors.torque_noise=1_seed=2_3f2a…` (the last
+    /// part its [`Cell::key`]).
     pub fn id(&self) -> String {
         let kv: Vec<String> = self
             .point
             .iter()
             .map(|(k, v)| format!("{k}={}", value_text(v)))
             .collect();
-        let raw = format!("{:04}_{}_seed={}", self.index, kv.join("_"), self.seed);
+        let raw = format!(
+            "{:04}_{}_seed={}_{}",
+            self.index,
+            kv.join("_"),
+            self.seed,
+            self.key
+        );
         raw.chars()
             .map(|c| {
                 if c.is_ascii_alphanumeric() || "._=-".contains(c) {
@@ -100,8 +123,10 @@ pub fn load(path: &Path) -> Result<(SweepSpec, PathBuf, String), IoError> {
     Ok((spec, scenario, base))
 }
 
-/// All cells, grid points in lexicographic order of the keys (last key fastest), then seeds.
-pub fn cells(spec: &SweepSpec) -> Vec<Cell> {
+/// All cells, grid points in lexicographic order of the keys (last key fastest), then seeds,
+/// each keyed by its resolved configuration ([`cell_key`]; the base scenario `base` read from
+/// `scenario_path`). Errors name the grid point whose scenario is invalid.
+pub fn cells(spec: &SweepSpec, base: &str, scenario_path: &Path) -> Result<Vec<Cell>, IoError> {
     let keys: Vec<(&String, &Vec<toml::Value>)> = spec
         .grid
         .iter()
@@ -123,15 +148,17 @@ pub fn cells(spec: &SweepSpec) -> Vec<Cell> {
         .collect();
     let mut out = vec![];
     for p in points {
+        let (sc, model) = scenario_at(base, scenario_path, &p)?;
         for &s in &seeds {
             out.push(Cell {
                 index: out.len(),
                 point: p.clone(),
                 seed: s,
+                key: cell_key(&sc, &model, spec, s),
             });
         }
     }
-    out
+    Ok(out)
 }
 
 /// The base scenario with a grid point applied (each dotted key set in the TOML tree, then the
