@@ -16,6 +16,10 @@ fn main() -> ExitCode {
     let args = cli::Cli::parse();
     match cli::run(args) {
         Ok(()) => ExitCode::SUCCESS,
+        Err(e) if e.downcast_ref::<cli::Failed>().is_some() => {
+            eprintln!("failed: {}", message(&e));
+            ExitCode::from(1)
+        }
         Err(e) => {
             eprintln!("error: {}", message(&e));
             ExitCode::from(2)

@@ -163,3 +163,42 @@ fn a_closed_output_pipe_is_not_a_panic() {
     let err = String::from_utf8_lossy(&out.stderr);
     assert!(!err.contains("panicked"), "{err}");
 }
+
+#[test]
+fn require_consistent_exits_1_naming_the_inconsistent_bodies() {
+    // Exit codes: 1 when the result fails a requirement asked for, 0 when it meets it, 2 for
+    // an error. Least squares on the real KUKA run leaves bodies physically inconsistent.
+    let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("data/kuka_lwr4");
+    let run = |set: &str, extra: &[&str]| {
+        let o = std::process::Command::new(env!("CARGO_BIN_EXE_physid"))
+            .args([
+                "identify",
+                "--data",
+                root.join("measurements_1.csv").to_str().unwrap(),
+                "--robot",
+                root.join("kuka_lwr4.urdf").to_str().unwrap(),
+                "--constraints",
+                set,
+                "--require-consistent",
+            ])
+            .args(extra)
+            .output()
+            .unwrap();
+        (
+            o.status.code(),
+            String::from_utf8_lossy(&o.stderr).to_string(),
+        )
+    };
+    let (code, err) = run("none", &[]);
+    assert_eq!(code, Some(1), "{err}");
+    assert!(
+        err.contains("failed: --require-consistent")
+            && err.contains("lwr_")
+            && err.contains("min eig J"),
+        "{err}"
+    );
+    let (code, err) = run("consistent", &["--json"]);
+    assert_eq!(code, Some(0), "{err}");
+    let (code, err) = run("consistent", &["--rows", "9:3"]);
+    assert_eq!(code, Some(2), "{err}");
+}

@@ -212,6 +212,10 @@ pub struct Args {
     /// consistent).
     #[arg(long)]
     constraints: Option<ConstraintSet>,
+    /// Exit with code 1 (after writing every output) when an identified body is not
+    /// physically consistent (J(π) not positive definite), e.g. under `--constraints none`.
+    #[arg(long)]
+    require_consistent: bool,
     /// Training samples, `a:b` (indices, end exclusive); default all. One --data file only.
     #[arg(long, allow_hyphen_values = true)]
     train: Option<String>,
@@ -445,10 +449,40 @@ pub fn run(a: Args) -> anyhow::Result<()> {
     };
     write_outputs(&a, m, &fit, &opts, &report)?;
     if a.json {
-        print_json(&a, m, &report)
+        print_json(&a, m, &report)?;
     } else {
         print_text(&a, m, &report);
+    }
+    if a.require_consistent {
+        require_consistent(&report.r)?;
+    }
+    Ok(())
+}
+
+/// `--require-consistent`: every body physically consistent (`J(π) ≻ 0`), or exit code 1
+/// naming the bodies that are not.
+fn require_consistent(r: &ident::Identified) -> anyhow::Result<()> {
+    let bad: Vec<String> = r
+        .bodies
+        .iter()
+        .filter(|b| b.consistency.min_eig_pseudo.is_nan() || b.consistency.min_eig_pseudo <= 0.0)
+        .map(|b| {
+            format!(
+                "{} (min eig J = {:.3e})",
+                b.name, b.consistency.min_eig_pseudo
+            )
+        })
+        .collect();
+    if bad.is_empty() {
         Ok(())
+    } else {
+        Err(super::Failed(format!(
+            "--require-consistent: {} of {} bodies are not physically consistent: {}",
+            bad.len(),
+            r.bodies.len(),
+            bad.join(", ")
+        ))
+        .into())
     }
 }
 

@@ -1,7 +1,9 @@
 //! The `physid` command line: one clap `Args` struct per command in its own file, each over a
 //! library entry point whose options check themselves. Errors are printed once, by `main`.
 //!
-//! Exit codes: 0 success; 2 any error (bad arguments, unreadable or invalid input, a failed
+//! Exit codes, for every command: 0 success; 1 the command ran but its result failed a
+//! requirement the user asked for (`identify --require-consistent` with a physically
+//! inconsistent body); 2 an error (bad arguments, unreadable or invalid input, a failed
 //! identification or simulation), with one message on standard error naming the file, field
 //! or sample.
 
@@ -39,6 +41,18 @@ enum Command {
     Sweep(sweep_cmd::Args),
     Dynamics(dynamics_cmd::Args),
 }
+
+/// A result that failed a requirement the user asked for: exit code 1 (not 2, an error).
+#[derive(Debug)]
+pub struct Failed(pub String);
+
+impl std::fmt::Display for Failed {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(&self.0)
+    }
+}
+
+impl std::error::Error for Failed {}
 
 /// An option error from a library `Options::validate()`, with the option named as its flag
 /// (`processing_cutoff` is `--cutoff`, other fields `--field-name`).
