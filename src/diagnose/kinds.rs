@@ -551,6 +551,15 @@ impl Kind {
             .map_or_else(|| model.clone(), |f| f(model))
     }
 
+    /// The kind a change of one body's own parameters is found as (a payload: the kind searched
+    /// over bodies).
+    pub fn body_change() -> Option<Kind> {
+        KIND_TABLE
+            .iter()
+            .find(|s| s.grid == Grid::Body)
+            .map(|s| s.kind)
+    }
+
     /// The kinds the blind benchmark draws in single-effect cases, in report order.
     pub fn blind_singles() -> Vec<Kind> {
         KIND_TABLE

@@ -34,6 +34,54 @@ pub enum Category {
     Two,
     /// One effect outside the library (quadratic damping).
     OutOfLibrary,
+    /// The robot differs from its description in a way no effect models (its friction, or
+    /// its last body's mass): the description's gap must be attributed to the change.
+    Changed,
+}
+
+/// A change of the simulated robot that its description does not carry.
+#[derive(Clone, Debug, Serialize, PartialEq)]
+#[serde(rename_all = "snake_case")]
+pub enum Change {
+    /// Every joint's viscous and Coulomb friction scaled by its factor.
+    Friction {
+        /// Factor per joint.
+        scale: Vec<f64>,
+    },
+    /// The last body's ten inertial parameters scaled (mass, first and second moments: the
+    /// same shape, another density).
+    Mass {
+        /// The factor.
+        scale: f64,
+    },
+}
+
+impl Change {
+    /// The name in the case table.
+    pub fn name(&self) -> &'static str {
+        match self {
+            Change::Friction { .. } => "friction_changed",
+            Change::Mass { .. } => "mass_changed",
+        }
+    }
+
+    /// The robot `model` with the change.
+    pub fn apply(&self, model: &Model) -> Model {
+        let mut m = model.clone();
+        match self {
+            Change::Friction { scale } => {
+                for (b, s) in m.bodies.iter_mut().zip(scale) {
+                    b.friction.viscous *= s;
+                    b.friction.coulomb *= s;
+                }
+            }
+            Change::Mass { scale } => {
+                let last = m.bodies.len() - 1;
+                m.bodies[last].inertia.0 *= *scale;
+            }
+        }
+        m
+    }
 }
 
 /// An injected effect with the magnitudes the diagnosis should find.
@@ -43,8 +91,11 @@ pub struct Injected {
     pub kind: Option<Kind>,
     /// The scenario effect (`None` for rotor inertia left out, which is a model change).
     pub spec: Option<EffectSpec>,
-    /// True magnitudes in the diagnosis's convention ([`diagnose::magnitudes_of`]).
+    /// True magnitudes in the diagnosis's convention ([`diagnose::magnitudes_of`]; for a mass
+    /// change the payload mass it amounts to, kg).
     pub magnitudes: Vec<f64>,
+    /// A change of the robot itself (category `changed`).
+    pub change: Option<Change>,
 }
 
 /// One scored case.
@@ -66,6 +117,9 @@ pub struct CaseResult {
     pub top1_unique: Option<bool>,
     /// Two: both injected kinds are among the attributions.
     pub both_found: Option<bool>,
+    /// Changed: the change leads the explanation of the description's gap (friction
+    /// re-identified first) or is found (a payload for the last body's mass).
+    pub changed_found: Option<bool>,
     /// Relative magnitude error `‖m̂ − m‖/‖m‖` over identifiable joints, when the kind is
     /// attributed.
     pub magnitude_error: Option<f64>,
@@ -92,6 +146,7 @@ pub fn draw(kind: Option<Kind>, model: &Model, rng: &mut ChaCha8Rng, rate: f64) 
             kind: None,
             magnitudes: c.clone(),
             spec: Some(EffectSpec::QuadraticDamping { coefficient: c }),
+            change: None,
         };
     };
     let (spec, magnitudes) = kind.draw(model, rng, rate);
@@ -99,21 +154,58 @@ pub fn draw(kind: Option<Kind>, model: &Model, rng: &mut ChaCha8Rng, rate: f64) 
         kind: Some(kind),
         spec,
         magnitudes,
+        change: None,
+    }
+}
+
+/// Draws change `slot` (0: friction, 1: the last body's mass) of `model`: every joint's
+/// friction ×1.5–2.5, or the last body's parameters ×1.3–1.6 or ×0.6–0.8.
+fn draw_change(slot: usize, model: &Model, rng: &mut ChaCha8Rng) -> Injected {
+    let change = if slot == 0 {
+        Change::Friction {
+            scale: (0..model.dof())
+                .map(|_| 1.5 + rng.random::<f64>())
+                .collect(),
+        }
+    } else {
+        let up = rng.random::<bool>();
+        let r = rng.random::<f64>();
+        Change::Mass {
+            scale: if up { 1.3 + 0.3 * r } else { 0.6 + 0.2 * r },
+        }
+    };
+    let magnitudes = match &change {
+        Change::Mass { scale } => {
+            vec![(scale - 1.0) * model.bodies[model.dof() - 1].inertia.mass()]
+        }
+        Change::Friction { scale } => scale.clone(),
+    };
+    Injected {
+        kind: None,
+        spec: None,
+        magnitudes,
+        change: Some(change),
     }
 }
 
 /// Clean slots at the start of each cycle of categories.
 const CLEAN_SLOTS: usize = 4;
 
-/// The category of case `i`: cycles of four clean slots, one per kind the effect table draws alone (`Kind::blind_singles`),
-/// one with two effects and one out of the library.
+/// Changed-robot slots at the end of each cycle (friction, the last body's mass).
+const CHANGED_SLOTS: usize = 2;
+
+/// The category of case `i`: cycles of four clean slots, one per kind the effect table draws
+/// alone (`Kind::blind_singles`), one with two effects, one out of the library and two of a
+/// changed robot.
 pub fn category(i: usize) -> (Category, Option<usize>) {
     let singles = Kind::blind_singles().len();
-    match i % (CLEAN_SLOTS + singles + 2) {
+    let out = CLEAN_SLOTS + singles + 1;
+    match i % (out + 1 + CHANGED_SLOTS) {
         s if s < CLEAN_SLOTS => (Category::Clean, None),
         s if s < CLEAN_SLOTS + singles => (Category::Single, Some(s - CLEAN_SLOTS)),
         s if s == CLEAN_SLOTS + singles => (Category::Two, None),
-        _ => (Category::OutOfLibrary, None),
+        s if s == out => (Category::OutOfLibrary, None),
+        s => (Category::Changed, Some(s - out - 1)),
     }
 }
 
@@ -295,6 +387,7 @@ fn injections(i: usize, seed: u64, model: &Model, rate: f64) -> (Category, Vec<I
             ]
         }
         Category::OutOfLibrary => vec![draw(None, model, &mut rng, rate)],
+        Category::Changed => vec![draw_change(slot.expect("changed"), model, &mut rng)],
     };
     (category, injected)
 }
@@ -343,8 +436,12 @@ pub fn run_case(
     sc.effects = injected.iter().filter_map(|x| x.spec.clone()).collect();
     sc.validate(model.dof())
         .map_err(|source| BlindError::Scenario { case: i, source })?;
+    let truth = injected
+        .iter()
+        .filter_map(|x| x.change.as_ref())
+        .fold(model.clone(), |m, c| c.apply(&m));
     let rec =
-        crate::sim::run(model, &sc, &mut |_| {}).map_err(|source| BlindError::Simulation {
+        crate::sim::run(&truth, &sc, &mut |_| {}).map_err(|source| BlindError::Simulation {
             case: i,
             twin: false,
             source,
@@ -395,54 +492,87 @@ pub fn run_case(
         .iter()
         .map(|e| e.group().map(|k| k.name()).collect::<Vec<_>>().join("|"))
         .collect();
-    let in_first = |k: Kind| d.effects.first().is_some_and(|e| e.group().any(|g| g == k));
-    let anywhere = |k: Kind| d.effects.iter().any(|e| e.group().any(|g| g == k));
-    let (mut top1, mut top1_unique, mut both_found, mut magnitude_error_) =
-        (None, None, None, None);
-    match category {
-        Category::Single => {
-            let k = injected[0].kind.expect("library kind");
-            top1 = Some(in_first(k));
-            top1_unique = Some(
-                d.effects
-                    .first()
-                    .is_some_and(|e| e.kind == k && e.ambiguous_with.is_empty()),
-            );
-            magnitude_error_ = magnitude_error(&d, k, &injected[0].magnitudes);
-        }
-        Category::Two => {
-            both_found = Some(
-                injected
-                    .iter()
-                    .all(|x| anywhere(x.kind.expect("library kind"))),
-            );
-        }
-        _ => {}
-    }
+    let marks = Marks::of(category.clone(), &injected, &d);
     let last = d.overall[d.overall.len() - 1];
     Ok(CaseResult {
         case: i,
         category,
         injected: injected
             .iter()
-            .map(|x| {
-                x.kind
-                    .map_or("quadratic_damping (not in library)".into(), |k| {
-                        k.name().into()
-                    })
+            .map(|x| match (&x.change, x.kind) {
+                (Some(c), _) => c.name().into(),
+                (None, Some(k)) => k.name().into(),
+                (None, None) => "quadratic_damping (not in library)".into(),
             })
             .collect(),
+        changed_found: marks.changed_found,
         found,
         verdict: d.verdict,
-        top1,
-        top1_unique,
-        both_found,
-        magnitude_error: magnitude_error_,
+        top1: marks.top1,
+        top1_unique: marks.top1_unique,
+        both_found: marks.both_found,
+        magnitude_error: marks.magnitude_error,
         gap_closed: d.gap_closed,
         rms: [d.overall[0], last, d.noise_floor],
         seconds,
         visible_gap,
     })
+}
+
+/// How a case's diagnosis scores against what was injected.
+#[derive(Default)]
+struct Marks {
+    top1: Option<bool>,
+    top1_unique: Option<bool>,
+    both_found: Option<bool>,
+    changed_found: Option<bool>,
+    magnitude_error: Option<f64>,
+}
+
+impl Marks {
+    fn of(category: Category, injected: &[Injected], d: &Diagnosis) -> Marks {
+        let in_first = |k: Kind| d.effects.first().is_some_and(|e| e.group().any(|g| g == k));
+        let anywhere = |k: Kind| d.effects.iter().any(|e| e.group().any(|g| g == k));
+        let mut m = Marks::default();
+        match category {
+            Category::Single => {
+                let k = injected[0].kind.expect("library kind");
+                m.top1 = Some(in_first(k));
+                m.top1_unique = Some(
+                    d.effects
+                        .first()
+                        .is_some_and(|e| e.kind == k && e.ambiguous_with.is_empty()),
+                );
+                m.magnitude_error = magnitude_error(d, k, &injected[0].magnitudes);
+            }
+            Category::Two => {
+                m.both_found = Some(
+                    injected
+                        .iter()
+                        .all(|x| anywhere(x.kind.expect("library kind"))),
+                );
+            }
+            Category::Changed => {
+                // The change must lead the explanation of the description's gap: friction
+                // re-identified first, or a payload (the last body's mass) found.
+                let first = d
+                    .explained_from_description
+                    .first()
+                    .map(|s| s.step.as_str());
+                let found = match injected[0].change.as_ref().expect("a change") {
+                    Change::Friction { .. } => first == Some("friction re-identified"),
+                    Change::Mass { .. } => Kind::body_change().is_some_and(anywhere),
+                };
+                m.changed_found = Some(found);
+                if matches!(injected[0].change, Some(Change::Mass { .. })) {
+                    m.magnitude_error = Kind::body_change()
+                        .and_then(|k| magnitude_error(d, k, &injected[0].magnitudes));
+                }
+            }
+            _ => {}
+        }
+        m
+    }
 }
 
 /// A visible gap (N m) of half the benchmark's torque noise.
@@ -480,6 +610,12 @@ pub struct Scores {
     pub out_of_library: usize,
     /// Reported unexplained rather than explained by a library effect.
     pub out_of_library_unexplained: f64,
+    /// Changed-robot cases and the fraction whose change is found.
+    pub changed: usize,
+    /// Found fraction.
+    pub changed_found: f64,
+    /// Median relative error of the payload mass found for a mass change.
+    pub changed_mass_error: f64,
 }
 
 /// Scores of a set of cases.
@@ -522,6 +658,17 @@ pub fn score(results: &[CaseResult]) -> Scores {
                 .map(|r| r.verdict != Verdict::Explained)
                 .collect(),
         ),
+        changed: of(Category::Changed).count(),
+        changed_found: frac(
+            of(Category::Changed)
+                .filter_map(|r| r.changed_found)
+                .collect(),
+        ),
+        changed_mass_error: diagnose::median(
+            &of(Category::Changed)
+                .filter_map(|r| r.magnitude_error)
+                .collect::<Vec<_>>(),
+        ),
     }
 }
 
@@ -537,6 +684,7 @@ pub fn case_table(results: &[CaseResult]) -> PolarsResult<DataFrame> {
         "verdict" => results.iter().map(|r| format!("{:?}", r.verdict)).collect::<Vec<_>>(),
         "top1" => results.iter().map(|r| opt_bool(r.top1)).collect::<Vec<_>>(),
         "both_found" => results.iter().map(|r| opt_bool(r.both_found)).collect::<Vec<_>>(),
+        "changed_found" => results.iter().map(|r| opt_bool(r.changed_found)).collect::<Vec<_>>(),
         "magnitude_error" => results.iter().map(|r| r.magnitude_error).collect::<Vec<_>>(),
         "gap_closed" => results.iter().map(|r| r.gap_closed).collect::<Vec<_>>(),
         "rms_before" => results.iter().map(|r| r.rms[0]).collect::<Vec<_>>(),
