@@ -3,11 +3,12 @@
 //!
 //! Exit codes, for every command: 0 success; 1 the command ran but its result failed a
 //! requirement the user asked for (`identify --require-consistent` with a physically
-//! inconsistent body); 2 an error (bad arguments, unreadable or invalid input, a failed
+//! inconsistent body, `compare` with a regression); 2 an error (bad arguments, unreadable or invalid input, a failed
 //! identification or simulation), with one message on standard error naming the file, field
 //! or sample.
 
 mod blind_cmd;
+mod compare_cmd;
 mod diagnose_cmd;
 mod dynamics_cmd;
 mod experiment_cmd;
@@ -39,6 +40,7 @@ enum Command {
     Identify(identify_cmd::Args),
     Experiment(experiment_cmd::Args),
     Sweep(sweep_cmd::Args),
+    Compare(compare_cmd::Args),
     Dynamics(dynamics_cmd::Args),
 }
 
@@ -92,6 +94,7 @@ pub fn run(cli: Cli) -> anyhow::Result<()> {
         Command::Identify(a) => identify_cmd::run(a),
         Command::Experiment(a) => experiment_cmd::run(a),
         Command::Sweep(a) => sweep_cmd::run(a),
+        Command::Compare(a) => compare_cmd::run(a),
         Command::Dynamics(a) => dynamics_cmd::run(a),
     }
 }

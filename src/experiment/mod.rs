@@ -18,6 +18,7 @@ use rand_distr::{Distribution, Normal};
 use rayon::prelude::*;
 
 pub mod blind;
+pub mod compare;
 pub mod plots;
 pub mod sweep;
 pub mod tables;

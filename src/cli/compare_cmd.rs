@@ -1,0 +1,140 @@
+//! `physid compare`: a result against a baseline, or two constraint sets within one run, with a
+//! stated test; exit 1 on a regression.
+
+use anyhow::{bail, Context};
+use physid::experiment::compare::{self, CompareOptions};
+use std::path::PathBuf;
+
+/// Compare results in CI (docs/ci.md): RESULT against --baseline DIR (every grid point, n_s and
+/// set, paired by seed), or two constraint sets within RESULT (--variant A<=B). A group
+/// regresses when its median per-seed ratio exceeds 1 + tolerance and a one-sided Wilcoxon
+/// signed-rank test gives p < alpha. Exit 0 pass, 1 regression, 2 error.
+#[derive(clap::Args, Debug)]
+pub struct Args {
+    /// Result directory: rows.parquet (or rows.csv) of `physid experiment` or `physid sweep`.
+    result: PathBuf,
+    /// Baseline result directory to compare against.
+    #[arg(long, conflicts_with = "variant", required_unless_present = "variant")]
+    baseline: Option<PathBuf>,
+    /// Two constraint sets within RESULT: `ellipsoid<=consistent` (the first no worse).
+    #[arg(long)]
+    variant: Option<String>,
+    /// Metric column, lower is better (default val_rms).
+    #[arg(long)]
+    metric: Option<String>,
+    /// Relative tolerance of the median ratio (default 0.05).
+    #[arg(long)]
+    tolerance: Option<f64>,
+    /// One-sided level of the signed-rank test (default 0.01).
+    #[arg(long)]
+    alpha: Option<f64>,
+    /// Fewest seed pairs a group needs to be able to fail (default 6).
+    #[arg(long)]
+    min_pairs: Option<usize>,
+    /// Only groups with n_s at most this.
+    #[arg(long)]
+    max_n_s: Option<u64>,
+    /// TOML with any of metric, tolerance, alpha, min_pairs, max_n_s (flags override it).
+    #[arg(long)]
+    config: Option<PathBuf>,
+    /// Also write the Markdown report here (it is printed, and appended to
+    /// $GITHUB_STEP_SUMMARY when that is set).
+    #[arg(long)]
+    markdown: Option<PathBuf>,
+    /// Write JUnit XML here (one test case per group).
+    #[arg(long)]
+    junit: Option<PathBuf>,
+}
+
+/// The optional TOML of `--config`.
+#[derive(serde::Deserialize, Default)]
+#[serde(deny_unknown_fields)]
+struct Config {
+    metric: Option<String>,
+    tolerance: Option<f64>,
+    alpha: Option<f64>,
+    min_pairs: Option<usize>,
+    max_n_s: Option<u64>,
+}
+
+fn options(a: &Args) -> anyhow::Result<CompareOptions> {
+    let file: Config = match &a.config {
+        Some(p) => {
+            let text = std::fs::read_to_string(p).with_context(|| p.display().to_string())?;
+            toml::from_str(&text).with_context(|| p.display().to_string())?
+        }
+        None => Config::default(),
+    };
+    let d = CompareOptions::default();
+    let opts = CompareOptions {
+        metric: a.metric.clone().or(file.metric).unwrap_or(d.metric),
+        tolerance: a.tolerance.or(file.tolerance).unwrap_or(d.tolerance),
+        alpha: a.alpha.or(file.alpha).unwrap_or(d.alpha),
+        min_pairs: a.min_pairs.or(file.min_pairs).unwrap_or(d.min_pairs),
+        max_n_s: a.max_n_s.or(file.max_n_s),
+    };
+    opts.validate().map_err(|e| match e {
+        compare::CompareError::InvalidOption {
+            option,
+            expected,
+            value,
+        } => super::flag_error(option, expected, value),
+        e => e.into(),
+    })?;
+    Ok(opts)
+}
+
+/// `physid compare`.
+pub fn run(a: Args) -> anyhow::Result<()> {
+    let opts = options(&a)?;
+    let outputs: Vec<&std::path::Path> = a
+        .markdown
+        .iter()
+        .chain(a.junit.iter())
+        .map(|p| p.as_path())
+        .collect();
+    let inputs: Vec<&std::path::Path> = [Some(a.result.as_path()), a.baseline.as_deref()]
+        .into_iter()
+        .flatten()
+        .collect();
+    physid::io::check_outputs(&outputs, &inputs)?;
+    let cmp = match (&a.baseline, &a.variant) {
+        (Some(b), _) => compare::against_baseline(&a.result, b, &opts)?,
+        (None, Some(v)) => {
+            let Some((better, reference)) = v.split_once("<=") else {
+                bail!(
+                    "--variant '{v}': give two constraint sets as A<=B, e.g. ellipsoid<=consistent"
+                );
+            };
+            compare::variants(&a.result, better.trim(), reference.trim(), &opts)?
+        }
+        (None, None) => bail!("give --baseline DIR or --variant A<=B"),
+    };
+    let md = cmp.markdown();
+    print!("{md}");
+    if let Some(p) = &a.markdown {
+        physid::io::write_atomic(p, md.as_bytes())?;
+    }
+    if let Some(p) = &a.junit {
+        physid::io::write_atomic(p, cmp.junit().as_bytes())?;
+    }
+    if let Some(summary) = std::env::var_os("GITHUB_STEP_SUMMARY") {
+        use std::io::Write;
+        let mut f = std::fs::OpenOptions::new()
+            .create(true)
+            .append(true)
+            .open(&summary)
+            .with_context(|| format!("$GITHUB_STEP_SUMMARY {}", summary.to_string_lossy()))?;
+        f.write_all(md.as_bytes())?;
+    }
+    let n = cmp.regressions();
+    if n > 0 {
+        return Err(super::Failed(format!(
+            "{n} of {} groups regressed ({})",
+            cmp.groups.len(),
+            cmp.metric
+        ))
+        .into());
+    }
+    Ok(())
+}

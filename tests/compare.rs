@@ -1,0 +1,118 @@
+//! `physid compare`: a rerun of the same configuration passes; a degraded run (ten times the
+//! torque noise) fails with exit 1, a readable Markdown table and a JUnit failure; constraint
+//! variants within one run; errors exit 2.
+
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+fn physid(args: &[&str]) -> (i32, String, String) {
+    let o = Command::new(env!("CARGO_BIN_EXE_physid"))
+        .args(args)
+        .env_remove("GITHUB_STEP_SUMMARY")
+        .output()
+        .unwrap();
+    (
+        o.status.code().unwrap_or(-1),
+        String::from_utf8_lossy(&o.stdout).to_string(),
+        String::from_utf8_lossy(&o.stderr).to_string(),
+    )
+}
+
+/// The sample-size scenario cut to 8 seeds and sizes 30..300, with `torque_noise` (N m), run
+/// into `dir/name`.
+fn experiment(dir: &Path, name: &str, torque_noise: f64) -> PathBuf {
+    let base = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenarios/sample_size.toml");
+    let text = std::fs::read_to_string(base).unwrap();
+    let text = text
+        .replace(
+            "torque_noise = 1.0",
+            &format!("torque_noise = {torque_noise}"),
+        )
+        .replace("seeds = 20 ", "seeds = 8 ")
+        .replace("min_size = 10 ", "min_size = 30 ")
+        .replace("max_size = 10000", "max_size = 300")
+        .replace("points = 12", "points = 2")
+        .replace("validation = 10000", "validation = 1000");
+    assert!(text.contains("seeds = 8 ") && text.contains("points = 2"));
+    let scenario = dir.join(format!("{name}.toml"));
+    std::fs::write(&scenario, text).unwrap();
+    let out = dir.join(name);
+    let (code, _, err) = physid(&[
+        "experiment",
+        scenario.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert_eq!(code, 0, "{err}");
+    out
+}
+
+#[test]
+fn compare_passes_a_rerun_and_fails_a_degraded_run() {
+    let dir = tempfile::tempdir().unwrap();
+    let base = experiment(dir.path(), "base", 1.0);
+    let rerun = experiment(dir.path(), "rerun", 1.0);
+    let noisy = experiment(dir.path(), "noisy", 10.0);
+    let s = |p: &Path| p.to_str().unwrap().to_string();
+    let (code, out, err) = physid(&["compare", &s(&rerun), "--baseline", &s(&base)]);
+    assert_eq!(code, 0, "{out}{err}");
+    assert!(out.contains("**PASS**: 0 of 8 groups regressed"), "{out}");
+    let md = dir.path().join("cmp.md");
+    let junit = dir.path().join("cmp.xml");
+    let (code, out, err) = physid(&[
+        "compare",
+        &s(&noisy),
+        "--baseline",
+        &s(&base),
+        "--markdown",
+        &s(&md),
+        "--junit",
+        &s(&junit),
+    ]);
+    assert_eq!(code, 1, "{out}{err}");
+    assert!(
+        err.contains("failed:") && err.contains("groups regressed"),
+        "{err}"
+    );
+    let text = std::fs::read_to_string(&md).unwrap();
+    assert_eq!(text, out);
+    assert!(
+        text.contains("**FAIL**") && text.contains("| **regression** |"),
+        "{text}"
+    );
+    // Every table row has the header's number of cells (unescaped pipes).
+    let rows: Vec<&str> = text.lines().filter(|l| l.starts_with('|')).collect();
+    let cells = |l: &str| l.replace("\\|", "").matches('|').count();
+    assert_eq!(rows.len(), 2 + 8, "{text}");
+    assert!(rows.iter().all(|l| cells(l) == cells(rows[0])), "{text}");
+    let xml = std::fs::read_to_string(&junit).unwrap();
+    assert!(xml.contains("<testsuite name=\"physid compare\" tests=\"8\""));
+    assert!(xml.matches("<failure").count() >= 1, "{xml}");
+    // Variants within one run: consistent is no worse than least squares at these sizes; the
+    // converse regresses.
+    let (code, out, err) = physid(&["compare", &s(&base), "--variant", "consistent<=none"]);
+    assert_eq!(code, 0, "{out}{err}");
+    let (code, out, _) = physid(&["compare", &s(&base), "--variant", "none<=consistent"]);
+    assert_eq!(code, 1, "{out}");
+    // Errors exit 2, naming what is wrong.
+    let (code, _, err) = physid(&[
+        "compare",
+        &s(&base),
+        "--baseline",
+        &s(&base),
+        "--metric",
+        "nope",
+    ]);
+    assert!(code == 2 && err.contains("no column 'nope'"), "{err}");
+    let (code, _, err) = physid(&["compare", &s(&base), "--variant", "consistent"]);
+    assert!(code == 2 && err.contains("A<=B"), "{err}");
+    let (code, _, err) = physid(&[
+        "compare",
+        &s(&base),
+        "--baseline",
+        &s(&base),
+        "--alpha",
+        "2",
+    ]);
+    assert!(code == 2 && err.contains("--alpha"), "{err}");
+}
