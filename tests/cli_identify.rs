@@ -137,7 +137,10 @@ fn identify_json_has_the_documented_fields() {
     assert_eq!(v["train"]["rms"].as_array().unwrap().len(), 3);
     assert_eq!(v["validation"]["rms"].as_array().unwrap().len(), 3);
     assert_eq!(v["constraints_hold"], true);
-    assert_eq!(v["solver"]["status"], "Solved");
+    assert_eq!(v["solver"]["status"], "solved");
+    // Every JSON physid writes names its version and schema.
+    assert_eq!(v["physid_version"], env!("CARGO_PKG_VERSION"));
+    assert_eq!(v["schema"], "physid.identify/1");
     assert!(
         v["solver"]["iterations"].as_u64().unwrap() > 0
             && v["solver"]["seconds"].as_f64().unwrap() > 0.0

@@ -290,6 +290,13 @@ fn the_cli_diagnoses_a_file_and_names_bad_input() {
     ] {
         assert!(report.join(f).exists(), "{f} missing");
     }
+    // The JSON on standard output and in the report name physid's version and their schema.
+    assert_eq!(j["schema"], "physid.diagnose/1");
+    assert_eq!(j["physid_version"], env!("CARGO_PKG_VERSION"));
+    let file: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(report.join("report.json")).unwrap())
+            .unwrap();
+    assert_eq!(file["schema"], "physid.diagnose/1");
     // A robot with another joint count: the error names the file.
     let out = std::process::Command::new(exe)
         .args(["diagnose", "--robot", "cheetah3", "--no-rotors", "--data"])

@@ -152,10 +152,25 @@ fn a_changed_configuration_never_reuses_a_cell() {
         .map(|l| l.split(',').nth(n_s).unwrap())
         .collect();
     assert_eq!(sizes.into_iter().collect::<Vec<_>>(), vec!["50"], "{rows}");
+    // Not on a terminal, progress comes as plain lines (here the last one).
+    assert!(log.contains("cells: 2 of 2 done"), "{log}");
     // Run again unchanged: everything is reused.
     let (code, log) = physid(&["sweep", &sweep, "--out", out, "--threads", "1"]);
     assert!(
         code == 0 && log.contains("2 already done, 0 to run"),
         "{log}"
     );
+}
+
+#[test]
+fn blind_progress_is_plain_text_with_counts() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("b");
+    let (code, log) = physid(&["blind", "--cases", "2", "--out", out.to_str().unwrap()]);
+    assert_eq!(code, 0, "{log}");
+    // One line per case with "k of N", the category and verdict as in the JSON, no Rust
+    // debug text.
+    assert!(log.contains("(1 of 2 done") && log.contains("(2 of 2 done"), "{log}");
+    assert!(log.contains(": clean; injected nothing; found nothing; verdict "), "{log}");
+    assert!(!log.contains("Some(") && !log.contains("None"), "{log}");
 }

@@ -33,18 +33,25 @@ pub struct Args {
     description_uncertainty: Option<f64>,
 }
 
-/// One line per finished case, on standard error.
-fn print_case(r: &CaseResult) {
+/// One line per finished case, on standard error: what was injected and found, the verdict,
+/// the validation RMS before and after, and the progress.
+fn print_case(r: &CaseResult, progress: &super::progress::Progress) {
+    let list = |v: &[String]| {
+        if v.is_empty() {
+            "nothing".to_string()
+        } else {
+            v.join(" + ")
+        }
+    };
+    let name = |v: serde_json::Value| v.as_str().unwrap_or("").to_string();
     eprintln!(
-        "case {:>3} {:<14} injected [{}] visible {:.3} found [{}] {:?} top1 {:?} mag {:?} rms {:.3}->{:.3} floor {:.3} ({:.1} s)",
+        "case {} ({}): {}; injected {}; found {}; verdict {}; validation RMS {:.3} -> {:.3} N m (noise floor {:.3}); {:.1} s",
         r.case,
-        format!("{:?}", r.category),
-        r.injected.join(", "),
-        r.visible_gap,
-        r.found.join(", "),
-        r.verdict,
-        r.top1,
-        r.magnitude_error.map(|m| (m * 1000.0).round() / 1000.0),
+        progress.status(),
+        name(serde_json::json!(r.category)),
+        list(&r.injected),
+        list(&r.found),
+        name(serde_json::json!(r.verdict)),
         r.rms[0],
         r.rms[1],
         r.rms[2],
@@ -73,6 +80,7 @@ pub fn run(a: Args) -> anyhow::Result<()> {
     let diagnose_opts = opts.diagnose_options();
     let pool = super::thread_pool(Some(a.threads))?;
     let start = std::time::Instant::now();
+    let progress = super::progress::Progress::counter("cases", a.cases as u64);
     let results: Vec<CaseResult> = pool.install(|| {
         (0..a.cases)
             .into_par_iter()
@@ -88,7 +96,8 @@ pub fn run(a: Args) -> anyhow::Result<()> {
                     &case_dir,
                 );
                 if let Ok(r) = &r {
-                    print_case(r);
+                    progress.inc();
+                    print_case(r, &progress);
                 }
                 r
             })
@@ -96,7 +105,10 @@ pub fn run(a: Args) -> anyhow::Result<()> {
     })?;
     let scores = blind::score(&results);
     let wall = start.elapsed().as_secs_f64();
-    println!("{}", serde_json::to_string_pretty(&scores)?);
+    println!(
+        "{}",
+        serde_json::to_string_pretty(&physid::io::versioned("blind_scores", &scores))?
+    );
     eprintln!("{} cases in {wall:.1} s", a.cases);
     if let Some(dir) = &a.out {
         let description = [a.description_error, opts.stated_uncertainty()];

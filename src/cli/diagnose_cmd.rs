@@ -80,7 +80,10 @@ pub fn run(a: Args) -> anyhow::Result<()> {
         eprintln!("wrote the report to {}", dir.display());
     }
     if a.json {
-        println!("{}", serde_json::to_string_pretty(&d)?);
+        println!(
+            "{}",
+            serde_json::to_string_pretty(&physid::io::versioned("diagnose", &d))?
+        );
     } else {
         print_text(&d);
     }

@@ -76,6 +76,7 @@ pub fn dynamics_json(
         "parameter_names": m.parameter_names(), "theta": m.parameters().as_slice(),
         "samples": states,
     });
+    let v = physid::io::versioned("dynamics", &v);
     physid::io::write_atomic(out, serde_json::to_string(&v)?.as_bytes())?;
     eprintln!("wrote {} states to {}", samples, out.display());
     Ok(())

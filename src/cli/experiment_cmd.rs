@@ -40,18 +40,13 @@ pub fn run(a: Args) -> anyhow::Result<()> {
     let staging = physid::io::StagingDir::new(&a.out)?;
     let out = staging.path();
     let cells = spec.seeds * spec.grid().len() * spec.constraints.len();
-    let bar = indicatif::ProgressBar::new(spec.seeds as u64);
-    bar.set_style(
-        indicatif::ProgressStyle::with_template("{spinner} seeds [{bar:40}] {pos}/{len} {elapsed}")
-            .expect("valid")
-            .progress_chars("=> "),
-    );
+    let bar = super::progress::Progress::new("seeds", spec.seeds as u64);
     let start = std::time::Instant::now();
     let rows = pool
-        .install(|| experiment::run(&model, &sc, &spec, &|done, _| bar.set_position(done as u64)))
+        .install(|| experiment::run(&model, &sc, &spec, &|done, _| bar.set(done as u64)))
         .with_context(|| format!("running the experiment of {}", path.display()))?;
     let wall = start.elapsed().as_secs_f64();
-    bar.finish_and_clear();
+    bar.finish();
     let joints: Vec<String> = model.bodies.iter().map(|b| b.joint_name.clone()).collect();
     let body_names: Vec<String> = physid::ident::bodies(&model)
         .into_iter()
@@ -190,7 +185,7 @@ fn write_provenance(
     });
     physid::io::write_atomic(
         &out.join("provenance.json"),
-        serde_json::to_string_pretty(&prov)?.as_bytes(),
+        serde_json::to_string_pretty(&physid::io::versioned("provenance", &prov))?.as_bytes(),
     )?;
     Ok(())
 }

@@ -719,6 +719,7 @@ fn export_problem(
         "bodies": bodies, "friction_cols": (l.viscous_col..l.len).collect::<Vec<_>>(),
         "physid": {"objective": r.objective, "theta": r.theta.as_slice(), "status": r.solver.status},
     });
+    let v = physid::io::versioned("problem", &v);
     physid::io::write_atomic(p, serde_json::to_string(&v)?.as_bytes())?;
     Ok(())
 }
@@ -751,6 +752,7 @@ fn print_json(a: &Args, m: &Model, rep: &Report) -> anyhow::Result<()> {
         "parameter_names": theta_names(m, &rep.terms), "theta": r.theta.as_slice(),
         "truth_errors": rep.truth_errors,
     });
+    let v = physid::io::versioned("identify", &v);
     println!("{}", serde_json::to_string_pretty(&v)?);
     Ok(())
 }

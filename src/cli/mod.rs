@@ -15,6 +15,7 @@ mod experiment_cmd;
 mod export_cmd;
 mod identify_cmd;
 mod model_cmd;
+mod progress;
 mod robot_args;
 mod simulate_cmd;
 mod sweep_cmd;

@@ -71,7 +71,10 @@ pub fn describe(m: &Model, as_json: bool) -> anyhow::Result<()> {
                 "limits": [b.limits.lower, b.limits.upper, b.limits.velocity, b.limits.effort]})).collect::<Vec<_>>(),
             "q0": q0, "gravity_torque_q0": g.as_slice(),
         });
-        println!("{}", serde_json::to_string_pretty(&v)?);
+        println!(
+            "{}",
+            serde_json::to_string_pretty(&physid::io::versioned("model", &v))?
+        );
         return Ok(());
     }
     println!(

@@ -94,7 +94,10 @@ pub fn run(a: Args) -> anyhow::Result<()> {
             "excitation": ex,
             "physid_inverse_dynamics_residual": { "rms": cons_rms, "max": cons_max },
         });
-        println!("{}", serde_json::to_string_pretty(&v)?);
+        println!(
+            "{}",
+            serde_json::to_string_pretty(&physid::io::versioned("simulate", &v))?
+        );
         return Ok(());
     }
     println!(

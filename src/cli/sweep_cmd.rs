@@ -86,14 +86,7 @@ pub fn run(a: Args) -> anyhow::Result<()> {
         todo.len()
     );
     let pool = super::thread_pool(threads)?;
-    let bar = indicatif::ProgressBar::new(todo.len() as u64);
-    bar.set_style(
-        indicatif::ProgressStyle::with_template(
-            "{spinner} cells [{bar:40}] {pos}/{len} {elapsed} eta {eta}",
-        )
-        .expect("valid")
-        .progress_chars("=> "),
-    );
+    let bar = super::progress::Progress::new("cells", todo.len() as u64);
     let (_, model) = sweep::scenario_at(&base, &scenario_path, &all[0].point)?;
     let joints: Vec<String> = model.bodies.iter().map(|b| b.joint_name.clone()).collect();
     pool.install(|| {
@@ -107,11 +100,11 @@ pub fn run(a: Args) -> anyhow::Result<()> {
                 .collect();
             let mut df = tables::with_constants(tables::long_table(&rows, &joints)?, &consts)?;
             tables::write_parquet(&file(c), &mut df)?;
-            bar.inc(1);
+            bar.inc();
             Ok(())
         })
     })?;
-    bar.finish_and_clear();
+    bar.finish();
     let missing = all.iter().filter(|c| !file(c).exists()).count();
     if missing > 0 {
         eprintln!("{missing} of {} cells still missing (other shards); merge when all are done by running without --shard", all.len());

@@ -3,7 +3,7 @@
 
 use super::Diagnosis;
 use crate::io::plot::{colour, legend};
-use crate::io::IoError;
+use crate::io::{md_cell, IoError};
 use plotters::prelude::*;
 use std::path::{Path, PathBuf};
 
@@ -203,14 +203,18 @@ fn where_section(d: &Diagnosis) -> String {
     for r in &d.breakdown.regimes {
         s += &format!(
             "| {} | {} | {} | {:.3} | {:.2} |\n",
-            r.joint, r.regime, r.samples, r.rms, r.share
+            md_cell(&r.joint),
+            md_cell(&r.regime),
+            r.samples,
+            r.rms,
+            r.share
         );
     }
     s += "\n| joint | PSD peak (Hz) | peak coherence with q, qd, qdd, sin(N q) |\n|---|---|---|\n";
     for sp in &d.spectra {
         s += &format!(
             "| {} | {:.2} | {} |\n",
-            sp.joint,
+            md_cell(&sp.joint),
             sp.peak_frequency,
             sp.peak_coherence
                 .iter()
@@ -337,7 +341,11 @@ fn effects_section(d: &Diagnosis) -> String {
         for m in &e.magnitudes {
             s += &format!(
                 "| {} | {:.4e} | {:.1e} | {} | {:.2} |\n",
-                m.joint, m.value, m.se, m.unit, m.identifiable
+                md_cell(&m.joint),
+                m.value,
+                m.se,
+                m.unit,
+                m.identifiable
             );
         }
         if let Some(sep) = &e.separate_by {
@@ -356,7 +364,7 @@ The sim-to-real gap itself: validation RMS per joint (N m; joint-samples slower 
 
 | step |");
     for j in &d.joints {
-        s += &format!(" {j} |");
+        s += &format!(" {} |", md_cell(j));
     }
     s += " all |\n|---|";
     s += &"---|".repeat(d.joints.len() + 1);
@@ -386,7 +394,12 @@ fn how_far_section(d: &Diagnosis) -> String {
     s += &"---|".repeat(d.effects.len() + 2);
     s += "\n";
     for g in &d.gap {
-        s += &format!("| {} | {:.3} | {:.3} |", g.joint, g.description, g.nominal);
+        s += &format!(
+            "| {} | {:.3} | {:.3} |",
+            md_cell(&g.joint),
+            g.description,
+            g.nominal
+        );
         for a in &g.after {
             s += &format!(" {a:.3} |");
         }
@@ -430,7 +443,8 @@ pub fn write(dir: &Path, d: &Diagnosis) -> Result<(), ReportError> {
         path: dir.to_path_buf(),
         source,
     })?;
-    let json = serde_json::to_string_pretty(d).expect("a diagnosis serializes");
+    let json = serde_json::to_string_pretty(&crate::io::versioned("diagnose", d))
+        .expect("a diagnosis serializes");
     crate::io::write_atomic(&dir.join("report.json"), json.as_bytes())?;
     crate::io::write_atomic(&dir.join("report.md"), markdown(d).as_bytes())?;
     // Where: RMS per regime kind (rows) and joint (series), regimes in the breakdown's order.

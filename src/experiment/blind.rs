@@ -672,19 +672,27 @@ pub fn score(results: &[CaseResult]) -> Scores {
     }
 }
 
+/// Serde's spelling of a unit enum value (what the JSON writes).
+fn serde_name<T: Serialize>(v: &T) -> String {
+    serde_json::to_value(v)
+        .ok()
+        .and_then(|v| v.as_str().map(String::from))
+        .unwrap_or_default()
+}
+
 /// The case table as a polars frame.
 pub fn case_table(results: &[CaseResult]) -> PolarsResult<DataFrame> {
-    let opt_bool = |v: Option<bool>| v.map(|b| if b { "yes" } else { "no" }).unwrap_or("");
+    // Enums spelled as in the JSON (snake_case), booleans as booleans (null: not scored).
     df!(
         "case" => results.iter().map(|r| r.case as u32).collect::<Vec<_>>(),
-        "category" => results.iter().map(|r| format!("{:?}", r.category).to_lowercase()).collect::<Vec<_>>(),
+        "category" => results.iter().map(|r| serde_name(&r.category)).collect::<Vec<_>>(),
         "injected" => results.iter().map(|r| r.injected.join(" + ")).collect::<Vec<_>>(),
         "visible_gap" => results.iter().map(|r| r.visible_gap).collect::<Vec<_>>(),
         "found" => results.iter().map(|r| r.found.join(" + ")).collect::<Vec<_>>(),
-        "verdict" => results.iter().map(|r| format!("{:?}", r.verdict)).collect::<Vec<_>>(),
-        "top1" => results.iter().map(|r| opt_bool(r.top1)).collect::<Vec<_>>(),
-        "both_found" => results.iter().map(|r| opt_bool(r.both_found)).collect::<Vec<_>>(),
-        "changed_found" => results.iter().map(|r| opt_bool(r.changed_found)).collect::<Vec<_>>(),
+        "verdict" => results.iter().map(|r| serde_name(&r.verdict)).collect::<Vec<_>>(),
+        "top1" => results.iter().map(|r| r.top1).collect::<Vec<_>>(),
+        "both_found" => results.iter().map(|r| r.both_found).collect::<Vec<_>>(),
+        "changed_found" => results.iter().map(|r| r.changed_found).collect::<Vec<_>>(),
         "magnitude_error" => results.iter().map(|r| r.magnitude_error).collect::<Vec<_>>(),
         "gap_closed" => results.iter().map(|r| r.gap_closed).collect::<Vec<_>>(),
         "rms_before" => results.iter().map(|r| r.rms[0]).collect::<Vec<_>>(),
@@ -716,11 +724,7 @@ pub fn write_blind(
         .group_by([col("injected")])
         .agg([
             len().alias("cases"),
-            col("top1")
-                .eq(lit("yes"))
-                .cast(DataType::Float64)
-                .mean()
-                .alias("top1"),
+            col("top1").cast(DataType::Float64).mean().alias("top1"),
             col("magnitude_error")
                 .median()
                 .alias("median_magnitude_error"),
@@ -744,7 +748,7 @@ pub fn write_blind(
     crate::io::write_atomic(&dir.join("README.md"), md.as_bytes())?;
     crate::io::write_atomic(
         &dir.join("scores.json"),
-        serde_json::to_string_pretty(scores)?.as_bytes(),
+        serde_json::to_string_pretty(&crate::io::versioned("blind_scores", scores))?.as_bytes(),
     )?;
     Ok(())
 }

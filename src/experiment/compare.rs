@@ -14,7 +14,7 @@
 //! from `rows.parquet` (or `rows.csv`) as `physid experiment` and `physid sweep` write them:
 //! the columns before `seed` are grid values, then `seed`, `n_s`, `constraints`, the metrics.
 
-use crate::io::IoError;
+use crate::io::{md_cell, IoError};
 use polars::prelude::*;
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
@@ -483,11 +483,6 @@ pub fn variants(
         alpha: opts.alpha,
         groups,
     })
-}
-
-/// Escapes a Markdown table cell (`|` and line breaks).
-pub fn md_cell(s: &str) -> String {
-    s.replace('|', "\\|").replace('\n', " ")
 }
 
 impl Comparison {

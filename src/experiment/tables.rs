@@ -247,9 +247,10 @@ pub fn markdown(df: &DataFrame) -> String {
         .iter()
         .map(|n| n.to_string())
         .collect();
+    let header: Vec<String> = names.iter().map(|n| crate::io::md_cell(n)).collect();
     s += &format!(
         "| {} |\n|{}\n",
-        names.join(" | "),
+        header.join(" | "),
         "---|".repeat(names.len())
     );
     for i in 0..df.height() {
@@ -258,7 +259,7 @@ pub fn markdown(df: &DataFrame) -> String {
             .iter()
             .map(|c| match c.get(i) {
                 Ok(AnyValue::Float64(x)) => format!("{x:.3}"),
-                Ok(AnyValue::String(x)) => x.to_string(),
+                Ok(AnyValue::String(x)) => crate::io::md_cell(x),
                 Ok(v) => format!("{v}"),
                 Err(_) => String::new(),
             })

@@ -212,11 +212,12 @@ pub enum IdentError {
     Rejected(String),
 }
 
-/// How the optimum was reached (serialized as before: `"direct"`, or Clarabel's own spelling).
+/// How the optimum was reached, spelled the same (snake_case) in JSON, tables and text:
+/// `direct`, `solved`, `almost_solved`.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "snake_case")]
 pub enum SolveStatus {
     /// Least squares solved directly, without the cone solver.
-    #[serde(rename = "direct")]
     Direct,
     /// Clarabel: solved to its full tolerances.
     Solved,
@@ -228,8 +229,8 @@ impl std::fmt::Display for SolveStatus {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         f.write_str(match self {
             SolveStatus::Direct => "direct",
-            SolveStatus::Solved => "Solved",
-            SolveStatus::AlmostSolved => "AlmostSolved",
+            SolveStatus::Solved => "solved",
+            SolveStatus::AlmostSolved => "almost_solved",
         })
     }
 }

@@ -215,6 +215,31 @@ pub fn create_dir_all(dir: &Path) -> Result<(), IoError> {
     })
 }
 
+/// `value` as a JSON object stamped with physid's version and the output's schema name, e.g.
+/// `physid.identify/1` (the fields of `value` follow at the top level; a value that is not an
+/// object is put under `data`). Every JSON physid writes carries these two fields.
+pub fn versioned<T: serde::Serialize>(schema: &str, value: &T) -> serde_json::Value {
+    let mut out = serde_json::Map::new();
+    out.insert("physid_version".into(), env!("CARGO_PKG_VERSION").into());
+    out.insert("schema".into(), format!("physid.{schema}/1").into());
+    match serde_json::to_value(value) {
+        Ok(serde_json::Value::Object(fields)) => out.extend(fields),
+        Ok(other) => {
+            out.insert("data".into(), other);
+        }
+        Err(e) => {
+            out.insert("error".into(), e.to_string().into());
+        }
+    }
+    serde_json::Value::Object(out)
+}
+
+/// A Markdown table cell: `|` escaped (a regime like `|qd| low`, an ambiguity group `a|b`, a
+/// user's joint name), line breaks as spaces.
+pub fn md_cell(s: &str) -> String {
+    s.replace('|', "\\|").replace(['\n', '\r'], " ")
+}
+
 /// Writes `contents` to `path` atomically: a temporary file in the same directory, then a rename,
 /// so a reader never sees half a file and a failure leaves any old file intact.
 pub fn write_atomic(path: &Path, contents: &[u8]) -> Result<(), IoError> {
