@@ -10,6 +10,31 @@ use nalgebra::{DMatrix, DVector, SymmetricEigen};
 /// counts as unidentifiable.
 pub const RANK_TOL: f64 = 1e-9;
 
+/// Rank and condition number of a regressor from its normal matrix `YᵀY`, physid's one
+/// definition (used by `simulate`, `identify` and the README): the columns of `Y` scaled to unit
+/// norm, its singular values `σ_i = √λ_i(D YᵀY D)`; the rank counts those with
+/// `σ_i² > RANK_TOL σ_max²` (`σ_i > 3.2·10⁻⁵ σ_max`), the condition number is `σ_max` over
+/// the smallest of them (the conditioning of the identifiable subspace).
+pub fn rank_and_condition(yty: &DMatrix<f64>) -> (usize, f64) {
+    let p = yty.nrows();
+    let d = unit_diagonal_scale(yty, 0.0);
+    let scaled = DMatrix::from_fn(p, p, |i, j| d[i] * yty[(i, j)] * d[j]);
+    let ev = SymmetricEigen::new(scaled).eigenvalues;
+    let lmax = ev.iter().copied().fold(0.0f64, f64::max);
+    let kept: Vec<f64> = ev
+        .iter()
+        .copied()
+        .filter(|l| *l > RANK_TOL * lmax)
+        .collect();
+    let lmin = kept.iter().copied().fold(f64::INFINITY, f64::min);
+    let condition = if kept.is_empty() {
+        f64::INFINITY
+    } else {
+        (lmax / lmin).sqrt()
+    };
+    (kept.len(), condition)
+}
+
 /// Column scaling to unit diagonal: `1/√m_ii`, or `fallback` where `m_ii <= 0` (an
 /// unexcited column).
 pub fn unit_diagonal_scale(m: &DMatrix<f64>, fallback: f64) -> Vec<f64> {
@@ -64,4 +89,25 @@ pub fn min_norm_solve(h: &DMatrix<f64>, g: &DMatrix<f64>) -> DMatrix<f64> {
         }
     }
     x
+}
+
+#[cfg(test)]
+mod rank_tests {
+    use super::*;
+
+    #[test]
+    fn rank_and_condition_follow_the_stated_threshold() {
+        // Two nearly collinear columns [1, 0] and [1, ε]: unit-norm Gram [[1, c], [c, 1]] with
+        // c = 1/√(1 + ε²), eigenvalues 1 ± c.
+        let gram = |eps: f64| DMatrix::from_row_slice(2, 2, &[1.0, 1.0, 1.0, 1.0 + eps * eps]);
+        let (rank, cond) = rank_and_condition(&gram(1e-3));
+        let c = 1.0 / (1.0f64 + 1e-6).sqrt();
+        assert_eq!(rank, 2);
+        assert!((cond - ((1.0 + c) / (1.0 - c)).sqrt()).abs() < 1e-3 * cond, "{cond}");
+        // (1 − c)/(1 + c) ≈ 2.5e-13 < RANK_TOL: one direction.
+        assert_eq!(rank_and_condition(&gram(1e-6)), (1, 1.0));
+        // An unexcited column counts for nothing.
+        let m = DMatrix::from_row_slice(2, 2, &[4.0, 0.0, 0.0, 0.0]);
+        assert_eq!(rank_and_condition(&m), (1, 1.0));
+    }
 }

@@ -170,7 +170,13 @@ fn blind_progress_is_plain_text_with_counts() {
     assert_eq!(code, 0, "{log}");
     // One line per case with "k of N", the category and verdict as in the JSON, no Rust
     // debug text.
-    assert!(log.contains("(1 of 2 done") && log.contains("(2 of 2 done"), "{log}");
-    assert!(log.contains(": clean; injected nothing; found nothing; verdict "), "{log}");
+    assert!(
+        log.contains("(1 of 2 done") && log.contains("(2 of 2 done"),
+        "{log}"
+    );
+    assert!(
+        log.contains(": clean; injected nothing; found nothing; verdict "),
+        "{log}"
+    );
     assert!(!log.contains("Some(") && !log.contains("None"), "{log}");
 }

@@ -848,7 +848,7 @@ fn print_text(a: &Args, m: &Model, rep: &Report) {
         }
     );
     println!(
-        "constraints of '{}': {}; objective {:.6e}; regressor rank {} of {}, condition {:.2e}; {} unidentifiable directions",
+        "constraints of '{}': {}; objective {:.6e}; regressor on the training samples: rank {} of {}, condition number {:.2e} (unit-norm columns; singular values above 3.2e-5 of the largest); {} unidentifiable directions",
         rep.set.name(),
         if rep.set == ConstraintSet::None { "none imposed" } else if r.constraints_hold { "all hold" } else { "do NOT all hold" },
         r.objective,

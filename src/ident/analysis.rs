@@ -72,15 +72,19 @@ pub fn rms_error_stream<E>(
 /// What the data determine.
 #[derive(Clone, Debug, Serialize)]
 pub struct Identifiability {
-    /// Numerical rank of the column-scaled `YᵀY`.
+    /// Numerical rank ([`crate::linalg::rank_and_condition`], the same definition).
     pub rank: usize,
     /// Number of parameters.
     pub parameters: usize,
-    /// Condition number on the identifiable subspace (scaled columns).
+    /// Condition number on the identifiable subspace ([`crate::linalg::rank_and_condition`]).
     pub condition: f64,
     /// Unidentifiable parameter combinations: the largest terms of each null-space direction,
-    /// e.g. `"0.71 thigh.m − 0.71 hip_rotor.m"`. At most 20 are listed.
+    /// e.g. `"0.71 thigh.m − 0.71 hip_rotor.m"`. At most 20 are listed
+    /// ([`Identifiability::unidentifiable_total`] counts them all).
     pub unidentifiable: Vec<String>,
+    /// How many unidentifiable directions there are (`parameters − rank`), of which
+    /// `unidentifiable` lists the first 20.
+    pub unidentifiable_total: usize,
     /// Standard error of each parameter (`σ² (YᵀY)⁺` with `σ²` the residual variance), infinite
     /// where the parameter moves along an unidentifiable direction.
     pub standard_errors: Vec<f64>,
@@ -100,7 +104,6 @@ pub fn identifiability(
     let lmax = eig.eigenvalues.max().max(0.0);
     let names = model.parameter_names();
     let mut rank = 0;
-    let mut lmin = f64::INFINITY;
     let mut null_weight = vec![0.0f64; p];
     let mut unidentifiable = vec![];
     let mut cov_s = DMatrix::zeros(p, p);
@@ -109,7 +112,6 @@ pub fn identifiability(
         let v = eig.eigenvectors.column(k);
         if l > RANK_TOL * lmax {
             rank += 1;
-            lmin = lmin.min(l);
             cov_s += v * v.transpose() / l;
         } else {
             // Unscaled direction: θ = D x.
@@ -150,11 +152,15 @@ pub fn identifiability(
             }
         })
         .collect();
+    // The one definition of rank and condition; the loop above drew the same line.
+    let (rank_checked, condition) = crate::linalg::rank_and_condition(yty);
+    debug_assert_eq!(rank_checked, rank);
     Identifiability {
         rank,
         parameters: p,
-        condition: (lmax / lmin).sqrt(),
+        condition,
         unidentifiable,
+        unidentifiable_total: p - rank,
         standard_errors,
     }
 }

@@ -4,7 +4,7 @@
 use crate::dynamics::{regressor, Data};
 use crate::model::Model;
 use crate::trajectory::Trajectory;
-use nalgebra::{DMatrix, SymmetricEigen};
+use nalgebra::DMatrix;
 
 /// Excitation summary of a trajectory.
 #[derive(Clone, Debug, serde::Serialize)]
@@ -15,13 +15,11 @@ pub struct Excitation {
     pub qd_peak: Vec<f64>,
     /// Per joint peak |τ| (N m).
     pub tau_peak: Vec<f64>,
-    /// Numerical rank of the stacked regressor (columns scaled to unit norm), tolerance 1e-8
-    /// of the largest singular value.
+    /// Numerical rank of the stacked regressor ([`crate::linalg::rank_and_condition`]).
     pub rank: usize,
     /// Number of parameters.
     pub parameters: usize,
-    /// Condition number of the scaled stacked regressor on its identifiable subspace
-    /// (largest over smallest singular value above the rank tolerance).
+    /// Condition number on its identifiable subspace ([`crate::linalg::rank_and_condition`]).
     pub condition: f64,
 }
 
@@ -44,17 +42,7 @@ pub fn excitation(model: &Model, tr: &Trajectory, stride: usize) -> Excitation {
         );
         yty.gemm_tr(1.0, &y, &y, 1.0);
     }
-    // Column scaling: Y D with D = diag(1/‖Y_c‖).
-    let scale = crate::linalg::unit_diagonal_scale(&yty, 0.0);
-    let scaled = DMatrix::from_fn(p, p, |i, j| yty[(i, j)] * scale[i] * scale[j]);
-    let ev = SymmetricEigen::new(scaled).eigenvalues;
-    let smax = ev.iter().cloned().fold(0.0f64, f64::max).max(0.0).sqrt();
-    let sv: Vec<f64> = ev
-        .iter()
-        .map(|e| e.max(0.0).sqrt())
-        .filter(|s| *s > 1e-8 * smax)
-        .collect();
-    let smin = sv.iter().cloned().fold(f64::INFINITY, f64::min);
+    let (rank, condition) = crate::linalg::rank_and_condition(&yty);
     let mut q_range = vec![[f64::INFINITY, f64::NEG_INFINITY]; n];
     let (mut qd_peak, mut tau_peak) = (vec![0.0f64; n], vec![0.0f64; n]);
     for k in 0..tr.len() {
@@ -69,9 +57,9 @@ pub fn excitation(model: &Model, tr: &Trajectory, stride: usize) -> Excitation {
         q_range,
         qd_peak,
         tau_peak,
-        rank: sv.len(),
+        rank,
         parameters: p,
-        condition: smax / smin,
+        condition,
     }
 }
 
