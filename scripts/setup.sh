@@ -33,10 +33,20 @@ setup_rust() {
 
 # The Debian packages physid links against: OpenBLAS (BLAS and LAPACK, linked by build.rs).
 setup_system() {
-  local wanted=(libopenblas-dev) missing=() p
+  install_debian libopenblas-dev
+}
+
+# The headless browser of the check that renders diagnose's report.html (tests only).
+setup_browser() {
+  install_debian chromium-headless-shell
+}
+
+# Installs the Debian packages given that are missing.
+install_debian() {
+  local wanted=("$@") missing=() p
   command -v dpkg >/dev/null 2>&1 || {
     # Not Debian: the build script finds OpenBLAS by pkg-config or the usual directories.
-    echo "physid setup: not a Debian system; install OpenBLAS (e.g. openblas-devel, brew install openblas) if the build asks for it"
+    echo "physid setup: not a Debian system; install the equivalent of ${wanted[*]} (e.g. openblas-devel or brew install openblas; a Chromium for the report check) if asked for"
     return 0
   }
   for p in "${wanted[@]}"; do

@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
 # Runs every physid test on a fresh machine: formatting, lints, the Rust test suite, and the
-# Python cross-checks against pinocchio, MuJoCo and CVXPY, and the README's main command
+# Python cross-checks against pinocchio, MuJoCo and CVXPY, the rendering of diagnose's
+# report.html in a headless browser, and the README's main command
 # (scripts/run.sh into a temporary directory, its outputs parsed). Installs what it needs
 # (scripts/setup.sh: Debian packages, the Python venv) when missing. Build outputs go to $CARGO_TARGET_DIR (default
 # ~/.cache/physid-target) so that repeated runs build incrementally.
@@ -12,6 +13,7 @@ step() { printf '\n== %s\n' "$*"; }
 step "setup (system packages, Python venv $PHYSID_VENV)"
 setup_rust
 setup_system
+setup_browser
 setup_python
 "$PHYSID_VENV/bin/python" -c "import numpy, mujoco, pinocchio; print('numpy', numpy.__version__, 'mujoco', mujoco.__version__, 'pinocchio', pinocchio.__version__)"
 
@@ -34,7 +36,7 @@ export PHYSID_BIN="$CARGO_TARGET_DIR/release/physid"
 py_passed=0; py_failed=0
 main_out=$(mktemp -d)
 trap 'rm -rf "$main_out"' EXIT
-for s in check_pinocchio check_mujoco check_cvxpy check_rosbag check_main_outputs; do
+for s in check_pinocchio check_mujoco check_cvxpy check_rosbag check_report_html check_main_outputs; do
   if [ "$s" = check_main_outputs ]; then
     step "the README's main command (bash scripts/run.sh), outputs parsed"
     out=$( { bash scripts/run.sh --out "$main_out/sample_size" >"$main_out/run.log" 2>&1 ||

@@ -103,7 +103,10 @@ mod rank_tests {
         let (rank, cond) = rank_and_condition(&gram(1e-3));
         let c = 1.0 / (1.0f64 + 1e-6).sqrt();
         assert_eq!(rank, 2);
-        assert!((cond - ((1.0 + c) / (1.0 - c)).sqrt()).abs() < 1e-3 * cond, "{cond}");
+        assert!(
+            (cond - ((1.0 + c) / (1.0 - c)).sqrt()).abs() < 1e-3 * cond,
+            "{cond}"
+        );
         // (1 − c)/(1 + c) ≈ 2.5e-13 < RANK_TOL: one direction.
         assert_eq!(rank_and_condition(&gram(1e-6)), (1, 1.0));
         // An unexcited column counts for nothing.

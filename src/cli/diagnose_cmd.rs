@@ -33,7 +33,7 @@ pub struct Args {
     /// Print the diagnosis as JSON.
     #[arg(long)]
     json: bool,
-    /// Write a report (report.md, report.json, SVG plots) into this directory.
+    /// Write a report (report.html: self-contained, the verdict first, plots inline; report.md, report.json with its schema, SVG plots) into this directory.
     #[arg(long)]
     report: Option<PathBuf>,
     /// How far the description's inertial parameters can be trusted (relative, 0.1 = 10 %):

@@ -437,7 +437,9 @@ fn how_far_section(d: &Diagnosis) -> String {
     s
 }
 
-/// Writes `report.json`, `report.md`, `where.svg`, `spectrum.svg` and `how_far.svg` into `dir`.
+/// Writes `report.json`, `report.md`, `where.svg`, `spectrum.svg`, `how_far.svg` and
+/// `report.html` (self-contained: the verdict first, the report's tables, the plots inline) into
+/// `dir`.
 pub fn write(dir: &Path, d: &Diagnosis) -> Result<(), ReportError> {
     std::fs::create_dir_all(dir).map_err(|source| IoError::Fs {
         path: dir.to_path_buf(),
@@ -508,5 +510,55 @@ pub fn write(dir: &Path, d: &Diagnosis) -> Result<(), ReportError> {
         &d.joints,
         &steps,
     )?;
+    let plots: Vec<(String, String)> = ["where.svg", "spectrum.svg", "how_far.svg"]
+        .iter()
+        .filter_map(|f| {
+            std::fs::read_to_string(dir.join(f))
+                .ok()
+                .map(|svg| (f.to_string(), svg))
+        })
+        .collect();
+    crate::io::write_atomic(&dir.join("report.html"), html(d, &plots).as_bytes())?;
     Ok(())
+}
+
+/// Text escaped for HTML.
+fn escape_html(s: &str) -> String {
+    s.replace('&', "&amp;")
+        .replace('<', "&lt;")
+        .replace('>', "&gt;")
+        .replace('"', "&quot;")
+}
+
+/// A self-contained HTML report: the verdict and summary first, then the Markdown report
+/// rendered (CommonMark with tables), then the `plots` (file name, SVG text) inline. No script,
+/// no external resource.
+pub fn html(d: &Diagnosis, plots: &[(String, String)]) -> String {
+    let verdict = serde_json::to_value(d.verdict)
+        .ok()
+        .and_then(|v| v.as_str().map(String::from))
+        .unwrap_or_default();
+    // The Markdown without its title and summary paragraph, which the page puts first.
+    let md = markdown(d);
+    let rest = md.splitn(3, "\n\n").nth(2).unwrap_or("");
+    let mut body = String::new();
+    pulldown_cmark::html::push_html(
+        &mut body,
+        pulldown_cmark::Parser::new_ext(rest, pulldown_cmark::Options::ENABLE_TABLES),
+    );
+    let figures: String = plots
+        .iter()
+        .map(|(name, svg)| {
+            format!(
+                "<figure>{svg}<figcaption>{}</figcaption></figure>\n",
+                escape_html(name)
+            )
+        })
+        .collect();
+    format!(
+        "<!DOCTYPE html>\n<html lang=\"en\">\n<head>\n<meta charset=\"utf-8\">\n<title>Diagnosis of {robot}</title>\n<style>\nbody {{ font-family: sans-serif; max-width: 1150px; margin: 2em auto; padding: 0 1em; color: #222; }}\ntable {{ border-collapse: collapse; font-size: 13px; margin: 0.5em 0 1.5em; }}\nth, td {{ border: 1px solid #ccc; padding: 2px 6px; }}\nth {{ background: #f2f2f2; }}\n.verdict {{ font-size: 1.1em; background: #f6f8fa; border-left: 5px solid #3465a4; padding: 0.6em 1em; }}\nfigure {{ margin: 1em 0; }} svg {{ max-width: 100%; height: auto; }} figcaption {{ color: #555; font-size: 12px; }}\n</style>\n</head>\n<body>\n<h1>Diagnosis of {robot}</h1>\n<p class=\"verdict\">Verdict: <b>{verdict}</b>. {summary}</p>\n{body}<h2>Plots</h2>\n{figures}</body>\n</html>\n",
+        robot = escape_html(&d.robot),
+        verdict = escape_html(&verdict),
+        summary = escape_html(&d.summary),
+    )
 }
