@@ -54,6 +54,17 @@ fn compare_passes_a_rerun_and_fails_a_degraded_run() {
     let rerun = experiment(dir.path(), "rerun", 1.0);
     let noisy = experiment(dir.path(), "noisy", 10.0);
     let s = |p: &Path| p.to_str().unwrap().to_string();
+    // The Parquet tables carry their writer and each column's unit.
+    let kv = physid::experiment::tables::parquet_key_values(&base.join("rows.parquet")).unwrap();
+    let get = |k: &str| kv.iter().find(|(key, _)| key == k).map(|(_, v)| v.clone());
+    assert_eq!(
+        get("physid.writer"),
+        Some(format!("physid {}", env!("CARGO_PKG_VERSION")))
+    );
+    let units: serde_json::Value = serde_json::from_str(&get("physid.units").unwrap()).unwrap();
+    assert_eq!(units["val_rms"], "N m");
+    assert_eq!(units["com_err_m"], "m");
+    assert_eq!(units["n_s"], "samples");
     let (code, out, err) = physid(&["compare", &s(&rerun), "--baseline", &s(&base)]);
     assert_eq!(code, 0, "{out}{err}");
     assert!(out.contains("**PASS**: 0 of 8 groups regressed"), "{out}");

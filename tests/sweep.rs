@@ -66,6 +66,8 @@ fn sharded_and_resumed_sweeps_equal_a_single_run() {
         code == 0 && out.contains("8 already done, 0 to run"),
         "{out}"
     );
+    let svg = std::fs::read_to_string(one.join("summary.svg")).unwrap();
+    assert!(svg.contains("sensors.torque_noise=2") && svg.trim_end().ends_with("</svg>"));
     let read = |d: &Path| std::fs::read_to_string(d.join("rows.csv")).unwrap();
     let strip = |csv: String| -> Vec<String> {
         // Drop the wall-clock solve time (last column).
@@ -179,4 +181,7 @@ fn blind_progress_is_plain_text_with_counts() {
         "{log}"
     );
     assert!(!log.contains("Some(") && !log.contains("None"), "{log}");
+    // The summary plot is drawn.
+    let svg = std::fs::read_to_string(out.join("blind.svg")).unwrap();
+    assert!(svg.starts_with("<svg") && svg.contains("top-1") && svg.trim_end().ends_with("</svg>"));
 }

@@ -136,9 +136,12 @@ pub fn run(a: Args) -> anyhow::Result<()> {
         spec.experiment.constraints.iter().map(|c| c.name()).collect::<Vec<_>>(),
         tables::markdown(&summary.select(keys.iter().map(|k| k.to_string()).chain(["n_s", "constraints", "val_rms_median", "j_err_median", "consistent_fraction"].map(String::from)))?)
     );
+    let svg = sweep::summary_plot(&summary, &keys)
+        .map_err(|m| anyhow::anyhow!("{}: plot: {m}", out.join("summary.svg").display()))?;
+    physid::io::write_atomic(&out.join("summary.svg"), svg.as_bytes())?;
     physid::io::write_atomic(&marker, md.as_bytes())?;
     println!(
-        "{} cells merged into {}/rows.parquet, summary.csv, summary.md",
+        "{} cells merged into {}/rows.parquet, summary.csv, summary.md, summary.svg",
         all.len(),
         out.display()
     );

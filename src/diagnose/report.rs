@@ -2,7 +2,7 @@
 //! before and after, validation RMS per joint before and after each effect).
 
 use super::Diagnosis;
-use crate::io::plot::{colour, legend};
+use crate::io::plot::{colour, legend_outside, tick, Mark, LEGEND_WIDTH};
 use crate::io::{md_cell, IoError};
 use plotters::prelude::*;
 use std::path::{Path, PathBuf};
@@ -31,7 +31,7 @@ fn plot_err<E: std::fmt::Display>(path: &Path) -> impl Fn(E) -> ReportError + '_
     }
 }
 
-/// Grouped bars: one group per label, one bar per series.
+/// Grouped bars ([`crate::io::plot::grouped_bars`]) written to `path`.
 fn bars(
     path: &Path,
     title: &str,
@@ -39,68 +39,8 @@ fn bars(
     labels: &[String],
     series: &[(String, Vec<f64>)],
 ) -> Result<(), ReportError> {
-    let ymax = series
-        .iter()
-        .flat_map(|(_, v)| v.iter().copied())
-        .filter(|v| v.is_finite())
-        .fold(0.0f64, f64::max)
-        .max(1e-9);
-    let groups = labels.len();
-    let per = series.len().max(1);
-    let mut svg = String::new();
-    {
-        let width = (140 + 60 * groups * per).clamp(640, 1400) as u32;
-        let root = SVGBackend::with_string(&mut svg, (width, 620)).into_drawing_area();
-        root.fill(&WHITE).map_err(plot_err(path))?;
-        let mut chart = ChartBuilder::on(&root)
-            .caption(title, ("sans-serif", 18))
-            .margin(15)
-            .x_label_area_size(40)
-            .y_label_area_size(70)
-            .build_cartesian_2d(0.0..groups as f64, -0.45 * ymax..ymax * 1.2)
-            .map_err(plot_err(path))?;
-        chart
-            .configure_mesh()
-            .disable_x_mesh()
-            .x_labels(0)
-            .y_label_formatter(&|v| {
-                // The band below zero holds the group labels.
-                if *v < 0.0 {
-                    String::new()
-                } else {
-                    format!("{v:.2}")
-                }
-            })
-            .y_desc(ylabel)
-            .draw()
-            .map_err(plot_err(path))?;
-        // Group labels inside the plot, below the zero line, written downwards.
-        let style = ("sans-serif", 12)
-            .into_font()
-            .transform(FontTransform::Rotate90)
-            .color(&BLACK);
-        chart
-            .draw_series(
-                labels.iter().enumerate().map(|(g, l)| {
-                    Text::new(l.clone(), (g as f64 + 0.45, -0.01 * ymax), style.clone())
-                }),
-            )
-            .map_err(plot_err(path))?;
-        let w = 0.8 / per as f64;
-        for (s, (name, vals)) in series.iter().enumerate() {
-            let c = colour(s);
-            chart
-                .draw_series(vals.iter().enumerate().map(|(g, v)| {
-                    let x0 = g as f64 + 0.1 + s as f64 * w;
-                    Rectangle::new([(x0, 0.0), (x0 + w * 0.9, v.max(0.0))], c.filled())
-                }))
-                .map_err(plot_err(path))?
-                .label(name.clone())
-                .legend(move |(x, y)| Rectangle::new([(x, y - 5), (x + 12, y + 5)], c.filled()));
-        }
-        legend(&mut chart).map_err(plot_err(path))?;
-        root.present().map_err(plot_err(path))?;
-    }
+    let svg =
+        crate::io::plot::grouped_bars(title, ylabel, labels, series).map_err(plot_err(path))?;
     crate::io::write_atomic(path, svg.as_bytes())?;
     Ok(())
 }
@@ -124,9 +64,10 @@ fn spectrum_plot(path: &Path, d: &Diagnosis) -> Result<(), ReportError> {
     let pmax = all.iter().map(|a| a.1).fold(0.0, f64::max);
     let mut svg = String::new();
     {
-        let root = SVGBackend::with_string(&mut svg, (900, 540)).into_drawing_area();
+        let root = SVGBackend::with_string(&mut svg, (900 + LEGEND_WIDTH, 540)).into_drawing_area();
         root.fill(&WHITE).map_err(plot_err(path))?;
-        let mut chart = ChartBuilder::on(&root)
+        let (plot_area, legend_area) = root.split_horizontally(900);
+        let mut chart = ChartBuilder::on(&plot_area)
             .caption(
                 "validation residual spectrum: nominal (thick), with effects (thin)",
                 ("sans-serif", 18),
@@ -143,9 +84,11 @@ fn spectrum_plot(path: &Path, d: &Diagnosis) -> Result<(), ReportError> {
             .configure_mesh()
             .x_desc("frequency (Hz)")
             .y_desc("PSD (N^2 m^2 / Hz)")
+            .x_label_formatter(&|v| tick(*v))
             .y_label_formatter(&|v| format!("{v:.0e}"))
             .draw()
             .map_err(plot_err(path))?;
+        let mut entries = vec![];
         for (j, (a, b)) in d.spectra.iter().zip(&d.spectra_after).enumerate() {
             let c = colour(j);
             let pts = |s: &super::spectrum::Spectrum| -> Vec<(f64, f64)> {
@@ -158,16 +101,13 @@ fn spectrum_plot(path: &Path, d: &Diagnosis) -> Result<(), ReportError> {
             };
             chart
                 .draw_series(LineSeries::new(pts(a), c.stroke_width(2)))
-                .map_err(plot_err(path))?
-                .label(a.joint.clone())
-                .legend(move |(x, y)| {
-                    PathElement::new(vec![(x, y), (x + 20, y)], c.stroke_width(2))
-                });
+                .map_err(plot_err(path))?;
+            entries.push((a.joint.clone(), c, Mark::Line));
             chart
                 .draw_series(LineSeries::new(pts(b), c.mix(0.6).stroke_width(1)))
                 .map_err(plot_err(path))?;
         }
-        legend(&mut chart).map_err(plot_err(path))?;
+        legend_outside(&legend_area, &entries).map_err(plot_err(path))?;
         root.present().map_err(plot_err(path))?;
     }
     crate::io::write_atomic(path, svg.as_bytes())?;

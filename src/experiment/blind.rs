@@ -701,8 +701,8 @@ pub fn case_table(results: &[CaseResult]) -> PolarsResult<DataFrame> {
     )
 }
 
-/// Writes the blind benchmark's case table (CSV, Parquet, Markdown with the scores) and
-/// `scores.json` into `dir`.
+/// Writes the blind benchmark's case table (CSV, Parquet, Markdown with the scores),
+/// `scores.json` and the plot `blind.svg` into `dir`.
 pub fn write_blind(
     dir: &Path,
     results: &[CaseResult],
@@ -750,5 +750,58 @@ pub fn write_blind(
         &dir.join("scores.json"),
         serde_json::to_string_pretty(&crate::io::versioned("blind_scores", scores))?.as_bytes(),
     )?;
+    let svg = summary_plot(results, scores).map_err(|message| {
+        BlindError::Report(crate::io::IoError::Invalid {
+            path: dir.join("blind.svg"),
+            message: format!("plot: {message}"),
+        })
+    })?;
+    crate::io::write_atomic(&dir.join("blind.svg"), svg.as_bytes())?;
     Ok(())
+}
+
+/// `blind.svg`: per single kind the fraction attributed first (top-1) and the median fraction
+/// of the gap closed, then the other categories' scores, as fractions of their cases.
+fn summary_plot(results: &[CaseResult], scores: &Scores) -> Result<String, String> {
+    let mut labels = vec![];
+    let (mut top1, mut closed) = (vec![], vec![]);
+    for k in Kind::ALL {
+        let cases: Vec<&CaseResult> = results
+            .iter()
+            .filter(|r| r.category == Category::Single && r.injected == [k.name()])
+            .collect();
+        if cases.is_empty() {
+            continue;
+        }
+        let hits = cases.iter().filter(|r| r.top1 == Some(true)).count();
+        labels.push(format!("{} ({})", k.name(), cases.len()));
+        top1.push(hits as f64 / cases.len() as f64);
+        let gaps: Vec<f64> = cases.iter().map(|r| r.gap_closed).collect();
+        closed.push(diagnose::median(&gaps).max(0.0));
+    }
+    for (name, count, value) in [
+        ("clean: no claim", scores.clean, scores.clean_no_claim),
+        ("two: both found", scores.two, scores.two_both_found),
+        (
+            "out of library: unexplained",
+            scores.out_of_library,
+            scores.out_of_library_unexplained,
+        ),
+        ("changed robot: found", scores.changed, scores.changed_found),
+    ] {
+        if count > 0 {
+            labels.push(format!("{name} ({count})"));
+            top1.push(value);
+            closed.push(f64::NAN);
+        }
+    }
+    crate::io::plot::grouped_bars(
+        "blind benchmark: scores per injected kind (cases in brackets)",
+        "fraction of cases (-)",
+        &labels,
+        &[
+            ("top-1 / found / no claim".into(), top1),
+            ("median gap closed (single)".into(), closed),
+        ],
+    )
 }

@@ -1,7 +1,7 @@
 //! Plots of an experiment (plotters, SVG): a summary column versus n_s on log-log axes, one line
 //! per constraint set (the median over seeds) with its interquartile band.
 
-use crate::io::plot::{colour, legend};
+use crate::io::plot::{colour, legend_outside, tick, Mark, LEGEND_WIDTH};
 use plotters::prelude::*;
 use polars::prelude::*;
 use std::path::Path;
@@ -58,25 +58,34 @@ pub fn plot_vs_ns(
     );
     let mut svg = String::new();
     {
-        let root = SVGBackend::with_string(&mut svg, (860, 540)).into_drawing_area();
+        let width = 860 + LEGEND_WIDTH;
+        let root = SVGBackend::with_string(&mut svg, (width, 540)).into_drawing_area();
         let draw = |e: String| err(format!("plot: {e}"));
         root.fill(&WHITE).map_err(|e| draw(e.to_string()))?;
-        let mut chart = ChartBuilder::on(&root)
+        let (plot_area, legend_area) = root.split_horizontally(860);
+        let mut chart = ChartBuilder::on(&plot_area)
             .caption(title, ("sans-serif", 20))
             .margin(15)
             .x_label_area_size(45)
             .y_label_area_size(75)
             .build_cartesian_2d(
                 (xmin * 0.9..xmax * 1.1).log_scale(),
-                (ymin * 0.8..ymax * 1.25).log_scale(),
+                // Whole decades, so that every axis carries a labelled tick at each end.
+                (0.99 * 10f64.powf(ymin.log10().floor())..1.01 * 10f64.powf(ymax.log10().ceil()))
+                    .log_scale(),
             )
             .map_err(|e| draw(e.to_string()))?;
         chart
             .configure_mesh()
-            .x_desc("training samples n_s")
+            .x_desc("training samples n_s (count)")
             .y_desc(ylabel)
+            .x_labels(12)
+            .y_labels(12)
+            .x_label_formatter(&|v| tick(*v))
+            .y_label_formatter(&|v| tick(*v))
             .draw()
             .map_err(|e| draw(e.to_string()))?;
+        let mut entries = vec![];
         for (k, set) in sets.iter().enumerate() {
             // Loosest to tightest: red, green, purple, blue (then orange, cyan).
             let color = colour([1, 2, 3, 0, 4, 5][k % 6]).to_rgba();
@@ -96,13 +105,14 @@ pub fn plot_vs_ns(
                     idx.iter().map(|&i| (ns[i], med[i])),
                     color.stroke_width(2),
                 ))
-                .map_err(|e| draw(e.to_string()))?
-                .label(*set)
-                .legend(move |(x, y)| {
-                    PathElement::new(vec![(x, y), (x + 20, y)], color.stroke_width(2))
-                });
+                .map_err(|e| draw(e.to_string()))?;
+            entries.push((
+                set.to_string(),
+                colour([1, 2, 3, 0, 4, 5][k % 6]),
+                Mark::Line,
+            ));
         }
-        legend(&mut chart).map_err(draw)?;
+        legend_outside(&legend_area, &entries).map_err(draw)?;
         root.present().map_err(|e| draw(e.to_string()))?;
     }
     crate::io::write_atomic(path, svg.as_bytes())

@@ -211,6 +211,84 @@ pub fn run_cell(
     Ok(run_seed(&model, &sc, &spec.experiment, cell.seed)?)
 }
 
+/// `summary.svg` of a merged sweep: per grid point (labels `key=value, …`), the median
+/// validation RMS of each constraint set at the largest training size, as grouped bars.
+pub fn summary_plot(summary: &polars::prelude::DataFrame, keys: &[&str]) -> Result<String, String> {
+    use polars::prelude::*;
+    let e = |e: PolarsError| e.to_string();
+    let n_s = summary
+        .column("n_s")
+        .map_err(e)?
+        .cast(&DataType::Float64)
+        .map_err(e)?;
+    let n_s: Vec<f64> = n_s
+        .f64()
+        .map_err(e)?
+        .iter()
+        .map(|v| v.unwrap_or(0.0))
+        .collect();
+    let top = n_s.iter().copied().fold(0.0, f64::max);
+    let text = |c: &str| -> Result<Vec<String>, String> {
+        let col = summary.column(c).map_err(e)?;
+        Ok((0..summary.height())
+            .map(|i| {
+                col.get(i)
+                    .map(|v| v.str_value().to_string())
+                    .unwrap_or_default()
+            })
+            .collect())
+    };
+    let sets = text("constraints")?;
+    let rms = summary
+        .column("val_rms_median")
+        .map_err(e)?
+        .cast(&DataType::Float64)
+        .map_err(e)?;
+    let rms: Vec<f64> = rms
+        .f64()
+        .map_err(e)?
+        .iter()
+        .map(|v| v.unwrap_or(f64::NAN))
+        .collect();
+    let grid: Vec<Vec<String>> = keys.iter().map(|k| text(k)).collect::<Result<_, _>>()?;
+    let point = |i: usize| -> String {
+        keys.iter()
+            .zip(&grid)
+            .map(|(k, g)| format!("{k}={}", g[i]))
+            .collect::<Vec<_>>()
+            .join(", ")
+    };
+    let (mut labels, mut names): (Vec<String>, Vec<String>) = (vec![], vec![]);
+    for i in (0..summary.height()).filter(|&i| n_s[i] == top) {
+        if !labels.contains(&point(i)) {
+            labels.push(point(i));
+        }
+        if !names.contains(&sets[i]) {
+            names.push(sets[i].clone());
+        }
+    }
+    let series: Vec<(String, Vec<f64>)> = names
+        .iter()
+        .map(|set| {
+            let vals = labels
+                .iter()
+                .map(|l| {
+                    (0..summary.height())
+                        .find(|&i| n_s[i] == top && &sets[i] == set && &point(i) == l)
+                        .map_or(f64::NAN, |i| rms[i])
+                })
+                .collect();
+            (set.clone(), vals)
+        })
+        .collect();
+    crate::io::plot::grouped_bars(
+        &format!("median validation RMS at n_s = {top:.0}, per grid point"),
+        "validation RMS (N m)",
+        &labels,
+        &series,
+    )
+}
+
 /// Sweep errors.
 #[derive(Debug, thiserror::Error)]
 pub enum SweepError {

@@ -195,7 +195,83 @@ fn write_atomically(
 
 /// Writes a table as Parquet, atomically.
 pub fn write_parquet(path: &Path, df: &mut DataFrame) -> Result<(), IoError> {
-    write_atomically(path, |f| ParquetWriter::new(f).finish(df).map(|_| ()))
+    let metadata = KeyValueMetadata::from_static(parquet_metadata(df));
+    write_atomically(path, |f| {
+        ParquetWriter::new(f)
+            .with_key_value_metadata(Some(metadata.clone()))
+            .finish(df)
+            .map(|_| ())
+    })
+}
+
+/// The unit of a column physid writes, by its name (`None`: a label, a count or a flag).
+pub fn unit_of(column: &str) -> Option<&'static str> {
+    let c = column;
+    let starts = |p: &str| c.starts_with(p);
+    if starts("val_rms")
+        || starts("train_rms")
+        || starts("rms_")
+        || c == "visible_gap"
+        || c == "noise_floor"
+    {
+        Some("N m")
+    } else if starts("com_err_m") {
+        Some("m")
+    } else if starts("mass_err")
+        || starts("inertia_err")
+        || starts("j_err")
+        || c == "magnitude_error"
+        || c == "gap_closed"
+        || c.ends_with("_fraction")
+        || c == "top1"
+    {
+        Some("1 (relative)")
+    } else if starts("solve_ms") {
+        Some("ms")
+    } else if c == "n_s" {
+        Some("samples")
+    } else {
+        None
+    }
+}
+
+/// File-level key-value metadata of every physid Parquet table: the writer and version, and
+/// each column's unit (`physid.units`, a JSON object) where it has one.
+fn parquet_metadata(df: &DataFrame) -> Vec<(String, String)> {
+    let units: serde_json::Map<String, serde_json::Value> = df
+        .get_column_names()
+        .iter()
+        .filter_map(|n| unit_of(n).map(|u| (n.to_string(), u.into())))
+        .collect();
+    vec![
+        (
+            "physid.writer".into(),
+            format!("physid {}", env!("CARGO_PKG_VERSION")),
+        ),
+        (
+            "physid.units".into(),
+            serde_json::Value::Object(units).to_string(),
+        ),
+    ]
+}
+
+/// The file-level key-value metadata of a Parquet file.
+pub fn parquet_key_values(path: &Path) -> Result<Vec<(String, String)>, IoError> {
+    let f = std::fs::File::open(path).map_err(|source| IoError::Fs {
+        path: path.to_path_buf(),
+        source,
+    })?;
+    let mut reader = ParquetReader::new(f);
+    let meta = reader.get_metadata().map_err(|e| IoError::Invalid {
+        path: path.to_path_buf(),
+        message: format!("reading metadata: {e}"),
+    })?;
+    Ok(meta
+        .key_value_metadata
+        .iter()
+        .flatten()
+        .map(|kv| (kv.key.clone(), kv.value.clone().unwrap_or_default()))
+        .collect())
 }
 
 /// Writes a table as CSV, atomically.
