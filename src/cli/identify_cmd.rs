@@ -652,23 +652,91 @@ struct Report {
     vranges: Vec<Range<usize>>,
     val: Option<(Vec<f64>, f64)>,
     idf: analysis::Identifiability,
-    truth_errors: Option<Vec<serde_json::Value>>,
+    truth_errors: Option<Vec<TruthError>>,
     total: f64,
 }
 
+/// One body's errors against the ground truth.
+#[derive(Clone, serde::Serialize, schemars::JsonSchema)]
+pub struct TruthError {
+    /// Body or rotor name.
+    name: String,
+    /// `|Δm|/m`.
+    mass_rel: f64,
+    /// `‖Δc‖` (m).
+    com_m: f64,
+    /// `‖ΔI_C‖/‖I_C‖`.
+    inertia_rel: f64,
+    /// `‖ΔJ‖/‖J‖`.
+    j_rel: f64,
+}
+
+/// A run and its sample range (`[start, end)`).
+#[derive(serde::Serialize, schemars::JsonSchema)]
+pub struct RunRange {
+    file: PathBuf,
+    range: [usize; 2],
+}
+
+/// The training or validation part of `identify --json`.
+#[derive(serde::Serialize, schemars::JsonSchema)]
+pub struct Split {
+    /// The first run's sample range.
+    range: Option<[usize; 2]>,
+    runs: Vec<RunRange>,
+    /// RMS of `Y θ − τ` per joint (N m).
+    rms: Vec<f64>,
+    /// Over all joints (N m).
+    rms_overall: f64,
+}
+
+/// Friction per joint.
+#[derive(serde::Serialize, schemars::JsonSchema)]
+pub struct Friction {
+    /// `B` (N m s/rad).
+    viscous: Vec<f64>,
+    /// `B_c` (N m).
+    coulomb: Vec<f64>,
+}
+
+/// `identify --json` (docs/identify-json.md; JSON Schema docs/schemas/identify.schema.json).
+#[derive(serde::Serialize, schemars::JsonSchema)]
+pub struct IdentifyJson {
+    data: PathBuf,
+    robot: String,
+    constraints: ConstraintSet,
+    constraints_default_because: Option<String>,
+    train: Split,
+    validation: Option<Split>,
+    bodies: Vec<ident::IdentifiedBody>,
+    friction: Friction,
+    effects: Vec<physid::diagnose::calibrate::TermFit>,
+    scenario_effects: Option<String>,
+    objective: f64,
+    constraints_hold: bool,
+    solver: ident::SolverInfo,
+    end_to_end_seconds: f64,
+    identifiability: analysis::Identifiability,
+    parameter_names: Vec<String>,
+    theta: Vec<f64>,
+    truth_errors: Option<Vec<TruthError>>,
+}
+
 /// Per-body errors against the ground truth, when the data are a physid log that carries it.
-fn truth_errors(
-    data: &Path,
-    m: &Model,
-    theta: &nalgebra::DVector<f64>,
-) -> Option<Vec<serde_json::Value>> {
+fn truth_errors(data: &Path, m: &Model, theta: &nalgebra::DVector<f64>) -> Option<Vec<TruthError>> {
     ground_truth(data, m).map(|truth| {
         let tm = m.with_parameters(&truth).expect("same layout");
         let errs = physid::experiment::body_errors(&tm, theta);
         physid::ident::bodies(m)
             .into_iter()
             .zip(errs)
-            .map(|((name, _, _), e)| json!({"name": name, "mass_rel": e[0], "com_m": e[1], "inertia_rel": e[2], "j_rel": e[3]}))
+            .map(|((name, _, _), e)| TruthError {
+                name,
+                mass_rel: e[0],
+                com_m: e[1],
+                inertia_rel: e[2],
+                j_rel: e[3],
+            })
             .collect::<Vec<_>>()
     })
 }
@@ -727,11 +795,14 @@ fn export_problem(
 /// The JSON report (docs/identify-json.md).
 fn print_json(a: &Args, m: &Model, rep: &Report) -> anyhow::Result<()> {
     let r = &rep.r;
-    let runs = |files: &[PathBuf], ranges: &[Range<usize>]| -> Vec<serde_json::Value> {
+    let runs = |files: &[PathBuf], ranges: &[Range<usize>]| -> Vec<RunRange> {
         files
             .iter()
             .zip(ranges)
-            .map(|(f, r)| json!({"file": f, "range": [r.start, r.end]}))
+            .map(|(f, r)| RunRange {
+                file: f.clone(),
+                range: [r.start, r.end],
+            })
             .collect()
     };
     let vfiles: &[PathBuf] = if a.validate.is_some() {
@@ -739,19 +810,39 @@ fn print_json(a: &Args, m: &Model, rep: &Report) -> anyhow::Result<()> {
     } else {
         &a.validate_data
     };
-    let v = json!({
-        "data": a.data[0], "robot": m.name, "constraints": rep.set,
-        "constraints_default_because": rep.set_note,
-        "train": { "range": [rep.train[0].start, rep.train[0].end], "runs": runs(&a.data, &rep.train), "rms": rep.train_rms, "rms_overall": rep.train_all },
-        "validation": rep.val.as_ref().map(|(rms, all)| json!({ "range": rep.vranges.first().map(|r| [r.start, r.end]), "runs": runs(vfiles, &rep.vranges), "rms": rms, "rms_overall": all })),
-        "bodies": r.bodies, "friction": { "viscous": r.viscous, "coulomb": r.coulomb },
-        "effects": rep.terms, "scenario_effects": rep.snippet,
-        "objective": r.objective, "constraints_hold": r.constraints_hold,
-        "solver": r.solver, "end_to_end_seconds": rep.total,
-        "identifiability": rep.idf,
-        "parameter_names": theta_names(m, &rep.terms), "theta": r.theta.as_slice(),
-        "truth_errors": rep.truth_errors,
-    });
+    let v = IdentifyJson {
+        data: a.data[0].clone(),
+        robot: m.name.clone(),
+        constraints: rep.set,
+        constraints_default_because: rep.set_note.clone(),
+        train: Split {
+            range: Some([rep.train[0].start, rep.train[0].end]),
+            runs: runs(&a.data, &rep.train),
+            rms: rep.train_rms.clone(),
+            rms_overall: rep.train_all,
+        },
+        validation: rep.val.as_ref().map(|(rms, all)| Split {
+            range: rep.vranges.first().map(|r| [r.start, r.end]),
+            runs: runs(vfiles, &rep.vranges),
+            rms: rms.clone(),
+            rms_overall: *all,
+        }),
+        bodies: r.bodies.clone(),
+        friction: Friction {
+            viscous: r.viscous.clone(),
+            coulomb: r.coulomb.clone(),
+        },
+        effects: rep.terms.clone(),
+        scenario_effects: rep.snippet.clone(),
+        objective: r.objective,
+        constraints_hold: r.constraints_hold,
+        solver: r.solver.clone(),
+        end_to_end_seconds: rep.total,
+        identifiability: rep.idf.clone(),
+        parameter_names: theta_names(m, &rep.terms),
+        theta: r.theta.as_slice().to_vec(),
+        truth_errors: rep.truth_errors.clone(),
+    };
     let v = physid::io::versioned("identify", &v);
     println!("{}", serde_json::to_string_pretty(&v)?);
     Ok(())
@@ -869,11 +960,7 @@ fn print_text(a: &Args, m: &Model, rep: &Report) {
         for e in errs {
             println!(
                 "{:<12} {:>10.4} {:>10.4} {:>12.4} {:>10.4}",
-                e["name"].as_str().unwrap_or(""),
-                e["mass_rel"].as_f64().unwrap_or(f64::NAN),
-                e["com_m"].as_f64().unwrap_or(f64::NAN),
-                e["inertia_rel"].as_f64().unwrap_or(f64::NAN),
-                e["j_rel"].as_f64().unwrap_or(f64::NAN)
+                e.name, e.mass_rel, e.com_m, e.inertia_rel, e.j_rel
             );
         }
     }

@@ -17,6 +17,7 @@ mod identify_cmd;
 mod model_cmd;
 mod progress;
 mod robot_args;
+mod schema_cmd;
 mod simulate_cmd;
 mod sweep_cmd;
 
@@ -42,6 +43,7 @@ enum Command {
     Experiment(experiment_cmd::Args),
     Sweep(sweep_cmd::Args),
     Compare(compare_cmd::Args),
+    Schema(schema_cmd::Args),
     Dynamics(dynamics_cmd::Args),
 }
 
@@ -96,6 +98,7 @@ pub fn run(cli: Cli) -> anyhow::Result<()> {
         Command::Experiment(a) => experiment_cmd::run(a),
         Command::Sweep(a) => sweep_cmd::run(a),
         Command::Compare(a) => compare_cmd::run(a),
+        Command::Schema(a) => schema_cmd::run(a),
         Command::Dynamics(a) => dynamics_cmd::run(a),
     }
 }

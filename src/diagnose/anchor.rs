@@ -182,7 +182,7 @@ pub struct Anchor<'a> {
 }
 
 /// One candidate's test.
-#[derive(Clone, Debug, Serialize)]
+#[derive(Clone, Debug, Serialize, schemars::JsonSchema)]
 pub struct Test {
     /// The kind.
     pub kind: Kind,
@@ -315,7 +315,7 @@ pub fn chi2_upper_quantile(d: usize, p: f64) -> f64 {
 }
 
 /// One accepted step of the description test.
-#[derive(Clone, Debug, Serialize)]
+#[derive(Clone, Debug, Serialize, schemars::JsonSchema)]
 pub struct Step {
     /// The kind kept.
     pub kind: Kind,
@@ -341,7 +341,7 @@ pub struct Step {
 }
 
 /// The description test's outcome.
-#[derive(Clone, Debug, Serialize)]
+#[derive(Clone, Debug, Serialize, schemars::JsonSchema)]
 pub struct Report {
     /// The stated relative uncertainty `ε` of the description's inertial parameters.
     pub uncertainty: f64,

@@ -75,7 +75,7 @@ impl Options {
 }
 
 /// One identified effect term.
-#[derive(Clone, Debug, Serialize)]
+#[derive(Clone, Debug, Serialize, schemars::JsonSchema)]
 pub struct TermFit {
     /// The kind.
     pub kind: Kind,

@@ -10,7 +10,7 @@ use crate::ident::ConstraintSet;
 use serde::Serialize;
 
 /// One estimated magnitude.
-#[derive(Clone, Debug, Serialize)]
+#[derive(Clone, Debug, Serialize, schemars::JsonSchema)]
 pub struct Magnitude {
     /// Joint name, or `"robot"` for one value for the whole robot.
     pub joint: String,
@@ -29,7 +29,7 @@ pub struct Magnitude {
 }
 
 /// What an effect was found by.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, schemars::JsonSchema)]
 #[serde(rename_all = "snake_case")]
 pub enum Evidence {
     /// It lowers the cross-validated torque error ([`select`]).
@@ -40,7 +40,7 @@ pub enum Evidence {
 }
 
 /// One selected effect with its magnitudes.
-#[derive(Clone, Debug, Serialize)]
+#[derive(Clone, Debug, Serialize, schemars::JsonSchema)]
 pub struct EffectEstimate {
     /// The kind.
     pub kind: Kind,
@@ -68,7 +68,7 @@ impl EffectEstimate {
 /// One step of the gap from the description explained ([`super::explain`]): what it adds to
 /// the description (whose inertial parameters stay pinned until the last step) and the
 /// validation RMS with everything added so far.
-#[derive(Clone, Debug, Serialize)]
+#[derive(Clone, Debug, Serialize, schemars::JsonSchema)]
 pub struct DescriptionStep {
     /// `+ <effect>`, `friction re-identified` or `inertial parameters re-identified`.
     pub step: String,
@@ -83,7 +83,7 @@ pub struct DescriptionStep {
 }
 
 /// Validation error of one joint along the selection.
-#[derive(Clone, Debug, Serialize)]
+#[derive(Clone, Debug, Serialize, schemars::JsonSchema)]
 pub struct JointGap {
     /// Joint name.
     pub joint: String,
@@ -101,7 +101,7 @@ pub struct JointGap {
 }
 
 /// The verdict.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, schemars::JsonSchema)]
 #[serde(rename_all = "snake_case")]
 pub enum Verdict {
     /// No effect selected and the residual is at the noise floor.
@@ -121,7 +121,7 @@ pub enum Verdict {
 }
 
 /// A whole diagnosis.
-#[derive(Clone, Debug, Serialize)]
+#[derive(Clone, Debug, Serialize, schemars::JsonSchema)]
 pub struct Diagnosis {
     /// Robot name.
     pub robot: String,

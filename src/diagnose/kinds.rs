@@ -18,7 +18,9 @@ use rand_chacha::ChaCha8Rng;
 use serde::Serialize;
 
 /// An effect kind the diagnosis can offer.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize, PartialOrd, Ord)]
+#[derive(
+    Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize, schemars::JsonSchema, PartialOrd, Ord,
+)]
 #[serde(rename_all = "snake_case")]
 pub enum Kind {
     /// Logged `τ += o` (N m per joint).

@@ -50,7 +50,7 @@ pub(super) struct Scratch {
 pub type RowSink<'f> = dyn FnMut(usize, &DMatrix<f64>, &[f64]) + 'f;
 
 /// An effect kind at one point of its grid (`param` = Stribeck velocity or cogging harmonic).
-#[derive(Clone, Copy, Debug, PartialEq, Serialize)]
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, schemars::JsonSchema)]
 pub struct Variant {
     /// The kind.
     pub kind: Kind,

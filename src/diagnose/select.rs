@@ -197,7 +197,7 @@ impl Folds {
 }
 
 /// One kind's best score in a step.
-#[derive(Clone, Debug, Serialize)]
+#[derive(Clone, Debug, Serialize, schemars::JsonSchema)]
 pub struct Score {
     /// The kind.
     pub kind: Kind,
@@ -212,7 +212,7 @@ pub struct Score {
 }
 
 /// One accepted step.
-#[derive(Clone, Debug, Serialize)]
+#[derive(Clone, Debug, Serialize, schemars::JsonSchema)]
 pub struct Step {
     /// The kind kept.
     pub kind: Kind,
@@ -234,7 +234,7 @@ pub struct Step {
 }
 
 /// The outcome of the forward selection.
-#[derive(Clone, Debug, Serialize)]
+#[derive(Clone, Debug, Serialize, schemars::JsonSchema)]
 pub struct Selection {
     /// Cross-validation blocks (the runs when several training runs are given).
     pub blocks: usize,

@@ -579,7 +579,7 @@ impl Marks {
 pub const VISIBLE: f64 = 0.15;
 
 /// The benchmark's scores.
-#[derive(Clone, Debug, Serialize)]
+#[derive(Clone, Debug, Serialize, schemars::JsonSchema)]
 pub struct Scores {
     /// Cases run.
     pub cases: usize,

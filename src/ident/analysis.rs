@@ -70,7 +70,7 @@ pub fn rms_error_stream<E>(
 }
 
 /// What the data determine.
-#[derive(Clone, Debug, Serialize)]
+#[derive(Clone, Debug, Serialize, schemars::JsonSchema)]
 pub struct Identifiability {
     /// Numerical rank ([`crate::linalg::rank_and_condition`], the same definition).
     pub rank: usize,

@@ -34,7 +34,17 @@ use serde::Serialize;
 
 /// The constraint set, loosest to tightest.
 #[derive(
-    Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize, serde::Deserialize, PartialOrd, Ord,
+    Clone,
+    Copy,
+    Debug,
+    PartialEq,
+    Eq,
+    Hash,
+    Serialize,
+    serde::Deserialize,
+    PartialOrd,
+    Ord,
+    schemars::JsonSchema,
 )]
 #[serde(rename_all = "lowercase")]
 pub enum ConstraintSet {
@@ -214,7 +224,7 @@ pub enum IdentError {
 
 /// How the optimum was reached, spelled the same (snake_case) in JSON, tables and text:
 /// `direct`, `solved`, `almost_solved`.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, schemars::JsonSchema)]
 #[serde(rename_all = "snake_case")]
 pub enum SolveStatus {
     /// Least squares solved directly, without the cone solver.
@@ -301,7 +311,7 @@ pub fn objective(
 }
 
 /// Solver information.
-#[derive(Clone, Debug, Serialize)]
+#[derive(Clone, Debug, Serialize, schemars::JsonSchema)]
 pub struct SolverInfo {
     /// How the optimum was reached.
     pub status: SolveStatus,
@@ -314,7 +324,7 @@ pub struct SolverInfo {
 }
 
 /// One identified body.
-#[derive(Clone, Debug, Serialize)]
+#[derive(Clone, Debug, Serialize, schemars::JsonSchema)]
 pub struct IdentifiedBody {
     /// Body or rotor name.
     pub name: String,

@@ -76,7 +76,7 @@ impl RigidInertia {
 }
 
 /// How well one parameter vector satisfies the nested consistency conditions.
-#[derive(Clone, Debug, PartialEq, serde::Serialize)]
+#[derive(Clone, Debug, PartialEq, serde::Serialize, schemars::JsonSchema)]
 pub struct ConsistencyReport {
     /// Mass (kg).
     pub mass: f64,
