@@ -181,6 +181,15 @@ fn blind_progress_is_plain_text_with_counts() {
         "{log}"
     );
     assert!(!log.contains("Some(") && !log.contains("None"), "{log}");
+    // Parquet holds lists as lists and flags as booleans.
+    let df = physid::experiment::tables::read_parquet(&out.join("cases.parquet")).unwrap();
+    let dtype = |c: &str| format!("{:?}", df.column(c).unwrap().dtype());
+    assert!(
+        dtype("found").starts_with("List") && dtype("injected").starts_with("List"),
+        "{}",
+        dtype("found")
+    );
+    assert_eq!(dtype("top1"), "Boolean");
     // The summary plot is drawn.
     let svg = std::fs::read_to_string(out.join("blind.svg")).unwrap();
     assert!(svg.starts_with("<svg") && svg.contains("top-1") && svg.trim_end().ends_with("</svg>"));

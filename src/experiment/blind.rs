@@ -680,7 +680,23 @@ fn serde_name<T: Serialize>(v: &T) -> String {
         .unwrap_or_default()
 }
 
-/// The case table as a polars frame.
+/// The case table with `injected` and `found` as list columns (for Parquet; CSV and Markdown
+/// take [`case_table`]'s joined strings).
+pub fn case_table_with_lists(results: &[CaseResult]) -> PolarsResult<DataFrame> {
+    let mut df = case_table(results)?;
+    let list = |name: &str, items: &dyn Fn(&CaseResult) -> &Vec<String>| -> Column {
+        let rows: Vec<Series> = results
+            .iter()
+            .map(|r| Series::new("".into(), items(r).clone()))
+            .collect();
+        Series::new(name.into(), rows).into_column()
+    };
+    df.replace("injected", list("injected", &|r| &r.injected))?;
+    df.replace("found", list("found", &|r| &r.found))?;
+    Ok(df)
+}
+
+/// The case table as a polars frame (`injected`, `found` joined by ` + `).
 pub fn case_table(results: &[CaseResult]) -> PolarsResult<DataFrame> {
     // Enums spelled as in the JSON (snake_case), booleans as booleans (null: not scored).
     df!(
@@ -715,7 +731,10 @@ pub fn write_blind(
     crate::io::create_dir_all(dir)?;
     let mut df = case_table(results)?;
     tables::write_csv(&dir.join("cases.csv"), &mut df)?;
-    tables::write_parquet(&dir.join("cases.parquet"), &mut df)?;
+    tables::write_parquet(
+        &dir.join("cases.parquet"),
+        &mut case_table_with_lists(results)?,
+    )?;
     // Per injected kind (single cases): count, top-1, median magnitude error.
     let per_kind = df
         .clone()
