@@ -65,6 +65,12 @@ fn compare_passes_a_rerun_and_fails_a_degraded_run() {
     assert_eq!(units["val_rms"], "N m");
     assert_eq!(units["com_err_m"], "m");
     assert_eq!(units["n_s"], "samples");
+    let prov: serde_json::Value = serde_json::from_str(&get("physid.provenance").unwrap()).unwrap();
+    assert_eq!(prov["seeds"].as_array().unwrap().len(), 8);
+    assert!(prov["scenario_file"]
+        .as_str()
+        .unwrap()
+        .ends_with("base.toml"));
     let (code, out, err) = physid(&["compare", &s(&rerun), "--baseline", &s(&base)]);
     assert_eq!(code, 0, "{out}{err}");
     assert!(out.contains("**PASS**: 0 of 8 groups regressed"), "{out}");

@@ -53,10 +53,19 @@ pub fn run(a: Args) -> anyhow::Result<()> {
         .map(|(n, _, _)| n)
         .collect();
     let mut long = tables::long_table_with_bodies(&rows, &joints, &body_names)?;
-    tables::write_parquet(&out.join("rows.parquet"), &mut long)?;
+    // Where the rows come from, in the table itself (as provenance.json says in full).
+    let provenance = vec![(
+        "physid.provenance".to_string(),
+        serde_json::json!({
+            "scenario_file": path, "git_revision": git_revision(),
+            "seeds": (spec.first_seed..spec.first_seed + spec.seeds as u64).collect::<Vec<_>>(),
+        })
+        .to_string(),
+    )];
+    tables::write_parquet_with(&out.join("rows.parquet"), &mut long, &provenance)?;
     tables::write_csv(&out.join("rows.csv"), &mut long)?;
     let mut summary = tables::summary(&long)?;
-    tables::write_parquet(&out.join("summary.parquet"), &mut summary)?;
+    tables::write_parquet_with(&out.join("summary.parquet"), &mut summary, &provenance)?;
     tables::write_csv(&out.join("summary.csv"), &mut summary)?;
     let sets: Vec<&str> = spec.constraints.iter().map(|s| s.name()).collect();
     let threads = pool.current_num_threads();
@@ -161,6 +170,17 @@ fn write_plots(
     Ok(())
 }
 
+/// The git revision of the working directory, or `unknown`.
+fn git_revision() -> String {
+    std::process::Command::new("git")
+        .args(["rev-parse", "HEAD"])
+        .output()
+        .ok()
+        .filter(|o| o.status.success())
+        .map(|o| String::from_utf8_lossy(&o.stdout).trim().to_string())
+        .unwrap_or_else(|| "unknown".into())
+}
+
 /// `provenance.json`: the scenario, seeds, git revision, versions, threads and wall time.
 fn write_provenance(
     path: &Path,
@@ -170,13 +190,7 @@ fn write_provenance(
     threads: usize,
     wall: f64,
 ) -> anyhow::Result<()> {
-    let git = std::process::Command::new("git")
-        .args(["rev-parse", "HEAD"])
-        .output()
-        .ok()
-        .filter(|o| o.status.success())
-        .map(|o| String::from_utf8_lossy(&o.stdout).trim().to_string())
-        .unwrap_or_else(|| "unknown".into());
+    let git = git_revision();
     let prov = serde_json::json!({
         "scenario_file": path, "scenario": text, "experiment": spec,
         "seeds": (spec.first_seed..spec.first_seed + spec.seeds as u64).collect::<Vec<_>>(),

@@ -195,7 +195,18 @@ fn write_atomically(
 
 /// Writes a table as Parquet, atomically.
 pub fn write_parquet(path: &Path, df: &mut DataFrame) -> Result<(), IoError> {
-    let metadata = KeyValueMetadata::from_static(parquet_metadata(df));
+    write_parquet_with(path, df, &[])
+}
+
+/// [`write_parquet`] with more file-level key-value metadata (e.g. `physid.provenance`).
+pub fn write_parquet_with(
+    path: &Path,
+    df: &mut DataFrame,
+    extra: &[(String, String)],
+) -> Result<(), IoError> {
+    let mut kv = parquet_metadata(df);
+    kv.extend(extra.iter().cloned());
+    let metadata = KeyValueMetadata::from_static(kv);
     write_atomically(path, |f| {
         ParquetWriter::new(f)
             .with_key_value_metadata(Some(metadata.clone()))
