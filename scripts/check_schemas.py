@@ -51,6 +51,8 @@ def main():
         check("results/kuka_diagnosis/report.json", json.load(f), "diagnose")
     with open(os.path.join(ROOT, "results", "blind", "scores.json")) as f:
         check("results/blind/scores.json", json.load(f), "blind_scores")
+    with open(os.path.join(ROOT, "results", "sample_size", "provenance.json")) as f:
+        check("results/sample_size/provenance.json", json.load(f), "provenance")
     print(f"{passed} passed, {failed} failed")
     return 0 if failed == 0 else 1
 

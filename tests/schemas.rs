@@ -10,6 +10,7 @@ fn the_committed_json_schemas_are_current() {
         ("identify", "identify"),
         ("diagnose", "diagnose"),
         ("blind_scores", "blind-scores"),
+        ("provenance", "provenance"),
     ] {
         let o = Command::new(env!("CARGO_BIN_EXE_physid"))
             .args(["schema", arg])

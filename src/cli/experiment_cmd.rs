@@ -181,6 +181,27 @@ fn git_revision() -> String {
         .unwrap_or_else(|| "unknown".into())
 }
 
+/// `provenance.json` of an experiment (schema `physid.provenance/1`, docs/schemas/).
+#[derive(serde::Serialize, schemars::JsonSchema)]
+pub struct Provenance {
+    /// The scenario file as given.
+    scenario_file: std::path::PathBuf,
+    /// Its text.
+    scenario: String,
+    /// The experiment settings used.
+    experiment: experiment::ExperimentSpec,
+    /// The seeds run.
+    seeds: Vec<u64>,
+    /// `git rev-parse HEAD` of the working directory, or `unknown`.
+    git_revision: String,
+    /// Versions of the numerical dependencies (from Cargo.lock) and the OpenBLAS linked.
+    dependencies: serde_json::Map<String, serde_json::Value>,
+    /// Worker threads.
+    threads: usize,
+    /// Wall time of the experiment (s).
+    wall_seconds: f64,
+}
+
 /// `provenance.json`: the scenario, seeds, git revision, versions, threads and wall time.
 fn write_provenance(
     path: &Path,
@@ -191,12 +212,16 @@ fn write_provenance(
     wall: f64,
 ) -> anyhow::Result<()> {
     let git = git_revision();
-    let prov = serde_json::json!({
-        "scenario_file": path, "scenario": text, "experiment": spec,
-        "seeds": (spec.first_seed..spec.first_seed + spec.seeds as u64).collect::<Vec<_>>(),
-        "git_revision": git, "physid_version": env!("CARGO_PKG_VERSION"), "dependencies": dependency_versions(),
-        "threads": threads, "wall_seconds": wall,
-    });
+    let prov = Provenance {
+        scenario_file: path.to_path_buf(),
+        scenario: text.to_string(),
+        experiment: spec.clone(),
+        seeds: (spec.first_seed..spec.first_seed + spec.seeds as u64).collect(),
+        git_revision: git,
+        dependencies: dependency_versions(),
+        threads,
+        wall_seconds: wall,
+    };
     physid::io::write_atomic(
         &out.join("provenance.json"),
         serde_json::to_string_pretty(&physid::io::versioned("provenance", &prov))?.as_bytes(),
@@ -205,7 +230,7 @@ fn write_provenance(
 }
 
 /// Versions of the numerical dependencies, read from the Cargo.lock the binary was built with.
-fn dependency_versions() -> serde_json::Value {
+fn dependency_versions() -> serde_json::Map<String, serde_json::Value> {
     const LOCK: &str = include_str!("../../Cargo.lock");
     let wanted = [
         "nalgebra",
@@ -234,5 +259,5 @@ fn dependency_versions() -> serde_json::Value {
         "openblas".to_string(),
         serde_json::Value::String(env!("PHYSID_OPENBLAS").to_string()),
     );
-    serde_json::Value::Object(out)
+    out
 }

@@ -20,6 +20,8 @@ enum Output {
     Diagnose,
     /// `blind`'s `scores.json`.
     BlindScores,
+    /// `experiment`'s `provenance.json`.
+    Provenance,
 }
 
 /// Every `"type": "number"` also admits null: serde_json writes a non-finite number (NaN, an
@@ -43,6 +45,7 @@ pub fn schema(output: &str) -> anyhow::Result<Value> {
         "identify" => schemars::schema_for!(super::identify_cmd::IdentifyJson),
         "diagnose" => schemars::schema_for!(physid::diagnose::Diagnosis),
         "blind_scores" => schemars::schema_for!(physid::experiment::blind::Scores),
+        "provenance" => schemars::schema_for!(super::experiment_cmd::Provenance),
         other => anyhow::bail!("no schema for '{other}'"),
     };
     let mut v = serde_json::to_value(s)?;
@@ -64,6 +67,7 @@ pub fn run(a: Args) -> anyhow::Result<()> {
         Output::Identify => "identify",
         Output::Diagnose => "diagnose",
         Output::BlindScores => "blind_scores",
+        Output::Provenance => "provenance",
     };
     println!("{}", serde_json::to_string_pretty(&schema(name)?)?);
     Ok(())

@@ -25,7 +25,7 @@ pub mod tables;
 use serde::{Deserialize, Serialize};
 
 /// The `[experiment]` table of a scenario file.
-#[derive(Clone, Debug, Deserialize, Serialize, PartialEq)]
+#[derive(Clone, Debug, Deserialize, Serialize, PartialEq, schemars::JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct ExperimentSpec {
     /// Number of seeds (simulated experiments).
@@ -77,7 +77,9 @@ impl ExperimentSpec {
 }
 
 /// Where the training window starts.
-#[derive(Clone, Copy, Debug, Default, Deserialize, Serialize, PartialEq, Eq)]
+#[derive(
+    Clone, Copy, Debug, Default, Deserialize, Serialize, PartialEq, Eq, schemars::JsonSchema,
+)]
 #[serde(rename_all = "lowercase")]
 pub enum Windows {
     /// At sample 0.
