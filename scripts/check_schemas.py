@@ -40,10 +40,15 @@ def main():
     with tempfile.TemporaryDirectory() as d:
         log = os.path.join(d, "shell.mcap")
         run(binary, "simulate", os.path.join(ROOT, "scenarios", "cheetah3_shell.toml"), "--out", log, "--duration", "3")
+        sim = json.loads(run(binary, "simulate", os.path.join(ROOT, "scenarios", "cheetah3_shell.toml"), "--out",
+                             os.path.join(d, "again.mcap"), "--duration", "1", "--json"))
+        check("simulate --json", sim, "simulate")
         truth = json.loads(run(binary, "identify", "--data", log, "--json"))
         check("identify --json (physid log with ground truth)", truth, "identify")
         if not truth.get("truth_errors"):
             print("FAIL the log's identify output carries truth_errors"); failed += 1
+    check("model --json (KUKA URDF)", json.loads(run(binary, "model", "--robot", KUKA_URDF, "--json")), "model")
+    check("model --json (Cheetah leg)", json.loads(run(binary, "model", "--json")), "model")
     diag = json.loads(run(binary, "diagnose", "--robot", KUKA_URDF, "--constraints", "consistent", "--data", m[0], m[1],
                           "--validate", m[2], "--json"))
     check("diagnose --json (KUKA)", diag, "diagnose")

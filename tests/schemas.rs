@@ -11,6 +11,8 @@ fn the_committed_json_schemas_are_current() {
         ("diagnose", "diagnose"),
         ("blind_scores", "blind-scores"),
         ("provenance", "provenance"),
+        ("simulate", "simulate"),
+        ("model", "model"),
     ] {
         let o = Command::new(env!("CARGO_BIN_EXE_physid"))
             .args(["schema", arg])

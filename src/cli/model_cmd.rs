@@ -4,28 +4,74 @@ use super::RobotArgs;
 use physid::dynamics::{crba, rnea, Data};
 use physid::model::Model;
 use physid::spatial::{ConsistencyReport, Ellipsoid, InertialParams};
-use serde_json::json;
 
-/// An ellipsoid as JSON: centre (m), semi-axes (m, ascending), `Q_s` (m²).
-fn ellipsoid_json(e: &Ellipsoid) -> serde_json::Value {
-    json!({
-        "center": e.center.as_slice(),
-        "semi_axes": e.semi_axes().as_slice(),
-        "qs": (0..3).map(|i| (0..3).map(|j| e.qs[(i, j)]).collect::<Vec<_>>()).collect::<Vec<_>>(),
-    })
+/// An ellipsoid: centre (m), semi-axes (m, ascending), `Q_s` (m²).
+#[derive(serde::Serialize, schemars::JsonSchema)]
+pub struct EllipsoidJson {
+    center: Vec<f64>,
+    semi_axes: Vec<f64>,
+    qs: Vec<Vec<f64>>,
 }
 
-fn body_json(name: &str, p: &InertialParams, e: Option<&Ellipsoid>) -> serde_json::Value {
-    let r: ConsistencyReport = p.consistency(e);
-    json!({
-        "ellipsoid": e.map(ellipsoid_json),
-        "name": name,
-        "pi": p.0.as_slice(),
-        "mass": p.mass(),
-        "com": p.com().map(|c| c.as_slice().to_vec()),
-        "principal_moments": p.principal_moments().map(|(v, _)| v.as_slice().to_vec()),
-        "consistency": r,
-    })
+/// One body or rotor: its ten parameters (paper order, own frame), mass (kg), CoM (m),
+/// principal moments about the CoM (kg m²), consistency margins, bounding ellipsoid.
+#[derive(serde::Serialize, schemars::JsonSchema)]
+pub struct BodyJson {
+    ellipsoid: Option<EllipsoidJson>,
+    name: String,
+    pi: Vec<f64>,
+    mass: f64,
+    com: Option<Vec<f64>>,
+    principal_moments: Option<Vec<f64>>,
+    consistency: ConsistencyReport,
+}
+
+/// One joint: friction and limits `[lower, upper, velocity, effort]`.
+#[derive(serde::Serialize, schemars::JsonSchema)]
+pub struct JointJson {
+    name: String,
+    friction: physid::model::JointFriction,
+    limits: [f64; 4],
+}
+
+/// `model --json` (schema `physid.model/1`, docs/schemas/).
+#[derive(serde::Serialize, schemars::JsonSchema)]
+pub struct ModelJson {
+    name: String,
+    dof: usize,
+    rotors: usize,
+    rotor_model: physid::model::RotorModel,
+    /// kg.
+    total_mass: f64,
+    parameters: usize,
+    bodies: Vec<BodyJson>,
+    joints: Vec<JointJson>,
+    /// The reference configuration (rad): zero clamped into the limits.
+    q0: Vec<f64>,
+    /// Gravity torque at `q0` (N m).
+    gravity_torque_q0: Vec<f64>,
+}
+
+fn ellipsoid_json(e: &Ellipsoid) -> EllipsoidJson {
+    EllipsoidJson {
+        center: e.center.as_slice().to_vec(),
+        semi_axes: e.semi_axes().as_slice().to_vec(),
+        qs: (0..3)
+            .map(|i| (0..3).map(|j| e.qs[(i, j)]).collect())
+            .collect(),
+    }
+}
+
+fn body_json(name: &str, p: &InertialParams, e: Option<&Ellipsoid>) -> BodyJson {
+    BodyJson {
+        ellipsoid: e.map(ellipsoid_json),
+        name: name.to_string(),
+        pi: p.0.as_slice().to_vec(),
+        mass: p.mass(),
+        com: p.com().map(|c| c.as_slice().to_vec()),
+        principal_moments: p.principal_moments().map(|(v, _)| v.as_slice().to_vec()),
+        consistency: p.consistency(e),
+    }
 }
 
 /// Describe a robot: bodies, rotors, mass properties, consistency margins, and its dynamics at
@@ -63,14 +109,31 @@ pub fn describe(m: &Model, as_json: bool) -> anyhow::Result<()> {
     let g = rnea(m, &mut d, &q0, &zero, &zero).clone();
     let h = crba(m, &mut d, &q0).clone();
     if as_json {
-        let v = json!({
-            "name": m.name, "dof": m.dof(), "rotors": m.rotor_count(),
-            "rotor_model": m.rotor_model, "total_mass": m.total_mass(),
-            "parameters": m.layout().len, "bodies": bodies,
-            "joints": m.bodies.iter().map(|b| json!({"name": b.joint_name, "friction": b.friction,
-                "limits": [b.limits.lower, b.limits.upper, b.limits.velocity, b.limits.effort]})).collect::<Vec<_>>(),
-            "q0": q0, "gravity_torque_q0": g.as_slice(),
-        });
+        let v = ModelJson {
+            name: m.name.clone(),
+            dof: m.dof(),
+            rotors: m.rotor_count(),
+            rotor_model: m.rotor_model,
+            total_mass: m.total_mass(),
+            parameters: m.layout().len,
+            bodies,
+            joints: m
+                .bodies
+                .iter()
+                .map(|b| JointJson {
+                    name: b.joint_name.clone(),
+                    friction: b.friction,
+                    limits: [
+                        b.limits.lower,
+                        b.limits.upper,
+                        b.limits.velocity,
+                        b.limits.effort,
+                    ],
+                })
+                .collect(),
+            q0: q0.clone(),
+            gravity_torque_q0: g.as_slice().to_vec(),
+        };
         println!(
             "{}",
             serde_json::to_string_pretty(&physid::io::versioned("model", &v))?

@@ -22,6 +22,10 @@ enum Output {
     BlindScores,
     /// `experiment`'s `provenance.json`.
     Provenance,
+    /// `simulate --json`.
+    Simulate,
+    /// `model --json`.
+    Model,
 }
 
 /// Every `"type": "number"` also admits null: serde_json writes a non-finite number (NaN, an
@@ -46,6 +50,8 @@ pub fn schema(output: &str) -> anyhow::Result<Value> {
         "diagnose" => schemars::schema_for!(physid::diagnose::Diagnosis),
         "blind_scores" => schemars::schema_for!(physid::experiment::blind::Scores),
         "provenance" => schemars::schema_for!(super::experiment_cmd::Provenance),
+        "simulate" => schemars::schema_for!(super::simulate_cmd::SimulateJson),
+        "model" => schemars::schema_for!(super::model_cmd::ModelJson),
         other => anyhow::bail!("no schema for '{other}'"),
     };
     let mut v = serde_json::to_value(s)?;
@@ -68,6 +74,8 @@ pub fn run(a: Args) -> anyhow::Result<()> {
         Output::Diagnose => "diagnose",
         Output::BlindScores => "blind_scores",
         Output::Provenance => "provenance",
+        Output::Simulate => "simulate",
+        Output::Model => "model",
     };
     println!("{}", serde_json::to_string_pretty(&schema(name)?)?);
     Ok(())

@@ -5,6 +5,29 @@ use physid::io::{mcap_log, samples};
 use physid::sim::scenario::Engine;
 use std::path::PathBuf;
 
+/// `simulate --json` (schema `physid.simulate/1`, docs/schemas/).
+#[derive(serde::Serialize, schemars::JsonSchema)]
+pub struct SimulateJson {
+    scenario: std::path::PathBuf,
+    out: std::path::PathBuf,
+    engine: String,
+    samples: usize,
+    /// s.
+    simulated_seconds: f64,
+    /// s.
+    wall_seconds: f64,
+    real_time_factor: f64,
+    excitation: physid::sim::report::Excitation,
+    physid_inverse_dynamics_residual: Residual,
+}
+
+/// How well physid's inverse dynamics explains the recording, per joint (N m).
+#[derive(serde::Serialize, schemars::JsonSchema)]
+pub struct Residual {
+    rms: Vec<f64>,
+    max: Vec<f64>,
+}
+
 /// Simulate a scenario's excitation experiment and log it to MCAP (and CSV).
 #[derive(clap::Args, Debug)]
 pub struct Args {
@@ -88,12 +111,20 @@ pub fn run(a: Args) -> anyhow::Result<()> {
     let (cons_rms, cons_max) = physid::sim::report::engine_consistency(&model, &rec);
     let sim_s = sc.simulation.duration;
     if json {
-        let v = serde_json::json!({
-            "scenario": path, "out": out, "engine": engine_name, "samples": rec.truth.len(),
-            "simulated_seconds": sim_s, "wall_seconds": wall, "real_time_factor": sim_s / wall,
-            "excitation": ex,
-            "physid_inverse_dynamics_residual": { "rms": cons_rms, "max": cons_max },
-        });
+        let v = SimulateJson {
+            scenario: path.to_path_buf(),
+            out: out.to_path_buf(),
+            engine: engine_name.to_string(),
+            samples: rec.truth.len(),
+            simulated_seconds: sim_s,
+            wall_seconds: wall,
+            real_time_factor: sim_s / wall,
+            excitation: ex,
+            physid_inverse_dynamics_residual: Residual {
+                rms: cons_rms,
+                max: cons_max,
+            },
+        };
         println!(
             "{}",
             serde_json::to_string_pretty(&physid::io::versioned("simulate", &v))?

@@ -99,7 +99,16 @@ impl Rotor {
 }
 
 /// Joint friction `τ_f = B q̇ + B_c sign(q̇)` (paper eq. 9), at the joint (gearbox output).
-#[derive(Clone, Copy, Debug, Default, PartialEq, serde::Serialize, serde::Deserialize)]
+#[derive(
+    Clone,
+    Copy,
+    Debug,
+    Default,
+    PartialEq,
+    serde::Serialize,
+    serde::Deserialize,
+    schemars::JsonSchema,
+)]
 #[serde(deny_unknown_fields)]
 pub struct JointFriction {
     /// Viscous coefficient `B` (N m s/rad).
@@ -207,7 +216,17 @@ pub enum ShapeKind {
 }
 
 /// How rotors enter the dynamics.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+#[derive(
+    Clone,
+    Copy,
+    Debug,
+    Default,
+    PartialEq,
+    Eq,
+    serde::Serialize,
+    serde::Deserialize,
+    schemars::JsonSchema,
+)]
 #[serde(rename_all = "lowercase")]
 pub enum RotorModel {
     /// Each rotor is a body spinning at `N q̇` on its parent (gyroscopic coupling kept).

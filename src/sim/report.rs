@@ -7,7 +7,7 @@ use crate::trajectory::Trajectory;
 use nalgebra::DMatrix;
 
 /// Excitation summary of a trajectory.
-#[derive(Clone, Debug, serde::Serialize)]
+#[derive(Clone, Debug, serde::Serialize, schemars::JsonSchema)]
 pub struct Excitation {
     /// Per joint `[min, max]` position (rad).
     pub q_range: Vec<[f64; 2]>,
