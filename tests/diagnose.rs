@@ -721,18 +721,22 @@ velocity = [0.1, 0.1, 0.1, 0.1, 0.1, 0.1, 0.1]
     physid::sim::run(&m, &sc, &mut |_| {}).unwrap().processed
 }
 
+/// The KUKA LWR4+ URDF as a description (with its geometry's ellipsoids).
+fn kuka_description() -> physid::model::Model {
+    let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR"));
+    let urdf = root.join("data/kuka_lwr4/kuka_lwr4.urdf");
+    physid::io::load_robot_with(urdf.to_str().unwrap(), &Default::default())
+        .unwrap()
+        .0
+}
+
 #[test]
 fn the_kuka_twin_finds_its_withheld_payload_and_claims_none_without() {
     // The real case's simulated twin: the KUKA URDF is the description, the robot carries a
     // 2.5 kg payload on its last link and Stribeck friction; trained on one run, validated on
     // another. The payload explains most of the description's gap, so it comes first in the
     // ladder from the description; without the payload, none is claimed.
-    let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR"));
-    let (description, _) = physid::io::load_robot_with(
-        root.join("data/kuka_lwr4/kuka_lwr4.urdf").to_str().unwrap(),
-        &Default::default(),
-    )
-    .unwrap();
+    let description = kuka_description();
     let opts = DiagOptions {
         description_uncertainty: Some(0.1),
         ..Default::default()
@@ -780,12 +784,7 @@ fn a_payload_on_an_inner_link_of_the_kuka_twin_is_found_on_that_link() {
     // (lwr_4_link, of seven) is attributed to it, with its mass. (On links whose mass the
     // motion does not separate from their neighbours', e.g. the third here, the link is found
     // but the mass's standard error says it is not identified.)
-    let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR"));
-    let (description, _) = physid::io::load_robot_with(
-        root.join("data/kuka_lwr4/kuka_lwr4.urdf").to_str().unwrap(),
-        &Default::default(),
-    )
-    .unwrap();
+    let description = kuka_description();
     let opts = DiagOptions {
         description_uncertainty: Some(0.1),
         every_body: true,

@@ -43,15 +43,14 @@ fn print_case(r: &CaseResult, progress: &super::progress::Progress) {
             v.join(" + ")
         }
     };
-    let name = |v: serde_json::Value| v.as_str().unwrap_or("").to_string();
     eprintln!(
         "case {} ({}): {}; injected {}; found {}; verdict {}; validation RMS {:.3} -> {:.3} N m (noise floor {:.3}); {:.1} s",
         r.case,
         progress.status(),
-        name(serde_json::json!(r.category)),
+        physid::io::serde_name(&r.category),
         list(&r.injected),
         list(&r.found),
-        name(serde_json::json!(r.verdict)),
+        physid::io::serde_name(&r.verdict),
         r.rms[0],
         r.rms[1],
         r.rms[2],

@@ -38,26 +38,21 @@ impl Progress {
             bar
         });
         Self {
-            label: label.to_string(),
-            total,
-            done: AtomicU64::new(0),
-            start: Instant::now(),
             bar,
-            last: Mutex::new(f64::NEG_INFINITY),
-            quiet: false,
+            ..Self::plain(label, total)
         }
     }
 
     /// A counter for a caller that prints one line per step itself, with [`Progress::status`].
     pub fn counter(label: &str, total: u64) -> Self {
         Self {
-            bar: None,
             quiet: true,
-            ..Self::new_plain(label, total)
+            ..Self::plain(label, total)
         }
     }
 
-    fn new_plain(label: &str, total: u64) -> Self {
+    /// Plain lines, whatever stderr is.
+    fn plain(label: &str, total: u64) -> Self {
         Self {
             label: label.to_string(),
             total,

@@ -93,17 +93,16 @@ pub(crate) fn from_description(
     let mut set = vec![];
     let mut steps = vec![];
     while !remaining.is_empty() {
-        let best = (0..remaining.len())
+        // Each remaining explanation tried; the winner's fit is the step's.
+        let (best, (theta, variants, _)) = (0..remaining.len())
             .map(|i| {
                 let mut trial = set.clone();
                 trial.push(remaining[i]);
-                (i, fit(stage, &trial).2)
+                (i, fit(stage, &trial))
             })
-            .min_by(|a, b| a.1.total_cmp(&b.1))
-            .map(|(i, _)| i)
+            .min_by(|a, b| a.1 .2.total_cmp(&b.1 .2))
             .expect("a remaining explanation");
         set.push(remaining.remove(best));
-        let (theta, variants, _) = fit(stage, &set);
         let (rms, _) = residual_rms(
             &stage.ctx_val,
             stage.validate,

@@ -700,7 +700,7 @@ fn tilt_angles(model: &Model, c: &[f64]) -> Option<(f64, f64)> {
     Some((roll, pitch))
 }
 
-pub(super) fn uniform(rng: &mut ChaCha8Rng, lo: f64, hi: f64) -> f64 {
+fn uniform(rng: &mut ChaCha8Rng, lo: f64, hi: f64) -> f64 {
     lo + (hi - lo) * rng.random::<f64>()
 }
 
@@ -714,7 +714,7 @@ fn signed(rng: &mut ChaCha8Rng, lo: f64, hi: f64) -> f64 {
 }
 
 /// `n` independent uniform draws in `[lo, hi)`.
-pub(super) fn per_joint(rng: &mut ChaCha8Rng, n: usize, lo: f64, hi: f64) -> Vec<f64> {
+fn per_joint(rng: &mut ChaCha8Rng, n: usize, lo: f64, hi: f64) -> Vec<f64> {
     (0..n).map(|_| uniform(rng, lo, hi)).collect()
 }
 

@@ -31,22 +31,23 @@ fn plot_err<E: std::fmt::Display>(path: &Path) -> impl Fn(E) -> ReportError + '_
     }
 }
 
-/// Grouped bars ([`crate::io::plot::grouped_bars`]) written to `path`.
+/// Grouped bars ([`crate::io::plot::grouped_bars`]) written to `path`; returns the SVG.
 fn bars(
     path: &Path,
     title: &str,
     ylabel: &str,
     labels: &[String],
     series: &[(String, Vec<f64>)],
-) -> Result<(), ReportError> {
+) -> Result<String, ReportError> {
     let svg =
         crate::io::plot::grouped_bars(title, ylabel, labels, series).map_err(plot_err(path))?;
     crate::io::write_atomic(path, svg.as_bytes())?;
-    Ok(())
+    Ok(svg)
 }
 
-/// Residual PSD per joint, before (solid) and after (thin) the selected effects, log-log.
-fn spectrum_plot(path: &Path, d: &Diagnosis) -> Result<(), ReportError> {
+/// Residual PSD per joint, before (solid) and after (thin) the selected effects, log-log,
+/// written to `path`; returns the SVG (`None`, and no file, without a positive spectrum).
+fn spectrum_plot(path: &Path, d: &Diagnosis) -> Result<Option<String>, ReportError> {
     let pos = |v: f64| v.is_finite() && v > 0.0;
     let all: Vec<(f64, f64)> = d
         .spectra
@@ -56,7 +57,7 @@ fn spectrum_plot(path: &Path, d: &Diagnosis) -> Result<(), ReportError> {
         .filter(|(f, p)| pos(*f) && pos(*p))
         .collect();
     if all.is_empty() {
-        return Ok(());
+        return Ok(None);
     }
     let fmin = all.iter().map(|a| a.0).fold(f64::INFINITY, f64::min);
     let fmax = all.iter().map(|a| a.0).fold(0.0, f64::max);
@@ -111,7 +112,7 @@ fn spectrum_plot(path: &Path, d: &Diagnosis) -> Result<(), ReportError> {
         root.present().map_err(plot_err(path))?;
     }
     crate::io::write_atomic(path, svg.as_bytes())?;
-    Ok(())
+    Ok(Some(svg))
 }
 
 /// The Markdown report.
@@ -418,14 +419,14 @@ pub fn write(dir: &Path, d: &Diagnosis) -> Result<(), ReportError> {
         .iter()
         .map(|r| r.replace("velocity", "vel.").replace("quartile", "q."))
         .collect();
-    bars(
+    let where_svg = bars(
         &dir.join("where.svg"),
         "nominal validation residual by motion regime",
         "RMS (N m)",
         &short,
         &series,
     )?;
-    spectrum_plot(&dir.join("spectrum.svg"), d)?;
+    let spectrum_svg = spectrum_plot(&dir.join("spectrum.svg"), d)?;
     let mut steps = vec![(
         "nominal".to_string(),
         d.gap.iter().map(|g| g.nominal).collect(),
@@ -443,21 +444,21 @@ pub fn write(dir: &Path, d: &Diagnosis) -> Result<(), ReportError> {
         "noise floor".into(),
         d.gap.iter().map(|g| g.noise_floor).collect(),
     ));
-    bars(
+    let how_far_svg = bars(
         &dir.join("how_far.svg"),
         "validation RMS per joint: before and after each effect",
         "RMS (N m)",
         &d.joints,
         &steps,
     )?;
-    let plots: Vec<(String, String)> = ["where.svg", "spectrum.svg", "how_far.svg"]
-        .iter()
-        .filter_map(|f| {
-            std::fs::read_to_string(dir.join(f))
-                .ok()
-                .map(|svg| (f.to_string(), svg))
-        })
-        .collect();
+    let plots: Vec<(String, String)> = [
+        ("where.svg", Some(where_svg)),
+        ("spectrum.svg", spectrum_svg),
+        ("how_far.svg", Some(how_far_svg)),
+    ]
+    .into_iter()
+    .filter_map(|(name, svg)| svg.map(|s| (name.to_string(), s)))
+    .collect();
     crate::io::write_atomic(&dir.join("report.html"), html(d, &plots).as_bytes())?;
     Ok(())
 }
@@ -474,10 +475,7 @@ fn escape_html(s: &str) -> String {
 /// rendered (CommonMark with tables), then the `plots` (file name, SVG text) inline. No script,
 /// no external resource.
 pub fn html(d: &Diagnosis, plots: &[(String, String)]) -> String {
-    let verdict = serde_json::to_value(d.verdict)
-        .ok()
-        .and_then(|v| v.as_str().map(String::from))
-        .unwrap_or_default();
+    let verdict = crate::io::serde_name(&d.verdict);
     // The Markdown without its title and summary paragraph, which the page puts first.
     let md = markdown(d);
     let rest = md.splitn(3, "\n\n").nth(2).unwrap_or("");

@@ -672,14 +672,6 @@ pub fn score(results: &[CaseResult]) -> Scores {
     }
 }
 
-/// Serde's spelling of a unit enum value (what the JSON writes).
-fn serde_name<T: Serialize>(v: &T) -> String {
-    serde_json::to_value(v)
-        .ok()
-        .and_then(|v| v.as_str().map(String::from))
-        .unwrap_or_default()
-}
-
 /// The case table with `injected` and `found` as list columns (for Parquet; CSV and Markdown
 /// take [`case_table`]'s joined strings).
 pub fn case_table_with_lists(results: &[CaseResult]) -> PolarsResult<DataFrame> {
@@ -701,11 +693,11 @@ pub fn case_table(results: &[CaseResult]) -> PolarsResult<DataFrame> {
     // Enums spelled as in the JSON (snake_case), booleans as booleans (null: not scored).
     df!(
         "case" => results.iter().map(|r| r.case as u32).collect::<Vec<_>>(),
-        "category" => results.iter().map(|r| serde_name(&r.category)).collect::<Vec<_>>(),
+        "category" => results.iter().map(|r| crate::io::serde_name(&r.category)).collect::<Vec<_>>(),
         "injected" => results.iter().map(|r| r.injected.join(" + ")).collect::<Vec<_>>(),
         "visible_gap" => results.iter().map(|r| r.visible_gap).collect::<Vec<_>>(),
         "found" => results.iter().map(|r| r.found.join(" + ")).collect::<Vec<_>>(),
-        "verdict" => results.iter().map(|r| serde_name(&r.verdict)).collect::<Vec<_>>(),
+        "verdict" => results.iter().map(|r| crate::io::serde_name(&r.verdict)).collect::<Vec<_>>(),
         "top1" => results.iter().map(|r| r.top1).collect::<Vec<_>>(),
         "both_found" => results.iter().map(|r| r.both_found).collect::<Vec<_>>(),
         "changed_found" => results.iter().map(|r| r.changed_found).collect::<Vec<_>>(),

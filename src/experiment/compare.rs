@@ -14,6 +14,7 @@
 //! from `rows.parquet` (or `rows.csv`) as `physid experiment` and `physid sweep` write them:
 //! the columns before `seed` are grid values, then `seed`, `n_s`, `constraints`, the metrics.
 
+use crate::diagnose::median;
 use crate::io::{md_cell, IoError};
 use polars::prelude::*;
 use std::collections::BTreeMap;
@@ -327,21 +328,17 @@ pub fn wilcoxon_upper_p(d: &[f64]) -> f64 {
     signed_rank_upper_p(&ranks2, w2)
 }
 
-fn median(v: &mut [f64]) -> f64 {
-    crate::diagnose::median(v)
-}
-
 /// Compares paired values (candidate, reference) of one group.
 fn judge(pairs: &[(f64, f64)], opts: &CompareOptions) -> (f64, f64, f64, f64, Outcome) {
-    let mut x: Vec<f64> = pairs.iter().map(|p| p.0).collect();
-    let mut y: Vec<f64> = pairs.iter().map(|p| p.1).collect();
+    let x: Vec<f64> = pairs.iter().map(|p| p.0).collect();
+    let y: Vec<f64> = pairs.iter().map(|p| p.1).collect();
     let logs: Vec<f64> = pairs
         .iter()
         .map(|(a, b)| (a / b).ln())
         .filter(|l| l.is_finite())
         .collect();
-    let mut ratios: Vec<f64> = logs.iter().map(|l| l.exp()).collect();
-    let ratio = median(&mut ratios);
+    let ratios: Vec<f64> = logs.iter().map(|l| l.exp()).collect();
+    let ratio = median(&ratios);
     let p = wilcoxon_upper_p(&logs);
     let outcome = if logs.len() < opts.min_pairs {
         Outcome::TooFewPairs
@@ -350,7 +347,7 @@ fn judge(pairs: &[(f64, f64)], opts: &CompareOptions) -> (f64, f64, f64, f64, Ou
     } else {
         Outcome::Pass
     };
-    (median(&mut y), median(&mut x), ratio, p, outcome)
+    (median(&y), median(&x), ratio, p, outcome)
 }
 
 /// Per seed: the candidate's and the reference's value.

@@ -234,6 +234,15 @@ pub fn versioned<T: serde::Serialize>(schema: &str, value: &T) -> serde_json::Va
     serde_json::Value::Object(out)
 }
 
+/// Serde's spelling of a unit enum value (what the JSON writes, e.g. `partially_explained`), so
+/// tables and text spell it the same way; empty for a value that is not a string.
+pub fn serde_name<T: serde::Serialize>(v: &T) -> String {
+    serde_json::to_value(v)
+        .ok()
+        .and_then(|v| v.as_str().map(String::from))
+        .unwrap_or_default()
+}
+
 /// A Markdown table cell: `|` escaped (a regime like `|qd| low`, an ambiguity group `a|b`, a
 /// user's joint name), line breaks as spaces.
 pub fn md_cell(s: &str) -> String {
