@@ -122,6 +122,37 @@ fn clean_data_claim_nothing_and_sit_at_the_noise_floor() {
             d.noise_floor
         );
         assert!(d.overall[0] < 1.2 * d.noise_floor, "seed {seed}");
+        // No structure left: a generic function of speed and angle predicts nothing.
+        let st = &d.structure_left;
+        assert!(!st.remains, "seed {seed}: {st:?}");
+        assert!(st.reduction < 1e-3, "seed {seed}: {st:?}");
+    }
+}
+
+#[test]
+fn an_effect_outside_the_library_leaves_structure_and_is_not_called_explained() {
+    // Quadratic damping (not in the library) at 1-1.5 N m s²/rad²: Stribeck friction takes part
+    // of it, and the generic function of speed and angle still predicts the held-out residual.
+    for seed in [5, 6] {
+        let d = diagnosed(
+            vec![EffectSpec::QuadraticDamping {
+                coefficient: vec![1.5, 1.0, 1.2],
+            }],
+            seed,
+        );
+        eprintln!("{}", d.summary);
+        let st = &d.structure_left;
+        assert!(st.remains, "seed {seed}: {st:?}");
+        assert!(st.reduction > 0.01 && st.t >= 2.0, "seed {seed}: {st:?}");
+        assert!(
+            matches!(
+                d.verdict,
+                Verdict::PartiallyExplained | Verdict::Unexplained
+            ),
+            "seed {seed}: {:?}",
+            d.verdict
+        );
+        assert!(d.summary.contains("structure remains outside the library"));
     }
 }
 

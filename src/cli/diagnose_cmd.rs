@@ -271,6 +271,19 @@ fn print_how_far(d: &Diagnosis) {
             100.0 * g.gap_closed
         );
     }
+    let st = &d.structure_left;
+    println!(
+        "  structure left (a smooth function of each joint's speed and angle, fitted on training): validation mean square {:+.1} % overall [{}]; t = {:.1} over 10 validation blocks; {} (needs at least {:.1} % with t >= 2)",
+        -100.0 * st.reduction,
+        st.per_joint
+            .iter()
+            .map(|r| format!("{:+.1} %", -100.0 * r))
+            .collect::<Vec<_>>()
+            .join(", "),
+        st.t,
+        if st.remains { "REMAINS: an effect outside the library" } else { "none" },
+        100.0 * st.threshold
+    );
     println!("\n{}", d.summary);
 }
 

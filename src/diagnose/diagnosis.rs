@@ -166,6 +166,9 @@ pub struct Diagnosis {
     pub noise_floor: f64,
     /// Fraction of the overall gap closed.
     pub gap_closed: f64,
+    /// Whether a generic smooth function of each joint's speed and angle still predicts the
+    /// final validation residual (an effect outside the library).
+    pub structure_left: super::StructureLeft,
     /// Validation RMS per joint and overall (N m) with the confirmed effects only (refitted),
     /// when some selected effect is not confirmed.
     pub confirmed_only: Option<(Vec<f64>, f64)>,

@@ -33,6 +33,7 @@ pub mod report;
 mod residual;
 pub mod select;
 pub mod spectrum;
+mod structure;
 mod verdict;
 
 use crate::ident::{self, NormalEquations};
@@ -50,6 +51,7 @@ pub use kinds::separate_by;
 pub use magnitude::magnitudes_of;
 pub use options::{DiagnoseError, Options};
 pub(crate) use residual::{finite_mean_square, mask_slow, mean_square, median, residual_rms};
+pub use structure::StructureLeft;
 
 /// Smallest identifiable fraction of a magnitude worth reporting as a number (its column's part
 /// outside the rigid-body regressor's span carries at least 3 % of its RMS).
@@ -132,11 +134,26 @@ pub fn diagnose(
     effects.extend(magnitude::against_description(&stage, anchored));
     let how_far = gap::how_far(&stage, &chosen, n_cv, &ladder)?;
     let explained_from_description = explain::from_description(&stage, &chosen, &ladder);
+    let final_variants: Vec<_> = chosen.iter().map(|&v| stage.folds.variants[v]).collect();
+    let (_, final_train_res) = residual_rms(
+        &stage.ctx_train,
+        train,
+        &final_variants,
+        &ladder.final_theta,
+        opts.min_speed,
+    );
+    let structure_left = structure::structure_left(
+        &stage,
+        &final_train_res,
+        &ladder.final_res,
+        opts.structure_threshold,
+    );
     let verdict = verdict::verdict(
         selection.steps.len(),
         anchored.len(),
         &how_far,
         opts.unexplained_ratio,
+        structure_left.remains,
     );
     let train_seconds = train
         .sample_period()
@@ -153,6 +170,7 @@ pub fn diagnose(
         how_far.overall[0],
         verdict::summary(verdict, &effects, n_cv, &how_far, description_test.as_ref())
     );
+    summary += &verdict::structure_summary(&structure_left, &model_joint_names(model));
     summary += &explain::summary(&explained_from_description, description_overall);
     if verdict == Verdict::Undecided {
         summary += &format!(
@@ -164,7 +182,7 @@ pub fn diagnose(
         confirmed: how_far.confirmed,
         confirmed_only: how_far.confirmed_only,
         robot: model.name.clone(),
-        joints: model.bodies.iter().map(|b| b.joint_name.clone()).collect(),
+        joints: model_joint_names(model),
         samples: [train.len(), validate.len()],
         constraints: opts.constraints,
         nominal_constraints_hold: nominal.constraints_hold,
@@ -181,9 +199,14 @@ pub fn diagnose(
         overall: how_far.overall,
         noise_floor: how_far.floor_ms.sqrt(),
         gap_closed: how_far.gap_closed,
+        structure_left,
         verdict,
         summary,
     })
+}
+
+fn model_joint_names(model: &Model) -> Vec<String> {
+    model.bodies.iter().map(|b| b.joint_name.clone()).collect()
 }
 
 /// Both data sets fit the robot and the diagnosis: same joints, accelerations present, at least

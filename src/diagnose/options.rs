@@ -24,6 +24,10 @@ pub struct Options {
     /// The residual counts as unexplained when its validation mean square exceeds the noise
     /// floor's by this factor.
     pub unexplained_ratio: f64,
+    /// The final residual has structure outside the library when a generic smooth function
+    /// of each joint's speed and angle, fitted on training, lowers its validation mean square
+    /// significantly and by at least this fraction ([`super::StructureLeft`]).
+    pub structure_threshold: f64,
     /// Relative uncertainty `ε` of the description's inertial parameters: when given, effects
     /// that identification absorbs are tested against the description ([`super::anchor`]).
     pub description_uncertainty: Option<f64>,
@@ -48,6 +52,7 @@ impl Default for Options {
             processing_cutoff: 20.0,
             train_runs: vec![],
             unexplained_ratio: 1.45,
+            structure_threshold: 0.002,
             description_uncertainty: None,
             min_decisive_seconds: 10.0,
             every_body: false,
@@ -94,6 +99,10 @@ impl Options {
                 "a finite duration >= 0 (s)",
                 s,
             ));
+        }
+        let st = self.structure_threshold;
+        if !(st.is_finite() && st > 0.0 && st < 1.0) {
+            return Err(invalid("structure_threshold", "a fraction in (0, 1)", st));
         }
         if !(self.unexplained_ratio.is_finite() && self.unexplained_ratio >= 1.0) {
             let ratio = self.unexplained_ratio;

@@ -357,6 +357,24 @@ fn how_far_section(d: &Diagnosis) -> String {
         d.noise_floor,
         100.0 * d.gap_closed
     );
+    let st = &d.structure_left;
+    s += &format!(
+        "\nStructure left: a smooth function of each joint's own speed and angle (piecewise linear), fitted on the training residual of the final model, changes its validation mean square by {:+.1} % ({}; t = {:.1} over 10 contiguous validation blocks); {} (counts when at least −{:.1} % with t ≥ 2).\n",
+        -100.0 * st.reduction,
+        d.joints
+            .iter()
+            .zip(&st.per_joint)
+            .map(|(j, r)| format!("{} {:+.1} %", md_cell(j), -100.0 * r))
+            .collect::<Vec<_>>()
+            .join(", "),
+        st.t,
+        if st.remains {
+            "**an effect outside the library remains**"
+        } else {
+            "no structure left"
+        },
+        100.0 * st.threshold
+    );
     if let Some((rms, o)) = &d.confirmed_only {
         s += &format!(
             "\nNot confirmed on the validation data: {}. Refitted with the confirmed effects only, the validation RMS is {o:.3} N m ({}).\n",

@@ -3,18 +3,20 @@
 use super::anchor;
 use super::gap::HowFar;
 use super::library::{self, Kind};
-use super::{EffectEstimate, Verdict};
+use super::{EffectEstimate, StructureLeft, Verdict};
 
 /// The verdict from what was selected and whether the final residual stays above the noise
-/// floor by more than `unexplained_ratio` (in mean square).
+/// floor by more than `unexplained_ratio` (in mean square) or still has structure a generic
+/// function of speed and angle predicts (`structure_left`).
 pub(crate) fn verdict(
     cross_validated: usize,
     absorbed: usize,
     how_far: &HowFar,
     unexplained_ratio: f64,
+    structure_left: bool,
 ) -> Verdict {
     let last = how_far.overall[how_far.overall.len() - 1].powi(2);
-    let above = last > unexplained_ratio * how_far.floor_ms;
+    let above = last > unexplained_ratio * how_far.floor_ms || structure_left;
     match (cross_validated == 0, above) {
         (true, false) if absorbed == 0 => Verdict::NoEffect,
         (true, false) => Verdict::Absorbed,
@@ -22,6 +24,24 @@ pub(crate) fn verdict(
         (false, false) => Verdict::Explained,
         (false, true) => Verdict::PartiallyExplained,
     }
+}
+
+/// The sentence on structure left in the final residual (empty when none is).
+pub(crate) fn structure_summary(s: &StructureLeft, joints: &[String]) -> String {
+    if !s.remains {
+        return String::new();
+    }
+    let at: Vec<String> = joints
+        .iter()
+        .zip(&s.per_joint)
+        .filter(|(_, r)| **r >= s.threshold)
+        .map(|(j, r)| format!("{j} {:.0} %", 100.0 * r))
+        .collect();
+    format!(
+        "; structure remains outside the library: a smooth function of each joint's speed and angle, fitted on the training residual, lowers the final validation error by {:.0} % ({})",
+        100.0 * s.reduction,
+        at.join(", ")
+    )
 }
 
 /// An effect's name, or its ambiguity group's.

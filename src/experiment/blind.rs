@@ -127,6 +127,11 @@ pub struct CaseResult {
     pub gap_closed: f64,
     /// Validation RMS before and after (N m) and the noise floor.
     pub rms: [f64; 3],
+    /// Relative reduction of the final validation residual's mean square by a generic
+    /// function of speed and angle (`Diagnosis::structure_left`).
+    pub structure_left: f64,
+    /// Its t statistic over validation blocks.
+    pub structure_t: f64,
     /// Wall time of the diagnosis (s).
     pub seconds: f64,
     /// How much the injected effects raise the nominal model's validation RMS over the same
@@ -514,6 +519,8 @@ pub fn run_case(
         magnitude_error: marks.magnitude_error,
         gap_closed: d.gap_closed,
         rms: [d.overall[0], last, d.noise_floor],
+        structure_left: d.structure_left.reduction,
+        structure_t: d.structure_left.t,
         seconds,
         visible_gap,
     })
@@ -706,6 +713,8 @@ pub fn case_table(results: &[CaseResult]) -> PolarsResult<DataFrame> {
         "rms_before" => results.iter().map(|r| r.rms[0]).collect::<Vec<_>>(),
         "rms_after" => results.iter().map(|r| r.rms[1]).collect::<Vec<_>>(),
         "noise_floor" => results.iter().map(|r| r.rms[2]).collect::<Vec<_>>(),
+        "structure_left" => results.iter().map(|r| r.structure_left).collect::<Vec<_>>(),
+        "structure_t" => results.iter().map(|r| r.structure_t).collect::<Vec<_>>(),
     )
 }
 
