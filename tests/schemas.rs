@@ -13,6 +13,7 @@ fn the_committed_json_schemas_are_current() {
         ("provenance", "provenance"),
         ("simulate", "simulate"),
         ("model", "model"),
+        ("excite", "excite"),
     ] {
         let o = Command::new(env!("CARGO_BIN_EXE_physid"))
             .args(["schema", arg])

@@ -11,6 +11,7 @@ mod blind_cmd;
 mod compare_cmd;
 mod diagnose_cmd;
 mod dynamics_cmd;
+mod excite_cmd;
 mod experiment_cmd;
 mod export_cmd;
 mod identify_cmd;
@@ -41,6 +42,7 @@ enum Command {
     Simulate(simulate_cmd::Args),
     Identify(identify_cmd::Args),
     Experiment(experiment_cmd::Args),
+    Excite(excite_cmd::Args),
     Sweep(sweep_cmd::Args),
     Compare(compare_cmd::Args),
     Schema(schema_cmd::Args),
@@ -96,6 +98,7 @@ pub fn run(cli: Cli) -> anyhow::Result<()> {
         Command::Simulate(a) => simulate_cmd::run(a),
         Command::Identify(a) => identify_cmd::run(a),
         Command::Experiment(a) => experiment_cmd::run(a),
+        Command::Excite(a) => excite_cmd::run(a),
         Command::Sweep(a) => sweep_cmd::run(a),
         Command::Compare(a) => compare_cmd::run(a),
         Command::Schema(a) => schema_cmd::run(a),

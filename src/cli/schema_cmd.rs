@@ -26,6 +26,8 @@ enum Output {
     Simulate,
     /// `model --json`.
     Model,
+    /// `excite --json`.
+    Excite,
 }
 
 /// Every `"type": "number"` also admits null: serde_json writes a non-finite number (NaN, an
@@ -52,6 +54,7 @@ pub fn schema(output: &str) -> anyhow::Result<Value> {
         "provenance" => schemars::schema_for!(super::experiment_cmd::Provenance),
         "simulate" => schemars::schema_for!(super::simulate_cmd::SimulateJson),
         "model" => schemars::schema_for!(super::model_cmd::ModelJson),
+        "excite" => schemars::schema_for!(super::excite_cmd::ExciteJson),
         other => anyhow::bail!("no schema for '{other}'"),
     };
     let mut v = serde_json::to_value(s)?;
@@ -76,6 +79,7 @@ pub fn run(a: Args) -> anyhow::Result<()> {
         Output::Provenance => "provenance",
         Output::Simulate => "simulate",
         Output::Model => "model",
+        Output::Excite => "excite",
     };
     println!("{}", serde_json::to_string_pretty(&schema(name)?)?);
     Ok(())

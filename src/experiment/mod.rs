@@ -19,6 +19,7 @@ use rayon::prelude::*;
 
 pub mod blind;
 pub mod compare;
+pub mod motions;
 pub mod plots;
 pub mod sweep;
 pub mod tables;
@@ -63,6 +64,16 @@ pub struct ExperimentSpec {
     /// `1 + e·n` and the CoM moved by `e/10` m·n, `n ~ N(0, 1)` drawn from the prior seed.
     #[serde(default = "prior_error")]
     pub prior_error: f64,
+    /// The excitation axis: motions to compare, each a scenario file (relative to this one)
+    /// whose excitation, simulation and sensors replace this scenario's (its robot must be
+    /// the same); empty: this scenario's own motion alone ([`motions`]).
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub excitations: Vec<motions::ExcitationEntry>,
+    /// Validate every model on an independent run of this motion (a name in `excitations`,
+    /// simulated with seed + 1,000,000) instead of on the samples after its training window,
+    /// so that motions are compared on the same data.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub validate_on: Option<String>,
 }
 
 impl ExperimentSpec {
@@ -131,6 +142,8 @@ impl Default for ExperimentSpec {
             prior_weight: prior_weight(),
             prior_error: prior_error(),
             windows: Windows::First,
+            excitations: vec![],
+            validate_on: None,
         }
     }
 }
@@ -182,6 +195,7 @@ impl ExperimentSpec {
                 ),
             );
         }
+        motions::validate_entries(&self.excitations, self.validate_on.as_deref())?;
         if !(self.prior_error.is_finite() && self.prior_error >= 0.0 && self.prior_error < 0.5) {
             return e(
                 "prior_error",
@@ -207,6 +221,11 @@ pub struct Row {
     pub val_rms_overall: f64,
     /// Training RMS over all joints (N m).
     pub train_rms_overall: f64,
+    /// RMS over all joints of the identified model's torque minus the true model's on the
+    /// validation samples' measured states, `Y (θ̂ − θ)` (N m): the prediction error without
+    /// the sensor noise, comparable across motions.
+    #[serde(default)]
+    pub val_truth_rms: f64,
     /// Mean relative mass error over bodies.
     pub mass_err: f64,
     /// Mean CoM error over bodies (m).
@@ -311,6 +330,22 @@ pub enum ExperimentError {
         /// What failed.
         source: ident::IdentError,
     },
+    /// A motion of the excitation axis could not be loaded.
+    #[error("experiment.excitations '{name}': {source}")]
+    Motion {
+        /// Its name.
+        name: String,
+        /// What failed.
+        source: crate::io::IoError,
+    },
+    /// A motion's scenario describes another robot.
+    #[error("experiment.excitations '{name}': {} describes another robot than the experiment's (the motions must share the robot and its ground truth)", path.display())]
+    DifferentRobot {
+        /// Its name.
+        name: String,
+        /// Its scenario file.
+        path: std::path::PathBuf,
+    },
 }
 
 /// Runs one seed: simulate, then every (size, set) cell.
@@ -319,6 +354,18 @@ pub fn run_seed(
     scenario: &Scenario,
     spec: &ExperimentSpec,
     seed: u64,
+) -> Result<Vec<Row>, ExperimentError> {
+    run_seed_validated_on(model, scenario, spec, seed, None)
+}
+
+/// [`run_seed`], validating every cell on the first `spec.validation` samples of `validation`
+/// (processed, with q̈) when given instead of on the samples after the training window.
+pub fn run_seed_validated_on(
+    model: &Model,
+    scenario: &Scenario,
+    spec: &ExperimentSpec,
+    seed: u64,
+    validation: Option<&crate::trajectory::Trajectory>,
 ) -> Result<Vec<Row>, ExperimentError> {
     let grid = spec.grid();
     let max_n = *grid.last().expect("validated grid");
@@ -333,21 +380,17 @@ pub fn run_seed(
     // Every sample's regressor once (n × p each, column-major).
     let mut ys: Vec<DMatrix<f64>> = Vec::with_capacity(total);
     ident::normal::for_each_regressor(model, data, 0..total, &mut |_, y| ys.push(y.clone()));
-    let rms = |theta: &DVector<f64>, range: std::ops::Range<usize>| -> (Vec<f64>, f64) {
-        let mut ss = vec![0.0; n];
-        for k in range.clone() {
-            let pred = &ys[k] * theta;
-            for j in 0..n {
-                ss[j] += (pred[j] - data.tau_at(k)[j]).powi(2);
-            }
+    let (ys_val, val_data) = match validation {
+        Some(v) => {
+            let mut out = Vec::with_capacity(spec.validation.min(v.len()));
+            let m = spec.validation.min(v.len());
+            ident::normal::for_each_regressor(model, v, 0..m, &mut |_, y| out.push(y.clone()));
+            (Some(out), v)
         }
-        let c = range.len().max(1) as f64;
-        (
-            ss.iter().map(|s| (s / c).sqrt()).collect(),
-            (ss.iter().sum::<f64>() / (c * n as f64)).sqrt(),
-        )
+        None => (None, data),
     };
     let prior = cad_prior(model, spec.prior_error, 1_000_003 ^ seed);
+    let truth = model.parameters();
     let mut ne = NormalEquations::new(n, p);
     let mut added = 0;
     let mut rows = vec![];
@@ -386,32 +429,88 @@ pub fn run_seed(
                     source,
                 }
             })?;
-            let (val, val_all) = rms(
-                &r.theta,
-                start + n_s..(start + n_s + spec.validation).min(total),
-            );
-            let (_, train_all) = rms(&r.theta, start..start + n_s);
-            let per_body = body_errors(model, &r.theta);
-            let [mass_err, com_err, inertia_err, j_err] = parameter_errors(model, &r.theta);
+            // Validation: the samples after the window, or the separate validation run.
+            let (vys, vtr, vrange) = match &ys_val {
+                Some(yv) => (yv.as_slice(), val_data, 0..yv.len()),
+                None => (
+                    ys.as_slice(),
+                    data,
+                    start + n_s..(start + n_s + spec.validation).min(total),
+                ),
+            };
+            let (val_rms, val_rms_overall) = torque_rms(vys, vtr, &r.theta, vrange.clone());
+            let (_, train_rms_overall) = torque_rms(&ys, data, &r.theta, start..start + n_s);
             rows.push(Row {
                 seed,
                 n_s,
                 constraints: set,
-                val_rms: val,
-                val_rms_overall: val_all,
-                train_rms_overall: train_all,
-                mass_err,
-                com_err,
-                inertia_err,
-                j_err,
-                body_errors: per_body,
-                consistent: ident::constraints_hold(model, &r.theta, ConstraintSet::Consistent),
-                status: r.solver.status.to_string(),
-                solve_s: r.solver.seconds,
+                val_rms,
+                val_rms_overall,
+                train_rms_overall,
+                val_truth_rms: model_rms(vys, &(&r.theta - &truth), vrange),
+                ..errors_of(model, &r)
             });
         }
     }
     Ok(rows)
+}
+
+/// Per joint and overall RMS (N m) of `Y_k θ − τ_k` over the samples `range` of `tr` (`ys`
+/// indexed like `tr`).
+fn torque_rms(
+    ys: &[DMatrix<f64>],
+    tr: &crate::trajectory::Trajectory,
+    theta: &DVector<f64>,
+    range: std::ops::Range<usize>,
+) -> (Vec<f64>, f64) {
+    let n = tr.dof();
+    let mut ss = vec![0.0; n];
+    for k in range.clone() {
+        let pred = &ys[k] * theta;
+        for j in 0..n {
+            ss[j] += (pred[j] - tr.tau_at(k)[j]).powi(2);
+        }
+    }
+    let c = range.len().max(1) as f64;
+    (
+        ss.iter().map(|s| (s / c).sqrt()).collect(),
+        (ss.iter().sum::<f64>() / (c * n as f64)).sqrt(),
+    )
+}
+
+/// A row's parameter errors against the truth, consistency and solver fields for the
+/// identified `r` (the torque errors left at zero for the caller).
+fn errors_of(model: &Model, r: &ident::Identified) -> Row {
+    let [mass_err, com_err, inertia_err, j_err] = parameter_errors(model, &r.theta);
+    Row {
+        seed: 0,
+        n_s: 0,
+        constraints: ConstraintSet::None,
+        val_rms: vec![],
+        val_rms_overall: 0.0,
+        train_rms_overall: 0.0,
+        val_truth_rms: 0.0,
+        mass_err,
+        com_err,
+        inertia_err,
+        j_err,
+        body_errors: body_errors(model, &r.theta),
+        consistent: ident::constraints_hold(model, &r.theta, ConstraintSet::Consistent),
+        status: r.solver.status.to_string(),
+        solve_s: r.solver.seconds,
+    }
+}
+
+/// RMS over the samples `range` of `ys` and over joints of `Y_k e` (N m for a parameter error
+/// `e`).
+fn model_rms(ys: &[DMatrix<f64>], e: &DVector<f64>, range: std::ops::Range<usize>) -> f64 {
+    let (mut ss, mut c) = (0.0, 0usize);
+    for y in &ys[range] {
+        let t = y * e;
+        ss += t.norm_squared();
+        c += t.len();
+    }
+    (ss / c.max(1) as f64).sqrt()
 }
 
 /// Runs the whole experiment, seeds in parallel on the current rayon pool. `progress(done,

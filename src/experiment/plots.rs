@@ -15,6 +15,19 @@ pub fn plot_vs_ns(
     ylabel: &str,
     path: &Path,
 ) -> Result<(), crate::io::IoError> {
+    plot_vs_ns_by(summary, "constraints", value, sets, title, ylabel, path)
+}
+
+/// [`plot_vs_ns`] with one line per value `series` of column `series_column`.
+pub fn plot_vs_ns_by(
+    summary: &DataFrame,
+    series_column: &str,
+    value: &str,
+    sets: &[&str],
+    title: &str,
+    ylabel: &str,
+    path: &Path,
+) -> Result<(), crate::io::IoError> {
     let err = |m: String| crate::io::IoError::Invalid {
         path: path.to_path_buf(),
         message: m,
@@ -35,7 +48,7 @@ pub fn plot_vs_ns(
         get(&format!("{value}_q75"))?,
     );
     let set_col = summary
-        .column("constraints")
+        .column(series_column)
         .map_err(|e| err(e.to_string()))?;
     let set_of: Vec<String> = (0..summary.height())
         .map(|i| {

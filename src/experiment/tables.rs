@@ -66,6 +66,10 @@ pub fn long_table(rows: &[Row], joints: &[String]) -> PolarsResult<DataFrame> {
         "train_rms",
         rows.iter().map(|r| r.train_rms_overall).collect(),
     ));
+    cols.push(f(
+        "val_truth_rms",
+        rows.iter().map(|r| r.val_truth_rms).collect(),
+    ));
     cols.push(f("mass_err", rows.iter().map(|r| r.mass_err).collect()));
     cols.push(f("com_err_m", rows.iter().map(|r| r.com_err).collect()));
     cols.push(f(
@@ -117,6 +121,14 @@ pub fn with_constants(mut df: DataFrame, columns: &[(String, String)]) -> Polars
     Ok(df)
 }
 
+/// The rows of `df` whose string column `column` equals `value`.
+pub fn filter_eq(df: &DataFrame, column: &str, value: &str) -> PolarsResult<DataFrame> {
+    df.clone()
+        .lazy()
+        .filter(col(column).eq(lit(value)))
+        .collect()
+}
+
 /// Stacks tables with the same columns.
 pub fn concat(tables: Vec<DataFrame>) -> PolarsResult<DataFrame> {
     let mut it = tables.into_iter();
@@ -141,6 +153,9 @@ pub fn summary_by(long: &DataFrame, keys: &[&str]) -> PolarsResult<DataFrame> {
             q("val_rms", 0.25, "val_rms_q25"),
             col("val_rms").median().alias("val_rms_median"),
             q("val_rms", 0.75, "val_rms_q75"),
+            q("val_truth_rms", 0.25, "val_truth_rms_q25"),
+            col("val_truth_rms").median().alias("val_truth_rms_median"),
+            q("val_truth_rms", 0.75, "val_truth_rms_q75"),
             q("j_err", 0.25, "j_err_q25"),
             col("j_err").median().alias("j_err_median"),
             q("j_err", 0.75, "j_err_q75"),
@@ -221,6 +236,7 @@ pub fn unit_of(column: &str) -> Option<&'static str> {
     let starts = |p: &str| c.starts_with(p);
     if starts("val_rms")
         || starts("train_rms")
+        || starts("val_truth_rms")
         || starts("rms_")
         || c == "visible_gap"
         || c == "noise_floor"

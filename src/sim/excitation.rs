@@ -70,6 +70,31 @@ pub struct Fourier {
 }
 
 impl Fourier {
+    /// The trajectory of given coefficients (rad; per joint, per harmonic) at fundamental
+    /// frequency `f0` (Hz), tracked with gains `kp`, `kd`.
+    pub fn new(
+        f0: f64,
+        a: Vec<Vec<f64>>,
+        b: Vec<Vec<f64>>,
+        offset: Vec<f64>,
+        kp: Vec<f64>,
+        kd: Vec<f64>,
+        computed_torque: bool,
+    ) -> Self {
+        let harmonics = a.first().map_or(0, |r| r.len());
+        Self {
+            w: (1..=harmonics)
+                .map(|l| 2.0 * std::f64::consts::PI * l as f64 * f0)
+                .collect(),
+            a,
+            b,
+            offset,
+            kp,
+            kd,
+            computed_torque,
+        }
+    }
+
     /// Desired `(q, q̇, q̈)` at time `t`.
     pub fn desired(&self, t: f64) -> [Vec<f64>; 3] {
         let n = self.offset.len();
@@ -153,10 +178,22 @@ impl Controller {
                 base_frequency,
                 amplitude,
                 offset,
+                coefficients,
                 kp,
                 kd,
                 computed_torque,
             } => {
+                if let Some(c) = coefficients {
+                    return Ok(Controller::Fourier(Fourier::new(
+                        *base_frequency,
+                        c.sin.clone(),
+                        c.cos.clone(),
+                        offset.clone(),
+                        kp.clone(),
+                        kd.clone(),
+                        *computed_torque,
+                    )));
+                }
                 let mut rng = ChaCha8Rng::seed_from_u64(seed ^ 0x5eed_f00d);
                 let n = model.dof();
                 let w: Vec<f64> = (1..=*harmonics)

@@ -1,5 +1,6 @@
 //! Time integration of the forward dynamics, and an independent engine ([`rapier`]).
 
+pub mod design;
 pub mod effects;
 pub mod excitation;
 pub mod rapier;

@@ -121,10 +121,15 @@ pub enum ExcitationSpec {
         /// Fundamental frequency (Hz).
         #[serde(default = "base_frequency")]
         base_frequency: f64,
-        /// Maximum excursion from `offset` per joint (rad).
+        /// Maximum excursion from `offset` per joint (rad) of the random coefficients drawn
+        /// from the seed (not used with `coefficients`).
+        #[serde(default)]
         amplitude: Vec<f64>,
         /// Centre of each joint's motion (rad).
         offset: Vec<f64>,
+        /// Given coefficients instead of a random draw (`physid excite` writes them).
+        #[serde(default, skip_serializing_if = "Option::is_none")]
+        coefficients: Option<FourierCoefficients>,
         /// Position gains: N m/rad for PD, 1/s² for computed torque.
         kp: Vec<f64>,
         /// Velocity gains: N m s/rad for PD, 1/s for computed torque.
@@ -135,6 +140,17 @@ pub enum ExcitationSpec {
     },
     /// No actuation: the robot swings freely from `initial_q`.
     Passive,
+}
+
+/// The coefficients of a Fourier excitation, per joint and harmonic `l = 1..L` (rad):
+/// `q_j(t) = offset_j + Σ_l sin[j][l−1] sin(ω_l t) + cos[j][l−1] (cos(ω_l t) − 1)`.
+#[derive(Clone, Debug, Deserialize, Serialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct FourierCoefficients {
+    /// Sine coefficients, one row per joint, one entry per harmonic (rad).
+    pub sin: Vec<Vec<f64>>,
+    /// Cosine coefficients, as `sin` (rad).
+    pub cos: Vec<Vec<f64>>,
 }
 
 fn a_phi() -> f64 {
@@ -546,6 +562,7 @@ impl ExcitationSpec {
                 base_frequency,
                 amplitude,
                 offset,
+                coefficients,
                 kp,
                 kd,
                 ..
@@ -554,7 +571,31 @@ impl ExcitationSpec {
                     format!("{harmonics} must be 1 to 50")
                 })?;
                 positive(*base_frequency, "excitation.base_frequency")?;
-                per_joint(amplitude, n, "excitation.amplitude")?;
+                match coefficients {
+                    None => per_joint(amplitude, n, "excitation.amplitude")?,
+                    Some(c) => {
+                        for (rows, key) in [
+                            (&c.sin, "excitation.coefficients.sin"),
+                            (&c.cos, "excitation.coefficients.cos"),
+                        ] {
+                            check(rows.len() == n, key, || {
+                                format!("has {} rows, the robot has {n} joints", rows.len())
+                            })?;
+                            for (j, row) in rows.iter().enumerate() {
+                                let key = format!("{key}[{j}]");
+                                check(row.len() == *harmonics, &key, || {
+                                    format!(
+                                        "has {} entries, the excitation has {harmonics} harmonics",
+                                        row.len()
+                                    )
+                                })?;
+                                check(row.iter().all(|x| x.is_finite()), &key, || {
+                                    "contains a non-finite number".into()
+                                })?;
+                            }
+                        }
+                    }
+                }
                 per_joint(offset, n, "excitation.offset")?;
                 per_joint(kp, n, "excitation.kp")?;
                 per_joint(kd, n, "excitation.kd")?;

@@ -1,0 +1,442 @@
+//! `physid excite`: design an excitation (library: `physid::sim::design`), write it as a
+//! scenario, and check it in simulation.
+
+use anyhow::Context;
+use clap::ValueEnum;
+use physid::model::Model;
+use physid::sim::design::{self, Design, DesignOptions, Objective};
+use physid::sim::scenario::ExcitationSpec;
+use std::path::{Path, PathBuf};
+
+/// Design a Fourier excitation that carries the most information about the robot's
+/// identifiable parameters within its joint limits, write it as a scenario that `simulate` and
+/// `experiment` run as is, and check the limits in simulation.
+#[derive(clap::Args, Debug)]
+pub struct Args {
+    /// Base scenario: its robot, simulation, sensors, processing and experiment are kept and
+    /// its excitation replaced; a Fourier excitation's `offset ± amplitude` narrows the joint
+    /// ranges (the other limits come from the robot).
+    #[arg(long, conflicts_with = "robot", required_unless_present = "robot")]
+    scenario: Option<PathBuf>,
+    /// Robot when no --scenario is given: `cheetah3` or a .urdf file (sensors and processing
+    /// then take physid's defaults: 0.3 N m torque noise, 20 Hz Butterworth).
+    #[arg(long)]
+    robot: Option<String>,
+    /// Duration of the written scenario (s).
+    #[arg(long, default_value_t = 20.0)]
+    duration: f64,
+    /// Harmonics per joint.
+    #[arg(long, default_value_t = 5)]
+    harmonics: usize,
+    /// Fundamental frequency (Hz): the motion repeats every 1/f s.
+    #[arg(long, default_value_t = 0.5)]
+    base_frequency: f64,
+    /// What is maximized.
+    #[arg(long, value_enum, default_value = "d-optimal")]
+    objective: ObjectiveArg,
+    /// Seed of the random starts and steps.
+    #[arg(long, default_value_t = 1)]
+    seed: u64,
+    /// Optimization steps per start (0: a random excitation scaled into the limits).
+    #[arg(long, default_value_t = 1000)]
+    iterations: usize,
+    /// Random starts (in parallel; the best is kept).
+    #[arg(long, default_value_t = 4)]
+    starts: usize,
+    /// Fraction of every limit left free.
+    #[arg(long, default_value_t = 0.15)]
+    margin: f64,
+    /// Acceleration limit of every joint (rad/s²).
+    #[arg(long, default_value_t = 30.0)]
+    max_acceleration: f64,
+    /// Samples per period at which the information is evaluated.
+    #[arg(long, default_value_t = 200)]
+    samples: usize,
+    /// Write the scenario here (TOML); it must not exist as an input of this run.
+    #[arg(long)]
+    out: Option<PathBuf>,
+    /// Print JSON (schema physid.excite/1) instead of text.
+    #[arg(long)]
+    json: bool,
+    /// Do not simulate the design to check its limits.
+    #[arg(long)]
+    no_check: bool,
+    /// Worker threads (0 = all cores). Results do not depend on it.
+    #[arg(long, default_value_t = 0)]
+    threads: usize,
+}
+
+#[derive(ValueEnum, Clone, Copy, Debug)]
+enum ObjectiveArg {
+    DOptimal,
+    EOptimal,
+    Condition,
+}
+
+/// The limits as the simulated robot used them (peak over the run / the robot's own limit,
+/// no margin).
+#[derive(serde::Serialize, schemars::JsonSchema)]
+pub struct SimulatedUse {
+    /// Joint name.
+    joint: String,
+    /// Lowest and highest angle reached (rad).
+    q_range: [f64; 2],
+    /// The robot's position limits (rad; null: none).
+    q_limits: [f64; 2],
+    /// Peak speed over the speed limit.
+    velocity: f64,
+    /// Peak acceleration in the motion's band (rad/s²; the true acceleration low-passed at 5×
+    /// the highest harmonic).
+    acceleration: f64,
+    /// Peak torque over the effort limit.
+    torque: f64,
+}
+
+/// `excite --json` (schema `physid.excite/1`, docs/schemas/).
+#[derive(serde::Serialize, schemars::JsonSchema)]
+pub struct ExciteJson {
+    /// The design.
+    design: Design,
+    /// The scenario written, if any.
+    out: Option<PathBuf>,
+    /// The check in simulation (null with --no-check).
+    simulated: Option<Vec<SimulatedUse>>,
+    /// Every simulated peak inside the robot's limits and the acceleration limit.
+    within_limits: Option<bool>,
+}
+
+/// `physid excite`.
+pub fn run(a: Args) -> anyhow::Result<()> {
+    let opts = DesignOptions {
+        harmonics: a.harmonics,
+        base_frequency: a.base_frequency,
+        objective: match a.objective {
+            ObjectiveArg::DOptimal => Objective::DOptimal,
+            ObjectiveArg::EOptimal => Objective::EOptimal,
+            ObjectiveArg::Condition => Objective::Condition,
+        },
+        seed: a.seed,
+        iterations: a.iterations,
+        starts: a.starts,
+        margin: a.margin,
+        max_acceleration: a.max_acceleration,
+        samples: a.samples,
+    };
+    opts.validate().map_err(|e| match e {
+        design::DesignError::InvalidOption {
+            option,
+            expected,
+            value,
+        } => super::flag_error(option, expected, value),
+        e => e.into(),
+    })?;
+    if !(a.duration.is_finite() && a.duration > 0.0) {
+        anyhow::bail!(
+            "--duration must be a positive number of seconds, got {}",
+            a.duration
+        );
+    }
+    let base = Base::load(&a)?;
+    if let Some(out) = &a.out {
+        if base.inputs.iter().any(|i| same_file(i, out)) {
+            anyhow::bail!("--out {} is an input of this run", out.display());
+        }
+    }
+    let pool = super::thread_pool(Some(a.threads))?;
+    let d = pool.install(|| design::design(&base.model, base.range.as_deref(), &opts))?;
+    let text = base.scenario_text(&d, &a)?;
+    let (simulated, within) = if a.no_check {
+        (None, None)
+    } else {
+        let band = 5.0 * a.harmonics as f64 * a.base_frequency;
+        let (s, ok) = check_in_simulation(&base, &text, a.max_acceleration, band)?;
+        (Some(s), Some(ok))
+    };
+    if let Some(out) = &a.out {
+        physid::io::write_atomic(out, text.as_bytes())?;
+    }
+    if a.json {
+        let j = ExciteJson {
+            design: d,
+            out: a.out.clone(),
+            simulated,
+            within_limits: within,
+        };
+        println!(
+            "{}",
+            serde_json::to_string_pretty(&physid::io::versioned("excite", &j))?
+        );
+    } else {
+        print_design(&d, simulated.as_deref(), &a);
+    }
+    if within == Some(false) {
+        return Err(super::Failed(
+            "the simulated run left a limit (see the table above); raise --margin".into(),
+        )
+        .into());
+    }
+    Ok(())
+}
+
+/// Whether two paths name the same file (when both exist) or the same path.
+fn same_file(a: &Path, b: &Path) -> bool {
+    match (a.canonicalize(), b.canonicalize()) {
+        (Ok(x), Ok(y)) => x == y,
+        _ => a == b,
+    }
+}
+
+/// What the design starts from: the robot, the scenario table it goes into, the joint ranges.
+struct Base {
+    model: Model,
+    /// The scenario's text (the base file's, or physid's defaults for a robot).
+    text: String,
+    /// The base file's directory (relative robot paths resolve against it).
+    dir: PathBuf,
+    /// Per joint `(lower, upper)` from a base Fourier excitation.
+    range: Option<Vec<(f64, f64)>>,
+    /// Gains of the tracking controller.
+    gains: (Vec<f64>, Vec<f64>, bool),
+    /// Files read.
+    inputs: Vec<PathBuf>,
+}
+
+impl Base {
+    fn load(a: &Args) -> anyhow::Result<Self> {
+        if let Some(path) = &a.scenario {
+            let (sc, model, text) = physid::sim::scenario::load(path)?;
+            let n = model.dof();
+            let (range, gains) = match &sc.excitation {
+                ExcitationSpec::Fourier {
+                    amplitude,
+                    offset,
+                    coefficients,
+                    kp,
+                    kd,
+                    computed_torque,
+                    ..
+                } => (
+                    coefficients.is_none().then(|| {
+                        offset
+                            .iter()
+                            .zip(amplitude)
+                            .map(|(o, a)| (o - a, o + a))
+                            .collect()
+                    }),
+                    (kp.clone(), kd.clone(), *computed_torque),
+                ),
+                _ => (None, default_gains(n)),
+            };
+            let dir = path.parent().unwrap_or(Path::new("")).to_path_buf();
+            Ok(Self {
+                model,
+                text,
+                dir,
+                range,
+                gains,
+                inputs: vec![path.clone()],
+            })
+        } else {
+            let robot = a
+                .robot
+                .clone()
+                .expect("clap requires --robot without --scenario");
+            let (model, warnings) = physid::io::load_robot_with(&robot, &Default::default())?;
+            for w in warnings {
+                eprintln!("warning: {robot}: {w}");
+            }
+            let n = model.dof();
+            let robot_table = if robot == "cheetah3" {
+                "builtin = \"cheetah3\"".to_string()
+            } else {
+                format!("urdf = {}", toml::Value::String(robot.clone()))
+            };
+            let text = format!(
+                "[robot]\n{robot_table}\n\n[simulation]\nduration = 1.0\nrate = 1000.0\nsubsteps = 4\nseed = 1\nfriction_velocity = 0.01\n\n[excitation]\nkind = \"passive\"\n\n[sensors]\ntorque_noise = 0.3\nvelocity_feedback = \"finite_difference\"\n\n[processing]\nmethod = \"butterworth\"\ncutoff = 20.0\norder = 2\n"
+            );
+            Ok(Self {
+                model,
+                text,
+                dir: std::env::current_dir()?,
+                range: None,
+                gains: default_gains(n),
+                inputs: if robot == "cheetah3" {
+                    vec![]
+                } else {
+                    vec![PathBuf::from(robot)]
+                },
+            })
+        }
+    }
+
+    /// The scenario text with the design as its excitation and `a.duration` (the base file's
+    /// other tables, comments included, as they were); a relative URDF path rewritten
+    /// relative to `a.out`'s folder.
+    fn scenario_text(&self, d: &Design, a: &Args) -> anyhow::Result<String> {
+        use toml_edit::{value, Array, DocumentMut, Item, Table};
+        let s = &d.series;
+        let (kp, kd, computed_torque) = self.gains.clone();
+        let list = |v: &[f64]| Array::from_iter(v.iter().copied());
+        let rows = |m: &[Vec<f64>]| Array::from_iter(m.iter().map(|r| list(r)));
+        let mut ex = Table::new();
+        ex["kind"] = value("fourier");
+        ex["harmonics"] = value(s.sin.first().map_or(0, |r| r.len()) as i64);
+        ex["base_frequency"] = value(s.base_frequency);
+        ex["offset"] = value(list(&s.offset));
+        ex["kp"] = value(list(&kp));
+        ex["kd"] = value(list(&kd));
+        ex["computed_torque"] = value(computed_torque);
+        let mut c = Table::new();
+        c["sin"] = value(rows(&s.sin));
+        c["cos"] = value(rows(&s.cos));
+        ex["coefficients"] = Item::Table(c);
+        let mut doc: DocumentMut = self.text.parse().context("re-reading the base scenario")?;
+        let header = format!(
+            "# Designed by `physid excite` (physid {}): {} Fourier excitation, {} harmonics at {} Hz,\n# objective {} = {:.4} (best random start {:.4}), condition number {:.3e}, seed {}, margin {},\n# acceleration limit {} rad/s². {} of {} parameter combinations identifiable. Limits kept and used: `physid excite --json`.\n",
+            env!("CARGO_PKG_VERSION"),
+            if d.evaluations > a.starts { "optimized" } else { "random" },
+            a.harmonics,
+            a.base_frequency,
+            physid::io::serde_name(&d.objective),
+            d.value,
+            d.start_value,
+            d.condition,
+            a.seed,
+            a.margin,
+            a.max_acceleration,
+            d.identifiable,
+            d.parameters,
+        );
+        ex.decor_mut().set_prefix(format!("\n{header}"));
+        doc["excitation"] = Item::Table(ex);
+        doc["simulation"]["duration"] = value(a.duration);
+        if let Some(u) = doc["robot"].get("urdf").and_then(|v| v.as_str()) {
+            let urdf = self.dir.join(u);
+            let urdf = urdf.canonicalize().unwrap_or(urdf);
+            let out_dir = a
+                .out
+                .as_ref()
+                .and_then(|o| o.parent())
+                .filter(|p| !p.as_os_str().is_empty())
+                .unwrap_or(Path::new("."))
+                .canonicalize()?;
+            let rel = pathdiff::diff_paths(&urdf, &out_dir).unwrap_or(urdf);
+            doc["robot"]["urdf"] = value(rel.display().to_string());
+        }
+        Ok(doc.to_string())
+    }
+}
+
+/// Computed-torque gains for a robot without a base excitation (1/s², 1/s).
+fn default_gains(n: usize) -> (Vec<f64>, Vec<f64>, bool) {
+    (vec![400.0; n], vec![40.0; n], true)
+}
+
+/// Simulates the scenario `text` (its robot is `base.model`) and compares each joint's peaks
+/// with the robot's limits (position, speed, torque: the true motion) and the acceleration
+/// limit (the true acceleration low-passed at `band` Hz, zero phase, without the first and
+/// last second: the tracking controller's reaction to encoder quantization adds broadband
+/// jitter of a few rad/s² that is not part of the motion, and its start-up a transient).
+fn check_in_simulation(
+    base: &Base,
+    text: &str,
+    max_acceleration: f64,
+    band: f64,
+) -> anyhow::Result<(Vec<SimulatedUse>, bool)> {
+    let sc: physid::sim::scenario::Scenario = toml::from_str(text)?;
+    sc.validate(base.model.dof())?;
+    let rec = physid::sim::run(&base.model, &sc, &mut |_| {})
+        .context("simulating the designed excitation")?;
+    let tr = &rec.truth;
+    let rate = sc.simulation.rate;
+    let sos = physid::signal::butterworth_lowpass(2, band.min(0.4 * rate), rate)?;
+    // The tracking controller's start-up and the filter's ends: the first and last second.
+    let settle = (rate as usize).min(tr.len() / 4);
+    let mut ok = true;
+    let uses = base
+        .model
+        .bodies
+        .iter()
+        .enumerate()
+        .map(|(j, b)| {
+            let col = |f: &dyn Fn(usize) -> f64| (0..tr.len()).map(f).collect::<Vec<f64>>();
+            let q = col(&|k| tr.q_at(k)[j]);
+            let qd = col(&|k| tr.qd_at(k)[j].abs());
+            let qdd: Vec<f64> = sos
+                .filtfilt(&col(&|k| tr.qdd_at(k).map_or(0.0, |a| a[j])))
+                .iter()
+                .skip(settle)
+                .take(tr.len().saturating_sub(2 * settle))
+                .map(|x| x.abs())
+                .collect();
+            let tau = col(&|k| tr.tau_at(k)[j].abs());
+            let max = |v: &[f64]| v.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+            let min = |v: &[f64]| v.iter().copied().fold(f64::INFINITY, f64::min);
+            let l = &b.limits;
+            let ratio = |p: f64, lim: f64| if lim.is_finite() { p / lim } else { 0.0 };
+            let u = SimulatedUse {
+                joint: b.joint_name.clone(),
+                q_range: [min(&q), max(&q)],
+                q_limits: [l.lower, l.upper],
+                velocity: ratio(max(&qd), l.velocity),
+                acceleration: max(&qdd),
+                torque: ratio(max(&tau), l.effort),
+            };
+            ok &= u.q_range[0] >= l.lower
+                && u.q_range[1] <= l.upper
+                && u.velocity <= 1.0
+                && u.torque <= 1.0
+                && u.acceleration <= max_acceleration;
+            u
+        })
+        .collect();
+    Ok((uses, ok))
+}
+
+fn print_design(d: &Design, simulated: Option<&[SimulatedUse]>, a: &Args) {
+    println!(
+        "{} Fourier excitation: {} harmonics at {} Hz (period {:.2} s), objective {} = {:.4} (best random start {:.4}); log det F / r = {:.4}; condition number {:.3e}; {} of {} parameter combinations identifiable; {} evaluations in {:.2} s",
+        if d.evaluations > a.starts { "optimized" } else { "random" },
+        a.harmonics,
+        a.base_frequency,
+        1.0 / a.base_frequency,
+        physid::io::serde_name(&d.objective),
+        d.value,
+        d.start_value,
+        d.d_value,
+        d.condition,
+        d.identifiable,
+        d.parameters,
+        d.evaluations,
+        d.seconds
+    );
+    println!(
+        "limits used (peak / limit with the {:.0} % margin): joint, position, speed, acceleration, torque",
+        100.0 * a.margin
+    );
+    for u in &d.limit_use {
+        println!(
+            "  {:<14} {:>5.2} {:>5.2} {:>5.2} {:>5.2}",
+            u.joint, u.position, u.velocity, u.acceleration, u.torque
+        );
+    }
+    if let Some(sim) = simulated {
+        println!("in simulation (peak / the robot's own limit): joint, q range [limits] rad, speed, acceleration rad/s², torque");
+        for u in sim {
+            println!(
+                "  {:<14} [{:.3}, {:.3}] in [{:.3}, {:.3}]  {:>5.2}  {:>7.2}  {:>5.2}",
+                u.joint,
+                u.q_range[0],
+                u.q_range[1],
+                u.q_limits[0],
+                u.q_limits[1],
+                u.velocity,
+                u.acceleration,
+                u.torque
+            );
+        }
+    }
+    if let Some(out) = &a.out {
+        println!("wrote {}", out.display());
+    }
+}

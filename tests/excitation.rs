@@ -1,0 +1,337 @@
+//! Excitation design (`physid::sim::design`, `physid excite`) and the experiment's excitation
+//! axis: the optimum beats its random start, keeps every limit (in the design and in
+//! simulation, on the leg and on the KUKA arm), does not depend on the thread count, and
+//! identifies better than the random motion within the same limits.
+
+use physid::experiment::{motions, ExperimentSpec};
+use physid::ident::ConstraintSet;
+use physid::sim::design::{design, score, DesignOptions, Objective};
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+fn root() -> PathBuf {
+    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+}
+
+fn leg() -> physid::model::Model {
+    physid::io::load_robot("cheetah3").unwrap()
+}
+
+/// The joint box of scenarios/excitation/base.toml (offset ± amplitude).
+fn leg_box() -> Vec<(f64, f64)> {
+    vec![(-0.35, 0.35), (-1.25, -0.25), (0.85, 1.75)]
+}
+
+fn opts(iterations: usize) -> DesignOptions {
+    DesignOptions {
+        iterations,
+        starts: 2,
+        max_acceleration: 60.0,
+        ..Default::default()
+    }
+}
+
+fn in_pool<T: Send>(threads: usize, f: impl FnOnce() -> T + Send) -> T {
+    rayon::ThreadPoolBuilder::new()
+        .num_threads(threads)
+        .build()
+        .unwrap()
+        .install(f)
+}
+
+#[test]
+fn the_optimum_beats_its_random_start_and_keeps_every_limit() {
+    let m = leg();
+    let d = in_pool(2, || design(&m, Some(&leg_box()), &opts(300))).unwrap();
+    eprintln!(
+        "log det F / r: start {:.3} -> optimum {:.3}; condition {:.1}; {} of {} identifiable; {:.2} s",
+        d.start_value, d.value, d.condition, d.identifiable, d.parameters, d.seconds
+    );
+    // The optimum is at least the start (elitist), and here clearly better: the information
+    // volume per identifiable direction grows by more than e^0.5.
+    assert!(d.value >= d.start_value);
+    assert!(
+        d.value > d.start_value + 0.5,
+        "{} vs {}",
+        d.value,
+        d.start_value
+    );
+    // Independent recomputation of the objective from the series alone.
+    let [dv, _, _] = score(&m, Some(&leg_box()), &d.series, &opts(0)).unwrap();
+    assert!((dv - d.value).abs() < 1e-9, "{dv} vs {}", d.value);
+    assert_eq!(d.identifiable, 38, "the leg's rank, as simulate reports it");
+    for u in &d.limit_use {
+        for (what, v) in [
+            ("position", u.position),
+            ("velocity", u.velocity),
+            ("acceleration", u.acceleration),
+            ("torque", u.torque),
+        ] {
+            assert!(v <= 1.0 + 1e-9, "{} {what} {v}", u.joint);
+        }
+    }
+    // The design uses the room it has: some limit binds on every joint.
+    for u in &d.limit_use {
+        let most = u.position.max(u.velocity).max(u.acceleration).max(u.torque);
+        assert!(most > 0.95, "{}: {most}", u.joint);
+    }
+}
+
+#[test]
+fn designs_do_not_depend_on_the_thread_count_and_objectives_differ() {
+    let m = leg();
+    let a = in_pool(1, || design(&m, Some(&leg_box()), &opts(60))).unwrap();
+    let b = in_pool(2, || design(&m, Some(&leg_box()), &opts(60))).unwrap();
+    assert_eq!(a.series, b.series);
+    assert_eq!(a.value, b.value);
+    let e = design(
+        &m,
+        Some(&leg_box()),
+        &DesignOptions {
+            objective: Objective::Condition,
+            ..opts(60)
+        },
+    )
+    .unwrap();
+    // Optimizing the condition number lowers it below the D-optimal design's start.
+    assert!(e.condition < a.condition * 1.5 && e.value > e.start_value);
+}
+
+#[test]
+fn bad_design_options_are_named() {
+    let m = leg();
+    for (o, name) in [
+        (
+            DesignOptions {
+                harmonics: 0,
+                ..opts(1)
+            },
+            "harmonics",
+        ),
+        (
+            DesignOptions {
+                base_frequency: f64::NAN,
+                ..opts(1)
+            },
+            "base_frequency",
+        ),
+        (
+            DesignOptions {
+                margin: 1.5,
+                ..opts(1)
+            },
+            "margin",
+        ),
+        (
+            DesignOptions {
+                max_acceleration: -1.0,
+                ..opts(1)
+            },
+            "max_acceleration",
+        ),
+    ] {
+        let e = design(&m, None, &o).unwrap_err().to_string();
+        assert!(e.contains(name), "{e}");
+    }
+    let e = design(&m, Some(&[(1.0, 0.0), (0.0, 1.0), (0.0, 1.0)]), &opts(1))
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("abad_joint") && e.contains("empty"), "{e}");
+}
+
+fn physid() -> Command {
+    Command::new(env!("CARGO_BIN_EXE_physid"))
+}
+
+/// Runs `physid excite ARGS --json` and returns its JSON.
+fn excite(args: &[&str]) -> serde_json::Value {
+    let out = physid()
+        .arg("excite")
+        .args(args)
+        .arg("--json")
+        .current_dir(root())
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    serde_json::from_slice(&out.stdout).unwrap()
+}
+
+fn within_limits_in_simulation(j: &serde_json::Value) {
+    assert_eq!(j["within_limits"], true, "{}", j["simulated"]);
+    for u in j["simulated"].as_array().unwrap() {
+        let (lo, hi) = (
+            u["q_range"][0].as_f64().unwrap(),
+            u["q_range"][1].as_f64().unwrap(),
+        );
+        let lim = &u["q_limits"];
+        assert!(
+            lo >= lim[0].as_f64().unwrap() && hi <= lim[1].as_f64().unwrap(),
+            "{u}"
+        );
+        assert!(u["velocity"].as_f64().unwrap() <= 1.0 && u["torque"].as_f64().unwrap() <= 1.0);
+    }
+}
+
+#[test]
+fn the_written_scenario_runs_as_is_and_stays_within_the_limits_on_the_leg_and_the_kuka() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("leg.toml");
+    let j = excite(&[
+        "--scenario",
+        "scenarios/excitation/base.toml",
+        "--max-acceleration",
+        "60",
+        "--iterations",
+        "100",
+        "--duration",
+        "6",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    within_limits_in_simulation(&j);
+    // The joint box of the base scenario holds in simulation.
+    for (u, (lo, hi)) in j["simulated"].as_array().unwrap().iter().zip(leg_box()) {
+        let r = &u["q_range"];
+        assert!(
+            r[0].as_f64().unwrap() >= lo - 0.02 && r[1].as_f64().unwrap() <= hi + 0.02,
+            "{u}"
+        );
+    }
+    // `simulate` runs the file as written.
+    let sim = physid()
+        .args(["simulate"])
+        .arg(&out)
+        .arg("--out")
+        .arg(dir.path().join("leg.mcap"))
+        .output()
+        .unwrap();
+    assert!(
+        sim.status.success(),
+        "{}",
+        String::from_utf8_lossy(&sim.stderr)
+    );
+    let text = std::fs::read_to_string(&out).unwrap();
+    assert!(text.contains("[excitation.coefficients]") && text.contains("# Designed by"));
+    // The base's comments stay.
+    assert!(text.contains("1 N m torque noise"));
+
+    // The KUKA arm from its URDF, written into another folder: the URDF path is rewritten.
+    let sub = dir.path().join("sub");
+    std::fs::create_dir(&sub).unwrap();
+    let kout = sub.join("kuka.toml");
+    let k = excite(&[
+        "--robot",
+        "data/kuka_lwr4/kuka_lwr4.urdf",
+        "--iterations",
+        "60",
+        "--duration",
+        "5",
+        "--out",
+        kout.to_str().unwrap(),
+    ]);
+    within_limits_in_simulation(&k);
+    assert_eq!(k["design"]["limit_use"].as_array().unwrap().len(), 7);
+    let sim = physid()
+        .args(["simulate"])
+        .arg(&kout)
+        .arg("--out")
+        .arg(sub.join("k.mcap"))
+        .output()
+        .unwrap();
+    assert!(
+        sim.status.success(),
+        "{}",
+        String::from_utf8_lossy(&sim.stderr)
+    );
+}
+
+#[test]
+fn excite_names_bad_flags_and_never_overwrites_its_input() {
+    let bad = physid()
+        .args(["excite", "--robot", "cheetah3", "--margin", "2"])
+        .output()
+        .unwrap();
+    assert_eq!(bad.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&bad.stderr).contains("--margin"));
+    let dir = tempfile::tempdir().unwrap();
+    let base = dir.path().join("base.toml");
+    std::fs::copy(root().join("scenarios/excitation/base.toml"), &base).unwrap();
+    let before = std::fs::read(&base).unwrap();
+    let same = physid()
+        .args(["excite", "--iterations", "1", "--scenario"])
+        .arg(&base)
+        .arg("--out")
+        .arg(&base)
+        .output()
+        .unwrap();
+    assert_eq!(same.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&same.stderr).contains("is an input"));
+    assert_eq!(std::fs::read(&base).unwrap(), before);
+}
+
+#[test]
+fn a_scenario_with_the_wrong_coefficient_shape_names_the_key() {
+    let dir = tempfile::tempdir().unwrap();
+    let text = std::fs::read_to_string(root().join("scenarios/excitation/optimized.toml"))
+        .unwrap()
+        .replacen("sin = [[", "sin = [[0.1], [", 1);
+    let p = dir.path().join("bad.toml");
+    std::fs::write(&p, text).unwrap();
+    let e = physid::sim::scenario::load(&p).unwrap_err().to_string();
+    assert!(e.contains("excitation.coefficients.sin"), "{e}");
+}
+
+#[test]
+fn the_designed_motion_identifies_better_than_the_random_one_on_held_out_data() {
+    // A small version of scenarios/excitation/compare.toml: 4 seeds, both Fourier motions,
+    // validated on an independent run of the held-out motion no model is trained on.
+    let path = root().join("scenarios/excitation/compare.toml");
+    let (sc, m, _) = physid::sim::scenario::load(&path).unwrap();
+    let mut spec = ExperimentSpec::from_scenario(&sc).unwrap();
+    spec.seeds = 4;
+    spec.sizes = Some(vec![800, 3000]);
+    spec.validation = 3000;
+    spec.constraints = vec![ConstraintSet::Consistent];
+    spec.excitations.retain(|e| e.name != "shell");
+    assert_eq!(spec.validate_on.as_deref(), Some("heldout"));
+    let ms = motions::load(&path, &spec, &m).unwrap();
+    let rows = in_pool(2, || motions::run(&m, &ms, &spec, &|_, _| {})).unwrap();
+    // The validation-only motion has no rows.
+    assert!(rows[2].is_empty() && ms[2].validation_only);
+    let names: Vec<String> = ms[..2].iter().map(|m| m.name.clone()).collect();
+    let rows = &rows[..2];
+    let curves = motions::median_curves(&names, rows, &spec);
+    let (random, optimized) = (&curves[0], &curves[1]);
+    eprintln!("random {random:?}\noptimized {optimized:?}");
+    assert_eq!(optimized.excitation, "optimized");
+    for i in 0..2 {
+        assert!(optimized.j_err[i] < random.j_err[i], "n_s index {i}");
+    }
+    // At 800 samples the designed motion already predicts the held-out motion better.
+    assert!(optimized.val_rms[0] < random.val_rms[0]);
+}
+
+#[test]
+fn motions_must_share_the_robot() {
+    let dir = tempfile::tempdir().unwrap();
+    let other = dir.path().join("other.toml");
+    let text = std::fs::read_to_string(root().join("scenarios/excitation/random.toml"))
+        .unwrap()
+        .replace(
+            "builtin = \"cheetah3\"",
+            "builtin = \"cheetah3\"\nrotors = false",
+        );
+    std::fs::write(&other, text).unwrap();
+    let path = root().join("scenarios/excitation/compare.toml");
+    let (sc, m, _) = physid::sim::scenario::load(&path).unwrap();
+    let mut spec = ExperimentSpec::from_scenario(&sc).unwrap();
+    spec.excitations[1].scenario = other;
+    let e = motions::load(Path::new(&path), &spec, &m)
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("another robot"), "{e}");
+}
