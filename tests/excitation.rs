@@ -60,6 +60,17 @@ fn the_optimum_beats_its_random_start_and_keeps_every_limit() {
     let [dv, _, _] = score(&m, Some(&leg_box()), &d.series, &opts(0)).unwrap();
     assert!((dv - d.value).abs() < 1e-9, "{dv} vs {}", d.value);
     assert_eq!(d.identifiable, 38, "the leg's rank, as simulate reports it");
+    // Scoring the series' own samples as a recorded motion gives the same value.
+    let period = d.series.period();
+    let samples: Vec<[Vec<f64>; 3]> = (0..200)
+        .map(|k| d.series.at(period * k as f64 / 200.0))
+        .collect();
+    let states = samples
+        .iter()
+        .map(|[q, qd, qdd]| [&q[..], &qd[..], &qdd[..]]);
+    let [sv, _, _] =
+        physid::sim::design::score_states(&m, Some(&leg_box()), &opts(0), states).unwrap();
+    assert!((sv - d.value).abs() < 1e-9, "{sv} vs {}", d.value);
     for u in &d.limit_use {
         for (what, v) in [
             ("position", u.position),

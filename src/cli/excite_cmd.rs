@@ -61,6 +61,10 @@ pub struct Args {
     /// Do not simulate the design to check its limits.
     #[arg(long)]
     no_check: bool,
+    /// Design nothing: simulate the base scenario's own excitation for --duration and print
+    /// its objective values on the true motion (to compare a motion designed elsewhere).
+    #[arg(long, requires = "scenario")]
+    score: bool,
     /// Worker threads (0 = all cores). Results do not depend on it.
     #[arg(long, default_value_t = 0)]
     threads: usize,
@@ -137,6 +141,9 @@ pub fn run(a: Args) -> anyhow::Result<()> {
         );
     }
     let base = Base::load(&a)?;
+    if a.score {
+        return score_base(&base, &a, &opts);
+    }
     if let Some(out) = &a.out {
         if base.inputs.iter().any(|i| same_file(i, out)) {
             anyhow::bail!("--out {} is an input of this run", out.display());
@@ -174,6 +181,32 @@ pub fn run(a: Args) -> anyhow::Result<()> {
             "the simulated run left a limit (see the table above); raise --margin".into(),
         )
         .into());
+    }
+    Ok(())
+}
+
+/// `--score`: the base scenario's own motion, simulated for `a.duration`, scored on its true
+/// states.
+fn score_base(base: &Base, a: &Args, opts: &DesignOptions) -> anyhow::Result<()> {
+    let mut sc: physid::sim::scenario::Scenario = toml::from_str(&base.text)?;
+    sc.simulation.duration = a.duration;
+    let rec =
+        physid::sim::run(&base.model, &sc, &mut |_| {}).context("simulating the base scenario")?;
+    let tr = &rec.truth;
+    let states = (0..tr.len()).filter_map(|k| Some([tr.q_at(k), tr.qd_at(k), tr.qdd_at(k)?]));
+    let [d, e, c] = design::score_states(&base.model, base.range.as_deref(), opts, states)?;
+    if a.json {
+        let v = serde_json::json!({
+            "d_optimal": d, "e_optimal": e, "condition": (-c).exp(), "samples": tr.len(),
+        });
+        println!("{}", serde_json::to_string_pretty(&v)?);
+    } else {
+        println!(
+            "{} s of the scenario's own motion ({} samples, true states): log det F / r = {d:.4}, log λ_min(F) = {e:.4}, condition number {:.3e}",
+            a.duration,
+            tr.len(),
+            (-c).exp()
+        );
     }
     Ok(())
 }

@@ -696,3 +696,27 @@ pub fn score(
         &problem.information(series, &mut Data::new(model)),
     ))
 }
+
+/// The objective values `[D, E, condition]` of a recorded motion: the information of the
+/// samples `states` (`(q, q̇, q̈)` each, rad, rad/s, rad/s²) in the same basis as [`design`]
+/// with `range` and `opts`, so a motion designed elsewhere (the shell) compares with a design.
+pub fn score_states<'s>(
+    model: &Model,
+    range: Option<&[(f64, f64)]>,
+    opts: &DesignOptions,
+    states: impl Iterator<Item = [&'s [f64]; 3]>,
+) -> Result<[f64; 3], DesignError> {
+    let limits = Limits::new(model, range, opts)?;
+    let basis = Basis::new(model, &limits, BASIS_SEED)?;
+    let (n, p) = (model.dof(), model.layout().len);
+    let mut data = Data::new(model);
+    let mut y = DMatrix::zeros(n, p);
+    let mut a = DMatrix::<f64>::zeros(p, p);
+    let mut m = 0usize;
+    for [q, qd, qdd] in states {
+        regressor(model, &mut data, q, qd, qdd, &mut y);
+        a += y.transpose() * &y;
+        m += 1;
+    }
+    Ok(objectives(&basis.information(&(a / m.max(1) as f64))))
+}
