@@ -285,6 +285,34 @@ fn excite_names_bad_flags_and_never_overwrites_its_input() {
 }
 
 #[test]
+fn a_design_that_leaves_a_limit_in_simulation_exits_1_and_is_not_written() {
+    // No margin: the design's peaks sit on the limits, and tracking adds the rest.
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("k.toml");
+    let o = physid()
+        .args([
+            "excite",
+            "--robot",
+            "data/kuka_lwr4/kuka_lwr4.urdf",
+            "--margin",
+            "0",
+        ])
+        .args(["--iterations", "20", "--duration", "4", "--out"])
+        .arg(&out)
+        .current_dir(root())
+        .output()
+        .unwrap();
+    assert_eq!(
+        o.status.code(),
+        Some(1),
+        "{}",
+        String::from_utf8_lossy(&o.stderr)
+    );
+    assert!(String::from_utf8_lossy(&o.stdout).contains("LEFT A LIMIT"));
+    assert!(!out.exists());
+}
+
+#[test]
 fn a_scenario_with_the_wrong_coefficient_shape_names_the_key() {
     let dir = tempfile::tempdir().unwrap();
     let text = std::fs::read_to_string(root().join("scenarios/excitation/optimized.toml"))

@@ -94,6 +94,8 @@ pub struct SimulatedUse {
     acceleration: f64,
     /// Peak torque over the effort limit.
     torque: f64,
+    /// Every peak inside its limit.
+    within: bool,
 }
 
 /// `excite --json` (schema `physid.excite/1`, docs/schemas/).
@@ -159,7 +161,8 @@ pub fn run(a: Args) -> anyhow::Result<()> {
         let (s, ok) = check_in_simulation(&base, &text, a.max_acceleration, band)?;
         (Some(s), Some(ok))
     };
-    if let Some(out) = &a.out {
+    // A design that leaves a limit in simulation is not written.
+    if let (Some(out), false) = (&a.out, within == Some(false)) {
         physid::io::write_atomic(out, text.as_bytes())?;
     }
     if a.json {
@@ -407,19 +410,21 @@ fn check_in_simulation(
             let min = |v: &[f64]| v.iter().copied().fold(f64::INFINITY, f64::min);
             let l = &b.limits;
             let ratio = |p: f64, lim: f64| if lim.is_finite() { p / lim } else { 0.0 };
-            let u = SimulatedUse {
+            let mut u = SimulatedUse {
                 joint: b.joint_name.clone(),
                 q_range: [min(&q), max(&q)],
                 q_limits: [l.lower, l.upper],
                 velocity: ratio(max(&qd), l.velocity),
                 acceleration: max(&qdd),
                 torque: ratio(max(&tau), l.effort),
+                within: false,
             };
-            ok &= u.q_range[0] >= l.lower
+            u.within = u.q_range[0] >= l.lower
                 && u.q_range[1] <= l.upper
                 && u.velocity <= 1.0
                 && u.torque <= 1.0
                 && u.acceleration <= max_acceleration;
+            ok &= u.within;
             u
         })
         .collect();
@@ -457,7 +462,7 @@ fn print_design(d: &Design, simulated: Option<&[SimulatedUse]>, a: &Args) {
         println!("in simulation (peak / the robot's own limit): joint, q range [limits] rad, speed, acceleration rad/s², torque");
         for u in sim {
             println!(
-                "  {:<14} [{:.3}, {:.3}] in [{:.3}, {:.3}]  {:>5.2}  {:>7.2}  {:>5.2}",
+                "  {:<14} [{:.3}, {:.3}] in [{:.3}, {:.3}]  {:>5.2}  {:>7.2}  {:>5.2}{}",
                 u.joint,
                 u.q_range[0],
                 u.q_range[1],
@@ -465,11 +470,19 @@ fn print_design(d: &Design, simulated: Option<&[SimulatedUse]>, a: &Args) {
                 u.q_limits[1],
                 u.velocity,
                 u.acceleration,
-                u.torque
+                u.torque,
+                if u.within { "" } else { "  LEFT A LIMIT" }
             );
         }
     }
     if let Some(out) = &a.out {
-        println!("wrote {}", out.display());
+        if simulated.is_some_and(|s| !s.iter().all(|u| u.within)) {
+            println!(
+                "not written: {} (a limit was left in simulation)",
+                out.display()
+            );
+        } else {
+            println!("wrote {}", out.display());
+        }
     }
 }
