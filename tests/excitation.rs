@@ -26,7 +26,7 @@ fn opts(iterations: usize) -> DesignOptions {
     DesignOptions {
         iterations,
         starts: 2,
-        max_acceleration: 60.0,
+        max_acceleration: vec![60.0],
         ..Default::default()
     }
 }
@@ -135,7 +135,7 @@ fn bad_design_options_are_named() {
         ),
         (
             DesignOptions {
-                max_acceleration: -1.0,
+                max_acceleration: vec![-1.0],
                 ..opts(1)
             },
             "max_acceleration",

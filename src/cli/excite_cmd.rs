@@ -46,9 +46,14 @@ pub struct Args {
     /// Fraction of every limit left free.
     #[arg(long, default_value_t = 0.15)]
     margin: f64,
-    /// Acceleration limit of every joint (rad/s²).
-    #[arg(long, default_value_t = 30.0)]
-    max_acceleration: f64,
+    /// Acceleration limit (rad/s²): one for every joint, or one per joint separated by commas.
+    #[arg(
+        long,
+        value_delimiter = ',',
+        default_value = "30",
+        allow_negative_numbers = true
+    )]
+    max_acceleration: Vec<f64>,
     /// Samples per period at which the information is evaluated.
     #[arg(long, default_value_t = 200)]
     samples: usize,
@@ -125,7 +130,7 @@ pub fn run(a: Args) -> anyhow::Result<()> {
         iterations: a.iterations,
         starts: a.starts,
         margin: a.margin,
-        max_acceleration: a.max_acceleration,
+        max_acceleration: a.max_acceleration.clone(),
         samples: a.samples,
     };
     opts.validate().map_err(|e| match e {
@@ -158,7 +163,7 @@ pub fn run(a: Args) -> anyhow::Result<()> {
         (None, None)
     } else {
         let band = 5.0 * a.harmonics as f64 * a.base_frequency;
-        let (s, ok) = check_in_simulation(&base, &text, a.max_acceleration, band)?;
+        let (s, ok) = check_in_simulation(&base, &text, &opts, band)?;
         (Some(s), Some(ok))
     };
     // A design that leaves a limit in simulation is not written.
@@ -328,7 +333,7 @@ impl Base {
         ex["coefficients"] = Item::Table(c);
         let mut doc: DocumentMut = self.text.parse().context("re-reading the base scenario")?;
         let header = format!(
-            "# Designed by `physid excite` (physid {}): {} Fourier excitation, {} harmonics at {} Hz,\n# objective {} = {:.4} (best random start {:.4}), condition number {:.3e}, seed {}, margin {},\n# acceleration limit {} rad/s². {} of {} parameter combinations identifiable. Limits kept and used: `physid excite --json`.\n",
+            "# Designed by `physid excite` (physid {}): {} Fourier excitation, {} harmonics at {} Hz,\n# objective {} = {:.4} (best random start {:.4}), condition number {:.3e}, seed {}, margin {},\n# acceleration limit {:?} rad/s². {} of {} parameter combinations identifiable. Limits kept and used: `physid excite --json`.\n",
             env!("CARGO_PKG_VERSION"),
             if d.evaluations > a.starts { "optimized" } else { "random" },
             a.harmonics,
@@ -376,7 +381,7 @@ fn default_gains(n: usize) -> (Vec<f64>, Vec<f64>, bool) {
 fn check_in_simulation(
     base: &Base,
     text: &str,
-    max_acceleration: f64,
+    opts: &DesignOptions,
     band: f64,
 ) -> anyhow::Result<(Vec<SimulatedUse>, bool)> {
     let sc: physid::sim::scenario::Scenario = toml::from_str(text)?;
@@ -423,7 +428,7 @@ fn check_in_simulation(
                 && u.q_range[1] <= l.upper
                 && u.velocity <= 1.0
                 && u.torque <= 1.0
-                && u.acceleration <= max_acceleration;
+                && u.acceleration <= opts.acceleration_limit(j);
             ok &= u.within;
             u
         })

@@ -62,8 +62,9 @@ pub struct DesignOptions {
     pub starts: usize,
     /// Fraction of every limit left free (0.1: peaks at 90 % of each limit).
     pub margin: f64,
-    /// Acceleration limit (rad/s²) of every joint (robot descriptions carry none).
-    pub max_acceleration: f64,
+    /// Acceleration limits (rad/s²): one for every joint, or one per joint (robot
+    /// descriptions carry none).
+    pub max_acceleration: Vec<f64>,
     /// Samples per period at which the information is evaluated.
     pub samples: usize,
 }
@@ -78,7 +79,7 @@ impl Default for DesignOptions {
             iterations: 1000,
             starts: 4,
             margin: 0.15,
-            max_acceleration: 30.0,
+            max_acceleration: vec![30.0],
             samples: 200,
         }
     }
@@ -123,6 +124,16 @@ pub enum DesignError {
 }
 
 impl DesignOptions {
+    /// Joint `j`'s acceleration limit (rad/s²): its own, or the one for every joint.
+    pub fn acceleration_limit(&self, j: usize) -> f64 {
+        let a = &self.max_acceleration;
+        if a.len() == 1 {
+            a[0]
+        } else {
+            a.get(j).copied().unwrap_or(f64::NAN)
+        }
+    }
+
     /// Checks every value against its range.
     pub fn validate(&self) -> Result<(), DesignError> {
         let bad = |option, expected, value: f64| {
@@ -148,9 +159,13 @@ impl DesignOptions {
         if !(self.margin.is_finite() && (0.0..0.9).contains(&self.margin)) {
             return bad("margin", "a fraction in [0, 0.9)", self.margin);
         }
-        let a = self.max_acceleration;
-        if !(a.is_finite() && a > 0.0) {
-            return bad("max_acceleration", "a positive number (rad/s²)", a);
+        if self.max_acceleration.is_empty() {
+            return bad("max_acceleration", "at least one value", 0.0);
+        }
+        for &a in &self.max_acceleration {
+            if !(a.is_finite() && a > 0.0) {
+                return bad("max_acceleration", "a positive number (rad/s²)", a);
+            }
         }
         if !(self.samples >= 4 * self.harmonics && self.samples <= 100_000) {
             return bad(
@@ -188,6 +203,14 @@ impl Limits {
         opts: &DesignOptions,
     ) -> Result<Self, DesignError> {
         let keep = 1.0 - opts.margin;
+        let k = opts.max_acceleration.len();
+        if k != 1 && k != model.dof() {
+            return Err(DesignError::InvalidOption {
+                option: "max_acceleration",
+                expected: "one value, or one per joint",
+                value: k as f64,
+            });
+        }
         let mut l = Limits {
             lower: vec![],
             upper: vec![],
@@ -222,7 +245,7 @@ impl Limits {
             l.lower.push(mid - half);
             l.upper.push(mid + half);
             l.velocity.push(b.limits.velocity * keep);
-            l.acceleration.push(opts.max_acceleration * keep);
+            l.acceleration.push(opts.acceleration_limit(j) * keep);
             l.effort.push(b.limits.effort * keep);
         }
         Ok(l)
