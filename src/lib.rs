@@ -10,7 +10,8 @@
 //! 1. [`spatial`] (Featherstone's spatial algebra, the inertial parameters `π` with `I(π)`,
 //!    `J(π)` and the ellipsoid conditions), [`signal`] (filters, differentiation), [`linalg`]
 //!    (scaling, least squares, minimum-norm solves), [`trajectory`] (joint time series,
-//!    recordings, sample rate, hold-out split, concatenation);
+//!    recordings, sample rate, hold-out split, concatenation), [`options`] (the invalid-option
+//!    report every `Options::validate` shares);
 //! 2. [`model`]: the immutable robot (tree, joints, rotors with their armature, friction,
 //!    limits, ellipsoids), the built-in Cheetah-3 leg;
 //! 3. [`io`] (URDF, robot TOML, MJCF, CSV, MCAP, plot style) and [`dynamics`] (RNEA, CRBA,
@@ -32,6 +33,7 @@ pub mod ident;
 pub mod io;
 pub mod linalg;
 pub mod model;
+pub mod options;
 pub mod signal;
 pub mod sim;
 pub mod spatial;

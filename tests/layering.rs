@@ -6,8 +6,9 @@
 use std::path::{Path, PathBuf};
 
 /// The floor of each top-level module of the library (the binary's `cli` is floor 7).
-const FLOORS: [(&str, u8); 13] = [
+const FLOORS: [(&str, u8); 14] = [
     ("spatial", 1),
+    ("options", 1),
     ("signal", 1),
     ("linalg", 1),
     ("trajectory", 1),

@@ -66,14 +66,7 @@ pub fn run(a: Args) -> anyhow::Result<()> {
         description_error: a.description_error,
         description_uncertainty: a.description_uncertainty,
     };
-    opts.validate().map_err(|e| match e {
-        blind::BlindError::InvalidOption {
-            option,
-            expected,
-            value,
-        } => super::flag_error(option, expected, value),
-        e => e.into(),
-    })?;
+    opts.validate().map_err(super::option_error)?;
     let (base, model, _) = physid::sim::scenario::load(&a.scenario)?;
     let work = tempfile::tempdir()?;
     let diagnose_opts = opts.diagnose_options();

@@ -73,14 +73,7 @@ fn options(a: &Args) -> anyhow::Result<CompareOptions> {
         min_pairs: a.min_pairs.or(file.min_pairs).unwrap_or(d.min_pairs),
         max_n_s: a.max_n_s.or(file.max_n_s),
     };
-    opts.validate().map_err(|e| match e {
-        compare::CompareError::InvalidOption {
-            option,
-            expected,
-            value,
-        } => super::flag_error(option, expected, value),
-        e => e.into(),
-    })?;
+    opts.validate().map_err(super::option_error)?;
     Ok(opts)
 }
 

@@ -56,14 +56,7 @@ pub fn run(a: Args) -> anyhow::Result<()> {
         every_body: a.payload_any_body,
         ..Default::default()
     };
-    opts.validate().map_err(|e| match e {
-        diagnose::DiagnoseError::InvalidOption {
-            option,
-            expected,
-            value,
-        } => super::flag_error(option, expected, value),
-        e => e.into(),
-    })?;
+    opts.validate().map_err(super::option_error)?;
     let model = a.robot.load()?;
     let load = |files: &[PathBuf]| -> anyhow::Result<Vec<_>> {
         files

@@ -133,14 +133,7 @@ pub fn run(a: Args) -> anyhow::Result<()> {
         max_acceleration: a.max_acceleration.clone(),
         samples: a.samples,
     };
-    opts.validate().map_err(|e| match e {
-        design::DesignError::InvalidOption {
-            option,
-            expected,
-            value,
-        } => super::flag_error(option, expected, value),
-        e => e.into(),
-    })?;
+    opts.validate().map_err(super::option_error)?;
     if !(a.duration.is_finite() && a.duration > 0.0) {
         anyhow::bail!(
             "--duration must be a positive number of seconds, got {}",
@@ -157,7 +150,9 @@ pub fn run(a: Args) -> anyhow::Result<()> {
         }
     }
     let pool = super::thread_pool(Some(a.threads))?;
-    let d = pool.install(|| design::design(&base.model, base.range.as_deref(), &opts))?;
+    let d = pool
+        .install(|| design::design(&base.model, base.range.as_deref(), &opts))
+        .map_err(super::option_error)?;
     let text = base.scenario_text(&d, &a)?;
     let (simulated, within) = if a.no_check {
         (None, None)

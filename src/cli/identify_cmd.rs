@@ -623,14 +623,7 @@ fn options(a: &Args, set: ConstraintSet) -> anyhow::Result<Options> {
     opts.prior_weight = a.prior_weight;
     opts.eps = a.eps;
     opts.regularizer = a.regularizer;
-    opts.validate().map_err(|e| match e {
-        ident::IdentError::InvalidOption {
-            option,
-            expected,
-            value,
-        } => super::flag_error(option, expected, value),
-        e => e.into(),
-    })?;
+    opts.validate().map_err(super::option_error)?;
     Ok(opts)
 }
 

@@ -71,6 +71,17 @@ fn flag_error(option: &str, expected: &str, value: f64) -> anyhow::Error {
     anyhow::anyhow!("--{flag} must be {expected}, got {value}")
 }
 
+/// A library error as the binary reports it: an invalid option named as its flag.
+fn option_error<E>(e: E) -> anyhow::Error
+where
+    E: physid::options::OptionError + std::error::Error + Send + Sync + 'static,
+{
+    match e.invalid_option() {
+        Some((option, expected, value)) => flag_error(option, expected, value),
+        None => e.into(),
+    }
+}
+
 /// A worker pool of `requested` threads (0 or none: all cores), never more than the machine's
 /// cores: more threads than cores only add contention (and a huge count would hang the start).
 fn thread_pool(requested: Option<usize>) -> anyhow::Result<rayon::ThreadPool> {

@@ -172,3 +172,5 @@ pub enum DiagnoseError {
         value: f64,
     },
 }
+
+crate::options::option_error!(DiagnoseError);

@@ -326,6 +326,8 @@ pub enum BlindError {
     },
 }
 
+crate::options::option_error!(BlindError);
+
 /// The nominal model's validation mean square (the last [`HOLDOUT`]), fitted as the diagnosis
 /// does.
 fn nominal_validation_ms(

@@ -99,6 +99,8 @@ pub enum CompareError {
     },
 }
 
+crate::options::option_error!(CompareError);
+
 /// One row of a results table, reduced to what a comparison needs.
 #[derive(Clone, Debug)]
 struct Sample {

@@ -222,6 +222,8 @@ pub enum IdentError {
     Rejected(String),
 }
 
+crate::options::option_error!(IdentError);
+
 /// How the optimum was reached, spelled the same (snake_case) in JSON, tables and text:
 /// `direct`, `solved`, `almost_solved`.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, schemars::JsonSchema)]

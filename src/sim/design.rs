@@ -123,6 +123,8 @@ pub enum DesignError {
     NothingIdentifiable,
 }
 
+crate::options::option_error!(DesignError);
+
 impl DesignOptions {
     /// Joint `j`'s acceleration limit (rad/s²): its own, or the one for every joint.
     pub fn acceleration_limit(&self, j: usize) -> f64 {
