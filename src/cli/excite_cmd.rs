@@ -181,7 +181,7 @@ pub fn run(a: Args) -> anyhow::Result<()> {
     }
     if within == Some(false) {
         return Err(super::Failed(
-            "the simulated run left a limit (see the table above); raise --margin".into(),
+            "the simulated run left a limit (see the table above), so the scenario was not written: raise --margin".into(),
         )
         .into());
     }
