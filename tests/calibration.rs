@@ -157,6 +157,19 @@ fn runs_join_as_sums_and_bad_terms_are_named() {
     assert!(code != 0 && err.contains("--train"), "{err}");
     let (code, _, err) = physid(&["identify", "--data", a, "--effects-from", a]);
     assert!(code != 0 && err.contains("not JSON"), "{err}");
+    // Cogging acts at the rotor's angle: refused on a robot without rotors.
+    let (code, _, err) = physid(&[
+        "identify",
+        "--data",
+        a,
+        "--no-rotors",
+        "--effects",
+        "cogging:2",
+    ]);
+    assert!(
+        code == 2 && err.contains("cogging:2") && err.contains("no rotors"),
+        "{err}"
+    );
 }
 
 /// Per-joint held-out RMS (N m) of the Python reference on the KUKA logs: pinocchio

@@ -788,6 +788,13 @@ fn the_kuka_twin_finds_its_withheld_payload_and_claims_none_without() {
         .unwrap_or_else(|| panic!("no payload: {}", d.summary));
     let mass = payload.magnitudes[0].value;
     assert!((mass - 2.5).abs() < 0.25, "payload {mass} kg vs 2.5");
+    // The URDF has no rotors: cogging (at the rotor's angle) is not offered.
+    assert!(d
+        .selection
+        .steps
+        .iter()
+        .flat_map(|s| &s.scores)
+        .all(|s| s.kind != Kind::Cogging));
     assert_eq!(
         d.explained_from_description[0].kind,
         Some(Kind::Payload),

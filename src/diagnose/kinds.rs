@@ -123,6 +123,9 @@ pub(super) struct KindSpec {
     /// The columns approximate the effect by more than a linearization (reflected inertia
     /// without the rotor's gyroscopic terms).
     pub approximate: bool,
+    /// A motor-side effect at the rotor's angle: offered only on joints whose rotor (and gear
+    /// ratio) the description knows (cogging: a link-angle harmonic is not cogging).
+    pub needs_rotor: bool,
     pub grid: Grid,
     pub fill: Fill,
     pub magnitudes: Magnitudes,
@@ -146,6 +149,7 @@ const fn row(kind: Kind, name: &'static str, columns: ColumnCount, fill: Fill) -
         linearized: false,
         rotor_parameter: false,
         approximate: false,
+        needs_rotor: false,
         grid: Grid::None,
         fill,
         magnitudes: same,
@@ -298,12 +302,14 @@ pub(super) const KIND_TABLE: [KindSpec; 13] = {
             magnitude: ("amplitude", "N m"),
             magnitude_pairs: true,
             grid: Grid::CoggingHarmonic,
+            needs_rotor: true,
             magnitudes: |c, n, _| (0..n).map(|j| c[j].hypot(c[n + j])).collect(),
             replay: replay_cogging,
             blind: Blind::SingleAndPair,
             draw: draw_cogging,
+            // Joints without a rotor in the description keep zero columns.
             ..row(Kind::Cogging, "cogging", PerJoint(2), |x, s, _, z, c| {
-                (0..s.n).for_each(|j| {
+                (0..s.n).filter(|&j| x.has_rotor[j]).for_each(|j| {
                     let a = s.param * x.gear[j] * s.q[j];
                     z[(j, c + j)] = a.sin();
                     z[(j, c + s.n + j)] = a.cos();
@@ -499,6 +505,11 @@ impl Kind {
             Grid::Body => (1..=n).map(|b| b as f64).collect(),
             Grid::None => vec![0.0],
         }
+    }
+
+    /// Whether the kind acts at the rotor's angle and needs the description's rotors.
+    pub fn needs_rotor(&self) -> bool {
+        self.spec().needs_rotor
     }
 
     /// Whether the kind has a grid.

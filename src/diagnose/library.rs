@@ -91,6 +91,8 @@ pub struct Context<'a> {
     /// Two unit vectors perpendicular to gravity (the tilt directions).
     pub(super) perp: [Vector3<f64>; 2],
     pub(super) gear: Vec<f64>,
+    /// Whether each joint has a rotor in the description.
+    pub(super) has_rotor: Vec<bool>,
 }
 
 /// `x` (sample-major, `n` columns) processed like an encoder angle: `F(x)`, `F(D x)`,
@@ -180,6 +182,7 @@ impl<'a> Context<'a> {
             .iter()
             .map(|b| b.rotor.as_ref().map_or(1.0, |r| r.gear_ratio))
             .collect();
+        let has_rotor = model.bodies.iter().map(|b| b.rotor.is_some()).collect();
         Self {
             model,
             theta0,
@@ -190,6 +193,7 @@ impl<'a> Context<'a> {
             slack,
             perp: [u1, u2],
             gear,
+            has_rotor,
         }
     }
 

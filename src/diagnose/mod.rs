@@ -273,7 +273,7 @@ impl<'a> Stage<'a> {
             &ctx_train,
             train,
             0..train.len(),
-            offered_variants(opts, model.dof()),
+            offered_variants(opts, model),
             opts.selection.folds.max(2),
             &opts.train_runs,
             opts.min_speed,
@@ -294,9 +294,12 @@ impl<'a> Stage<'a> {
     }
 }
 
-/// The variants of `opts.kinds` offered for a robot of `n` joints: kinds that act on one body
-/// on the last body only unless `opts.every_body`.
-fn offered_variants(opts: &Options, n: usize) -> Vec<library::Variant> {
+/// The variants of `opts.kinds` offered for `model`: kinds that act on one body on the last
+/// body only unless `opts.every_body`; kinds at the rotor's angle only when the description
+/// has rotors.
+fn offered_variants(opts: &Options, model: &Model) -> Vec<library::Variant> {
+    let n = model.dof();
+    let rotors = model.bodies.iter().any(|b| b.rotor.is_some());
     library::variants(&opts.kinds, n)
         .into_iter()
         .filter(|v| {
@@ -304,6 +307,7 @@ fn offered_variants(opts: &Options, n: usize) -> Vec<library::Variant> {
                 .body(v.param, n)
                 .is_none_or(|b| opts.every_body || b == n - 1)
         })
+        .filter(|v| rotors || !v.kind.needs_rotor())
         .collect()
 }
 
