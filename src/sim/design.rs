@@ -20,6 +20,7 @@
 //!   random starts (seeded; run in parallel, the best kept, ties to the first start), each for
 //!   `iterations` steps. Deterministic for a seed whatever the thread count.
 
+pub use super::excitation::FourierSeries;
 use crate::dynamics::{regressor, rnea_with_friction, Data};
 use crate::model::Model;
 use nalgebra::{DMatrix, DVector, SymmetricEigen};
@@ -263,52 +264,9 @@ impl Limits {
     }
 }
 
-/// A Fourier trajectory: offsets and coefficients per joint and harmonic (rad).
-#[derive(Clone, Debug, PartialEq, Serialize, schemars::JsonSchema)]
-pub struct FourierSeries {
-    /// Fundamental frequency (Hz).
-    pub base_frequency: f64,
-    /// `o_j` (rad).
-    pub offset: Vec<f64>,
-    /// `a_jl` (rad).
-    pub sin: Vec<Vec<f64>>,
-    /// `b_jl` (rad).
-    pub cos: Vec<Vec<f64>>,
-}
-
-impl FourierSeries {
-    /// `(q, q̇, q̈)` at time `t` (s).
-    pub fn at(&self, t: f64) -> [Vec<f64>; 3] {
-        let n = self.offset.len();
-        let (mut q, mut qd, mut qdd) = (self.offset.clone(), vec![0.0; n], vec![0.0; n]);
-        let w0 = 2.0 * std::f64::consts::PI * self.base_frequency;
-        for j in 0..n {
-            for (l, (a, b)) in self.sin[j].iter().zip(&self.cos[j]).enumerate() {
-                let w = w0 * (l + 1) as f64;
-                let (s, c) = (w * t).sin_cos();
-                q[j] += a * s + b * (c - 1.0);
-                qd[j] += w * (a * c - b * s);
-                qdd[j] -= w * w * (a * s + b * c);
-            }
-        }
-        [q, qd, qdd]
-    }
-
-    /// The period `1/f₀` (s).
-    pub fn period(&self) -> f64 {
-        1.0 / self.base_frequency
-    }
-
-    /// `m` evenly spaced times over one period.
-    fn times(&self, m: usize) -> impl Iterator<Item = f64> + '_ {
-        (0..m).map(move |k| self.period() * k as f64 / m as f64)
-    }
-
-    /// Joint `j`'s coefficients times `s`.
-    fn scale_joint(&mut self, j: usize, s: f64) {
-        self.sin[j].iter_mut().for_each(|c| *c *= s);
-        self.cos[j].iter_mut().for_each(|c| *c *= s);
-    }
+/// `m` evenly spaced times over one period of `s`.
+fn times(s: &FourierSeries, m: usize) -> impl Iterator<Item = f64> + '_ {
+    (0..m).map(move |k| s.period() * k as f64 / m as f64)
 }
 
 /// How much of each limit a trajectory uses, per joint (peak over one period / limit).
@@ -371,10 +329,7 @@ impl Basis {
     fn new(model: &Model, limits: &Limits, seed: u64) -> Result<Self, DesignError> {
         let (n, p) = (model.dof(), model.layout().len);
         let mut rng = ChaCha8Rng::seed_from_u64(seed ^ 0xba5e_5eed);
-        let mut data = Data::new(model);
-        let mut y = DMatrix::zeros(n, p);
-        let mut a = DMatrix::<f64>::zeros(p, p);
-        for _ in 0..(40 * p).max(400) {
+        let states = (0..(40 * p).max(400)).map(|_| {
             let mut draw = |lo: f64, hi: f64| rng.random_range(lo..=hi);
             let q: Vec<f64> = (0..n)
                 .map(|j| draw(limits.lower[j], limits.upper[j]))
@@ -388,9 +343,9 @@ impl Basis {
             let qdd: Vec<f64> = (0..n)
                 .map(|j| draw(-limits.acceleration[j], limits.acceleration[j]))
                 .collect();
-            regressor(model, &mut data, &q, &qd, &qdd, &mut y);
-            a += y.transpose() * &y;
-        }
+            [q, qd, qdd]
+        });
+        let (a, _) = gram(model, &mut Data::new(model), states);
         let inv_scale = DVector::from_iterator(
             p,
             (0..p).map(|i| {
@@ -449,15 +404,8 @@ fn objectives(f: &DMatrix<f64>) -> [f64; 3] {
 impl Problem<'_> {
     /// The information matrix of `s` over `samples` points of one period.
     fn information(&self, s: &FourierSeries, data: &mut Data) -> DMatrix<f64> {
-        let (n, p) = (self.model.dof(), self.model.layout().len);
-        let mut y = DMatrix::zeros(n, p);
-        let mut a = DMatrix::<f64>::zeros(p, p);
-        let m = self.opts.samples;
-        for t in s.times(m) {
-            let [q, qd, qdd] = s.at(t);
-            regressor(self.model, data, &q, &qd, &qdd, &mut y);
-            a += y.transpose() * &y;
-        }
+        let states = times(s, self.opts.samples).map(|t| s.at(t));
+        let (a, m) = gram(self.model, data, states);
         self.basis.information(&(a / m as f64))
     }
 
@@ -475,7 +423,7 @@ impl Problem<'_> {
     fn kinematic_peaks(&self, s: &FourierSeries) -> Vec<[f64; 4]> {
         let n = s.offset.len();
         let mut peaks = vec![[0.0f64; 4]; n];
-        for t in s.times(4 * self.opts.samples) {
+        for t in times(s, 4 * self.opts.samples) {
             let [q, qd, qdd] = s.at(t);
             for j in 0..n {
                 let e = q[j] - s.offset[j];
@@ -496,7 +444,7 @@ impl Problem<'_> {
         if self.limits.effort.iter().all(|e| !e.is_finite()) {
             return r;
         }
-        for t in s.times(points) {
+        for t in times(s, points) {
             let [q, qd, qdd] = s.at(t);
             let tau = rnea_with_friction(self.model, data, &q, &qd, &qdd);
             for j in 0..n {
@@ -702,24 +650,23 @@ fn check_holding_torque(model: &Model, limits: &Limits) -> Result<(), DesignErro
 }
 
 /// The objective values `[D, E, condition]` of any series for `model` (the same basis as
-/// [`design`] with `opts`): to score a motion that was not designed here.
+/// [`design`] with `opts`, the series sampled as the design samples it): to score a motion
+/// that was not designed here.
 pub fn score(
     model: &Model,
     range: Option<&[(f64, f64)]>,
     series: &FourierSeries,
     opts: &DesignOptions,
 ) -> Result<[f64; 3], DesignError> {
-    let limits = Limits::new(model, range, opts)?;
-    let basis = Basis::new(model, &limits, BASIS_SEED)?;
-    let problem = Problem {
+    let states: Vec<[Vec<f64>; 3]> = times(series, opts.samples).map(|t| series.at(t)).collect();
+    score_states(
         model,
-        limits,
-        basis,
+        range,
         opts,
-    };
-    Ok(objectives(
-        &problem.information(series, &mut Data::new(model)),
-    ))
+        states
+            .iter()
+            .map(|[q, qd, qdd]| [&q[..], &qd[..], &qdd[..]]),
+    )
 }
 
 /// The objective values `[D, E, condition]` of a recorded motion: the information of the
@@ -733,15 +680,24 @@ pub fn score_states<'s>(
 ) -> Result<[f64; 3], DesignError> {
     let limits = Limits::new(model, range, opts)?;
     let basis = Basis::new(model, &limits, BASIS_SEED)?;
+    let (a, m) = gram(model, &mut Data::new(model), states);
+    Ok(objectives(&basis.information(&(a / m.max(1) as f64))))
+}
+
+/// `Σ_k Y_kᵀ Y_k` of the regressors at `states` (`(q, q̇, q̈)` each), and their count.
+fn gram<S: AsRef<[f64]>>(
+    model: &Model,
+    data: &mut Data,
+    states: impl Iterator<Item = [S; 3]>,
+) -> (DMatrix<f64>, usize) {
     let (n, p) = (model.dof(), model.layout().len);
-    let mut data = Data::new(model);
     let mut y = DMatrix::zeros(n, p);
     let mut a = DMatrix::<f64>::zeros(p, p);
-    let mut m = 0usize;
+    let mut m = 0;
     for [q, qd, qdd] in states {
-        regressor(model, &mut data, q, qd, qdd, &mut y);
+        regressor(model, data, q.as_ref(), qd.as_ref(), qdd.as_ref(), &mut y);
         a += y.transpose() * &y;
         m += 1;
     }
-    Ok(objectives(&basis.information(&(a / m.max(1) as f64))))
+    (a, m)
 }

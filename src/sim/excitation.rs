@@ -56,53 +56,30 @@ impl Shell {
     }
 }
 
-/// Fourier-series joint trajectories `q_d = offset + Σ_l a_l sin(ω_l t) + b_l (cos(ω_l t) − 1)`,
-/// `ω_l = 2π l f_0`, with random coefficients (decaying as 1/l) scaled to the amplitude.
-#[derive(Clone, Debug)]
-pub struct Fourier {
-    w: Vec<f64>,
-    a: Vec<Vec<f64>>,
-    b: Vec<Vec<f64>>,
-    offset: Vec<f64>,
-    kp: Vec<f64>,
-    kd: Vec<f64>,
-    computed_torque: bool,
+/// A Fourier trajectory: offsets and coefficients per joint and harmonic (rad),
+/// `q_j(t) = o_j + Σ_l a_jl sin(ω_l t) + b_jl (cos(ω_l t) − 1)`, `ω_l = 2π l f₀` (Swevers et al.):
+/// what a Fourier excitation tracks and what the excitation design (`super::design`) optimizes.
+#[derive(Clone, Debug, PartialEq, serde::Serialize, schemars::JsonSchema)]
+pub struct FourierSeries {
+    /// Fundamental frequency (Hz).
+    pub base_frequency: f64,
+    /// `o_j` (rad).
+    pub offset: Vec<f64>,
+    /// `a_jl` (rad).
+    pub sin: Vec<Vec<f64>>,
+    /// `b_jl` (rad).
+    pub cos: Vec<Vec<f64>>,
 }
 
-impl Fourier {
-    /// The trajectory of given coefficients (rad; per joint, per harmonic) at fundamental
-    /// frequency `f0` (Hz), tracked with gains `kp`, `kd`.
-    pub fn new(
-        f0: f64,
-        a: Vec<Vec<f64>>,
-        b: Vec<Vec<f64>>,
-        offset: Vec<f64>,
-        kp: Vec<f64>,
-        kd: Vec<f64>,
-        computed_torque: bool,
-    ) -> Self {
-        let harmonics = a.first().map_or(0, |r| r.len());
-        Self {
-            w: (1..=harmonics)
-                .map(|l| 2.0 * std::f64::consts::PI * l as f64 * f0)
-                .collect(),
-            a,
-            b,
-            offset,
-            kp,
-            kd,
-            computed_torque,
-        }
-    }
-
-    /// Desired `(q, q̇, q̈)` at time `t`.
-    pub fn desired(&self, t: f64) -> [Vec<f64>; 3] {
+impl FourierSeries {
+    /// `(q, q̇, q̈)` at time `t` (s).
+    pub fn at(&self, t: f64) -> [Vec<f64>; 3] {
         let n = self.offset.len();
         let (mut q, mut qd, mut qdd) = (self.offset.clone(), vec![0.0; n], vec![0.0; n]);
-        for (l, w) in self.w.iter().enumerate() {
-            let (s, c) = (w * t).sin_cos();
-            for j in 0..n {
-                let (a, b) = (self.a[j][l], self.b[j][l]);
+        for j in 0..n {
+            for (l, (a, b)) in self.sin[j].iter().zip(&self.cos[j]).enumerate() {
+                let w = 2.0 * std::f64::consts::PI * (l + 1) as f64 * self.base_frequency;
+                let (s, c) = (w * t).sin_cos();
                 q[j] += a * s + b * (c - 1.0);
                 qd[j] += w * (a * c - b * s);
                 qdd[j] -= w * w * (a * s + b * c);
@@ -110,6 +87,26 @@ impl Fourier {
         }
         [q, qd, qdd]
     }
+
+    /// The period `1/f₀` (s).
+    pub fn period(&self) -> f64 {
+        1.0 / self.base_frequency
+    }
+
+    /// Joint `j`'s coefficients times `s`.
+    pub fn scale_joint(&mut self, j: usize, s: f64) {
+        self.sin[j].iter_mut().for_each(|c| *c *= s);
+        self.cos[j].iter_mut().for_each(|c| *c *= s);
+    }
+}
+
+/// A Fourier series tracked by joint PD or computed torque.
+#[derive(Clone, Debug)]
+pub struct Fourier {
+    series: FourierSeries,
+    kp: Vec<f64>,
+    kd: Vec<f64>,
+    computed_torque: bool,
 }
 
 /// A controller ready to run.
@@ -183,22 +180,24 @@ impl Controller {
                 kd,
                 computed_torque,
             } => {
+                let tracked = |series| Fourier {
+                    series,
+                    kp: kp.clone(),
+                    kd: kd.clone(),
+                    computed_torque: *computed_torque,
+                };
                 if let Some(c) = coefficients {
-                    return Ok(Controller::Fourier(Fourier::new(
-                        *base_frequency,
-                        c.sin.clone(),
-                        c.cos.clone(),
-                        offset.clone(),
-                        kp.clone(),
-                        kd.clone(),
-                        *computed_torque,
-                    )));
+                    return Ok(Controller::Fourier(tracked(FourierSeries {
+                        base_frequency: *base_frequency,
+                        offset: offset.clone(),
+                        sin: c.sin.clone(),
+                        cos: c.cos.clone(),
+                    })));
                 }
+                // Random coefficients (decaying as 1/l), scaled so that max |q_d − offset|
+                // equals the amplitude over one period.
                 let mut rng = ChaCha8Rng::seed_from_u64(seed ^ 0x5eed_f00d);
                 let n = model.dof();
-                let w: Vec<f64> = (1..=*harmonics)
-                    .map(|l| 2.0 * std::f64::consts::PI * l as f64 * base_frequency)
-                    .collect();
                 let mut a = vec![vec![0.0; *harmonics]; n];
                 let mut b = vec![vec![0.0; *harmonics]; n];
                 for j in 0..n {
@@ -207,35 +206,24 @@ impl Controller {
                         b[j][l] = rng.random_range(-1.0..1.0) / (l + 1) as f64;
                     }
                 }
-                let mut f = Fourier {
-                    w,
-                    a,
-                    b,
+                let mut series = FourierSeries {
+                    base_frequency: *base_frequency,
                     offset: offset.clone(),
-                    kp: kp.clone(),
-                    kd: kd.clone(),
-                    computed_torque: *computed_torque,
+                    sin: a,
+                    cos: b,
                 };
-                // Scale each joint to its amplitude over one fundamental period.
-                let period = 1.0 / base_frequency;
+                let period = series.period();
                 let mut peak = vec![0.0f64; n];
                 for k in 0..2000 {
-                    let [q, _, _] = f.desired(period * k as f64 / 2000.0);
+                    let [q, _, _] = series.at(period * k as f64 / 2000.0);
                     for j in 0..n {
                         peak[j] = peak[j].max((q[j] - offset[j]).abs());
                     }
                 }
-                for j in 0..n {
-                    let s = if peak[j] > 0.0 {
-                        amplitude[j] / peak[j]
-                    } else {
-                        0.0
-                    };
-                    f.a[j]
-                        .iter_mut()
-                        .chain(f.b[j].iter_mut())
-                        .for_each(|c| *c *= s);
+                for (j, p) in peak.iter().enumerate() {
+                    series.scale_joint(j, if *p > 0.0 { amplitude[j] / p } else { 0.0 });
                 }
+                let f = tracked(series);
                 Controller::Fourier(f)
             }
             ExcitationSpec::Passive => Controller::Passive,
@@ -294,7 +282,7 @@ impl Controller {
                 Ok((q, vec![0.0; n]))
             }
             Controller::Fourier(f) => {
-                let [q, qd, _] = f.desired(0.0);
+                let [q, qd, _] = f.series.at(0.0);
                 Ok((q, qd))
             }
             Controller::Passive => Ok((guess.to_vec(), vec![0.0; n])),
@@ -329,7 +317,7 @@ impl Controller {
                 tau
             }
             Controller::Fourier(f) => {
-                let [qd_d, qdd_d_vel, qdd_d] = f.desired(t);
+                let [qd_d, qdd_d_vel, qdd_d] = f.series.at(t);
                 let e: Vec<f64> = (0..n).map(|j| qd_d[j] - q[j]).collect();
                 let ed: Vec<f64> = (0..n).map(|j| qdd_d_vel[j] - qd[j]).collect();
                 if f.computed_torque {
