@@ -32,32 +32,14 @@ pub fn plot_vs_ns_by(
         path: path.to_path_buf(),
         message: m,
     };
-    let get = |name: &str| -> Result<Vec<f64>, crate::io::IoError> {
-        let c = summary.column(name).map_err(|e| err(e.to_string()))?;
-        let c = c.cast(&DataType::Float64).map_err(|e| err(e.to_string()))?;
-        Ok(c.f64()
-            .map_err(|e| err(e.to_string()))?
-            .iter()
-            .map(|v| v.unwrap_or(f64::NAN))
-            .collect())
-    };
+    let get = |name: &str| super::tables::floats(summary, name).map_err(|e| err(e.to_string()));
     let ns = get("n_s")?;
     let (lo, med, hi) = (
         get(&format!("{value}_q25"))?,
         get(&format!("{value}_median"))?,
         get(&format!("{value}_q75"))?,
     );
-    let set_col = summary
-        .column(series_column)
-        .map_err(|e| err(e.to_string()))?;
-    let set_of: Vec<String> = (0..summary.height())
-        .map(|i| {
-            set_col
-                .get(i)
-                .map(|v| v.str_value().to_string())
-                .unwrap_or_default()
-        })
-        .collect();
+    let set_of = super::tables::strings(summary, series_column).map_err(|e| err(e.to_string()))?;
     let finite = |v: &f64| v.is_finite() && *v > 0.0;
     let xs: Vec<f64> = ns.iter().copied().filter(finite).collect();
     let ys: Vec<f64> = lo.iter().chain(&hi).copied().filter(finite).collect();

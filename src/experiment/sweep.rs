@@ -214,42 +214,13 @@ pub fn run_cell(
 /// `summary.svg` of a merged sweep: per grid point (labels `key=value, …`), the median
 /// validation RMS of each constraint set at the largest training size, as grouped bars.
 pub fn summary_plot(summary: &polars::prelude::DataFrame, keys: &[&str]) -> Result<String, String> {
-    use polars::prelude::*;
-    let e = |e: PolarsError| e.to_string();
-    let n_s = summary
-        .column("n_s")
-        .map_err(e)?
-        .cast(&DataType::Float64)
-        .map_err(e)?;
-    let n_s: Vec<f64> = n_s
-        .f64()
-        .map_err(e)?
-        .iter()
-        .map(|v| v.unwrap_or(0.0))
-        .collect();
+    use super::tables::{floats, strings};
+    let e = |e: polars::prelude::PolarsError| e.to_string();
+    let n_s = floats(summary, "n_s").map_err(e)?;
     let top = n_s.iter().copied().fold(0.0, f64::max);
-    let text = |c: &str| -> Result<Vec<String>, String> {
-        let col = summary.column(c).map_err(e)?;
-        Ok((0..summary.height())
-            .map(|i| {
-                col.get(i)
-                    .map(|v| v.str_value().to_string())
-                    .unwrap_or_default()
-            })
-            .collect())
-    };
+    let text = |c: &str| strings(summary, c).map_err(e);
     let sets = text("constraints")?;
-    let rms = summary
-        .column("val_rms_median")
-        .map_err(e)?
-        .cast(&DataType::Float64)
-        .map_err(e)?;
-    let rms: Vec<f64> = rms
-        .f64()
-        .map_err(e)?
-        .iter()
-        .map(|v| v.unwrap_or(f64::NAN))
-        .collect();
+    let rms = floats(summary, "val_rms_median").map_err(e)?;
     let grid: Vec<Vec<String>> = keys.iter().map(|k| text(k)).collect::<Result<_, _>>()?;
     let point = |i: usize| -> String {
         keys.iter()

@@ -121,6 +121,29 @@ pub fn with_constants(mut df: DataFrame, columns: &[(String, String)]) -> Polars
     Ok(df)
 }
 
+/// Column `name` of `df` as numbers (cast to f64; nulls are NaN).
+pub fn floats(df: &DataFrame, name: &str) -> PolarsResult<Vec<f64>> {
+    Ok(df
+        .column(name)?
+        .cast(&DataType::Float64)?
+        .f64()?
+        .iter()
+        .map(|v| v.unwrap_or(f64::NAN))
+        .collect())
+}
+
+/// Column `name` of `df` as text, one string per row (nulls are empty).
+pub fn strings(df: &DataFrame, name: &str) -> PolarsResult<Vec<String>> {
+    let col = df.column(name)?;
+    Ok((0..df.height())
+        .map(|i| {
+            col.get(i)
+                .map(|v| v.str_value().to_string())
+                .unwrap_or_default()
+        })
+        .collect())
+}
+
 /// The rows of `df` whose string column `column` equals `value`.
 pub fn filter_eq(df: &DataFrame, column: &str, value: &str) -> PolarsResult<DataFrame> {
     df.clone()
