@@ -3,11 +3,13 @@
 //! simulation, on the leg and on the KUKA arm), does not depend on the thread count, and
 //! identifies better than the random motion within the same limits.
 
+mod common;
+
+use common::physid;
 use physid::experiment::{motions, ExperimentSpec};
 use physid::ident::ConstraintSet;
 use physid::sim::design::{design, score, DesignOptions, Objective};
 use std::path::{Path, PathBuf};
-use std::process::Command;
 
 fn root() -> PathBuf {
     PathBuf::from(env!("CARGO_MANIFEST_DIR"))
@@ -150,25 +152,27 @@ fn bad_design_options_are_named() {
     assert!(e.contains("abad_joint") && e.contains("empty"), "{e}");
 }
 
-fn physid() -> Command {
-    Command::new(env!("CARGO_BIN_EXE_physid"))
+/// A file of the repository, as an argument.
+fn repo(path: &str) -> String {
+    root().join(path).to_str().unwrap().to_string()
 }
 
 /// Runs `physid excite ARGS --json` and returns its JSON.
 fn excite(args: &[&str]) -> serde_json::Value {
-    let out = physid()
-        .arg("excite")
-        .args(args)
-        .arg("--json")
-        .current_dir(root())
-        .output()
-        .unwrap();
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    serde_json::from_slice(&out.stdout).unwrap()
+    let (code, out, err) = physid(&[&["excite"], args, &["--json"]].concat());
+    assert_eq!(code, 0, "{err}");
+    serde_json::from_str(&out).unwrap()
+}
+
+/// `physid simulate SCENARIO --out LOG` succeeds.
+fn simulates(scenario: &Path, log: &Path) {
+    let (code, _, err) = physid(&[
+        "simulate",
+        scenario.to_str().unwrap(),
+        "--out",
+        log.to_str().unwrap(),
+    ]);
+    assert_eq!(code, 0, "{err}");
 }
 
 fn within_limits_in_simulation(j: &serde_json::Value) {
@@ -193,7 +197,7 @@ fn the_written_scenario_runs_as_is_and_stays_within_the_limits_on_the_leg_and_th
     let out = dir.path().join("leg.toml");
     let j = excite(&[
         "--scenario",
-        "scenarios/excitation/base.toml",
+        &repo("scenarios/excitation/base.toml"),
         "--max-acceleration",
         "60",
         "--iterations",
@@ -213,18 +217,7 @@ fn the_written_scenario_runs_as_is_and_stays_within_the_limits_on_the_leg_and_th
         );
     }
     // `simulate` runs the file as written.
-    let sim = physid()
-        .args(["simulate"])
-        .arg(&out)
-        .arg("--out")
-        .arg(dir.path().join("leg.mcap"))
-        .output()
-        .unwrap();
-    assert!(
-        sim.status.success(),
-        "{}",
-        String::from_utf8_lossy(&sim.stderr)
-    );
+    simulates(&out, &dir.path().join("leg.mcap"));
     let text = std::fs::read_to_string(&out).unwrap();
     assert!(text.contains("[excitation.coefficients]") && text.contains("# Designed by"));
     // The base's comments stay.
@@ -236,7 +229,7 @@ fn the_written_scenario_runs_as_is_and_stays_within_the_limits_on_the_leg_and_th
     let kout = sub.join("kuka.toml");
     let k = excite(&[
         "--robot",
-        "data/kuka_lwr4/kuka_lwr4.urdf",
+        &repo("data/kuka_lwr4/kuka_lwr4.urdf"),
         "--iterations",
         "60",
         "--duration",
@@ -246,41 +239,22 @@ fn the_written_scenario_runs_as_is_and_stays_within_the_limits_on_the_leg_and_th
     ]);
     within_limits_in_simulation(&k);
     assert_eq!(k["design"]["limit_use"].as_array().unwrap().len(), 7);
-    let sim = physid()
-        .args(["simulate"])
-        .arg(&kout)
-        .arg("--out")
-        .arg(sub.join("k.mcap"))
-        .output()
-        .unwrap();
-    assert!(
-        sim.status.success(),
-        "{}",
-        String::from_utf8_lossy(&sim.stderr)
-    );
+    simulates(&kout, &sub.join("k.mcap"));
 }
 
 #[test]
 fn excite_names_bad_flags_and_never_overwrites_its_input() {
-    let bad = physid()
-        .args(["excite", "--robot", "cheetah3", "--margin", "2"])
-        .output()
-        .unwrap();
-    assert_eq!(bad.status.code(), Some(2));
-    assert!(String::from_utf8_lossy(&bad.stderr).contains("--margin"));
+    let (code, _, err) = physid(&["excite", "--robot", "cheetah3", "--margin", "2"]);
+    assert_eq!(code, 2);
+    assert!(err.contains("--margin"));
     let dir = tempfile::tempdir().unwrap();
     let base = dir.path().join("base.toml");
     std::fs::copy(root().join("scenarios/excitation/base.toml"), &base).unwrap();
     let before = std::fs::read(&base).unwrap();
-    let same = physid()
-        .args(["excite", "--iterations", "1", "--scenario"])
-        .arg(&base)
-        .arg("--out")
-        .arg(&base)
-        .output()
-        .unwrap();
-    assert_eq!(same.status.code(), Some(2));
-    assert!(String::from_utf8_lossy(&same.stderr).contains("is an input"));
+    let b = base.to_str().unwrap();
+    let (code, _, err) = physid(&["excite", "--iterations", "1", "--scenario", b, "--out", b]);
+    assert_eq!(code, 2);
+    assert!(err.contains("is an input"));
     assert_eq!(std::fs::read(&base).unwrap(), before);
 }
 
@@ -289,26 +263,21 @@ fn a_design_that_leaves_a_limit_in_simulation_exits_1_and_is_not_written() {
     // No margin: the design's peaks sit on the limits, and tracking adds the rest.
     let dir = tempfile::tempdir().unwrap();
     let out = dir.path().join("k.toml");
-    let o = physid()
-        .args([
-            "excite",
-            "--robot",
-            "data/kuka_lwr4/kuka_lwr4.urdf",
-            "--margin",
-            "0",
-        ])
-        .args(["--iterations", "20", "--duration", "4", "--out"])
-        .arg(&out)
-        .current_dir(root())
-        .output()
-        .unwrap();
-    assert_eq!(
-        o.status.code(),
-        Some(1),
-        "{}",
-        String::from_utf8_lossy(&o.stderr)
-    );
-    assert!(String::from_utf8_lossy(&o.stdout).contains("LEFT A LIMIT"));
+    let (code, stdout, err) = physid(&[
+        "excite",
+        "--robot",
+        &repo("data/kuka_lwr4/kuka_lwr4.urdf"),
+        "--margin",
+        "0",
+        "--iterations",
+        "20",
+        "--duration",
+        "4",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert_eq!(code, 1, "{err}");
+    assert!(stdout.contains("LEFT A LIMIT"));
     assert!(!out.exists());
 }
 
