@@ -634,16 +634,45 @@ fn three_seconds_of_clean_data_are_undecided_not_unexplained() {
 }
 
 #[test]
+fn compliance_read_on_the_motor_side_is_attributed() {
+    // k = 500 N m/rad on every joint, read by a motor-side encoder (`q + τ/k`): the columns
+    // shift the kinematics by the logged torque processed like the encoder, blind to each
+    // sample's own torque noise. Compliance must be among the selected effects, ahead of a
+    // delay (non-negative: the encoder leads, it does not lag), with a positive compliance on
+    // the abduction and hip joints.
+    let d = diagnosed(
+        vec![EffectSpec::Compliance {
+            stiffness: vec![500.0; 3],
+        }],
+        7,
+    );
+    eprintln!("{}", d.summary);
+    let at = d
+        .effects
+        .iter()
+        .position(|e| e.kind == Kind::Compliance)
+        .unwrap_or_else(|| panic!("compliance not selected: {}", d.summary));
+    assert!(
+        d.effects[..at].iter().all(|e| e.kind != Kind::TimeDelay),
+        "{}",
+        d.summary
+    );
+    let kappa: Vec<f64> = d.effects[at].magnitudes.iter().map(|m| m.value).collect();
+    eprintln!("compliance {kappa:?} (true 0.002)");
+    assert!(kappa[0] > 5e-4 && kappa[1] > 5e-4, "{kappa:?}");
+}
+
+#[test]
 fn backlash_read_on_the_motor_side_is_attributed() {
     // A 0.02-0.03 rad dead zone read by a motor-side encoder: the logged angle jumps by the
     // width at every torque reversal, and the filtered derivatives carry the jump. The
-    // library's backlash columns (the logged torque's sign, processed like the encoder) are
-    // selected first and confirmed on held-out data; like compliance, the linearized columns
-    // catch only part of the gap (16-26 %), and the widths are not reliable (seed 8: 0.032,
-    // 0.029, 0.023 rad for 0.02, 0.03, 0.02; seed 9: the knee 0.21): docs/diagnose.md, known
-    // limits.
+    // library's backlash columns (the logged torque's sign, processed like the encoder, blind
+    // to each sample's own) are selected and confirmed on held-out data: first on seed 8; on
+    // seed 9 second after cogging since the columns went blind to their own samples
+    // (2026-11-23; first before). The linearized columns catch only part of the gap, and the
+    // widths are not reliable: docs/diagnose.md, known limits.
     let width = [0.02, 0.03, 0.02];
-    for seed in [8, 9] {
+    for (seed, rank) in [(8, 0), (9, 1)] {
         let d = diagnosed(
             vec![EffectSpec::Backlash {
                 width: width.to_vec(),
@@ -651,13 +680,14 @@ fn backlash_read_on_the_motor_side_is_attributed() {
             seed,
         );
         eprintln!("{}", d.summary);
-        let e = &d.effects[0];
-        assert_eq!(e.kind, Kind::Backlash, "seed {seed}: {}", d.summary);
+        let at = d.effects.iter().position(|e| e.kind == Kind::Backlash);
+        assert_eq!(at, Some(rank), "seed {seed}: {}", d.summary);
+        let e = &d.effects[rank];
         let got: Vec<f64> = e.magnitudes.iter().map(|m| m.value).collect();
         eprintln!("widths {got:?}");
         assert!(got.iter().all(|b| *b > 0.0), "seed {seed}: {got:?}");
         assert!(
-            d.confirmed[0],
+            d.confirmed[rank],
             "seed {seed}: not confirmed on held-out data"
         );
     }

@@ -8,8 +8,8 @@ use std::path::PathBuf;
 /// scored against what was injected.
 #[derive(clap::Args, Debug)]
 pub struct Args {
-    /// Number of cases (categories cycle in 17: 4 clean, 11 single effects, 1 two, 1 out of
-    /// the library).
+    /// Number of cases (categories cycle: 4 clean, one per single effect the library draws, 1
+    /// with two effects, 1 out of the library, 2 changed robots; 21 slots).
     #[arg(long, default_value_t = 102)]
     cases: usize,
     /// Seed of every draw.

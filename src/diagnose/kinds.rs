@@ -198,6 +198,9 @@ pub(super) const KIND_TABLE: [KindSpec; 13] = {
             )
         },
         KindSpec {
+            // The logged torque lags: a "negative delay" is no delay, and was the best single
+            // column for a compliant transmission's encoder, which leads the link.
+            non_negative: true,
             magnitude: ("delay", "s"),
             linearized: true,
             magnitudes: |c, _, _| vec![c[0]],
@@ -355,6 +358,7 @@ pub(super) const KIND_TABLE: [KindSpec; 13] = {
                 let stiffness = c.iter().map(|k| 1.0 / k).collect();
                 Some(EffectSpec::Compliance { stiffness })
             },
+            blind: Blind::Single,
             draw: |m, rng, _| {
                 let k = per_joint(rng, m.dof(), 300.0, 1000.0);
                 let kappa = k.iter().map(|k| 1.0 / k).collect();
@@ -379,6 +383,7 @@ pub(super) const KIND_TABLE: [KindSpec; 13] = {
                 let width = c.iter().map(|b| b.max(0.0)).collect();
                 Some(EffectSpec::Backlash { width })
             },
+            blind: Blind::Single,
             draw: |m, rng, _| {
                 let b = per_joint(rng, m.dof(), 0.01, 0.03);
                 (Some(EffectSpec::Backlash { width: b.clone() }), b)

@@ -3,7 +3,7 @@
 //! (`robot.urdf`, `data.csv`), diagnosed from those files only, then scored against what was
 //! injected.
 //!
-//! Case `i` draws from `ChaCha8(seed, stream i)`: its category cycles through seventeen slots
+//! Case `i` draws from `ChaCha8(seed, stream i)`: its category cycles through slots
 //! ([`category`]: four clean, one per kind the effect table draws alone (`Kind::blind_singles`), one with two effects, one out of
 //! the library),
 //! its magnitudes are uniform in the ranges of [`draw`], and the excitation seed differs per
