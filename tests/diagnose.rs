@@ -637,9 +637,11 @@ fn three_seconds_of_clean_data_are_undecided_not_unexplained() {
 fn compliance_read_on_the_motor_side_is_attributed() {
     // k = 500 N m/rad on every joint, read by a motor-side encoder (`q + τ/k`): the columns
     // shift the kinematics by the logged torque processed like the encoder, blind to each
-    // sample's own torque noise. Compliance must be among the selected effects, ahead of a
-    // delay (non-negative: the encoder leads, it does not lag), with a positive compliance on
-    // the abduction and hip joints.
+    // sample's own torque noise, as a secant with Coulomb friction at the shifted velocity (a
+    // link at rest while the encoder moves). Compliance is selected first (before the secant:
+    // a tilt, before the own-sample blindness: a negative delay) and 1/k comes out within a
+    // factor 2.5 on every joint (1.7, 1.2, 0.84 ·10⁻³ for 2 ·10⁻³: the column's own noise
+    // attenuates it).
     let d = diagnosed(
         vec![EffectSpec::Compliance {
             stiffness: vec![500.0; 3],
@@ -647,19 +649,13 @@ fn compliance_read_on_the_motor_side_is_attributed() {
         7,
     );
     eprintln!("{}", d.summary);
-    let at = d
-        .effects
-        .iter()
-        .position(|e| e.kind == Kind::Compliance)
-        .unwrap_or_else(|| panic!("compliance not selected: {}", d.summary));
-    assert!(
-        d.effects[..at].iter().all(|e| e.kind != Kind::TimeDelay),
-        "{}",
-        d.summary
-    );
-    let kappa: Vec<f64> = d.effects[at].magnitudes.iter().map(|m| m.value).collect();
+    assert_eq!(d.effects[0].kind, Kind::Compliance, "{}", d.summary);
+    let kappa: Vec<f64> = d.effects[0].magnitudes.iter().map(|m| m.value).collect();
     eprintln!("compliance {kappa:?} (true 0.002)");
-    assert!(kappa[0] > 5e-4 && kappa[1] > 5e-4, "{kappa:?}");
+    assert!(
+        kappa.iter().all(|k| *k > 0.002 / 2.5 && *k < 0.002 * 2.5),
+        "{kappa:?}"
+    );
 }
 
 #[test]

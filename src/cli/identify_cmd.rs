@@ -231,7 +231,7 @@ pub struct Args {
     #[arg(long, value_delimiter = ',', default_value = "viscous,coulomb")]
     friction: Vec<String>,
     /// Effect terms from the diagnosis library, comma-separated (e.g. tilt,time_delay,
-    /// torque_gain,payload; cogging:<harmonic>); see docs/diagnose.md.
+    /// torque_gain,payload; cogging:<harmonic>; compliance:<1/k of the secant>, default the tangent); see docs/diagnose.md.
     #[arg(long, value_delimiter = ',')]
     effects: Vec<String>,
     /// Take the effects a diagnosis confirmed: its report.json (`physid diagnose --out`).

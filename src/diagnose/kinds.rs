@@ -77,6 +77,11 @@ pub(super) enum Grid {
     CoggingHarmonic,
     /// The body it acts on, numbered from 1 in body order (0, the default: the last body).
     Body,
+    /// Compliance `1/k` (rad/(N m)) the columns are a secant at: 0.5·10⁻³ · 2^i, i = 0..3
+    /// (0, the default of a term: the tangent).
+    Compliance,
+    /// Backlash width (rad) the columns are a secant at: 0.01 · 2^i, i = 0..2 (0: the tangent).
+    BacklashWidth,
 }
 
 /// Where the blind benchmark draws a kind.
@@ -364,13 +369,15 @@ pub(super) const KIND_TABLE: [KindSpec; 13] = {
                 let kappa = k.iter().map(|k| 1.0 / k).collect();
                 (Some(EffectSpec::Compliance { stiffness: k }), kappa)
             },
-            // −d/dκ_j ID(q − κ_j τ_j e_j, q̇ − κ_j τ̇_j e_j, q̈ − κ_j τ̈_j e_j).
+            grid: Grid::Compliance,
+            // −d/dκ_j ID(q − κ_j τ_j e_j, q̇ − κ_j τ̇_j e_j, q̈ − κ_j τ̈_j e_j), as a secant at the
+            // grid's κ (Coulomb friction at the shifted velocity) or the tangent at 0.
             ..row(
                 Kind::Compliance,
                 "compliance",
                 PerJoint(1),
                 |x, s, w, z, c| {
-                    let cols = x.encoder_shift_columns(&x.defl, s, w);
+                    let cols = x.encoder_shift_columns(&x.defl, s.param, s, w);
                     z.columns_mut(c, s.n).copy_from(&cols);
                 },
             )
@@ -391,8 +398,9 @@ pub(super) const KIND_TABLE: [KindSpec; 13] = {
             // −d/db_j ID(q − b_j s_j, q̇ − b_j ṡ_j, q̈ − b_j s̈_j), s = ½ sign(τ) processed like
             // the encoder: a motor-side encoder leads the link by half the dead zone in the
             // direction of the torque.
+            grid: Grid::BacklashWidth,
             ..row(Kind::Backlash, "backlash", PerJoint(1), |x, s, w, z, c| {
-                let cols = x.encoder_shift_columns(&x.slack, s, w);
+                let cols = x.encoder_shift_columns(&x.slack, s.param, s, w);
                 z.columns_mut(c, s.n).copy_from(&cols);
             })
         },
@@ -508,6 +516,8 @@ impl Kind {
             Grid::StribeckVelocity => (0..10).map(|i| 0.04 * 2f64.powf(i as f64 / 2.0)).collect(),
             Grid::CoggingHarmonic => (1..=8).map(f64::from).collect(),
             Grid::Body => (1..=n).map(|b| b as f64).collect(),
+            Grid::Compliance => (0..4).map(|i| 0.5e-3 * 2f64.powi(i)).collect(),
+            Grid::BacklashWidth => (0..3).map(|i| 0.01 * 2f64.powi(i)).collect(),
             Grid::None => vec![0.0],
         }
     }
@@ -525,7 +535,7 @@ impl Kind {
     /// The grid value a term takes when none is given (`None`: one must be given).
     pub fn default_param(&self) -> Option<f64> {
         match self.spec().grid {
-            Grid::None | Grid::Body => Some(0.0),
+            Grid::None | Grid::Body | Grid::Compliance | Grid::BacklashWidth => Some(0.0),
             Grid::StribeckVelocity | Grid::CoggingHarmonic => None,
         }
     }
@@ -536,6 +546,7 @@ impl Kind {
             Grid::None => param == 0.0,
             Grid::Body => param.fract() == 0.0 && param >= 0.0 && param <= n as f64,
             Grid::StribeckVelocity | Grid::CoggingHarmonic => param.is_finite() && param > 0.0,
+            Grid::Compliance | Grid::BacklashWidth => param.is_finite() && param >= 0.0,
         }
     }
 
@@ -545,6 +556,8 @@ impl Kind {
             Grid::StribeckVelocity => "Stribeck velocity, rad/s",
             Grid::CoggingHarmonic => "harmonic per rotor revolution",
             Grid::Body => "body number from 1, default the last",
+            Grid::Compliance => "compliance 1/k of the secant, rad/(N m); 0: the tangent",
+            Grid::BacklashWidth => "width of the secant, rad; 0: the tangent",
             Grid::None => "",
         }
     }

@@ -2,8 +2,9 @@
 //! identification as extra regressor columns `E_k` next to the rigid-body regressor `Y_k`, so
 //! that `τ_k ≈ Y_k θ + E_k c` (equations and units in `docs/diagnose.md`). Linear effects are
 //! columns of the data; nonlinear ones are linearized about the nominal model `θ̂₀` (gain, tilt,
-//! compliance, delay) or searched over a one-dimensional grid (Stribeck velocity, cogging
-//! harmonic), each grid point a [`Variant`].
+//! delay), searched over a one-dimensional grid (Stribeck velocity, cogging harmonic), each
+//! grid point a [`Variant`], or both (compliance and backlash: a secant of `θ̂₀`'s prediction at
+//! the grid's shift).
 //!
 //! What each kind's columns are is its row of [`super::kinds`]; this module holds what they
 //! share: the nominal prediction and its processed forms ([`Context`]) and the loop over samples
@@ -220,8 +221,10 @@ impl<'a> Context<'a> {
         // The side of the dead zone follows the torque actually delivered: the logged torque's
         // sign, a step that is then filtered and differenced like the encoder signal (the
         // prediction's sign switches a few samples off and lost the attribution).
-        let half_sign: Vec<f64> = tr
-            .tau
+        // Its sign is taken after the zero-phase low-pass (one crossing where the noisy torque
+        // chatters about zero).
+        let smooth_tau = processed_like_encoder(&tr.tau, tr, cutoff);
+        let half_sign: Vec<f64> = smooth_tau[0]
             .iter()
             .map(|t| 0.5 * crate::dynamics::sign(*t))
             .collect();
@@ -261,29 +264,42 @@ impl<'a> Context<'a> {
 
     /// The columns `−∂ID/∂ε_j` of inverse dynamics with joint `j`'s encoder signals shifted by
     /// `ε_j · shift_j` (angle, velocity, acceleration of sample `s`), one per joint: how a
-    /// motor-side encoder offset (compliance, backlash) enters the rigid-body prediction.
+    /// motor-side encoder offset (compliance, backlash) enters the prediction. At `secant = 0`
+    /// the tangent of the smooth prediction (no Coulomb friction); at `secant > 0` the secant
+    /// `(ID(x − secant · shift_j e_j) − ID(x)) / secant` of the whole prediction, Coulomb
+    /// friction included: where the shift reverses the velocity (a link at rest while the
+    /// encoder moves with the torque) the friction term changes sign, which no tangent sees.
     pub(super) fn encoder_shift_columns(
         &self,
         shift: &[Vec<f64>; 3],
+        secant: f64,
         s: &Sample,
         w: &mut Scratch,
     ) -> DMatrix<f64> {
         let model = self.model;
         let n = s.n;
-        let eps = 1e-7;
-        let mut out = DMatrix::zeros(n, n);
-        for j in 0..n {
+        let (h, theta) = if secant > 0.0 {
+            (secant, &self.theta0)
+        } else {
+            (1e-7, &self.theta_smooth)
+        };
+        let id = |j: usize, by: f64, w: &mut Scratch| {
             let at = s.k * n + j;
-            let dir = [shift[0][at], shift[1][at], shift[2][at]];
-            let mut id = |h: f64| {
-                let (mut q, mut qd, mut qdd) = (s.q.to_vec(), s.qd.to_vec(), s.qdd.to_vec());
-                q[j] -= h * dir[0];
-                qd[j] -= h * dir[1];
-                qdd[j] -= h * dir[2];
-                regressor(model, &mut w.data, &q, &qd, &qdd, &mut w.yg);
-                &w.yg * &self.theta_smooth
+            let (mut q, mut qd, mut qdd) = (s.q.to_vec(), s.qd.to_vec(), s.qdd.to_vec());
+            q[j] -= by * shift[0][at];
+            qd[j] -= by * shift[1][at];
+            qdd[j] -= by * shift[2][at];
+            regressor(model, &mut w.data, &q, &qd, &qdd, &mut w.yg);
+            &w.yg * theta
+        };
+        let mut out = DMatrix::zeros(n, n);
+        let base = (secant > 0.0).then(|| id(0, 0.0, w));
+        for j in 0..n {
+            let d = if let Some(base) = &base {
+                (id(j, h, w) - base) / h
+            } else {
+                (id(j, h, w) - id(j, -h, w)) / (2.0 * h)
             };
-            let d = (id(eps) - id(-eps)) / (2.0 * eps);
             out.column_mut(j).copy_from(&d);
         }
         out
