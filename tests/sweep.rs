@@ -194,3 +194,43 @@ fn blind_progress_is_plain_text_with_counts() {
     let svg = std::fs::read_to_string(out.join("blind.svg")).unwrap();
     assert!(svg.starts_with("<svg") && svg.contains("top-1") && svg.trim_end().ends_with("</svg>"));
 }
+
+#[test]
+fn a_blind_case_can_be_kept_and_rediagnosed_by_hand() {
+    // `--only 4 --keep-cases DIR`: case 4 alone (the first single effect of a cycle, a torque
+    // offset), its files kept where the user can run the diagnosis on them again, which then
+    // finds the same first effect.
+    let dir = tempfile::tempdir().unwrap();
+    let keep = dir.path().join("cases");
+    let (code, log) = physid(&[
+        "blind",
+        "--only",
+        "4",
+        "--keep-cases",
+        keep.to_str().unwrap(),
+    ]);
+    assert_eq!(code, 0, "{log}");
+    assert!(log.contains("case 4 (1 of 1 done"), "{log}");
+    assert!(
+        log.contains("injected torque_offset; found torque_offset"),
+        "{log}"
+    );
+    let case = keep.join("case4");
+    let (code, text) = physid(&[
+        "diagnose",
+        "--robot",
+        case.join("robot.urdf").to_str().unwrap(),
+        "--data",
+        case.join("data.csv").to_str().unwrap(),
+        "--description-uncertainty",
+        "0.1",
+    ]);
+    assert_eq!(code, 0, "{text}");
+    assert!(text.contains("step 1: torque_offset"), "{text}");
+    // A case beyond --cases is named.
+    let (code, log) = physid(&["blind", "--cases", "21", "--only", "21"]);
+    assert!(
+        code != 0 && log.contains("--only 21: the cases are numbered 0 to 20"),
+        "{log}"
+    );
+}

@@ -31,6 +31,14 @@ pub struct Args {
     /// turns the description test off).
     #[arg(long, allow_negative_numbers = true)]
     description_uncertainty: Option<f64>,
+    /// Keep each case's files (`caseI/robot.urdf`, `caseI/data.csv`) in this folder, to
+    /// re-diagnose a case by hand (`physid diagnose --robot DIR/case17/robot.urdf --data
+    /// DIR/case17/data.csv`); default: a temporary folder, removed.
+    #[arg(long)]
+    keep_cases: Option<PathBuf>,
+    /// Run only these cases (numbers below --cases, comma-separated); the scores cover them.
+    #[arg(long, value_delimiter = ',')]
+    only: Vec<usize>,
 }
 
 /// One line per finished case, on standard error: what was injected and found, the verdict,
@@ -68,16 +76,28 @@ pub fn run(a: Args) -> anyhow::Result<()> {
     };
     opts.validate().map_err(super::option_error)?;
     let (base, model, _) = physid::sim::scenario::load(&a.scenario)?;
-    let work = tempfile::tempdir()?;
+    if let Some(&i) = a.only.iter().find(|&&i| i >= a.cases) {
+        anyhow::bail!("--only {i}: the cases are numbered 0 to {}", a.cases - 1);
+    }
+    let temp = tempfile::tempdir()?;
+    let work = a
+        .keep_cases
+        .clone()
+        .unwrap_or_else(|| temp.path().to_path_buf());
+    let chosen: Vec<usize> = if a.only.is_empty() {
+        (0..a.cases).collect()
+    } else {
+        a.only.clone()
+    };
     let diagnose_opts = opts.diagnose_options();
     let pool = super::thread_pool(Some(a.threads))?;
     let start = std::time::Instant::now();
-    let progress = super::progress::Progress::counter("cases", a.cases as u64);
+    let progress = super::progress::Progress::counter("cases", chosen.len() as u64);
     let results: Vec<CaseResult> = pool.install(|| {
-        (0..a.cases)
-            .into_par_iter()
-            .map(|i| {
-                let case_dir = work.path().join(format!("case{i}"));
+        chosen
+            .par_iter()
+            .map(|&i| {
+                let case_dir = work.join(format!("case{i}"));
                 let r = blind::run_case(
                     i,
                     a.seed,
@@ -101,7 +121,7 @@ pub fn run(a: Args) -> anyhow::Result<()> {
         "{}",
         serde_json::to_string_pretty(&physid::io::versioned("blind_scores", &scores))?
     );
-    eprintln!("{} cases in {wall:.1} s", a.cases);
+    eprintln!("{} cases in {wall:.1} s", chosen.len());
     if let Some(dir) = &a.out {
         let description = [a.description_error, opts.stated_uncertainty()];
         blind::write_blind(
