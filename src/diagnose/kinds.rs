@@ -400,7 +400,7 @@ pub(super) const KIND_TABLE: [KindSpec; 13] = {
             // direction of the torque.
             grid: Grid::BacklashWidth,
             ..row(Kind::Backlash, "backlash", PerJoint(1), |x, s, w, z, c| {
-                let cols = x.encoder_shift_columns(&x.slack, s.param, s, w);
+                let cols = x.encoder_shift_columns(x.slack(s.param), s.param, s, w);
                 z.columns_mut(c, s.n).copy_from(&cols);
             })
         },
@@ -546,7 +546,8 @@ impl Kind {
             Grid::None => param == 0.0,
             Grid::Body => param.fract() == 0.0 && param >= 0.0 && param <= n as f64,
             Grid::StribeckVelocity | Grid::CoggingHarmonic => param.is_finite() && param > 0.0,
-            Grid::Compliance | Grid::BacklashWidth => param.is_finite() && param >= 0.0,
+            Grid::Compliance => param.is_finite() && param >= 0.0,
+            Grid::BacklashWidth => param == 0.0 || self.grid(n).contains(&param),
         }
     }
 
@@ -557,7 +558,7 @@ impl Kind {
             Grid::CoggingHarmonic => "harmonic per rotor revolution",
             Grid::Body => "body number from 1, default the last",
             Grid::Compliance => "compliance 1/k of the secant, rad/(N m); 0: the tangent",
-            Grid::BacklashWidth => "width of the secant, rad; 0: the tangent",
+            Grid::BacklashWidth => "width of the secant, rad: 0.01, 0.02 or 0.04; 0: the tangent",
             Grid::None => "",
         }
     }

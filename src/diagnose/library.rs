@@ -86,9 +86,10 @@ pub struct Context<'a> {
     /// The logged torque processed like the encoder signal (filtered; filtered derivative;
     /// filtered derivative of that), for the deflection of a compliant transmission.
     pub(super) defl: [Vec<f64>; 3],
-    /// Half the sign of the logged torque processed like the encoder signal, for the offset of
-    /// a motor-side encoder across a backlash dead zone.
-    pub(super) slack: [Vec<f64>; 3],
+    /// The offset of a motor-side encoder across a backlash dead zone of unit width, processed
+    /// like the encoder signal, per width of the backlash grid (`(0, ½ sign)` for the tangent
+    /// first): see [`Context::slack`].
+    pub(super) slack: Vec<(f64, [Vec<f64>; 3])>,
     /// Two unit vectors perpendicular to gravity (the tilt directions).
     pub(super) perp: [Vector3<f64>; 2],
     pub(super) gear: Vec<f64>,
@@ -172,6 +173,23 @@ fn processed_without_own(x: &[f64], tr: &Trajectory, cutoff: f64) -> [Vec<f64>; 
     out
 }
 
+/// The motor's offset in a backlash dead zone of `width` (rad) driven by the torque `tau`
+/// (sample-major), divided by the width: `sim::effects::DeadZone` with the model's rotors.
+fn dead_zone_offsets(model: &Model, tau: &[f64], tr: &Trajectory, width: f64) -> Vec<f64> {
+    let n = tr.dof();
+    let dt = tr.sample_period().unwrap_or(1e-3);
+    let effects = [crate::sim::scenario::EffectSpec::Backlash {
+        width: vec![width; n],
+    }];
+    let Some(mut zone) = crate::sim::effects::DeadZone::new(model, &effects) else {
+        return vec![0.0; tau.len()];
+    };
+    tau.chunks(n)
+        .flat_map(|t| zone.step(t, dt))
+        .map(|s| s / width)
+        .collect()
+}
+
 fn derivative(x: &[f64], t: &[f64], n: usize) -> Vec<f64> {
     let m = t.len();
     let mut out = vec![0.0; x.len()];
@@ -218,17 +236,21 @@ impl<'a> Context<'a> {
         // the prediction's friction jumps fall a few samples off the delivered torque's and its
         // column lost the attribution to delay, cogging and spring.
         let defl = processed_without_own(&tr.tau, tr, cutoff);
-        // The side of the dead zone follows the torque actually delivered: the logged torque's
-        // sign, a step that is then filtered and differenced like the encoder signal (the
-        // prediction's sign switches a few samples off and lost the attribution).
-        // Its sign is taken after the zero-phase low-pass (one crossing where the noisy torque
-        // chatters about zero).
+        // The side of the dead zone follows the torque actually delivered: the logged torque,
+        // low-passed (one crossing where the noisy torque chatters about zero), drives the
+        // motor across the gap as the simulator's dead zone does (`sim::effects::DeadZone`:
+        // the description's rotor inertia, a crossing of tens of ms), at each width of the
+        // grid; the tangent takes half its sign (an instant crossing).
         let smooth_tau = processed_like_encoder(&tr.tau, tr, cutoff);
         let half_sign: Vec<f64> = smooth_tau[0]
             .iter()
             .map(|t| 0.5 * crate::dynamics::sign(*t))
             .collect();
-        let slack = processed_without_own(&half_sign, tr, cutoff);
+        let mut slack = vec![(0.0, processed_without_own(&half_sign, tr, cutoff))];
+        for width in Kind::Backlash.grid(n) {
+            let unit = dead_zone_offsets(model, &smooth_tau[0], tr, width);
+            slack.push((width, processed_without_own(&unit, tr, cutoff)));
+        }
         let g = model.gravity.try_normalize(1e-12).unwrap_or(-Vector3::z());
         let a = if g.x.abs() < 0.9 {
             Vector3::x()
@@ -260,6 +282,17 @@ impl<'a> Context<'a> {
     /// The model.
     pub fn model(&self) -> &'a Model {
         self.model
+    }
+
+    /// The processed unit-width dead-zone offset for backlash at grid width `width` (the
+    /// nearest computed; 0: half the torque's sign, for the tangent).
+    pub(super) fn slack(&self, width: f64) -> &[Vec<f64>; 3] {
+        let nearest = self
+            .slack
+            .iter()
+            .min_by(|a, b| (a.0 - width).abs().total_cmp(&(b.0 - width).abs()))
+            .expect("the tangent's is always there");
+        &nearest.1
     }
 
     /// The columns `−∂ID/∂ε_j` of inverse dynamics with joint `j`'s encoder signals shifted by

@@ -327,9 +327,10 @@ pub enum EffectSpec {
         stiffness: Vec<f64>,
     },
     /// Backlash (a dead zone of `width` in the transmission) read on the motor side: the motor
-    /// leads the link by half the width in the direction of the delivered torque, so the
-    /// logged encoder reads `q + (b/2) sign(τ_mot)`; a sensor effect like compliance (the
-    /// free flight across the dead zone at a torque reversal is not simulated).
+    /// rests against the side of the gap its torque pushes it to and crosses the gap driven
+    /// by its own torque (`effects::DeadZone`), so the logged encoder reads `q + s`,
+    /// `|s| ≤ b/2`; a sensor effect like compliance (the link's loss of torque while the motor
+    /// crosses is not simulated).
     Backlash {
         /// Dead-zone width per joint (rad, motor side seen at the joint, ≥ 0).
         width: Vec<f64>,

@@ -126,6 +126,7 @@ pub fn simulate(
         }
     };
     let mut q_enc_prev: Option<Vec<f64>> = None;
+    let mut dead_zone = super::effects::DeadZone::new(model, &scenario.effects);
     let mut last_report = 0usize;
     for k in 0..samples {
         let t = k as f64 / s.rate;
@@ -164,7 +165,9 @@ pub fn simulate(
             .into_iter()
             .map(|t| t + tau_noise.sample(&mut rng))
             .collect();
-        let q_log = super::effects::logged_angle(&scenario.effects, &q_enc, &tau_mot);
+        let offsets = dead_zone.as_mut().map(|d| d.step(&tau_mot, dt));
+        let q_log =
+            super::effects::logged_angle(&scenario.effects, &q_enc, &tau_mot, offsets.as_deref());
         measured.push(t, &q_log, &qd_fb, Some(&vec![0.0; n]), &logged);
         q_enc_prev = Some(q_enc);
         check_state(model, engine.as_ref(), t + dt, s.max_speed)?;
