@@ -66,7 +66,7 @@ impl Options {
             if t.kind.gridded() && !t.kind.valid_param(t.param, n) {
                 return Err(IdentError::InvalidTerm {
                     term: term(),
-                    reason: "needs a valid value (stribeck:<velocity rad/s > 0>, cogging:<harmonic > 0>, payload:<body number 1..n>)",
+                    reason: "needs a valid value (stribeck:<velocity rad/s > 0>, cogging:<harmonic > 0>, payload:<body number 1..n>, compliance:<1/k of the secant >= 0>, backlash:<width 0, 0.01, 0.02 or 0.04 rad>)",
                 });
             }
         }

@@ -47,8 +47,9 @@ pub enum Kind {
     /// Compliant transmission seen by a motor-side encoder: `q_logged = q + κ τ`
     /// (κ = 1/k, rad/(N m) per joint).
     Compliance,
-    /// Backlash read by a motor-side encoder: `q_logged = q + (b/2) sign(τ)` (b = dead-zone
-    /// width, rad per joint; the sign from the logged torque).
+    /// Backlash read by a motor-side encoder: `q_logged = q + s`, `s ∈ [−b/2, b/2]` the motor's
+    /// offset in a dead zone of width `b` (rad per joint) that it crosses driven by its own
+    /// torque (`sim::effects::DeadZone`).
     Backlash,
     /// An unmodelled payload on one body (searched over the bodies): ten inertial parameters
     /// `π_p` added to it (that body's own regressor columns; reported as its mass, kg), so also
@@ -395,9 +396,9 @@ pub(super) const KIND_TABLE: [KindSpec; 13] = {
                 let b = per_joint(rng, m.dof(), 0.01, 0.03);
                 (Some(EffectSpec::Backlash { width: b.clone() }), b)
             },
-            // −d/db_j ID(q − b_j s_j, q̇ − b_j ṡ_j, q̈ − b_j s̈_j), s = ½ sign(τ) processed like
-            // the encoder: a motor-side encoder leads the link by half the dead zone in the
-            // direction of the torque.
+            // −d/db_j ID(q − b_j s_j, q̇ − b_j ṡ_j, q̈ − b_j s̈_j) as a secant at the grid's
+            // width b_g, s the unit-width offset of a dead zone of width b_g driven by the
+            // low-passed logged torque, processed like the encoder (the tangent: s = ½ sign τ).
             grid: Grid::BacklashWidth,
             ..row(Kind::Backlash, "backlash", PerJoint(1), |x, s, w, z, c| {
                 let cols = x.encoder_shift_columns(x.slack(s.param), s.param, s, w);
