@@ -631,6 +631,16 @@ impl Kind {
     }
 }
 
+/// The dead-zone widths (rad) whose motor offsets the columns need (the backlash grid):
+/// [`super::library::Context`] runs a dead zone at each.
+pub(super) fn dead_zone_widths(n: usize) -> Vec<f64> {
+    Kind::ALL
+        .into_iter()
+        .filter(|k| k.spec().grid == Grid::BacklashWidth)
+        .flat_map(|k| k.grid(n))
+        .collect()
+}
+
 /// What data separates two kinds the data could not tell apart.
 pub fn separate_by(a: Kind, b: Kind) -> String {
     use Kind::*;

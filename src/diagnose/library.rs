@@ -247,7 +247,7 @@ impl<'a> Context<'a> {
             .map(|t| 0.5 * crate::dynamics::sign(*t))
             .collect();
         let mut slack = vec![(0.0, processed_without_own(&half_sign, tr, cutoff))];
-        for width in Kind::Backlash.grid(n) {
+        for width in super::kinds::dead_zone_widths(n) {
             let unit = dead_zone_offsets(model, &smooth_tau[0], tr, width);
             slack.push((width, processed_without_own(&unit, tr, cutoff)));
         }
