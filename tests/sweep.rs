@@ -1,22 +1,14 @@
 //! `physid sweep`: sharded and resumed runs give exactly the single run's table; bad grid values
 //! fail before any cell runs, naming the key.
 
-use std::path::Path;
-use std::process::Command;
+mod common;
 
+use std::path::Path;
+
+/// `physid ARGS`: exit code and standard output and error together.
 fn physid(args: &[&str]) -> (i32, String) {
-    let o = Command::new(env!("CARGO_BIN_EXE_physid"))
-        .args(args)
-        .output()
-        .unwrap();
-    (
-        o.status.code().unwrap_or(-1),
-        format!(
-            "{}{}",
-            String::from_utf8_lossy(&o.stdout),
-            String::from_utf8_lossy(&o.stderr)
-        ),
-    )
+    let (code, stdout, stderr) = common::physid(args);
+    (code, stdout + &stderr)
 }
 
 fn sweep_file(dir: &Path, grid: &str) -> String {

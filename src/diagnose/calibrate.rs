@@ -113,7 +113,7 @@ pub struct Calibration {
 pub fn calibrate(model: &Model, runs: &[Run], opts: &Options) -> Result<Calibration, IdentError> {
     opts.validate_for(model.dof())?;
     if let Some(t) = opts.terms.iter().find(|t| t.kind.needs_rotor()) {
-        if model.bodies.iter().all(|b| b.rotor.is_none()) {
+        if model.rotor_count() == 0 {
             return Err(IdentError::InvalidTerm {
                 term: format!("{}:{}", t.kind.name(), t.param),
                 reason: "acts at the rotor's angle, and this robot has no rotors (give them in the robot's TOML sidecar, docs/robot-format.md)",

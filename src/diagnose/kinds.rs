@@ -318,11 +318,13 @@ pub(super) const KIND_TABLE: [KindSpec; 13] = {
             draw: draw_cogging,
             // Joints without a rotor in the description keep zero columns.
             ..row(Kind::Cogging, "cogging", PerJoint(2), |x, s, _, z, c| {
-                (0..s.n).filter(|&j| x.has_rotor[j]).for_each(|j| {
-                    let a = s.param * x.gear[j] * s.q[j];
-                    z[(j, c + j)] = a.sin();
-                    z[(j, c + s.n + j)] = a.cos();
-                })
+                (0..s.n)
+                    .filter(|&j| x.model.bodies[j].rotor.is_some())
+                    .for_each(|j| {
+                        let a = s.param * x.gear[j] * s.q[j];
+                        z[(j, c + j)] = a.sin();
+                        z[(j, c + s.n + j)] = a.cos();
+                    })
             })
         },
         KindSpec {

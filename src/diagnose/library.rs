@@ -93,8 +93,6 @@ pub struct Context<'a> {
     /// Two unit vectors perpendicular to gravity (the tilt directions).
     pub(super) perp: [Vector3<f64>; 2],
     pub(super) gear: Vec<f64>,
-    /// Whether each joint has a rotor in the description.
-    pub(super) has_rotor: Vec<bool>,
 }
 
 /// `x` (sample-major, `n` columns) processed like an encoder angle: `F(x)`, `F(D x)`,
@@ -129,22 +127,36 @@ fn process_column(col: &[f64], dt: f64, cutoff: f64) -> [Vec<f64>; 3] {
 /// Samples on either side of its own that [`processed_without_own`] leaves out.
 const OWN_LAGS: usize = 2;
 
-/// Like [`processed_like_encoder`], but each output sample blind to the input's own sample and
-/// its [`OWN_LAGS`] neighbours on either side (replaced by the straight line across them). A
-/// column made of the logged torque is regressed against that same torque: through the
-/// processing's centre tap it would carry the sample's own noise (differentiated twice, the
-/// tap is large and negative), which fits the residual's noise (on clean blind data compliance
-/// was then claimed in 6 of 16 cases). White noise is then uncorrelated with the column.
-fn processed_without_own(x: &[f64], tr: &Trajectory, cutoff: f64) -> [Vec<f64>; 3] {
-    let (m, n) = (tr.len(), tr.dof());
-    let dt = tr.sample_period().unwrap_or(1e-3);
-    let mut out = processed_like_encoder(x, tr, cutoff);
-    let w = OWN_LAGS;
-    // The processing's impulse response at lags −w..=w (time-invariant away from the ends).
+/// The encoder processing's impulse response (angle, rate, acceleration) at lags
+/// `−OWN_LAGS..=OWN_LAGS` (time-invariant away from the ends), for [`without_own`].
+type OwnTaps = [[f64; 2 * OWN_LAGS + 1]; 3];
+
+/// [`OwnTaps`] at sample period `dt` (s) and `cutoff` (Hz).
+fn own_taps(dt: f64, cutoff: f64) -> OwnTaps {
     let centre = 2000;
     let mut impulse = vec![0.0; 2 * centre + 1];
     impulse[centre] = 1.0;
     let h = process_column(&impulse, dt, cutoff);
+    std::array::from_fn(|c| std::array::from_fn(|i| h[c][centre - OWN_LAGS + i]))
+}
+
+/// `processed` (= [`processed_like_encoder`] of `x`) with each output sample made blind to
+/// the input's own sample and its [`OWN_LAGS`] neighbours on either side (replaced by the
+/// straight line across them). A column made of the logged torque is regressed against that
+/// same torque: through the processing's centre tap it would carry the sample's own noise
+/// (differentiated twice, the tap is large and negative), which fits the residual's noise (on
+/// clean blind data compliance was then claimed in 6 of 16 cases). White noise is then
+/// uncorrelated with the column.
+fn without_own(
+    mut out: [Vec<f64>; 3],
+    x: &[f64],
+    tr: &Trajectory,
+    cutoff: f64,
+    taps: &OwnTaps,
+) -> [Vec<f64>; 3] {
+    let (m, n) = (tr.len(), tr.dof());
+    let dt = tr.sample_period().unwrap_or(1e-3);
+    let w = OWN_LAGS;
     // The zero-phase filter's start-up transient at the ends of the data (not of the data's own
     // processing, which saw the whole run, but of this one): columns there are left at zero.
     let ends = ((3.0 / cutoff) / dt).ceil() as usize;
@@ -160,17 +172,21 @@ fn processed_without_own(x: &[f64], tr: &Trajectory, cutoff: f64) -> [Vec<f64>; 
         let at = |k: usize| x[k * n + j];
         for k in (w + 1..m - w - 1).filter(|&k| k >= ends && k + ends < m) {
             let (a, b) = (at(k - w - 1), at(k + w + 1));
-            for lag in -(w as isize)..=(w as isize) {
-                let i = (k as isize - lag) as usize;
+            for (t, i) in (k - w..=k + w).rev().enumerate() {
                 let frac = (i - (k - w - 1)) as f64 / (2 * w + 2) as f64;
                 let own = at(i) - (a + (b - a) * frac);
-                for (o, hc) in out.iter_mut().zip(&h) {
-                    o[k * n + j] -= hc[(centre as isize + lag) as usize] * own;
+                for (o, hc) in out.iter_mut().zip(taps) {
+                    o[k * n + j] -= hc[t] * own;
                 }
             }
         }
     }
     out
+}
+
+/// [`processed_like_encoder`] of `x` made blind to each sample's own ([`without_own`]).
+fn processed_without_own(x: &[f64], tr: &Trajectory, cutoff: f64, taps: &OwnTaps) -> [Vec<f64>; 3] {
+    without_own(processed_like_encoder(x, tr, cutoff), x, tr, cutoff, taps)
 }
 
 /// The motor's offset in a backlash dead zone of `width` (rad) driven by the torque `tau`
@@ -235,22 +251,23 @@ impl<'a> Context<'a> {
         // differentiated twice through the 20 Hz filter, adds ~0.05 N m on the blind scenario;
         // the prediction's friction jumps fall a few samples off the delivered torque's and its
         // column lost the attribution to delay, cogging and spring.
-        let defl = processed_without_own(&tr.tau, tr, cutoff);
+        let taps = own_taps(tr.sample_period().unwrap_or(1e-3), cutoff);
+        let logged = processed_like_encoder(&tr.tau, tr, cutoff);
         // The side of the dead zone follows the torque actually delivered: the logged torque,
         // low-passed (one crossing where the noisy torque chatters about zero), drives the
         // motor across the gap as the simulator's dead zone does (`sim::effects::DeadZone`:
         // the description's rotor inertia, a crossing of tens of ms), at each width of the
         // grid; the tangent takes half its sign (an instant crossing).
-        let smooth_tau = processed_like_encoder(&tr.tau, tr, cutoff);
-        let half_sign: Vec<f64> = smooth_tau[0]
+        let half_sign: Vec<f64> = logged[0]
             .iter()
             .map(|t| 0.5 * crate::dynamics::sign(*t))
             .collect();
-        let mut slack = vec![(0.0, processed_without_own(&half_sign, tr, cutoff))];
+        let mut slack = vec![(0.0, processed_without_own(&half_sign, tr, cutoff, &taps))];
         for width in super::kinds::dead_zone_widths(n) {
-            let unit = dead_zone_offsets(model, &smooth_tau[0], tr, width);
-            slack.push((width, processed_without_own(&unit, tr, cutoff)));
+            let unit = dead_zone_offsets(model, &logged[0], tr, width);
+            slack.push((width, processed_without_own(&unit, tr, cutoff, &taps)));
         }
+        let defl = without_own(logged, &tr.tau, tr, cutoff, &taps);
         let g = model.gravity.try_normalize(1e-12).unwrap_or(-Vector3::z());
         let a = if g.x.abs() < 0.9 {
             Vector3::x()
@@ -264,7 +281,6 @@ impl<'a> Context<'a> {
             .iter()
             .map(|b| b.rotor.as_ref().map_or(1.0, |r| r.gear_ratio))
             .collect();
-        let has_rotor = model.bodies.iter().map(|b| b.rotor.is_some()).collect();
         Self {
             model,
             theta0,
@@ -275,7 +291,6 @@ impl<'a> Context<'a> {
             slack,
             perp: [u1, u2],
             gear,
-            has_rotor,
         }
     }
 
@@ -433,7 +448,8 @@ mod tests {
             .collect();
         let tr = one_joint(&smooth);
         let full = processed_like_encoder(&smooth, &tr, 20.0);
-        let own = processed_without_own(&smooth, &tr, 20.0);
+        let taps = own_taps(1e-3, 20.0);
+        let own = processed_without_own(&smooth, &tr, 20.0, &taps);
         // A 1.3 Hz sine is nearly a straight line over seven samples: the same processing
         // (angle, rate, acceleration: amplitudes 1, 8.2, 67) where the ends are not zeroed, but
         // for the acceleration, whose large centre taps see the line's missing curvature: 0.3 %
@@ -455,7 +471,7 @@ mod tests {
         let k = 1500;
         let mut spiked = smooth.clone();
         spiked[k] += 1.0;
-        let own_spiked = processed_without_own(&spiked, &one_joint(&spiked), 20.0);
+        let own_spiked = processed_without_own(&spiked, &one_joint(&spiked), 20.0, &taps);
         let full_spiked = processed_like_encoder(&spiked, &one_joint(&spiked), 20.0);
         for c in 0..3 {
             assert!((own_spiked[c][k] - own[c][k]).abs() < 1e-9 * (1.0 + own[c][k].abs()));

@@ -299,7 +299,7 @@ impl<'a> Stage<'a> {
 /// has rotors.
 fn offered_variants(opts: &Options, model: &Model) -> Vec<library::Variant> {
     let n = model.dof();
-    let rotors = model.bodies.iter().any(|b| b.rotor.is_some());
+    let rotors = model.rotor_count() > 0;
     library::variants(&opts.kinds, n)
         .into_iter()
         .filter(|v| {
