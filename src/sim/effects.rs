@@ -77,8 +77,8 @@ pub fn logged_torque(effects: &[EffectSpec], tau: &[f64]) -> Vec<f64> {
 }
 
 /// The logged encoder angle for link angle `q` under delivered torque `tau_mot`: `q + τ/k`
-/// with a `compliance` effect; with `backlash`, plus the motor's offset in the dead zone
-/// (`dead_zone`, from [`DeadZone::step`]; `(b/2) sign(τ)` when not given), else `q`.
+/// with a `compliance` effect, plus the motor's offsets in a backlash dead zone (`dead_zone`,
+/// from [`DeadZone::step`]), else `q`.
 pub fn logged_angle(
     effects: &[EffectSpec],
     q: &[f64],
@@ -87,25 +87,16 @@ pub fn logged_angle(
 ) -> Vec<f64> {
     let mut out = q.to_vec();
     for e in effects {
-        match e {
-            EffectSpec::Compliance { stiffness } => {
-                for (j, o) in out.iter_mut().enumerate() {
-                    if stiffness[j].is_finite() {
-                        *o += tau_mot[j] / stiffness[j];
-                    }
+        if let EffectSpec::Compliance { stiffness } = e {
+            for (j, o) in out.iter_mut().enumerate() {
+                if stiffness[j].is_finite() {
+                    *o += tau_mot[j] / stiffness[j];
                 }
             }
-            EffectSpec::Backlash { width } => {
-                for (j, o) in out.iter_mut().enumerate() {
-                    *o += match dead_zone {
-                        Some(s) => s[j],
-                        None if tau_mot[j] != 0.0 => 0.5 * width[j] * tau_mot[j].signum(),
-                        None => 0.0,
-                    };
-                }
-            }
-            _ => {}
         }
+    }
+    if let Some(offset) = dead_zone {
+        out.iter_mut().zip(offset).for_each(|(o, s)| *o += s);
     }
     out
 }
