@@ -34,6 +34,7 @@ pub mod io;
 pub mod linalg;
 pub mod model;
 pub mod options;
+pub mod prepare;
 pub mod signal;
 pub mod sim;
 pub mod spatial;

@@ -7,6 +7,16 @@ use physid::io;
 use serde::Serialize;
 use std::path::Path;
 
+/// The samples of a data file as the readers give them (before the pipeline), the file's
+/// joints the robot lacks, and the messages skipped.
+fn read(
+    path: &Path,
+    model: &physid::model::Model,
+    opts: &io::DataOptions,
+) -> (io::samples::Logged, Vec<String>, usize) {
+    io::load_logged(path, model, opts).unwrap()
+}
+
 #[derive(Serialize)]
 struct Time {
     sec: i32,
@@ -178,11 +188,11 @@ fn a_bag_in_another_joint_order_with_an_extra_joint_reads_as_the_robot_order() {
     );
     write_bag(&missing, measured, &[Some(2), Some(0)], 0);
 
-    let a = io::load_trajectory(&plain, &model).unwrap();
-    let b = io::load_trajectory(&shuffled, &model).unwrap();
-    assert!(a.ignored_joints.is_empty());
-    assert_eq!(b.ignored_joints, vec!["gripper".to_string()]);
-    let (a, b) = (a.trajectory, b.trajectory);
+    let a = read(&plain, &model, &Default::default());
+    let b = read(&shuffled, &model, &Default::default());
+    assert!(a.1.is_empty());
+    assert_eq!(b.1, vec!["gripper".to_string()]);
+    let (a, b) = (a.0, b.0);
     assert_eq!(a.joint_names, b.joint_names);
     assert_eq!(a.q, b.q);
     assert_eq!(a.qd, b.qd);
@@ -244,31 +254,75 @@ fn a_rosbag2_directory_split_in_two_files_on_another_topic_reads_whole() {
         topic: Some("/leg/joint_states".into()),
         ..Default::default()
     };
-    let read = io::load_trajectory_with(&bag, &model, &opts)
-        .unwrap()
-        .trajectory;
-    assert_eq!(read.q, measured.q);
-    assert_eq!(read.tau, measured.tau);
-    assert_eq!(read.len(), measured.len());
+    let whole = read(&bag, &model, &opts).0;
+    assert_eq!(whole.q, measured.q);
+    assert_eq!(whole.tau, measured.tau);
+    assert_eq!(whole.len(), measured.len());
     // Without the topic, the default /joint_states is named as missing.
+    // Without the topic, the default /joint_states is named as missing, with the topics that
+    // do carry joint states.
     let err = io::load_trajectory(&bag, &model).unwrap_err().to_string();
     assert!(
-        err.contains("no /joint_states messages") && err.contains("--topic"),
+        err.contains("no /joint_states messages")
+            && err.contains("topics with sensor_msgs/msg/JointState: /leg/joint_states")
+            && err.contains("--topic"),
         "{err}"
     );
-    // A bag stored in SQLite is named as such.
+    // The same messages in a bag stored in SQLite (ROS 2's older default), metadata.yaml with
+    // a flow-style list, read the same.
+    let db_bag = dir.path().join("run_sqlite");
+    std::fs::create_dir(&db_bag).unwrap();
+    let db = db_bag.join("run_sqlite_0.db3");
+    for file in ["run_2026_0.mcap", "run_2026_1.mcap"] {
+        mcap_into_sqlite(&bag.join(file), &db);
+    }
     std::fs::write(
-        bag.join("metadata.yaml"),
-        "rosbag2_bagfile_information:\n  storage_identifier: sqlite3\n  relative_file_paths:\n  - run_2026_0.db3\n",
+        db_bag.join("metadata.yaml"),
+        "rosbag2_bagfile_information:\n  version: 5\n  storage_identifier: sqlite3\n  relative_file_paths: [run_sqlite_0.db3]\n",
     )
     .unwrap();
-    let err = io::load_trajectory_with(&bag, &model, &opts)
+    let from_db = read(&db_bag, &model, &opts).0;
+    assert_eq!(from_db.q, measured.q);
+    assert_eq!(from_db.tau, measured.tau);
+    // A storage physid cannot read is named.
+    std::fs::write(
+        db_bag.join("metadata.yaml"),
+        "rosbag2_bagfile_information:\n  storage_identifier: parquet\n  relative_file_paths: [run_sqlite_0.db3]\n",
+    )
+    .unwrap();
+    let err = io::load_trajectory_with(&db_bag, &model, &opts)
         .unwrap_err()
         .to_string();
     assert!(
-        err.contains("metadata.yaml") && err.contains("sqlite3"),
+        err.contains("metadata.yaml") && err.contains("'parquet'"),
         "{err}"
     );
+}
+
+/// Appends the messages of an MCAP file to a rosbag2 SQLite database (created with the tables
+/// rosbag2 writes when absent).
+fn mcap_into_sqlite(mcap_file: &Path, db: &Path) {
+    let conn = rusqlite::Connection::open(db).unwrap();
+    conn.execute_batch(
+        "CREATE TABLE IF NOT EXISTS topics(id INTEGER PRIMARY KEY, name TEXT NOT NULL, type TEXT NOT NULL, serialization_format TEXT NOT NULL, offered_qos_profiles TEXT NOT NULL);
+         CREATE TABLE IF NOT EXISTS messages(id INTEGER PRIMARY KEY, topic_id INTEGER NOT NULL, timestamp INTEGER NOT NULL, data BLOB NOT NULL);",
+    )
+    .unwrap();
+    let bytes = std::fs::read(mcap_file).unwrap();
+    for m in mcap::MessageStream::new(&bytes).unwrap() {
+        let m = m.unwrap();
+        let kind = m.channel.schema.as_ref().unwrap().name.clone();
+        conn.execute(
+            "INSERT OR IGNORE INTO topics(id, name, type, serialization_format, offered_qos_profiles) VALUES (1, ?1, ?2, 'cdr', '')",
+            (&m.channel.topic, &kind),
+        )
+        .unwrap();
+        conn.execute(
+            "INSERT INTO messages(topic_id, timestamp, data) VALUES (1, ?1, ?2)",
+            (m.log_time as i64, &m.data[..]),
+        )
+        .unwrap();
+    }
 }
 
 #[test]
@@ -292,11 +346,11 @@ fn header_stamps_give_the_sampling_times_and_another_publisher_is_skipped() {
         stamp: io::mcap_log::Stamp::Header,
         ..Default::default()
     };
-    let by_header = io::load_trajectory_with(&p, &model, &header).unwrap();
-    assert_eq!(by_header.skipped_messages, measured.len());
+    let by_header = read(&p, &model, &header);
+    assert_eq!(by_header.2, measured.len());
     let t0 = measured.t[0];
     let worst = by_header
-        .trajectory
+        .0
         .t
         .iter()
         .zip(&measured.t)
@@ -304,7 +358,7 @@ fn header_stamps_give_the_sampling_times_and_another_publisher_is_skipped() {
         .fold(0.0, f64::max);
     assert!(worst < 1e-9, "header times off by {worst:e} s");
     // The log times carry the recorder's jitter (up to 0.9 ms).
-    let by_log = io::load_trajectory(&p, &model).unwrap().trajectory;
+    let by_log = read(&p, &model, &Default::default()).0;
     let off = by_log
         .t
         .iter()
@@ -371,12 +425,12 @@ fn csv_columns_named_by_joint_in_any_order_read_as_numbered_ones() {
     w.flush().unwrap();
     let joints: Vec<String> = model.bodies.iter().map(|b| b.joint_name.clone()).collect();
     assert_eq!(joints, names);
-    let a = io::load_trajectory(&numbered, &model).unwrap().trajectory;
-    let b = io::load_trajectory(&dir.path().join("named.csv"), &model).unwrap();
-    assert_eq!(b.ignored_joints, vec!["gripper".to_string()]);
-    assert_eq!(a.q, b.trajectory.q);
-    assert_eq!(a.qd, b.trajectory.qd);
-    assert_eq!(a.tau, b.trajectory.tau);
+    let a = read(&numbered, &model, &Default::default()).0;
+    let b = read(&dir.path().join("named.csv"), &model, &Default::default());
+    assert_eq!(b.1, vec!["gripper".to_string()]);
+    assert_eq!(a.q, b.0.q);
+    assert_eq!(a.qd, b.0.qd);
+    assert_eq!(a.tau, b.0.tau);
 }
 
 #[test]
@@ -391,8 +445,8 @@ fn a_joint_order_that_changes_from_message_to_message_reads_the_same() {
         ..Bag::default()
     };
     write_bag_with(&rotating, &measured, &order, 1_700_000_000_000_000_000, &b);
-    let a = io::load_trajectory(&steady, &model).unwrap().trajectory;
-    let r = io::load_trajectory(&rotating, &model).unwrap().trajectory;
+    let a = read(&steady, &model, &Default::default()).0;
+    let r = read(&rotating, &model, &Default::default()).0;
     assert_eq!(a.q, r.q);
     assert_eq!(a.qd, r.qd);
     assert_eq!(a.tau, r.tau);

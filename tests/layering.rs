@@ -6,13 +6,14 @@
 use std::path::{Path, PathBuf};
 
 /// The floor of each top-level module of the library (the binary's `cli` is floor 7).
-const FLOORS: [(&str, u8); 14] = [
+const FLOORS: [(&str, u8); 15] = [
     ("spatial", 1),
     ("options", 1),
     ("signal", 1),
     ("linalg", 1),
     ("trajectory", 1),
     ("model", 2),
+    ("prepare", 2),
     ("io", 3),
     ("dynamics", 3),
     ("sim", 4),

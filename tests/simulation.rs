@@ -176,7 +176,7 @@ fn mcap_and_csv_round_trip_the_samples() {
     mcap_log::write(&p, &rec, &meta).unwrap();
     let log = mcap_log::read(&p).unwrap();
     assert_eq!(log.measured.q, rec.measured.q);
-    assert_eq!(log.measured.qd, rec.measured.qd);
+    assert_eq!(log.measured.qd.as_ref(), Some(&rec.measured.qd));
     assert_eq!(log.measured.tau, rec.measured.tau);
     assert_eq!(log.measured.t, rec.measured.t);
     assert_eq!(log.processed.as_ref().unwrap(), &rec.processed);
@@ -185,7 +185,7 @@ fn mcap_and_csv_round_trip_the_samples() {
     let values: Vec<f64> =
         serde_json::from_str(&log.metadata["ground_truth_parameters"]["values"]).unwrap();
     assert_eq!(values, theta.as_slice());
-    assert_eq!(log.identification_input(), &rec.processed);
+    assert_eq!(log.identification_input(), rec.processed.clone().into());
     // CSV: the processed samples, exactly.
     let c = dir.path().join("log.csv");
     samples::write_csv(&c, &rec.processed).unwrap();

@@ -27,9 +27,6 @@ pub struct Args {
     /// Fraction held out for validation when no --validate is given.
     #[arg(long, default_value_t = 0.3, allow_negative_numbers = true)]
     holdout: f64,
-    /// Low-pass cutoff (Hz) the data were processed with (for the compliance terms).
-    #[arg(long, default_value_t = 20.0, allow_negative_numbers = true)]
-    cutoff: f64,
     /// Print the diagnosis as JSON.
     #[arg(long)]
     json: bool,
@@ -49,9 +46,8 @@ pub struct Args {
 
 /// `physid diagnose`.
 pub fn run(a: Args) -> anyhow::Result<()> {
-    let opts = diagnose::Options {
+    let mut opts = diagnose::Options {
         constraints: a.constraints,
-        processing_cutoff: a.cutoff,
         description_uncertainty: a.description_uncertainty,
         every_body: a.payload_any_body,
         ..Default::default()
@@ -61,12 +57,18 @@ pub fn run(a: Args) -> anyhow::Result<()> {
     let load = |files: &[PathBuf]| -> anyhow::Result<Vec<_>> {
         files
             .iter()
-            .map(|f| super::identify_cmd::load_data(f, &model, &a.read.options()))
+            .map(|f| super::identify_cmd::load_data(f, &model, &a.read))
             .collect()
     };
-    let train_runs = load(&a.data)?;
+    let (train, validate) = (load(&a.data)?, load(&a.validate)?);
+    // The effect columns are processed like the data: at the pipeline's cutoff.
+    opts.processing_cutoff = train[0].report.cutoff;
+    let runs = |d: &[physid::io::LoadedData]| -> Vec<_> {
+        d.iter().flat_map(|l| l.trajectories()).collect()
+    };
+    let train_runs = runs(&train);
     warn_short(&train_runs);
-    let d = diagnose::diagnose_runs(&model, train_runs, load(&a.validate)?, a.holdout, &opts)?;
+    let d = diagnose::diagnose_runs(&model, train_runs, runs(&validate), a.holdout, &opts)?;
     if let Some(dir) = &a.report {
         diagnose::report::write(dir, &d)
             .with_context(|| format!("writing the report to {}", dir.display()))?;

@@ -35,7 +35,8 @@ pub fn parse_range(s: &str, len: usize, what: &str) -> anyhow::Result<Range<usiz
     Ok(a..b)
 }
 
-/// How data files are read: `--topic` and `--stamp` for MCAP files and rosbag2 directories.
+/// How data files are read and prepared: `--topic` and `--stamp` for MCAP files and rosbag2
+/// directories; the pipeline's cutoff and locked joints for all.
 #[derive(clap::Args, Debug, Clone)]
 pub struct ReadArgs {
     /// The `sensor_msgs/msg/JointState` topic of an MCAP file or rosbag2 directory (default:
@@ -46,25 +47,73 @@ pub struct ReadArgs {
     /// message's header.stamp, when the driver sampled the joints).
     #[arg(long, default_value = "log")]
     stamp: physid::io::mcap_log::Stamp,
+    /// Low-pass cutoff (Hz) of the signals derived from the log (q̈, and q̇ when not logged):
+    /// zero-phase 2nd-order Butterworth. Default: 20 Hz, at most a tenth of the sample rate.
+    #[arg(long, allow_negative_numbers = true)]
+    cutoff: Option<f64>,
+    /// Joints to hold at their logged position (q̇ = q̈ = 0; their torque is not fitted), e.g.
+    /// a gripper that never moves; comma-separated names.
+    #[arg(long, value_delimiter = ',')]
+    lock: Vec<String>,
+    /// Fit only these joints' torques; every other joint is locked (comma-separated names).
+    #[arg(long, value_delimiter = ',', conflicts_with = "lock")]
+    only: Vec<String>,
 }
 
 impl ReadArgs {
-    /// The library's reading options.
-    pub fn options(&self) -> physid::io::DataOptions {
-        physid::io::DataOptions {
+    /// The library's reading options for `model` (`--only` becomes the other joints locked).
+    pub fn options(&self, model: &Model) -> anyhow::Result<physid::io::DataOptions> {
+        let joints: Vec<String> = model.bodies.iter().map(|b| b.joint_name.clone()).collect();
+        for j in self.lock.iter().chain(&self.only) {
+            if !joints.contains(j) {
+                bail!(
+                    "--{}: the robot has no joint '{j}' (its joints: {})",
+                    if self.only.is_empty() { "lock" } else { "only" },
+                    joints.join(", ")
+                );
+            }
+        }
+        let lock = if self.only.is_empty() {
+            self.lock.clone()
+        } else {
+            joints
+                .into_iter()
+                .filter(|j| !self.only.contains(j))
+                .collect()
+        };
+        if let Some(c) = self.cutoff.filter(|c| !(c.is_finite() && *c > 0.0)) {
+            bail!("--cutoff must be a positive frequency in Hz, got {c}");
+        }
+        Ok(physid::io::DataOptions {
             topic: self.topic.clone(),
             stamp: self.stamp,
-        }
+            prepare: physid::prepare::Options {
+                cutoff: self.cutoff,
+                lock,
+            },
+        })
+    }
+    /// Whether any reading option applies only to bags (for a warning on other files).
+    fn bag_only(&self) -> bool {
+        self.topic.is_some() || self.stamp != physid::io::mcap_log::Stamp::Log
     }
 }
 
-/// Loads identification data (see [`physid::io::load_trajectory_with`]), printing notes.
+/// Loads identification data (see [`physid::io::load_trajectory_with`]), printing what the
+/// pipeline did and warnings.
 pub fn load_data(
     path: &Path,
     model: &Model,
-    opts: &physid::io::DataOptions,
-) -> anyhow::Result<Trajectory> {
-    let loaded = physid::io::load_trajectory_with(path, model, opts)?;
+    read: &ReadArgs,
+) -> anyhow::Result<physid::io::LoadedData> {
+    let is_bag = path.is_dir() || path.extension().and_then(|e| e.to_str()) == Some("mcap");
+    if read.bag_only() && !is_bag {
+        eprintln!(
+            "warning: {}: --topic and --stamp apply to MCAP files and rosbag2 directories only",
+            path.display()
+        );
+    }
+    let loaded = physid::io::load_trajectory_with(path, model, &read.options(model)?)?;
     if !loaded.ignored_joints.is_empty() {
         eprintln!(
             "note: {} has joints the robot does not have, left out: {}",
@@ -79,42 +128,128 @@ pub fn load_data(
             loaded.skipped_messages
         );
     }
-    if loaded.derived_qdd {
+    for line in data_notes(&loaded.report) {
         eprintln!(
-            "note: {} has no ddq columns; q̈ = zero-phase {} Hz Butterworth of the central difference of q̇",
-            path.display(),
-            physid::signal::DERIVED_QDD_CUTOFF
+            "{}: {}: {line}",
+            if line.starts_with("joint") {
+                "warning"
+            } else {
+                "note"
+            },
+            path.display()
         );
     }
-    Ok(loaded.trajectory)
+    Ok(loaded)
+}
+
+/// What the pipeline did to one file, one line per kind of change (nothing for clean data
+/// with accelerations).
+pub fn data_notes(r: &physid::prepare::Report) -> Vec<String> {
+    use physid::prepare::TimeBase;
+    let mut out = vec![];
+    if !r.gaps.is_empty() {
+        let gaps: Vec<String> = r
+            .gaps
+            .iter()
+            .take(5)
+            .map(|g| format!("{:+.3} s before sample {}", g.seconds, g.sample))
+            .collect();
+        out.push(format!(
+            "split into {} runs at {} time jump{} ({}{}): no signal is differentiated across them",
+            r.runs + usize::from(r.dropped_short > 0),
+            r.gaps.len(),
+            if r.gaps.len() == 1 { "" } else { "s" },
+            gaps.join(", "),
+            if r.gaps.len() > 5 { ", …" } else { "" }
+        ));
+    }
+    if r.missing_bridged > 0 {
+        out.push(format!(
+            "{} missing samples bridged at {} places (the derivatives interpolate across them)",
+            r.missing_bridged, r.dropouts_bridged
+        ));
+    }
+    if r.duplicates > 0 {
+        out.push(format!("{} duplicated samples dropped", r.duplicates));
+    }
+    match r.time_base {
+        TimeBase::Uniform => {}
+        TimeBase::Stamps => out.push(format!("time stamps scatter by {:.1} % of the period (RMS); the samples agree with their stamps, which are used", 100.0 * r.jitter)),
+        TimeBase::ClockSlots => out.push(format!("time stamps scatter by {:.1} % of the period (RMS); the samples agree with a uniform clock, so each is placed at its clock slot", 100.0 * r.jitter)),
+    }
+    if r.derived_qd || r.derived_qdd {
+        let what = match (r.derived_qd, r.derived_qdd) {
+            (true, true) => "no velocities or accelerations: q̇ and q̈ derived",
+            (true, false) => "no velocities: q̇ derived",
+            _ => "no accelerations: q̈ derived",
+        };
+        out.push(format!(
+            "{what} (central difference, zero-phase {} Hz Butterworth); {} samples trimmed at the ends of the runs ({} at each end, the filter's settling){}",
+            r.cutoff,
+            r.trimmed,
+            r.settle_samples,
+            if r.dropped_short > 0 { format!(", {} samples of pieces too short to keep", r.dropped_short) } else { String::new() }
+        ));
+    }
+    if r.samples_kept < r.samples_read {
+        out.push(format!(
+            "{} of {} samples used",
+            r.samples_kept, r.samples_read
+        ));
+    }
+    for j in &r.unmeasured {
+        out.push(format!("joint '{j}': its torque is zero in every sample (not measured): locked, its torque is not fitted"));
+    }
+    let asked: Vec<&String> = r
+        .locked
+        .iter()
+        .filter(|j| !r.unmeasured.contains(j))
+        .collect();
+    if !asked.is_empty() {
+        out.push(format!(
+            "locked (held at their logged position, torque not fitted): {}",
+            asked
+                .iter()
+                .map(|s| s.as_str())
+                .collect::<Vec<_>>()
+                .join(", ")
+        ));
+    }
+    for j in r.still.iter().filter(|j| !r.locked.contains(j)) {
+        out.push(format!("joint '{j}' never moves: its friction cannot be identified from these data (lock it with --lock {j}, or record a motion that moves it)"));
+    }
+    out
 }
 
 /// CSV files above this size with `ddq` columns are streamed (memory independent of length)
 /// when no effect terms are asked for; smaller files are read once into memory.
 const STREAM_ABOVE_BYTES: u64 = 64 << 20;
 
-/// One run of identification data: in memory, or a large CSV with q̈ streamed from disk.
+/// One file of identification data: its runs in memory, or a large CSV with q̇ and q̈ streamed
+/// from disk.
 pub enum Data {
-    /// Loaded samples.
-    Memory(Trajectory),
+    /// Loaded and prepared samples.
+    Memory(physid::io::LoadedData),
     /// A streamable CSV, the robot's joint names and its sample count.
     Csv(PathBuf, Vec<String>, usize),
 }
 
 impl Data {
-    /// Opens `path`: large CSV files with `ddq` columns stream (unless `in_memory`),
-    /// everything else is loaded.
+    /// Opens `path`: large CSV files with `dq` and `ddq` columns stream (unless `in_memory`),
+    /// everything else is loaded and prepared.
     pub fn open(
         path: &Path,
         model: &Model,
-        read: &physid::io::DataOptions,
+        read: &ReadArgs,
         in_memory: bool,
     ) -> anyhow::Result<Data> {
         let large = std::fs::metadata(path).is_ok_and(|m| m.len() > STREAM_ABOVE_BYTES);
         if !in_memory
             && large
+            && read.lock.is_empty()
+            && read.only.is_empty()
             && path.extension().and_then(|e| e.to_str()) == Some("csv")
-            && samples::csv_has_ddq(path)?
+            && samples::csv_streamable(path)?
         {
             let names: Vec<String> = model.bodies.iter().map(|b| b.joint_name.clone()).collect();
             let len = samples::stream_csv(path, &names, 0..0, &mut |_, _| {})?;
@@ -122,21 +257,70 @@ impl Data {
         }
         Ok(Data::Memory(load_data(path, model, read)?))
     }
+    /// Samples in the file as read.
     fn len(&self) -> usize {
         match self {
-            Data::Memory(t) => t.len(),
+            Data::Memory(d) => d.report.samples_read,
             Data::Csv(_, _, n) => *n,
         }
     }
-    fn trajectory(&self) -> Option<&Trajectory> {
+    /// The pipeline's report (none for a streamed file).
+    fn report(&self) -> Option<&physid::prepare::Report> {
         match self {
-            Data::Memory(t) => Some(t),
+            Data::Memory(d) => Some(&d.report),
             Data::Csv(..) => None,
         }
     }
-    fn normal_equations(&self, m: &Model, r: Range<usize>) -> anyhow::Result<NormalEquations> {
+    /// Joints locked by the pipeline (their rows are not fitted).
+    fn locked(&self, m: &Model) -> Vec<usize> {
+        let names = self.report().map_or(&[][..], |r| &r.locked[..]);
+        m.bodies
+            .iter()
+            .enumerate()
+            .filter(|(_, b)| names.contains(&b.joint_name))
+            .map(|(j, _)| j)
+            .collect()
+    }
+    /// The runs' samples whose index in the file lies in `r` (in memory).
+    fn pieces(&self, r: &Range<usize>) -> Vec<Trajectory> {
+        match self {
+            Data::Memory(d) => d
+                .runs
+                .iter()
+                .filter_map(|run| run.within(r))
+                .map(|run| run.trajectory)
+                .collect(),
+            Data::Csv(..) => vec![],
+        }
+    }
+    /// Samples of `r` that the fit and the scores use.
+    fn used(&self, r: &Range<usize>) -> usize {
+        match self {
+            Data::Memory(_) => self.pieces(r).iter().map(Trajectory::len).sum(),
+            Data::Csv(..) => r.len(),
+        }
+    }
+    fn normal_equations(
+        &self,
+        m: &Model,
+        r: Range<usize>,
+        excluded: &[usize],
+    ) -> anyhow::Result<NormalEquations> {
         Ok(match self {
-            Data::Memory(t) => NormalEquations::from_trajectory(m, t, r),
+            Data::Memory(_) => {
+                let mut ne = NormalEquations::new(m.dof(), m.layout().len)
+                    .excluding(excluded)
+                    .finish();
+                for t in self.pieces(&r) {
+                    ne = ne.merged(&NormalEquations::from_trajectory_excluding(
+                        m,
+                        &t,
+                        0..t.len(),
+                        excluded,
+                    ));
+                }
+                ne
+            }
             Data::Csv(p, names, _) => {
                 NormalEquations::from_stream(m, |sink| samples::stream_csv(p, names, r, sink))?.0
             }
@@ -148,13 +332,22 @@ impl Data {
         theta: &nalgebra::DVector<f64>,
         r: Range<usize>,
     ) -> anyhow::Result<SquaredErrors> {
-        let (per, _) = match self {
-            Data::Memory(t) => analysis::rms_error(m, theta, t, r.clone()),
-            Data::Csv(p, names, _) => analysis::rms_error_stream(m, theta, |sink| {
-                samples::stream_csv(p, names, r.clone(), sink)
-            })?,
-        };
-        Ok(SquaredErrors::from_rms(&per, r.len()))
+        Ok(match self {
+            Data::Memory(_) => {
+                let mut acc = SquaredErrors::new(m.dof());
+                for t in self.pieces(&r) {
+                    let (per, _) = analysis::rms_error(m, theta, &t, 0..t.len());
+                    acc = acc.add(SquaredErrors::from_rms(&per, t.len()));
+                }
+                acc
+            }
+            Data::Csv(p, names, _) => {
+                let (per, _) = analysis::rms_error_stream(m, theta, |sink| {
+                    samples::stream_csv(p, names, r.clone(), sink)
+                })?;
+                SquaredErrors::from_rms(&per, r.len())
+            }
+        })
     }
 }
 
@@ -186,11 +379,18 @@ impl SquaredErrors {
         self.samples += other.samples;
         self
     }
-    /// Per-joint and overall RMS (N m).
-    fn rms(&self) -> (Vec<f64>, f64) {
+    /// Per-joint RMS (N m; `None` for the `locked` joints, whose torque is not fitted) and the
+    /// RMS over the other joints.
+    fn rms(&self, locked: &[usize]) -> (Vec<Option<f64>>, f64) {
         let k = self.samples.max(1) as f64;
-        let per = self.sum.iter().map(|s| (s / k).sqrt()).collect();
-        let all = (self.sum.iter().sum::<f64>() / (k * self.sum.len().max(1) as f64)).sqrt();
+        let per = (0..self.sum.len())
+            .map(|j| (!locked.contains(&j)).then(|| (self.sum[j] / k).sqrt()))
+            .collect();
+        let fitted: Vec<f64> = (0..self.sum.len())
+            .filter(|j| !locked.contains(j))
+            .map(|j| self.sum[j])
+            .collect();
+        let all = (fitted.iter().sum::<f64>() / (k * fitted.len().max(1) as f64)).sqrt();
         (per, all)
     }
 }
@@ -350,6 +550,79 @@ fn confirmed_effects(path: &Path) -> anyhow::Result<Vec<Variant>> {
 
 /// Runs the identification and prints the report.
 pub fn run(a: Args) -> anyhow::Result<()> {
+    check_paths(&a)?;
+    let model = a.robot.load()?;
+    let m = &model;
+    let (set, set_note) = constraint_set(a.constraints, m);
+    let opts = options(&a, set)?;
+    let terms = terms(&a)?;
+    if a.export_problem.is_some() && !terms.is_empty() {
+        bail!("--export-problem writes the model's own problem: leave out the extra --friction terms and --effects");
+    }
+    let in_memory = !terms.is_empty();
+    let open = |p: &PathBuf| Data::open(p, m, &a.read, in_memory);
+    let data: Vec<Data> = a.data.iter().map(open).collect::<anyhow::Result<_>>()?;
+    let train: Vec<Range<usize>> = match a.train.as_deref() {
+        Some(s) => vec![parse_range(s, data[0].len(), "--train")?],
+        None => data.iter().map(|d| 0..d.len()).collect(),
+    };
+    let vdata: Vec<Data> = a
+        .validate_data
+        .iter()
+        .map(open)
+        .collect::<anyhow::Result<_>>()?;
+    let validation: Vec<(&Data, Range<usize>)> = match a.validate.as_deref() {
+        Some(s) => vec![(&data[0], parse_range(s, data[0].len(), "--validate")?)],
+        None => vdata.iter().map(|d| (d, 0..d.len())).collect(),
+    };
+    let locked = locked_joints(m, data.iter().chain(&vdata));
+    let samples: usize = data.iter().zip(&train).map(|(d, r)| d.used(r)).sum();
+    let p = m.layout().len + physid::diagnose::calibrate::columns(&terms, m.dof());
+    let equations = samples * (m.dof() - locked.len());
+    if equations < p && !a.allow_few_samples {
+        bail!(
+            "{}: {samples} samples give {equations} equations for {p} parameters: the fit is decided by the prior; give more samples, or --allow-few-samples if that is what you want",
+            a.data[0].display(),
+        );
+    }
+    let runs: Vec<(&Data, Range<usize>)> = data.iter().zip(train.iter().cloned()).collect();
+    let start = std::time::Instant::now();
+    let fit = if terms.is_empty() {
+        fit_plain(m, &runs, &opts, &locked)?
+    } else {
+        fit_with_terms(m, &runs, &opts, terms, &locked)?
+    };
+    let total = start.elapsed().as_secs_f64();
+    let files = Files {
+        train: &data,
+        validate: &vdata,
+    };
+    let report = score(
+        &a,
+        m,
+        fit,
+        (set, set_note),
+        &runs,
+        &validation,
+        files,
+        &locked,
+        total,
+    )?;
+    write_outputs(&a, m, &report)?;
+    if a.json {
+        print_json(&a, m, &report)?;
+    } else {
+        print_text(&a, m, &report);
+    }
+    if a.require_consistent {
+        require_consistent(&report.r)?;
+    }
+    Ok(())
+}
+
+/// Outputs never onto inputs or each other; `--train`/`--validate` with one data file and
+/// without `--validate-data`.
+fn check_paths(a: &Args) -> anyhow::Result<()> {
     let robot_file = Path::new(&a.robot.robot);
     let mut inputs: Vec<&Path> = a.data.iter().map(PathBuf::as_path).collect();
     inputs.push(robot_file);
@@ -370,67 +643,58 @@ pub fn run(a: Args) -> anyhow::Result<()> {
     if a.validate.is_some() && !a.validate_data.is_empty() {
         bail!("give --validate or --validate-data, not both");
     }
-    let model = a.robot.load()?;
-    let m = &model;
-    let (set, set_note) = constraint_set(a.constraints, m);
-    let opts = options(&a, set)?;
-    let terms = terms(&a)?;
-    if a.export_problem.is_some() && !terms.is_empty() {
-        bail!("--export-problem writes the model's own problem: leave out the extra --friction terms and --effects");
-    }
-    let read = a.read.options();
-    let in_memory = !terms.is_empty();
-    let open = |p: &PathBuf| Data::open(p, m, &read, in_memory);
-    let data: Vec<Data> = a.data.iter().map(open).collect::<anyhow::Result<_>>()?;
-    let train: Vec<Range<usize>> = match a.train.as_deref() {
-        Some(s) => vec![parse_range(s, data[0].len(), "--train")?],
-        None => data.iter().map(|d| 0..d.len()).collect(),
-    };
-    let vdata: Vec<Data> = a
-        .validate_data
-        .iter()
-        .map(open)
-        .collect::<anyhow::Result<_>>()?;
-    let validation: Vec<(&Data, Range<usize>)> = match a.validate.as_deref() {
-        Some(s) => vec![(&data[0], parse_range(s, data[0].len(), "--validate")?)],
-        None => vdata.iter().map(|d| (d, 0..d.len())).collect(),
-    };
-    let samples: usize = train.iter().map(Range::len).sum();
-    let p = m.layout().len + physid::diagnose::calibrate::columns(&terms, m.dof());
-    if samples * m.dof() < p && !a.allow_few_samples {
-        bail!(
-            "{}: {samples} samples give {} equations for {p} parameters: the fit is decided by the prior; give more samples, or --allow-few-samples if that is what you want",
-            a.data[0].display(),
-            samples * m.dof()
-        );
-    }
-    let runs: Vec<(&Data, Range<usize>)> = data.iter().zip(train.iter().cloned()).collect();
-    let start = std::time::Instant::now();
-    let fit = if terms.is_empty() {
-        fit_plain(m, &runs, &opts)?
-    } else {
-        fit_with_terms(m, &runs, &opts, terms)?
-    };
-    let total = start.elapsed().as_secs_f64();
-    let (train_rms, train_all) = fit.errors(m, &runs)?;
+    Ok(())
+}
+
+/// The data files read: training and held-out.
+struct Files<'d> {
+    train: &'d [Data],
+    validate: &'d [Data],
+}
+
+/// The fit scored on the training and validation samples, with its identifiability and what
+/// the data pipeline did.
+#[allow(clippy::too_many_arguments)]
+fn score(
+    a: &Args,
+    m: &Model,
+    fit: Fit,
+    (set, set_note): (ConstraintSet, Option<String>),
+    runs: &[(&Data, Range<usize>)],
+    validation: &[(&Data, Range<usize>)],
+    files: Files,
+    locked: &[usize],
+    total: f64,
+) -> anyhow::Result<Report> {
+    let (train_rms, train_all) = fit.errors(m, runs, locked)?;
     let val = if validation.is_empty() {
         None
     } else {
-        Some(fit.errors(m, &validation)?)
+        Some(fit.errors(m, validation, locked)?)
     };
     let idf = analysis::identifiability(m, &fit.ne, &fit.model_theta(m));
+    let train: Vec<Range<usize>> = runs.iter().map(|(_, r)| r.clone()).collect();
     let vrange = validation
         .first()
         .map(|(_, r)| r)
         .filter(|_| a.data.len() == 1);
     warn_weak_data(&train[0], vrange, a.validate.is_some(), &idf);
-    let dt = data[0]
-        .trajectory()
-        .and_then(|t| t.sample_period())
-        .unwrap_or(1e-3);
+    let dt = files.train[0].report().map_or(1e-3, |r| r.period);
     let snippet = (!fit.terms.is_empty())
         .then(|| physid::diagnose::calibrate::scenario_snippet(m, &fit.terms, dt));
-    let report = Report {
+    let data = a
+        .data
+        .iter()
+        .zip(files.train)
+        .chain(a.validate_data.iter().zip(files.validate))
+        .filter_map(|(f, d)| {
+            d.report().map(|r| DataJson {
+                file: f.clone(),
+                pipeline: r.clone(),
+            })
+        })
+        .collect();
+    Ok(Report {
         idf,
         truth_errors: (a.data.len() == 1)
             .then(|| truth_errors(&a.data[0], m, &fit.r.theta))
@@ -446,17 +710,17 @@ pub fn run(a: Args) -> anyhow::Result<()> {
         vranges: validation.iter().map(|(_, r)| r.clone()).collect(),
         val,
         total,
-    };
-    write_outputs(&a, m, &fit, &opts, &report)?;
-    if a.json {
-        print_json(&a, m, &report)?;
-    } else {
-        print_text(&a, m, &report);
-    }
-    if a.require_consistent {
-        require_consistent(&report.r)?;
-    }
-    Ok(())
+        used: (
+            runs.iter().map(|(d, r)| d.used(r)).collect(),
+            validation.iter().map(|(d, r)| d.used(r)).collect(),
+        ),
+        data,
+        locked: locked
+            .iter()
+            .map(|&j| m.bodies[j].joint_name.clone())
+            .collect(),
+        fit,
+    })
 }
 
 /// `--require-consistent`: every body physically consistent (`J(π) ≻ 0`), or exit code 1
@@ -487,13 +751,7 @@ fn require_consistent(r: &ident::Identified) -> anyhow::Result<()> {
 }
 
 /// `--out-urdf`, `--out-effects` and `--export-problem`.
-fn write_outputs(
-    a: &Args,
-    m: &Model,
-    fit: &Fit,
-    opts: &Options,
-    rep: &Report,
-) -> anyhow::Result<()> {
+fn write_outputs(a: &Args, m: &Model, rep: &Report) -> anyhow::Result<()> {
     if let Some(p) = &a.out_urdf {
         write_urdf(p, &a.robot.robot, rep, m)?;
     }
@@ -506,7 +764,8 @@ fn write_outputs(
         _ => {}
     }
     if let Some(p) = &a.export_problem {
-        export_problem(p, a, rep.set, m, &fit.ne, opts, &rep.r)?;
+        let opts = options(a, rep.set)?;
+        export_problem(p, a, rep.set, m, &rep.fit.ne, &opts, &rep.r)?;
     }
     Ok(())
 }
@@ -526,37 +785,64 @@ impl Fit {
     fn model_theta(&self, m: &Model) -> nalgebra::DVector<f64> {
         self.r.theta.rows(0, m.layout().len).into_owned()
     }
-    /// Per-joint and overall RMS over runs (N m), every sample scored.
-    fn errors(&self, m: &Model, runs: &[(&Data, Range<usize>)]) -> anyhow::Result<(Vec<f64>, f64)> {
+    /// Per-joint (`None` for locked joints) and overall RMS over runs (N m), every sample the
+    /// pipeline kept scored.
+    fn errors(
+        &self,
+        m: &Model,
+        runs: &[(&Data, Range<usize>)],
+        locked: &[usize],
+    ) -> anyhow::Result<(Vec<Option<f64>>, f64)> {
         if let Some((cal, copts)) = &self.calibration {
-            let rs = in_memory_runs(runs);
-            return Ok(physid::diagnose::calibrate::rms_error(m, cal, &rs, copts));
+            let pieces = in_memory(runs);
+            let (per, _) = physid::diagnose::calibrate::rms_error(m, cal, &as_runs(&pieces), copts);
+            let count = pieces.iter().map(Trajectory::len).sum();
+            return Ok(SquaredErrors::from_rms(&per, count).rms(locked));
         }
         let mut acc = SquaredErrors::new(m.dof());
         for (d, r) in runs {
             acc = acc.add(d.squared_errors(m, &self.r.theta, r.clone())?);
         }
-        Ok(acc.rms())
+        Ok(acc.rms(locked))
     }
 }
 
-/// The runs as the library's (their data loaded in memory).
-fn in_memory_runs<'a>(runs: &[(&'a Data, Range<usize>)]) -> Vec<Run<'a>> {
-    runs.iter()
-        .map(|(d, r)| Run {
-            trajectory: d
-                .trajectory()
-                .expect("data with effect terms are loaded in memory"),
-            range: r.clone(),
+/// The joints any data file locks (union, in joint order).
+fn locked_joints<'a>(m: &Model, data: impl Iterator<Item = &'a Data>) -> Vec<usize> {
+    let mut out: Vec<usize> = data.flat_map(|d| d.locked(m)).collect();
+    out.sort_unstable();
+    out.dedup();
+    out
+}
+
+/// The runs' samples in memory (each file's runs within its range).
+fn in_memory(runs: &[(&Data, Range<usize>)]) -> Vec<Trajectory> {
+    runs.iter().flat_map(|(d, r)| d.pieces(r)).collect()
+}
+
+/// Whole trajectories as the calibration's runs.
+fn as_runs(pieces: &[Trajectory]) -> Vec<Run<'_>> {
+    pieces
+        .iter()
+        .map(|t| Run {
+            trajectory: t,
+            range: 0..t.len(),
         })
         .collect()
 }
 
 /// The model's own identification, the normal equations summed over the runs.
-fn fit_plain(m: &Model, runs: &[(&Data, Range<usize>)], opts: &Options) -> anyhow::Result<Fit> {
-    let mut ne = NormalEquations::new(m.dof(), m.layout().len).finish();
+fn fit_plain(
+    m: &Model,
+    runs: &[(&Data, Range<usize>)],
+    opts: &Options,
+    locked: &[usize],
+) -> anyhow::Result<Fit> {
+    let mut ne = NormalEquations::new(m.dof(), m.layout().len)
+        .excluding(locked)
+        .finish();
     for (d, r) in runs {
-        ne = ne.merged(&d.normal_equations(m, r.clone())?);
+        ne = ne.merged(&d.normal_equations(m, r.clone(), locked)?);
     }
     let r = ident::identify(m, &ne, &m.parameters(), opts)?;
     Ok(Fit {
@@ -573,14 +859,20 @@ fn fit_with_terms(
     runs: &[(&Data, Range<usize>)],
     opts: &Options,
     terms: Vec<Variant>,
+    locked: &[usize],
 ) -> anyhow::Result<Fit> {
-    let rs = in_memory_runs(runs);
+    let pieces = in_memory(runs);
+    let cutoff = runs
+        .iter()
+        .find_map(|(d, _)| d.report())
+        .map_or(physid::prepare::default_cutoff(1e3), |r| r.cutoff);
     let copts = CalOptions {
         ident: opts.clone(),
         terms,
-        processing_cutoff: 20.0,
+        processing_cutoff: cutoff,
+        excluded: locked.to_vec(),
     };
-    let cal = physid::diagnose::calibrate::calibrate(m, &rs, &copts)?;
+    let cal = physid::diagnose::calibrate::calibrate(m, &as_runs(&pieces), &copts)?;
     Ok(Fit {
         r: cal.identified.clone(),
         ne: cal.rigid.clone(),
@@ -639,14 +931,32 @@ struct Report {
     set_note: Option<String>,
     /// Training samples per run.
     train: Vec<Range<usize>>,
-    train_rms: Vec<f64>,
+    train_rms: Vec<Option<f64>>,
     train_all: f64,
     /// Validation samples per validation run.
     vranges: Vec<Range<usize>>,
-    val: Option<(Vec<f64>, f64)>,
+    val: Option<(Vec<Option<f64>>, f64)>,
     idf: analysis::Identifiability,
     truth_errors: Option<Vec<TruthError>>,
     total: f64,
+    /// Samples fitted per training run and scored per validation run (after the pipeline).
+    used: (Vec<usize>, Vec<usize>),
+    /// What the pipeline did to each file read in memory.
+    data: Vec<DataJson>,
+    /// Joints whose torque is not fitted.
+    locked: Vec<String>,
+    /// The fit itself (normal equations, calibration), for the outputs.
+    fit: Fit,
+}
+
+/// One data file and what the pipeline did to it.
+#[derive(Clone, serde::Serialize, schemars::JsonSchema)]
+pub struct DataJson {
+    /// The file.
+    file: PathBuf,
+    /// Runs, gaps, bridged, trimmed and dropped samples, derived signals, locked and still
+    /// joints.
+    pipeline: physid::prepare::Report,
 }
 
 /// One body's errors against the ground truth.
@@ -664,11 +974,14 @@ pub struct TruthError {
     j_rel: f64,
 }
 
-/// A run and its sample range (`[start, end)`).
+/// A run and its sample range (`[start, end)`, indices of the file as read).
 #[derive(serde::Serialize, schemars::JsonSchema)]
 pub struct RunRange {
     file: PathBuf,
     range: [usize; 2],
+    /// Samples of the range that were fitted or scored (after the pipeline's trimming and
+    /// splitting).
+    samples_used: usize,
 }
 
 /// The training or validation part of `identify --json`.
@@ -677,8 +990,8 @@ pub struct Split {
     /// The first run's sample range.
     range: Option<[usize; 2]>,
     runs: Vec<RunRange>,
-    /// RMS of `Y θ − τ` per joint (N m).
-    rms: Vec<f64>,
+    /// RMS of `Y θ − τ` per joint (N m); null for a locked joint (its torque is not fitted).
+    rms: Vec<Option<f64>>,
     /// Over all joints (N m).
     rms_overall: f64,
 }
@@ -713,6 +1026,10 @@ pub struct IdentifyJson {
     parameter_names: Vec<String>,
     theta: Vec<f64>,
     truth_errors: Option<Vec<TruthError>>,
+    /// What the data pipeline did to each file read in memory.
+    data_pipeline: Vec<DataJson>,
+    /// Joints held at their logged position, whose torque is not fitted.
+    locked_joints: Vec<String>,
 }
 
 /// Per-body errors against the ground truth, when the data are a physid log that carries it.
@@ -788,13 +1105,15 @@ fn export_problem(
 /// The JSON report (docs/identify-json.md).
 fn print_json(a: &Args, m: &Model, rep: &Report) -> anyhow::Result<()> {
     let r = &rep.r;
-    let runs = |files: &[PathBuf], ranges: &[Range<usize>]| -> Vec<RunRange> {
+    let runs = |files: &[PathBuf], ranges: &[Range<usize>], used: &[usize]| -> Vec<RunRange> {
         files
             .iter()
             .zip(ranges)
-            .map(|(f, r)| RunRange {
+            .zip(used)
+            .map(|((f, r), &u)| RunRange {
                 file: f.clone(),
                 range: [r.start, r.end],
+                samples_used: u,
             })
             .collect()
     };
@@ -810,13 +1129,13 @@ fn print_json(a: &Args, m: &Model, rep: &Report) -> anyhow::Result<()> {
         constraints_default_because: rep.set_note.clone(),
         train: Split {
             range: Some([rep.train[0].start, rep.train[0].end]),
-            runs: runs(&a.data, &rep.train),
+            runs: runs(&a.data, &rep.train, &rep.used.0),
             rms: rep.train_rms.clone(),
             rms_overall: rep.train_all,
         },
         validation: rep.val.as_ref().map(|(rms, all)| Split {
             range: rep.vranges.first().map(|r| [r.start, r.end]),
-            runs: runs(vfiles, &rep.vranges),
+            runs: runs(vfiles, &rep.vranges, &rep.used.1),
             rms: rms.clone(),
             rms_overall: *all,
         }),
@@ -835,6 +1154,8 @@ fn print_json(a: &Args, m: &Model, rep: &Report) -> anyhow::Result<()> {
         parameter_names: theta_names(m, &rep.terms),
         theta: r.theta.as_slice().to_vec(),
         truth_errors: rep.truth_errors.clone(),
+        data_pipeline: rep.data.clone(),
+        locked_joints: rep.locked.clone(),
     };
     let v = physid::io::versioned("identify", &v);
     println!("{}", serde_json::to_string_pretty(&v)?);
@@ -900,15 +1221,15 @@ fn print_text(a: &Args, m: &Model, rep: &Report) {
         "\n{:<14} {:>12} {:>12} {:>12} {:>14}",
         "joint", "B [Nms/rad]", "Bc [Nm]", "train RMS", "validation RMS"
     );
+    let cell = |x: Option<f64>| x.map_or("locked".to_string(), |v| format!("{v:.4}"));
     for (j, b) in m.bodies.iter().enumerate() {
         println!(
-            "{:<14} {:>12.4} {:>12.4} {:>12.4} {:>14}",
+            "{:<14} {:>12.4} {:>12.4} {:>12} {:>14}",
             b.joint_name,
             r.viscous[j],
             r.coulomb[j],
-            train_rms[j],
-            val.as_ref()
-                .map_or("-".into(), |(v, _)| format!("{:.4}", v[j]))
+            cell(train_rms[j]),
+            val.as_ref().map_or("-".into(), |(v, _)| cell(v[j]))
         );
     }
     print_terms(&rep.terms, m);

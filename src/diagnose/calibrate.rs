@@ -35,6 +35,8 @@ pub struct Options {
     pub terms: Vec<Variant>,
     /// Low-pass cutoff (Hz) of the data's processing, for the compliance columns.
     pub processing_cutoff: f64,
+    /// Joints whose torque rows are not fitted (locked joints).
+    pub excluded: Vec<usize>,
 }
 
 impl Options {
@@ -122,12 +124,15 @@ pub fn calibrate(model: &Model, runs: &[Run], opts: &Options) -> Result<Calibrat
     }
     let prior = model.parameters();
     let rigid = runs.iter().fold(
-        NormalEquations::new(model.dof(), model.layout().len).finish(),
+        NormalEquations::new(model.dof(), model.layout().len)
+            .excluding(&opts.excluded)
+            .finish(),
         |acc, r| {
-            acc.merged(&NormalEquations::from_trajectory(
+            acc.merged(&NormalEquations::from_trajectory_excluding(
                 model,
                 r.trajectory,
                 r.range.clone(),
+                &opts.excluded,
             ))
         },
     );
@@ -158,7 +163,7 @@ pub fn calibrate(model: &Model, runs: &[Run], opts: &Options) -> Result<Calibrat
     })
 }
 
-/// The normal equations of `[Y | E]` over the runs (no rows masked).
+/// The normal equations of `[Y | E]` over the runs (the rows of `opts.excluded` left out).
 pub fn normal_equations(
     model: &Model,
     nominal: &DVector<f64>,
@@ -167,7 +172,7 @@ pub fn normal_equations(
 ) -> NormalEquations {
     let n = model.dof();
     let p = model.layout().len + columns(&opts.terms, n);
-    let mut ne = NormalEquations::new(n, p);
+    let mut ne = NormalEquations::new(n, p).excluding(&opts.excluded);
     for r in runs {
         let ctx = Context::new(model, nominal, r.trajectory, opts.processing_cutoff);
         ctx.for_each_row(

@@ -26,7 +26,7 @@ pub use fd::{forward_dynamics, FdError};
 pub use regressor::{inertia_bilinear, regressor};
 pub use rnea::{friction_torque, rnea, rnea_with_friction, sign};
 
-use crate::model::{Joint, Model, Rotor, RotorModel};
+use crate::model::{Model, Rotor, RotorModel};
 use crate::spatial::{Force, Motion, RigidInertia, Transform};
 use nalgebra::{DMatrix, DVector};
 
@@ -140,9 +140,9 @@ pub fn update_transforms(model: &Model, data: &mut Data, q: &[f64]) {
         data.x_up[i] = b.joint.transform(q[i]).compose(&b.x_tree);
         if let Some(r) = &b.rotor {
             if full {
-                let spin = Joint::Revolute { axis: r.axis }.transform(r.gear_ratio * q[i]);
-                data.x_rot[i] = spin.compose(&r.x_rot);
-                data.s_rot[i] = Motion::new(r.axis * r.gear_ratio, Default::default());
+                let own = r.joint.transform(r.gear_ratio * q[i]);
+                data.x_rot[i] = own.compose(&r.x_rot);
+                data.s_rot[i] = r.motion_subspace();
             } else {
                 data.x_rot[i] = r.x_rot;
                 data.s_rot[i] = Motion::zero();

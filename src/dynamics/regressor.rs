@@ -96,7 +96,7 @@ pub fn regressor(
             if full {
                 put(y, n, i, col, &row_block(&data.s_rot[i], &vr, &ar));
             } else {
-                let s = Motion::new(r.axis * r.gear_ratio, Default::default());
+                let s = r.motion_subspace();
                 put(y, n, i, col, &inertia_bilinear(&s, &s).map(|c| c * qdd[i]));
             }
             if let Some(p) = b.parent {

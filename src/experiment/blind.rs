@@ -490,9 +490,8 @@ pub fn run_case(
     let given = crate::io::load_robot(&robot.to_string_lossy()).map_err(io_err)?;
     let given_data = crate::io::load_trajectory(&data, &given)
         .map_err(io_err)?
-        .trajectory;
-    let d = diagnose::diagnose_runs(&given, vec![given_data], vec![], HOLDOUT, opts)
-        .map_err(diag_err)?;
+        .trajectories();
+    let d = diagnose::diagnose_runs(&given, given_data, vec![], HOLDOUT, opts).map_err(diag_err)?;
     let seconds = start.elapsed().as_secs_f64();
     let found: Vec<String> = d
         .effects

@@ -141,7 +141,7 @@ pub fn identifiability(
             null_weight[i] = 1.0;
         }
     }
-    let rows = (ne.samples * model.dof()) as f64;
+    let rows = (ne.samples * ne.rows_per_sample()) as f64;
     let sigma2 = ne.residual_sum_of_squares(theta) / (rows - rank as f64).max(1.0);
     let standard_errors = (0..p)
         .map(|i| {

@@ -45,6 +45,8 @@ pub struct NormalEquations {
     /// Number of samples added.
     pub samples: usize,
     n: usize,
+    /// Joints whose rows are left out (locked joints: their torque is not fitted).
+    excluded: Vec<usize>,
     rows: DMatrix<f64>,
     taus: DVector<f64>,
     filled: usize,
@@ -59,10 +61,23 @@ impl NormalEquations {
             tt: 0.0,
             samples: 0,
             n,
+            excluded: vec![],
             rows: DMatrix::zeros(BLOCK_SAMPLES * n, p),
             taus: DVector::zeros(BLOCK_SAMPLES * n),
             filled: 0,
         }
+    }
+
+    /// The same, empty, normal equations leaving out the rows of `joints` (their torques are
+    /// not fitted: locked joints).
+    pub fn excluding(mut self, joints: &[usize]) -> Self {
+        self.excluded = joints.to_vec();
+        self
+    }
+
+    /// Equations per sample: the joints whose rows are fitted.
+    pub fn rows_per_sample(&self) -> usize {
+        self.n - self.excluded.len()
     }
 
     /// Adds one sample's regressor `y` (n×p) and torque `tau`.
@@ -73,6 +88,10 @@ impl NormalEquations {
             .copy_from(y);
         for (j, t) in tau.iter().enumerate() {
             self.taus[r0 + j] = *t;
+        }
+        for &j in &self.excluded {
+            self.rows.row_mut(r0 + j).fill(0.0);
+            self.taus[r0 + j] = 0.0;
         }
         self.filled += 1;
         self.samples += 1;
@@ -131,12 +150,25 @@ impl NormalEquations {
         self.ytt += &other.ytt;
         self.tt += other.tt;
         self.samples += other.samples;
+        if self.excluded.is_empty() {
+            self.excluded = other.excluded.clone();
+        }
         self
     }
 
     /// Accumulates samples `range` of a trajectory (which must carry q̈) for `model`.
     pub fn from_trajectory(model: &Model, tr: &Trajectory, range: std::ops::Range<usize>) -> Self {
-        let mut ne = Self::new(model.dof(), model.layout().len);
+        Self::from_trajectory_excluding(model, tr, range, &[])
+    }
+
+    /// [`Self::from_trajectory`] leaving out the rows of `excluded` joints.
+    pub fn from_trajectory_excluding(
+        model: &Model,
+        tr: &Trajectory,
+        range: std::ops::Range<usize>,
+        excluded: &[usize],
+    ) -> Self {
+        let mut ne = Self::new(model.dof(), model.layout().len).excluding(excluded);
         for_each_regressor(model, tr, range, &mut |k, y| ne.add(y, tr.tau_at(k)));
         ne.finish()
     }
@@ -174,6 +206,7 @@ impl NormalEquations {
             tt,
             samples,
             n,
+            excluded: vec![],
             rows: DMatrix::zeros(0, p),
             taus: DVector::zeros(0),
             filled: 0,
@@ -183,13 +216,15 @@ impl NormalEquations {
     /// The normal equations of the columns `cols` only (in that order).
     pub fn select(&self, cols: &[usize]) -> Self {
         let m = cols.len();
-        Self::from_sums(
+        let mut out = Self::from_sums(
             self.n,
             DMatrix::from_fn(m, m, |i, j| self.yty[(cols[i], cols[j])]),
             DVector::from_fn(m, |i, _| self.ytt[cols[i]]),
             self.tt,
             self.samples,
-        )
+        );
+        out.excluded = self.excluded.clone();
+        out
     }
 
     /// `Σ ‖Y θ − τ‖²` for parameters `theta`.

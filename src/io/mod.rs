@@ -8,6 +8,7 @@ pub mod mjcf;
 pub mod plot;
 pub mod robot_spec;
 pub mod robot_toml;
+pub mod rosbag2;
 pub mod samples;
 pub mod urdf;
 pub mod urdf_patch;
@@ -391,18 +392,28 @@ pub fn export_urdf(
     write_atomic(&side, side_text.as_bytes())
 }
 
-/// Identification data read from one file.
+/// Identification data read from one file and put through the pipeline ([`crate::prepare`]).
 #[derive(Clone, Debug)]
 pub struct LoadedData {
-    /// The samples, validated (lengths, finite values, increasing time).
-    pub trajectory: Trajectory,
-    /// The file had no accelerations: they were derived from the velocities
-    /// ([`crate::signal::derive_acceleration`]).
-    pub derived_qdd: bool,
+    /// The runs (split at gaps, q̇ and q̈ derived where not logged, ends trimmed).
+    pub runs: Vec<crate::prepare::Run>,
+    /// What the pipeline did, every sample counted.
+    pub report: crate::prepare::Report,
     /// Joints in the file that the robot does not have (left out).
     pub ignored_joints: Vec<String>,
     /// Joint-state messages naming none of the robot's joints (skipped).
     pub skipped_messages: usize,
+}
+
+impl LoadedData {
+    /// The runs' trajectories.
+    pub fn trajectories(&self) -> Vec<Trajectory> {
+        self.runs.iter().map(|r| r.trajectory.clone()).collect()
+    }
+    /// The runs joined end to end ([`Trajectory::concatenate`]); for data known to be one run.
+    pub fn joined(&self) -> Trajectory {
+        Trajectory::concatenate(self.trajectories()).expect("the pipeline keeps at least one run")
+    }
 }
 
 /// How identification data are read ([`load_trajectory_with`]).
@@ -413,6 +424,8 @@ pub struct DataOptions {
     pub topic: Option<String>,
     /// Which time stamps a joint-state sample.
     pub stamp: mcap_log::Stamp,
+    /// The pipeline's options (cutoff, locked joints).
+    pub prepare: crate::prepare::Options,
 }
 
 /// [`load_trajectory_with`] with the default options.
@@ -423,13 +436,31 @@ pub fn load_trajectory(path: &Path, model: &Model) -> Result<LoadedData, IoError
 /// Loads identification data: the processed signals of a physid MCAP, the joint states of
 /// another MCAP or of a rosbag2 directory (matched to `model`'s joints by name, in any order,
 /// extra joints left out), or a CSV (numbered columns in the robot's joint order, or columns
-/// named by joint); q̈ is derived ([`crate::signal::derive_acceleration`]) if the file has none.
-/// Errors name the file and the sample.
+/// named by joint); then the pipeline ([`crate::prepare::prepare`]: runs split at gaps, q̇ and
+/// q̈ derived where not logged, ends trimmed). Errors name the file and the sample.
 pub fn load_trajectory_with(
     path: &Path,
     model: &Model,
     opts: &DataOptions,
 ) -> Result<LoadedData, IoError> {
+    let (logged, ignored_joints, skipped_messages) = load_logged(path, model, opts)?;
+    let prepared = crate::prepare::prepare(&logged, &opts.prepare)
+        .map_err(|e| IoError::invalid(path, e.to_string()))?;
+    Ok(LoadedData {
+        runs: prepared.runs,
+        report: prepared.report,
+        ignored_joints,
+        skipped_messages,
+    })
+}
+
+/// The samples of a data file as logged, matched to `model`'s joints: the samples, the file's
+/// joints the robot lacks, and the joint-state messages skipped (naming none of its joints).
+pub fn load_logged(
+    path: &Path,
+    model: &Model,
+    opts: &DataOptions,
+) -> Result<(crate::prepare::Logged, Vec<String>, usize), IoError> {
     let names: Vec<String> = model.bodies.iter().map(|b| b.joint_name.clone()).collect();
     let is_mcap = path.is_dir() || path.extension().and_then(|e| e.to_str()) == Some("mcap");
     let (read, mut ignored, skipped) = if is_mcap {
@@ -442,43 +473,33 @@ pub fn load_trajectory_with(
             joints: Some(names.clone()),
         };
         let log = mcap_log::read_with(path, &ropts)?;
-        let tr = match (&opts.topic, log.processed) {
-            (None, Some(processed)) => processed,
+        let logged = match (&opts.topic, log.processed) {
+            (None, Some(processed)) => processed.into(),
             _ => log.measured,
         };
-        (tr, vec![], log.skipped_messages)
+        (logged, vec![], log.skipped_messages)
     } else if path.extension().and_then(|e| e.to_str()) == Some("csv") {
-        let (tr, ignored) = samples::read_csv_matched(path, Some(&names))?;
-        (tr, ignored, 0)
+        let (logged, ignored) = samples::read_csv_logged(path, Some(&names))?;
+        (logged, ignored, 0)
     } else {
         return Err(IoError::invalid(
             path,
             "give a .mcap file, a rosbag2 directory or a .csv file",
         ));
     };
-    // Both readers have validated the samples (lengths, finite values, increasing time).
-    let (mut tr, more_ignored) =
+    let (logged, more_ignored) =
         match_joints(read, &names).map_err(|m| IoError::invalid(path, m))?;
     ignored.extend(more_ignored);
-    let derived_qdd = tr.qdd.is_none();
-    if derived_qdd {
-        let dt = tr.sample_period().unwrap_or(1e-3);
-        let qdd = crate::signal::derive_acceleration(&tr.qd, tr.dof(), dt)
-            .map_err(|e| IoError::invalid(path, format!("deriving q̈: {e}")))?;
-        tr.qdd = Some(qdd);
-    }
-    Ok(LoadedData {
-        trajectory: tr,
-        derived_qdd,
-        ignored_joints: ignored,
-        skipped_messages: skipped,
-    })
+    Ok((logged, ignored, skipped))
 }
 
 /// The data's joints matched to the robot's `names` by name (reordered; joints the robot does
 /// not have are dropped and returned); data that name no joints are taken in the robot's order
 /// when the counts agree. An error names a robot joint the data lack.
-fn match_joints(tr: Trajectory, names: &[String]) -> Result<(Trajectory, Vec<String>), String> {
+fn match_joints(
+    tr: crate::prepare::Logged,
+    names: &[String],
+) -> Result<(crate::prepare::Logged, Vec<String>), String> {
     if tr.joint_names.iter().all(|n| n.is_empty()) {
         if tr.dof() != names.len() {
             return Err(format!(

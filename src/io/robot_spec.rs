@@ -121,10 +121,25 @@ pub struct RotorSpec {
     pub origin: OriginSpec,
     /// Spin axis in the rotor frame (default: the joint axis).
     pub axis: Option<[f64; 3]>,
+    /// How the rotor moves: `revolute` (spins about its axis, the default) or `prismatic`
+    /// (slides along it: a mimic of a prismatic joint).
+    #[serde(rename = "type", default)]
+    pub kind: RotorJointType,
     /// Rotor inertial parameters, rotor frame.
     pub inertial: InertialSpec,
     /// Bounding ellipsoid, rotor frame.
     pub ellipsoid: Option<EllipsoidSpec>,
+}
+
+/// How a rotor moves relative to its parent.
+#[derive(Clone, Copy, Debug, Default, Deserialize, PartialEq, Eq)]
+#[serde(rename_all = "lowercase")]
+pub enum RotorJointType {
+    /// Spins about its axis (a motor behind a gearbox).
+    #[default]
+    Revolute,
+    /// Slides along its axis.
+    Prismatic,
 }
 
 /// Friction of one joint (sidecar form).
@@ -212,7 +227,13 @@ pub(crate) fn rotor_from_spec(
     let what = format!("rotor '{name}'");
     Ok(crate::model::Rotor {
         x_rot: spec.origin.transform().compose(x_parent),
-        axis: spec.axis.map_or(joint_axis, Vector3::from),
+        joint: {
+            let axis = spec.axis.map_or(joint_axis, Vector3::from);
+            match spec.kind {
+                RotorJointType::Revolute => crate::model::Joint::Revolute { axis },
+                RotorJointType::Prismatic => crate::model::Joint::Prismatic { axis },
+            }
+        },
         gear_ratio: spec.gear_ratio,
         inertia: spec.inertial.params(&what)?,
         bounding: spec

@@ -5,6 +5,7 @@
 //! they are matched to the robot's joints by name.
 
 use super::IoError;
+pub use crate::prepare::Logged;
 pub use crate::trajectory::{SampleError, SampleRef, SampleSink, Trajectory};
 use std::path::Path;
 
@@ -57,7 +58,8 @@ struct Columns {
     header: Vec<String>,
     t: usize,
     q: Vec<usize>,
-    dq: Vec<usize>,
+    /// Velocity columns, if the file has them (else the pipeline derives q̇).
+    dq: Option<Vec<usize>>,
     ddq: Option<Vec<usize>>,
     tau: Vec<usize>,
     /// The joints' names: the robot's for named columns (or when given), else `joint1..n`.
@@ -130,12 +132,15 @@ impl Columns {
                 })
                 .collect()
         };
-        let (q, dq, tau) = (need("q")?, need("dq")?, need("tau")?);
-        let ddq = if col(&format!("ddq{}", keys[0])).is_some() {
-            Some(need("ddq")?)
-        } else {
-            None
+        let (q, tau) = (need("q")?, need("tau")?);
+        let optional = |g: &str| -> Result<Option<Vec<usize>>, IoError> {
+            if keys.iter().any(|k| col(&format!("{g}{k}")).is_some()) {
+                Ok(Some(need(g)?))
+            } else {
+                Ok(None)
+            }
         };
+        let (dq, ddq) = (optional("dq")?, optional("ddq")?);
         Ok(Columns {
             t,
             q,
@@ -151,51 +156,96 @@ impl Columns {
 
 /// Reads a trajectory from CSV, its joints in `robot`'s order when given (named columns matched
 /// by name; numbered ones must be as many), else as the file has them (`joint1..n` for numbered
-/// columns). Errors name the file, the line and the column.
+/// columns). The file must have velocity columns and increasing time; logs as robots write them
+/// go through [`read_csv_logged`] and the pipeline instead. Errors name the file, the line and
+/// the column.
 pub fn read_csv(path: &Path, robot: Option<&[String]>) -> Result<Trajectory, IoError> {
-    Ok(read_csv_matched(path, robot)?.0)
+    let (logged, _) = read_csv_logged(path, robot)?;
+    let bad = |m: String| IoError::invalid(path, m);
+    let qd = logged
+        .qd
+        .ok_or_else(|| bad("no dq columns (velocities)".into()))?;
+    let tr = Trajectory {
+        joint_names: logged.joint_names,
+        t: logged.t,
+        q: logged.q,
+        qd,
+        qdd: logged.qdd,
+        tau: logged.tau,
+    };
+    tr.validate().map_err(|e| bad(e.to_string()))?;
+    Ok(tr)
 }
 
-/// [`read_csv`], also returning the joints named in the file that the robot lacks.
-pub fn read_csv_matched(
+/// Reads a CSV as logged (velocity and acceleration columns optional, time stamps as written),
+/// its joints in `robot`'s order when given, and the joints named in the file that the robot
+/// lacks. Each value is checked (finite, within range), naming the line and column; the time
+/// stamps' order and gaps are the pipeline's ([`crate::prepare`]). One record buffer is reused
+/// for every line.
+pub fn read_csv_logged(
     path: &Path,
     robot: Option<&[String]>,
-) -> Result<(Trajectory, Vec<String>), IoError> {
-    let text = super::read_to_string(path)?;
+) -> Result<(Logged, Vec<String>), IoError> {
+    let file = std::fs::File::open(path).map_err(|source| IoError::Fs {
+        path: path.to_path_buf(),
+        source,
+    })?;
     let bad = |m: String| IoError::invalid(path, m);
     let mut r = csv::ReaderBuilder::new()
         .trim(csv::Trim::All)
-        .from_reader(text.as_bytes());
+        .from_reader(std::io::BufReader::with_capacity(1 << 16, file));
     let c = Columns::parse(&mut r, path, robot)?;
-    let header = &c.header;
-    let (t_col, qc, dqc, tauc, ddqc) =
-        (c.t, c.q.clone(), c.dq.clone(), c.tau.clone(), c.ddq.clone());
-    let names = c.names.clone();
-    let mut tr = Trajectory::new(names, ddqc.is_some());
-    for (k, rec) in r.records().enumerate() {
+    let mut out = Logged {
+        joint_names: c.names.clone(),
+        t: vec![],
+        q: vec![],
+        qd: c.dq.is_some().then(Vec::new),
+        qdd: c.ddq.is_some().then(Vec::new),
+        tau: vec![],
+    };
+    let mut rec = csv::StringRecord::new();
+    let mut k = 0usize;
+    while r
+        .read_record(&mut rec)
+        .map_err(|e| bad(format!("line {}: {e}", k + 2)))?
+    {
         let line = k + 2;
-        let rec = rec.map_err(|e| bad(format!("line {line}: {e}")))?;
-        let get = |c: usize| -> Result<f64, IoError> {
-            let s = rec.get(c).unwrap_or("");
-            s.parse::<f64>().map_err(|_| {
+        let value = |col: usize, group: &str, t: Option<f64>| -> Result<f64, IoError> {
+            let s = rec.get(col).unwrap_or("");
+            let v: f64 = s.parse().map_err(|_| {
                 bad(format!(
                     "line {line}, column '{}': '{s}' is not a number",
-                    header[c]
+                    c.header[col]
                 ))
-            })
+            })?;
+            crate::trajectory::check_value(k, t.unwrap_or(v), group, &c.header[col], v)
+                .map_err(|e| bad(format!("line {line}: {e}")))?;
+            Ok(v)
         };
-        let vals = |cs: &[usize]| cs.iter().map(|&c| get(c)).collect::<Result<Vec<f64>, _>>();
-        let ddq = ddqc.as_deref().map(vals).transpose()?;
-        tr.push(
-            get(t_col)?,
-            &vals(&qc)?,
-            &vals(&dqc)?,
-            ddq.as_deref(),
-            &vals(&tauc)?,
-        );
+        let t = value(c.t, "t", None)?;
+        out.t.push(t);
+        for &col in &c.q {
+            out.q.push(value(col, "q", Some(t))?);
+        }
+        if let (Some(cols), Some(v)) = (&c.dq, out.qd.as_mut()) {
+            for &col in cols {
+                v.push(value(col, "dq", Some(t))?);
+            }
+        }
+        if let (Some(cols), Some(v)) = (&c.ddq, out.qdd.as_mut()) {
+            for &col in cols {
+                v.push(value(col, "ddq", Some(t))?);
+            }
+        }
+        for &col in &c.tau {
+            out.tau.push(value(col, "tau", Some(t))?);
+        }
+        k += 1;
     }
-    tr.validate().map_err(|e| bad(e.to_string()))?;
-    Ok((tr, c.ignored))
+    if k == 0 {
+        return Err(bad("no samples".into()));
+    }
+    Ok((out, c.ignored))
 }
 
 /// Streams a CSV with `ddq` columns sample by sample without loading it, checking each sample
@@ -224,7 +274,10 @@ pub fn stream_csv(
         .ddq
         .clone()
         .ok_or_else(|| bad("no ddq columns: streaming needs accelerations".into()))?;
-    let cols = [c.q.clone(), c.dq.clone(), ddq, c.tau.clone()];
+    let dq =
+        c.dq.clone()
+            .ok_or_else(|| bad("no dq columns: streaming needs velocities".into()))?;
+    let cols = [c.q.clone(), dq, ddq, c.tau.clone()];
     let mut vals = vec![0.0; 4 * n];
     let mut prev = f64::NEG_INFINITY;
     let mut rec = csv::StringRecord::new();
@@ -285,8 +338,8 @@ pub fn stream_csv(
     Ok(k)
 }
 
-/// Whether a CSV's header has `ddq` columns (so it can be streamed).
-pub fn csv_has_ddq(path: &Path) -> Result<bool, IoError> {
+/// Whether a CSV's header has `dq` and `ddq` columns (so it can be streamed: nothing to derive).
+pub fn csv_streamable(path: &Path) -> Result<bool, IoError> {
     let file = std::fs::File::open(path).map_err(|source| IoError::Fs {
         path: path.to_path_buf(),
         source,
@@ -294,5 +347,6 @@ pub fn csv_has_ddq(path: &Path) -> Result<bool, IoError> {
     let mut r = csv::ReaderBuilder::new()
         .trim(csv::Trim::All)
         .from_reader(std::io::BufReader::new(file));
-    Ok(Columns::parse(&mut r, path, None)?.ddq.is_some())
+    let c = Columns::parse(&mut r, path, None)?;
+    Ok(c.dq.is_some() && c.ddq.is_some())
 }

@@ -532,7 +532,16 @@ fn attach_rotors(
         bodies[k].rotor = Some(Rotor {
             name: jt.child.link.clone(),
             x_rot,
-            axis: Vector3::from(jt.axis.xyz.0),
+            // The mimic joint's own type: a prismatic mimic slides (a gripper's second finger,
+            // as pinocchio models it), a revolute or continuous one spins.
+            joint: match jt.joint_type {
+                urdf_rs::JointType::Prismatic => Joint::Prismatic {
+                    axis: Vector3::from(jt.axis.xyz.0),
+                },
+                _ => Joint::Revolute {
+                    axis: Vector3::from(jt.axis.xyz.0),
+                },
+            },
             gear_ratio: mimic.multiplier.unwrap_or(1.0),
             inertia: params,
             bounding: shapes.bound(&jt.child.link, lookup).unwrap_or_else(|w| {
@@ -699,14 +708,22 @@ pub fn to_string(model: &Model) -> String {
         });
         if let Some(r) = &b.rotor {
             links.push(link(&r.name, &r.inertia));
-            // The rotor's joint has its joint's type (pinocchio's mimic needs equal
-            // configuration sizes: a `continuous` rotor on a `revolute` joint is refused) and
-            // its limits scaled by the gear ratio.
+            // The rotor's joint moves as the rotor does (a sliding rotor is prismatic); a
+            // spinning one is `continuous` only on a `continuous` joint (pinocchio's mimic needs
+            // equal configuration sizes: a `continuous` rotor on a `revolute` joint is refused).
+            // Its limits are its joint's scaled by the gear ratio.
+            let rotor_type = match (r.joint, &jt) {
+                (Joint::Prismatic { .. }, _) => urdf_rs::JointType::Prismatic,
+                (Joint::Revolute { .. }, urdf_rs::JointType::Continuous) => {
+                    urdf_rs::JointType::Continuous
+                }
+                (Joint::Revolute { .. }, _) => urdf_rs::JointType::Revolute,
+            };
             let n = r.gear_ratio;
             let (lo, hi) = (n * b.limits.lower, n * b.limits.upper);
             joints.push(urdf_rs::Joint {
                 name: format!("{}_joint", r.name),
-                joint_type: jt.clone(),
+                joint_type: rotor_type,
                 limit: urdf_rs::JointLimit {
                     lower: finite_or(lo.min(hi), 0.0),
                     upper: finite_or(lo.max(hi), 0.0),
@@ -722,7 +739,7 @@ pub fn to_string(model: &Model) -> String {
                     link: r.name.clone(),
                 },
                 axis: urdf_rs::Axis {
-                    xyz: urdf_rs::Vec3([r.axis.x, r.axis.y, r.axis.z]),
+                    xyz: urdf_rs::Vec3(r.joint.axis().into()),
                 },
                 calibration: None,
                 dynamics: None,

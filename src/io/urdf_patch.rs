@@ -202,9 +202,14 @@ fn rotor_toml(joint: &str, r: &crate::model::Rotor) -> String {
     let (rot, pos) = r.x_rot.to_pose();
     let (roll, pitch, yaw) = nalgebra::Rotation3::from_matrix_unchecked(rot).euler_angles();
     let pi: Vec<String> = r.inertia.0.iter().map(|x| num(*x)).collect();
+    let a = r.joint.axis();
+    let kind = match r.joint {
+        crate::model::Joint::Revolute { .. } => "",
+        crate::model::Joint::Prismatic { .. } => "type = \"prismatic\"\n",
+    };
     format!(
-        "[[robot.rotor]]\njoint = \"{joint}\"\nname = \"{}\"\ngear_ratio = {}\naxis = [{}, {}, {}]\norigin = {{ xyz = [{}, {}, {}], rpy = [{roll}, {pitch}, {yaw}] }}\ninertial = {{ pi = [{}] }}\n",
-        r.name, r.gear_ratio, r.axis.x, r.axis.y, r.axis.z, pos.x, pos.y, pos.z, pi.join(", ")
+        "[[robot.rotor]]\njoint = \"{joint}\"\nname = \"{}\"\n{kind}gear_ratio = {}\naxis = [{}, {}, {}]\norigin = {{ xyz = [{}, {}, {}], rpy = [{roll}, {pitch}, {yaw}] }}\ninertial = {{ pi = [{}] }}\n",
+        r.name, r.gear_ratio, a.x, a.y, a.z, pos.x, pos.y, pos.z, pi.join(", ")
     )
 }
 

@@ -245,7 +245,7 @@ pub fn leg_with(o: &LegOptions) -> Result<Model, ModelError> {
         o.rotors.then(|| Rotor {
             name: name.into(),
             x_rot,
-            axis,
+            joint: crate::model::Joint::Revolute { axis },
             gear_ratio: n[i],
             inertia: params(p, o.truth),
             bounding: Some(e),

@@ -80,9 +80,11 @@ pub struct Rotor {
     pub name: String,
     /// Transform from the parent body's frame to the rotor frame at zero rotor angle.
     pub x_rot: Transform,
-    /// Unit spin axis, in the rotor frame.
-    pub axis: Vector3<f64>,
-    /// Gear ratio `N`: the rotor turns `N q_i` (rad per rad, or rad per m for a prismatic joint).
+    /// How the rotor moves relative to its parent, in the rotor frame: spinning about a unit
+    /// axis (a motor; `Joint::Revolute`), or sliding along it (`Joint::Prismatic`: a URDF
+    /// `<mimic>` of a prismatic joint, such as a gripper's second finger).
+    pub joint: Joint,
+    /// Gear ratio `N`: the rotor moves by `N q_i` (rad or m per rad or m of its joint).
     pub gear_ratio: f64,
     /// Inertial parameters in the rotor frame.
     pub inertia: InertialParams,
@@ -91,10 +93,21 @@ pub struct Rotor {
 }
 
 impl Rotor {
-    /// Armature `N² (axisᵀ Ī_rot axis)` (kg m², at the joint): the rotor's spin inertia
-    /// reflected through the gearbox, as the reflected model and MuJoCo's `armature` use it.
+    /// Armature `N² Sᵀ I_rot S` (kg m² or kg, at the joint): the rotor's inertia along its own
+    /// motion reflected through the gearbox (`N² axisᵀ Ī_rot axis` for a spinning rotor,
+    /// `N² m` for a sliding one), as the reflected model and MuJoCo's `armature` use it.
     pub fn armature(&self) -> f64 {
-        self.gear_ratio * self.gear_ratio * self.axis.dot(&(self.inertia.ibar() * self.axis))
+        let a = self.joint.axis();
+        let own = match self.joint {
+            Joint::Revolute { .. } => a.dot(&(self.inertia.ibar() * a)),
+            Joint::Prismatic { .. } => self.inertia.mass(),
+        };
+        self.gear_ratio * self.gear_ratio * own
+    }
+
+    /// The rotor's motion subspace at its joint, `S_rot = N S` (rotor frame).
+    pub fn motion_subspace(&self) -> crate::spatial::Motion {
+        self.joint.motion_subspace() * self.gear_ratio
     }
 }
 
@@ -650,15 +663,14 @@ fn check_rotor(
             reason: format!("{} must be finite and non-zero", r.gear_ratio),
         });
     }
-    let n = r.axis.norm();
-    if !n.is_finite() || n < 1e-9 {
-        return Err(ModelError::BadValue {
-            element: rn,
+    r.joint = r
+        .joint
+        .normalized()
+        .map_err(|reason| ModelError::BadValue {
+            element: rn.clone(),
             field: "axis",
-            reason: "must be a non-zero finite vector".into(),
-        });
-    }
-    r.axis /= n;
+            reason,
+        })?;
     check_transform(&rn, "origin", &r.x_rot)?;
     check_params(&rn, &r.inertia)?;
     if !names.insert(r.name.clone()) {

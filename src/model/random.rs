@@ -66,10 +66,17 @@ pub fn random_tree(seed: u64, n: usize) -> Model {
             };
             let rotor = rng.random_bool(0.6).then(|| {
                 let n_abs = rng.random_range(2.0..15.0);
+                let axis = unit(&mut rng);
+                // Mostly spinning motors; sometimes a sliding rotor (a mimic finger).
+                let joint = if rng.random_bool(0.8) {
+                    Joint::Revolute { axis }
+                } else {
+                    Joint::Prismatic { axis }
+                };
                 Rotor {
                     name: format!("rotor{i}"),
                     x_rot: pose(&mut rng, 0.1),
-                    axis: unit(&mut rng),
+                    joint,
                     gear_ratio: if rng.random_bool(0.5) { n_abs } else { -n_abs },
                     inertia: random_body(&mut rng, &Vector3::zeros(), 0.05),
                     bounding: None,

@@ -119,7 +119,13 @@ impl RapierSim {
                     .build();
                 let hr = bodies.insert(body);
                 let (r_rot, p_rot) = r.x_rot.to_pose();
-                let br = x_onto(&r.axis);
+                let crate::model::Joint::Revolute { axis } = r.joint else {
+                    return Err(RapierError::Unsupported(format!(
+                        "rotor '{}' slides (a prismatic mimic); the rapier engine models spinning rotors only",
+                        r.name
+                    )));
+                };
+                let br = x_onto(&axis);
                 let joint = GenericJointBuilder::new(JointAxesMask::LOCKED_REVOLUTE_AXES)
                     .local_frame1(Pose::from_parts(vec3(&p_rot), rot3(&(r_rot * br))))
                     .local_frame2(Pose::from_parts(Vector::ZERO, rot3(&br)))

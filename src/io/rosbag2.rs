@@ -1,0 +1,132 @@
+//! ROS 2 bags (rosbag2 directories): `metadata.yaml` read with a YAML parser, and the two
+//! storage formats ROS 2 writes: MCAP (the newer default) and SQLite 3 (the default before
+//! it, still common), whose `messages` table holds the same CDR messages
+//! (read with rusqlite, SQLite itself compiled in).
+
+use super::mcap_log::Reader;
+use super::IoError;
+use serde::Deserialize;
+use std::path::{Path, PathBuf};
+
+/// How a bag stores its messages.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Storage {
+    /// MCAP files.
+    Mcap,
+    /// SQLite 3 databases (`.db3`).
+    Sqlite3,
+}
+
+/// `metadata.yaml`: the keys physid reads (others are ignored).
+#[derive(Deserialize, Debug)]
+struct Metadata {
+    rosbag2_bagfile_information: Information,
+}
+
+#[derive(Deserialize, Debug)]
+struct Information {
+    storage_identifier: Option<String>,
+    #[serde(default)]
+    relative_file_paths: Vec<String>,
+}
+
+/// The storage files of a rosbag2 directory, in the order its `metadata.yaml` lists them
+/// (`relative_file_paths`), and how they store messages. Errors name the directory or the
+/// metadata file and the key at fault.
+pub fn files(dir: &Path) -> Result<(Vec<PathBuf>, Storage), IoError> {
+    let meta_path = dir.join("metadata.yaml");
+    if !meta_path.is_file() {
+        return Err(IoError::invalid(
+            dir,
+            "is a directory without metadata.yaml (give an MCAP file or a rosbag2 directory)",
+        ));
+    }
+    let text = super::read_to_string(&meta_path)?;
+    let bad = |m: String| IoError::invalid(&meta_path, m);
+    let meta: Metadata = serde_yaml_ng::from_str(&text)
+        .map_err(|e| bad(format!("not a rosbag2 metadata file: {e}")))?;
+    let info = meta.rosbag2_bagfile_information;
+    let storage = match info.storage_identifier.as_deref() {
+        Some("mcap") => Storage::Mcap,
+        Some("sqlite3") => Storage::Sqlite3,
+        // Before storage_identifier was written, the extension tells.
+        None if info.relative_file_paths.iter().all(|f| f.ends_with(".db3")) => Storage::Sqlite3,
+        None => Storage::Mcap,
+        Some(other) => {
+            return Err(bad(format!(
+                "storage_identifier is '{other}'; physid reads bags stored as mcap or sqlite3"
+            )))
+        }
+    };
+    if info.relative_file_paths.is_empty() {
+        return Err(bad("lists no relative_file_paths".into()));
+    }
+    let files: Vec<PathBuf> = info
+        .relative_file_paths
+        .iter()
+        .map(|f| dir.join(f))
+        .collect();
+    if let Some(missing) = files.iter().find(|f| !f.is_file()) {
+        return Err(bad(format!(
+            "lists {}, which does not exist",
+            missing.display()
+        )));
+    }
+    Ok((files, storage))
+}
+
+/// Feeds every message of a rosbag2 SQLite database to `reader`, in time order.
+pub(crate) fn read_sqlite(path: &Path, reader: &mut Reader) -> Result<(), IoError> {
+    use rusqlite::{Connection, OpenFlags};
+    let bad = |m: String| IoError::invalid(path, m);
+    let sql = |e: rusqlite::Error| bad(format!("not a readable rosbag2 database: {e}"));
+    let db = Connection::open_with_flags(path, OpenFlags::SQLITE_OPEN_READ_ONLY).map_err(sql)?;
+    let mut topics = std::collections::HashMap::new();
+    {
+        let mut stmt = db
+            .prepare("SELECT id, name, type FROM topics")
+            .map_err(sql)?;
+        let rows = stmt
+            .query_map([], |r| {
+                Ok((
+                    r.get::<_, i64>(0)?,
+                    r.get::<_, String>(1)?,
+                    r.get::<_, String>(2)?,
+                ))
+            })
+            .map_err(sql)?;
+        for row in rows {
+            let (id, name, kind) = row.map_err(sql)?;
+            topics.insert(id, (name, kind));
+        }
+    }
+    let mut stmt = db
+        .prepare("SELECT topic_id, timestamp, data FROM messages ORDER BY timestamp, id")
+        .map_err(sql)?;
+    let mut rows = stmt.query([]).map_err(sql)?;
+    let mut sequence = 0u64;
+    while let Some(row) = rows.next().map_err(sql)? {
+        let id: i64 = row.get(0).map_err(sql)?;
+        let stamp: i64 = row.get(1).map_err(sql)?;
+        let data = row
+            .get_ref(2)
+            .map_err(sql)?
+            .as_blob()
+            .map_err(|e| bad(format!("message {sequence}: {e}")))?;
+        let (topic, kind) = topics.get(&id).ok_or_else(|| {
+            bad(format!(
+                "message {sequence} names topic id {id}, which the topics table lacks"
+            ))
+        })?;
+        let stamp = u64::try_from(stamp).map_err(|_| {
+            bad(format!(
+                "{topic} message {sequence}: negative timestamp {stamp} ns"
+            ))
+        })?;
+        reader
+            .message(topic, kind, data, stamp, sequence)
+            .map_err(bad)?;
+        sequence += 1;
+    }
+    Ok(())
+}
