@@ -12,12 +12,12 @@ pub const RANK_TOL: f64 = 1e-9;
 
 /// Rank and condition number of a regressor from its normal matrix `YᵀY`, physid's one
 /// definition (used by `simulate`, `identify` and the README): the columns of `Y` scaled to unit
-/// norm, its singular values `σ_i = √λ_i(D YᵀY D)`; the rank counts those with
+/// norm (numerically zero columns left at zero, [`excited_scale`]), its singular values `σ_i = √λ_i(D YᵀY D)`; the rank counts those with
 /// `σ_i² > RANK_TOL σ_max²` (`σ_i > 3.2·10⁻⁵ σ_max`), the condition number is `σ_max` over
 /// the smallest of them (the conditioning of the identifiable subspace).
 pub fn rank_and_condition(yty: &DMatrix<f64>) -> (usize, f64) {
     let p = yty.nrows();
-    let d = unit_diagonal_scale(yty, 0.0);
+    let d = excited_scale(yty);
     let scaled = DMatrix::from_fn(p, p, |i, j| d[i] * yty[(i, j)] * d[j]);
     let ev = SymmetricEigen::new(scaled).eigenvalues;
     let lmax = ev.iter().copied().fold(0.0f64, f64::max);
@@ -33,6 +33,26 @@ pub fn rank_and_condition(yty: &DMatrix<f64>) -> (usize, f64) {
         (lmax / lmin).sqrt()
     };
     (kept.len(), condition)
+}
+
+/// A column whose norm is below this fraction of the largest column's is numerically zero (the
+/// round-off of a structurally zero column, e.g. a vertical first joint's mass column): unexcited.
+pub const UNEXCITED: f64 = 1e-10;
+
+/// Column scaling of a normal matrix to unit diagonal, `1/√m_ii`, with `0` for an unexcited
+/// column (`√m_ii` below [`UNEXCITED`] of the largest): scaled to unit norm, round-off would
+/// look like an independent direction.
+pub fn excited_scale(m: &DMatrix<f64>) -> Vec<f64> {
+    let largest = (0..m.nrows()).map(|i| m[(i, i)]).fold(0.0f64, f64::max);
+    (0..m.nrows())
+        .map(|i| {
+            if m[(i, i)] > UNEXCITED * UNEXCITED * largest && m[(i, i)] > 0.0 {
+                1.0 / m[(i, i)].sqrt()
+            } else {
+                0.0
+            }
+        })
+        .collect()
 }
 
 /// Column scaling to unit diagonal: `1/√m_ii`, or `fallback` where `m_ii <= 0` (an

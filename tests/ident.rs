@@ -269,3 +269,80 @@ fn extra_columns_are_free_unless_declared_non_negative() {
     o.nonnegative = vec![p + 1];
     assert!(ident::identify(&m, &ne, &prior, &o).is_err());
 }
+
+#[test]
+fn base_parameters_are_the_identifiable_combinations_with_errors() {
+    // The leg with rotors on clean data: the base parameters span the regressor's row space
+    // (one per rank), each dependent column is the combination of base columns they state, and
+    // their values at the truth and at any θ that differs by a null direction agree.
+    let m = cheetah3::leg();
+    let tr = exact_data(&m, 400, 3);
+    let ne = NormalEquations::from_trajectory(&m, &tr, 0..tr.len());
+    let truth = m.parameters();
+    let idf = analysis::identifiability(&m, &ne, &truth);
+    assert_eq!(idf.base.len(), idf.rank);
+    assert_eq!(idf.rank, 38, "the leg's structural rank on rich motion");
+    assert_eq!(idf.unidentifiable_total, idf.parameters - idf.rank);
+    // Listed once each: no two null directions the same line.
+    let mut lines = idf.unidentifiable.clone();
+    lines.sort();
+    lines.dedup();
+    assert_eq!(lines.len(), idf.unidentifiable.len());
+    // The world-mounted ab/ad rotor's mass never enters the torques.
+    assert!(
+        idf.unidentifiable
+            .iter()
+            .any(|u| u.starts_with("abad_rotor:")
+                && u.contains(" m,")
+                && u.ends_with("(never excited)")),
+        "{:?}",
+        idf.unidentifiable
+    );
+    // Y θ = Σ_i Y_{b_i} β_i for every θ: check on the samples with a θ moved along the null
+    // space (the truth plus a random vector projected out of the row space).
+    let names = m.parameter_names();
+    let col = |name: &str| names.iter().position(|n| n == name).unwrap();
+    let beta = |theta: &DVector<f64>| -> Vec<f64> {
+        idf.base
+            .iter()
+            .map(|b| {
+                b.terms
+                    .iter()
+                    .map(|t| t.coefficient * theta[col(&t.parameter)])
+                    .sum()
+            })
+            .collect()
+    };
+    let mut d = Data::new(&m);
+    let mut y = DMatrix::zeros(m.dof(), truth.len());
+    let k = 17;
+    regressor(
+        &m,
+        &mut d,
+        tr.q_at(k),
+        tr.qd_at(k),
+        tr.qdd_at(k).unwrap(),
+        &mut y,
+    );
+    let at_base = |b: &[f64]| -> DVector<f64> {
+        let mut tau = DVector::zeros(m.dof());
+        for (bp, v) in idf.base.iter().zip(b) {
+            tau += y.column(col(&bp.terms[0].parameter)) * *v;
+        }
+        tau
+    };
+    let tau = &y * &truth;
+    let err = (at_base(&beta(&truth)) - &tau).norm() / tau.norm();
+    assert!(err < 1e-9, "Y θ against Y_b β: {err:e}");
+    // Values reported at θ, and exact data leave tiny standard errors.
+    for (bp, v) in idf.base.iter().zip(beta(&truth)) {
+        assert!(
+            (bp.value - v).abs() <= 1e-12 * v.abs().max(1.0),
+            "{}",
+            bp.expression
+        );
+        assert!(bp.standard_error.is_finite());
+    }
+    // A parameter that is not identifiable alone has no finite standard error.
+    assert!(idf.standard_errors[col("abad_rotor.m")].is_infinite());
+}

@@ -54,13 +54,14 @@ pub fn run(a: Args) -> anyhow::Result<()> {
     };
     opts.validate().map_err(super::option_error)?;
     let model = a.robot.load()?;
-    let load = |files: &[PathBuf]| -> anyhow::Result<Vec<_>> {
-        files
-            .iter()
-            .map(|f| super::identify_cmd::load_data(f, &model, &a.read))
-            .collect()
-    };
-    let (train, validate) = (load(&a.data)?, load(&a.validate)?);
+    let paths: Vec<&std::path::Path> = a
+        .data
+        .iter()
+        .chain(&a.validate)
+        .map(PathBuf::as_path)
+        .collect();
+    let mut train = super::identify_cmd::load_data(&paths, &model, &a.read)?;
+    let validate = train.split_off(a.data.len());
     // The effect columns are processed like the data: at the pipeline's cutoff.
     opts.processing_cutoff = train[0].report.cutoff;
     let runs = |d: &[physid::io::LoadedData]| -> Vec<_> {

@@ -90,6 +90,7 @@ impl ReadArgs {
             prepare: physid::prepare::Options {
                 cutoff: self.cutoff,
                 lock,
+                band_edge: None,
             },
         })
     }
@@ -99,21 +100,31 @@ impl ReadArgs {
     }
 }
 
-/// Loads identification data (see [`physid::io::load_trajectory_with`]), printing what the
-/// pipeline did and warnings.
+/// Loads data files read together (see [`physid::io::load_all`]: one cutoff for all),
+/// printing what the pipeline did to each and warnings.
 pub fn load_data(
-    path: &Path,
+    paths: &[&Path],
     model: &Model,
     read: &ReadArgs,
-) -> anyhow::Result<physid::io::LoadedData> {
-    let is_bag = path.is_dir() || path.extension().and_then(|e| e.to_str()) == Some("mcap");
-    if read.bag_only() && !is_bag {
-        eprintln!(
-            "warning: {}: --topic and --stamp apply to MCAP files and rosbag2 directories only",
-            path.display()
-        );
+) -> anyhow::Result<Vec<physid::io::LoadedData>> {
+    for path in paths {
+        let is_bag = path.is_dir() || path.extension().and_then(|e| e.to_str()) == Some("mcap");
+        if read.bag_only() && !is_bag {
+            eprintln!(
+                "warning: {}: --topic and --stamp apply to MCAP files and rosbag2 directories only",
+                path.display()
+            );
+        }
     }
-    let loaded = physid::io::load_trajectory_with(path, model, &read.options(model)?)?;
+    let loaded = physid::io::load_all(paths, model, &read.options(model)?)?;
+    for (path, l) in paths.iter().zip(&loaded) {
+        print_notes(path, l);
+    }
+    Ok(loaded)
+}
+
+/// What the pipeline did to one file, on standard error.
+fn print_notes(path: &Path, loaded: &physid::io::LoadedData) {
     if !loaded.ignored_joints.is_empty() {
         eprintln!(
             "note: {} has joints the robot does not have, left out: {}",
@@ -139,7 +150,6 @@ pub fn load_data(
             path.display()
         );
     }
-    Ok(loaded)
 }
 
 /// What the pipeline did to one file, one line per kind of change (nothing for clean data
@@ -184,8 +194,9 @@ pub fn data_notes(r: &physid::prepare::Report) -> Vec<String> {
             _ => "no accelerations: q̈ derived",
         };
         out.push(format!(
-            "{what} (central difference, zero-phase {} Hz Butterworth); {} samples trimmed at the ends of the runs ({} at each end, the filter's settling){}",
+            "{what} (central difference, zero-phase {:.3} Hz Butterworth{}); {} samples trimmed at the ends of the runs ({} at each end, the filter's settling){}",
             r.cutoff,
+            r.band_edge.map_or(String::new(), |e| format!(", 4 times the motion's band edge {e:.3} Hz over all files read")),
             r.trimmed,
             r.settle_samples,
             if r.dropped_short > 0 { format!(", {} samples of pieces too short to keep", r.dropped_short) } else { String::new() }
@@ -235,27 +246,50 @@ pub enum Data {
 }
 
 impl Data {
-    /// Opens `path`: large CSV files with `dq` and `ddq` columns stream (unless `in_memory`),
-    /// everything else is loaded and prepared.
-    pub fn open(
-        path: &Path,
+    /// Opens `paths` (read together): large CSV files with `dq` and `ddq` columns stream
+    /// (unless `in_memory`), the others are loaded and prepared with one cutoff.
+    pub fn open_all(
+        paths: &[&Path],
         model: &Model,
         read: &ReadArgs,
         in_memory: bool,
-    ) -> anyhow::Result<Data> {
-        let large = std::fs::metadata(path).is_ok_and(|m| m.len() > STREAM_ABOVE_BYTES);
-        if !in_memory
-            && large
-            && read.lock.is_empty()
-            && read.only.is_empty()
-            && path.extension().and_then(|e| e.to_str()) == Some("csv")
-            && samples::csv_streamable(path)?
-        {
-            let names: Vec<String> = model.bodies.iter().map(|b| b.joint_name.clone()).collect();
-            let len = samples::stream_csv(path, &names, 0..0, &mut |_, _| {})?;
-            return Ok(Data::Csv(path.to_path_buf(), names, len));
+    ) -> anyhow::Result<Vec<Data>> {
+        let mut streamed = vec![];
+        for path in paths {
+            let large = std::fs::metadata(path).is_ok_and(|m| m.len() > STREAM_ABOVE_BYTES);
+            streamed.push(
+                !in_memory
+                    && large
+                    && read.lock.is_empty()
+                    && read.only.is_empty()
+                    && path.extension().and_then(|e| e.to_str()) == Some("csv")
+                    && samples::csv_streamable(path)?,
+            );
         }
-        Ok(Data::Memory(load_data(path, model, read)?))
+        let loaded_paths: Vec<&Path> = paths
+            .iter()
+            .zip(&streamed)
+            .filter(|(_, s)| !**s)
+            .map(|(p, _)| *p)
+            .collect();
+        let mut loaded = load_data(&loaded_paths, model, read)?.into_iter();
+        let names: Vec<String> = model.bodies.iter().map(|b| b.joint_name.clone()).collect();
+        paths
+            .iter()
+            .zip(streamed)
+            .map(|(path, s)| {
+                Ok(if s {
+                    let len = samples::stream_csv(path, &names, 0..0, &mut |_, _| {})?;
+                    Data::Csv(path.to_path_buf(), names.clone(), len)
+                } else {
+                    Data::Memory(
+                        loaded
+                            .next()
+                            .expect("one loaded file per path not streamed"),
+                    )
+                })
+            })
+            .collect()
     }
     /// Samples in the file as read.
     fn len(&self) -> usize {
@@ -560,17 +594,18 @@ pub fn run(a: Args) -> anyhow::Result<()> {
         bail!("--export-problem writes the model's own problem: leave out the extra --friction terms and --effects");
     }
     let in_memory = !terms.is_empty();
-    let open = |p: &PathBuf| Data::open(p, m, &a.read, in_memory);
-    let data: Vec<Data> = a.data.iter().map(open).collect::<anyhow::Result<_>>()?;
+    let paths: Vec<&Path> = a
+        .data
+        .iter()
+        .chain(&a.validate_data)
+        .map(PathBuf::as_path)
+        .collect();
+    let mut data = Data::open_all(&paths, m, &a.read, in_memory)?;
+    let vdata = data.split_off(a.data.len());
     let train: Vec<Range<usize>> = match a.train.as_deref() {
         Some(s) => vec![parse_range(s, data[0].len(), "--train")?],
         None => data.iter().map(|d| 0..d.len()).collect(),
     };
-    let vdata: Vec<Data> = a
-        .validate_data
-        .iter()
-        .map(open)
-        .collect::<anyhow::Result<_>>()?;
     let validation: Vec<(&Data, Range<usize>)> = match a.validate.as_deref() {
         Some(s) => vec![(&data[0], parse_range(s, data[0].len(), "--validate")?)],
         None => vdata.iter().map(|d| (d, 0..d.len())).collect(),
@@ -1173,69 +1208,147 @@ fn theta_names(m: &Model, terms: &[physid::diagnose::calibrate::TermFit]) -> Vec
 
 /// The text report: bodies, friction, effects, errors, consistency, identifiability, truth.
 fn print_text(a: &Args, m: &Model, rep: &Report) {
-    let (r, idf, train_rms, train_all, val) =
-        (&rep.r, &rep.idf, &rep.train_rms, rep.train_all, &rep.val);
-    let (total, truth_errors) = (rep.total, &rep.truth_errors);
+    print_header(a, m, rep);
+    print_identified_bodies(m, rep);
+    print_joints(m, rep);
+    print_terms(&rep.terms, m);
+    print_fit(rep);
+    print_identifiability(&rep.idf);
+    if let Some(errs) = &rep.truth_errors {
+        println!("\nagainst the ground truth in the log (relative errors; CoM in m):");
+        println!(
+            "{:<12} {:>10} {:>10} {:>12} {:>10}",
+            "body", "mass", "CoM", "inertia_C", "J"
+        );
+        for e in errs {
+            println!(
+                "{:<12} {:>10.4} {:>10.4} {:>12.4} {:>10.4}",
+                e.name, e.mass_rel, e.com_m, e.inertia_rel, e.j_rel
+            );
+        }
+    }
+}
+
+/// Robot, set, data, parameter count and solve time.
+fn print_header(a: &Args, m: &Model, rep: &Report) {
+    let r = &rep.r;
+    let used: usize = rep.used.0.iter().sum();
     let on = if a.data.len() == 1 {
         format!(
-            "samples {}..{} of {}",
+            "samples {}..{} of {} ({used} used)",
             rep.train[0].start,
             rep.train[0].end,
             a.data[0].display()
         )
     } else {
-        let k: usize = rep.train.iter().map(Range::len).sum();
         let files: Vec<String> = a.data.iter().map(|p| p.display().to_string()).collect();
         format!(
-            "{k} samples of {} runs ({})",
+            "{used} samples of {} runs ({})",
             a.data.len(),
             files.join(", ")
         )
     };
+    let own = m.layout().len;
+    let extra = r.theta.len() - own;
+    let count = if extra > 0 {
+        format!("{own} parameters of the model + {extra} effect coefficients")
+    } else {
+        format!("{own} parameters")
+    };
     println!(
-        "{}: '{}' on {on} ({} parameters), {} in {:.1} ms ({} iterations, {:.1} ms end to end)",
+        "{}: '{}' on {on} ({count}), {} in {:.1} ms ({} iterations, {:.1} ms end to end)",
         m.name,
         rep.set.name(),
-        r.theta.len(),
         r.solver.status,
         r.solver.seconds * 1e3,
         r.solver.iterations,
-        total * 1e3
+        rep.total * 1e3
     );
     if let Some(why) = &rep.set_note {
         println!("constraints '{}' by default: {why}", rep.set.name());
     }
-    let rows: Vec<_> = r
+}
+
+/// Each body's identified mass properties; a mass the data do not determine is marked `~`.
+fn print_identified_bodies(m: &Model, rep: &Report) {
+    let names = m.parameter_names();
+    let se = &rep.idf.standard_errors;
+    let mut undetermined = 0;
+    let (rows, marks): (Vec<_>, Vec<char>) = rep
+        .r
         .bodies
         .iter()
         .map(|b| {
-            (
-                b.name.clone(),
-                physid::spatial::InertialParams(nalgebra::SVector::from(b.pi)),
-                b.consistency.clone(),
-            )
+            let pi = physid::spatial::InertialParams(nalgebra::SVector::from(b.pi));
+            let col = names.iter().position(|n| *n == format!("{}.m", b.name));
+            let mark = match col.map(|c| se[c]) {
+                Some(e) if e.is_finite() && e < pi.mass().abs() => ' ',
+                _ => {
+                    undetermined += 1;
+                    '~'
+                }
+            };
+            ((b.name.clone(), pi, b.consistency.clone()), mark)
         })
-        .collect();
-    super::model_cmd::print_bodies(&rows);
+        .unzip();
+    super::model_cmd::print_bodies_marked(&rows, &marks);
+    if undetermined > 0 {
+        println!(
+            "~ {undetermined} of {} masses are not determined by the data on their own (no finite standard error, or one larger than the mass): the prior and the constraints set them; the base parameters below are what the data determine",
+            rows.len()
+        );
+    }
+}
+
+/// Friction and RMS per joint; friction the data cannot determine (a locked joint, or one that
+/// never moves) shows `—`.
+fn print_joints(m: &Model, rep: &Report) {
+    let r = &rep.r;
+    let width = m
+        .bodies
+        .iter()
+        .map(|b| b.joint_name.len())
+        .max()
+        .unwrap_or(5)
+        .max(14);
     println!(
-        "\n{:<14} {:>12} {:>12} {:>12} {:>14}",
+        "\n{:<width$} {:>12} {:>12} {:>12} {:>14}",
         "joint", "B [Nms/rad]", "Bc [Nm]", "train RMS", "validation RMS"
     );
     let cell = |x: Option<f64>| x.map_or("locked".to_string(), |v| format!("{v:.4}"));
+    let still: Vec<&String> = rep
+        .data
+        .iter()
+        .flat_map(|d| d.pipeline.still.iter())
+        .collect();
     for (j, b) in m.bodies.iter().enumerate() {
+        let known = rep.train_rms[j].is_some() && !still.contains(&&b.joint_name);
+        let friction = |v: f64| {
+            if known {
+                format!("{v:.4}")
+            } else {
+                "—".into()
+            }
+        };
         println!(
-            "{:<14} {:>12.4} {:>12.4} {:>12} {:>14}",
+            "{:<width$} {:>12} {:>12} {:>12} {:>14}",
             b.joint_name,
-            r.viscous[j],
-            r.coulomb[j],
-            cell(train_rms[j]),
-            val.as_ref().map_or("-".into(), |(v, _)| cell(v[j]))
+            friction(r.viscous[j]),
+            friction(r.coulomb[j]),
+            cell(rep.train_rms[j]),
+            rep.val.as_ref().map_or("-".into(), |(v, _)| cell(v[j]))
         );
     }
-    print_terms(&rep.terms, m);
+}
+
+/// Overall RMS, consistency and the constraints' state.
+fn print_fit(rep: &Report) {
+    let r = &rep.r;
     println!(
-        "overall RMS: train {train_all:.4} N m{}",
-        val.as_ref()
+        "overall RMS: train {:.4} N m{}",
+        rep.train_all,
+        rep.val
+            .as_ref()
             .map_or(String::new(), |(_, v)| format!(", validation {v:.4} N m"))
     );
     let inconsistent: Vec<&str> = r
@@ -1253,30 +1366,43 @@ fn print_text(a: &Args, m: &Model, rep: &Report) {
         }
     );
     println!(
-        "constraints of '{}': {}; objective {:.6e}; regressor on the training samples: rank {} of {}, condition number {:.2e} (unit-norm columns; singular values above 3.2e-5 of the largest); {} unidentifiable directions",
+        "constraints of '{}': {}; objective {:.6e}",
         rep.set.name(),
-        if rep.set == ConstraintSet::None { "none imposed" } else if r.constraints_hold { "all hold" } else { "do NOT all hold" },
-        r.objective,
-        idf.rank,
-        idf.parameters,
-        idf.condition,
-        idf.parameters - idf.rank
+        if rep.set == ConstraintSet::None {
+            "none imposed"
+        } else if r.constraints_hold {
+            "all hold"
+        } else {
+            "do NOT all hold"
+        },
+        r.objective
     );
-    for u in idf.unidentifiable.iter().take(5) {
+}
+
+/// Rank, conditioning, the base parameters with their errors, and the null directions.
+fn print_identifiability(idf: &analysis::Identifiability) {
+    println!(
+        "\nidentifiability on the training samples: the model's {} parameters have rank {} (condition number {:.2e}; unit-norm columns, singular values above 3.2e-5 of the largest), {} unidentifiable directions",
+        idf.parameters, idf.rank, idf.condition, idf.unidentifiable_total
+    );
+    println!("base parameters (what the data determine), value ± standard error:");
+    for (i, b) in idf.base.iter().enumerate() {
+        println!(
+            "  β{:<3} {:>12.5e} ± {:<10.2e} {}",
+            i + 1,
+            b.value,
+            b.standard_error,
+            b.expression
+        );
+    }
+    for u in &idf.unidentifiable {
         println!("  unidentifiable: {u}");
     }
-    if let Some(errs) = &truth_errors {
-        println!("\nagainst the ground truth in the log (relative errors; CoM in m):");
+    if idf.unidentifiable.len() < idf.unidentifiable_total {
         println!(
-            "{:<12} {:>10} {:>10} {:>12} {:>10}",
-            "body", "mass", "CoM", "inertia_C", "J"
+            "  (and {} more unidentifiable directions; all in --json)",
+            idf.unidentifiable_total - idf.unidentifiable.len()
         );
-        for e in errs {
-            println!(
-                "{:<12} {:>10.4} {:>10.4} {:>12.4} {:>10.4}",
-                e.name, e.mass_rel, e.com_m, e.inertia_rel, e.j_rel
-            );
-        }
     }
 }
 

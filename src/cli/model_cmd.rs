@@ -219,15 +219,27 @@ fn print_ellipsoids(m: &Model) {
 /// Prints one line per body: mass, CoM, principal moments about the CoM and the consistency
 /// margins (`λ_min I`, `λ_min J`, `tr(JQ)/m`).
 pub fn print_bodies(rows: &[(String, InertialParams, ConsistencyReport)]) {
+    print_bodies_marked(rows, &vec![' '; rows.len()]);
+}
+
+/// [`print_bodies`] with a mark after each body's mass (e.g. `~` for a mass the data do not
+/// determine).
+pub fn print_bodies_marked(rows: &[(String, InertialParams, ConsistencyReport)], marks: &[char]) {
+    let width = rows
+        .iter()
+        .map(|(n, _, _)| n.len())
+        .max()
+        .unwrap_or(4)
+        .max(12);
     println!(
-        "\n{:<12} {:>8} {:>28} {:>30} {:>11} {:>11} {:>9}",
+        "\n{:<width$} {:>9} {:>28} {:>30} {:>11} {:>11} {:>9}",
         "body", "m [kg]", "CoM [m]", "principal I_C [kg m^2]", "min eig I", "min eig J", "tr(JQ)/m"
     );
-    for (name, p, r) in rows {
+    for ((name, p, r), mark) in rows.iter().zip(marks) {
         let c = p.com().unwrap_or_default();
         let pm = p.principal_moments().map(|x| x.0).unwrap_or_default();
         println!(
-            "{:<12} {:>8.4} {:>28} {:>30} {:>11.3e} {:>11.3e} {:>9}",
+            "{:<width$} {:>8.4}{mark} {:>28} {:>30} {:>11.3e} {:>11.3e} {:>9}",
             name,
             p.mass(),
             format!("({:.4}, {:.4}, {:.4})", c.x, c.y, c.z),

@@ -454,6 +454,39 @@ pub fn load_trajectory_with(
     })
 }
 
+/// Loads several data files read together (training and validation runs): each through the
+/// pipeline, with one cutoff for all (chosen from the motion of all of them when not given), so
+/// that every run is processed alike.
+pub fn load_all(
+    paths: &[&Path],
+    model: &Model,
+    opts: &DataOptions,
+) -> Result<Vec<LoadedData>, IoError> {
+    let read: Vec<_> = paths
+        .iter()
+        .map(|p| load_logged(p, model, opts))
+        .collect::<Result<_, _>>()?;
+    let mut popts = opts.prepare.clone();
+    if popts.cutoff.is_none() {
+        let logs: Vec<&crate::prepare::Logged> = read.iter().map(|(l, _, _)| l).collect();
+        popts.band_edge = crate::prepare::band_edge_of(&logs);
+    }
+    paths
+        .iter()
+        .zip(read)
+        .map(|(path, (logged, ignored_joints, skipped_messages))| {
+            let prepared = crate::prepare::prepare(&logged, &popts)
+                .map_err(|e| IoError::invalid(path, e.to_string()))?;
+            Ok(LoadedData {
+                runs: prepared.runs,
+                report: prepared.report,
+                ignored_joints,
+                skipped_messages,
+            })
+        })
+        .collect()
+}
+
 /// The samples of a data file as logged, matched to `model`'s joints: the samples, the file's
 /// joints the robot lacks, and the joint-state messages skipped (naming none of its joints).
 pub fn load_logged(
