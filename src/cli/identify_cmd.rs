@@ -240,7 +240,7 @@ const STREAM_ABOVE_BYTES: u64 = 64 << 20;
 /// from disk.
 pub enum Data {
     /// Loaded and prepared samples.
-    Memory(physid::io::LoadedData),
+    Memory(Box<physid::io::LoadedData>),
     /// A streamable CSV, the robot's joint names and its sample count.
     Csv(PathBuf, Vec<String>, usize),
 }
