@@ -282,11 +282,11 @@ impl Data {
                     let len = samples::stream_csv(path, &names, 0..0, &mut |_, _| {})?;
                     Data::Csv(path.to_path_buf(), names.clone(), len)
                 } else {
-                    Data::Memory(
+                    Data::Memory(Box::new(
                         loaded
                             .next()
                             .expect("one loaded file per path not streamed"),
-                    )
+                    ))
                 })
             })
             .collect()
