@@ -54,7 +54,7 @@ class Report:
     def add(self, case, err, tol):
         ok = err <= tol
         self.rows.append(ok)
-        print(f"{'ok  ' if ok else 'FAIL'} {case:<58} max rel. error {err:.2e} (tol {tol:.0e})")
+        print(f"{'ok  ' if ok else 'FAIL'} {case:<58} max rel. error {err:.2e} (tol {tol:.2g})")
 
     def check(self, case, ok):
         """A pass/fail check without a numeric error."""

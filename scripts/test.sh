@@ -36,7 +36,7 @@ export PHYSID_BIN="$CARGO_TARGET_DIR/release/physid"
 py_passed=0; py_failed=0
 main_out=$(mktemp -d)
 trap 'rm -rf "$main_out"' EXIT
-for s in check_pinocchio check_mujoco check_cvxpy check_rosbag check_schemas check_report_html check_main_outputs; do
+for s in check_pinocchio check_mujoco check_cvxpy check_rosbag check_panda check_schemas check_report_html check_main_outputs; do
   if [ "$s" = check_main_outputs ]; then
     step "the README's main command (bash scripts/run.sh), outputs parsed"
     out=$( { bash scripts/run.sh --out "$main_out/sample_size" >"$main_out/run.log" 2>&1 ||

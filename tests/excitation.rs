@@ -254,7 +254,7 @@ fn excite_names_bad_flags_and_never_overwrites_its_input() {
     let b = base.to_str().unwrap();
     let (code, _, err) = physid(&["excite", "--iterations", "1", "--scenario", b, "--out", b]);
     assert_eq!(code, 2);
-    assert!(err.contains("is an input"));
+    assert!(err.contains("refusing to write over the input"), "{err}");
     assert_eq!(std::fs::read(&base).unwrap(), before);
 }
 
@@ -342,4 +342,71 @@ fn motions_must_share_the_robot() {
         .unwrap_err()
         .to_string();
     assert!(e.contains("another robot"), "{e}");
+}
+
+#[test]
+fn a_designed_motion_starts_and_ends_at_rest_within_every_limit() {
+    // The Panda, whose URDF gives no acceleration or jerk limits: the design keeps the safe
+    // defaults (3 rad/s², 30 rad/s³), fades in from rest and out to rest, is checked in
+    // simulation (exit 0 means no limit was left), and its exported time series at 500 Hz
+    // starts and ends at rest. Before, it started at up to 2.09 rad/s and −18 rad/s².
+    let urdf =
+        root().join("data/panda/example-robot-data/robots/panda_description/urdf/panda.urdf");
+    let dir = tempfile::tempdir().unwrap();
+    let (csv, out) = (
+        dir.path().join("motion.csv"),
+        dir.path().join("motion.toml"),
+    );
+    let (code, stdout, err) = physid(&[
+        "excite",
+        "--robot",
+        urdf.to_str().unwrap(),
+        "--duration",
+        "10",
+        "--iterations",
+        "40",
+        "--rate",
+        "500",
+        "--csv",
+        csv.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert_eq!(code, 0, "{err}");
+    assert!(stdout.contains("starts and ends at rest"), "{stdout}");
+    assert!(err.contains("3 rad/s² and 30 rad/s³"), "{err}");
+    let mut r = csv::Reader::from_path(&csv).unwrap();
+    let header: Vec<String> = r.headers().unwrap().iter().map(String::from).collect();
+    let rows: Vec<Vec<f64>> = r
+        .records()
+        .map(|rec| rec.unwrap().iter().map(|x| x.parse().unwrap()).collect())
+        .collect();
+    assert_eq!(rows.len(), 5001);
+    let col = |name: &str| header.iter().position(|h| h == name).unwrap();
+    for j in 1..=7 {
+        let (dq, ddq) = (
+            col(&format!("dq_panda_joint{j}")),
+            col(&format!("ddq_panda_joint{j}")),
+        );
+        for row in [&rows[0], &rows[rows.len() - 1]] {
+            assert!(
+                row[dq].abs() < 1e-12 && row[ddq].abs() < 1e-9,
+                "joint {j}: {row:?}"
+            );
+        }
+        let peak = rows.iter().map(|row| row[ddq].abs()).fold(0.0, f64::max);
+        assert!(
+            peak <= 3.0 + 1e-9 && peak > 0.5,
+            "joint {j}: peak acceleration {peak}"
+        );
+        let q = col(&format!("q_panda_joint{j}"));
+        assert_eq!(
+            rows[0][q],
+            rows[rows.len() - 1][q],
+            "joint {j} comes back to its start"
+        );
+    }
+    // The scenario carries the ramp, so `simulate` runs it from rest too.
+    let text = std::fs::read_to_string(&out).unwrap();
+    assert!(text.contains("ramp = 2"), "{text}");
 }

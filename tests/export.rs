@@ -153,3 +153,36 @@ fn fixed_links_hand_their_inertia_to_the_body_and_rotors_keep_their_links() {
         "parameters differ by {d}"
     );
 }
+
+#[test]
+fn dynamics_keeps_its_other_attributes_when_friction_is_written() {
+    // The Panda's <dynamics D="1" K="7000" damping="0.003" friction="0.0" mu_coulomb="0"
+    // mu_viscous="16"/> carries a simulator's joint stiffness and friction: only damping and
+    // friction change. Before, the element was rewritten whole and the rest was lost.
+    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
+    let urdf = root.join("data/panda/example-robot-data/robots/panda_description/urdf/panda.urdf");
+    let xml = std::fs::read_to_string(&urdf).unwrap();
+    let model = io::load_robot(urdf.to_str().unwrap()).unwrap();
+    let mut identified = model.clone();
+    for (j, b) in identified.bodies.iter_mut().enumerate() {
+        b.friction.viscous = 0.25 + 0.01 * j as f64;
+        b.friction.coulomb = 0.5;
+    }
+    let out = io::urdf_patch::patch(&xml, &urdf, &model, &identified).unwrap();
+    let joint1 = &out[out.find("<joint name=\"panda_joint1\"").unwrap()..];
+    let dynamics = &joint1[joint1.find("<dynamics").unwrap()..];
+    let dynamics = &dynamics[..dynamics.find("/>").unwrap() + 2];
+    assert_eq!(
+        dynamics,
+        "<dynamics D=\"1\" K=\"7000\" damping=\"0.25\" friction=\"0.5\" mu_coulomb=\"0\" mu_viscous=\"16\"/>"
+    );
+    // A <dynamics> without damping gets it added, keeping what it has.
+    let trimmed = xml.replacen("damping=\"0.003\" ", "", 1);
+    let out = io::urdf_patch::patch(&trimmed, &urdf, &model, &identified).unwrap();
+    let joint1 = &out[out.find("<joint name=\"panda_joint1\"").unwrap()..];
+    assert!(
+        joint1.contains("<dynamics damping=\"0.25\" D=\"1\" K=\"7000\" friction=\"0.5\""),
+        "{}",
+        &joint1[..400]
+    );
+}

@@ -47,13 +47,29 @@ pub struct Args {
     #[arg(long, default_value_t = 0.15)]
     margin: f64,
     /// Acceleration limit (rad/s²): one for every joint, or one per joint separated by commas.
-    #[arg(
-        long,
-        value_delimiter = ',',
-        default_value = "30",
-        allow_negative_numbers = true
-    )]
-    max_acceleration: Vec<f64>,
+    /// Default: the description's (a URDF `<limit acceleration=…>`, a robot TOML's
+    /// `limits.acceleration`), else 3 rad/s², below common arms' limits.
+    #[arg(long, value_delimiter = ',', allow_negative_numbers = true)]
+    max_acceleration: Option<Vec<f64>>,
+    /// Jerk limit (rad/s³), as --max-acceleration; default the description's, else 30 rad/s³.
+    #[arg(long, value_delimiter = ',', allow_negative_numbers = true)]
+    max_jerk: Option<Vec<f64>>,
+    /// Start and end at rest (s): the motion fades in from rest over this long and out to rest
+    /// at the end (velocity, acceleration and jerk zero at both ends). Default: one period of
+    /// the fundamental, at most a quarter of the duration; 0 starts mid-motion (periodic).
+    #[arg(long, allow_negative_numbers = true)]
+    ramp: Option<f64>,
+    /// Also write the designed trajectory (t, q, q̇, q̈ per joint, named by joint) as CSV, to
+    /// send to a controller.
+    #[arg(long)]
+    csv: Option<PathBuf>,
+    /// Also write the designed trajectory as MCAP (physid_msgs/msg/JointSample on
+    /// /physid/excitation: position, velocity, acceleration).
+    #[arg(long)]
+    mcap: Option<PathBuf>,
+    /// Sample rate of --csv and --mcap (Hz).
+    #[arg(long, default_value_t = 1000.0, allow_negative_numbers = true)]
+    rate: f64,
     /// Samples per period at which the information is evaluated.
     #[arg(long, default_value_t = 200)]
     samples: usize,
@@ -118,6 +134,29 @@ pub struct ExciteJson {
 
 /// `physid excite`.
 pub fn run(a: Args) -> anyhow::Result<()> {
+    if !(a.duration.is_finite() && a.duration > 0.0) {
+        anyhow::bail!(
+            "--duration must be a positive number of seconds, got {}",
+            a.duration
+        );
+    }
+    let base = Base::load(&a)?;
+    let (max_acceleration, max_jerk, defaulted) = design::rate_limits(
+        &base.model,
+        a.max_acceleration.as_deref(),
+        a.max_jerk.as_deref(),
+    );
+    if !defaulted.is_empty() && !a.json {
+        eprintln!(
+            "note: the description gives no acceleration or jerk limit for {}: designing within {} rad/s² and {} rad/s³ (give --max-acceleration and --max-jerk)",
+            defaulted.join(", "),
+            design::SAFE_ACCELERATION,
+            design::SAFE_JERK
+        );
+    }
+    let ramp = a
+        .ramp
+        .unwrap_or_else(|| (1.0 / a.base_frequency).min(0.25 * a.duration));
     let opts = DesignOptions {
         harmonics: a.harmonics,
         base_frequency: a.base_frequency,
@@ -130,25 +169,29 @@ pub fn run(a: Args) -> anyhow::Result<()> {
         iterations: a.iterations,
         starts: a.starts,
         margin: a.margin,
-        max_acceleration: a.max_acceleration.clone(),
+        max_acceleration,
+        max_jerk,
+        ramp,
+        duration: a.duration,
         samples: a.samples,
     };
     opts.validate().map_err(super::option_error)?;
-    if !(a.duration.is_finite() && a.duration > 0.0) {
+    if !(a.rate.is_finite() && a.rate > 0.0 && a.rate <= 1e5) {
         anyhow::bail!(
-            "--duration must be a positive number of seconds, got {}",
-            a.duration
+            "--rate must be a sample rate in (0, 100000] Hz, got {}",
+            a.rate
         );
     }
-    let base = Base::load(&a)?;
     if a.score {
         return score_base(&base, &a, &opts);
     }
-    if let Some(out) = &a.out {
-        if base.inputs.iter().any(|i| same_file(i, out)) {
-            anyhow::bail!("--out {} is an input of this run", out.display());
-        }
-    }
+    let outputs: Vec<&Path> = [&a.out, &a.csv, &a.mcap]
+        .into_iter()
+        .flatten()
+        .map(PathBuf::as_path)
+        .collect();
+    let inputs: Vec<&Path> = base.inputs.iter().map(PathBuf::as_path).collect();
+    physid::io::check_outputs(&outputs, &inputs)?;
     let pool = super::thread_pool(Some(a.threads))?;
     let d = pool
         .install(|| design::design(&base.model, base.range.as_deref(), &opts))
@@ -162,8 +205,11 @@ pub fn run(a: Args) -> anyhow::Result<()> {
         (Some(s), Some(ok))
     };
     // A design that leaves a limit in simulation is not written.
-    if let (Some(out), false) = (&a.out, within == Some(false)) {
-        physid::io::write_atomic(out, text.as_bytes())?;
+    if within != Some(false) {
+        if let Some(out) = &a.out {
+            physid::io::write_atomic(out, text.as_bytes())?;
+        }
+        write_trajectory(&base.model, &d.series, &a)?;
     }
     if a.json {
         let j = ExciteJson {
@@ -184,6 +230,29 @@ pub fn run(a: Args) -> anyhow::Result<()> {
             "the simulated run left a limit (see the table above), so the scenario was not written: raise --margin".into(),
         )
         .into());
+    }
+    Ok(())
+}
+
+/// `--csv` and `--mcap`: the designed reference trajectory (t, q, q̇, q̈) at `a.rate` over the
+/// run, written atomically.
+fn write_trajectory(model: &Model, series: &design::FourierSeries, a: &Args) -> anyhow::Result<()> {
+    if a.csv.is_none() && a.mcap.is_none() {
+        return Ok(());
+    }
+    let names: Vec<String> = model.bodies.iter().map(|b| b.joint_name.clone()).collect();
+    let samples = (a.duration * a.rate).round() as usize + 1;
+    let mut tr = physid::trajectory::Trajectory::new(names.clone(), true);
+    for k in 0..samples {
+        let t = k as f64 / a.rate;
+        let [q, qd, qdd] = series.at(t);
+        tr.push(t, &q, &qd, Some(&qdd), &vec![0.0; names.len()]);
+    }
+    if let Some(p) = &a.csv {
+        physid::io::samples::write_reference_csv(p, &tr)?;
+    }
+    if let Some(p) = &a.mcap {
+        physid::io::mcap_log::write_reference(p, &tr)?;
     }
     Ok(())
 }
@@ -212,14 +281,6 @@ fn score_base(base: &Base, a: &Args, opts: &DesignOptions) -> anyhow::Result<()>
         );
     }
     Ok(())
-}
-
-/// Whether two paths name the same file (when both exist) or the same path.
-fn same_file(a: &Path, b: &Path) -> bool {
-    match (a.canonicalize(), b.canonicalize()) {
-        (Ok(x), Ok(y)) => x == y,
-        _ => a == b,
-    }
 }
 
 /// What the design starts from: the robot, the scenario table it goes into, the joint ranges.
@@ -322,13 +383,19 @@ impl Base {
         ex["kp"] = value(list(&kp));
         ex["kd"] = value(list(&kd));
         ex["computed_torque"] = value(computed_torque);
+        if let Some(w) = s.window {
+            ex["ramp"] = value(w.ramp);
+        }
+        if computed_torque {
+            ex["friction_feedforward"] = value(true);
+        }
         let mut c = Table::new();
         c["sin"] = value(rows(&s.sin));
         c["cos"] = value(rows(&s.cos));
         ex["coefficients"] = Item::Table(c);
         let mut doc: DocumentMut = self.text.parse().context("re-reading the base scenario")?;
         let header = format!(
-            "# Designed by `physid excite` (physid {}): {} Fourier excitation, {} harmonics at {} Hz,\n# objective {} = {:.4} (best random start {:.4}), condition number {:.3e}, seed {}, margin {},\n# acceleration limit {:?} rad/s². {} of {} parameter combinations identifiable. Limits kept and used: `physid excite --json`.\n",
+            "# Designed by `physid excite` (physid {}): {} Fourier excitation, {} harmonics at {} Hz,\n# objective {} = {:.4} (best random start {:.4}), condition number {:.3e}, seed {}, margin {},\n# acceleration limit {:?} rad/s², jerk limit {:?} rad/s³, ramp {} s. {} of {} parameter combinations identifiable. Limits kept and used: `physid excite --json`.\n",
             env!("CARGO_PKG_VERSION"),
             if d.evaluations > a.starts { "optimized" } else { "random" },
             a.harmonics,
@@ -339,7 +406,9 @@ impl Base {
             d.condition,
             a.seed,
             a.margin,
-            a.max_acceleration,
+            d.limits.acceleration.iter().map(|x| x / (1.0 - a.margin)).collect::<Vec<_>>(),
+            d.limits.jerk.iter().map(|x| x / (1.0 - a.margin)).collect::<Vec<_>>(),
+            s.window.map_or(0.0, |w| w.ramp),
             d.identifiable,
             d.parameters,
         );
@@ -449,13 +518,19 @@ fn print_design(d: &Design, simulated: Option<&[SimulatedUse]>, a: &Args) {
         d.seconds
     );
     println!(
-        "limits used (peak / limit with the {:.0} % margin): joint, position, speed, acceleration, torque",
+        "limits used (peak / limit with the {:.0} % margin, ramps included): joint, position, speed, acceleration, jerk, torque",
         100.0 * a.margin
     );
     for u in &d.limit_use {
         println!(
-            "  {:<14} {:>5.2} {:>5.2} {:>5.2} {:>5.2}",
-            u.joint, u.position, u.velocity, u.acceleration, u.torque
+            "  {:<14} {:>5.2} {:>5.2} {:>5.2} {:>5.2} {:>5.2}",
+            u.joint, u.position, u.velocity, u.acceleration, u.jerk, u.torque
+        );
+    }
+    if let Some(w) = d.series.window {
+        println!(
+            "starts and ends at rest: {:.2} s ramps at both ends of the {} s run",
+            w.ramp, a.duration
         );
     }
     if let Some(sim) = simulated {

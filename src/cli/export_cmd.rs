@@ -30,6 +30,15 @@ pub fn run(a: Args) -> anyhow::Result<()> {
     );
     if let Some(p) = &a.mjcf {
         physid::io::write_atomic(p, physid::io::mjcf::to_string(&m).as_bytes())?;
+        let lost = physid::io::mjcf::unwritten(&m);
+        if !lost.is_empty() {
+            eprintln!(
+                "warning: {}: {} meshes are in a format MuJoCo does not read (STL and OBJ only) and are not in the MJCF: {}",
+                p.display(),
+                lost.len(),
+                lost.join(", ")
+            );
+        }
         eprintln!("wrote {}", p.display());
     }
     if let Some(p) = &a.urdf {

@@ -371,10 +371,14 @@ pub fn run_seed_validated_on(
     let max_n = *grid.last().expect("validated grid");
     let mut sc = scenario.clone();
     sc.simulation.seed = seed;
-    sc.simulation.duration = (max_n + spec.validation + 1) as f64 / sc.simulation.rate;
+    // The processing's ends are left out of every fit and score: the experiment runs that long
+    // again at each end.
+    let settle = crate::sim::simulate::settle_samples(&sc, sc.simulation.rate);
+    sc.simulation.duration = (max_n + spec.validation + 1 + 2 * settle) as f64 / sc.simulation.rate;
     let rec = crate::sim::run(model, &sc, &mut |_| {})
         .map_err(|source| ExperimentError::Sim { seed, source })?;
-    let data = &rec.processed;
+    let processed = rec.processed.slice(settle..rec.processed.len() - settle);
+    let data = &processed;
     let (n, p) = (model.dof(), model.layout().len);
     let total = (max_n + spec.validation).min(data.len());
     // Every sample's regressor once (n × p each, column-major).

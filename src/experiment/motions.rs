@@ -183,12 +183,14 @@ fn validation_run(
     let mut sc = scenario.clone();
     let vseed = seed + VALIDATION_SEED_OFFSET;
     sc.simulation.seed = vseed;
-    sc.simulation.duration = (spec.validation + 1) as f64 / sc.simulation.rate;
+    // Longer by the processing's settling at each end, which is left out.
+    let settle = crate::sim::simulate::settle_samples(&sc, sc.simulation.rate);
+    sc.simulation.duration = (spec.validation + 1 + 2 * settle) as f64 / sc.simulation.rate;
     let rec = crate::sim::run(model, &sc, &mut |_| {}).map_err(|source| ExperimentError::Sim {
         seed: vseed,
         source,
     })?;
-    Ok(rec.processed)
+    Ok(rec.processed.slice(settle..rec.processed.len() - settle))
 }
 
 /// The smallest training size at which `errors` (per size, ascending sizes `ns`) first

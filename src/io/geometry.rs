@@ -186,9 +186,12 @@ pub(crate) fn into_frame(pieces: &[Piece], rot: &Matrix3<f64>, pos: &Vector3<f64
 }
 
 /// A link's shapes for export, each placed in the link frame: its collision shapes, or its
-/// visual ones when a collision mesh cannot be found (as [`link_pieces`] does); meshes that
-/// cannot be found are left out.
-pub(crate) fn link_shapes(link: &urdf_rs::Link, lookup: &Lookup) -> Vec<crate::model::Shape> {
+/// visual ones when a collision mesh cannot be found (as [`link_pieces`] does); and the mesh
+/// files of the chosen geometry that cannot be found (left out of every export).
+pub(crate) fn link_shapes_and_missing(
+    link: &urdf_rs::Link,
+    lookup: &Lookup,
+) -> (Vec<crate::model::Shape>, Vec<String>) {
     use crate::model::{Shape, ShapeKind};
     use urdf_rs::Geometry as G;
     let collision: Vec<_> = link
@@ -214,7 +217,16 @@ pub(crate) fn link_shapes(link: &urdf_rs::Link, lookup: &Lookup) -> Vec<crate::m
     } else {
         visual
     };
-    chosen
+    let missing: Vec<String> = chosen
+        .iter()
+        .filter_map(|(_, g)| match g {
+            G::Mesh { filename, .. } if resolve(filename, lookup).is_err() => {
+                Some(filename.clone())
+            }
+            _ => None,
+        })
+        .collect();
+    let shapes = chosen
         .into_iter()
         .filter_map(|(origin, g)| {
             let kind = match g {
@@ -239,5 +251,6 @@ pub(crate) fn link_shapes(link: &urdf_rs::Link, lookup: &Lookup) -> Vec<crate::m
             );
             Some(Shape { pose, kind })
         })
-        .collect()
+        .collect();
+    (shapes, missing)
 }

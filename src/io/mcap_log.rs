@@ -316,6 +316,63 @@ pub fn write(path: &Path, rec: &Recording, meta: &LogMeta) -> Result<(), IoError
     Ok(())
 }
 
+/// The topic of a reference trajectory ([`write_reference`]).
+pub const TOPIC_REFERENCE: &str = "/physid/excitation";
+
+/// Writes a reference trajectory (what a controller is to follow: q, q̇, q̈, no torques) as MCAP,
+/// `physid_msgs/msg/JointSample` on [`TOPIC_REFERENCE`], log time = the trajectory's time,
+/// atomically.
+pub fn write_reference(path: &Path, tr: &Trajectory) -> Result<(), IoError> {
+    let fs_err = |source| IoError::Fs {
+        path: path.to_path_buf(),
+        source,
+    };
+    let mcap_err = |e: mcap::McapError| IoError::invalid(path, format!("MCAP: {e}"));
+    let tmp = super::new_temp_beside(path)?;
+    {
+        let file = std::io::BufWriter::new(tmp.as_file());
+        let mut w = mcap::WriteOptions::new()
+            .compression(Some(mcap::Compression::Zstd))
+            .profile("ros2")
+            .create(file)
+            .map_err(mcap_err)?;
+        let schema = w
+            .add_schema(
+                JOINT_SAMPLE_TYPE,
+                "ros2msg",
+                joint_sample_schema().as_bytes(),
+            )
+            .map_err(mcap_err)?;
+        let channel = w
+            .add_channel(schema, TOPIC_REFERENCE, "cdr", &BTreeMap::new())
+            .map_err(mcap_err)?;
+        for k in 0..tr.len() {
+            let (header, ns) = stamp(tr.t[k]);
+            let msg = JointSample {
+                header,
+                name: tr.joint_names.clone(),
+                position: tr.q_at(k).to_vec(),
+                velocity: tr.qd_at(k).to_vec(),
+                acceleration: tr.qdd_at(k).map(<[f64]>::to_vec).unwrap_or_default(),
+                effort: vec![],
+                friction: vec![],
+                effects: vec![],
+            };
+            let mh = mcap::records::MessageHeader {
+                channel_id: channel,
+                sequence: k as u32,
+                log_time: ns,
+                publish_time: ns,
+            };
+            w.write_to_known_channel(&mh, &cdr_bytes(&msg))
+                .map_err(mcap_err)?;
+        }
+        w.finish().map_err(mcap_err)?;
+    }
+    tmp.persist(path).map_err(|e| fs_err(e.error))?;
+    Ok(())
+}
+
 /// Which time a joint-state sample gets.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub enum Stamp {

@@ -74,16 +74,44 @@ fn mujoco_reads(path: &std::path::Path) -> bool {
     matches!(ext.as_deref(), Some("stl" | "obj"))
 }
 
+/// Every body's shapes by the name their geoms take (`world` for the static base's).
+fn named_shapes(model: &Model) -> Vec<(&str, &[Shape])> {
+    std::iter::once(("world", &model.base_shapes[..]))
+        .chain(
+            model
+                .bodies
+                .iter()
+                .map(|b| (b.name.as_str(), &b.shapes[..])),
+        )
+        .collect()
+}
+
+/// The description's meshes an MJCF cannot carry (a format MuJoCo does not read), by body, for
+/// a warning: the export shows those bodies without them.
+pub fn unwritten(model: &Model) -> Vec<String> {
+    named_shapes(model)
+        .into_iter()
+        .flat_map(|(body, shapes)| {
+            shapes.iter().filter_map(move |sh| match &sh.kind {
+                ShapeKind::Mesh { path, .. } if !mujoco_reads(path) => {
+                    Some(format!("{body}: {}", path.display()))
+                }
+                _ => None,
+            })
+        })
+        .collect()
+}
+
 /// Mesh files MuJoCo reads: asset name → file, scale.
 fn mesh_assets(model: &Model) -> Vec<(String, String, [f64; 3])> {
     let mut out = vec![];
-    for b in &model.bodies {
-        for (k, sh) in b.shapes.iter().enumerate() {
+    for (body, shapes) in named_shapes(model) {
+        for (k, sh) in shapes.iter().enumerate() {
             if let ShapeKind::Mesh { path, scale } = &sh.kind {
                 if mujoco_reads(path) {
                     let file = std::fs::canonicalize(path).unwrap_or(path.clone());
                     out.push((
-                        format!("{}_mesh{k}", b.name),
+                        format!("{body}_mesh{k}"),
                         file.display().to_string(),
                         *scale,
                     ));
@@ -225,6 +253,11 @@ pub fn to_string(model: &Model) -> String {
         let _ = writeln!(s, "  </asset>");
     }
     let _ = writeln!(s, "  <worldbody>");
+    for (k, sh) in model.base_shapes.iter().enumerate() {
+        if let Some(g) = shape_geom("world", k, sh) {
+            let _ = writeln!(s, "    {g}");
+        }
+    }
     // Rotors on the fixed base: static bodies welded to the world, so that the model's mass
     // is complete; their spin inertia acts through their joint's armature.
     for b in model.bodies.iter().filter(|b| b.parent.is_none()) {

@@ -83,6 +83,10 @@ pub struct LimitsSpec {
     pub velocity: Option<f64>,
     /// Torque limit (N m or N).
     pub effort: Option<f64>,
+    /// Acceleration limit for designed motions (rad/s² or m/s²).
+    pub acceleration: Option<f64>,
+    /// Jerk limit for designed motions (rad/s³ or m/s³).
+    pub jerk: Option<f64>,
 }
 
 /// The `[robot]` table.
@@ -358,6 +362,8 @@ fn body_from_spec(k: usize, b: &BodySpec, earlier: &[Body], path: &Path) -> Resu
             upper: l.upper.unwrap_or(d.upper),
             velocity: l.velocity.unwrap_or(d.velocity),
             effort: l.effort.unwrap_or(d.effort),
+            acceleration: l.acceleration.unwrap_or(d.acceleration),
+            jerk: l.jerk.unwrap_or(d.jerk),
         },
     })
 }

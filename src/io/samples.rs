@@ -48,6 +48,26 @@ pub fn to_csv(tr: &Trajectory) -> String {
     String::from_utf8(w.into_inner().expect("in memory")).expect("CSV is UTF-8")
 }
 
+/// Writes a reference trajectory (what a controller is to follow) as CSV, atomically: `t`, then
+/// `q_<joint>`, `dq_<joint>`, `ddq_<joint>` per joint (s, rad, rad/s, rad/s²), no torques.
+pub fn write_reference_csv(path: &Path, tr: &Trajectory) -> Result<(), IoError> {
+    let mut w = csv::Writer::from_writer(vec![]);
+    let mut header = vec!["t".to_string()];
+    for g in ["q", "dq", "ddq"] {
+        header.extend(tr.joint_names.iter().map(|j| format!("{g}_{j}")));
+    }
+    w.write_record(&header).expect("writing to memory");
+    for k in 0..tr.len() {
+        let mut rec = vec![num(tr.t[k])];
+        rec.extend(tr.q_at(k).iter().map(|&x| num(x)));
+        rec.extend(tr.qd_at(k).iter().map(|&x| num(x)));
+        rec.extend(tr.qdd_at(k).unwrap_or(&[]).iter().map(|&x| num(x)));
+        w.write_record(&rec).expect("writing to memory");
+    }
+    let bytes = w.into_inner().expect("in memory");
+    super::write_atomic(path, &bytes)
+}
+
 /// Writes a trajectory as CSV, atomically.
 pub fn write_csv(path: &Path, tr: &Trajectory) -> Result<(), IoError> {
     super::write_atomic(path, to_csv(tr).as_bytes())

@@ -141,6 +141,7 @@ pub fn from_str(
         });
     }
     let warnings = duplicate_elements(xml);
+    let rates = rate_limits(xml, path)?;
     let robot = urdf_rs::read_from_string(&first_origin_only(xml)).map_err(|e| IoError::Parse {
         path: path.to_path_buf(),
         message: format!("not a valid URDF: {e}"),
@@ -158,9 +159,24 @@ pub fn from_str(
         mut bodies,
         body_parent_link_x,
         shapes,
+        base,
         mimics,
     } = walk(&robot, &link_idx, &children, root, &lookup)?;
     let mut warnings = warnings;
+    for b in &mut bodies {
+        if let Some(&(acceleration, jerk)) = rates.get(&b.joint_name) {
+            b.limits.acceleration = acceleration.unwrap_or(b.limits.acceleration);
+            b.limits.jerk = jerk.unwrap_or(b.limits.jerk);
+        }
+    }
+    let lost: Vec<&String> = shapes.iter().chain([&base]).flat_map(|s| &s.lost).collect();
+    if !lost.is_empty() {
+        warnings.push(format!(
+            "{} meshes of the geometry were not found, and exports (MJCF) will lack them: {} (give --package-dir)",
+            lost.len(),
+            lost.iter().take(4).map(|s| s.as_str()).collect::<Vec<_>>().join("; ")
+        ));
+    }
     for (b, s) in bodies.iter_mut().zip(&shapes) {
         b.shapes = s.shapes.clone();
         b.bounding = s.bound(&b.name, &lookup).unwrap_or_else(|w| {
@@ -180,7 +196,8 @@ pub fn from_str(
             path: path.to_path_buf(),
             source,
         })?
-        .with_rotor_model(extras.rotor_model.unwrap_or_default());
+        .with_rotor_model(extras.rotor_model.unwrap_or_default())
+        .with_base_shapes(base.shapes);
     model
         .check_physical_with(false)
         .map_err(|source| IoError::Model {
@@ -189,6 +206,47 @@ pub fn from_str(
         })?;
     check_bounds(&model, extras, path, &mut warnings)?;
     Ok((model, warnings))
+}
+
+/// Per joint name, `<limit acceleration jerk>` as given.
+type RateLimits = HashMap<String, (Option<f64>, Option<f64>)>;
+
+/// Per joint, the `acceleration` and `jerk` attributes of its `<limit>` (not part of the URDF
+/// standard, which urdfdom ignores; some descriptions carry them for planners). A value that
+/// is not a number is an error naming the joint.
+fn rate_limits(xml: &str, path: &Path) -> Result<RateLimits, IoError> {
+    let Ok(doc) = roxmltree::Document::parse(xml) else {
+        return Ok(HashMap::new());
+    };
+    let mut out = HashMap::new();
+    for joint in doc
+        .root_element()
+        .children()
+        .filter(|n| n.has_tag_name("joint"))
+    {
+        let Some(limit) = joint.children().find(|n| n.has_tag_name("limit")) else {
+            continue;
+        };
+        let name = joint.attribute("name").unwrap_or("");
+        let read = |attr: &str| -> Result<Option<f64>, IoError> {
+            limit
+                .attribute(attr)
+                .map(|v| {
+                    v.trim().parse::<f64>().map_err(|_| {
+                        IoError::invalid(
+                            path,
+                            format!("joint '{name}': <limit {attr}=\"{v}\"> is not a number"),
+                        )
+                    })
+                })
+                .transpose()
+        };
+        let pair = (read("acceleration")?, read("jerk")?);
+        if pair != (None, None) {
+            out.insert(name.to_string(), pair);
+        }
+    }
+    Ok(out)
 }
 
 /// Link name → index; every link defined once with a finite non-negative mass.
@@ -284,6 +342,8 @@ type PendingRotor<'r> = (
 struct Shapes {
     /// The shapes themselves, for export.
     shapes: Vec<crate::model::Shape>,
+    /// Meshes of the shapes that were not found (left out of every export).
+    lost: Vec<String>,
     pieces: Vec<Piece>,
     missing: Vec<String>,
 }
@@ -292,15 +352,7 @@ impl Shapes {
     /// Adds a link's geometry, placed in the body frame by `x_link` (link from body). A link
     /// with mass but no usable geometry makes the body's bound unknown.
     fn add(&mut self, link: &urdf_rs::Link, x_link: &Transform, lookup: &Lookup) {
-        self.shapes
-            .extend(
-                geometry::link_shapes(link, lookup)
-                    .into_iter()
-                    .map(|s| crate::model::Shape {
-                        pose: s.pose.compose(x_link),
-                        kind: s.kind,
-                    }),
-            );
+        self.add_shapes(link, x_link, lookup);
         if lookup.opts.ignore_geometry {
             return;
         }
@@ -315,6 +367,20 @@ impl Shapes {
             Ok(None) => {}
             Err(e) => self.missing.push(format!("link '{}': {e}", link.name)),
         }
+    }
+
+    /// Adds a link's shapes only (for export: the base's geometry bounds nothing).
+    fn add_shapes(&mut self, link: &urdf_rs::Link, x_link: &Transform, lookup: &Lookup) {
+        let (shapes, lost) = geometry::link_shapes_and_missing(link, lookup);
+        self.shapes
+            .extend(shapes.into_iter().map(|s| crate::model::Shape {
+                pose: s.pose.compose(x_link),
+                kind: s.kind,
+            }));
+        self.lost.extend(
+            lost.into_iter()
+                .map(|m| format!("link '{}': {m}", link.name)),
+        );
     }
 
     /// The bounding ellipsoid, or a warning naming the element and why there is none.
@@ -346,6 +412,8 @@ struct Walk<'r> {
     body_parent_link_x: Vec<Transform>,
     /// Per body: its geometry.
     shapes: Vec<Shapes>,
+    /// The static base's geometry (the root link and the links fixed to it).
+    base: Shapes,
     mimics: Vec<PendingRotor<'r>>,
 }
 
@@ -369,6 +437,8 @@ fn walk<'r>(
     let mut bodies: Vec<Body> = vec![];
     let mut body_parent_link_x: Vec<Transform> = vec![]; // parent link frame from parent body frame
     let mut shapes: Vec<Shapes> = vec![];
+    let mut base = Shapes::default();
+    base.add_shapes(&robot.links[link_idx[root]], &Transform::identity(), lookup);
     let mut mimics = vec![];
     let mut done = vec![false; robot.joints.len()];
     let mut progress = true;
@@ -392,6 +462,8 @@ fn walk<'r>(
                         let merged = child_params.transformed(&x_origin.inverse());
                         bodies[b].inertia = InertialParams(bodies[b].inertia.0 + merged.0);
                         shapes[b].add(child_link, &x_origin, lookup);
+                    } else {
+                        base.add_shapes(child_link, &x_origin, lookup);
                     }
                     attach.insert(child, (pb, x_origin));
                     continue;
@@ -446,6 +518,7 @@ fn walk<'r>(
         bodies,
         body_parent_link_x,
         shapes,
+        base,
         mimics,
     })
 }
@@ -491,6 +564,7 @@ fn moving_body(
             upper,
             velocity: inf_if_zero(lim.velocity),
             effort: inf_if_zero(lim.effort),
+            ..Default::default()
         },
     }
 }

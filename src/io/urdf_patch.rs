@@ -88,21 +88,38 @@ fn link_edit(
     }
 }
 
-/// The edit for one `<joint>`'s `<dynamics>`.
-fn dynamics_edit(xml: &str, joint: roxmltree::Node, damping: f64, friction: f64) -> Option<Edit> {
+/// The edits for one `<joint>`'s `<dynamics>`: an existing element keeps every other attribute
+/// (a simulator's `K`, `D`, `mu_coulomb`, …) byte for byte, only the values of `damping` and
+/// `friction` replaced (or those attributes added); a joint without one gets a new element.
+fn dynamics_edits(xml: &str, joint: roxmltree::Node, damping: f64, friction: f64) -> Vec<Edit> {
+    let values = [("damping", num(damping)), ("friction", num(friction))];
+    if let Some(el) = joint.children().find(|c| c.has_tag_name("dynamics")) {
+        let after_name = el.range().start + "<dynamics".len();
+        let mut edits = vec![];
+        let mut added = String::new();
+        for (name, value) in values {
+            match el.attributes().find(|a| a.name() == name) {
+                Some(attr) => edits.push((attr.range_value(), value)),
+                None => added += &format!(" {name}=\"{value}\""),
+            }
+        }
+        if !added.is_empty() {
+            edits.push((after_name..after_name, added));
+        }
+        return edits;
+    }
     let tag = format!(
         "<dynamics damping=\"{}\" friction=\"{}\"/>",
-        num(damping),
-        num(friction)
+        values[0].1, values[1].1
     );
-    if let Some(el) = joint.children().find(|c| c.has_tag_name("dynamics")) {
-        return Some((el.range(), tag));
-    }
-    let close = xml[joint.range()]
+    let Some(close) = xml[joint.range()]
         .rfind("</joint>")
-        .map(|i| joint.range().start + i)?;
+        .map(|i| joint.range().start + i)
+    else {
+        return vec![];
+    };
     let outer = indent_at(xml, joint.range().start);
-    Some((close..close, format!("  {tag}\n{outer}")))
+    vec![(close..close, format!("  {tag}\n{outer}"))]
 }
 
 /// `xml` (the URDF `model` was loaded from, at `path`) with `identified`'s inertial parameters
@@ -125,7 +142,7 @@ pub fn patch(xml: &str, path: &Path, model: &Model, identified: &Model) -> Resul
         edits.extend(link_edit(xml, link, Some(&bi.inertia), ""));
         let joint = named("joint", &b.joint_name)
             .ok_or_else(|| bad(format!("no <joint name=\"{}\">", b.joint_name)))?;
-        edits.extend(dynamics_edit(
+        edits.extend(dynamics_edits(
             xml,
             joint,
             bi.friction.viscous,

@@ -26,6 +26,15 @@ use nalgebra::Vector3;
 pub const GEAR_RATIO: f64 = 10.6;
 /// Motor peak torque (N m), Cheetah-Software `ActuatorModel.h`.
 pub const MOTOR_TAU_MAX: f64 = 27.2;
+
+/// Acceleration limit of every joint for designed motions (rad/s²): about the peak of the
+/// paper's shell motion on this leg (the motors allow far more: 288 N m at the knee against
+/// 0.05 kg m² of reflected rotor inertia).
+pub const MAX_ACCELERATION: f64 = 65.0;
+
+/// Jerk limit of every joint for designed motions (rad/s³): the acceleration limit reached
+/// within about 40 ms.
+pub const MAX_JERK: f64 = 1500.0;
 /// Motor torque constant (N m/A).
 pub const MOTOR_KT: f64 = 0.266;
 /// Motor winding resistance (ohm).
@@ -275,6 +284,8 @@ pub fn leg_with(o: &LegOptions) -> Result<Model, ModelError> {
                 upper: 1.5,
                 velocity: qd_max(0),
                 effort: tau_max(0),
+                acceleration: MAX_ACCELERATION,
+                jerk: MAX_JERK,
             },
         },
         Body {
@@ -300,6 +311,8 @@ pub fn leg_with(o: &LegOptions) -> Result<Model, ModelError> {
                 upper: 5.0,
                 velocity: qd_max(1),
                 effort: tau_max(1),
+                acceleration: MAX_ACCELERATION,
+                jerk: MAX_JERK,
             },
         },
         Body {
@@ -325,6 +338,8 @@ pub fn leg_with(o: &LegOptions) -> Result<Model, ModelError> {
                 upper: 2.6,
                 velocity: qd_max(2),
                 effort: tau_max(2),
+                acceleration: MAX_ACCELERATION,
+                jerk: MAX_JERK,
             },
         },
     ];

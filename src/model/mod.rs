@@ -142,6 +142,16 @@ pub struct JointLimits {
     pub velocity: f64,
     /// Torque limit at the joint (N m or N).
     pub effort: f64,
+    /// Acceleration limit (rad/s² or m/s²), for the motions physid designs.
+    #[serde(default = "unlimited")]
+    pub acceleration: f64,
+    /// Jerk limit (rad/s³ or m/s³), for the motions physid designs.
+    #[serde(default = "unlimited")]
+    pub jerk: f64,
+}
+
+fn unlimited() -> f64 {
+    f64::INFINITY
 }
 
 impl Default for JointLimits {
@@ -151,6 +161,8 @@ impl Default for JointLimits {
             upper: f64::INFINITY,
             velocity: f64::INFINITY,
             effort: f64::INFINITY,
+            acceleration: f64::INFINITY,
+            jerk: f64::INFINITY,
         }
     }
 }
@@ -278,6 +290,9 @@ pub struct Model {
     pub gravity: Vector3<f64>,
     /// How rotors enter the dynamics.
     pub rotor_model: RotorModel,
+    /// The static base's shapes as the description gives them (in the base frame), for export
+    /// only.
+    pub base_shapes: Vec<Shape>,
     /// Rotor on the base frame's pose is fixed; rotors on bodies move with them.
     layout: ParamLayout,
     /// `support[i]`: joint `i` and its ancestors, nearest first.
@@ -318,9 +333,16 @@ impl Model {
             bodies,
             gravity,
             rotor_model: RotorModel::Full,
+            base_shapes: vec![],
             layout,
             support,
         })
+    }
+
+    /// The same model with the base's description shapes (for export).
+    pub fn with_base_shapes(mut self, shapes: Vec<Shape>) -> Self {
+        self.base_shapes = shapes;
+        self
     }
 
     /// The same model with another rotor treatment.
@@ -634,7 +656,12 @@ fn check_body(
             reason: format!("lower {} must not exceed upper {}", l.lower, l.upper),
         });
     }
-    for (field, v) in [("limits.velocity", l.velocity), ("limits.effort", l.effort)] {
+    for (field, v) in [
+        ("limits.velocity", l.velocity),
+        ("limits.effort", l.effort),
+        ("limits.acceleration", l.acceleration),
+        ("limits.jerk", l.jerk),
+    ] {
         // Positive, or infinite where unknown; a zero or negative limit stops the joint.
         if v.is_nan() || v <= 0.0 {
             return Err(ModelError::BadValue {

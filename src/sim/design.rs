@@ -3,7 +3,9 @@
 //! combinations, within the joints' position, velocity, acceleration and torque limits.
 //!
 //! - The trajectory `q_j(t) = o_j + Σ_l a_jl sin(ω_l t) + b_jl (cos(ω_l t) − 1)`, `ω_l = 2π l f₀`,
-//!   is periodic with period `1/f₀`; it starts at rest-free `q(0) = o`.
+//!   is periodic with period `1/f₀`; with a ramp it fades in from rest at `o` and out to rest
+//!   at the end of the run ([`super::excitation::RestWindow`]), so a robot can start and stop
+//!   it. The information is that of the periodic part; the limits hold over the ramps too.
 //! - **Identifiable combinations.** The regressor `Y(q, q̇, q̈)` (rigid bodies with rotors, then
 //!   friction) is stacked over random states inside the limits; its columns are scaled to unit
 //!   norm (`D`), and the eigenvectors `V` of `D⁻¹ YᵀY D⁻¹` above `1e-9` of the largest
@@ -29,6 +31,50 @@ use rand_chacha::ChaCha8Rng;
 use rand_distr::{Distribution, StandardNormal};
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
+
+/// Acceleration limit (rad/s²) of a joint whose description gives none: below common arms'
+/// (the Panda's smallest is 7.5, a UR arm's default move 1.4–3).
+pub const SAFE_ACCELERATION: f64 = 3.0;
+
+/// Jerk limit (rad/s³) of a joint whose description gives none.
+pub const SAFE_JERK: f64 = 30.0;
+
+/// Per joint, the acceleration and jerk limits a design keeps: `given` (one for every joint or
+/// one per joint) when given, else the model's own where it has them and [`SAFE_ACCELERATION`],
+/// [`SAFE_JERK`] where it does not. Also the joints that took a safe default.
+pub fn rate_limits(
+    model: &Model,
+    acceleration: Option<&[f64]>,
+    jerk: Option<&[f64]>,
+) -> (Vec<f64>, Vec<f64>, Vec<String>) {
+    let mut defaulted = vec![];
+    let mut pick = |given: Option<&[f64]>, own: &dyn Fn(usize) -> f64, safe: f64| -> Vec<f64> {
+        match given {
+            Some(v) => v.to_vec(),
+            None => (0..model.dof())
+                .map(|j| {
+                    let v = own(j);
+                    if v.is_finite() {
+                        v
+                    } else {
+                        let name = &model.bodies[j].joint_name;
+                        if !defaulted.contains(name) {
+                            defaulted.push(name.clone());
+                        }
+                        safe
+                    }
+                })
+                .collect(),
+        }
+    };
+    let a = pick(
+        acceleration,
+        &|j| model.bodies[j].limits.acceleration,
+        SAFE_ACCELERATION,
+    );
+    let k = pick(jerk, &|j| model.bodies[j].limits.jerk, SAFE_JERK);
+    (a, k, defaulted)
+}
 
 /// Seed of the random states that define the identifiable basis (fixed, so values compare
 /// across designs of one robot).
@@ -63,9 +109,15 @@ pub struct DesignOptions {
     pub starts: usize,
     /// Fraction of every limit left free (0.1: peaks at 90 % of each limit).
     pub margin: f64,
-    /// Acceleration limits (rad/s²): one for every joint, or one per joint (robot
-    /// descriptions carry none).
+    /// Acceleration limits (rad/s²): one for every joint, or one per joint.
     pub max_acceleration: Vec<f64>,
+    /// Jerk limits (rad/s³): one for every joint, or one per joint.
+    pub max_jerk: Vec<f64>,
+    /// Fade in from rest and out to rest over this long at each end (s); 0: periodic from
+    /// t = 0, starting mid-motion.
+    pub ramp: f64,
+    /// The run's length (s): where the ramp out ends.
+    pub duration: f64,
     /// Samples per period at which the information is evaluated.
     pub samples: usize,
 }
@@ -81,6 +133,9 @@ impl Default for DesignOptions {
             starts: 4,
             margin: 0.15,
             max_acceleration: vec![30.0],
+            max_jerk: vec![f64::INFINITY],
+            ramp: 0.0,
+            duration: 20.0,
             samples: 200,
         }
     }
@@ -129,12 +184,20 @@ crate::options::option_error!(DesignError);
 impl DesignOptions {
     /// Joint `j`'s acceleration limit (rad/s²): its own, or the one for every joint.
     pub fn acceleration_limit(&self, j: usize) -> f64 {
-        let a = &self.max_acceleration;
-        if a.len() == 1 {
-            a[0]
-        } else {
-            a.get(j).copied().unwrap_or(f64::NAN)
-        }
+        per_joint(&self.max_acceleration, j)
+    }
+
+    /// Joint `j`'s jerk limit (rad/s³): its own, or the one for every joint.
+    pub fn jerk_limit(&self, j: usize) -> f64 {
+        per_joint(&self.max_jerk, j)
+    }
+
+    /// The fade to rest, if any.
+    pub fn window(&self) -> Option<super::excitation::RestWindow> {
+        (self.ramp > 0.0).then_some(super::excitation::RestWindow {
+            ramp: self.ramp,
+            end: self.duration,
+        })
     }
 
     /// Checks every value against its range.
@@ -170,6 +233,24 @@ impl DesignOptions {
                 return bad("max_acceleration", "a positive number (rad/s²)", a);
             }
         }
+        if self.max_jerk.is_empty() {
+            return bad("max_jerk", "at least one value", 0.0);
+        }
+        for &a in &self.max_jerk {
+            if a.is_nan() || a <= 0.0 {
+                return bad("max_jerk", "a positive number (rad/s³)", a);
+            }
+        }
+        if !(self.duration.is_finite() && self.duration > 0.0) {
+            return bad("duration", "a positive number of seconds", self.duration);
+        }
+        if !(self.ramp.is_finite() && self.ramp >= 0.0 && 2.0 * self.ramp <= self.duration) {
+            return bad(
+                "ramp",
+                "0 or more seconds, at most half the duration",
+                self.ramp,
+            );
+        }
         if !(self.samples >= 4 * self.harmonics && self.samples <= 100_000) {
             return bad(
                 "samples",
@@ -192,6 +273,8 @@ pub struct Limits {
     pub velocity: Vec<f64>,
     /// Largest acceleration (rad/s²).
     pub acceleration: Vec<f64>,
+    /// Largest jerk (rad/s³; infinite: none).
+    pub jerk: Vec<f64>,
     /// Largest torque (N m; infinite: none).
     pub effort: Vec<f64>,
 }
@@ -206,19 +289,24 @@ impl Limits {
         opts: &DesignOptions,
     ) -> Result<Self, DesignError> {
         let keep = 1.0 - opts.margin;
-        let k = opts.max_acceleration.len();
-        if k != 1 && k != model.dof() {
-            return Err(DesignError::InvalidOption {
-                option: "max_acceleration",
-                expected: "one value, or one per joint",
-                value: k as f64,
-            });
+        for (option, k) in [
+            ("max_acceleration", opts.max_acceleration.len()),
+            ("max_jerk", opts.max_jerk.len()),
+        ] {
+            if k != 1 && k != model.dof() {
+                return Err(DesignError::InvalidOption {
+                    option,
+                    expected: "one value, or one per joint",
+                    value: k as f64,
+                });
+            }
         }
         let mut l = Limits {
             lower: vec![],
             upper: vec![],
             velocity: vec![],
             acceleration: vec![],
+            jerk: vec![],
             effort: vec![],
         };
         for (j, b) in model.bodies.iter().enumerate() {
@@ -249,6 +337,7 @@ impl Limits {
             l.upper.push(mid + half);
             l.velocity.push(b.limits.velocity * keep);
             l.acceleration.push(opts.acceleration_limit(j) * keep);
+            l.jerk.push(opts.jerk_limit(j) * keep);
             l.effort.push(b.limits.effort * keep);
         }
         Ok(l)
@@ -269,6 +358,27 @@ fn times(s: &FourierSeries, m: usize) -> impl Iterator<Item = f64> + '_ {
     (0..m).map(move |k| s.period() * k as f64 / m as f64)
 }
 
+/// The times at which limits are checked: `m` over one period of the steady motion (after the
+/// ramp in), and `m` over each ramp.
+fn check_times(s: &FourierSeries, m: usize) -> Vec<f64> {
+    let Some(w) = s.window else {
+        return times(s, m).collect();
+    };
+    let steady = (0..m).map(|k| w.ramp + s.period() * k as f64 / m as f64);
+    let ramp_in = (0..m).map(|k| w.ramp * k as f64 / m as f64);
+    let ramp_out = (0..=m).map(|k| w.end - w.ramp + w.ramp * k as f64 / m as f64);
+    steady.chain(ramp_in).chain(ramp_out).collect()
+}
+
+/// One value for every joint (one given), or joint `j`'s own.
+fn per_joint(v: &[f64], j: usize) -> f64 {
+    if v.len() == 1 {
+        v[0]
+    } else {
+        v.get(j).copied().unwrap_or(f64::NAN)
+    }
+}
+
 /// How much of each limit a trajectory uses, per joint (peak over one period / limit).
 #[derive(Clone, Debug, Serialize, schemars::JsonSchema)]
 pub struct LimitUse {
@@ -281,6 +391,8 @@ pub struct LimitUse {
     pub velocity: f64,
     /// Peak acceleration over its limit with the margin.
     pub acceleration: f64,
+    /// Peak jerk over its limit with the margin (0 without a limit).
+    pub jerk: f64,
     /// Peak torque (inverse dynamics with friction) over the effort limit with the margin
     /// (0 without a limit).
     pub torque: f64,
@@ -419,12 +531,13 @@ impl Problem<'_> {
         }
     }
 
-    /// Peaks over one period: per joint `[below centre, above centre, |q̇|, |q̈|]`.
-    fn kinematic_peaks(&self, s: &FourierSeries) -> Vec<[f64; 4]> {
+    /// Peaks over one period and the ramps: per joint `[below centre, above centre, |q̇|, |q̈|,
+    /// |q⃛|]`.
+    fn kinematic_peaks(&self, s: &FourierSeries) -> Vec<[f64; 5]> {
         let n = s.offset.len();
-        let mut peaks = vec![[0.0f64; 4]; n];
-        for t in times(s, 4 * self.opts.samples) {
-            let [q, qd, qdd] = s.at(t);
+        let mut peaks = vec![[0.0f64; 5]; n];
+        for t in check_times(s, 4 * self.opts.samples) {
+            let [q, qd, qdd, jerk] = s.with_jerk(t);
             for j in 0..n {
                 let e = q[j] - s.offset[j];
                 let pk = &mut peaks[j];
@@ -432,6 +545,7 @@ impl Problem<'_> {
                 pk[1] = pk[1].max(e);
                 pk[2] = pk[2].max(qd[j].abs());
                 pk[3] = pk[3].max(qdd[j].abs());
+                pk[4] = pk[4].max(jerk[j].abs());
             }
         }
         peaks
@@ -444,7 +558,7 @@ impl Problem<'_> {
         if self.limits.effort.iter().all(|e| !e.is_finite()) {
             return r;
         }
-        for t in times(s, points) {
+        for t in check_times(s, points) {
             let [q, qd, qdd] = s.at(t);
             let tau = rnea_with_friction(self.model, data, &q, &qd, &qdd);
             for j in 0..n {
@@ -467,6 +581,7 @@ impl Problem<'_> {
                 l.upper[j] - o,
                 l.velocity[j],
                 l.acceleration[j],
+                l.jerk[j],
             ];
             let f = room
                 .iter()
@@ -519,6 +634,7 @@ impl Problem<'_> {
                     position: (peaks[j][0] / (o - l.lower[j])).max(peaks[j][1] / (l.upper[j] - o)),
                     velocity: ratio(peaks[j][2], l.velocity[j]),
                     acceleration: ratio(peaks[j][3], l.acceleration[j]),
+                    jerk: ratio(peaks[j][4], l.jerk[j]),
                     torque: torque[j],
                 }
             })
@@ -538,6 +654,7 @@ impl Problem<'_> {
             offset: self.limits.centre(),
             sin,
             cos,
+            window: self.opts.window(),
         }
     }
 

@@ -57,8 +57,49 @@ impl Shell {
 }
 
 /// A Fourier trajectory: offsets and coefficients per joint and harmonic (rad),
+/// A motion that starts and ends at rest: a deviation `δ(t)` faded in over the first `ramp` s
+/// and out over the last `ramp` s before `end`, `q = o + w(t) δ(t)`, by the septic smoothstep
+/// `s(x) = 35x⁴ − 84x⁵ + 70x⁶ − 20x⁷` (velocity, acceleration and jerk zero at both ends).
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, schemars::JsonSchema)]
+pub struct RestWindow {
+    /// Fade length at each end (s).
+    pub ramp: f64,
+    /// When the motion has come to rest again (s); after it, `w = 0`.
+    pub end: f64,
+}
+
+impl RestWindow {
+    /// `w` and its first three time derivatives at `t` (s).
+    pub fn at(&self, t: f64) -> [f64; 4] {
+        let r = self.ramp;
+        let s = |x: f64| {
+            let x = x.clamp(0.0, 1.0);
+            let (x2, x3) = (x * x, x * x * x);
+            [
+                x2 * x2 * (35.0 - 84.0 * x + 70.0 * x2 - 20.0 * x3),
+                x3 * (140.0 - 420.0 * x + 420.0 * x2 - 140.0 * x3),
+                x2 * (420.0 - 1680.0 * x + 2100.0 * x2 - 840.0 * x3),
+                x * (840.0 - 5040.0 * x + 8400.0 * x2 - 4200.0 * x3),
+            ]
+        };
+        if r <= 0.0 || (t >= r && t <= self.end - r) {
+            [1.0, 0.0, 0.0, 0.0]
+        } else if t < r {
+            let v = s(t / r);
+            [v[0], v[1] / r, v[2] / (r * r), v[3] / (r * r * r)]
+        } else if t < self.end {
+            let v = s((self.end - t) / r);
+            [v[0], -v[1] / r, v[2] / (r * r), -v[3] / (r * r * r)]
+        } else {
+            [0.0; 4]
+        }
+    }
+}
+
 /// `q_j(t) = o_j + Σ_l a_jl sin(ω_l t) + b_jl (cos(ω_l t) − 1)`, `ω_l = 2π l f₀` (Swevers et al.):
-/// what a Fourier excitation tracks and what the excitation design (`super::design`) optimizes.
+/// what a Fourier excitation tracks and what the excitation design (`super::design`) optimizes;
+/// with a [`RestWindow`], the deviation from `o` fades in and out so the motion starts and ends
+/// at rest.
 #[derive(Clone, Debug, PartialEq, serde::Serialize, schemars::JsonSchema)]
 pub struct FourierSeries {
     /// Fundamental frequency (Hz).
@@ -69,23 +110,44 @@ pub struct FourierSeries {
     pub sin: Vec<Vec<f64>>,
     /// `b_jl` (rad).
     pub cos: Vec<Vec<f64>>,
+    /// The fade in and out to rest, if any.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub window: Option<RestWindow>,
 }
 
 impl FourierSeries {
     /// `(q, q̇, q̈)` at time `t` (s).
     pub fn at(&self, t: f64) -> [Vec<f64>; 3] {
-        let n = self.offset.len();
-        let (mut q, mut qd, mut qdd) = (self.offset.clone(), vec![0.0; n], vec![0.0; n]);
-        for j in 0..n {
-            for (l, (a, b)) in self.sin[j].iter().zip(&self.cos[j]).enumerate() {
+        let [q, qd, qdd, _] = self.with_jerk(t);
+        [q, qd, qdd]
+    }
+
+    /// `(q, q̇, q̈, q⃛)` at time `t` (s): the periodic deviation `δ` and its derivatives, times
+    /// the window by the product rule.
+    pub fn with_jerk(&self, t: f64) -> [Vec<f64>; 4] {
+        // Per joint, δ and its first three derivatives.
+        let deviation = |sin: &[f64], cos: &[f64]| {
+            let mut d = [0.0f64; 4];
+            for (l, (a, b)) in sin.iter().zip(cos).enumerate() {
                 let w = 2.0 * std::f64::consts::PI * (l + 1) as f64 * self.base_frequency;
                 let (s, c) = (w * t).sin_cos();
-                q[j] += a * s + b * (c - 1.0);
-                qd[j] += w * (a * c - b * s);
-                qdd[j] -= w * w * (a * s + b * c);
+                d[0] += a * s + b * (c - 1.0);
+                d[1] += w * (a * c - b * s);
+                d[2] -= w * w * (a * s + b * c);
+                d[3] -= w * w * w * (a * c - b * s);
             }
+            d
+        };
+        let [w0, w1, w2, w3] = self.window.map_or([1.0, 0.0, 0.0, 0.0], |win| win.at(t));
+        let mut out: [Vec<f64>; 4] = Default::default();
+        for ((o, sin), cos) in self.offset.iter().zip(&self.sin).zip(&self.cos) {
+            let d = deviation(sin, cos);
+            out[0].push(o + w0 * d[0]);
+            out[1].push(w1 * d[0] + w0 * d[1]);
+            out[2].push(w2 * d[0] + 2.0 * w1 * d[1] + w0 * d[2]);
+            out[3].push(w3 * d[0] + 3.0 * w2 * d[1] + 3.0 * w1 * d[2] + w0 * d[3]);
         }
-        [q, qd, qdd]
+        out
     }
 
     /// The period `1/f₀` (s).
@@ -104,6 +166,7 @@ impl FourierSeries {
 #[derive(Clone, Debug)]
 pub struct Fourier {
     series: FourierSeries,
+    friction_feedforward: bool,
     kp: Vec<f64>,
     kd: Vec<f64>,
     computed_torque: bool,
@@ -122,7 +185,15 @@ pub enum Controller {
 
 impl Controller {
     /// Builds the controller of a scenario for `model`; `seed` draws the Fourier coefficients.
-    pub fn new(model: &Model, spec: &ExcitationSpec, seed: u64) -> Result<Self, ScenarioError> {
+    ///
+    /// `duration` (s) is the experiment's length: a Fourier excitation with a `ramp` comes to
+    /// rest at its end.
+    pub fn new(
+        model: &Model,
+        spec: &ExcitationSpec,
+        seed: u64,
+        duration: f64,
+    ) -> Result<Self, ScenarioError> {
         Ok(match spec {
             ExcitationSpec::Shell {
                 point,
@@ -170,61 +241,8 @@ impl Controller {
                     gravity_compensation: *gravity_compensation,
                 })
             }
-            ExcitationSpec::Fourier {
-                harmonics,
-                base_frequency,
-                amplitude,
-                offset,
-                coefficients,
-                kp,
-                kd,
-                computed_torque,
-            } => {
-                let tracked = |series| Fourier {
-                    series,
-                    kp: kp.clone(),
-                    kd: kd.clone(),
-                    computed_torque: *computed_torque,
-                };
-                if let Some(c) = coefficients {
-                    return Ok(Controller::Fourier(tracked(FourierSeries {
-                        base_frequency: *base_frequency,
-                        offset: offset.clone(),
-                        sin: c.sin.clone(),
-                        cos: c.cos.clone(),
-                    })));
-                }
-                // Random coefficients (decaying as 1/l), scaled so that max |q_d − offset|
-                // equals the amplitude over one period.
-                let mut rng = ChaCha8Rng::seed_from_u64(seed ^ 0x5eed_f00d);
-                let n = model.dof();
-                let mut a = vec![vec![0.0; *harmonics]; n];
-                let mut b = vec![vec![0.0; *harmonics]; n];
-                for j in 0..n {
-                    for l in 0..*harmonics {
-                        a[j][l] = rng.random_range(-1.0..1.0) / (l + 1) as f64;
-                        b[j][l] = rng.random_range(-1.0..1.0) / (l + 1) as f64;
-                    }
-                }
-                let mut series = FourierSeries {
-                    base_frequency: *base_frequency,
-                    offset: offset.clone(),
-                    sin: a,
-                    cos: b,
-                };
-                let period = series.period();
-                let mut peak = vec![0.0f64; n];
-                for k in 0..2000 {
-                    let [q, _, _] = series.at(period * k as f64 / 2000.0);
-                    for j in 0..n {
-                        peak[j] = peak[j].max((q[j] - offset[j]).abs());
-                    }
-                }
-                for (j, p) in peak.iter().enumerate() {
-                    series.scale_joint(j, if *p > 0.0 { amplitude[j] / p } else { 0.0 });
-                }
-                let f = tracked(series);
-                Controller::Fourier(f)
+            ExcitationSpec::Fourier { .. } => {
+                Controller::Fourier(fourier(model, spec, seed, duration))
             }
             ExcitationSpec::Passive => Controller::Passive,
         })
@@ -324,7 +342,12 @@ impl Controller {
                     let a: Vec<f64> = (0..n)
                         .map(|j| qdd_d[j] + f.kp[j] * e[j] + f.kd[j] * ed[j])
                         .collect();
-                    rnea(model, data, q, qd, &a).clone()
+                    let tau = rnea(model, data, q, qd, &a).clone();
+                    if f.friction_feedforward {
+                        tau + crate::dynamics::friction_torque(model, &qdd_d_vel)
+                    } else {
+                        tau
+                    }
                 } else {
                     DVector::from_iterator(n, (0..n).map(|j| f.kp[j] * e[j] + f.kd[j] * ed[j]))
                 }
@@ -361,4 +384,79 @@ pub fn solve_ik(
         }
     }
     q
+}
+
+/// The Fourier tracking controller of `spec` (given coefficients, or a random draw from `seed`
+/// scaled to the amplitudes), its motion coming to rest at `duration` when it has a ramp.
+fn fourier(model: &Model, spec: &ExcitationSpec, seed: u64, duration: f64) -> Fourier {
+    let ExcitationSpec::Fourier {
+        harmonics,
+        base_frequency,
+        amplitude,
+        offset,
+        coefficients,
+        kp,
+        kd,
+        computed_torque,
+        ramp,
+        friction_feedforward,
+    } = spec
+    else {
+        unreachable!("called for a Fourier excitation")
+    };
+    let ramp = *ramp;
+    let tracked = |series| Fourier {
+        series,
+        friction_feedforward: *friction_feedforward,
+        kp: kp.clone(),
+        kd: kd.clone(),
+        computed_torque: *computed_torque,
+    };
+    if let Some(c) = coefficients {
+        return tracked(FourierSeries {
+            base_frequency: *base_frequency,
+            offset: offset.clone(),
+            sin: c.sin.clone(),
+            cos: c.cos.clone(),
+            window: ramp.map(|ramp| RestWindow {
+                ramp,
+                end: duration,
+            }),
+        });
+    }
+    // Random coefficients (decaying as 1/l), scaled so that max |q_d − offset|
+    // equals the amplitude over one period.
+    let mut rng = ChaCha8Rng::seed_from_u64(seed ^ 0x5eed_f00d);
+    let n = model.dof();
+    let mut a = vec![vec![0.0; *harmonics]; n];
+    let mut b = vec![vec![0.0; *harmonics]; n];
+    for j in 0..n {
+        for l in 0..*harmonics {
+            a[j][l] = rng.random_range(-1.0..1.0) / (l + 1) as f64;
+            b[j][l] = rng.random_range(-1.0..1.0) / (l + 1) as f64;
+        }
+    }
+    let mut series = FourierSeries {
+        base_frequency: *base_frequency,
+        offset: offset.clone(),
+        sin: a,
+        cos: b,
+        window: None,
+    };
+    let period = series.period();
+    let mut peak = vec![0.0f64; n];
+    for k in 0..2000 {
+        let [q, _, _] = series.at(period * k as f64 / 2000.0);
+        for j in 0..n {
+            peak[j] = peak[j].max((q[j] - offset[j]).abs());
+        }
+    }
+    for (j, p) in peak.iter().enumerate() {
+        series.scale_joint(j, if *p > 0.0 { amplitude[j] / p } else { 0.0 });
+    }
+    series.window = ramp.map(|ramp| RestWindow {
+        ramp,
+        end: duration,
+    });
+    tracked(series)
 }

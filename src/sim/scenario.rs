@@ -130,6 +130,16 @@ pub enum ExcitationSpec {
         /// Given coefficients instead of a random draw (`physid excite` writes them).
         #[serde(default, skip_serializing_if = "Option::is_none")]
         coefficients: Option<FourierCoefficients>,
+        /// Start and end at rest at `offset` (s): the motion fades in over the first `ramp` s
+        /// and out over the last `ramp` s of the simulation (a septic smoothstep: velocity,
+        /// acceleration and jerk zero at both ends). Without it the series starts mid-motion.
+        #[serde(default, skip_serializing_if = "Option::is_none")]
+        ramp: Option<f64>,
+        /// Computed torque also feeds forward the description's friction at the desired
+        /// velocity (as a robot's own controller does), so that the tracking error does not
+        /// kick at every reversal.
+        #[serde(default, skip_serializing_if = "std::ops::Not::not")]
+        friction_feedforward: bool,
         /// Position gains: N m/rad for PD, 1/s² for computed torque.
         kp: Vec<f64>,
         /// Velocity gains: N m s/rad for PD, 1/s for computed torque.
@@ -452,7 +462,7 @@ impl Scenario {
         self.simulation.validate(n)?;
         self.sensors.validate()?;
         self.processing.validate(self.simulation.rate)?;
-        self.excitation.validate(n)?;
+        self.excitation.validate(n, self.simulation.duration)?;
         for (i, e) in self.effects.iter().enumerate() {
             e.validate(i, n)?;
         }
@@ -530,7 +540,7 @@ impl ProcessingSpec {
 }
 
 impl ExcitationSpec {
-    fn validate(&self, n: usize) -> Result<(), ScenarioError> {
+    fn validate(&self, n: usize, duration: f64) -> Result<(), ScenarioError> {
         match self {
             ExcitationSpec::Shell {
                 radii,
@@ -566,8 +576,19 @@ impl ExcitationSpec {
                 coefficients,
                 kp,
                 kd,
+                ramp,
                 ..
             } => {
+                if let Some(r) = ramp {
+                    let d = duration;
+                    check(
+                        r.is_finite() && *r > 0.0 && 2.0 * r <= d,
+                        "excitation.ramp",
+                        || {
+                            format!("{r} must be positive and at most half the simulation's duration ({d} s)")
+                        },
+                    )?;
+                }
                 check((1..=50).contains(harmonics), "excitation.harmonics", || {
                     format!("{harmonics} must be 1 to 50")
                 })?;

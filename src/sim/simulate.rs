@@ -79,6 +79,10 @@ fn back_emf_limit(tau: f64, qd: f64, n: f64, kt: f64, r: f64, v: f64) -> f64 {
 
 /// Simulates `scenario` on `model` (the ground truth). `progress(fraction)` is called about a
 /// hundred times. Deterministic: the same scenario gives the same numbers.
+///
+/// The processed signals are wrong near the ends of the recording (the zero-phase filters'
+/// one-sided differences and padding, [`settle_samples`] at each end): a fit or a score should
+/// leave those samples out, as the sample-size experiment does.
 pub fn simulate(
     model: &Model,
     scenario: &Scenario,
@@ -91,7 +95,7 @@ pub fn simulate(
     let h = dt / s.substeps as f64;
     let samples = (s.duration * s.rate).round() as usize;
     check_memory(samples, n)?;
-    let controller = Controller::new(model, &scenario.excitation, s.seed)?;
+    let controller = Controller::new(model, &scenario.excitation, s.seed, s.duration)?;
     let mut cdata = Data::new(model);
     let guess = initial_guess(model, s);
     let (q0, qd0) = controller.initial_state(model, &mut cdata, &guess)?;
@@ -188,6 +192,18 @@ pub fn simulate(
         measured,
         processed,
     })
+}
+
+/// Samples the offline processing ([`process`]) needs at each end before what it derives has
+/// settled: the filter's settling length for q̈ (two cascaded derivations), 2 for plain
+/// differences.
+pub fn settle_samples(scenario: &Scenario, rate: f64) -> usize {
+    let p = &scenario.processing;
+    match p.method {
+        Processing::FiniteDifference => 2,
+        Processing::Butterworth => butterworth_lowpass(p.order, p.cutoff, rate)
+            .map_or(0, |sos| crate::prepare::settle_samples(&sos, true)),
+    }
 }
 
 /// Joint arrays a simulation keeps per sample and joint: the truth (q, q̇, q̈, τ), friction
