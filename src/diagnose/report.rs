@@ -445,10 +445,16 @@ pub fn write(dir: &Path, d: &Diagnosis) -> Result<(), ReportError> {
         &series,
     )?;
     let spectrum_svg = spectrum_plot(&dir.join("spectrum.svg"), d)?;
-    let mut steps = vec![(
-        "nominal".to_string(),
-        d.gap.iter().map(|g| g.nominal).collect(),
-    )];
+    let mut steps = vec![
+        (
+            "description as given".to_string(),
+            d.gap.iter().map(|g| g.description).collect(),
+        ),
+        (
+            "nominal (re-identified)".to_string(),
+            d.gap.iter().map(|g| g.nominal).collect(),
+        ),
+    ];
     for (i, e) in d.effects.iter().enumerate() {
         steps.push((
             format!("+ {}", e.kind.name()),
@@ -464,15 +470,16 @@ pub fn write(dir: &Path, d: &Diagnosis) -> Result<(), ReportError> {
     ));
     let how_far_svg = bars(
         &dir.join("how_far.svg"),
-        "validation RMS per joint: before and after each effect",
+        "validation RMS per joint: the description, re-identified, after each effect",
         "RMS (N m)",
         &d.joints,
         &steps,
     )?;
+    // How far first (the answer), then where the residual lies.
     let plots: Vec<(String, String)> = [
+        ("how_far.svg", Some(how_far_svg)),
         ("where.svg", Some(where_svg)),
         ("spectrum.svg", spectrum_svg),
-        ("how_far.svg", Some(how_far_svg)),
     ]
     .into_iter()
     .filter_map(|(name, svg)| svg.map(|s| (name.to_string(), s)))
@@ -489,19 +496,15 @@ fn escape_html(s: &str) -> String {
         .replace('"', "&quot;")
 }
 
-/// A self-contained HTML report: the verdict and summary first, then the Markdown report
-/// rendered (CommonMark with tables), then the `plots` (file name, SVG text) inline. No script,
-/// no external resource.
+/// A self-contained HTML report, in the order a reader wants it: the verdict and summary, the
+/// `plots` (file name, SVG text) inline, then each section of the Markdown report (CommonMark
+/// with tables) folded under its title. No script, no external resource.
 pub fn html(d: &Diagnosis, plots: &[(String, String)]) -> String {
     let verdict = crate::io::serde_name(&d.verdict);
     // The Markdown without its title and summary paragraph, which the page puts first.
     let md = markdown(d);
     let rest = md.splitn(3, "\n\n").nth(2).unwrap_or("");
-    let mut body = String::new();
-    pulldown_cmark::html::push_html(
-        &mut body,
-        pulldown_cmark::Parser::new_ext(rest, pulldown_cmark::Options::ENABLE_TABLES),
-    );
+    let body = folded_sections(rest);
     let figures: String = plots
         .iter()
         .map(|(name, svg)| {
@@ -512,9 +515,40 @@ pub fn html(d: &Diagnosis, plots: &[(String, String)]) -> String {
         })
         .collect();
     format!(
-        "<!DOCTYPE html>\n<html lang=\"en\">\n<head>\n<meta charset=\"utf-8\">\n<title>Diagnosis of {robot}</title>\n<style>\nbody {{ font-family: sans-serif; max-width: 1150px; margin: 2em auto; padding: 0 1em; color: #222; }}\ntable {{ border-collapse: collapse; font-size: 13px; margin: 0.5em 0 1.5em; }}\nth, td {{ border: 1px solid #ccc; padding: 2px 6px; }}\nth {{ background: #f2f2f2; }}\n.verdict {{ font-size: 1.1em; background: #f6f8fa; border-left: 5px solid #3465a4; padding: 0.6em 1em; }}\nfigure {{ margin: 1em 0; }} svg {{ max-width: 100%; height: auto; }} figcaption {{ color: #555; font-size: 12px; }}\n</style>\n</head>\n<body>\n<h1>Diagnosis of {robot}</h1>\n<p class=\"verdict\">Verdict: <b>{verdict}</b>. {summary}</p>\n{body}<h2>Plots</h2>\n{figures}</body>\n</html>\n",
+        "<!DOCTYPE html>\n<html lang=\"en\">\n<head>\n<meta charset=\"utf-8\">\n<title>Diagnosis of {robot}</title>\n<style>\nbody {{ font-family: sans-serif; max-width: 1150px; margin: 2em auto; padding: 0 1em; color: #222; }}\ntable {{ border-collapse: collapse; font-size: 13px; margin: 0.5em 0 1.5em; }}\nth, td {{ border: 1px solid #ccc; padding: 2px 6px; }}\nth {{ background: #f2f2f2; }}\n.verdict {{ font-size: 1.1em; background: #f6f8fa; border-left: 5px solid #3465a4; padding: 0.6em 1em; }}\nfigure {{ margin: 1em 0; }} svg {{ max-width: 100%; height: auto; }} figcaption {{ color: #555; font-size: 12px; }}\ndetails {{ margin: 0.4em 0; }} summary {{ cursor: pointer; font-weight: bold; font-size: 1.05em; }}\n</style>\n</head>\n<body>\n<h1>Diagnosis of {robot}</h1>\n<p class=\"verdict\">Verdict: <b>{verdict}</b>. {summary}</p>\n<h2>Plots</h2>\n{figures}<h2>Tables</h2>\n{body}</body>\n</html>\n",
         robot = escape_html(&d.robot),
         verdict = escape_html(&verdict),
         summary = escape_html(&d.summary),
     )
+}
+
+/// Markdown text with `## ` sections, rendered to HTML with each section folded
+/// (`<details>`) under its title.
+fn folded_sections(md: &str) -> String {
+    let render = |text: &str| {
+        let mut out = String::new();
+        pulldown_cmark::html::push_html(
+            &mut out,
+            pulldown_cmark::Parser::new_ext(text, pulldown_cmark::Options::ENABLE_TABLES),
+        );
+        out
+    };
+    let mut html = String::new();
+    for (k, section) in md.split("\n## ").enumerate() {
+        let section = if k == 0 {
+            section.strip_prefix("## ").unwrap_or(section)
+        } else {
+            section
+        };
+        if section.trim().is_empty() {
+            continue;
+        }
+        let (title, content) = section.split_once('\n').unwrap_or((section, ""));
+        html += &format!(
+            "<details>\n<summary>{}</summary>\n{}</details>\n",
+            escape_html(title.trim()),
+            render(content)
+        );
+    }
+    html
 }

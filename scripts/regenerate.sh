@@ -1,0 +1,33 @@
+#!/usr/bin/env bash
+# Regenerates the committed results (results/NAME/) with the release binary, each by the command
+# its docs give. Usage: bash scripts/regenerate.sh [NAME ...]   (default: all but the blind
+# benchmarks, which take a few minutes each: give `blind` and `blind_seed2` by name).
+set -euo pipefail
+cd "$(dirname "$0")/.."
+export CARGO_TARGET_DIR="${CARGO_TARGET_DIR:-$HOME/.cache/physid-target}"
+B="$CARGO_TARGET_DIR/release/physid"
+K=data/kuka_lwr4
+run() {
+  case "$1" in
+    sample_size) "$B" experiment scenarios/sample_size.toml --out results/sample_size ;;
+    ci_baseline) "$B" experiment scenarios/ci.toml --out results/ci_baseline ;;
+    noise) "$B" sweep scenarios/sweeps/noise.toml --out results/noise ;;
+    excitation) "$B" experiment scenarios/excitation/compare.toml --out results/excitation ;;
+    excitation_on_shell) "$B" experiment scenarios/excitation/compare_on_shell.toml --out results/excitation_on_shell ;;
+    excitation_kuka) "$B" experiment scenarios/excitation/compare_kuka.toml --out results/excitation_kuka ;;
+    kuka_diagnosis)
+      "$B" diagnose --robot $K/kuka_lwr4.urdf --data $K/measurements_1.csv $K/measurements_2.csv \
+        --validate $K/measurements_3.csv --report results/kuka_diagnosis > results/kuka_diagnosis/.diagnose.txt 2>&1
+      mv results/kuka_diagnosis/.diagnose.txt results/kuka_diagnosis/diagnose.txt ;;
+    blind) "$B" blind --cases 102 --seed 1 --out results/blind ;;
+    blind_seed2) "$B" blind --cases 102 --seed 2 --out results/blind_seed2 ;;
+    *) echo "unknown result '$1'" >&2; exit 2 ;;
+  esac
+}
+[ $# -gt 0 ] || set -- sample_size ci_baseline noise excitation excitation_on_shell excitation_kuka kuka_diagnosis
+cargo build --release --quiet --bin physid
+for r in "$@"; do
+  start=$(date +%s)
+  run "$r" > /dev/null
+  echo "$r: $(( $(date +%s) - start )) s"
+done
