@@ -524,55 +524,54 @@ fn split_runs(logged: &Logged, period: f64, bridge: usize) -> Result<Split, Prep
     Ok(s)
 }
 
-/// A uniform clock fitted to one piece's stamps: sample `i` of the piece sits in slot
-/// `slot[i]` at `t0 + slot[i] h`.
+/// A clock tracked through one piece's stamps: sample `i` of the piece sits in a slot of
+/// period `h`, at the clock's time `time[i]`.
 struct Clock {
-    t0: f64,
     h: f64,
-    slot: Vec<usize>,
+    /// The clock's time of each sample's slot (s): the stamps with their jitter tracked out.
+    time: Vec<f64>,
     /// RMS of the stamps about the clock, in periods.
     jitter: f64,
 }
 
 impl Clock {
-    /// Slots by tracking a clock through the stamps (each stamp rounded to the nearest slot
-    /// after the previous one, the clock's phase nudged toward the stamps so that a slightly
-    /// wrong period cannot drift a slot), then the period and origin by least squares of the
-    /// stamps on their slots (twice: the refined period tracks again).
+    /// Each stamp is rounded to the nearest slot after the previous one (a step of two or
+    /// more periods: samples missing), and the clock's phase is nudged toward it: the clock
+    /// follows a slow drift of the stamps while their jitter stays out. Tracked twice, the
+    /// second time at the period fitted (least squares of the stamps on their slots) to the
+    /// first. A sample late by more than half a period reads as one slot missing: the clock then
+    /// carries one phantom slot (interpolated, never a sample), which is harmless, where one
+    /// line through all stamps would bend.
     fn fit(t: &[f64], piece: &[usize], period: f64) -> Clock {
         let mut h = period;
-        let mut t0 = t[piece[0]];
         let mut slot = vec![0usize; piece.len()];
+        let mut time = vec![t[piece[0]]; piece.len()];
         for _ in 0..2 {
             let mut anchor = (t[piece[0]], 0usize);
             for i in 1..piece.len() {
                 let ahead = (t[piece[i]] - anchor.0) / h;
                 slot[i] = anchor.1 + (ahead.round() as usize).max(1);
-                let predicted = anchor.0 + (slot[i] - anchor.1) as f64 * h;
-                anchor = (predicted + PHASE_GAIN * (t[piece[i]] - predicted), slot[i]);
+                time[i] = anchor.0 + (slot[i] - anchor.1) as f64 * h;
+                anchor = (time[i] + PHASE_GAIN * (t[piece[i]] - time[i]), slot[i]);
             }
-            (t0, h) = line_fit(piece.iter().map(|&k| t[k]), &slot).unwrap_or((t0, h));
+            h = line_fit(piece.iter().map(|&k| t[k]), &slot).map_or(h, |(_, h)| h);
         }
         let ms = piece
             .iter()
-            .zip(&slot)
-            .map(|(&k, &s)| (t[k] - t0 - s as f64 * h).powi(2))
+            .zip(&time)
+            .map(|(&k, &c)| (t[k] - c).powi(2))
             .sum::<f64>()
             / piece.len() as f64;
         Clock {
-            t0,
             h,
-            slot,
+            time,
             jitter: ms.sqrt() / h,
         }
     }
 
     /// The time of each sample on the clock.
     fn slot_times(&self) -> Vec<f64> {
-        self.slot
-            .iter()
-            .map(|&s| self.t0 + s as f64 * self.h)
-            .collect()
+        self.time.clone()
     }
 
     /// Uniform when the stamps sit on the clock; otherwise stamps or clock slots, whichever

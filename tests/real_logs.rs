@@ -1,0 +1,157 @@
+//! Real KUKA LWR4+ logs reshaped as robots write them (issue 25): no accelerations, a 0.5 s
+//! dropout, 2 % of the samples dropped at random, time stamps jittered by ±1 ms (a fifth of the
+//! period), columns named by joint in another order, and a gripper joint the robot does not
+//! have. `identify` must give the held-out error of the clean files, and say what it did.
+
+mod common;
+
+use common::{physid, root};
+use rand::{Rng, SeedableRng};
+use std::path::{Path, PathBuf};
+
+/// Run `r` of the KUKA logs rewritten as a robot would log it (see the module docs); `gap`
+/// removes 0.5 s from t = 10 s.
+fn reshaped(dir: &Path, r: usize, gap: bool) -> PathBuf {
+    let src = root().join(format!("data/kuka_lwr4/measurements_{r}.csv"));
+    let mut rd = csv::Reader::from_path(&src).unwrap();
+    let header: Vec<String> = rd.headers().unwrap().iter().map(String::from).collect();
+    let col = |name: &str| header.iter().position(|h| h == name).unwrap();
+    let order = [3usize, 0, 6, 1, 5, 2, 4];
+    let mut out_header = vec!["t".to_string()];
+    for g in ["q", "dq", "tau"] {
+        out_header.extend(order.iter().map(|j| format!("{g}_lwr_{j}_joint")));
+        out_header.push(format!("{g}_gripper"));
+    }
+    let path = dir.join(format!("robot_{r}.csv"));
+    let mut w = csv::Writer::from_path(&path).unwrap();
+    w.write_record(&out_header).unwrap();
+    let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(r as u64);
+    for rec in rd.records() {
+        let rec = rec.unwrap();
+        let v = |name: &str| rec[col(name)].to_string();
+        let t: f64 = v("t").parse().unwrap();
+        let dropped = rng.random_bool(0.02);
+        let jitter = rng.random_range(-1e-3..1e-3);
+        if dropped || (gap && (10.0..10.5).contains(&t)) {
+            continue;
+        }
+        let mut row = vec![format!("{}", t + jitter)];
+        for (g, still) in [("q", "0.02"), ("dq", "0"), ("tau", "0")] {
+            row.extend(order.iter().map(|j| v(&format!("{g}{}", j + 1))));
+            row.push(still.to_string());
+        }
+        w.write_record(&row).unwrap();
+    }
+    w.flush().unwrap();
+    path
+}
+
+fn identify_json(train: &Path, validate: &Path, extra: &[&str]) -> (serde_json::Value, String) {
+    let urdf = root().join("data/kuka_lwr4/kuka_lwr4.urdf");
+    let s = |p: &Path| p.to_str().unwrap().to_string();
+    let mut args = vec![
+        "identify".to_string(),
+        "--data".into(),
+        s(train),
+        "--validate-data".into(),
+        s(validate),
+        "--robot".into(),
+        s(&urdf),
+        "--constraints".into(),
+        "consistent".into(),
+        "--friction".into(),
+        "viscous,coulomb,offset".into(),
+        "--json".into(),
+    ];
+    args.extend(extra.iter().map(|a| a.to_string()));
+    let refs: Vec<&str> = args.iter().map(String::as_str).collect();
+    let (code, out, err) = physid(&refs);
+    assert_eq!(code, 0, "{err}");
+    (serde_json::from_str(&out).unwrap(), err)
+}
+
+#[test]
+fn kuka_logs_as_a_robot_writes_them_identify_like_the_clean_files() {
+    let dir = tempfile::tempdir().unwrap();
+    let k = root().join("data/kuka_lwr4");
+    let (clean, _) = identify_json(
+        &k.join("measurements_1.csv"),
+        &k.join("measurements_3.csv"),
+        &[],
+    );
+    let (train, val) = (
+        reshaped(dir.path(), 1, true),
+        reshaped(dir.path(), 3, false),
+    );
+    let (rough, err) = identify_json(&train, &val, &[]);
+    let rms = |v: &serde_json::Value| v["validation"]["rms_overall"].as_f64().unwrap();
+    let (a, b) = (rms(&clean), rms(&rough));
+    eprintln!("held-out RMS: clean {a:.4}, as a robot writes them {b:.4}");
+    assert!((b / a - 1.0).abs() < 0.02, "clean {a}, reshaped {b}");
+    // What the pipeline did, counted: the dropout split the run, drops bridged, the stamps'
+    // scatter read as a clock's, q̈ derived and the ends trimmed, the gripper left out.
+    let p = &rough["data_pipeline"][0]["pipeline"];
+    let gaps: Vec<f64> = p["gaps"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|g| g["seconds"].as_f64().unwrap())
+        .collect();
+    assert!(gaps.iter().any(|g| (g - 0.5).abs() < 0.02), "{gaps:?}");
+    assert!(p["missing_bridged"].as_u64().unwrap() > 50, "{p}");
+    assert_eq!(p["time_base"], "clock_slots", "{p}");
+    assert!(p["derived_qdd"].as_bool().unwrap() && !p["derived_qd"].as_bool().unwrap());
+    let (read, kept) = (
+        p["samples_read"].as_u64().unwrap(),
+        p["samples_kept"].as_u64().unwrap(),
+    );
+    let counted = kept
+        + p["trimmed"].as_u64().unwrap()
+        + p["dropped_short"].as_u64().unwrap()
+        + p["duplicates"].as_u64().unwrap();
+    assert_eq!(counted, read, "{p}");
+    assert!(err.contains("left out: gripper"), "{err}");
+    assert!(
+        err.contains("split into") && err.contains("bridged"),
+        "{err}"
+    );
+}
+
+#[test]
+fn a_locked_joint_is_not_fitted_and_lock_names_are_checked() {
+    let dir = tempfile::tempdir().unwrap();
+    let (train, val) = (
+        reshaped(dir.path(), 1, false),
+        reshaped(dir.path(), 3, false),
+    );
+    let (v, _) = identify_json(&train, &val, &["--lock", "lwr_6_joint"]);
+    assert_eq!(v["locked_joints"], serde_json::json!(["lwr_6_joint"]));
+    assert!(
+        v["validation"]["rms"][6].is_null(),
+        "{}",
+        v["validation"]["rms"]
+    );
+    assert!(v["validation"]["rms"][5].as_f64().unwrap() > 0.0);
+    // `--only` one joint: every other joint locked.
+    let (v, _) = identify_json(&train, &val, &["--only", "lwr_1_joint"]);
+    assert_eq!(v["locked_joints"].as_array().unwrap().len(), 6);
+    // Unknown names are refused, naming the robot's joints.
+    let urdf = root().join("data/kuka_lwr4/kuka_lwr4.urdf");
+    for flag in ["--lock", "--only"] {
+        let (code, _, err) = physid(&[
+            "identify",
+            "--data",
+            train.to_str().unwrap(),
+            "--robot",
+            urdf.to_str().unwrap(),
+            flag,
+            "gripper",
+        ]);
+        assert_eq!(code, 2, "{err}");
+        assert!(
+            err.contains(&format!("{flag}: the robot has no joint 'gripper'"))
+                && err.contains("lwr_0_joint"),
+            "{err}"
+        );
+    }
+}
