@@ -280,3 +280,82 @@ fn an_mcap_chunk_record_claiming_exabytes_is_an_error_naming_the_file() {
         "{err}"
     );
 }
+
+#[test]
+fn logs_and_designs_as_robots_use_them_refuse_what_they_cannot_be() {
+    let dir = tempfile::tempdir().unwrap();
+    let kuka = root().join("data/kuka_lwr4/kuka_lwr4.urdf");
+    let kuka = kuka.to_str().unwrap();
+    // A cutoff above what the data's rate allows, naming the rate.
+    let data = root().join("data/kuka_lwr4/measurements_1.csv");
+    let (ok, err) = physid(&[
+        "identify",
+        "--data",
+        data.to_str().unwrap(),
+        "--robot",
+        kuka,
+        "--cutoff",
+        "5000",
+    ]);
+    assert!(
+        !ok && err.contains("cutoff 5000 Hz: the data are sampled at 200.04"),
+        "{err}"
+    );
+    // physid's own ground-truth channel is not a JointState topic: refused with its type and
+    // the topics that are (before: its JointSample arrays were read as joint states).
+    let sc = root().join("scenarios/cheetah3_shell.toml");
+    let log = dir.path().join("shell.mcap");
+    let (ok, err) = physid(&[
+        "simulate",
+        sc.to_str().unwrap(),
+        "--out",
+        log.to_str().unwrap(),
+        "--duration",
+        "0.5",
+    ]);
+    assert!(ok, "{err}");
+    let (ok, err) = physid(&[
+        "identify",
+        "--data",
+        log.to_str().unwrap(),
+        "--topic",
+        "/physid/ground_truth",
+        "--allow-few-samples",
+    ]);
+    assert!(
+        !ok && err.contains("topic /physid/ground_truth carries physid_msgs/msg/JointSample, not sensor_msgs/msg/JointState")
+            && err.contains("topics with sensor_msgs/msg/JointState: /joint_states"),
+        "{err}"
+    );
+    // Excitation designs: a ramp longer than half the run, a zero jerk limit, a zero export
+    // rate, an export onto the base scenario.
+    for (args, words) in [
+        (
+            vec!["--ramp", "50"],
+            "--ramp must be 0 or more seconds, at most half the duration, got 50",
+        ),
+        (
+            vec!["--max-jerk", "0"],
+            "--max-jerk must be a positive number (rad/s³), got 0",
+        ),
+        (
+            vec!["--rate", "0"],
+            "--rate must be a sample rate in (0, 100000] Hz, got 0",
+        ),
+    ] {
+        let mut a = vec!["excite", "--robot", "cheetah3", "--iterations", "1"];
+        a.extend(args);
+        let (ok, err) = physid(&a);
+        assert!(!ok && err.contains(words), "{err}");
+    }
+    let base = dir.path().join("base.toml");
+    std::fs::copy(root().join("scenarios/excitation/base.toml"), &base).unwrap();
+    let before = std::fs::read(&base).unwrap();
+    let b = base.to_str().unwrap();
+    let (ok, err) = physid(&["excite", "--scenario", b, "--iterations", "1", "--csv", b]);
+    assert!(
+        !ok && err.contains("refusing to write over the input"),
+        "{err}"
+    );
+    assert_eq!(std::fs::read(&base).unwrap(), before);
+}
