@@ -359,3 +359,111 @@ fn logs_and_designs_as_robots_use_them_refuse_what_they_cannot_be() {
     );
     assert_eq!(std::fs::read(&base).unwrap(), before);
 }
+
+#[test]
+fn the_ladder_s_new_inputs_are_checked_by_name() {
+    let k = root().join("data/kuka_lwr4");
+    let s = |p: PathBuf| p.to_str().unwrap().to_string();
+    let (urdf, m1, m2) = (
+        s(k.join("kuka_lwr4.urdf")),
+        s(k.join("measurements_1.csv")),
+        s(k.join("measurements_2.csv")),
+    );
+    // A baseline without the uncertainty the change is judged within.
+    let (ok, err) = physid(&[
+        "diagnose",
+        "--robot",
+        &urdf,
+        "--data",
+        &m1,
+        "--baseline-data",
+        &m2,
+    ]);
+    assert!(
+        !ok && err.contains("--baseline-data") && err.contains("--description-uncertainty"),
+        "{err}"
+    );
+    // A baseline that is not there is named.
+    let (ok, err) = physid(&[
+        "diagnose",
+        "--robot",
+        &urdf,
+        "--data",
+        &m1,
+        "--baseline-data",
+        "/nonexistent/before.csv",
+        "--description-uncertainty",
+        "0.05",
+    ]);
+    assert!(!ok && err.contains("/nonexistent/before.csv"), "{err}");
+    // The semi-real benchmark needs another run for the description, and its robot.
+    let (ok, err) = physid(&[
+        "blind",
+        "--real",
+        &m1,
+        "--real-robot",
+        &urdf,
+        "--cases",
+        "1",
+    ]);
+    assert!(!ok && err.contains("at least two runs"), "{err}");
+    let (ok, err) = physid(&["blind", "--real", &m1, "--cases", "1"]);
+    assert!(!ok && err.contains("--real-robot"), "{err}");
+    let (ok, err) = physid(&["blind", "--real-baseline", "--cases", "1"]);
+    assert!(!ok && err.contains("--real"), "{err}");
+    // Base runs without accelerations: the injected torques need the logged motion.
+    let dir = tempfile::tempdir().unwrap();
+    let bare = dir.path().join("bare.csv");
+    let text = std::fs::read_to_string(k.join("measurements_1.csv")).unwrap();
+    let mut out = String::new();
+    for line in text.lines() {
+        let cols: Vec<&str> = line.split(',').collect();
+        out += &format!("{},{}\n", cols[..8].join(","), cols[22..29].join(","));
+    }
+    std::fs::write(&bare, out).unwrap();
+    let (ok, err) = physid(&[
+        "blind",
+        "--real",
+        &s(bare.clone()),
+        "--real",
+        &m2,
+        "--real-robot",
+        &urdf,
+        "--cases",
+        "1",
+    ]);
+    assert!(
+        !ok && err.contains("bare.csv") && err.contains("q̈"),
+        "{err}"
+    );
+    // Out-of-range counts and uncertainties are refused before any work.
+    let (ok, err) = physid(&[
+        "blind",
+        "--real",
+        &m1,
+        "--real",
+        &m2,
+        "--real-robot",
+        &urdf,
+        "--cases",
+        "1000000000",
+    ]);
+    assert!(!ok && err.contains("cases"), "{err}");
+    let (ok, err) = physid(&[
+        "blind",
+        "--real",
+        &m1,
+        "--real",
+        &m2,
+        "--real-robot",
+        &urdf,
+        "--cases",
+        "2",
+        "--description-uncertainty",
+        "-1",
+    ]);
+    assert!(
+        !ok && (err.contains("description_uncertainty") || err.contains("description-uncertainty")),
+        "{err}"
+    );
+}

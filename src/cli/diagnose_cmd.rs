@@ -42,6 +42,12 @@ pub struct Args {
     /// inner bodies are found only where the motion separates their parameters).
     #[arg(long)]
     payload_any_body: bool,
+    /// "What changed": runs of the same robot before the change (a tool change, a repair, a
+    /// new gripper). The description is calibrated on them with their standing effects, which
+    /// are taken out of --data; only what differs is attributed. Needs
+    /// --description-uncertainty.
+    #[arg(long = "baseline-data", num_args = 1..)]
+    baseline_data: Vec<PathBuf>,
 }
 
 /// `physid diagnose`.
@@ -58,9 +64,16 @@ pub fn run(a: Args) -> anyhow::Result<()> {
         .data
         .iter()
         .chain(&a.validate)
+        .chain(&a.baseline_data)
         .map(PathBuf::as_path)
         .collect();
+    if !a.baseline_data.is_empty() && a.description_uncertainty.is_none() {
+        return Err(super::option_error(
+            diagnose::DiagnoseError::BaselineWithoutUncertainty,
+        ));
+    }
     let mut train = super::identify_cmd::load_data(&paths, &model, &a.read)?;
+    let baseline = train.split_off(a.data.len() + a.validate.len());
     let validate = train.split_off(a.data.len());
     // The effect columns are processed like the data: at the pipeline's cutoff.
     opts.processing_cutoff = train[0].report.cutoff;
@@ -69,7 +82,20 @@ pub fn run(a: Args) -> anyhow::Result<()> {
     };
     let train_runs = runs(&train);
     warn_short(&train_runs);
-    let d = diagnose::diagnose_runs(&model, train_runs, runs(&validate), a.holdout, &opts)?;
+    let d = if baseline.is_empty() {
+        diagnose::diagnose_runs(&model, train_runs, runs(&validate), a.holdout, &opts)?
+    } else {
+        let before =
+            diagnose::baseline::Baseline::calibrate(&model, runs(&baseline), a.holdout, &opts)
+                .context("diagnosing and calibrating the baseline (--baseline-data)")?;
+        let standing: Vec<&str> = before.standing.iter().map(|v| v.kind.name()).collect();
+        eprintln!(
+            "baseline: the description calibrated on {} run(s); standing effects taken out of the data: {}",
+            runs(&baseline).len(),
+            if standing.is_empty() { "none".to_string() } else { standing.join(", ") }
+        );
+        before.diagnose_change(&model, train_runs, runs(&validate), a.holdout, &opts)?
+    };
     if let Some(dir) = &a.report {
         diagnose::report::write(dir, &d)
             .with_context(|| format!("writing the report to {}", dir.display()))?;
@@ -241,8 +267,32 @@ fn print_from_description(d: &Diagnosis) {
         &d.gap.iter().map(|g| g.description).collect::<Vec<_>>(),
         d.description_overall,
     );
-    for st in &d.explained_from_description {
-        row(&st.step, &st.rms, st.overall);
+    match &d.ladder {
+        Some(l) => {
+            for r in l.rungs.iter().skip(1) {
+                row(&r.step, &r.rms, r.overall);
+                if !r.ambiguous_with.is_empty() {
+                    println!("    the data fit as well: {}", r.ambiguous_with.join("; "));
+                }
+            }
+            for b in &l.bodies {
+                let com = b.com.map_or(String::new(), |c| {
+                    format!(", centre of mass ({:.3}, {:.3}, {:.3}) m", c[0], c[1], c[2])
+                });
+                println!(
+                    "  {} on {}: {:+.3} ± {:.3} kg{com}",
+                    if b.payload { "payload" } else { "change" },
+                    b.body,
+                    b.mass,
+                    b.mass_se
+                );
+            }
+        }
+        None => {
+            for st in &d.explained_from_description {
+                row(&st.step, &st.rms, st.overall);
+            }
+        }
     }
 }
 

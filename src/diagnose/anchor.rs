@@ -568,6 +568,33 @@ pub(crate) fn test_description(
     })
 }
 
+/// The information matrix of `model`'s parameters identified on `data` as [`super::fit_nominal`]
+/// does: `w YᵀY` over the joint-samples at or above the speed threshold, `w = 1/(s² τ_c)` with
+/// `s²` the fit's residual mean square and `τ_c` its correlation time (samples), the same
+/// weight the ladder gives its own data ([`Options::description_information`](super::Options::description_information)).
+pub fn information(
+    model: &Model,
+    data: &crate::trajectory::Trajectory,
+    opts: &super::Options,
+) -> Result<DMatrix<f64>, super::DiagnoseError> {
+    let fit = super::fit_nominal(model, data, opts)?;
+    let mut ne = crate::ident::NormalEquations::new(model.dof(), model.layout().len);
+    super::library::Context::new(model, &fit.theta, data, opts.processing_cutoff).for_each_row(
+        data,
+        0..data.len(),
+        &[],
+        opts.min_speed,
+        &mut |_, z, tau| ne.add(z, tau),
+    );
+    let ne = ne.finish();
+    let ctx = super::library::Context::new(model, &fit.theta, data, opts.processing_cutoff);
+    let (_, res) = super::residual_rms(&ctx, data, &[], &fit.theta, opts.min_speed);
+    let masked = super::mask_slow(data, &res, opts.min_speed);
+    let s2 = super::finite_mean_square(&masked);
+    let tau_c = correlation_time(&masked, model.dof(), data.sample_rate().unwrap_or(1.0));
+    Ok(&ne.yty / (s2 * tau_c).max(1e-300))
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -146,6 +146,10 @@ pub struct Diagnosis {
     /// Why the description test did not run although an uncertainty was stated (`None` when
     /// it ran or was not asked for).
     pub description_test_skipped: Option<String>,
+    /// The ladder from the description (when its uncertainty is stated): every explanation
+    /// (effects, a payload or change on any body, friction) competing from the description as
+    /// given, scored on the held-out data.
+    pub ladder: Option<super::ladder::Ladder>,
     /// The selected effects and their magnitudes.
     pub effects: Vec<EffectEstimate>,
     /// How far: per joint.

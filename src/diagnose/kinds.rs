@@ -595,6 +595,25 @@ impl Kind {
             .map(|s| s.kind)
     }
 
+    /// Whether the kind frees one body's ten parameters (a payload or change of the body).
+    pub fn is_body_change(&self) -> bool {
+        self.spec().grid == Grid::Body
+    }
+
+    /// The kinds the semi-real benchmark injects on real logs (`experiment::semireal`): those
+    /// whose injection needs no model of the robot beyond its description.
+    pub fn semi_real_singles() -> Vec<Kind> {
+        use Kind::*;
+        vec![
+            TorqueGain,
+            TimeDelay,
+            Tilt,
+            TorqueOffset,
+            Backlash,
+            Compliance,
+        ]
+    }
+
     /// The kinds the blind benchmark draws in single-effect cases, in report order.
     pub fn blind_singles() -> Vec<Kind> {
         KIND_TABLE

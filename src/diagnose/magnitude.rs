@@ -16,7 +16,14 @@ pub fn magnitudes_of(kind: Kind, c: &[f64], n: usize, gravity: f64) -> Vec<f64> 
 }
 
 /// First-order standard error of magnitude `index` from its coefficients' errors.
-fn magnitude_se(kind: Kind, c: &[f64], se: &[f64], n: usize, gravity: f64, index: usize) -> f64 {
+pub(crate) fn magnitude_se(
+    kind: Kind,
+    c: &[f64],
+    se: &[f64],
+    n: usize,
+    gravity: f64,
+    index: usize,
+) -> f64 {
     let base = magnitudes_of(kind, c, n, gravity)[index];
     let mut v = 0.0;
     for i in 0..c.len() {
@@ -59,7 +66,7 @@ impl<'a> Identifiable<'a> {
 /// The joint a magnitude belongs to, or `"robot"` for a single robot-wide value.
 /// A single magnitude of a kind searched over bodies belongs to that body (named by its
 /// joint).
-fn joint_label(stage: &Stage, single: bool, i: usize, variant: Variant) -> String {
+pub(crate) fn joint_label(stage: &Stage, single: bool, i: usize, variant: Variant) -> String {
     let n = stage.model.dof();
     match (single, variant.kind.body(variant.param, n)) {
         (true, Some(b)) => stage.model.bodies[b].joint_name.clone(),

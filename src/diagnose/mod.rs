@@ -19,12 +19,14 @@
 //! runs first. The blind benchmark that scores it is `experiment::blind`.
 
 pub mod anchor;
+pub mod baseline;
 pub mod breakdown;
 pub mod calibrate;
 mod diagnosis;
 mod explain;
 mod gap;
 mod kinds;
+pub mod ladder;
 pub mod library;
 pub mod magnitude;
 pub mod noise;
@@ -97,30 +99,7 @@ pub fn diagnose(
     let stage = Stage::new(model, train, validate, opts, nominal.theta.clone());
     let selection =
         select::forward_select(&stage.folds, model, &stage.ident_opts, &opts.selection)?;
-    // Absorbed effects, against the description when its uncertainty is stated, beside what
-    // cross-validation chose, unless a chosen effect's columns only approximate it (a delay to
-    // first order, a rotor without its gyroscopic terms): what they miss biases θ in ways the
-    // prior test would misread as an absorbed effect.
-    let linearized: Vec<Kind> = selection
-        .chosen
-        .iter()
-        .map(|&v| stage.folds.variants[v].kind)
-        .filter(|k| k.approximate())
-        .collect();
-    let description_test = match opts.description_uncertainty {
-        Some(eps) if linearized.is_empty() => {
-            Some(anchor::test_description(&stage, eps, &selection.chosen)?)
-        }
-        _ => None,
-    };
-    let description_test_skipped = (opts.description_uncertainty.is_some()
-        && description_test.is_none())
-    .then(|| {
-        format!(
-            "not run: cross-validation selected {}, whose columns only approximate it (linearized about the nominal model, or a rotor without its gyroscopic terms); what they miss would bias the parameters the test compares",
-            library::names(&linearized, false)
-        )
-    });
+    let (description_test, description_test_skipped) = run_description_test(&stage, &selection)?;
     let anchored: &[anchor::Step] = description_test.as_ref().map_or(&[], |r| &r.steps);
     let n_cv = selection.chosen.len();
     let chosen: Vec<usize> = selection
@@ -132,8 +111,12 @@ pub fn diagnose(
     let ladder = gap::ladder(&stage, &chosen)?;
     let mut effects = magnitude::cross_validated(&stage, &selection, &ladder.final_theta);
     effects.extend(magnitude::against_description(&stage, anchored));
+    let from_description = ladder::from_description(&stage, &selection, &mut effects);
     let how_far = gap::how_far(&stage, &chosen, n_cv, &ladder)?;
-    let explained_from_description = explain::from_description(&stage, &chosen, &ladder);
+    let explained_from_description = match &from_description {
+        Some(l) => l.description_steps(),
+        None => explain::from_description(&stage, &chosen, &ladder),
+    };
     let final_variants: Vec<_> = chosen.iter().map(|&v| stage.folds.variants[v]).collect();
     let (_, final_train_res) = residual_rms(
         &stage.ctx_train,
@@ -148,36 +131,35 @@ pub fn diagnose(
         &ladder.final_res,
         opts.structure_threshold,
     );
-    let verdict = verdict::verdict(
+    let train_seconds = train
+        .sample_period()
+        .map_or(0.0, |dt| dt * train.len() as f64);
+    let verdict = match verdict::verdict(
         selection.steps.len(),
         anchored.len(),
         &how_far,
         opts.unexplained_ratio,
         structure_left.remains,
-    );
-    let train_seconds = train
-        .sample_period()
-        .map_or(0.0, |dt| dt * train.len() as f64);
-    let short = train_seconds < opts.min_decisive_seconds;
-    let verdict = match verdict {
-        Verdict::Unexplained | Verdict::NoEffect if short => Verdict::Undecided,
+    ) {
+        Verdict::Unexplained | Verdict::NoEffect if train_seconds < opts.min_decisive_seconds => {
+            Verdict::Undecided
+        }
         v => v,
     };
     let description_overall = mean_square(&ladder.description_rms).sqrt();
-    let mut summary = format!(
-        "the description as given predicts the validation data with {:.3} N m RMS (re-identified: {:.3} N m); {}",
-        description_overall,
-        how_far.overall[0],
-        verdict::summary(verdict, &effects, n_cv, &how_far, description_test.as_ref())
+    let summary = summary_text(
+        model,
+        (
+            description_overall,
+            train_seconds,
+            opts.min_decisive_seconds,
+        ),
+        &how_far,
+        verdict,
+        (&effects, n_cv),
+        description_test.as_ref(),
+        (&structure_left, &explained_from_description),
     );
-    summary += &verdict::structure_summary(&structure_left, &model_joint_names(model));
-    summary += &explain::summary(&explained_from_description, description_overall);
-    if verdict == Verdict::Undecided {
-        summary += &format!(
-            " (only {train_seconds:.1} s of training data, below the {} s on which a verdict of \"unexplained\" or \"no effect\" can be trusted: record longer runs)",
-            opts.min_decisive_seconds
-        );
-    }
     Ok(Diagnosis {
         confirmed: how_far.confirmed,
         confirmed_only: how_far.confirmed_only,
@@ -192,6 +174,7 @@ pub fn diagnose(
         selection,
         description_test,
         description_test_skipped,
+        ladder: from_description,
         effects,
         gap: how_far.gap,
         description_overall,
@@ -203,6 +186,69 @@ pub fn diagnose(
         verdict,
         summary,
     })
+}
+
+/// Absorbed effects, against the description when its uncertainty is stated, beside what
+/// cross-validation chose, unless a chosen effect's columns only approximate it (a delay to
+/// first order, a rotor without its gyroscopic terms): what they miss biases θ in ways the
+/// prior test would misread as an absorbed effect. Returns the test, or why it did not run.
+fn run_description_test(
+    stage: &Stage,
+    selection: &select::Selection,
+) -> Result<(Option<anchor::Report>, Option<String>), DiagnoseError> {
+    // Absorbed effects, against the description when its uncertainty is stated, beside what
+    // cross-validation chose, unless a chosen effect's columns only approximate it (a delay to
+    // first order, a rotor without its gyroscopic terms): what they miss biases θ in ways the
+    // prior test would misread as an absorbed effect.
+    let linearized: Vec<Kind> = selection
+        .chosen
+        .iter()
+        .map(|&v| stage.folds.variants[v].kind)
+        .filter(|k| k.approximate())
+        .collect();
+    let description_test = match stage.opts.description_uncertainty {
+        Some(eps) if linearized.is_empty() => {
+            Some(anchor::test_description(stage, eps, &selection.chosen)?)
+        }
+        _ => None,
+    };
+    let description_test_skipped = (stage.opts.description_uncertainty.is_some()
+        && description_test.is_none())
+    .then(|| {
+        format!(
+            "not run: cross-validation selected {}, whose columns only approximate it (linearized about the nominal model, or a rotor without its gyroscopic terms); what they miss would bias the parameters the test compares",
+            library::names(&linearized, false)
+        )
+    });
+    Ok((description_test, description_test_skipped))
+}
+
+/// The diagnosis's one-paragraph summary.
+#[allow(clippy::too_many_arguments)]
+fn summary_text(
+    model: &Model,
+    (description_overall, train_seconds, min_decisive): (f64, f64, f64),
+    how_far: &gap::HowFar,
+    verdict: Verdict,
+    (effects, n_cv): (&[EffectEstimate], usize),
+    description_test: Option<&anchor::Report>,
+    (structure_left, explained): (&StructureLeft, &[DescriptionStep]),
+) -> String {
+    let mut summary = format!(
+        "the description as given predicts the validation data with {:.3} N m RMS (re-identified: {:.3} N m); {}",
+        description_overall,
+        how_far.overall[0],
+        verdict::summary(verdict, effects, n_cv, how_far, description_test)
+    );
+    summary += &verdict::structure_summary(structure_left, &model_joint_names(model));
+    summary += &explain::summary(explained, description_overall);
+    if verdict == Verdict::Undecided {
+        summary += &format!(
+            " (only {train_seconds:.1} s of training data, below the {} s on which a verdict of \"unexplained\" or \"no effect\" can be trusted: record longer runs)",
+            min_decisive
+        );
+    }
+    summary
 }
 
 fn model_joint_names(model: &Model) -> Vec<String> {

@@ -21,6 +21,8 @@ pub struct Options {
     pub train_runs: Vec<usize>,
     /// Low-pass cutoff (Hz) of the data's processing, for the compliance columns.
     pub processing_cutoff: f64,
+    /// The ladder from the description's settings.
+    pub ladder: super::ladder::Settings,
     /// The residual counts as unexplained when its validation mean square exceeds the noise
     /// floor's by this factor.
     pub unexplained_ratio: f64,
@@ -31,6 +33,11 @@ pub struct Options {
     /// Relative uncertainty `ε` of the description's inertial parameters: when given, effects
     /// that identification absorbs are tested against the description ([`super::anchor`]).
     pub description_uncertainty: Option<f64>,
+    /// The description's information matrix (precision of its parameters, `θ` layout, in
+    /// 1/(parameter unit)²), when the description is itself identified ([`super::anchor::information`]):
+    /// the ladder's prior becomes this plus the `ε` prior, so parameters the description's own
+    /// data did not determine are free to move and those it did are held.
+    pub description_information: Option<nalgebra::DMatrix<f64>>,
     /// Training data shorter than this (s) cannot support "unexplained" or "no effect": the
     /// cross-validation blocks and the noise floor rest on too few repetitions of the motion
     /// (the verdicts were measured on 20 s and more). Such a verdict becomes
@@ -50,10 +57,12 @@ impl Default for Options {
             kinds: Kind::ALL.to_vec(),
             min_speed: 0.05,
             processing_cutoff: 20.0,
+            ladder: Default::default(),
             train_runs: vec![],
             unexplained_ratio: 1.45,
             structure_threshold: 0.002,
             description_uncertainty: None,
+            description_information: None,
             min_decisive_seconds: 10.0,
             every_body: false,
         }
@@ -158,6 +167,12 @@ pub enum DiagnoseError {
     /// No training run was given.
     #[error("no training data given")]
     NoData,
+    /// A model built from a calibration is not valid.
+    #[error("the calibrated description is not a valid model: {0}")]
+    Model(#[from] crate::model::ModelError),
+    /// A baseline without a stated description uncertainty.
+    #[error("a baseline (--baseline-data) needs --description-uncertainty: the change is found against the description calibrated on the baseline, within that uncertainty")]
+    BaselineWithoutUncertainty,
     /// The held-out fraction is outside (0, 1).
     #[error("the held-out fraction {0} must lie strictly between 0 and 1")]
     Holdout(f64),

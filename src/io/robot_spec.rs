@@ -86,6 +86,16 @@ pub struct EllipsoidSpec {
     /// Orientation of the semi-axes (rad).
     #[serde(default)]
     pub rpy: [f64; 3],
+    /// Whether the body's inertia must lie inside (default). `false` keeps the ellipsoid for
+    /// identification but only warns when the description's inertia is outside: what
+    /// `identify --out-urdf` writes for a model identified under a looser set than the
+    /// ellipsoids (it then lies outside the geometry's ellipsoids, and must still load).
+    #[serde(default = "strict")]
+    pub strict: bool,
+}
+
+fn strict() -> bool {
+    true
 }
 
 impl EllipsoidSpec {

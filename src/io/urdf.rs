@@ -642,7 +642,7 @@ fn check_bounds(
         extras
             .ellipsoid
             .iter()
-            .any(|e| e.body.as_deref() == Some(name))
+            .any(|e| e.body.as_deref() == Some(name) && e.strict)
     };
     let elements = model.bodies.iter().flat_map(|b| {
         std::iter::once((&b.name, &b.inertia, b.bounding.as_ref())).chain(

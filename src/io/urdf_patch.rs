@@ -198,7 +198,7 @@ fn fixed_descendants<'a, 'i>(
 
 /// An ellipsoid as a sidecar `[[robot.ellipsoid]]` entry: centre, semi-axes and the
 /// roll-pitch-yaw of its principal axes.
-fn ellipsoid_toml(name: &str, e: &crate::spatial::Ellipsoid) -> String {
+fn ellipsoid_toml(name: &str, e: &crate::spatial::Ellipsoid, p: &InertialParams) -> String {
     let eig = nalgebra::SymmetricEigen::new(e.qs);
     let mut r = eig.eigenvectors;
     if r.determinant() < 0.0 {
@@ -207,8 +207,18 @@ fn ellipsoid_toml(name: &str, e: &crate::spatial::Ellipsoid) -> String {
     let (roll, pitch, yaw) = nalgebra::Rotation3::from_matrix_unchecked(r).euler_angles();
     let a = eig.eigenvalues.map(|l| l.max(0.0).sqrt());
     let c = e.center;
+    // A model identified under a looser set may lie outside: it still loads, with a warning.
+    let inside = p
+        .consistency(Some(e))
+        .trace_jq_per_mass
+        .is_none_or(|t| t >= 0.0);
+    let strict = if inside {
+        ""
+    } else {
+        "strict = false   # the identified inertia lies outside (identified without the ellipsoid set)\n"
+    };
     format!(
-        "[[robot.ellipsoid]]\nbody = \"{name}\"\ncenter = [{}, {}, {}]\nsemi_axes = [{}, {}, {}]\nrpy = [{}, {}, {}]\n",
+        "[[robot.ellipsoid]]\nbody = \"{name}\"\ncenter = [{}, {}, {}]\nsemi_axes = [{}, {}, {}]\nrpy = [{}, {}, {}]\n{strict}",
         num(c.x), num(c.y), num(c.z), num(a.x), num(a.y), num(a.z), num(roll), num(pitch), num(yaw)
     )
 }
@@ -259,7 +269,7 @@ pub fn sidecar(
     for b in &model.bodies {
         if let Some(e) = &b.bounding {
             s.push('\n');
-            s.push_str(&ellipsoid_toml(&b.name, e));
+            s.push_str(&ellipsoid_toml(&b.name, e, &b.inertia));
         }
         if let Some((r, e)) = b
             .rotor
@@ -267,7 +277,7 @@ pub fn sidecar(
             .and_then(|r| r.bounding.as_ref().map(|e| (r, e)))
         {
             s.push('\n');
-            s.push_str(&ellipsoid_toml(&r.name, e));
+            s.push_str(&ellipsoid_toml(&r.name, e, &r.inertia));
         }
     }
     if let Some(fx) = effects {

@@ -1,0 +1,942 @@
+//! **From the description**: why the user's model does not match the robot, as one ladder of
+//! explanations that starts at the description as given.
+//!
+//! The residual of a model re-identified on the data has already absorbed whatever the inertial
+//! parameters can mimic (a payload, a gain, a tilt); selecting effects on it, as
+//! [`super::select`] does, then names what is left of them, or nothing. Here every explanation
+//! competes from the description instead:
+//!
+//! - the **base** is the description, its inertial parameters free to move only as far as their
+//!   stated uncertainty allows: a Gaussian prior of relative size `ε` on each body's
+//!   pseudo-inertia ([`super::anchor::prior_precision`]), against the data's likelihood (weight
+//!   `1/(s² τ_c)`, `s²` the re-identified model's residual mean square, `τ_c` its correlation
+//!   time), with friction fixed at the description's;
+//! - the **candidates** are every effect of the library (its coefficients free), a payload or
+//!   change on any body (its ten parameters free: `Δπ_b`), and the friction re-identified;
+//! - each is fitted on the training data and **scored on the held-out data**: the one that
+//!   lowers the held-out error most is kept if it lowers it by at least `min_reduction`
+//!   (relative) with a block t statistic of at least `min_t` over `blocks` held-out blocks;
+//!   candidates within `tie` of its reduction are reported as ambiguous with it;
+//! - after each step the linearized columns (gain, tilt, delay, compliance, backlash, …) are
+//!   **rebuilt about the current model**, payload included, and the chosen set refitted until
+//!   the held-out error settles, so a payload and a gain are told apart by what they predict,
+//!   not by where the previous model stood;
+//! - the last rung re-identifies every parameter: what the explanations leave.
+//!
+//! A body's freed parameters whose mass change is positive and physically consistent are
+//! reported as a payload; otherwise as a change of the body.
+
+use super::library::{Context, Kind, Variant};
+use super::select::Folds;
+use super::{anchor, finite_mean_square, mask_slow, mean_square, residual_rms, Stage};
+use crate::linalg::least_squares;
+use crate::spatial::InertialParams;
+use nalgebra::{DMatrix, DVector};
+use serde::Serialize;
+
+/// The ladder's settings.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Settings {
+    /// Held-out blocks of the t statistic.
+    pub blocks: usize,
+    /// Smallest block t statistic of a step's held-out improvement.
+    pub min_t: f64,
+    /// Smallest relative reduction of the held-out mean square a step must bring.
+    pub min_reduction: f64,
+    /// Candidates within this fraction of the winner's reduction are ambiguous with it.
+    pub tie: f64,
+    /// At most this many steps.
+    pub max_steps: usize,
+}
+
+impl Default for Settings {
+    fn default() -> Self {
+        Self {
+            blocks: 10,
+            min_t: 3.0,
+            min_reduction: 0.02,
+            tie: 0.1,
+            max_steps: 6,
+        }
+    }
+}
+
+/// What one step explains.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(crate) enum Explanation {
+    /// An effect of the library (for a payload: a body's ten parameters).
+    Effect(Variant),
+    /// The friction coefficients re-identified.
+    Friction,
+}
+
+impl Explanation {
+    fn name(&self) -> String {
+        match self {
+            Explanation::Effect(v) if v.kind.is_body_change() => {
+                format!("payload or change on body {}", v.param)
+            }
+            Explanation::Effect(v) => v.kind.name().to_string(),
+            Explanation::Friction => "friction re-identified".into(),
+        }
+    }
+}
+
+/// One rung: the held-out error once the explanations so far are in.
+#[derive(Clone, Debug, Serialize, schemars::JsonSchema)]
+pub struct Rung {
+    /// `"description as given"`, `"description within its uncertainty"`, `"+ payload on
+    /// lwr_7_link"`, `"friction re-identified"`, …, `"inertial parameters re-identified"`.
+    pub step: String,
+    /// The effect kind of the step, if it is one (a payload is `payload`).
+    pub kind: Option<Kind>,
+    /// Its grid value (the body number for a payload, the Stribeck velocity, …).
+    pub param: f64,
+    /// Held-out RMS per joint (N m; joint-samples slower than the speed threshold left out).
+    pub rms: Vec<f64>,
+    /// Over all joints.
+    pub overall: f64,
+    /// Relative reduction of the held-out mean square by this step (0 for the fixed rungs).
+    pub reduction: f64,
+    /// Block t statistic of the reduction.
+    pub t: f64,
+    /// Other explanations within the tie of this step's reduction.
+    pub ambiguous_with: Vec<String>,
+}
+
+/// A body's parameters freed by the ladder: the change found, in the body's frame.
+#[derive(Clone, Debug, Serialize, schemars::JsonSchema)]
+pub struct BodyChange {
+    /// Body or rotor name.
+    pub body: String,
+    /// Whether it reads as a payload: added mass beyond three standard errors, its centre of
+    /// mass within the body's bounding ellipsoid doubled (a metre of the frame without one).
+    pub payload: bool,
+    /// Mass change (kg) and its standard error.
+    pub mass: f64,
+    /// Standard error of the mass change (kg).
+    pub mass_se: f64,
+    /// Centre of mass of the change (m, body frame), when its mass is positive.
+    pub com: Option<[f64; 3]>,
+    /// The ten parameters of the change, paper order.
+    pub pi: [f64; 10],
+}
+
+/// Why the ladder stopped.
+#[derive(Clone, Debug, PartialEq, Serialize, schemars::JsonSchema)]
+#[serde(rename_all = "snake_case")]
+pub enum Stop {
+    /// The best remaining candidate did not lower the held-out error enough.
+    NotSignificant {
+        /// Its name.
+        best: String,
+        /// Its relative reduction.
+        reduction: f64,
+        /// Its block t statistic.
+        t: f64,
+    },
+    /// The maximum number of steps was reached.
+    MaxSteps,
+    /// Nothing left to try.
+    NoCandidate,
+}
+
+/// The ladder's outcome.
+#[derive(Clone, Debug, Serialize, schemars::JsonSchema)]
+pub struct Ladder {
+    /// The stated relative uncertainty `ε` of the description's inertial parameters.
+    pub uncertainty: f64,
+    /// The rungs, from the description as given to everything re-identified.
+    pub rungs: Vec<Rung>,
+    /// The bodies whose parameters a step freed.
+    pub bodies: Vec<BodyChange>,
+    /// Why it stopped.
+    pub stop: Stop,
+    /// The chosen explanations, in order (for the magnitudes).
+    #[serde(skip)]
+    pub(crate) chosen: Vec<Explanation>,
+    /// Per chosen effect (in `chosen` order, friction skipped), its coefficients.
+    #[serde(skip)]
+    pub(crate) coefficients: Vec<Vec<f64>>,
+    /// Their posterior standard errors.
+    #[serde(skip)]
+    pub(crate) coefficient_se: Vec<Vec<f64>>,
+}
+
+impl Ladder {
+    /// The explanations as the diagnosis's effect estimates (described by the description
+    /// test's evidence: they depart from the description), friction left out.
+    pub(crate) fn estimates(&self, stage: &Stage) -> Vec<super::EffectEstimate> {
+        let n = stage.model.dof();
+        let g = stage.model.gravity.norm().max(1e-12);
+        let effects = self.chosen.iter().filter_map(|e| match e {
+            Explanation::Effect(v) => Some(*v),
+            Explanation::Friction => None,
+        });
+        effects
+            .zip(self.coefficients.iter().zip(&self.coefficient_se))
+            .map(|(v, (c, se))| {
+                let (name, unit) = v.kind.magnitude();
+                let values = super::magnitudes_of(v.kind, c, n, g);
+                let single = values.len() == 1;
+                let magnitudes = values
+                    .iter()
+                    .enumerate()
+                    .map(|(i, &value)| super::Magnitude {
+                        joint: super::magnitude::joint_label(stage, single, i, v),
+                        value,
+                        se: super::magnitude::magnitude_se(v.kind, c, se, n, g, i),
+                        unit: unit.into(),
+                        identifiable: 1.0,
+                    })
+                    .collect();
+                super::EffectEstimate {
+                    kind: v.kind,
+                    evidence: super::Evidence::Description,
+                    param: v.param,
+                    magnitude_name: name.into(),
+                    magnitudes,
+                    ambiguous_with: vec![],
+                    separate_by: None,
+                }
+            })
+            .collect()
+    }
+
+    /// The rungs from the first explanation on (the description as given and within its
+    /// uncertainty left out), as the diagnosis's description steps.
+    pub(crate) fn description_steps(&self) -> Vec<super::DescriptionStep> {
+        self.rungs
+            .iter()
+            .skip(2)
+            .map(|r| super::DescriptionStep {
+                step: r.step.clone(),
+                kind: r.kind,
+                param: r.param,
+                rms: r.rms.clone(),
+                overall: r.overall,
+            })
+            .collect()
+    }
+}
+
+/// Normal equations of `[Y | E]` about one linearization point: the training data summed,
+/// the held-out data per block.
+struct Data {
+    /// Joints.
+    n: usize,
+    /// The model parameters the linearized columns were built about.
+    theta_lin: DVector<f64>,
+    variants: Vec<Variant>,
+    offsets: Vec<usize>,
+    /// The training data's blocks (the description test reads them).
+    folds: Folds,
+    train: crate::ident::NormalEquations,
+    held: Vec<crate::ident::NormalEquations>,
+}
+
+impl Data {
+    /// Columns of every variant about the model parameters `theta`.
+    fn build(stage: &Stage, variants: &[Variant], theta: &DVector<f64>, blocks: usize) -> Data {
+        let (model, opts) = (stage.model, stage.opts);
+        let cutoff = opts.processing_cutoff;
+        let ctx_t = Context::new(model, theta, stage.train, cutoff);
+        let ctx_v = Context::new(model, theta, stage.validate, cutoff);
+        let ms = opts.min_speed;
+        let (t, v) = (stage.train, stage.validate);
+        let train = Folds::build(&ctx_t, t, 0..t.len(), variants.to_vec(), 2, &[], ms);
+        let held = Folds::build(&ctx_v, v, 0..v.len(), variants.to_vec(), blocks, &[], ms);
+        Data {
+            n: model.dof(),
+            theta_lin: theta.clone(),
+            variants: variants.to_vec(),
+            offsets: train.offsets.clone(),
+            train: train.sum_except(usize::MAX),
+            folds: train,
+            held: held.blocks,
+        }
+    }
+
+    /// The variant's index.
+    fn index(&self, v: &Variant) -> usize {
+        self.variants
+            .iter()
+            .position(|w| w == v)
+            .expect("an offered variant")
+    }
+}
+
+/// The fixed parts of every fit: the description, its prior, the data's weight.
+struct Problem<'a> {
+    stage: &'a Stage<'a>,
+    theta_d: DVector<f64>,
+    prior: DMatrix<f64>,
+    weight: f64,
+}
+
+/// A fit: the parameters over `cols` (model columns, then the chosen effects').
+struct Fit {
+    cols: Vec<usize>,
+    w: DVector<f64>,
+    /// The posterior covariance's diagonal over `cols` (for standard errors).
+    var: Vec<f64>,
+}
+
+impl Problem<'_> {
+    /// `min w·‖Z x − τ‖² + (x_Y − θ_d)ᵀ P (x_Y − θ_d)` over the model's columns and the chosen
+    /// effects', friction fixed at the description's unless re-identified.
+    fn fit(&self, data: &Data, set: &[Explanation]) -> Fit {
+        let p0 = self.theta_d.len();
+        let l = self.stage.model.layout();
+        let n = self.stage.model.dof();
+        let mut cols: Vec<usize> = (0..p0).collect();
+        for e in set {
+            if let Explanation::Effect(v) = e {
+                let at = data.offsets[data.index(v)];
+                cols.extend(at..at + v.kind.columns(n));
+            }
+        }
+        let friction_free = set.contains(&Explanation::Friction);
+        let fixed: Vec<usize> = if friction_free {
+            vec![]
+        } else {
+            (l.viscous_col..l.len).collect()
+        };
+        let m = cols.len();
+        let ne = &data.train;
+        let mut h = DMatrix::from_fn(m, m, |i, j| self.weight * ne.yty[(cols[i], cols[j])]);
+        let mut g = DVector::from_fn(m, |i, _| self.weight * ne.ytt[cols[i]]);
+        let mut hv = h.view_mut((0, 0), (p0, p0));
+        hv += &self.prior;
+        let mut gv = g.rows_mut(0, p0);
+        gv += &self.prior * &self.theta_d;
+        // A tiny ridge relative to each column's own curvature (a column nothing sees gets a
+        // unit one): free effect columns stay determined without being pulled.
+        for i in 0..m {
+            let v = h[(i, i)];
+            h[(i, i)] = if v > 0.0 { v * (1.0 + 1e-10) } else { 1.0 };
+        }
+        // Fixed columns: moved to the right-hand side at the description's values.
+        let free: Vec<usize> = (0..m).filter(|i| !fixed.contains(&cols[*i])).collect();
+        let mut w = DVector::zeros(m);
+        for &f in &fixed {
+            w[f] = self.theta_d[f];
+        }
+        let hf = DMatrix::from_fn(free.len(), free.len(), |i, j| h[(free[i], free[j])]);
+        let gf = DVector::from_fn(free.len(), |i, _| {
+            g[free[i]] - fixed.iter().map(|&f| h[(free[i], f)] * w[f]).sum::<f64>()
+        });
+        // Scaled to unit diagonal: the prior's precision spans twenty decades (a thin body's
+        // J⁻¹), which an unscaled Cholesky turns into garbage.
+        let d: Vec<f64> = (0..free.len()).map(|i| 1.0 / hf[(i, i)].sqrt()).collect();
+        let hs = DMatrix::from_fn(free.len(), free.len(), |i, j| d[i] * hf[(i, j)] * d[j]);
+        let gs = DVector::from_fn(free.len(), |i, _| d[i] * gf[i]);
+        let y = least_squares(&hs, &gs);
+        let inv = hs
+            .cholesky()
+            .map(|c| c.inverse())
+            .unwrap_or_else(|| DMatrix::zeros(free.len(), free.len()));
+        let mut var = vec![0.0; m];
+        for (i, &f) in free.iter().enumerate() {
+            w[f] = d[i] * y[i];
+            var[f] = d[i] * d[i] * inv[(i, i)];
+        }
+        Fit { cols, w, var }
+    }
+
+    /// Held-out sum of squares per block.
+    fn held_out(&self, data: &Data, fit: &Fit) -> Vec<f64> {
+        data.held
+            .iter()
+            .map(|b| b.select(&fit.cols).residual_sum_of_squares(&fit.w))
+            .collect()
+    }
+}
+
+/// The relative reduction of the summed `after` below `before`, and the block t statistic of
+/// the per-block log ratios `ln(before_b / after_b)`: scale-free, so blocks of large torques do
+/// not drown a change that helps every block alike.
+fn improvement(before: &[f64], after: &[f64]) -> (f64, f64) {
+    let d: Vec<f64> = before
+        .iter()
+        .zip(after)
+        .map(|(a, b)| (a.max(1e-300) / b.max(1e-300)).ln())
+        .collect();
+    let k = d.len() as f64;
+    let total: f64 = before.iter().sum();
+    let mean = d.iter().sum::<f64>() / k;
+    let var = d.iter().map(|x| (x - mean).powi(2)).sum::<f64>() / (k - 1.0).max(1.0);
+    let t = if var > 0.0 {
+        mean / (var / k).sqrt()
+    } else if mean > 0.0 {
+        f64::INFINITY
+    } else {
+        0.0
+    };
+    let reduction = (total - after.iter().sum::<f64>()) / total.max(1e-300);
+    (reduction, t)
+}
+
+/// The variants the ladder offers: the stage's effect kinds (rotor parameters left out when the
+/// model has rotors: they would test the description) and a payload on every body.
+fn offered(stage: &Stage) -> Vec<Variant> {
+    let n = stage.model.dof();
+    let rotors = stage.model.rotor_count() > 0;
+    let mut out: Vec<Variant> = stage
+        .folds
+        .variants
+        .iter()
+        .copied()
+        .filter(|v| !(v.kind.is_body_change() || (rotors && v.kind.is_rotor_parameter())))
+        .collect();
+    let bodies: Vec<Kind> = Kind::body_change().into_iter().collect();
+    out.extend(super::library::variants(&bodies, n));
+    out
+}
+
+/// The model parameters of a fit (payloads added to their bodies' parameters) and the
+/// coefficients of each chosen effect, in the order of `set` (friction skipped).
+fn model_of(
+    data: &Data,
+    fit: &Fit,
+    set: &[Explanation],
+    p0: usize,
+) -> (DVector<f64>, Vec<Vec<f64>>) {
+    let mut theta = fit.w.rows(0, p0).into_owned();
+    let mut coefs = vec![];
+    let mut c = p0;
+    for e in set {
+        if let Explanation::Effect(v) = e {
+            let d = v.kind.columns(data.n);
+            let x: Vec<f64> = fit.w.rows(c, d).iter().copied().collect();
+            if let Some(b) = v.kind.body(v.param, data.n) {
+                for (k, xk) in x.iter().enumerate() {
+                    theta[10 * b + k] += xk;
+                }
+            }
+            coefs.push(x);
+            c += d;
+        }
+    }
+    (theta, coefs)
+}
+
+/// The diagnosis's ladder from the description (module docs), with relative uncertainty `eps`
+/// of the description's inertial parameters.
+pub(crate) fn ladder(stage: &Stage, eps: f64, selected: &[Variant], settings: &Settings) -> Ladder {
+    let problem = problem(stage, eps);
+    let variants = offered(stage);
+    let p0 = problem.theta_d.len();
+    let data = Data::build(stage, &variants, &problem.theta_d, settings.blocks);
+    let mut set: Vec<Explanation> = vec![];
+    let mut rungs = vec![given_rung(stage)];
+    // The columns about the description within its uncertainty, not the raw description.
+    let (mut data, mut current) = settle(&problem, stage, &variants, data, &set, settings);
+    let mut sse = problem.held_out(&data, &current);
+    rungs.push(rung(
+        stage,
+        &data,
+        &current,
+        &set,
+        "description within its uncertainty",
+        None,
+        (0.0, 0.0),
+        vec![],
+    ));
+    let stop = loop {
+        if set.len() >= settings.max_steps {
+            break Stop::MaxSteps;
+        }
+        let mut scored: Vec<(Explanation, f64, f64)> = candidates(&data, selected, &set)
+            .into_iter()
+            .filter_map(|e| {
+                let mut trial = set.clone();
+                trial.push(e);
+                let fit = problem.fit(&data, &trial);
+                // A changed body must still be a body.
+                if !bodies_consistent(&data, &fit, &trial, p0, stage.model) {
+                    return None;
+                }
+                let (r, t) = improvement(&sse, &problem.held_out(&data, &fit));
+                Some((e, r, t))
+            })
+            .collect();
+        scored.sort_by(|a, b| b.1.total_cmp(&a.1));
+        let Some(&(best, r, t)) = scored.first() else {
+            break Stop::NoCandidate;
+        };
+        if r < settings.min_reduction || t < settings.min_t {
+            break Stop::NotSignificant {
+                best: best.name(),
+                reduction: r,
+                t,
+            };
+        }
+        // Ties: within `tie` of the winner's reduction; the simplest (fewest columns) is kept,
+        // the others of its size reported as ambiguous with it.
+        let tied: Vec<&(Explanation, f64, f64)> = scored
+            .iter()
+            .filter(|(_, ri, ti)| *ri >= r * (1.0 - settings.tie) && *ti >= settings.min_t)
+            .collect();
+        let width = |e: &Explanation| columns(e, data.n);
+        let fewest = tied.iter().map(|(e, _, _)| width(e)).min().unwrap_or(0);
+        let simplest: Vec<&&(Explanation, f64, f64)> =
+            tied.iter().filter(|(e, _, _)| width(e) == fewest).collect();
+        let (best, r, t) = **simplest[0];
+        let ties: Vec<String> = simplest[1..].iter().map(|(e, _, _)| e.name()).collect();
+        set.push(best);
+        (data, current) = settle(&problem, stage, &variants, data, &set, settings);
+        sse = problem.held_out(&data, &current);
+        let name = match best {
+            Explanation::Friction => best.name(),
+            _ => format!("+ {}", step_name(stage, &best)),
+        };
+        rungs.push(rung(
+            stage,
+            &data,
+            &current,
+            &set,
+            &name,
+            Some(best),
+            (r, t),
+            ties,
+        ));
+    };
+    let absorbed = absorbed_steps(&problem, stage, &data, &mut set, settings);
+    current = problem.fit(&data, &set);
+    for (name, e) in absorbed {
+        rungs.push(rung(
+            stage,
+            &data,
+            &current,
+            &set,
+            &name,
+            Some(e),
+            (0.0, 0.0),
+            vec![],
+        ));
+    }
+    rungs.push(reidentified_rung(stage));
+    let (_, coefficients) = model_of(&data, &current, &set, p0);
+    let coefficient_se = standard_errors(&data, &current, &set, p0);
+    let bodies = body_changes(stage, &current, &set);
+    name_changes(&mut rungs, &bodies);
+    Ladder {
+        uncertainty: eps,
+        bodies,
+        rungs,
+        stop,
+        chosen: set,
+        coefficients,
+        coefficient_se,
+    }
+}
+
+/// The ladder from the description when its uncertainty is stated, its first explanation added
+/// to `effects` when cross-validation and the description test did not name it (a payload on
+/// any body, an absorbed tilt or gain beside a linearized effect); its later steps stay in the
+/// ladder (on perturbed simulated descriptions they are mostly the description's own errors).
+pub(crate) fn from_description(
+    stage: &Stage,
+    selection: &super::select::Selection,
+    effects: &mut Vec<super::EffectEstimate>,
+) -> Option<Ladder> {
+    let selected: Vec<Variant> = selection
+        .chosen
+        .iter()
+        .map(|&v| stage.folds.variants[v])
+        .collect();
+    let eps = stage.opts.description_uncertainty?;
+    let l = ladder(stage, eps, &selected, &stage.opts.ladder);
+    if let Some(e) = l.estimates(stage).into_iter().next() {
+        if !effects.iter().any(|x| x.group().any(|k| k == e.kind)) {
+            effects.push(e);
+        }
+    }
+    Some(l)
+}
+
+/// Per chosen effect, the posterior standard errors of its coefficients (in `set` order,
+/// friction skipped), from the fit's covariance and the data weight's scale.
+fn standard_errors(data: &Data, fit: &Fit, set: &[Explanation], p0: usize) -> Vec<Vec<f64>> {
+    let mut c = p0;
+    let mut out = vec![];
+    for e in set {
+        if let Explanation::Effect(v) = e {
+            let d = v.kind.columns(data.n);
+            out.push((c..c + d).map(|i| fit.var[i].max(0.0).sqrt()).collect());
+            c += d;
+        }
+    }
+    out
+}
+
+/// A body's rung named for what its change reads as: a payload, or a change of the body.
+fn name_changes(rungs: &mut [Rung], bodies: &[BodyChange]) {
+    for b in bodies.iter().filter(|b| !b.payload) {
+        let payload = format!("+ payload on {}", b.body);
+        for r in rungs.iter_mut().filter(|r| r.step == payload) {
+            r.step = format!("+ change of {}", b.body);
+        }
+    }
+}
+
+/// The description, its prior and the data's weight (the re-identified model's residual).
+fn problem<'a>(stage: &'a Stage, eps: f64) -> Problem<'a> {
+    let (model, train, opts) = (stage.model, stage.train, stage.opts);
+    let (_, res) = residual_rms(&stage.ctx_train, train, &[], &stage.theta0, opts.min_speed);
+    let masked = mask_slow(train, &res, opts.min_speed);
+    let s2 = finite_mean_square(&masked);
+    let tau_c = anchor::correlation_time(&masked, model.dof(), train.sample_rate().unwrap_or(1.0));
+    Problem {
+        stage,
+        theta_d: model.parameters(),
+        prior: match &opts.description_information {
+            Some(info) if info.nrows() == model.layout().len => prior_precision(model, eps) + info,
+            _ => prior_precision(model, eps),
+        },
+        weight: 1.0 / (s2 * tau_c).max(1e-300),
+    }
+}
+
+/// Smallest eigenvalue of a body's pseudo-inertia the prior trusts, relative to its trace: an
+/// identified description often sits on the boundary `J ⪰ ε_J 1` (a body flat in one
+/// direction), where the affine-invariant prior would pin that direction to a relative `ε` of
+/// nothing (a precision twenty decades above the others).
+const J_FLOOR: f64 = 1e-3;
+
+/// [`anchor::prior_precision`] with each body's `J` floored at [`J_FLOOR`] of its trace.
+fn prior_precision(model: &crate::model::Model, eps: f64) -> DMatrix<f64> {
+    let l = model.layout();
+    let mut p = DMatrix::zeros(l.len, l.len);
+    let floored = |pi: &InertialParams| {
+        let j = pi.pseudo_inertia();
+        let floor = J_FLOOR * j.trace();
+        InertialParams::from_pseudo_inertia(&(j + nalgebra::Matrix4::identity() * floor))
+    };
+    let mut put = |c: usize, pi: &InertialParams| {
+        p.view_mut((c, c), (10, 10))
+            .copy_from(&anchor::body_precision(&floored(pi), eps));
+    };
+    for (i, b) in model.bodies.iter().enumerate() {
+        put(10 * i, &b.inertia);
+        if let (Some(c), Some(r)) = (l.rotor_col[i], &b.rotor) {
+            put(c, &r.inertia);
+        }
+    }
+    p
+}
+
+/// How complex an explanation is, for ties: the columns it adds.
+fn columns(e: &Explanation, n: usize) -> usize {
+    match e {
+        Explanation::Effect(v) => v.kind.columns(n),
+        Explanation::Friction => 2 * n,
+    }
+}
+
+/// Whether every body a payload or change in `set` frees is still a plausible body: a positive
+/// total mass, and the change's centre of mass (for a positive change) inside the body's
+/// bounding ellipsoid doubled about its centre, or within a metre of the frame without one. The
+/// data rarely see a change's every second moment, so its full pseudo-inertia is not judged.
+fn bodies_consistent(
+    data: &Data,
+    fit: &Fit,
+    set: &[Explanation],
+    p0: usize,
+    model: &crate::model::Model,
+) -> bool {
+    let (theta, _) = model_of(data, fit, set, p0);
+    let mut c = p0;
+    let mut ok = true;
+    for e in set {
+        let Explanation::Effect(v) = e else { continue };
+        let d = v.kind.columns(data.n);
+        if let Some(b) = v.kind.body(v.param, data.n) {
+            let total = theta[10 * b];
+            let dm = fit.w[c];
+            let com = (dm > 0.0)
+                .then(|| nalgebra::Vector3::new(fit.w[c + 1], fit.w[c + 2], fit.w[c + 3]) / dm);
+            let inside = com.is_none_or(|x| match &model.bodies[b].bounding {
+                Some(e) => e.scaled(2.0).contains(&x),
+                None => x.norm() <= 1.0,
+            });
+            ok &= total > 0.0 && inside;
+        }
+        c += d;
+    }
+    ok
+}
+
+/// Every explanation not yet chosen that the held-out phase offers: the effects
+/// cross-validation `selected` (their variants; a kind once), a payload or change on each body
+/// not yet freed, and the friction. (Kinds the parameters absorb are the description test's.)
+fn candidates(data: &Data, selected: &[Variant], set: &[Explanation]) -> Vec<Explanation> {
+    let used_kinds: Vec<Kind> = set
+        .iter()
+        .filter_map(|e| match e {
+            Explanation::Effect(v) if !v.kind.is_body_change() => Some(v.kind),
+            _ => None,
+        })
+        .collect();
+    let mut out: Vec<Explanation> = data
+        .variants
+        .iter()
+        .filter(|v| v.kind.is_body_change() || selected.contains(v))
+        .filter(|v| !used_kinds.contains(&v.kind))
+        .map(|v| Explanation::Effect(*v))
+        .filter(|e| !set.contains(e))
+        .collect();
+    if !set.contains(&Explanation::Friction) {
+        out.push(Explanation::Friction);
+    }
+    out
+}
+
+/// After a step: the columns rebuilt once about the model it fitted (payloads included) and
+/// the set refitted there, kept only if the held-out error does not rise (a linearization is
+/// trusted near its point, not followed wherever a fit leads it).
+fn settle(
+    problem: &Problem,
+    stage: &Stage,
+    variants: &[Variant],
+    data: Data,
+    set: &[Explanation],
+    settings: &Settings,
+) -> (Data, Fit) {
+    let p0 = problem.theta_d.len();
+    let fit = problem.fit(&data, set);
+    let before: f64 = problem.held_out(&data, &fit).iter().sum();
+    let (theta, _) = model_of(&data, &fit, set, p0);
+    let moved = Data::build(stage, variants, &theta, settings.blocks);
+    let refit = problem.fit(&moved, set);
+    let after: f64 = problem.held_out(&moved, &refit).iter().sum();
+    if after <= before {
+        (moved, refit)
+    } else {
+        (data, fit)
+    }
+}
+
+/// Phase two: kinds the parameters absorb (a gain, a tilt: the re-identified model mimics
+/// them, so cross-validation never offers them) tested against the description's prior about
+/// the ladder's model ([`anchor::select`], the explanations so far free), each confirmed on the
+/// held-out data alone and kept only while the bodies stay plausible. Returns the accepted
+/// steps' rung names; `set` grows by them.
+fn absorbed_steps(
+    problem: &Problem,
+    stage: &Stage,
+    data: &Data,
+    set: &mut Vec<Explanation>,
+    settings: &Settings,
+) -> Vec<(String, Explanation)> {
+    let chosen: Vec<usize> = set
+        .iter()
+        .filter_map(|e| match e {
+            Explanation::Effect(v) => Some(data.index(v)),
+            Explanation::Friction => None,
+        })
+        .collect();
+    let rotors = stage.model.rotor_count() > 0;
+    let exclude: Vec<Kind> = Kind::ALL
+        .into_iter()
+        .filter(|k| k.is_body_change() || (rotors && k.is_rotor_parameter()))
+        .collect();
+    let train = anchor::Anchor {
+        ne: &data.train,
+        weight: problem.weight,
+        mean: problem.theta_d.clone(),
+        precision: problem.prior.clone(),
+    };
+    let room = settings.max_steps.saturating_sub(set.len());
+    let (steps, _) = anchor::select(&train, &data.folds, &chosen, &exclude, room, settings.tie);
+    let held_sum = data
+        .held
+        .iter()
+        .skip(1)
+        .fold(data.held[0].clone(), |acc, b| acc.merged(b));
+    let held = anchor::Anchor {
+        ne: &held_sum,
+        ..train
+    };
+    let mut base = data.folds.columns(&chosen);
+    let mut out = vec![];
+    for step in steps {
+        let v = data.folds.variants[step.variant];
+        let d = v.kind.columns(data.n);
+        let at = data.offsets[step.variant];
+        let cand: Vec<usize> = (at..at + d).collect();
+        let threshold = anchor::chi2_upper_quantile(d, anchor::CONFIRM_ALPHA);
+        if held.fit(&base, &cand).statistic < threshold {
+            break;
+        }
+        let e = Explanation::Effect(v);
+        let mut trial = set.clone();
+        trial.push(e);
+        let fit = problem.fit(data, &trial);
+        if !bodies_consistent(data, &fit, &trial, problem.theta_d.len(), stage.model) {
+            break;
+        }
+        base.extend(cand);
+        set.push(e);
+        out.push((format!("+ {}", step_name(stage, &e)), e));
+    }
+    out
+}
+
+/// A step's name: the kind (with its body for a payload).
+fn step_name(stage: &Stage, e: &Explanation) -> String {
+    match e {
+        Explanation::Effect(v) if v.kind.is_body_change() => {
+            let n = stage.model.dof();
+            let b = v.kind.body(v.param, n).expect("a payload has a body");
+            format!("payload on {}", stage.model.bodies[b].name)
+        }
+        Explanation::Effect(v) => v.kind.name().to_string(),
+        Explanation::Friction => "friction re-identified".into(),
+    }
+}
+
+/// The held-out rung of a fit.
+#[allow(clippy::too_many_arguments)]
+fn rung(
+    stage: &Stage,
+    data: &Data,
+    fit: &Fit,
+    set: &[Explanation],
+    step: &str,
+    e: Option<Explanation>,
+    (reduction, t): (f64, f64),
+    ambiguous_with: Vec<String>,
+) -> Rung {
+    let p0 = stage.model.layout().len;
+    let (theta, coefs) = model_of(data, fit, set, p0);
+    let variants: Vec<Variant> = set
+        .iter()
+        .filter_map(|e| match e {
+            Explanation::Effect(v) if !v.kind.is_body_change() => Some(*v),
+            _ => None,
+        })
+        .collect();
+    let mut full = theta.iter().copied().collect::<Vec<f64>>();
+    for (e, c) in set
+        .iter()
+        .filter(|e| matches!(e, Explanation::Effect(_)))
+        .zip(&coefs)
+    {
+        if let Explanation::Effect(v) = e {
+            if !v.kind.is_body_change() {
+                full.extend(c);
+            }
+        }
+    }
+    // At the fit's own linearization point: the same columns the held-out score saw.
+    let mut full_theta = data.theta_lin.clone();
+    full_theta.copy_from(&theta);
+    let ctx = Context::new(
+        stage.model,
+        &data.theta_lin,
+        stage.validate,
+        stage.opts.processing_cutoff,
+    );
+    let (rms, _) = residual_rms(
+        &ctx,
+        stage.validate,
+        &variants,
+        &DVector::from_vec(full),
+        stage.opts.min_speed,
+    );
+    let (kind, param) = match e {
+        Some(Explanation::Effect(v)) => (Some(v.kind), v.param),
+        _ => (None, 0.0),
+    };
+    Rung {
+        step: step.into(),
+        kind,
+        param,
+        overall: mean_square(&rms).sqrt(),
+        rms,
+        reduction,
+        t,
+        ambiguous_with,
+    }
+}
+
+/// The description as given, scored on the held-out data.
+fn given_rung(stage: &Stage) -> Rung {
+    let theta = stage.model.parameters();
+    let (rms, _) = residual_rms(
+        &stage.ctx_val,
+        stage.validate,
+        &[],
+        &theta,
+        stage.opts.min_speed,
+    );
+    fixed_rung("description as given", rms)
+}
+
+/// Everything re-identified: the stage's nominal model.
+fn reidentified_rung(stage: &Stage) -> Rung {
+    let (rms, _) = residual_rms(
+        &stage.ctx_val,
+        stage.validate,
+        &[],
+        &stage.theta0,
+        stage.opts.min_speed,
+    );
+    fixed_rung("inertial parameters re-identified", rms)
+}
+
+fn fixed_rung(step: &str, rms: Vec<f64>) -> Rung {
+    Rung {
+        step: step.into(),
+        kind: None,
+        param: 0.0,
+        overall: mean_square(&rms).sqrt(),
+        rms,
+        reduction: 0.0,
+        t: 0.0,
+        ambiguous_with: vec![],
+    }
+}
+
+/// The bodies a payload step freed: their change, read as a payload when its mass is positive
+/// beyond three standard errors and its centre lies on or near the body.
+fn body_changes(stage: &Stage, fit: &Fit, set: &[Explanation]) -> Vec<BodyChange> {
+    let n = stage.model.dof();
+    let p0 = stage.model.layout().len;
+    let mut c = p0;
+    let mut out = vec![];
+    for e in set {
+        let Explanation::Effect(v) = e else { continue };
+        let d = v.kind.columns(n);
+        if v.kind.is_body_change() {
+            let b = v.kind.body(v.param, n).expect("a payload has a body");
+            let x: Vec<f64> = fit.w.rows(c, d).iter().copied().collect();
+            let pi = InertialParams(nalgebra::SVector::<f64, 10>::from_iterator(
+                x.iter().copied(),
+            ));
+            let mass = pi.mass();
+            let mass_se = fit.var[c].max(0.0).sqrt();
+            // Its second moments are seldom determined by the data (a payload's inertia about
+            // the joint axes trades with its neighbours'): judged by its mass and centre only.
+            let com_ok = pi
+                .com()
+                .is_some_and(|x| match &stage.model.bodies[b].bounding {
+                    Some(e) => e.scaled(2.0).contains(&x),
+                    None => x.norm() <= 1.0,
+                });
+            let payload = mass > 3.0 * mass_se && com_ok;
+            out.push(BodyChange {
+                body: stage.model.bodies[b].name.clone(),
+                payload,
+                mass,
+                mass_se,
+                com: (mass > 0.0).then(|| pi.com().map_or([0.0; 3], |c| [c.x, c.y, c.z])),
+                pi: x.try_into().unwrap_or([0.0; 10]),
+            });
+        }
+        c += d;
+    }
+    out
+}
