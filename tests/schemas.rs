@@ -10,6 +10,7 @@ fn the_committed_json_schemas_are_current() {
         ("identify", "identify"),
         ("diagnose", "diagnose"),
         ("blind_scores", "blind-scores"),
+        ("blind_real_scores", "blind-real-scores"),
         ("provenance", "provenance"),
         ("simulate", "simulate"),
         ("model", "model"),

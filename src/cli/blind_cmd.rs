@@ -39,6 +39,18 @@ pub struct Args {
     /// Run only these cases (numbers below --cases, comma-separated); the scores cover them.
     #[arg(long, value_delimiter = ',')]
     only: Vec<usize>,
+    /// Semi-real benchmark: real runs of the robot `--real-robot` (CSV, MCAP or rosbag2 with
+    /// q̇ and q̈; at least two), each case one of them with a change injected and a
+    /// description identified on another (docs/diagnose.md, "Semi-real benchmark").
+    #[arg(long, value_delimiter = ',', requires = "real_robot")]
+    real: Vec<PathBuf>,
+    /// The robot of the `--real` runs (URDF, robot TOML or a built-in name).
+    #[arg(long, requires = "real")]
+    real_robot: Option<String>,
+    /// With `--real`: give each case the run its description was identified on as the
+    /// baseline ("what changed", `diagnose --baseline-data`).
+    #[arg(long, requires = "real")]
+    real_baseline: bool,
 }
 
 /// One line per finished case, on standard error: what was injected and found, the verdict,
@@ -68,6 +80,9 @@ fn print_case(r: &CaseResult, progress: &super::progress::Progress) {
 
 /// `physid blind`.
 pub fn run(a: Args) -> anyhow::Result<()> {
+    if let Some(robot) = a.real_robot.clone() {
+        return run_real(a, &robot);
+    }
     let opts = BlindOptions {
         cases: a.cases,
         seed: a.seed,
@@ -133,6 +148,86 @@ pub fn run(a: Args) -> anyhow::Result<()> {
             description,
             wall,
         )?;
+        eprintln!("wrote {}", dir.display());
+    }
+    Ok(())
+}
+
+/// `physid blind --real`: the semi-real benchmark.
+fn run_real(a: Args, robot: &str) -> anyhow::Result<()> {
+    use physid::experiment::semireal::{self, RealCase, RealOptions};
+    let opts = RealOptions {
+        cases: a.cases,
+        seed: a.seed,
+        description_uncertainty: a.description_uncertainty.unwrap_or(0.05),
+        baseline: a.real_baseline,
+    };
+    opts.validate().map_err(super::option_error)?;
+    if let Some(&i) = a.only.iter().find(|&&i| i >= a.cases) {
+        anyhow::bail!("--only {i}: the cases are numbered 0 to {}", a.cases - 1);
+    }
+    let model = physid::io::load_robot(robot)?;
+    let bases = semireal::bases(&model, &a.real, &opts)?;
+    let temp = tempfile::tempdir()?;
+    let work = a
+        .keep_cases
+        .clone()
+        .unwrap_or_else(|| temp.path().to_path_buf());
+    let chosen: Vec<usize> = if a.only.is_empty() {
+        (0..a.cases).collect()
+    } else {
+        a.only.clone()
+    };
+    let dopts = opts.diagnose_options();
+    let pool = super::thread_pool(Some(a.threads))?;
+    let start = std::time::Instant::now();
+    let progress = super::progress::Progress::counter("cases", chosen.len() as u64);
+    let results: Vec<RealCase> = pool.install(|| {
+        chosen
+            .par_iter()
+            .map(|&i| {
+                let r =
+                    semireal::run_case(i, a.seed, &bases, &dopts, &work.join(format!("case{i}")));
+                if let Ok(r) = &r {
+                    progress.inc();
+                    eprintln!(
+                        "case {} ({}): {} on {}{}; found {}; {:.1} s",
+                        r.case,
+                        progress.status(),
+                        r.injected,
+                        r.base,
+                        r.injected_body
+                            .as_ref()
+                            .map_or(String::new(), |b| format!(" ({b})")),
+                        if r.found.is_empty() {
+                            "nothing".into()
+                        } else {
+                            r.found.join(", ")
+                        },
+                        r.seconds
+                    );
+                }
+                r
+            })
+            .collect::<Result<Vec<_>, semireal::RealError>>()
+    })?;
+    let scores = semireal::score(&results);
+    let wall = start.elapsed().as_secs_f64();
+    println!(
+        "{}",
+        serde_json::to_string_pretty(&physid::io::versioned("blind_real_scores", &scores))?
+    );
+    if let Some(dir) = &a.out {
+        let runs: Vec<String> = a.real.iter().map(|p| p.display().to_string()).collect();
+        let command = format!(
+            "physid blind --real {} --real-robot {robot}{} --cases {} --seed {} --description-uncertainty {}",
+            runs.join(","),
+            if opts.baseline { " --real-baseline" } else { "" },
+            a.cases,
+            a.seed,
+            opts.description_uncertainty
+        );
+        semireal::write(dir, &results, &scores, &command, wall)?;
         eprintln!("wrote {}", dir.display());
     }
     Ok(())

@@ -20,6 +20,8 @@ enum Output {
     Diagnose,
     /// `blind`'s `scores.json`.
     BlindScores,
+    /// `blind --real`'s `scores.json`.
+    BlindRealScores,
     /// `experiment`'s `provenance.json`.
     Provenance,
     /// `simulate --json`.
@@ -51,6 +53,7 @@ pub fn schema(output: &str) -> anyhow::Result<Value> {
         "identify" => schemars::schema_for!(super::identify_cmd::IdentifyJson),
         "diagnose" => schemars::schema_for!(physid::diagnose::Diagnosis),
         "blind_scores" => schemars::schema_for!(physid::experiment::blind::Scores),
+        "blind_real_scores" => schemars::schema_for!(physid::experiment::semireal::RealScores),
         "provenance" => schemars::schema_for!(super::experiment_cmd::Provenance),
         "simulate" => schemars::schema_for!(super::simulate_cmd::SimulateJson),
         "model" => schemars::schema_for!(super::model_cmd::ModelJson),
@@ -76,6 +79,7 @@ pub fn run(a: Args) -> anyhow::Result<()> {
         Output::Identify => "identify",
         Output::Diagnose => "diagnose",
         Output::BlindScores => "blind_scores",
+        Output::BlindRealScores => "blind_real_scores",
         Output::Provenance => "provenance",
         Output::Simulate => "simulate",
         Output::Model => "model",

@@ -21,6 +21,7 @@ pub mod blind;
 pub mod compare;
 pub mod motions;
 pub mod plots;
+pub mod semireal;
 pub mod sweep;
 pub mod tables;
 use serde::{Deserialize, Serialize};

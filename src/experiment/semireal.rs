@@ -1,0 +1,828 @@
+//! The semi-real blind benchmark: real logs as the base, one withheld change injected on top.
+//!
+//! The simulated benchmark ([`super::blind`]) cannot see what real data bring: a residual with
+//! its own structure (the robot's standing friction and offsets, the recording tool's filters,
+//! jitter), and a description that is itself an identified model. Here every case starts from
+//! a real run:
+//!
+//! - the **description** is identified on *another* run of the same robot (the nominal fit
+//!   of the diagnosis, constraint set `consistent`, viscous and Coulomb friction), and written
+//!   as the URDF the user would give;
+//! - one **change** is injected into the real run (or none: the untouched run is the clean
+//!   case): a payload on a random body (its torque `Y_b(q, q̇, q̈) π_p` from the logged motion,
+//!   the inverse dynamics of the payload alone), the friction changed (the description's
+//!   viscous and Coulomb terms scaled), a torque gain or offset and a delay
+//!   ([`crate::sim::effects::logged_torque`], whole samples), a base tilt (the description's
+//!   gravity torque under the tilted gravity minus its own), and compliance or backlash read
+//!   on the motor side ([`crate::sim::effects::logged_angle`]);
+//! - the case is written as a robot writes it (`t`, `q`, `τ` only: velocities and
+//!   accelerations are the pipeline's to derive), diagnosed from those files with the
+//!   description's stated uncertainty, and scored on what the ladder from the description
+//!   names first.
+//!
+//! Case `i` takes base run `i mod runs` and slot `i mod 11` ([`slots`]), drawn from
+//! `ChaCha8(seed, stream i)`.
+
+use crate::diagnose::library::Kind;
+use crate::diagnose::{self, Diagnosis, Verdict};
+use crate::experiment::tables;
+use crate::model::Model;
+use crate::prepare::Logged;
+use crate::sim::effects;
+use crate::sim::scenario::EffectSpec;
+use nalgebra::Vector3;
+use polars::prelude::*;
+use rand::{Rng, SeedableRng};
+use rand_chacha::ChaCha8Rng;
+use serde::Serialize;
+use std::path::{Path, PathBuf};
+
+/// What a slot injects.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Slot {
+    /// The real run untouched.
+    Clean,
+    /// A payload on a random body.
+    Payload,
+    /// Every joint's viscous and Coulomb friction scaled.
+    Friction,
+    /// One effect of the library.
+    Effect(Kind),
+}
+
+/// The cycle of slots: two clean, two payloads, the friction changed, then one per effect
+/// kind injected on real logs (`Kind::semi_real_singles`).
+pub fn slots() -> Vec<Slot> {
+    let mut out = vec![
+        Slot::Clean,
+        Slot::Clean,
+        Slot::Payload,
+        Slot::Payload,
+        Slot::Friction,
+    ];
+    out.extend(Kind::semi_real_singles().into_iter().map(Slot::Effect));
+    out
+}
+
+impl Slot {
+    /// The name in the case table.
+    pub fn name(&self) -> &'static str {
+        match self {
+            Slot::Clean => "clean",
+            Slot::Payload => "payload",
+            Slot::Friction => "friction_changed",
+            Slot::Effect(k) => k.name(),
+        }
+    }
+}
+
+/// A real run the cases start from.
+#[derive(Clone, Debug)]
+pub struct Base {
+    /// Its file (for the case table).
+    pub path: PathBuf,
+    /// The run as logged: it must carry `q̇` and `q̈` (the injected torques are computed from
+    /// the logged motion).
+    pub logged: Logged,
+    /// The description identified on another run.
+    pub description: Model,
+    /// Which run the description was identified on.
+    pub described_by: PathBuf,
+    /// The description's information matrix from that run ([`diagnose::anchor::information`]).
+    pub information: nalgebra::DMatrix<f64>,
+    /// That run's calibration, in the "what changed" mode.
+    pub baseline: Option<diagnose::baseline::Baseline>,
+}
+
+/// What a semi-real benchmark is asked for.
+#[derive(Clone, Debug, PartialEq)]
+pub struct RealOptions {
+    /// Number of cases (at least 1).
+    pub cases: usize,
+    /// Seed of every draw.
+    pub seed: u64,
+    /// The description's relative uncertainty the diagnosis is told (> 0).
+    pub description_uncertainty: f64,
+    /// "What changed" mode: the run the description was identified on is also given as the
+    /// baseline ([`diagnose::baseline::what_changed`]), so the robot's standing effects cancel.
+    pub baseline: bool,
+}
+
+impl RealOptions {
+    /// Checks every value against its range.
+    pub fn validate(&self) -> Result<(), RealError> {
+        if self.cases == 0 || self.cases > MAX_CASES {
+            return Err(RealError::InvalidOption {
+                option: "cases",
+                expected: "in 1..=100000",
+                value: self.cases as f64,
+            });
+        }
+        let e = self.description_uncertainty;
+        if !(e.is_finite() && e > 0.0) {
+            return Err(RealError::InvalidOption {
+                option: "description_uncertainty",
+                expected: "a positive fraction (0.05 = 5 %)",
+                value: e,
+            });
+        }
+        Ok(())
+    }
+
+    /// The diagnosis's options for every case.
+    pub fn diagnose_options(&self) -> diagnose::Options {
+        diagnose::Options {
+            description_uncertainty: Some(self.description_uncertainty),
+            ..Default::default()
+        }
+    }
+}
+
+/// At most this many cases.
+pub const MAX_CASES: usize = 100_000;
+
+/// A semi-real case or its report that could not be made.
+#[derive(Debug, thiserror::Error)]
+pub enum RealError {
+    /// An option out of its range.
+    #[error("{option} must be {expected}, got {value}")]
+    InvalidOption {
+        /// The option.
+        option: &'static str,
+        /// Its range.
+        expected: &'static str,
+        /// The value given.
+        value: f64,
+    },
+    /// Fewer than two runs: the description must come from another run.
+    #[error("the semi-real benchmark needs at least two runs (the description is identified on another run than the case's), got {0}")]
+    TooFewRuns(usize),
+    /// A base run without logged velocities or accelerations.
+    #[error("{}: the semi-real benchmark computes the injected torques from the logged motion and needs its q̇ and q̈ columns", .0.display())]
+    NoAccelerations(PathBuf),
+    /// Reading or writing a file.
+    #[error("{0}")]
+    Io(#[from] crate::io::IoError),
+    /// The description's identification or a case's diagnosis.
+    #[error("{context}: {source}")]
+    Diagnose {
+        /// Which case or description.
+        context: String,
+        /// The failure.
+        source: diagnose::DiagnoseError,
+    },
+    /// Building the case table.
+    #[error("case table: {0}")]
+    Table(#[from] PolarsError),
+    /// Serializing the scores.
+    #[error("scores: {0}")]
+    Json(#[from] serde_json::Error),
+}
+
+crate::options::option_error!(RealError);
+
+/// The bases of `paths` on `robot`: each run's description identified on the next run
+/// (cyclically) by the diagnosis's nominal fit.
+pub fn bases(robot: &Model, paths: &[PathBuf], opts: &RealOptions) -> Result<Vec<Base>, RealError> {
+    if paths.len() < 2 {
+        return Err(RealError::TooFewRuns(paths.len()));
+    }
+    let dopts = opts.diagnose_options();
+    let mut out = vec![];
+    for (k, path) in paths.iter().enumerate() {
+        let other = &paths[(k + 1) % paths.len()];
+        let runs = crate::io::load_trajectory(other, robot)?.trajectories();
+        let data = crate::trajectory::Trajectory::concatenate(runs.clone())
+            .ok_or(RealError::TooFewRuns(0))?;
+        let fit =
+            diagnose::fit_nominal(robot, &data, &dopts).map_err(|source| RealError::Diagnose {
+                context: format!("the description from {}", other.display()),
+                source,
+            })?;
+        let information =
+            diagnose::anchor::information(robot, &data, &dopts).map_err(|source| {
+                RealError::Diagnose {
+                    context: format!("the description's information from {}", other.display()),
+                    source,
+                }
+            })?;
+        let description = robot
+            .with_parameters(&fit.theta)
+            .map_err(|e| RealError::Io(crate::io::IoError::invalid(other, e.to_string())))?;
+        let (logged, _, _) =
+            crate::io::load_logged(path, robot, &crate::io::DataOptions::default())?;
+        let baseline = if opts.baseline {
+            let b = diagnose::baseline::Baseline::calibrate(&description, runs, HOLDOUT, &dopts)
+                .map_err(|source| RealError::Diagnose {
+                    context: format!("the baseline {}", other.display()),
+                    source,
+                })?;
+            Some(b)
+        } else {
+            None
+        };
+        if logged.qd.is_none() || logged.qdd.is_none() {
+            return Err(RealError::NoAccelerations(path.clone()));
+        }
+        out.push(Base {
+            path: path.clone(),
+            logged,
+            description,
+            described_by: other.clone(),
+            information,
+            baseline,
+        });
+    }
+    Ok(out)
+}
+
+/// A change drawn for a case: the slot, its effect (if one of the library's), the payload
+/// (body index, mass, centre in the body frame) and the friction factors.
+#[derive(Clone, Debug, Serialize)]
+pub struct Injection {
+    /// The slot.
+    pub slot: Slot,
+    /// The library effect injected.
+    pub spec: Option<EffectSpec>,
+    /// True magnitudes in the diagnosis's convention (the payload's mass, kg; the friction's
+    /// factors).
+    pub magnitudes: Vec<f64>,
+    /// The payload's body (index from 0).
+    pub body: Option<usize>,
+}
+
+/// Draws case `i`'s change on `description`.
+pub fn draw(i: usize, seed: u64, description: &Model, rate: f64) -> Injection {
+    let mut rng = ChaCha8Rng::seed_from_u64(seed);
+    rng.set_stream(i as u64);
+    let slots = slots();
+    let slot = slots[i % slots.len()];
+    let n = description.dof();
+    match slot {
+        Slot::Clean => Injection {
+            slot,
+            spec: None,
+            magnitudes: vec![],
+            body: None,
+        },
+        Slot::Payload => draw_payload(slot, description, &mut rng),
+        Slot::Friction => Injection {
+            slot,
+            spec: None,
+            magnitudes: (0..n).map(|_| 1.5 + rng.random::<f64>()).collect(),
+            body: None,
+        },
+        Slot::Effect(kind) => {
+            let (spec, magnitudes) = kind.draw(description, &mut rng, rate);
+            Injection {
+                slot,
+                spec,
+                magnitudes,
+                body: None,
+            }
+        }
+    }
+}
+
+/// A payload of 0.5–3 kg on a random body after the first (the first's mass acts on no
+/// joint of an arm whose first axis is vertical), a 4 cm sphere centred at a random point of
+/// the body's bounding ellipsoid (within 10 cm of its frame without one).
+fn draw_payload(slot: Slot, model: &Model, rng: &mut ChaCha8Rng) -> Injection {
+    let n = model.dof();
+    let body = rng.random_range(1.min(n - 1)..n);
+    let mass = 0.5 + 2.5 * rng.random::<f64>();
+    let unit = loop {
+        let u = Vector3::new(
+            2.0 * rng.random::<f64>() - 1.0,
+            2.0 * rng.random::<f64>() - 1.0,
+            2.0 * rng.random::<f64>() - 1.0,
+        );
+        if u.norm() <= 1.0 {
+            break u;
+        }
+    };
+    let com = match &model.bodies[body].bounding {
+        Some(e) => {
+            let l =
+                e.qs.cholesky()
+                    .map_or(nalgebra::Matrix3::zeros(), |c| c.l());
+            e.center + l * unit
+        }
+        None => unit * 0.1,
+    };
+    Injection {
+        slot,
+        spec: Some(EffectSpec::Payload {
+            mass,
+            com: [com.x, com.y, com.z],
+            radius: 0.04,
+            body: Some(body + 1),
+        }),
+        magnitudes: vec![mass],
+        body: Some(body),
+    }
+}
+
+/// The run `logged` (with q̇, q̈) with the change injected, as a robot writes it (no q̇, q̈):
+/// torques from the logged motion through `description` where the change acts through the
+/// dynamics.
+pub fn inject(logged: &Logged, description: &Model, inj: &Injection) -> Logged {
+    let n = logged.dof();
+    let (qd, qdd) = (
+        logged.qd.as_deref().unwrap_or(&[]),
+        logged.qdd.as_deref().unwrap_or(&[]),
+    );
+    let mut out = Logged {
+        qd: None,
+        qdd: None,
+        ..logged.clone()
+    };
+    let rows = logged.len();
+    let at = |v: &[f64], k: usize| v[k * n..(k + 1) * n].to_vec();
+    match (&inj.slot, &inj.spec) {
+        (Slot::Clean, _) => {}
+        (Slot::Friction, _) => {
+            for k in 0..rows {
+                for j in 0..n {
+                    let f = &description.bodies[j].friction;
+                    let w = qd[k * n + j];
+                    let extra = f.viscous * w + f.coulomb * crate::dynamics::sign(w);
+                    out.tau[k * n + j] += (inj.magnitudes[j] - 1.0) * extra;
+                }
+            }
+        }
+        (_, Some(spec @ (EffectSpec::Payload { .. } | EffectSpec::Tilt { .. }))) => {
+            let truth = effects::true_robot(description, std::slice::from_ref(spec));
+            let mut d0 = crate::dynamics::Data::new(description);
+            let mut d1 = crate::dynamics::Data::new(&truth);
+            for k in 0..rows {
+                let (q, w, a) = (at(&logged.q, k), at(qd, k), at(qdd, k));
+                let t0 = crate::dynamics::rnea(description, &mut d0, &q, &w, &a).clone();
+                let t1 = crate::dynamics::rnea(&truth, &mut d1, &q, &w, &a);
+                for j in 0..n {
+                    out.tau[k * n + j] += t1[j] - t0[j];
+                }
+            }
+        }
+        (_, Some(EffectSpec::TimeDelay { samples })) => {
+            let s = (*samples).min(rows.saturating_sub(1));
+            // The torque at sample k is the one of sample k − s: the first s samples go.
+            let tau: Vec<f64> = logged.tau[..(rows - s) * n].to_vec();
+            out.t = logged.t[s..].to_vec();
+            out.q = logged.q[s * n..].to_vec();
+            out.tau = tau;
+        }
+        (_, Some(spec @ (EffectSpec::Compliance { .. } | EffectSpec::Backlash { .. }))) => {
+            let specs = std::slice::from_ref(spec);
+            let mut zone = effects::DeadZone::new(description, specs);
+            for k in 0..rows {
+                let tau = at(&logged.tau, k);
+                let dt = if k + 1 < rows {
+                    logged.t[k + 1] - logged.t[k]
+                } else {
+                    0.0
+                };
+                let offsets = zone.as_mut().map(|z| z.step(&tau, dt));
+                let q = effects::logged_angle(specs, &at(&logged.q, k), &tau, offsets.as_deref());
+                out.q[k * n..(k + 1) * n].copy_from_slice(&q);
+            }
+        }
+        (_, Some(spec)) => {
+            let specs = std::slice::from_ref(spec);
+            for k in 0..rows {
+                let tau = effects::logged_torque(specs, &at(&logged.tau, k));
+                out.tau[k * n..(k + 1) * n].copy_from_slice(&tau);
+            }
+        }
+        (_, None) => {}
+    }
+    out
+}
+
+/// A CSV of `t`, `q1..qn`, `tau1..taun` (the physid format without q̇, q̈).
+pub fn logged_csv(logged: &Logged) -> String {
+    let n = logged.dof();
+    let mut s = String::from("t");
+    (1..=n).for_each(|j| s += &format!(",q{j}"));
+    (1..=n).for_each(|j| s += &format!(",tau{j}"));
+    s.push('\n');
+    for k in 0..logged.len() {
+        s += &format!("{}", logged.t[k]);
+        for v in &logged.q[k * n..(k + 1) * n] {
+            s += &format!(",{v}");
+        }
+        for v in &logged.tau[k * n..(k + 1) * n] {
+            s += &format!(",{v}");
+        }
+        s.push('\n');
+    }
+    s
+}
+
+/// One scored case.
+#[derive(Clone, Debug, Serialize)]
+pub struct RealCase {
+    /// Case index.
+    pub case: usize,
+    /// The base run's file name.
+    pub base: String,
+    /// The run its description was identified on.
+    pub described_by: String,
+    /// What was injected.
+    pub injected: String,
+    /// The payload's body, when one was injected.
+    pub injected_body: Option<String>,
+    /// The ladder's steps from the description, in order (ambiguous ones joined by `|`).
+    pub found: Vec<String>,
+    /// The verdict.
+    pub verdict: Verdict,
+    /// The first step names the injected change (a payload: on its body, or a body the step
+    /// is ambiguous with).
+    pub top1: Option<bool>,
+    /// A payload or body change was claimed on a clean run.
+    pub payload_claimed: bool,
+    /// Payload cases: the payload's mass found (kg) on the injected body.
+    pub payload_mass: Option<f64>,
+    /// Relative magnitude error `‖m̂ − m‖/‖m‖` of the injected kind, when attributed.
+    pub magnitude_error: Option<f64>,
+    /// The description's and the final validation RMS (N m).
+    pub rms: [f64; 2],
+    /// Wall time of the diagnosis (s).
+    pub seconds: f64,
+}
+
+/// Runs case `i` on its base, writing its files (`robot.urdf`, `data.csv`) into `dir`.
+pub fn run_case(
+    i: usize,
+    seed: u64,
+    bases: &[Base],
+    opts: &diagnose::Options,
+    dir: &Path,
+) -> Result<RealCase, RealError> {
+    let base = &bases[i % bases.len()];
+    let rate = base.logged.len() as f64 / (base.logged.t[base.logged.len() - 1] - base.logged.t[0]);
+    let inj = draw(i, seed, &base.description, rate);
+    let data = inject(&base.logged, &base.description, &inj);
+    crate::io::create_dir_all(dir)?;
+    let robot = dir.join("robot.urdf");
+    let csv = dir.join("data.csv");
+    let urdf = crate::io::urdf::to_string(&base.description);
+    crate::io::write_atomic(&robot, urdf.as_bytes())?;
+    crate::io::write_atomic(&csv, logged_csv(&data).as_bytes())?;
+    let start = std::time::Instant::now();
+    let given = crate::io::load_robot(&robot.to_string_lossy())?;
+    let runs = crate::io::load_trajectory(&csv, &given)?.trajectories();
+    let diag_err = |source| RealError::Diagnose {
+        context: format!("case {i}"),
+        source,
+    };
+    let d = if let Some(b) = &base.baseline {
+        b.diagnose_change(&given, runs, vec![], HOLDOUT, opts)
+            .map_err(diag_err)?
+    } else {
+        let opts = diagnose::Options {
+            description_information: Some(base.information.clone()),
+            ..opts.clone()
+        };
+        diagnose::diagnose_runs(&given, runs, vec![], HOLDOUT, &opts).map_err(diag_err)?
+    };
+    Ok(score_case(
+        i,
+        base,
+        &inj,
+        &given,
+        &d,
+        start.elapsed().as_secs_f64(),
+    ))
+}
+
+/// The fraction of each case's data held out for validation.
+const HOLDOUT: f64 = 0.3;
+
+/// A case's marks.
+fn score_case(
+    i: usize,
+    base: &Base,
+    inj: &Injection,
+    model: &Model,
+    d: &Diagnosis,
+    seconds: f64,
+) -> RealCase {
+    let ladder = d.ladder.as_ref();
+    let steps: Vec<&diagnose::ladder::Rung> =
+        ladder.map_or(vec![], |l| l.rungs[2..l.rungs.len() - 1].iter().collect());
+    let found: Vec<String> = steps
+        .iter()
+        .map(|r| {
+            std::iter::once(r.step.clone())
+                .chain(r.ambiguous_with.iter().cloned())
+                .collect::<Vec<_>>()
+                .join(" | ")
+        })
+        .collect();
+    let bodies = ladder.map_or(&[][..], |l| &l.bodies[..]);
+    let body_name = inj.body.map(|b| model.bodies[b].name.clone());
+    let first = steps.first();
+    let names_body = |r: &diagnose::ladder::Rung, b: &str| {
+        let on = |s: &str| s.ends_with(&format!(" on {b}")) || s.ends_with(&format!(" of {b}"));
+        on(&r.step) || r.ambiguous_with.iter().any(|s| on(s) || s.ends_with(b))
+    };
+    let top1 =
+        match inj.slot {
+            Slot::Clean => None,
+            Slot::Payload => {
+                let b = body_name.as_deref().expect("a payload has a body");
+                Some(first.is_some_and(|r| {
+                    r.kind.is_some_and(|k| k.is_body_change()) && names_body(r, b)
+                }))
+            }
+            Slot::Friction => Some(first.is_some_and(|r| r.step == "friction re-identified")),
+            Slot::Effect(k) => Some(first.is_some_and(|r| {
+                r.kind == Some(k) || r.ambiguous_with.iter().any(|s| s == k.name())
+            })),
+        };
+    let payload_mass = body_name
+        .as_deref()
+        .and_then(|b| bodies.iter().find(|c| c.body == b))
+        .map(|c| c.mass);
+    let magnitude_error = match inj.slot {
+        Slot::Payload => payload_mass.map(|m| (m - inj.magnitudes[0]).abs() / inj.magnitudes[0]),
+        Slot::Effect(k) => magnitude_error(d, k, &inj.magnitudes),
+        _ => None,
+    };
+    RealCase {
+        case: i,
+        base: file_name(&base.path),
+        described_by: file_name(&base.described_by),
+        injected: inj.slot.name().into(),
+        injected_body: body_name,
+        found,
+        verdict: d.verdict,
+        top1,
+        payload_claimed: bodies.iter().any(|b| b.payload),
+        payload_mass,
+        magnitude_error,
+        rms: [d.overall[0], d.overall[d.overall.len() - 1]],
+        seconds,
+    }
+}
+
+fn file_name(p: &Path) -> String {
+    p.file_name()
+        .map_or_else(|| p.display().to_string(), |f| f.to_string_lossy().into())
+}
+
+/// Relative error over the joints whose estimate is identifiable.
+fn magnitude_error(d: &Diagnosis, kind: Kind, truth: &[f64]) -> Option<f64> {
+    let e = d.effects.iter().find(|e| e.kind == kind)?;
+    let (mut num, mut den) = (0.0, 0.0);
+    for (m, t) in e.magnitudes.iter().zip(truth) {
+        if m.identifiable >= diagnose::IDENTIFIABLE {
+            num += (m.value - t).powi(2);
+            den += t * t;
+        }
+    }
+    (den > 0.0).then(|| (num / den).sqrt())
+}
+
+/// The semi-real benchmark's scores.
+#[derive(Clone, Debug, Serialize, schemars::JsonSchema)]
+pub struct RealScores {
+    /// Cases run.
+    pub cases: usize,
+    /// Payload cases.
+    pub payload: usize,
+    /// Fraction whose first step is the payload on its body.
+    pub payload_found: f64,
+    /// Fraction whose payload mass on that body is within 15 % of the truth.
+    pub payload_mass_within_15: f64,
+    /// Median relative error of the payload mass.
+    pub median_payload_mass_error: f64,
+    /// Untouched real runs.
+    pub clean: usize,
+    /// Fraction of them with no payload or body change claimed.
+    pub clean_no_payload: f64,
+    /// Fraction of them with no step at all.
+    pub clean_no_claim: f64,
+    /// Cases with one injected change (payload and friction included).
+    pub single: usize,
+    /// Fraction whose first step names it.
+    pub top1: f64,
+    /// Median relative magnitude error over them, where attributed.
+    pub median_magnitude_error: f64,
+}
+
+/// Scores of a set of cases.
+pub fn score(results: &[RealCase]) -> RealScores {
+    let frac = |xs: Vec<bool>| {
+        if xs.is_empty() {
+            f64::NAN
+        } else {
+            xs.iter().filter(|x| **x).count() as f64 / xs.len() as f64
+        }
+    };
+    let payload: Vec<&RealCase> = results.iter().filter(|r| r.injected == "payload").collect();
+    let clean: Vec<&RealCase> = results.iter().filter(|r| r.injected == "clean").collect();
+    let mass_err: Vec<f64> = payload.iter().filter_map(|r| r.magnitude_error).collect();
+    RealScores {
+        cases: results.len(),
+        payload: payload.len(),
+        payload_found: frac(payload.iter().map(|r| r.top1 == Some(true)).collect()),
+        payload_mass_within_15: frac(
+            payload
+                .iter()
+                .map(|r| r.magnitude_error.is_some_and(|e| e <= 0.15))
+                .collect(),
+        ),
+        median_payload_mass_error: diagnose::median(&mass_err),
+        clean: clean.len(),
+        clean_no_payload: frac(clean.iter().map(|r| !r.payload_claimed).collect()),
+        clean_no_claim: frac(clean.iter().map(|r| r.found.is_empty()).collect()),
+        single: results.iter().filter(|r| r.top1.is_some()).count(),
+        top1: frac(results.iter().filter_map(|r| r.top1).collect()),
+        median_magnitude_error: diagnose::median(
+            &results
+                .iter()
+                .filter_map(|r| r.magnitude_error)
+                .collect::<Vec<_>>(),
+        ),
+    }
+}
+
+/// The case table.
+pub fn case_table(results: &[RealCase]) -> PolarsResult<DataFrame> {
+    let s = |f: &dyn Fn(&RealCase) -> String| results.iter().map(f).collect::<Vec<_>>();
+    df!(
+        "case" => results.iter().map(|r| r.case as u64).collect::<Vec<_>>(),
+        "base" => s(&|r| r.base.clone()),
+        "described_by" => s(&|r| r.described_by.clone()),
+        "injected" => s(&|r| r.injected.clone()),
+        "injected_body" => results.iter().map(|r| r.injected_body.clone()).collect::<Vec<_>>(),
+        "found" => s(&|r| r.found.join(", ")),
+        "verdict" => s(&|r| crate::io::serde_name(&r.verdict)),
+        "top1" => results.iter().map(|r| r.top1).collect::<Vec<_>>(),
+        "payload_claimed" => results.iter().map(|r| r.payload_claimed).collect::<Vec<_>>(),
+        "payload_mass" => results.iter().map(|r| r.payload_mass).collect::<Vec<_>>(),
+        "magnitude_error" => results.iter().map(|r| r.magnitude_error).collect::<Vec<_>>(),
+        "rms_description" => results.iter().map(|r| r.rms[0]).collect::<Vec<_>>(),
+        "rms_final" => results.iter().map(|r| r.rms[1]).collect::<Vec<_>>(),
+    )
+}
+
+/// Writes `cases.csv`, `README.md` (command, scores, per-kind table, cases) and `scores.json`
+/// into `dir`.
+pub fn write(
+    dir: &Path,
+    results: &[RealCase],
+    scores: &RealScores,
+    command: &str,
+    wall: f64,
+) -> Result<(), RealError> {
+    crate::io::create_dir_all(dir)?;
+    let mut df = case_table(results)?;
+    tables::write_csv(&dir.join("cases.csv"), &mut df)?;
+    let per_kind = df
+        .clone()
+        .lazy()
+        .group_by([col("injected")])
+        .agg([
+            len().alias("cases"),
+            col("top1").cast(DataType::Float64).mean().alias("top1"),
+            col("payload_claimed")
+                .cast(DataType::Float64)
+                .mean()
+                .alias("payload_claimed"),
+            col("magnitude_error")
+                .median()
+                .alias("median_magnitude_error"),
+        ])
+        .sort(["injected"], Default::default())
+        .collect()?;
+    let md = format!(
+        "# Semi-real blind benchmark\n\n`{command}` ({wall:.0} s wall).\n\nReal runs as the base, the description identified on another run, one change injected per case (docs/diagnose.md, \"Semi-real benchmark\").\n\n## Scores\n\n```json\n{}\n```\n\n## By injected change\n\n{}\n## Cases\n\n{}",
+        serde_json::to_string_pretty(scores)?,
+        tables::markdown(&per_kind),
+        tables::markdown(&df)
+    )
+    .replace("| null |", "|  |");
+    crate::io::write_atomic(&dir.join("README.md"), md.as_bytes())?;
+    crate::io::write_atomic(
+        &dir.join("scores.json"),
+        serde_json::to_string_pretty(&crate::io::versioned("blind_real_scores", scores))?
+            .as_bytes(),
+    )?;
+    Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::spatial::InertialParams;
+    use nalgebra::{DMatrix, Matrix3};
+
+    /// A short logged run of the Cheetah leg: sinusoids with their exact derivatives.
+    fn logged(model: &Model) -> Logged {
+        let n = model.dof();
+        let (mut t, mut q, mut qd, mut qdd, mut tau) = (vec![], vec![], vec![], vec![], vec![]);
+        for k in 0..50 {
+            let s = k as f64 * 0.01;
+            t.push(s);
+            for j in 0..n {
+                let w = 2.0 + j as f64;
+                q.push(0.3 * (w * s).sin());
+                qd.push(0.3 * w * (w * s).cos());
+                qdd.push(-0.3 * w * w * (w * s).sin());
+                tau.push(0.1 * j as f64);
+            }
+        }
+        Logged {
+            joint_names: model.bodies.iter().map(|b| b.joint_name.clone()).collect(),
+            t,
+            q,
+            qd: Some(qd),
+            qdd: Some(qdd),
+            tau,
+        }
+    }
+
+    #[test]
+    fn an_injected_payload_adds_its_body_s_regressor_columns_times_its_parameters() {
+        let model = crate::model::cheetah3::leg();
+        let n = model.dof();
+        let log = logged(&model);
+        let (mass, com, radius) = (1.3, [0.02, -0.01, -0.15], 0.04);
+        let inj = Injection {
+            slot: Slot::Payload,
+            spec: Some(EffectSpec::Payload {
+                mass,
+                com,
+                radius,
+                body: Some(n),
+            }),
+            magnitudes: vec![mass],
+            body: Some(n - 1),
+        };
+        let out = inject(&log, &model, &inj);
+        let pi = InertialParams::from_mass_com_inertia(
+            mass,
+            &Vector3::from(com),
+            &(Matrix3::identity() * (0.4 * mass * radius * radius)),
+        );
+        let mut data = crate::dynamics::Data::new(&model);
+        let mut y = DMatrix::zeros(n, model.layout().len);
+        let mut worst: f64 = 0.0;
+        for k in 0..log.len() {
+            let r = k * n..(k + 1) * n;
+            let (q, qd, qdd) = (
+                &log.q[r.clone()],
+                &log.qd.as_ref().unwrap()[r.clone()],
+                &log.qdd.as_ref().unwrap()[r.clone()],
+            );
+            crate::dynamics::regressor(&model, &mut data, q, qd, qdd, &mut y);
+            let added = y.columns(10 * (n - 1), 10) * pi.0;
+            for j in 0..n {
+                let d = out.tau[k * n + j] - log.tau[k * n + j];
+                worst = worst.max((d - added[j]).abs());
+            }
+        }
+        assert!(worst < 1e-10, "{worst}");
+        assert!(out.qd.is_none() && out.qdd.is_none());
+    }
+
+    #[test]
+    fn a_delay_shifts_the_torque_behind_the_motion_and_compliance_the_angle() {
+        let model = crate::model::cheetah3::leg();
+        let n = model.dof();
+        let log = logged(&model);
+        let delayed = inject(
+            &log,
+            &model,
+            &Injection {
+                slot: Slot::Effect(Kind::TimeDelay),
+                spec: Some(EffectSpec::TimeDelay { samples: 3 }),
+                magnitudes: vec![3.0],
+                body: None,
+            },
+        );
+        assert_eq!(delayed.len(), log.len() - 3);
+        assert_eq!(delayed.t[0], log.t[3]);
+        assert_eq!(delayed.q[..n], log.q[3 * n..4 * n]);
+        assert_eq!(delayed.tau[..n], log.tau[..n]);
+        let k = vec![200.0; n];
+        let soft = inject(
+            &log,
+            &model,
+            &Injection {
+                slot: Slot::Effect(Kind::Compliance),
+                spec: Some(EffectSpec::Compliance { stiffness: k }),
+                magnitudes: vec![],
+                body: None,
+            },
+        );
+        for i in 0..log.q.len() {
+            assert!((soft.q[i] - (log.q[i] + log.tau[i] / 200.0)).abs() < 1e-15);
+        }
+        assert_eq!(soft.tau, log.tau);
+    }
+}
