@@ -396,6 +396,53 @@ fn the_ladder_s_new_inputs_are_checked_by_name() {
         "0.05",
     ]);
     assert!(!ok && err.contains("/nonexistent/before.csv"), "{err}");
+    // The same recording in two roles (here a copy under another name) is refused, naming both.
+    let dir = tempfile::tempdir().unwrap();
+    let copy = dir.path().join("copy.csv");
+    std::fs::copy(&m1, &copy).unwrap();
+    let (ok, err) = physid(&[
+        "diagnose",
+        "--robot",
+        &urdf,
+        "--data",
+        &m1,
+        "--baseline-data",
+        &s(copy.clone()),
+        "--description-uncertainty",
+        "0.05",
+    ]);
+    assert!(
+        !ok && err.contains("copy.csv") && err.contains("--baseline-data") && err.contains("twice"),
+        "{err}"
+    );
+    let (ok, err) = physid(&[
+        "identify",
+        "--robot",
+        &urdf,
+        "--data",
+        &m1,
+        "--validate-data",
+        &m1,
+    ]);
+    assert!(
+        !ok && err.contains("--validate-data") && err.contains("twice"),
+        "{err}"
+    );
+    let (ok, err) = physid(&[
+        "blind",
+        "--real",
+        &m1,
+        "--real",
+        &s(copy),
+        "--real-robot",
+        &urdf,
+        "--cases",
+        "1",
+    ]);
+    assert!(
+        !ok && err.contains("twice") && err.contains("--real"),
+        "{err}"
+    );
     // The semi-real benchmark needs another run for the description, and its robot.
     let (ok, err) = physid(&[
         "blind",

@@ -53,6 +53,7 @@ fn run(dir: &Path, r: usize, mass: f64, robot: &Path) -> PathBuf {
         }),
         magnitudes: vec![mass],
         body: Some(n - 1),
+        visible: None,
     };
     let changed = semireal::inject(&logged, &model, &injection);
     let path = dir.join(format!("run{r}_{mass}kg.csv"));

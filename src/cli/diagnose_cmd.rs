@@ -67,6 +67,15 @@ pub fn run(a: Args) -> anyhow::Result<()> {
         .chain(&a.baseline_data)
         .map(PathBuf::as_path)
         .collect();
+    let roles: Vec<(&str, &std::path::Path)> = (a.data.iter().map(|p| ("--data", p.as_path())))
+        .chain(a.validate.iter().map(|p| ("--validate", p.as_path())))
+        .chain(
+            a.baseline_data
+                .iter()
+                .map(|p| ("--baseline-data", p.as_path())),
+        )
+        .collect();
+    physid::io::check_distinct_recordings(&roles)?;
     if !a.baseline_data.is_empty() && a.description_uncertainty.is_none() {
         return Err(super::option_error(
             diagnose::DiagnoseError::BaselineWithoutUncertainty,

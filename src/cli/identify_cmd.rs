@@ -600,6 +600,14 @@ pub fn run(a: Args) -> anyhow::Result<()> {
         .chain(&a.validate_data)
         .map(PathBuf::as_path)
         .collect();
+    let roles: Vec<(&str, &Path)> = (a.data.iter().map(|p| ("--data", p.as_path())))
+        .chain(
+            a.validate_data
+                .iter()
+                .map(|p| ("--validate-data", p.as_path())),
+        )
+        .collect();
+    physid::io::check_distinct_recordings(&roles)?;
     let mut data = Data::open_all(&paths, m, &a.read, in_memory)?;
     let vdata = data.split_off(a.data.len());
     let train: Vec<Range<usize>> = match a.train.as_deref() {

@@ -10,7 +10,10 @@
 //!   stated uncertainty allows: a Gaussian prior of relative size `ε` on each body's
 //!   pseudo-inertia ([`super::anchor::prior_precision`]), against the data's likelihood (weight
 //!   `1/(s² τ_c)`, `s²` the re-identified model's residual mean square, `τ_c` its correlation
-//!   time), with friction fixed at the description's;
+//!   time), with friction fixed at the description's; and confined to the region the stated
+//!   uncertainty gives (its `χ²` quantile at 10⁻³), since a fixed prior yields to any gap given
+//!   data enough and would absorb a payload before any explanation is offered (a prior that
+//!   carries data's information, a baseline's, needs no region);
 //! - the **candidates** are every effect of the library (its coefficients free), a payload or
 //!   change on any body (its ten parameters free: `Δπ_b`), and the friction re-identified;
 //! - each is fitted on the training data and **scored on the held-out data**: the one that
@@ -271,8 +274,21 @@ struct Problem<'a> {
     stage: &'a Stage<'a>,
     theta_d: DVector<f64>,
     prior: DMatrix<f64>,
+    /// The prior's part from the stated relative uncertainty alone (the information of a
+    /// baseline or a sidecar left out): the region the base may move in is measured by it, as
+    /// run-to-run differences of a real robot exceed what one run's information allows.
+    stated: DMatrix<f64>,
     weight: f64,
+    /// The squared radius of the description's stated uncertainty: the `χ²` quantile, over the
+    /// parameters the prior covers, exceeded with probability [`OUTSIDE`]; infinite when the
+    /// prior carries the information of data (a baseline's, a sidecar's): a prior that grows
+    /// with the data is not overrun by them.
+    radius2: f64,
 }
+
+/// Probability that a description drawn from its stated uncertainty lies outside the region
+/// the ladder's base may move in.
+const OUTSIDE: f64 = 1e-3;
 
 /// A fit: the parameters over `cols` (model columns, then the chosen effects').
 struct Fit {
@@ -283,9 +299,48 @@ struct Fit {
 }
 
 impl Problem<'_> {
-    /// `min w·‖Z x − τ‖² + (x_Y − θ_d)ᵀ P (x_Y − θ_d)` over the model's columns and the chosen
-    /// effects', friction fixed at the description's unless re-identified.
+    /// `min w·‖Z x − τ‖² + (x_Y − θ_d)ᵀ (P + (λ − 1) P_ε) (x_Y − θ_d)` over the model's columns
+    /// and the chosen effects', friction fixed at the description's unless re-identified (`P`
+    /// the prior, `P_ε` its stated-uncertainty part: the Lagrangian of the prior fit confined
+    /// to the stated region); `λ = 1` unless that
+    /// leaves the description's parameters outside their stated uncertainty
+    /// (`(x_Y − θ_d)ᵀ P_ε (x_Y − θ_d) > r²`, [`Problem::radius2`]), then the `λ ≥ 1` that puts them
+    /// on its edge. A Gaussian prior alone yields to any gap given data enough (a 2.5 kg payload
+    /// on a 0.3 kg link is eighty standard deviations away, yet ten thousand samples outweigh
+    /// them): the description "within its uncertainty" must stay within it, so that what lies
+    /// beyond is left for the explanations to claim.
     fn fit(&self, data: &Data, set: &[Explanation]) -> Fit {
+        let system = self.system(data, set);
+        let at_one = system.solve(1.0);
+        if self.distance2(&at_one) <= self.radius2 {
+            return system.with_variance(at_one, 1.0);
+        }
+        // The distance falls as λ grows: bisection on ln λ.
+        let (mut lo, mut hi) = (0.0_f64, 30.0_f64);
+        let mut best = (system.solve(hi.exp()), hi.exp());
+        for _ in 0..48 {
+            let mid = 0.5 * (lo + hi);
+            let w = system.solve(mid.exp());
+            if self.distance2(&w) <= self.radius2 {
+                hi = mid;
+                best = (w, mid.exp());
+            } else {
+                lo = mid;
+            }
+        }
+        system.with_variance(best.0, best.1)
+    }
+
+    /// The squared Mahalanobis distance of a fit's model parameters from the description,
+    /// under the stated uncertainty.
+    fn distance2(&self, w: &DVector<f64>) -> f64 {
+        let p0 = self.theta_d.len();
+        let dx = w.rows(0, p0) - &self.theta_d;
+        dx.dot(&(&self.stated * &dx))
+    }
+
+    /// The normal equations of a fit over the columns `set` frees, the prior apart.
+    fn system(&self, data: &Data, set: &[Explanation]) -> System<'_> {
         let p0 = self.theta_d.len();
         let l = self.stage.model.layout();
         let n = self.stage.model.dof();
@@ -296,54 +351,120 @@ impl Problem<'_> {
                 cols.extend(at..at + v.kind.columns(n));
             }
         }
-        let friction_free = set.contains(&Explanation::Friction);
-        let fixed: Vec<usize> = if friction_free {
+        let fixed: Vec<usize> = if set.contains(&Explanation::Friction) {
             vec![]
         } else {
             (l.viscous_col..l.len).collect()
         };
         let m = cols.len();
         let ne = &data.train;
-        let mut h = DMatrix::from_fn(m, m, |i, j| self.weight * ne.yty[(cols[i], cols[j])]);
-        let mut g = DVector::from_fn(m, |i, _| self.weight * ne.ytt[cols[i]]);
+        let h = DMatrix::from_fn(m, m, |i, j| self.weight * ne.yty[(cols[i], cols[j])]);
+        let g = DVector::from_fn(m, |i, _| self.weight * ne.ytt[cols[i]]);
+        let free = (0..m).filter(|i| !fixed.contains(&cols[*i])).collect();
+        System {
+            cols,
+            h,
+            g,
+            prior: &self.prior,
+            prior_g: &self.prior * &self.theta_d,
+            stated: &self.stated,
+            stated_g: &self.stated * &self.theta_d,
+            theta_d: &self.theta_d,
+            fixed,
+            free,
+        }
+    }
+}
+
+/// One fit's normal equations: the data's `w ZᵀZ`, `w Zᵀτ` over `cols`, the prior added with
+/// its scale at each solve.
+struct System<'a> {
+    cols: Vec<usize>,
+    h: DMatrix<f64>,
+    g: DVector<f64>,
+    prior: &'a DMatrix<f64>,
+    prior_g: DVector<f64>,
+    /// The stated uncertainty's part of the prior (the one the trust region scales).
+    stated: &'a DMatrix<f64>,
+    stated_g: DVector<f64>,
+    theta_d: &'a DVector<f64>,
+    /// Columns held at the description's values (friction unless re-identified).
+    fixed: Vec<usize>,
+    /// Indices into `cols` that are free.
+    free: Vec<usize>,
+}
+
+impl System<'_> {
+    /// The free block's scaled system with the stated uncertainty's part of the prior weighted
+    /// by `lambda`, and its scales.
+    fn scaled(&self, lambda: f64) -> (DMatrix<f64>, DVector<f64>, Vec<f64>) {
+        let m = self.cols.len();
+        let p0 = self.prior.nrows();
+        let mut h = self.h.clone();
+        let mut g = self.g.clone();
         let mut hv = h.view_mut((0, 0), (p0, p0));
-        hv += &self.prior;
+        hv += self.prior + self.stated * (lambda - 1.0);
         let mut gv = g.rows_mut(0, p0);
-        gv += &self.prior * &self.theta_d;
+        gv += &self.prior_g + &self.stated_g * (lambda - 1.0);
         // A tiny ridge relative to each column's own curvature (a column nothing sees gets a
         // unit one): free effect columns stay determined without being pulled.
         for i in 0..m {
             let v = h[(i, i)];
             h[(i, i)] = if v > 0.0 { v * (1.0 + 1e-10) } else { 1.0 };
         }
-        // Fixed columns: moved to the right-hand side at the description's values.
-        let free: Vec<usize> = (0..m).filter(|i| !fixed.contains(&cols[*i])).collect();
-        let mut w = DVector::zeros(m);
-        for &f in &fixed {
-            w[f] = self.theta_d[f];
-        }
+        let fixed_value = |f: usize| self.theta_d[f];
+        let free = &self.free;
         let hf = DMatrix::from_fn(free.len(), free.len(), |i, j| h[(free[i], free[j])]);
         let gf = DVector::from_fn(free.len(), |i, _| {
-            g[free[i]] - fixed.iter().map(|&f| h[(free[i], f)] * w[f]).sum::<f64>()
+            g[free[i]]
+                - self
+                    .fixed
+                    .iter()
+                    .map(|&f| h[(free[i], f)] * fixed_value(f))
+                    .sum::<f64>()
         });
         // Scaled to unit diagonal: the prior's precision spans twenty decades (a thin body's
         // J⁻¹), which an unscaled Cholesky turns into garbage.
         let d: Vec<f64> = (0..free.len()).map(|i| 1.0 / hf[(i, i)].sqrt()).collect();
         let hs = DMatrix::from_fn(free.len(), free.len(), |i, j| d[i] * hf[(i, j)] * d[j]);
         let gs = DVector::from_fn(free.len(), |i, _| d[i] * gf[i]);
+        (hs, gs, d)
+    }
+
+    /// The parameters over `cols` with the stated part of the prior weighted by `lambda`.
+    fn solve(&self, lambda: f64) -> DVector<f64> {
+        let (hs, gs, d) = self.scaled(lambda);
         let y = least_squares(&hs, &gs);
+        let mut w = DVector::zeros(self.cols.len());
+        for &f in &self.fixed {
+            w[f] = self.theta_d[f];
+        }
+        for (i, &f) in self.free.iter().enumerate() {
+            w[f] = d[i] * y[i];
+        }
+        w
+    }
+
+    /// The fit `w` found at prior weight `lambda`, with its posterior variances.
+    fn with_variance(self, w: DVector<f64>, lambda: f64) -> Fit {
+        let (hs, _, d) = self.scaled(lambda);
         let inv = hs
             .cholesky()
             .map(|c| c.inverse())
-            .unwrap_or_else(|| DMatrix::zeros(free.len(), free.len()));
-        let mut var = vec![0.0; m];
-        for (i, &f) in free.iter().enumerate() {
-            w[f] = d[i] * y[i];
+            .unwrap_or_else(|| DMatrix::zeros(self.free.len(), self.free.len()));
+        let mut var = vec![0.0; self.cols.len()];
+        for (i, &f) in self.free.iter().enumerate() {
             var[f] = d[i] * d[i] * inv[(i, i)];
         }
-        Fit { cols, w, var }
+        Fit {
+            cols: self.cols,
+            w,
+            var,
+        }
     }
+}
 
+impl Problem<'_> {
     /// Held-out sum of squares per block.
     fn held_out(&self, data: &Data, fit: &Fit) -> Vec<f64> {
         data.held
@@ -588,14 +709,28 @@ fn problem<'a>(stage: &'a Stage, eps: f64) -> Problem<'a> {
     let masked = mask_slow(train, &res, opts.min_speed);
     let s2 = finite_mean_square(&masked);
     let tau_c = anchor::correlation_time(&masked, model.dof(), train.sample_rate().unwrap_or(1.0));
+    let stated = prior_precision(model, eps);
+    let prior = match &opts.description_information {
+        Some(info) if info.nrows() == model.layout().len => Some(&stated + info),
+        _ => None,
+    };
+    let covered = (0..stated.nrows())
+        .filter(|&i| stated[(i, i)] > 0.0)
+        .count();
+    // With information, the base is held as strongly as the data that determined it: no
+    // region is needed (and a real robot's run-to-run differences exceed one run's region).
+    let radius2 = match prior {
+        Some(_) => f64::INFINITY,
+        None => anchor::chi2_upper_quantile(covered, OUTSIDE),
+    };
+    let prior = prior.unwrap_or_else(|| stated.clone());
     Problem {
         stage,
         theta_d: model.parameters(),
-        prior: match &opts.description_information {
-            Some(info) if info.nrows() == model.layout().len => prior_precision(model, eps) + info,
-            _ => prior_precision(model, eps),
-        },
+        prior,
+        stated,
         weight: 1.0 / (s2 * tau_c).max(1e-300),
+        radius2,
     }
 }
 

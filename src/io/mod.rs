@@ -105,6 +105,46 @@ pub fn same_file(a: &Path, b: &Path) -> bool {
     }
 }
 
+/// Whether `a` and `b` are the same recording: the same file ([`same_file`]), or two regular
+/// files of equal bytes (compared up to 64 MiB; larger files only by path).
+pub fn same_recording(a: &Path, b: &Path) -> bool {
+    if same_file(a, b) {
+        return true;
+    }
+    const MAX: u64 = 64 << 20;
+    let size = |p: &Path| {
+        std::fs::metadata(p)
+            .ok()
+            .filter(|m| m.is_file())
+            .map(|m| m.len())
+    };
+    match (size(a), size(b)) {
+        (Some(x), Some(y)) if x == y && x <= MAX => {
+            matches!((std::fs::read(a), std::fs::read(b)), (Ok(u), Ok(v)) if u == v)
+        }
+        _ => false,
+    }
+}
+
+/// The first recording given twice among `inputs` (each with the option that named it), as
+/// an error naming both options and the file.
+pub fn check_distinct_recordings(inputs: &[(&str, &Path)]) -> Result<(), IoError> {
+    for (i, (role_a, a)) in inputs.iter().enumerate() {
+        for (role_b, b) in &inputs[i + 1..] {
+            if same_recording(a, b) {
+                return Err(IoError::invalid(
+                    b,
+                    format!(
+                        "the same recording is given twice ({role_a} {} and {role_b}): each run counts once, and a baseline or validation run must be another recording",
+                        a.display()
+                    ),
+                ));
+            }
+        }
+    }
+    Ok(())
+}
+
 /// Refuses, before any work, outputs that would overwrite one of `inputs` or each other, or
 /// whose directory does not exist.
 pub fn check_outputs(outputs: &[&Path], inputs: &[&Path]) -> Result<(), IoError> {
