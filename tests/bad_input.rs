@@ -514,3 +514,63 @@ fn the_ladder_s_new_inputs_are_checked_by_name() {
         "{err}"
     );
 }
+
+#[test]
+fn counts_from_the_user_are_bounded_before_anything_is_allocated() {
+    // Before: `blind --cases 1e9` ran for an hour (8 GB of case numbers, then cases one by
+    // one); a 10^6-cell sweep grid aborted on allocation.
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("b");
+    let (ok, err) = physid(&[
+        "blind",
+        "--cases",
+        "1000000000",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert!(
+        !ok && err.contains("--cases") && err.contains("1000000000"),
+        "{err}"
+    );
+    assert!(!out.exists());
+    let values = format!(
+        "[{}]",
+        (1..=100)
+            .map(|i| i.to_string())
+            .collect::<Vec<_>>()
+            .join(",")
+    );
+    let sweep = dir.path().join("big.toml");
+    let scenario = root().join("scenarios/cheetah3_fourier.toml");
+    std::fs::write(
+        &sweep,
+        format!(
+            "scenario = {:?}\n[grid]\n\"sensors.torque_noise\" = {values}\n\"simulation.seed\" = {values}\n\"processing.cutoff\" = {values}\n",
+            scenario.to_str().unwrap()
+        ),
+    )
+    .unwrap();
+    let out = dir.path().join("sw");
+    let (ok, err) = physid(&[
+        "sweep",
+        sweep.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert!(
+        !ok && err.contains("big.toml") && err.contains("cells"),
+        "{err}"
+    );
+    assert!(!out.exists());
+    // A grid of a hundred points (times the default seeds) is within the bound.
+    let small = dir.path().join("small.toml");
+    std::fs::write(
+        &small,
+        format!(
+            "scenario = {:?}\n[grid]\n\"sensors.torque_noise\" = {values}\n",
+            scenario.to_str().unwrap()
+        ),
+    )
+    .unwrap();
+    assert!(physid::experiment::sweep::load(&small).is_ok());
+}

@@ -133,3 +133,102 @@ fn compare_passes_a_rerun_and_fails_a_degraded_run() {
     ]);
     assert!(code == 2 && err.contains("--alpha"), "{err}");
 }
+
+/// A copy of the committed CI baseline's rows (CSV only) in `dir/name`, each row passed
+/// through `edit` (None: dropped).
+fn baseline_copy(dir: &Path, name: &str, edit: &dyn Fn(&str) -> Option<String>) -> PathBuf {
+    let src = Path::new(env!("CARGO_MANIFEST_DIR")).join("results/ci_baseline/rows.csv");
+    let text = std::fs::read_to_string(src).unwrap();
+    let mut lines = text.lines();
+    let mut out = vec![lines.next().unwrap().to_string()];
+    out.extend(lines.filter_map(edit));
+    let d = dir.join(name);
+    std::fs::create_dir_all(&d).unwrap();
+    std::fs::write(d.join("rows.csv"), out.join("\n") + "\n").unwrap();
+    d
+}
+
+/// The row with its seed replaced by `f(seed)`.
+fn with_seed(line: &str, f: &dyn Fn(i64) -> i64) -> String {
+    let (seed, rest) = line.split_once(',').unwrap();
+    format!("{},{rest}", f(seed.parse().unwrap()))
+}
+
+#[test]
+fn compare_refuses_what_it_cannot_judge() {
+    let dir = tempfile::tempdir().unwrap();
+    let s = |p: &Path| p.to_str().unwrap().to_string();
+    let same = baseline_copy(dir.path(), "same", &|l| Some(l.to_string()));
+    let base = baseline_copy(dir.path(), "base", &|l| Some(l.to_string()));
+    let (code, out, err) = physid(&["compare", &s(&same), "--baseline", &s(&base)]);
+    assert_eq!(code, 0, "{out}{err}");
+    // Before: a NaN metric made its group "too few pairs" and the run passed.
+    let nan = baseline_copy(dir.path(), "nan", &|l| {
+        Some(if l.starts_with("3,311,consistent,") {
+            let mut cells: Vec<&str> = l.split(',').collect();
+            cells[6] = "NaN";
+            cells.join(",")
+        } else {
+            l.to_string()
+        })
+    });
+    let (code, _, err) = physid(&["compare", &s(&nan), "--baseline", &s(&base)]);
+    assert!(
+        code == 2
+            && err.contains("val_rms = NaN")
+            && err.contains("seed 3")
+            && err.contains("candidate"),
+        "{code} {err}"
+    );
+    // Before: results that pair nothing (here disjoint seeds) passed with exit 0.
+    let shifted = baseline_copy(dir.path(), "shifted", &|l| Some(with_seed(l, &|s| s + 100)));
+    let (code, _, err) = physid(&["compare", &s(&shifted), "--baseline", &s(&base)]);
+    assert!(code == 2 && err.contains("no group pairs"), "{code} {err}");
+    // Before: six seeds at alpha 0.01 could never fail (smallest p = 1/64), yet passed. Five
+    // times the metric on every row is not a pass now: it cannot be judged (exit 2), unless
+    // allowed, and a looser alpha lets it fail.
+    let six = |l: &str| {
+        (l.split(',').next().unwrap().parse::<i64>().unwrap() <= 6).then(|| l.to_string())
+    };
+    let base6 = baseline_copy(dir.path(), "base6", &six);
+    let worse6 = baseline_copy(dir.path(), "worse6", &|l| {
+        six(l).map(|l| {
+            let mut cells: Vec<String> = l.split(',').map(String::from).collect();
+            let v: f64 = cells[6].parse().unwrap();
+            cells[6] = (5.0 * v).to_string();
+            cells.join(",")
+        })
+    });
+    let (code, out, err) = physid(&["compare", &s(&worse6), "--baseline", &s(&base6)]);
+    assert!(
+        code == 2 && err.contains("cannot reach alpha = 0.01"),
+        "{code} {err}"
+    );
+    assert!(out.contains("cannot reach alpha"), "{out}");
+    let (code, _, err) = physid(&[
+        "compare",
+        &s(&worse6),
+        "--baseline",
+        &s(&base6),
+        "--allow-too-few",
+    ]);
+    assert_eq!(code, 0, "{err}");
+    let (code, _, err) = physid(&[
+        "compare",
+        &s(&worse6),
+        "--baseline",
+        &s(&base6),
+        "--alpha",
+        "0.05",
+    ]);
+    assert_eq!(code, 1, "{err}");
+    // Before: --markdown/--junit could replace the baseline's own table.
+    let before = std::fs::read(base.join("rows.csv")).unwrap();
+    for flag in ["--markdown", "--junit"] {
+        let target = s(&base.join("rows.csv"));
+        let (code, _, err) =
+            physid(&["compare", &s(&same), "--baseline", &s(&base), flag, &target]);
+        assert!(code == 2 && err.contains("rows.csv"), "{flag}: {err}");
+    }
+    assert_eq!(std::fs::read(base.join("rows.csv")).unwrap(), before);
+}

@@ -28,9 +28,14 @@ pub struct Args {
     /// One-sided level of the signed-rank test (default 0.01).
     #[arg(long)]
     alpha: Option<f64>,
-    /// Fewest seed pairs a group needs to be able to fail (default 6).
+    /// Fewest seed pairs a group needs to be able to fail (default 6; raised to what --alpha
+    /// needs: the exact test's smallest p on n pairs is 2^-n, so 7 at 0.01).
     #[arg(long)]
     min_pairs: Option<usize>,
+    /// Let groups with too few pairs to reach --alpha pass (by default they fail the run with
+    /// exit 2: a group that cannot fail is not a pass).
+    #[arg(long)]
+    allow_too_few: bool,
     /// Only groups with n_s at most this.
     #[arg(long)]
     max_n_s: Option<u64>,
@@ -71,6 +76,7 @@ fn options(a: &Args) -> anyhow::Result<CompareOptions> {
         tolerance: a.tolerance.or(file.tolerance).unwrap_or(d.tolerance),
         alpha: a.alpha.or(file.alpha).unwrap_or(d.alpha),
         min_pairs: a.min_pairs.or(file.min_pairs).unwrap_or(d.min_pairs),
+        allow_too_few: a.allow_too_few,
         max_n_s: a.max_n_s.or(file.max_n_s),
     };
     opts.validate().map_err(super::option_error)?;
@@ -89,6 +95,18 @@ pub fn run(a: Args) -> anyhow::Result<()> {
     let inputs: Vec<&std::path::Path> = [Some(a.result.as_path()), a.baseline.as_deref()]
         .into_iter()
         .flatten()
+        .collect();
+    // Every file of an input directory is an input (its rows.parquet, rows.csv, provenance).
+    let files: Vec<std::path::PathBuf> = inputs
+        .iter()
+        .filter_map(|d| std::fs::read_dir(d).ok())
+        .flatten()
+        .filter_map(|e| e.ok().map(|e| e.path()))
+        .filter(|p| p.is_file())
+        .collect();
+    let inputs: Vec<&std::path::Path> = inputs
+        .into_iter()
+        .chain(files.iter().map(|p| p.as_path()))
         .collect();
     physid::io::check_outputs(&outputs, &inputs)?;
     let cmp = match (&a.baseline, &a.variant) {
@@ -128,6 +146,15 @@ pub fn run(a: Args) -> anyhow::Result<()> {
             cmp.metric
         ))
         .into());
+    }
+    let few = cmp.too_few();
+    if few > 0 && !opts.allow_too_few {
+        bail!(
+            "{few} of {} groups have fewer than {} seed pairs and cannot reach alpha = {} (the exact test's smallest p on n pairs is 2^-n): run more seeds, raise --alpha, or pass --allow-too-few",
+            cmp.groups.len(),
+            opts.required_pairs(),
+            opts.alpha
+        );
     }
     Ok(())
 }

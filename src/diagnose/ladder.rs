@@ -604,7 +604,10 @@ pub(crate) fn ladder(stage: &Stage, eps: f64, selected: &[Variant], settings: &S
         let simplest: Vec<&&(Explanation, f64, f64)> =
             tied.iter().filter(|(e, _, _)| width(e) == fewest).collect();
         let (best, r, t) = **simplest[0];
-        let ties: Vec<String> = simplest[1..].iter().map(|(e, _, _)| e.name()).collect();
+        let ties: Vec<String> = simplest[1..]
+            .iter()
+            .map(|(e, _, _)| tie_name(stage, e))
+            .collect();
         set.push(best);
         (data, current) = settle(&problem, stage, &variants, data, &set, settings);
         sse = problem.held_out(&data, &current);
@@ -917,6 +920,21 @@ fn absorbed_steps(
         out.push((format!("+ {}", step_name(stage, &e)), e));
     }
     out
+}
+
+/// An explanation tied with a step: the kind, or for a body "payload or change on <body>"
+/// (what it reads as is known only for the chosen one).
+fn tie_name(stage: &Stage, e: &Explanation) -> String {
+    match e {
+        Explanation::Effect(v) if v.kind.is_body_change() => {
+            let b = v.kind.body(v.param, stage.model.dof());
+            match b {
+                Some(b) => format!("payload or change on {}", stage.model.bodies[b].name),
+                None => e.name(),
+            }
+        }
+        _ => e.name(),
+    }
 }
 
 /// A step's name: the kind (with its body for a payload).

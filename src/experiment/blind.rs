@@ -220,7 +220,7 @@ const HOLDOUT: f64 = 0.3;
 /// What a blind benchmark run is asked for.
 #[derive(Clone, Debug, PartialEq)]
 pub struct BlindOptions {
-    /// Number of cases (at least 1).
+    /// Number of cases (1 to 100,000: bounded before anything is allocated).
     pub cases: usize,
     /// Seed of every draw.
     pub seed: u64,
@@ -238,8 +238,8 @@ impl BlindOptions {
             expected,
             value,
         };
-        if self.cases == 0 {
-            return Err(invalid("cases", "at least 1", 0.0));
+        if self.cases == 0 || self.cases > super::semireal::MAX_CASES {
+            return Err(invalid("cases", "in 1..=100000", self.cases as f64));
         }
         let e = self.description_error;
         if !(e.is_finite() && (0.0..1.0).contains(&e)) {

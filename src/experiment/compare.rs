@@ -10,7 +10,11 @@
 //!   the signed-rank sum, average ranks for ties, zero differences dropped) rejects "no
 //!   increase" at level `alpha` (a difference the seeds support).
 //!
-//! With fewer than `min_pairs` pairs a group cannot fail, and the report says so. Rows are read
+//! A group needs enough pairs to be able to fail: at least `min_pairs`, and at least the
+//! `n` whose smallest exact p-value `2⁻ⁿ` lies below `alpha` ([`CompareOptions::required_pairs`];
+//! seven at the default 0.01). With fewer it cannot be judged: the report says so, and the run
+//! fails unless `allow_too_few` is set. Non-finite metric values and a comparison that pairs
+//! nothing are refused. Rows are read
 //! from `rows.parquet` (or `rows.csv`) as `physid experiment` and `physid sweep` write them:
 //! the columns before `seed` are grid values, then `seed`, `n_s`, `constraints`, the metrics.
 
@@ -29,8 +33,10 @@ pub struct CompareOptions {
     pub tolerance: f64,
     /// One-sided level of the signed-rank test.
     pub alpha: f64,
-    /// Fewest seed pairs a group needs to be able to fail.
+    /// Fewest seed pairs a group needs to be able to fail (raised to what `alpha` needs).
     pub min_pairs: usize,
+    /// Whether groups with too few pairs to reach `alpha` may pass the run.
+    pub allow_too_few: bool,
     /// Only groups with `n_s` at most this (None: all).
     pub max_n_s: Option<u64>,
 }
@@ -42,6 +48,7 @@ impl Default for CompareOptions {
             tolerance: 0.05,
             alpha: 0.01,
             min_pairs: 6,
+            allow_too_few: false,
             max_n_s: None,
         }
     }
@@ -66,6 +73,15 @@ impl CompareOptions {
         }
         Ok(())
     }
+
+    /// The fewest pairs a group needs to be able to fail: `min_pairs`, raised to the smallest
+    /// `n` with `2⁻ⁿ < alpha` (the exact one-sided signed-rank test's smallest p on `n` pairs).
+    pub fn required_pairs(&self) -> usize {
+        let by_alpha = (1..=64)
+            .find(|&n| 0.5f64.powi(n as i32) < self.alpha)
+            .unwrap_or(64);
+        self.min_pairs.max(by_alpha)
+    }
 }
 
 /// A comparison could not be made.
@@ -87,6 +103,22 @@ pub enum CompareError {
     /// Nothing to compare.
     #[error("{0}")]
     Nothing(String),
+    /// A metric value that is not a finite number.
+    #[error(
+        "{table}: {metric} = {value} at {group}, seed {seed}: a comparison needs finite values"
+    )]
+    NonFinite {
+        /// Which table: the candidate or the reference.
+        table: &'static str,
+        /// The metric.
+        metric: String,
+        /// The group, in words.
+        group: String,
+        /// The seed.
+        seed: i64,
+        /// The value.
+        value: f64,
+    },
     /// An option value out of its range.
     #[error("{option} must be {expected}, got {value}")]
     InvalidOption {
@@ -169,6 +201,14 @@ pub struct Comparison {
 }
 
 impl Comparison {
+    /// Groups with too few pairs to be judged.
+    pub fn too_few(&self) -> usize {
+        self.groups
+            .iter()
+            .filter(|g| g.outcome == Outcome::TooFewPairs)
+            .count()
+    }
+
     /// Groups that regressed.
     pub fn regressions(&self) -> usize {
         self.groups
@@ -342,7 +382,7 @@ fn judge(pairs: &[(f64, f64)], opts: &CompareOptions) -> (f64, f64, f64, f64, Ou
     let ratios: Vec<f64> = logs.iter().map(|l| l.exp()).collect();
     let ratio = median(&ratios);
     let p = wilcoxon_upper_p(&logs);
-    let outcome = if logs.len() < opts.min_pairs {
+    let outcome = if logs.len() < opts.required_pairs() {
         Outcome::TooFewPairs
     } else if ratio > 1.0 + opts.tolerance && p < opts.alpha {
         Outcome::Regression
@@ -362,13 +402,28 @@ fn group_result(
     set: String,
     seeds: &BySeed,
     opts: &CompareOptions,
-) -> GroupResult {
+) -> Result<GroupResult, CompareError> {
+    for (&seed, (a, b)) in seeds {
+        for (table, v) in [("candidate", a), ("reference", b)] {
+            if let Some(v) = v.filter(|v| !v.is_finite()) {
+                return Err(CompareError::NonFinite {
+                    table,
+                    metric: opts.metric.clone(),
+                    group: format!("{} n_s={n_s} {set}", point.join(","))
+                        .trim()
+                        .to_string(),
+                    seed,
+                    value: v,
+                });
+            }
+        }
+    }
     let pairs: Vec<(f64, f64)> = seeds
         .values()
         .filter_map(|(a, b)| Some(((*a)?, (*b)?)))
         .collect();
     let (reference_median, candidate_median, median_ratio, p_value, outcome) = judge(&pairs, opts);
-    GroupResult {
+    Ok(GroupResult {
         point,
         n_s,
         set,
@@ -378,7 +433,18 @@ fn group_result(
         median_ratio,
         p_value,
         outcome,
+    })
+}
+
+/// The groups, refused when none pairs a candidate row with a reference row (results of
+/// different kinds, or of disjoint seeds).
+fn paired(groups: Vec<GroupResult>, what: &str) -> Result<Vec<GroupResult>, CompareError> {
+    if groups.iter().all(|g| g.pairs == 0) {
+        return Err(CompareError::Nothing(format!(
+            "{what}: no group pairs a candidate row with a reference row (the same grid point, n_s, set and seed): results of different kinds (an experiment against a sweep) or of disjoint seeds cannot be compared"
+        )));
     }
+    Ok(groups)
 }
 
 fn in_scope(g: &Group, opts: &CompareOptions) -> bool {
@@ -416,7 +482,11 @@ pub fn against_baseline(
         .into_iter()
         .filter(|(g, _)| in_scope(g, opts))
         .map(|(g, seeds)| group_result(g.point, g.n_s, g.set, &seeds, opts))
-        .collect();
+        .collect::<Result<Vec<_>, _>>()?;
+    let groups = paired(
+        groups,
+        &format!("{} against {}", candidate.display(), baseline.display()),
+    )?;
     Ok(Comparison {
         title: format!(
             "{} against the baseline {}",
@@ -474,7 +544,8 @@ pub fn variants(
         .map(|((point, n_s), seeds)| {
             group_result(point, n_s, format!("{better} vs {reference}"), &seeds, opts)
         })
-        .collect();
+        .collect::<Result<Vec<_>, _>>()?;
+    let groups = paired(groups, &dir.display().to_string())?;
     Ok(Comparison {
         title: format!("{better} <= {reference} in {}", dir.display()),
         metric: opts.metric.clone(),
@@ -507,7 +578,7 @@ impl Comparison {
                 match g.outcome {
                     Outcome::Pass => "pass",
                     Outcome::Regression => "**regression**",
-                    Outcome::TooFewPairs => "too few pairs",
+                    Outcome::TooFewPairs => "cannot reach alpha with these pairs",
                 },
                 if g.point.is_empty() {
                     "-".to_string()
@@ -559,7 +630,10 @@ impl Comparison {
                     )
                 }
                 Outcome::TooFewPairs => {
-                    s += &format!("<skipped message=\"{} pairs\"/>", g.pairs)
+                    s += &format!(
+                        "<skipped message=\"{} pairs cannot reach alpha = {}\"/>",
+                        g.pairs, self.alpha
+                    )
                 }
                 Outcome::Pass => {}
             }
@@ -603,5 +677,17 @@ mod tests {
             .collect();
         assert_eq!(judge(&same, &opts).4, Outcome::Pass);
         assert_eq!(judge(&worse[..3], &opts).4, Outcome::TooFewPairs);
+        // Six pairs, every one worse: the smallest exact p is 1/64 > 0.01, so six pairs cannot
+        // fail at the default level and count as too few; seven can.
+        assert_eq!(opts.required_pairs(), 7);
+        assert!(wilcoxon_upper_p(&[1.0, 2.0, 3.0, 4.0, 5.0, 6.0]) > opts.alpha);
+        assert_eq!(judge(&worse[..6], &opts).4, Outcome::TooFewPairs);
+        assert_eq!(judge(&worse[..7], &opts).4, Outcome::Regression);
+        let loose = CompareOptions {
+            alpha: 0.05,
+            min_pairs: 1,
+            ..opts
+        };
+        assert_eq!(loose.required_pairs(), 5);
     }
 }

@@ -753,6 +753,11 @@ pub struct RealScores {
     pub payload_mass_within_15: f64,
     /// Median relative error of the payload mass.
     pub median_payload_mass_error: f64,
+    /// Payload cases whose payload raised the description's torque RMS by at least
+    /// `VISIBLE.0` (a payload near the base barely moves the torque).
+    pub payload_visible: usize,
+    /// Fraction of those whose first step is the payload on its body.
+    pub payload_found_visible: f64,
     /// Untouched real runs.
     pub clean: usize,
     /// Fraction of them with no payload or body change claimed.
@@ -800,6 +805,14 @@ pub fn score(results: &[RealCase]) -> RealScores {
                 .collect(),
         ),
         median_payload_mass_error: diagnose::median(&mass_err),
+        payload_visible: payload.iter().filter(|r| r.growth >= VISIBLE.0).count(),
+        payload_found_visible: frac(
+            payload
+                .iter()
+                .filter(|r| r.growth >= VISIBLE.0)
+                .map(|r| r.top1 == Some(true))
+                .collect(),
+        ),
         clean: clean.len(),
         clean_no_payload: frac(clean.iter().map(|r| !r.payload_claimed).collect()),
         clean_no_claim: frac(clean.iter().map(|r| r.found.is_empty()).collect()),

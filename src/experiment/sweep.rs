@@ -120,8 +120,24 @@ pub fn load(path: &Path) -> Result<(SweepSpec, PathBuf, String), IoError> {
             ));
         }
     }
+    let points = spec.grid.values().try_fold(1usize, |n, v| {
+        n.checked_mul(v.as_array().map_or(1, Vec::len))
+    });
+    let cells = points.and_then(|p| p.checked_mul(spec.experiment.seeds.max(1)));
+    if cells.is_none_or(|c| c > MAX_CELLS) {
+        let count = cells.map_or("more than 2^64".to_string(), |c| c.to_string());
+        return Err(IoError::invalid(
+            path,
+            format!(
+                "grid: {count} cells (grid points times experiment.seeds); at most {MAX_CELLS} per sweep (shard a larger one)"
+            ),
+        ));
+    }
     Ok((spec, scenario, base))
 }
+
+/// The most cells a sweep may have (checked before any is allocated).
+pub const MAX_CELLS: usize = 100_000;
 
 /// All cells, grid points in lexicographic order of the keys (last key fastest), then seeds,
 /// each keyed by its resolved configuration ([`cell_key`]; the base scenario `base` read from
