@@ -574,3 +574,31 @@ fn counts_from_the_user_are_bounded_before_anything_is_allocated() {
     .unwrap();
     assert!(physid::experiment::sweep::load(&small).is_ok());
 }
+
+#[test]
+fn a_design_without_finite_information_is_never_written() {
+    // Before: exit 0, objective -inf, and a scenario written.
+    let dir = tempfile::tempdir().unwrap();
+    let scenario = root().join("scenarios/cheetah3_fourier.toml");
+    for flag in [["--base-frequency", "1e9"], ["--max-acceleration", "1e12"]] {
+        let out = dir.path().join("design.toml");
+        let (ok, err) = physid(&[
+            "excite",
+            "--scenario",
+            scenario.to_str().unwrap(),
+            flag[0],
+            flag[1],
+            "--iterations",
+            "20",
+            "--starts",
+            "1",
+            "--out",
+            out.to_str().unwrap(),
+        ]);
+        assert!(
+            !ok && err.contains("no excitation found with a finite"),
+            "{flag:?}: {err}"
+        );
+        assert!(!out.exists(), "{flag:?}");
+    }
+}

@@ -177,6 +177,18 @@ pub enum DesignError {
     /// The robot has no identifiable parameter.
     #[error("no parameter combination of this robot is identifiable from joint torques")]
     NothingIdentifiable,
+    /// No start found a motion whose information is finite: nothing is written.
+    #[error("no excitation found with a finite {objective} objective (best {value}): the limits leave no motion that carries information at these settings (base_frequency = {base_frequency} Hz, harmonics = {harmonics}; check the velocity and acceleration limits against them)")]
+    NoFiniteDesign {
+        /// The objective's name.
+        objective: String,
+        /// Its best value.
+        value: f64,
+        /// The base frequency (Hz).
+        base_frequency: f64,
+        /// Harmonics.
+        harmonics: usize,
+    },
 }
 
 crate::options::option_error!(DesignError);
@@ -732,6 +744,14 @@ pub fn design(
     let mut data = Data::new(model);
     let f = problem.information(&series, &mut data);
     let [d_value, _, neg_half_log_kappa] = objectives(&f);
+    if !(value.is_finite() && d_value.is_finite()) {
+        return Err(DesignError::NoFiniteDesign {
+            objective: crate::io::serde_name(&opts.objective),
+            value,
+            base_frequency: opts.base_frequency,
+            harmonics: opts.harmonics,
+        });
+    }
     Ok(Design {
         limit_use: problem.limit_use(&series, &mut data),
         series,
