@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # Regenerates the committed results (results/NAME/) with the release binary, each by the command
 # its docs give. Usage: bash scripts/regenerate.sh [NAME ...]   (default: all but the blind
-# benchmarks, which take a few minutes each: give `blind` and `blind_seed2` by name).
+# benchmarks, which take a few minutes each: give `blind`, `blind_seed2` and
+# `blind_real_{seed1,seed2,baseline_seed1,baseline_seed2}` by name).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 export CARGO_TARGET_DIR="${CARGO_TARGET_DIR:-$HOME/.cache/physid-target}"
@@ -21,6 +22,13 @@ run() {
       mv results/kuka_diagnosis/.diagnose.txt results/kuka_diagnosis/diagnose.txt ;;
     blind) "$B" blind --cases 102 --seed 1 --out results/blind ;;
     blind_seed2) "$B" blind --cases 102 --seed 2 --out results/blind_seed2 ;;
+    blind_real_seed1|blind_real_seed2|blind_real_baseline_seed1|blind_real_baseline_seed2)
+      runs=$K/measurements_1.csv,$K/measurements_2.csv,$K/measurements_3.csv
+      seed=${1##*seed}; mode=(); name=seed$seed
+      case "$1" in *baseline*) mode=(--real-baseline); name=baseline_seed$seed ;; esac
+      mkdir -p results/blind_real
+      "$B" blind --real "$runs" --real-robot $K/kuka_lwr4.urdf "${mode[@]}" --cases 55 --seed "$seed" \
+        --out results/blind_real/$name ;;
     *) echo "unknown result '$1'" >&2; exit 2 ;;
   esac
 }

@@ -602,3 +602,66 @@ fn a_design_without_finite_information_is_never_written() {
         assert!(!out.exists(), "{flag:?}");
     }
 }
+
+#[test]
+fn outputs_never_replace_a_robot_s_sidecar_or_meshes() {
+    // Before: `identify --out-effects` replaced the input URDF's own sidecar, and `export
+    // --mjcf` a mesh the robot reads; a --package-dir that does not exist was accepted.
+    let dir = tempfile::tempdir().unwrap();
+    let kuka = root().join("data/kuka_lwr4");
+    let copy = dir.path().join("kuka");
+    std::fs::create_dir_all(copy.join("lwr_description/meshes/kuka")).unwrap();
+    std::fs::copy(kuka.join("kuka_lwr4.urdf"), copy.join("kuka_lwr4.urdf")).unwrap();
+    let meshes = kuka.join("lwr_description/meshes/kuka");
+    for e in std::fs::read_dir(&meshes).unwrap() {
+        let e = e.unwrap();
+        if e.path().is_file() {
+            std::fs::copy(
+                e.path(),
+                copy.join("lwr_description/meshes/kuka").join(e.file_name()),
+            )
+            .unwrap();
+        }
+    }
+    let s = |p: &Path| p.to_str().unwrap().to_string();
+    let urdf = copy.join("kuka_lwr4.urdf");
+    let mesh = copy.join("lwr_description/meshes/kuka/link_6.STL");
+    let before = std::fs::read(&mesh).unwrap();
+    let (ok, err) = physid(&["export", "--robot", &s(&urdf), "--mjcf", &s(&mesh)]);
+    assert!(
+        !ok && err.contains("refusing to write over the input"),
+        "{err}"
+    );
+    assert_eq!(std::fs::read(&mesh).unwrap(), before);
+    // An exported URDF with its sidecar, then identify's effects aimed at that sidecar.
+    let arm = copy.join("arm.urdf");
+    let (ok, err) = physid(&["export", "--robot", &s(&urdf), "--urdf", &s(&arm)]);
+    assert!(ok, "{err}");
+    let sidecar = copy.join("arm.physid.toml");
+    let side = std::fs::read(&sidecar).unwrap();
+    let (ok, err) = physid(&[
+        "identify",
+        "--robot",
+        &s(&arm),
+        "--data",
+        &s(&kuka.join("measurements_1.csv")),
+        "--out-effects",
+        &s(&sidecar),
+    ]);
+    assert!(
+        !ok && err.contains("refusing to write over the input"),
+        "{err}"
+    );
+    assert_eq!(std::fs::read(&sidecar).unwrap(), side);
+    let (ok, err) = physid(&[
+        "model",
+        "--robot",
+        &s(&urdf),
+        "--package-dir",
+        &s(&copy.join("nowhere")),
+    ]);
+    assert!(
+        !ok && err.contains("--package-dir") && err.contains("does not exist"),
+        "{err}"
+    );
+}

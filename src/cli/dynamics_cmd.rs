@@ -35,6 +35,9 @@ pub fn run(a: Args) -> anyhow::Result<()> {
         "--scale must be a positive number, got {}",
         a.scale
     );
+    let inputs = a.robot.files();
+    let inputs: Vec<&std::path::Path> = inputs.iter().map(|p| p.as_path()).collect();
+    physid::io::check_outputs(&[a.out.as_path()], &inputs)?;
     dynamics_json(
         &a.robot.load()?,
         a.samples as usize,

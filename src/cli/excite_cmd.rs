@@ -357,11 +357,7 @@ impl Base {
                 dir: std::env::current_dir()?,
                 range: None,
                 gains: default_gains(n),
-                inputs: if robot == "cheetah3" {
-                    vec![]
-                } else {
-                    vec![PathBuf::from(robot)]
-                },
+                inputs: physid::io::robot_files(&robot, &[]),
             })
         }
     }

@@ -20,9 +20,17 @@ pub struct Args {
 
 /// `physid export`.
 pub fn run(a: Args) -> anyhow::Result<()> {
-    let outputs: Vec<&std::path::Path> =
-        a.mjcf.iter().chain(&a.urdf).map(|p| p.as_path()).collect();
-    physid::io::check_outputs(&outputs, &[std::path::Path::new(&a.robot.robot)])?;
+    let sidecar = a.urdf.as_deref().map(physid::io::sidecar_path);
+    let outputs: Vec<&std::path::Path> = a
+        .mjcf
+        .iter()
+        .chain(&a.urdf)
+        .chain(&sidecar)
+        .map(|p| p.as_path())
+        .collect();
+    let inputs = a.robot.files();
+    let inputs: Vec<&std::path::Path> = inputs.iter().map(|p| p.as_path()).collect();
+    physid::io::check_outputs(&outputs, &inputs)?;
     let m = a.robot.load()?;
     anyhow::ensure!(
         a.mjcf.is_some() || a.urdf.is_some(),

@@ -671,8 +671,8 @@ fn check_paths(a: &Args) -> anyhow::Result<()> {
     inputs.push(robot_file);
     inputs.extend(a.validate_data.iter().map(PathBuf::as_path));
     inputs.extend(a.effects_from.as_deref());
-    let source_urdf = physid::io::robot_urdf(&a.robot.robot)?;
-    inputs.extend(source_urdf.as_deref());
+    let robot_files = a.robot.files();
+    inputs.extend(robot_files.iter().map(PathBuf::as_path));
     let sidecar = a.out_urdf.as_deref().map(physid::io::sidecar_path);
     let outputs: Vec<&Path> = [&a.out_urdf, &a.export_problem, &a.out_effects, &sidecar]
         .into_iter()

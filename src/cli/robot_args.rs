@@ -35,7 +35,23 @@ enum RotorArg {
 }
 
 impl RobotArgs {
+    /// Every file the robot reads (its URDF, sidecar, meshes): inputs no output may replace.
+    pub(super) fn files(&self) -> Vec<std::path::PathBuf> {
+        physid::io::robot_files(&self.robot, &self.package_dir)
+    }
+
     pub(super) fn load(&self) -> anyhow::Result<Model> {
+        if let Some(d) = self.package_dir.iter().find(|d| !d.is_dir()) {
+            anyhow::bail!(
+                "--package-dir {}: {}",
+                d.display(),
+                if d.exists() {
+                    "is not a folder"
+                } else {
+                    "does not exist"
+                }
+            );
+        }
         let opts = physid::io::robot_spec::RobotOptions {
             ellipsoid_margin: self.ellipsoid_margin,
             package_dirs: self.package_dir.clone(),

@@ -116,6 +116,32 @@ fn shape_pieces(
     Ok(local.iter().map(|p| p.moved(&rot, &pos)).collect())
 }
 
+/// The mesh files a URDF's text names that exist (`filename="…"` of every mesh, resolved as
+/// [`resolve`] does with `package_dirs`): inputs an output must never replace.
+pub fn referenced_meshes(urdf: &Path, package_dirs: &[PathBuf]) -> Vec<PathBuf> {
+    let Ok(text) = std::fs::read_to_string(urdf) else {
+        return vec![];
+    };
+    let opts = GeometryOptions {
+        package_dirs: package_dirs.to_vec(),
+        ..Default::default()
+    };
+    let lookup = Lookup { urdf, opts: &opts };
+    let mut out = vec![];
+    for quote in ['"', '\''] {
+        let key = format!("filename={quote}");
+        for (at, _) in text.match_indices(&key) {
+            let rest = &text[at + key.len()..];
+            if let Some(end) = rest.find(quote) {
+                if let Ok(p) = resolve(&rest[..end], &lookup) {
+                    out.push(p);
+                }
+            }
+        }
+    }
+    out
+}
+
 /// The file a mesh `filename` names (see the module docs), or why it was not found.
 fn resolve(filename: &str, lookup: &Lookup) -> Result<PathBuf, String> {
     let base = lookup.urdf.parent().unwrap_or(Path::new("."));

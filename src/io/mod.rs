@@ -393,6 +393,25 @@ pub fn robot_urdf(arg: &str) -> Result<Option<PathBuf>, IoError> {
     }
 }
 
+/// Every file a `--robot` argument reads: the file itself, the URDF behind it, that URDF's
+/// sidecar (`arm.physid.toml`) and the meshes it names (found with `package_dirs`). An output
+/// must replace none of them.
+pub fn robot_files(arg: &str, package_dirs: &[PathBuf]) -> Vec<PathBuf> {
+    if arg == "cheetah3" {
+        return vec![];
+    }
+    let mut out = vec![PathBuf::from(arg)];
+    if let Ok(Some(urdf)) = robot_urdf(arg) {
+        let sidecar = sidecar_path(&urdf);
+        if sidecar.is_file() {
+            out.push(sidecar);
+        }
+        out.extend(geometry::referenced_meshes(&urdf, package_dirs));
+        out.push(urdf);
+    }
+    out
+}
+
 /// The sidecar written beside an exported URDF: `arm.urdf` → `arm.physid.toml`.
 pub fn sidecar_path(urdf: &Path) -> PathBuf {
     let stem = urdf
