@@ -665,3 +665,64 @@ fn outputs_never_replace_a_robot_s_sidecar_or_meshes() {
         "{err}"
     );
 }
+
+#[test]
+fn a_diagnosis_report_is_checked_before_its_effects_are_used() {
+    // Before: `--effects-from` dropped effects when `confirmed` was shorter, skipped all when
+    // it held strings, applied a report made for another robot, turned a negative compliance
+    // into the default term, and took compliance:1e308 to "normal equations are not finite".
+    let dir = tempfile::tempdir().unwrap();
+    let k = root().join("data/kuka_lwr4");
+    let report: serde_json::Value = serde_json::from_str(
+        &std::fs::read_to_string(root().join("results/kuka_diagnosis/report.json")).unwrap(),
+    )
+    .unwrap();
+    let s = |p: &Path| p.to_str().unwrap().to_string();
+    let try_report = |name: &str, edit: &dyn Fn(&mut serde_json::Value)| {
+        let mut r = report.clone();
+        edit(&mut r);
+        let p = dir.path().join(format!("{name}.json"));
+        std::fs::write(&p, serde_json::to_string(&r).unwrap()).unwrap();
+        physid(&[
+            "identify",
+            "--robot",
+            &s(&k.join("kuka_lwr4.urdf")),
+            "--data",
+            &s(&k.join("measurements_1.csv")),
+            "--effects-from",
+            &s(&p),
+        ])
+    };
+    let (ok, err) = try_report("short", &|r| {
+        r["confirmed"].as_array_mut().unwrap().pop();
+    });
+    assert!(
+        !ok && err.contains("3 effects but 2 confirmed flags"),
+        "{err}"
+    );
+    let (ok, err) = try_report("strings", &|r| r["confirmed"][0] = "true".into());
+    assert!(
+        !ok && err.contains("confirmed[0]") && err.contains("not true or false"),
+        "{err}"
+    );
+    let (ok, err) = try_report("other", &|r| r["robot"] = "panda".into());
+    assert!(
+        !ok && err.contains("the report is for robot \"panda\""),
+        "{err}"
+    );
+    for value in [-0.001, 1e308] {
+        let (ok, err) = try_report("compliance", &|r| {
+            r["effects"][0]["kind"] = "compliance".into();
+            r["effects"][0]["param"] = value.into();
+        });
+        assert!(
+            !ok && err.contains("effects[0]") && err.contains("out of range"),
+            "{value}: {err}"
+        );
+    }
+    let (ok, err) = try_report("param", &|r| r["effects"][0]["param"] = "big".into());
+    assert!(!ok && err.contains("effects[0].param"), "{err}");
+    // The report as written still works.
+    let (ok, err) = try_report("same", &|_| {});
+    assert!(ok, "{err}");
+}

@@ -124,9 +124,17 @@ fn runs_join_as_sums_and_bad_terms_are_named() {
     let dir = tempfile::tempdir().unwrap();
     let (a, b) = (simulate(dir.path(), 3), simulate(dir.path(), 4));
     let (a, b) = (a.to_str().unwrap(), b.to_str().unwrap());
-    // The same run twice: the same normal equations per sample, the same optimum.
+    // The same recording twice is refused (each run counts once)...
+    let (code, _, err) = physid(&["identify", "--data", a, a]);
+    assert!(code == 2 && err.contains("the same recording is given twice"), "{err}");
+    // ... but the same samples in another file (a trailing newline more) join as a sum: the
+    // same normal equations per sample, the same optimum.
+    let again = dir.path().join("again.csv");
+    let mut bytes = std::fs::read(a).unwrap();
+    bytes.push(b'\n');
+    std::fs::write(&again, bytes).unwrap();
     let once = identify(&["--data", a]);
-    let twice = identify(&["--data", a, a]);
+    let twice = identify(&["--data", a, again.to_str().unwrap()]);
     let (x, y) = (
         once["theta"].as_array().unwrap(),
         twice["theta"].as_array().unwrap(),

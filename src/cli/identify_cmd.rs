@@ -528,7 +528,7 @@ fn constraint_set(given: Option<ConstraintSet>, m: &Model) -> (ConstraintSet, Op
 }
 
 /// The effect terms from `--friction`, `--effects` and `--effects-from`.
-fn terms(a: &Args) -> anyhow::Result<Vec<Variant>> {
+fn terms(a: &Args, model: &Model) -> anyhow::Result<Vec<Variant>> {
     let mut out = vec![];
     let mut has = [false; 2];
     for f in &a.friction {
@@ -548,36 +548,70 @@ fn terms(a: &Args) -> anyhow::Result<Vec<Variant>> {
         out.push(parse_term(e.trim()).map_err(|e| anyhow!("--effects: {e}"))?);
     }
     if let Some(p) = &a.effects_from {
-        out.extend(confirmed_effects(p)?);
+        out.extend(confirmed_effects(p, model)?);
     }
     Ok(out)
 }
 
-/// The effects a diagnosis report confirmed (its `effects[i]` with `confirmed[i]` true).
-fn confirmed_effects(path: &Path) -> anyhow::Result<Vec<Variant>> {
+/// The effects a diagnosis report of this robot confirmed (its `effects[i]` with
+/// `confirmed[i]` true), the report checked first: both arrays of one length, `confirmed` of
+/// booleans, made for `model` (its robot name and joints), each term valid as `--effects`
+/// would require.
+fn confirmed_effects(path: &Path, model: &Model) -> anyhow::Result<Vec<Variant>> {
     let text = physid::io::read_to_string(path)?;
     let v: serde_json::Value =
         serde_json::from_str(&text).with_context(|| format!("{}: not JSON", path.display()))?;
+    let at = path.display();
     let (Some(effects), Some(confirmed)) = (v["effects"].as_array(), v["confirmed"].as_array())
     else {
-        bail!(
-            "{}: not a diagnosis report (no effects and confirmed arrays; write one with `physid diagnose --out DIR`)",
-            path.display()
-        );
+        bail!("{at}: not a diagnosis report (no effects and confirmed arrays; write one with `physid diagnose --out DIR`)");
     };
+    if effects.len() != confirmed.len() {
+        bail!(
+            "{at}: {} effects but {} confirmed flags: a report's arrays pair one to one",
+            effects.len(),
+            confirmed.len()
+        );
+    }
+    let joints: Vec<&str> = model.bodies.iter().map(|b| b.joint_name.as_str()).collect();
+    let theirs: Option<Vec<&str>> = v["joints"]
+        .as_array()
+        .map(|j| j.iter().filter_map(|x| x.as_str()).collect());
+    if v["robot"].as_str() != Some(model.name.as_str()) || theirs.as_deref() != Some(&joints[..]) {
+        bail!(
+            "{at}: the report is for robot {} with joints {:?}, not {} with joints {:?}",
+            v["robot"],
+            theirs.unwrap_or_default(),
+            model.name,
+            joints
+        );
+    }
     let mut out = vec![];
     for (i, (e, ok)) in effects.iter().zip(confirmed).enumerate() {
-        if ok.as_bool() != Some(true) {
-            continue;
-        }
+        let Some(ok) = ok.as_bool() else {
+            bail!("{at}: confirmed[{i}] is {ok}, not true or false");
+        };
         let kind = e["kind"]
             .as_str()
-            .with_context(|| format!("{}: effects[{i}].kind is not a string", path.display()))?;
-        let term = match e["param"].as_f64() {
-            Some(p) if p > 0.0 => format!("{kind}:{p}"),
-            _ => kind.to_string(),
+            .with_context(|| format!("{at}: effects[{i}].kind is not a string"))?;
+        let term = match &e["param"] {
+            serde_json::Value::Null => kind.to_string(),
+            p => match p.as_f64() {
+                Some(0.0) => kind.to_string(),
+                Some(p) => format!("{kind}:{p}"),
+                None => bail!("{at}: effects[{i}].param is {p}, not a number"),
+            },
         };
-        out.push(parse_term(&term).map_err(|m| anyhow!("{}: effects[{i}]: {m}", path.display()))?);
+        let variant = parse_term(&term).map_err(|m| anyhow!("{at}: effects[{i}]: {m}"))?;
+        if variant.kind.gridded() && !variant.kind.valid_param(variant.param, model.dof()) {
+            bail!(
+                "{at}: effects[{i}]: {term}: {} out of range",
+                variant.kind.grid_meaning()
+            );
+        }
+        if ok {
+            out.push(variant);
+        }
     }
     Ok(out)
 }
@@ -589,7 +623,7 @@ pub fn run(a: Args) -> anyhow::Result<()> {
     let m = &model;
     let (set, set_note) = constraint_set(a.constraints, m);
     let opts = options(&a, set)?;
-    let terms = terms(&a)?;
+    let terms = terms(&a, m)?;
     if a.export_problem.is_some() && !terms.is_empty() {
         bail!("--export-problem writes the model's own problem: leave out the extra --friction terms and --effects");
     }

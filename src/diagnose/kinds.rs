@@ -543,13 +543,14 @@ impl Kind {
         }
     }
 
-    /// Whether `param` is a valid grid value of this kind for `n` joints.
+    /// Whether `param` is a valid grid value of this kind for `n` joints (a Stribeck velocity
+    /// or harmonic in (0, 1000], a compliance in [0, 1] rad/(N m): beyond, no transmission).
     pub fn valid_param(&self, param: f64, n: usize) -> bool {
         match self.spec().grid {
             Grid::None => param == 0.0,
             Grid::Body => param.fract() == 0.0 && param >= 0.0 && param <= n as f64,
-            Grid::StribeckVelocity | Grid::CoggingHarmonic => param.is_finite() && param > 0.0,
-            Grid::Compliance => param.is_finite() && param >= 0.0,
+            Grid::StribeckVelocity | Grid::CoggingHarmonic => param > 0.0 && param <= 1e3,
+            Grid::Compliance => (0.0..=1.0).contains(&param),
             Grid::BacklashWidth => param == 0.0 || self.grid(n).contains(&param),
         }
     }
