@@ -726,3 +726,71 @@ fn a_diagnosis_report_is_checked_before_its_effects_are_used() {
     let (ok, err) = try_report("same", &|_| {});
     assert!(ok, "{err}");
 }
+
+/// A binary STL of one tetrahedron (4 triangles), its header's count replaced by `claimed`.
+fn tetrahedron_stl(claimed: u32) -> Vec<u8> {
+    let v = [
+        [0.0f32, 0.0, 0.0],
+        [0.1, 0.0, 0.0],
+        [0.0, 0.1, 0.0],
+        [0.0, 0.0, 0.1],
+    ];
+    let faces = [[0, 2, 1], [0, 1, 3], [0, 3, 2], [1, 2, 3]];
+    let mut out = vec![0u8; 80];
+    out.extend(claimed.to_le_bytes());
+    for f in faces {
+        out.extend([0u8; 12]);
+        for i in f {
+            for x in v[i] {
+                out.extend(x.to_le_bytes());
+            }
+        }
+        out.extend([0u8; 2]);
+    }
+    out
+}
+
+#[test]
+fn meshes_and_masses_no_robot_has_are_named() {
+    // Before: an STL header claiming 2^32 - 1 triangles and a mesh scale of 1e30 were accepted
+    // without a word (or called "flat"), and a mass of 1e-300 kg was taken as a body.
+    let dir = tempfile::tempdir().unwrap();
+    std::fs::write(dir.path().join("tet.stl"), tetrahedron_stl(4)).unwrap();
+    std::fs::write(dir.path().join("bad.stl"), tetrahedron_stl(u32::MAX)).unwrap();
+    let urdf = |mesh: &str, scale: &str, mass: &str| {
+        format!(
+            r#"<robot name="r">
+  <link name="base"/>
+  <link name="arm"><inertial><mass value="{mass}"/><origin xyz="0.02 0.02 0.02"/>
+    <inertia ixx="1e-4" ixy="0" ixz="0" iyy="1e-4" iyz="0" izz="1e-4"/></inertial>
+    <collision><geometry><mesh filename="{mesh}" scale="{scale}"/></geometry></collision></link>
+  <joint name="j1" type="revolute"><parent link="base"/><child link="arm"/><axis xyz="0 0 1"/>
+    <limit lower="-1" upper="1" effort="5" velocity="2"/></joint>
+</robot>"#
+        )
+    };
+    let path = dir.path().join("r.urdf");
+    let load = |xml: String| io::urdf::from_str(&xml, &path, &Default::default());
+    // The sound mesh gives the link its ellipsoid, without a warning.
+    let (m, warnings) = load(urdf("tet.stl", "1 1 1", "1")).unwrap();
+    assert!(warnings.is_empty(), "{warnings:?}");
+    assert!(m.bodies[0].bounding.is_some());
+    let (_, warnings) = load(urdf("bad.stl", "1 1 1", "1")).unwrap();
+    assert!(
+        warnings
+            .iter()
+            .any(|w| w.contains("bad.stl") && w.contains("claims 4294967295 triangles")),
+        "{warnings:?}"
+    );
+    let (_, warnings) = load(urdf("tet.stl", "1e30 1e30 1e30", "1")).unwrap();
+    assert!(
+        warnings
+            .iter()
+            .any(|w| w.contains("tet.stl") && w.contains("mesh scale")),
+        "{warnings:?}"
+    );
+    let err = load(urdf("tet.stl", "1 1 1", "1e-300"))
+        .unwrap_err()
+        .to_string();
+    assert!(err.contains("'arm'") && err.contains("1e-300 kg"), "{err}");
+}

@@ -126,7 +126,10 @@ fn runs_join_as_sums_and_bad_terms_are_named() {
     let (a, b) = (a.to_str().unwrap(), b.to_str().unwrap());
     // The same recording twice is refused (each run counts once)...
     let (code, _, err) = physid(&["identify", "--data", a, a]);
-    assert!(code == 2 && err.contains("the same recording is given twice"), "{err}");
+    assert!(
+        code == 2 && err.contains("the same recording is given twice"),
+        "{err}"
+    );
     // ... but the same samples in another file (a trailing newline more) join as a sum: the
     // same normal equations per sample, the same optimum.
     let again = dir.path().join("again.csv");

@@ -173,8 +173,49 @@ fn resolve(filename: &str, lookup: &Lookup) -> Result<PathBuf, String> {
         })
 }
 
+/// The largest distance from a link frame a mesh vertex may lie at, and the largest scale (m).
+const MAX_EXTENT: f64 = 1e3;
+
+/// A binary STL's size must match its header's triangle count (`84 + 50 n` bytes); an ASCII
+/// one (starting `solid` and not of that size) is left to the loader.
+fn check_binary_stl(path: &Path) -> Result<(), String> {
+    let is_stl = path
+        .extension()
+        .is_some_and(|e| e.eq_ignore_ascii_case("stl"));
+    let Ok(meta) = std::fs::metadata(path) else {
+        return Ok(());
+    };
+    if !is_stl || meta.len() < 84 {
+        return Ok(());
+    }
+    let mut head = [0u8; 84];
+    use std::io::Read;
+    let read = std::fs::File::open(path).and_then(|mut f| f.read_exact(&mut head));
+    if read.is_err() {
+        return Ok(());
+    }
+    let n = u32::from_le_bytes([head[80], head[81], head[82], head[83]]) as u64;
+    let expected = 84 + 50 * n;
+    if expected == meta.len() || head.starts_with(b"solid") {
+        return Ok(());
+    }
+    Err(format!(
+        "{}: binary STL header claims {n} triangles ({expected} bytes) but the file has {} bytes",
+        path.display(),
+        meta.len()
+    ))
+}
+
 /// A mesh file's vertices, scaled, reduced to its convex hull.
 fn mesh_pieces(path: &Path, scale: &Vector3<f64>) -> Result<Vec<Piece>, String> {
+    if !scale.iter().all(|s| s.is_finite() && s.abs() <= MAX_EXTENT) {
+        return Err(format!(
+            "{}: mesh scale {:?} is beyond ±{MAX_EXTENT} (a robot part is not larger than a kilometre)",
+            path.display(),
+            scale.as_slice()
+        ));
+    }
+    check_binary_stl(path)?;
     let scene = mesh_loader::Loader::default()
         .load(path)
         .map_err(|e| format!("{}: {e}", path.display()))?;
@@ -191,6 +232,17 @@ fn mesh_pieces(path: &Path, scale: &Vector3<f64>) -> Result<Vec<Piece>, String> 
         return Err(format!(
             "{}: the mesh has non-finite vertices",
             path.display()
+        ));
+    }
+    if let Some((i, p)) = points
+        .iter()
+        .enumerate()
+        .find(|(_, p)| p.amax() > MAX_EXTENT)
+    {
+        return Err(format!(
+            "{}: vertex {i} (scaled) lies {:.3e} m from the link frame, beyond {MAX_EXTENT} m: a unit or scale error",
+            path.display(),
+            p.norm()
         ));
     }
     Ok(bounding::hull_vertices(&points)

@@ -249,6 +249,9 @@ fn rate_limits(xml: &str, path: &Path) -> Result<RateLimits, IoError> {
     Ok(out)
 }
 
+/// The smallest nonzero link mass read (kg): dummy links of real URDFs weigh 1e-5 and more.
+const MIN_MASS: f64 = 1e-9;
+
 /// Link name → index; every link defined once with a finite non-negative mass.
 fn link_index<'r>(
     robot: &'r urdf_rs::Robot,
@@ -264,6 +267,12 @@ fn link_index<'r>(
         if !m.is_finite() || m < 0.0 {
             return Err(bad(format!(
                 "link '{}': mass {m} kg is not a finite non-negative number",
+                l.name
+            )));
+        }
+        if m > 0.0 && m < MIN_MASS {
+            return Err(bad(format!(
+                "link '{}': mass {m:e} kg is below {MIN_MASS:e} kg, which no part weighs and which makes the mass matrix singular in effect: give 0 for a massless link",
                 l.name
             )));
         }
