@@ -794,3 +794,23 @@ fn meshes_and_masses_no_robot_has_are_named() {
         .to_string();
     assert!(err.contains("'arm'") && err.contains("1e-300 kg"), "{err}");
 }
+
+#[test]
+fn a_zero_gear_ratio_is_named_as_such() {
+    // Before: blamed on `limits.effort` (the ratio scales the joint's limits).
+    let dir = tempfile::tempdir().unwrap();
+    let text = std::fs::read_to_string(root().join("scenarios/cheetah3_leg.toml")).unwrap();
+    assert!(text.contains("gear_ratio = 10.6"));
+    let path = dir.path().join("leg.toml");
+    std::fs::write(
+        &path,
+        text.replacen("gear_ratio = 10.6", "gear_ratio = 0.0", 1),
+    )
+    .unwrap();
+    let (ok, err) = physid(&["model", "--robot", path.to_str().unwrap()]);
+    assert!(
+        !ok && err.contains("rotor 'abad_rotor'") && err.contains("gear_ratio"),
+        "{err}"
+    );
+    assert!(!err.contains("limits.effort"), "{err}");
+}

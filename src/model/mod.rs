@@ -648,6 +648,11 @@ fn check_body(
             });
         }
     }
+    // The rotor first: its gear ratio scales the joint's limits, so a zero ratio is named as
+    // such rather than as the effort limit it zeroes.
+    if let Some(r) = &mut b.rotor {
+        check_rotor(r, names)?;
+    }
     let l = &b.limits;
     if l.lower.is_nan() || l.upper.is_nan() || l.lower > l.upper {
         return Err(ModelError::BadValue {
@@ -670,9 +675,6 @@ fn check_body(
                 reason: format!("{v} must be > 0 (or left out when unknown)"),
             });
         }
-    }
-    if let Some(r) = &mut b.rotor {
-        check_rotor(r, names)?;
     }
     Ok(())
 }
