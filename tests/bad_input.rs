@@ -327,6 +327,24 @@ fn logs_and_designs_as_robots_use_them_refuse_what_they_cannot_be() {
             && err.contains("topics with sensor_msgs/msg/JointState: /joint_states"),
         "{err}"
     );
+    // --topic or --stamp on CSV data alone: refused (before: a warning, then read anyway).
+    let csv = root().join("data/kuka_lwr4/measurements_1.csv");
+    let urdf = root().join("data/kuka_lwr4/kuka_lwr4.urdf");
+    for flag in [["--topic", "/joint_states"], ["--stamp", "header"]] {
+        let (ok, err) = physid(&[
+            "identify",
+            "--robot",
+            urdf.to_str().unwrap(),
+            "--data",
+            csv.to_str().unwrap(),
+            flag[0],
+            flag[1],
+        ]);
+        assert!(
+            !ok && err.contains("measurements_1.csv") && err.contains("no data file given is one"),
+            "{flag:?}: {err}"
+        );
+    }
     // Excitation designs: a ramp longer than half the run, a zero jerk limit, a zero export
     // rate, an export onto the base scenario.
     for (args, words) in [

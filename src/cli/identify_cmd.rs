@@ -107,9 +107,16 @@ pub fn load_data(
     model: &Model,
     read: &ReadArgs,
 ) -> anyhow::Result<Vec<physid::io::LoadedData>> {
-    for path in paths {
-        let is_bag = path.is_dir() || path.extension().and_then(|e| e.to_str()) == Some("mcap");
-        if read.bag_only() && !is_bag {
+    let is_bag = |p: &Path| p.is_dir() || p.extension().and_then(|e| e.to_str()) == Some("mcap");
+    if read.bag_only() {
+        // Given for no bag at all, the option cannot mean what the user meant.
+        if let Some(first) = paths.first().filter(|_| !paths.iter().any(|p| is_bag(p))) {
+            bail!(
+                "{}: --topic and --stamp apply to MCAP files and rosbag2 directories only, and no data file given is one",
+                first.display()
+            );
+        }
+        for path in paths.iter().filter(|p| !is_bag(p)) {
             eprintln!(
                 "warning: {}: --topic and --stamp apply to MCAP files and rosbag2 directories only",
                 path.display()
