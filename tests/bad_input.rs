@@ -832,3 +832,25 @@ fn a_zero_gear_ratio_is_named_as_such() {
     );
     assert!(!err.contains("limits.effort"), "{err}");
 }
+
+#[test]
+fn an_empty_joint_range_is_named() {
+    // Before: lower = upper = 0 written out was read as unlimited without a word.
+    let xml = ONE_JOINT_URDF
+        .replace("EFFORT", "5")
+        .replace(r#"lower="-1" upper="1""#, r#"lower="0" upper="0""#);
+    let (m, warnings) = io::urdf::from_str(&xml, Path::new("r.urdf"), &Default::default()).unwrap();
+    assert!(
+        warnings
+            .iter()
+            .any(|w| w.contains("joint 'j1'") && w.contains("empty range")),
+        "{warnings:?}"
+    );
+    assert!(m.bodies[0].limits.lower.is_infinite());
+    let ok = ONE_JOINT_URDF.replace("EFFORT", "5");
+    let (_, warnings) = io::urdf::from_str(&ok, Path::new("r.urdf"), &Default::default()).unwrap();
+    assert!(
+        warnings.iter().all(|w| !w.contains("range")),
+        "{warnings:?}"
+    );
+}

@@ -163,6 +163,7 @@ pub fn from_str(
         mimics,
     } = walk(&robot, &link_idx, &children, root, &lookup)?;
     let mut warnings = warnings;
+    warnings.extend(empty_ranges(xml));
     for b in &mut bodies {
         if let Some(&(acceleration, jerk)) = rates.get(&b.joint_name) {
             b.limits.acceleration = acceleration.unwrap_or(b.limits.acceleration);
@@ -206,6 +207,46 @@ pub fn from_str(
         })?;
     check_bounds(&model, extras, path, &mut warnings)?;
     Ok((model, warnings))
+}
+
+/// A warning per revolute or prismatic joint whose `<limit>` gives `lower` and `upper` both and
+/// equal: a range the joint cannot move in. Both zero is also what URDF readers give when the
+/// attributes are left out, and is read as unlimited; other equal values are kept, and the
+/// joint should be locked (`--lock`).
+fn empty_ranges(xml: &str) -> Vec<String> {
+    let Ok(doc) = roxmltree::Document::parse(xml) else {
+        return vec![];
+    };
+    let moving =
+        |j: &roxmltree::Node| matches!(j.attribute("type"), Some("revolute") | Some("prismatic"));
+    let mut out = vec![];
+    for joint in doc
+        .root_element()
+        .children()
+        .filter(|n| n.has_tag_name("joint") && moving(n))
+    {
+        let Some(limit) = joint.children().find(|n| n.has_tag_name("limit")) else {
+            continue;
+        };
+        let value = |a: &str| {
+            limit
+                .attribute(a)
+                .and_then(|v| v.trim().parse::<f64>().ok())
+        };
+        let (Some(lower), Some(upper)) = (value("lower"), value("upper")) else {
+            continue;
+        };
+        if lower != upper {
+            continue;
+        }
+        let name = joint.attribute("name").unwrap_or("");
+        out.push(if lower == 0.0 {
+            format!("joint '{name}': <limit lower=\"0\" upper=\"0\"> is an empty range; read as no range at all (URDF's value when none is given): write type=\"continuous\" for an unlimited joint, or --lock {name} for a joint that does not move")
+        } else {
+            format!("joint '{name}': <limit lower = upper = {lower}> is a range the joint cannot move in: --lock {name} if it does not move")
+        });
+    }
+    out
 }
 
 /// Per joint name, `<limit acceleration jerk>` as given.
