@@ -33,6 +33,7 @@ use super::library::{Context, Kind, Variant};
 use super::select::Folds;
 use super::{anchor, finite_mean_square, mask_slow, mean_square, residual_rms, Stage};
 use crate::linalg::least_squares;
+use crate::model::Model;
 use crate::spatial::InertialParams;
 use nalgebra::{DMatrix, DVector};
 use serde::Serialize;
@@ -74,10 +75,15 @@ pub(crate) enum Explanation {
 }
 
 impl Explanation {
-    fn name(&self) -> String {
+    /// Its name in a report: the kind; for a body, `reads_as` ("payload", or "payload or
+    /// change" while what it reads as is not known) on the body's name.
+    fn name(&self, model: &Model, reads_as: &str) -> String {
         match self {
             Explanation::Effect(v) if v.kind.is_body_change() => {
-                format!("payload or change on body {}", v.param)
+                match v.kind.body(v.param, model.dof()) {
+                    Some(b) => format!("{reads_as} on {}", model.bodies[b].name),
+                    None => format!("{reads_as} on body {}", v.param),
+                }
             }
             Explanation::Effect(v) => v.kind.name().to_string(),
             Explanation::Friction => "friction re-identified".into(),
@@ -278,6 +284,9 @@ struct Problem<'a> {
     /// baseline or a sidecar left out): the region the base may move in is measured by it, as
     /// run-to-run differences of a real robot exceed what one run's information allows.
     stated: DMatrix<f64>,
+    /// `P θ_d` and `P_ε θ_d`: the prior's pull towards the description.
+    prior_g: DVector<f64>,
+    stated_g: DVector<f64>,
     weight: f64,
     /// The squared radius of the description's stated uncertainty: the `χ²` quantile, over the
     /// parameters the prior covers, exceeded with probability [`OUTSIDE`]; infinite when the
@@ -289,6 +298,11 @@ struct Problem<'a> {
 /// Probability that a description drawn from its stated uncertainty lies outside the region
 /// the ladder's base may move in.
 const OUTSIDE: f64 = 1e-3;
+
+/// A chosen body step reads as a payload (renamed a change by `name_changes` when it is not one).
+const PAYLOAD: &str = "payload";
+/// A body step not chosen: what it reads as is not known.
+const UNREAD: &str = "payload or change";
 
 /// A fit: the parameters over `cols` (model columns, then the chosen effects').
 struct Fit {
@@ -366,9 +380,9 @@ impl Problem<'_> {
             h,
             g,
             prior: &self.prior,
-            prior_g: &self.prior * &self.theta_d,
+            prior_g: &self.prior_g,
             stated: &self.stated,
-            stated_g: &self.stated * &self.theta_d,
+            stated_g: &self.stated_g,
             theta_d: &self.theta_d,
             fixed,
             free,
@@ -383,10 +397,10 @@ struct System<'a> {
     h: DMatrix<f64>,
     g: DVector<f64>,
     prior: &'a DMatrix<f64>,
-    prior_g: DVector<f64>,
+    prior_g: &'a DVector<f64>,
     /// The stated uncertainty's part of the prior (the one the trust region scales).
     stated: &'a DMatrix<f64>,
-    stated_g: DVector<f64>,
+    stated_g: &'a DVector<f64>,
     theta_d: &'a DVector<f64>,
     /// Columns held at the description's values (friction unless re-identified).
     fixed: Vec<usize>,
@@ -405,7 +419,7 @@ impl System<'_> {
         let mut hv = h.view_mut((0, 0), (p0, p0));
         hv += self.prior + self.stated * (lambda - 1.0);
         let mut gv = g.rows_mut(0, p0);
-        gv += &self.prior_g + &self.stated_g * (lambda - 1.0);
+        gv += self.prior_g + self.stated_g * (lambda - 1.0);
         // A tiny ridge relative to each column's own curvature (a column nothing sees gets a
         // unit one): free effect columns stay determined without being pulled.
         for i in 0..m {
@@ -588,7 +602,7 @@ pub(crate) fn ladder(stage: &Stage, eps: f64, selected: &[Variant], settings: &S
         };
         if r < settings.min_reduction || t < settings.min_t {
             break Stop::NotSignificant {
-                best: best.name(),
+                best: best.name(stage.model, UNREAD),
                 reduction: r,
                 t,
             };
@@ -606,14 +620,14 @@ pub(crate) fn ladder(stage: &Stage, eps: f64, selected: &[Variant], settings: &S
         let (best, r, t) = **simplest[0];
         let ties: Vec<String> = simplest[1..]
             .iter()
-            .map(|(e, _, _)| tie_name(stage, e))
+            .map(|(e, _, _)| e.name(stage.model, UNREAD))
             .collect();
         set.push(best);
         (data, current) = settle(&problem, stage, &variants, data, &set, settings);
         sse = problem.held_out(&data, &current);
         let name = match best {
-            Explanation::Friction => best.name(),
-            _ => format!("+ {}", step_name(stage, &best)),
+            Explanation::Friction => best.name(stage.model, PAYLOAD),
+            _ => format!("+ {}", best.name(stage.model, PAYLOAD)),
         };
         rungs.push(rung(
             stage,
@@ -727,9 +741,12 @@ fn problem<'a>(stage: &'a Stage, eps: f64) -> Problem<'a> {
         None => anchor::chi2_upper_quantile(covered, OUTSIDE),
     };
     let prior = prior.unwrap_or_else(|| stated.clone());
+    let theta_d = model.parameters();
     Problem {
         stage,
-        theta_d: model.parameters(),
+        prior_g: &prior * &theta_d,
+        stated_g: &stated * &theta_d,
+        theta_d,
         prior,
         stated,
         weight: 1.0 / (s2 * tau_c).max(1e-300),
@@ -744,7 +761,7 @@ fn problem<'a>(stage: &'a Stage, eps: f64) -> Problem<'a> {
 const J_FLOOR: f64 = 1e-3;
 
 /// [`anchor::prior_precision`] with each body's `J` floored at [`J_FLOOR`] of its trace.
-fn prior_precision(model: &crate::model::Model, eps: f64) -> DMatrix<f64> {
+fn prior_precision(model: &Model, eps: f64) -> DMatrix<f64> {
     let l = model.layout();
     let mut p = DMatrix::zeros(l.len, l.len);
     let floored = |pi: &InertialParams| {
@@ -782,7 +799,7 @@ fn bodies_consistent(
     fit: &Fit,
     set: &[Explanation],
     p0: usize,
-    model: &crate::model::Model,
+    model: &Model,
 ) -> bool {
     let (theta, _) = model_of(data, fit, set, p0);
     let mut c = p0;
@@ -917,37 +934,9 @@ fn absorbed_steps(
         }
         base.extend(cand);
         set.push(e);
-        out.push((format!("+ {}", step_name(stage, &e)), e));
+        out.push((format!("+ {}", e.name(stage.model, PAYLOAD)), e));
     }
     out
-}
-
-/// An explanation tied with a step: the kind, or for a body "payload or change on <body>"
-/// (what it reads as is known only for the chosen one).
-fn tie_name(stage: &Stage, e: &Explanation) -> String {
-    match e {
-        Explanation::Effect(v) if v.kind.is_body_change() => {
-            let b = v.kind.body(v.param, stage.model.dof());
-            match b {
-                Some(b) => format!("payload or change on {}", stage.model.bodies[b].name),
-                None => e.name(),
-            }
-        }
-        _ => e.name(),
-    }
-}
-
-/// A step's name: the kind (with its body for a payload).
-fn step_name(stage: &Stage, e: &Explanation) -> String {
-    match e {
-        Explanation::Effect(v) if v.kind.is_body_change() => {
-            let n = stage.model.dof();
-            let b = v.kind.body(v.param, n).expect("a payload has a body");
-            format!("payload on {}", stage.model.bodies[b].name)
-        }
-        Explanation::Effect(v) => v.kind.name().to_string(),
-        Explanation::Friction => "friction re-identified".into(),
-    }
 }
 
 /// The held-out rung of a fit.
