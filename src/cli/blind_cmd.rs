@@ -55,6 +55,28 @@ pub struct Args {
 
 /// One line per finished case, on standard error: what was injected and found, the verdict,
 /// the validation RMS before and after, and the progress.
+fn print_real_case(
+    r: &physid::experiment::semireal::RealCase,
+    progress: &super::progress::Progress,
+) {
+    eprintln!(
+        "case {} ({}): {} on {}{}; found {}; {:.1} s",
+        r.case,
+        progress.status(),
+        r.injected,
+        r.base,
+        r.injected_body
+            .as_ref()
+            .map_or(String::new(), |b| format!(" ({b})")),
+        if r.found.is_empty() {
+            "nothing".into()
+        } else {
+            r.found.join(", ")
+        },
+        r.seconds
+    );
+}
+
 fn print_case(r: &CaseResult, progress: &super::progress::Progress) {
     let list = |v: &[String]| {
         if v.is_empty() {
@@ -91,52 +113,30 @@ pub fn run(a: Args) -> anyhow::Result<()> {
     };
     opts.validate().map_err(super::option_error)?;
     let (base, model, _) = physid::sim::scenario::load(&a.scenario)?;
-    if let Some(&i) = a.only.iter().find(|&&i| i >= a.cases) {
-        anyhow::bail!("--only {i}: the cases are numbered 0 to {}", a.cases - 1);
-    }
-    let temp = tempfile::tempdir()?;
-    let work = a
-        .keep_cases
-        .clone()
-        .unwrap_or_else(|| temp.path().to_path_buf());
-    let chosen: Vec<usize> = if a.only.is_empty() {
-        (0..a.cases).collect()
-    } else {
-        a.only.clone()
-    };
     let diagnose_opts = opts.diagnose_options();
-    let pool = super::thread_pool(Some(a.threads))?;
     let start = std::time::Instant::now();
-    let progress = super::progress::Progress::counter("cases", chosen.len() as u64);
-    let results: Vec<CaseResult> = pool.install(|| {
-        chosen
-            .par_iter()
-            .map(|&i| {
-                let case_dir = work.join(format!("case{i}"));
-                let r = blind::run_case(
-                    i,
-                    a.seed,
-                    &base,
-                    &model,
-                    a.description_error,
-                    &diagnose_opts,
-                    &case_dir,
-                );
-                if let Ok(r) = &r {
-                    progress.inc();
-                    print_case(r, &progress);
-                }
-                r
-            })
-            .collect::<Result<Vec<_>, blind::BlindError>>()
-    })?;
+    let results: Vec<CaseResult> = run_chosen(
+        &a,
+        |i, case_dir| {
+            blind::run_case(
+                i,
+                a.seed,
+                &base,
+                &model,
+                a.description_error,
+                &diagnose_opts,
+                case_dir,
+            )
+        },
+        print_case,
+    )?;
     let scores = blind::score(&results);
     let wall = start.elapsed().as_secs_f64();
     println!(
         "{}",
         serde_json::to_string_pretty(&physid::io::versioned("blind_scores", &scores))?
     );
-    eprintln!("{} cases in {wall:.1} s", chosen.len());
+    eprintln!("{} cases in {wall:.1} s", results.len());
     if let Some(dir) = &a.out {
         let description = [a.description_error, opts.stated_uncertainty()];
         blind::write_blind(
@@ -153,21 +153,21 @@ pub fn run(a: Args) -> anyhow::Result<()> {
     Ok(())
 }
 
-/// `physid blind --real`: the semi-real benchmark.
-fn run_real(a: Args, robot: &str) -> anyhow::Result<()> {
-    use physid::experiment::semireal::{self, RealCase, RealOptions};
-    let opts = RealOptions {
-        cases: a.cases,
-        seed: a.seed,
-        description_uncertainty: a.description_uncertainty.unwrap_or(0.05),
-        baseline: a.real_baseline,
-    };
-    opts.validate().map_err(super::option_error)?;
+/// The chosen cases (`--only`, else all `--cases`) run in parallel on `--threads`, each in its
+/// own folder under `--keep-cases` (else a temporary one), each counted on the progress line and
+/// then shown by `show`.
+fn run_chosen<T, E>(
+    a: &Args,
+    case: impl Fn(usize, &std::path::Path) -> Result<T, E> + Sync,
+    show: impl Fn(&T, &super::progress::Progress) + Sync,
+) -> anyhow::Result<Vec<T>>
+where
+    T: Send,
+    E: std::error::Error + Send + Sync + 'static,
+{
     if let Some(&i) = a.only.iter().find(|&&i| i >= a.cases) {
         anyhow::bail!("--only {i}: the cases are numbered 0 to {}", a.cases - 1);
     }
-    let model = physid::io::load_robot(robot)?;
-    let bases = semireal::bases(&model, &a.real, &opts)?;
     let temp = tempfile::tempdir()?;
     let work = a
         .keep_cases
@@ -178,39 +178,43 @@ fn run_real(a: Args, robot: &str) -> anyhow::Result<()> {
     } else {
         a.only.clone()
     };
-    let dopts = opts.diagnose_options();
     let pool = super::thread_pool(Some(a.threads))?;
-    let start = std::time::Instant::now();
     let progress = super::progress::Progress::counter("cases", chosen.len() as u64);
-    let results: Vec<RealCase> = pool.install(|| {
+    let results = pool.install(|| {
         chosen
             .par_iter()
             .map(|&i| {
-                let r =
-                    semireal::run_case(i, a.seed, &bases, &dopts, &work.join(format!("case{i}")));
+                let r = case(i, &work.join(format!("case{i}")));
                 if let Ok(r) = &r {
                     progress.inc();
-                    eprintln!(
-                        "case {} ({}): {} on {}{}; found {}; {:.1} s",
-                        r.case,
-                        progress.status(),
-                        r.injected,
-                        r.base,
-                        r.injected_body
-                            .as_ref()
-                            .map_or(String::new(), |b| format!(" ({b})")),
-                        if r.found.is_empty() {
-                            "nothing".into()
-                        } else {
-                            r.found.join(", ")
-                        },
-                        r.seconds
-                    );
+                    show(r, &progress);
                 }
                 r
             })
-            .collect::<Result<Vec<_>, semireal::RealError>>()
+            .collect::<Result<Vec<T>, E>>()
     })?;
+    Ok(results)
+}
+
+/// `physid blind --real`: the semi-real benchmark.
+fn run_real(a: Args, robot: &str) -> anyhow::Result<()> {
+    use physid::experiment::semireal::{self, RealCase, RealOptions};
+    let opts = RealOptions {
+        cases: a.cases,
+        seed: a.seed,
+        description_uncertainty: a.description_uncertainty.unwrap_or(0.05),
+        baseline: a.real_baseline,
+    };
+    opts.validate().map_err(super::option_error)?;
+    let model = physid::io::load_robot(robot)?;
+    let bases = semireal::bases(&model, &a.real, &opts)?;
+    let dopts = opts.diagnose_options();
+    let start = std::time::Instant::now();
+    let results: Vec<RealCase> = run_chosen(
+        &a,
+        |i, case_dir| semireal::run_case(i, a.seed, &bases, &dopts, case_dir),
+        print_real_case,
+    )?;
     let scores = semireal::score(&results);
     let wall = start.elapsed().as_secs_f64();
     println!(
