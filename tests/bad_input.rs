@@ -2,24 +2,17 @@
 //! huge allocation, or an output written over an input. Each case here was a crash, a hang or
 //! silent damage before (issue 13's list).
 
+mod common;
+
+use common::root;
 use physid::io;
 use physid::sim::scenario::{self, EffectSpec};
 use std::path::{Path, PathBuf};
-use std::process::Command;
 
-fn root() -> PathBuf {
-    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
-}
-
+/// Runs `physid`: whether it succeeded, and what it said on stderr.
 fn physid(args: &[&str]) -> (bool, String) {
-    let out = Command::new(env!("CARGO_BIN_EXE_physid"))
-        .args(args)
-        .output()
-        .unwrap();
-    (
-        out.status.success(),
-        String::from_utf8_lossy(&out.stderr).into_owned(),
-    )
+    let (code, _, stderr) = common::physid(args);
+    (code == 0, stderr)
 }
 
 const ONE_JOINT_URDF: &str = r#"<robot name="r">
@@ -378,6 +371,17 @@ fn logs_and_designs_as_robots_use_them_refuse_what_they_cannot_be() {
     assert_eq!(std::fs::read(&base).unwrap(), before);
 }
 
+/// Each command is refused, its message holding every one of its words.
+fn refused_naming(cases: &[(&[&str], &[&str])]) {
+    for (args, words) in cases {
+        let (ok, err) = physid(args);
+        assert!(
+            !ok && words.iter().all(|w| err.contains(w)),
+            "{args:?} should be refused naming {words:?}: {err}"
+        );
+    }
+}
+
 #[test]
 fn the_ladder_s_new_inputs_are_checked_by_name() {
     let k = root().join("data/kuka_lwr4");
@@ -387,150 +391,107 @@ fn the_ladder_s_new_inputs_are_checked_by_name() {
         s(k.join("measurements_1.csv")),
         s(k.join("measurements_2.csv")),
     );
-    // A baseline without the uncertainty the change is judged within.
-    let (ok, err) = physid(&[
-        "diagnose",
-        "--robot",
-        &urdf,
-        "--data",
-        &m1,
-        "--baseline-data",
-        &m2,
-    ]);
-    assert!(
-        !ok && err.contains("--baseline-data") && err.contains("--description-uncertainty"),
-        "{err}"
-    );
-    // A baseline that is not there is named.
-    let (ok, err) = physid(&[
-        "diagnose",
-        "--robot",
-        &urdf,
-        "--data",
-        &m1,
-        "--baseline-data",
-        "/nonexistent/before.csv",
-        "--description-uncertainty",
-        "0.05",
-    ]);
-    assert!(!ok && err.contains("/nonexistent/before.csv"), "{err}");
-    // The same recording in two roles (here a copy under another name) is refused, naming both.
     let dir = tempfile::tempdir().unwrap();
-    let copy = dir.path().join("copy.csv");
+    // The same recording under another name.
+    let copy = s(dir.path().join("copy.csv"));
     std::fs::copy(&m1, &copy).unwrap();
-    let (ok, err) = physid(&[
-        "diagnose",
-        "--robot",
-        &urdf,
-        "--data",
-        &m1,
-        "--baseline-data",
-        &s(copy.clone()),
-        "--description-uncertainty",
-        "0.05",
-    ]);
-    assert!(
-        !ok && err.contains("copy.csv") && err.contains("--baseline-data") && err.contains("twice"),
-        "{err}"
-    );
-    let (ok, err) = physid(&[
-        "identify",
-        "--robot",
-        &urdf,
-        "--data",
-        &m1,
-        "--validate-data",
-        &m1,
-    ]);
-    assert!(
-        !ok && err.contains("--validate-data") && err.contains("twice"),
-        "{err}"
-    );
-    let (ok, err) = physid(&[
-        "blind",
-        "--real",
-        &m1,
-        "--real",
-        &s(copy),
-        "--real-robot",
-        &urdf,
-        "--cases",
-        "1",
-    ]);
-    assert!(
-        !ok && err.contains("twice") && err.contains("--real"),
-        "{err}"
-    );
-    // The semi-real benchmark needs another run for the description, and its robot.
-    let (ok, err) = physid(&[
-        "blind",
-        "--real",
-        &m1,
-        "--real-robot",
-        &urdf,
-        "--cases",
-        "1",
-    ]);
-    assert!(!ok && err.contains("at least two runs"), "{err}");
-    let (ok, err) = physid(&["blind", "--real", &m1, "--cases", "1"]);
-    assert!(!ok && err.contains("--real-robot"), "{err}");
-    let (ok, err) = physid(&["blind", "--real-baseline", "--cases", "1"]);
-    assert!(!ok && err.contains("--real"), "{err}");
-    // Base runs without accelerations: the injected torques need the logged motion.
-    let dir = tempfile::tempdir().unwrap();
-    let bare = dir.path().join("bare.csv");
-    let text = std::fs::read_to_string(k.join("measurements_1.csv")).unwrap();
+    // A base run without accelerations: the injected torques need the logged motion.
+    let bare = s(dir.path().join("bare.csv"));
+    let text = std::fs::read_to_string(&m1).unwrap();
     let mut out = String::new();
     for line in text.lines() {
         let cols: Vec<&str> = line.split(',').collect();
         out += &format!("{},{}\n", cols[..8].join(","), cols[22..29].join(","));
     }
     std::fs::write(&bare, out).unwrap();
-    let (ok, err) = physid(&[
-        "blind",
-        "--real",
-        &s(bare.clone()),
-        "--real",
-        &m2,
-        "--real-robot",
-        &urdf,
-        "--cases",
-        "1",
+    let (d, u) = ("--description-uncertainty", "0.05");
+    let diagnose = ["diagnose", "--robot", &urdf, "--data", &m1];
+    let real = ["blind", "--real", &m1, "--real", &m2, "--real-robot", &urdf];
+    refused_naming(&[
+        // A baseline without the uncertainty the change is judged within.
+        (
+            &[&diagnose[..], &["--baseline-data", &m2]].concat(),
+            &["--baseline-data", d],
+        ),
+        // A baseline that is not there.
+        (
+            &[
+                &diagnose[..],
+                &["--baseline-data", "/nonexistent/before.csv", d, u],
+            ]
+            .concat(),
+            &["/nonexistent/before.csv"],
+        ),
+        // The same recording in two roles, naming both.
+        (
+            &[&diagnose[..], &["--baseline-data", &copy, d, u]].concat(),
+            &["copy.csv", "--baseline-data", "twice"],
+        ),
+        (
+            &[
+                "identify",
+                "--robot",
+                &urdf,
+                "--data",
+                &m1,
+                "--validate-data",
+                &m1,
+            ],
+            &["--validate-data", "twice"],
+        ),
+        (
+            &[
+                "blind",
+                "--real",
+                &m1,
+                "--real",
+                &copy,
+                "--real-robot",
+                &urdf,
+                "--cases",
+                "1",
+            ],
+            &["twice", "--real"],
+        ),
+        // The semi-real benchmark needs another run for the description, and its robot.
+        (
+            &[
+                "blind",
+                "--real",
+                &m1,
+                "--real-robot",
+                &urdf,
+                "--cases",
+                "1",
+            ],
+            &["at least two runs"],
+        ),
+        (&["blind", "--real", &m1, "--cases", "1"], &["--real-robot"]),
+        (&["blind", "--real-baseline", "--cases", "1"], &["--real"]),
+        (
+            &[
+                "blind",
+                "--real",
+                &bare,
+                "--real",
+                &m2,
+                "--real-robot",
+                &urdf,
+                "--cases",
+                "1",
+            ],
+            &["bare.csv", "q̈"],
+        ),
+        // Out-of-range counts and uncertainties are refused before any work.
+        (
+            &[&real[..], &["--cases", "1000000000"]].concat(),
+            &["cases"],
+        ),
+        (
+            &[&real[..], &["--cases", "2", d, "-1"]].concat(),
+            &["description", "uncertainty"],
+        ),
     ]);
-    assert!(
-        !ok && err.contains("bare.csv") && err.contains("q̈"),
-        "{err}"
-    );
-    // Out-of-range counts and uncertainties are refused before any work.
-    let (ok, err) = physid(&[
-        "blind",
-        "--real",
-        &m1,
-        "--real",
-        &m2,
-        "--real-robot",
-        &urdf,
-        "--cases",
-        "1000000000",
-    ]);
-    assert!(!ok && err.contains("cases"), "{err}");
-    let (ok, err) = physid(&[
-        "blind",
-        "--real",
-        &m1,
-        "--real",
-        &m2,
-        "--real-robot",
-        &urdf,
-        "--cases",
-        "2",
-        "--description-uncertainty",
-        "-1",
-    ]);
-    assert!(
-        !ok && (err.contains("description_uncertainty") || err.contains("description-uncertainty")),
-        "{err}"
-    );
 }
 
 #[test]
@@ -745,36 +706,17 @@ fn a_diagnosis_report_is_checked_before_its_effects_are_used() {
     assert!(ok, "{err}");
 }
 
-/// A binary STL of one tetrahedron (4 triangles), its header's count replaced by `claimed`.
-fn tetrahedron_stl(claimed: u32) -> Vec<u8> {
-    let v = [
-        [0.0f32, 0.0, 0.0],
-        [0.1, 0.0, 0.0],
-        [0.0, 0.1, 0.0],
-        [0.0, 0.0, 0.1],
-    ];
-    let faces = [[0, 2, 1], [0, 1, 3], [0, 3, 2], [1, 2, 3]];
-    let mut out = vec![0u8; 80];
-    out.extend(claimed.to_le_bytes());
-    for f in faces {
-        out.extend([0u8; 12]);
-        for i in f {
-            for x in v[i] {
-                out.extend(x.to_le_bytes());
-            }
-        }
-        out.extend([0u8; 2]);
-    }
-    out
-}
-
 #[test]
 fn meshes_and_masses_no_robot_has_are_named() {
     // Before: an STL header claiming 2^32 - 1 triangles and a mesh scale of 1e30 were accepted
     // without a word (or called "flat"), and a mass of 1e-300 kg was taken as a body.
     let dir = tempfile::tempdir().unwrap();
-    std::fs::write(dir.path().join("tet.stl"), tetrahedron_stl(4)).unwrap();
-    std::fs::write(dir.path().join("bad.stl"), tetrahedron_stl(u32::MAX)).unwrap();
+    std::fs::write(dir.path().join("tet.stl"), common::tetrahedron_stl(4)).unwrap();
+    std::fs::write(
+        dir.path().join("bad.stl"),
+        common::tetrahedron_stl(u32::MAX),
+    )
+    .unwrap();
     let urdf = |mesh: &str, scale: &str, mass: &str| {
         format!(
             r#"<robot name="r">

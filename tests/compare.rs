@@ -2,21 +2,10 @@
 //! torque noise) fails with exit 1, a readable Markdown table and a JUnit failure; constraint
 //! variants within one run; errors exit 2.
 
-use std::path::{Path, PathBuf};
-use std::process::Command;
+mod common;
 
-fn physid(args: &[&str]) -> (i32, String, String) {
-    let o = Command::new(env!("CARGO_BIN_EXE_physid"))
-        .args(args)
-        .env_remove("GITHUB_STEP_SUMMARY")
-        .output()
-        .unwrap();
-    (
-        o.status.code().unwrap_or(-1),
-        String::from_utf8_lossy(&o.stdout).to_string(),
-        String::from_utf8_lossy(&o.stderr).to_string(),
-    )
-}
+use common::physid;
+use std::path::{Path, PathBuf};
 
 /// The sample-size scenario cut to 8 seeds and sizes 30..300, with `torque_noise` (N m), run
 /// into `dir/name`.

@@ -5,15 +5,11 @@
 
 mod common;
 
-use common::physid;
+use common::{physid, root};
 use physid::experiment::{motions, ExperimentSpec};
 use physid::ident::ConstraintSet;
 use physid::sim::design::{design, score, DesignOptions, Objective};
-use std::path::{Path, PathBuf};
-
-fn root() -> PathBuf {
-    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
-}
+use std::path::Path;
 
 fn leg() -> physid::model::Model {
     physid::io::load_robot("cheetah3").unwrap()

@@ -7,11 +7,14 @@
 //! reserved it and aborted; now every record length is bounded before reading), and a CDR string
 //! length of 4 GB (bounded by the message's own size).
 
+mod common;
+
+use common::root;
 use physid::io;
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use std::panic::{catch_unwind, AssertUnwindSafe};
-use std::path::{Path, PathBuf};
+use std::path::Path;
 
 /// Mutated inputs per reader and run.
 const EXECUTIONS: usize = 2000;
@@ -95,10 +98,6 @@ fn fuzz(name: &str, seed: &[u8], file: &Path, read: &dyn Fn(&Path) -> bool) -> (
         }
     }
     (EXECUTIONS, rejected)
-}
-
-fn root() -> PathBuf {
-    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
 }
 
 #[test]
