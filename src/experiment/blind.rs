@@ -628,13 +628,6 @@ pub struct Scores {
 
 /// Scores of a set of cases.
 pub fn score(results: &[CaseResult]) -> Scores {
-    let frac = |xs: Vec<bool>| {
-        if xs.is_empty() {
-            f64::NAN
-        } else {
-            xs.iter().filter(|x| **x).count() as f64 / xs.len() as f64
-        }
-    };
     let of = |c: Category| results.iter().filter(move |r| r.category == c);
     let mut mags: Vec<f64> = of(Category::Single)
         .filter_map(|r| r.magnitude_error)
@@ -643,35 +636,28 @@ pub fn score(results: &[CaseResult]) -> Scores {
     Scores {
         cases: results.len(),
         single: of(Category::Single).count(),
-        top1: frac(of(Category::Single).filter_map(|r| r.top1).collect()),
-        top1_unique: frac(of(Category::Single).filter_map(|r| r.top1_unique).collect()),
+        top1: super::fraction(of(Category::Single).filter_map(|r| r.top1)),
+        top1_unique: super::fraction(of(Category::Single).filter_map(|r| r.top1_unique)),
         single_visible: of(Category::Single)
             .filter(|r| r.visible_gap >= VISIBLE)
             .count(),
-        top1_visible: frac(
+        top1_visible: super::fraction(
             of(Category::Single)
                 .filter(|r| r.visible_gap >= VISIBLE)
-                .filter_map(|r| r.top1)
-                .collect(),
+                .filter_map(|r| r.top1),
         ),
         median_magnitude_error: diagnose::median(&std::mem::take(&mut mags)),
         median_gap_closed: diagnose::median(&std::mem::take(&mut gaps)),
         clean: of(Category::Clean).count(),
-        clean_no_claim: frac(of(Category::Clean).map(|r| r.found.is_empty()).collect()),
+        clean_no_claim: super::fraction(of(Category::Clean).map(|r| r.found.is_empty())),
         two: of(Category::Two).count(),
-        two_both_found: frac(of(Category::Two).filter_map(|r| r.both_found).collect()),
+        two_both_found: super::fraction(of(Category::Two).filter_map(|r| r.both_found)),
         out_of_library: of(Category::OutOfLibrary).count(),
-        out_of_library_unexplained: frac(
-            of(Category::OutOfLibrary)
-                .map(|r| r.verdict != Verdict::Explained)
-                .collect(),
+        out_of_library_unexplained: super::fraction(
+            of(Category::OutOfLibrary).map(|r| r.verdict != Verdict::Explained),
         ),
         changed: of(Category::Changed).count(),
-        changed_found: frac(
-            of(Category::Changed)
-                .filter_map(|r| r.changed_found)
-                .collect(),
-        ),
+        changed_found: super::fraction(of(Category::Changed).filter_map(|r| r.changed_found)),
         changed_mass_error: diagnose::median(
             &of(Category::Changed)
                 .filter_map(|r| r.magnitude_error)

@@ -545,6 +545,18 @@ pub fn run(
     Ok(per_seed.into_iter().flatten().collect())
 }
 
+/// The fraction of `xs` that hold (NaN when there are none: a score of nothing is no score).
+pub(crate) fn fraction(xs: impl IntoIterator<Item = bool>) -> f64 {
+    let (hold, all) = xs
+        .into_iter()
+        .fold((0usize, 0usize), |(h, n), x| (h + usize::from(x), n + 1));
+    if all == 0 {
+        f64::NAN
+    } else {
+        hold as f64 / all as f64
+    }
+}
+
 /// Median and interquartile range of `v` (NaN-free values only).
 pub fn median_iqr(v: &[f64]) -> (f64, f64, f64) {
     let mut s: Vec<f64> = v.iter().copied().filter(|x| x.is_finite()).collect();

@@ -779,13 +779,6 @@ pub struct RealScores {
 
 /// Scores of a set of cases.
 pub fn score(results: &[RealCase]) -> RealScores {
-    let frac = |xs: Vec<bool>| {
-        if xs.is_empty() {
-            f64::NAN
-        } else {
-            xs.iter().filter(|x| **x).count() as f64 / xs.len() as f64
-        }
-    };
     let payload: Vec<&RealCase> = results.iter().filter(|r| r.injected == "payload").collect();
     let clean: Vec<&RealCase> = results.iter().filter(|r| r.injected == "clean").collect();
     let mass_err: Vec<f64> = payload.iter().filter_map(|r| r.magnitude_error).collect();
@@ -797,29 +790,27 @@ pub fn score(results: &[RealCase]) -> RealScores {
     RealScores {
         cases: results.len(),
         payload: payload.len(),
-        payload_found: frac(payload.iter().map(|r| r.top1 == Some(true)).collect()),
-        payload_mass_within_15: frac(
+        payload_found: super::fraction(payload.iter().map(|r| r.top1 == Some(true))),
+        payload_mass_within_15: super::fraction(
             payload
                 .iter()
-                .map(|r| r.magnitude_error.is_some_and(|e| e <= 0.15))
-                .collect(),
+                .map(|r| r.magnitude_error.is_some_and(|e| e <= 0.15)),
         ),
         median_payload_mass_error: diagnose::median(&mass_err),
         payload_visible: payload.iter().filter(|r| r.growth >= VISIBLE.0).count(),
-        payload_found_visible: frac(
+        payload_found_visible: super::fraction(
             payload
                 .iter()
                 .filter(|r| r.growth >= VISIBLE.0)
-                .map(|r| r.top1 == Some(true))
-                .collect(),
+                .map(|r| r.top1 == Some(true)),
         ),
         clean: clean.len(),
-        clean_no_payload: frac(clean.iter().map(|r| !r.payload_claimed).collect()),
-        clean_no_claim: frac(clean.iter().map(|r| r.found.is_empty()).collect()),
+        clean_no_payload: super::fraction(clean.iter().map(|r| !r.payload_claimed)),
+        clean_no_claim: super::fraction(clean.iter().map(|r| r.found.is_empty())),
         single: results.iter().filter(|r| r.top1.is_some()).count(),
-        top1: frac(results.iter().filter_map(|r| r.top1).collect()),
+        top1: super::fraction(results.iter().filter_map(|r| r.top1)),
         visible_single: visible.len(),
-        top1_visible: frac(visible),
+        top1_visible: super::fraction(visible),
         median_magnitude_error: diagnose::median(
             &results
                 .iter()
