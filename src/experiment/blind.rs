@@ -646,8 +646,8 @@ pub fn score(results: &[CaseResult]) -> Scores {
                 .filter(|r| r.visible_gap >= VISIBLE)
                 .filter_map(|r| r.top1),
         ),
-        median_magnitude_error: diagnose::median(&std::mem::take(&mut mags)),
-        median_gap_closed: diagnose::median(&std::mem::take(&mut gaps)),
+        median_magnitude_error: super::median(&std::mem::take(&mut mags)),
+        median_gap_closed: super::median(&std::mem::take(&mut gaps)),
         clean: of(Category::Clean).count(),
         clean_no_claim: super::fraction(of(Category::Clean).map(|r| r.found.is_empty())),
         two: of(Category::Two).count(),
@@ -658,7 +658,7 @@ pub fn score(results: &[CaseResult]) -> Scores {
         ),
         changed: of(Category::Changed).count(),
         changed_found: super::fraction(of(Category::Changed).filter_map(|r| r.changed_found)),
-        changed_mass_error: diagnose::median(
+        changed_mass_error: super::median(
             &of(Category::Changed)
                 .filter_map(|r| r.magnitude_error)
                 .collect::<Vec<_>>(),

@@ -557,6 +557,12 @@ pub(crate) fn fraction(xs: impl IntoIterator<Item = bool>) -> f64 {
     }
 }
 
+/// The median of the finite values of `v` (NaN when there are none: a median of nothing is no
+/// score, not a perfect one).
+pub(crate) fn median(v: &[f64]) -> f64 {
+    median_iqr(v).1
+}
+
 /// Median and interquartile range of `v` (NaN-free values only).
 pub fn median_iqr(v: &[f64]) -> (f64, f64, f64) {
     let mut s: Vec<f64> = v.iter().copied().filter(|x| x.is_finite()).collect();

@@ -796,7 +796,7 @@ pub fn score(results: &[RealCase]) -> RealScores {
                 .iter()
                 .map(|r| r.magnitude_error.is_some_and(|e| e <= 0.15)),
         ),
-        median_payload_mass_error: diagnose::median(&mass_err),
+        median_payload_mass_error: super::median(&mass_err),
         payload_visible: payload.iter().filter(|r| r.growth >= VISIBLE.0).count(),
         payload_found_visible: super::fraction(
             payload
@@ -811,7 +811,7 @@ pub fn score(results: &[RealCase]) -> RealScores {
         top1: super::fraction(results.iter().filter_map(|r| r.top1)),
         visible_single: visible.len(),
         top1_visible: super::fraction(visible),
-        median_magnitude_error: diagnose::median(
+        median_magnitude_error: super::median(
             &results
                 .iter()
                 .filter_map(|r| r.magnitude_error)
