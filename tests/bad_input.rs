@@ -796,3 +796,21 @@ fn an_empty_joint_range_is_named() {
         "{warnings:?}"
     );
 }
+
+/// A result folder that cannot be made is named as the user gave it, never as the hidden
+/// staging folder beside it (/proc takes no new directory, even for root).
+#[cfg(target_os = "linux")]
+#[test]
+fn a_result_folder_that_cannot_be_made_is_named_not_its_staging() {
+    let scenario = root().join("scenarios/ci.toml");
+    let (ok, err) = physid(&[
+        "experiment",
+        scenario.to_str().unwrap(),
+        "--out",
+        "/proc/physid-results",
+    ]);
+    assert!(
+        !ok && err.contains("/proc/physid-results") && !err.contains("partial"),
+        "{err}"
+    );
+}

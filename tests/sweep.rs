@@ -110,6 +110,48 @@ fn bad_grid_values_fail_before_running_and_name_the_key() {
         dir.path().join("p").to_str().unwrap(),
     ]);
     assert!(code == 2 && out.contains("torque_nois"), "{out}");
+    // The experiment settings are the sweep's own: a grid over them would be overridden while
+    // the rows carried the grid's value.
+    let sweep = sweep_file(dir.path(), "\"experiment.seeds\" = [1, 3]");
+    let (code, out) = physid(&[
+        "sweep",
+        &sweep,
+        "--out",
+        dir.path().join("q").to_str().unwrap(),
+    ]);
+    assert!(
+        code == 2 && out.contains("experiment.seeds") && out.contains("[experiment]"),
+        "{out}"
+    );
+}
+
+#[test]
+fn a_grid_over_experiment_keys_sets_each_point_s_experiment() {
+    // Without the grid the sizes are [30, 300]; each grid point runs its own sizes.
+    let dir = tempfile::tempdir().unwrap();
+    let sweep = sweep_file(dir.path(), "\"experiment.sizes\" = [[30], [50]]");
+    let out_dir = dir.path().join("out");
+    let (code, log) = physid(&["sweep", &sweep, "--out", out_dir.to_str().unwrap()]);
+    assert_eq!(code, 0, "{log}");
+    let df = physid::experiment::tables::read_parquet(&out_dir.join("rows.parquet")).unwrap();
+    let n_s = physid::experiment::tables::floats(&df, "n_s").unwrap();
+    let sizes: std::collections::BTreeSet<u64> = n_s.iter().map(|&n| n as u64).collect();
+    assert_eq!(sizes.into_iter().collect::<Vec<_>>(), vec![30, 50]);
+    // 2 points x 2 seeds x 2 sets x 1 size.
+    assert_eq!(df.height(), 8);
+    // A value the experiment refuses is named with its point before anything runs.
+    let sweep = sweep_file(dir.path(), "\"experiment.prior_weight\" = [1e-6, -1.0]");
+    let (code, log) = physid(&[
+        "sweep",
+        &sweep,
+        "--out",
+        dir.path().join("p").to_str().unwrap(),
+    ]);
+    assert!(
+        code == 2 && log.contains("prior_weight") && log.contains("-1"),
+        "{log}"
+    );
+    assert!(!dir.path().join("p/cells").exists(), "{log}");
 }
 
 #[test]

@@ -8,6 +8,7 @@
 //! [grid]
 //! "sensors.torque_noise" = [0.3, 1.0, 3.0]
 //! "simulation.engine" = ["physid", "rapier"]
+//! "experiment.prior_weight" = [1e-6, 1e-3]  # the sweep's [experiment] keys too (not seeds)
 //! [experiment]                           # as a scenario's [experiment] table
 //! seeds = 3
 //! sizes = [100, 1000]
@@ -60,10 +61,14 @@ pub struct Cell {
 
 /// The hash of what determines a cell's rows: the resolved scenario and robot at its grid
 /// point, the experiment settings, the seed and physid's version (BLAKE3, first 16 hex digits).
-pub fn cell_key(sc: &Scenario, model: &crate::model::Model, spec: &SweepSpec, seed: u64) -> String {
+pub fn cell_key(
+    sc: &Scenario,
+    model: &crate::model::Model,
+    experiment: &ExperimentSpec,
+    seed: u64,
+) -> String {
     let text = format!(
-        "{sc:?}\n{model:?}\n{:?}\nseed {seed}\nphysid {}",
-        spec.experiment,
+        "{sc:?}\n{model:?}\n{experiment:?}\nseed {seed}\nphysid {}",
         env!("CARGO_PKG_VERSION")
     );
     blake3::hash(text.as_bytes()).to_hex()[..16].to_string()
@@ -113,6 +118,14 @@ pub fn load(path: &Path) -> Result<(SweepSpec, PathBuf, String), IoError> {
     let scenario = path.parent().unwrap_or(Path::new(".")).join(&spec.scenario);
     let base = crate::io::read_to_string(&scenario)?;
     for (k, v) in &spec.grid {
+        if k == "experiment" || k == "experiment.seeds" || k == "experiment.first_seed" {
+            return Err(IoError::invalid(
+                path,
+                format!(
+                    "grid.\"{k}\": the seeds are the sweep's cells, set once in its [experiment] table; a grid cannot vary them"
+                ),
+            ));
+        }
         if !matches!(v, toml::Value::Array(a) if !a.is_empty()) {
             return Err(IoError::invalid(
                 path,
@@ -165,12 +178,13 @@ pub fn cells(spec: &SweepSpec, base: &str, scenario_path: &Path) -> Result<Vec<C
     let mut out = vec![];
     for p in points {
         let (sc, model) = scenario_at(base, scenario_path, &p)?;
+        let experiment = experiment_at(spec, &p, scenario_path)?;
         for &s in &seeds {
             out.push(Cell {
                 index: out.len(),
                 point: p.clone(),
                 seed: s,
-                key: cell_key(&sc, &model, spec, s),
+                key: cell_key(&sc, &model, &experiment, s),
             });
         }
     }
@@ -186,7 +200,7 @@ pub fn scenario_at(
 ) -> Result<(Scenario, crate::model::Model), IoError> {
     let mut doc: toml::Table =
         toml::from_str(base).map_err(|e| crate::io::robot_toml::toml_error(scenario_path, e))?;
-    for (key, value) in point {
+    for (key, value) in point.iter().filter(|(k, _)| !is_experiment_key(k)) {
         let parts: Vec<&str> = key.split('.').collect();
         let mut t = &mut doc;
         for p in &parts[..parts.len() - 1] {
@@ -216,6 +230,36 @@ pub fn scenario_at(
     Ok((sc, model))
 }
 
+/// Whether a grid key sets the sweep's experiment settings (`experiment.…`), not the scenario.
+fn is_experiment_key(key: &str) -> bool {
+    key.starts_with("experiment.")
+}
+
+/// The sweep's experiment settings at a grid point: its `experiment.…` keys set over the
+/// sweep's `[experiment]` table, then parsed and checked (errors name the key and the point).
+pub fn experiment_at(
+    spec: &SweepSpec,
+    point: &Point,
+    scenario_path: &Path,
+) -> Result<ExperimentSpec, IoError> {
+    let keys: Vec<&(String, toml::Value)> =
+        point.iter().filter(|(k, _)| is_experiment_key(k)).collect();
+    if keys.is_empty() {
+        return Ok(spec.experiment.clone());
+    }
+    let bad =
+        |m: String| IoError::invalid(scenario_path, format!("with sweep values {point:?}: {m}"));
+    let mut table = toml::Table::try_from(&spec.experiment).map_err(|e| bad(e.to_string()))?;
+    for (key, value) in keys {
+        table.insert(key["experiment.".len()..].to_string(), value.clone());
+    }
+    let experiment: ExperimentSpec = table
+        .try_into()
+        .map_err(|e: toml::de::Error| bad(e.to_string().trim_end().to_string()))?;
+    experiment.validate().map_err(|e| bad(e.to_string()))?;
+    Ok(experiment)
+}
+
 /// Runs one cell.
 pub fn run_cell(
     base: &str,
@@ -224,7 +268,8 @@ pub fn run_cell(
     cell: &Cell,
 ) -> Result<Vec<Row>, SweepError> {
     let (sc, model) = scenario_at(base, scenario_path, &cell.point)?;
-    Ok(run_seed(&model, &sc, &spec.experiment, cell.seed)?)
+    let experiment = experiment_at(spec, &cell.point, scenario_path)?;
+    Ok(run_seed(&model, &sc, &experiment, cell.seed)?)
 }
 
 /// `summary.svg` of a merged sweep: per grid point (labels `key=value, …`), the median

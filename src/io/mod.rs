@@ -214,9 +214,17 @@ impl StagingDir {
         let dir = tempfile::Builder::new()
             .prefix(&prefix)
             .tempdir_in(&parent)
-            .map_err(|source| IoError::Fs {
-                path: parent.clone(),
-                source,
+            .map_err(|e| {
+                // tempfile's error names the hidden staging folder; the user gave `target`.
+                let text = e.to_string();
+                let text = text.split(" at path ").next().unwrap_or(&text);
+                IoError::invalid(
+                    target,
+                    format!(
+                        "cannot be created: its folder {} does not take a new directory ({text})",
+                        parent.display()
+                    ),
+                )
             })?;
         Ok(Self {
             target: target.to_path_buf(),
