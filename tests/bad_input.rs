@@ -814,3 +814,92 @@ fn a_result_folder_that_cannot_be_made_is_named_not_its_staging() {
         "{err}"
     );
 }
+
+/// A result folder never takes its inputs with it: an experiment's folder is replaced whole,
+/// so giving the scenario's own folder (or any folder physid did not write) is refused before
+/// any work, and the folder is left as it was; the same holds for sweep, blind and diagnose
+/// reports, and for simulate onto a file the scenario's robot reads.
+#[test]
+fn a_result_folder_never_holds_or_replaces_an_input() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let s = |p: &Path| p.to_str().unwrap().to_string();
+    let scenarios = d.join("scenarios");
+    std::fs::create_dir(&scenarios).unwrap();
+    let sc = scenarios.join("ci.toml");
+    std::fs::copy(root().join("scenarios/ci.toml"), &sc).unwrap();
+    let listing = |p: &Path| {
+        let mut v: Vec<String> = std::fs::read_dir(p)
+            .unwrap()
+            .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+            .collect();
+        v.sort();
+        v
+    };
+    // Before: exit 0, and the folder held the results instead of the scenario.
+    let (ok, err) = physid(&["experiment", &s(&sc), "--out", &s(&scenarios)]);
+    assert!(
+        !ok && err.contains("refusing to write over the folder of the input"),
+        "{err}"
+    );
+    assert_eq!(listing(&scenarios), vec!["ci.toml"]);
+    let sweep = scenarios.join("sweep.toml");
+    std::fs::write(
+        &sweep,
+        "scenario = \"ci.toml\"\n[grid]\n\"sensors.torque_noise\" = [0.3]\n",
+    )
+    .unwrap();
+    let (ok, err) = physid(&["sweep", &s(&sweep), "--out", &s(&scenarios)]);
+    assert!(!ok && err.contains("folder of the input"), "{err}");
+    assert_eq!(listing(&scenarios), vec!["ci.toml", "sweep.toml"]);
+    // A folder physid did not write is not replaced.
+    let notes = d.join("notes");
+    std::fs::create_dir(&notes).unwrap();
+    std::fs::write(notes.join("todo.txt"), "keep me").unwrap();
+    let (ok, err) = physid(&["experiment", &s(&sc), "--out", &s(&notes)]);
+    assert!(
+        !ok && err.contains("notes") && err.contains("did not write"),
+        "{err}"
+    );
+    assert_eq!(listing(&notes), vec!["todo.txt"]);
+    // simulate onto the URDF its scenario's robot reads.
+    let kuka = d.join("kuka");
+    std::fs::create_dir(&kuka).unwrap();
+    let urdf = kuka.join("kuka_lwr4.urdf");
+    std::fs::copy(root().join("data/kuka_lwr4/kuka_lwr4.urdf"), &urdf).unwrap();
+    let text = std::fs::read_to_string(root().join("scenarios/excitation/kuka_base.toml"))
+        .unwrap()
+        .replace("../../data/kuka_lwr4/kuka_lwr4.urdf", "kuka/kuka_lwr4.urdf");
+    let ksc = d.join("kuka.toml");
+    std::fs::write(&ksc, text).unwrap();
+    let before = std::fs::read(&urdf).unwrap();
+    let (ok, err) = physid(&["simulate", &s(&ksc), "--out", &s(&urdf)]);
+    assert!(
+        !ok && err.contains("refusing to write over the input"),
+        "{err}"
+    );
+    assert_eq!(std::fs::read(&urdf).unwrap(), before);
+    // blind and diagnose results into the folder of their inputs.
+    let (ok, err) = physid(&[
+        "blind",
+        "--cases",
+        "1",
+        "--out",
+        &s(&kuka),
+        "--scenario",
+        &s(&ksc),
+    ]);
+    assert!(!ok && err.contains("folder of the input"), "{err}");
+    let m1 = root().join("data/kuka_lwr4/measurements_1.csv");
+    let (ok, err) = physid(&[
+        "diagnose",
+        "--robot",
+        &s(&urdf),
+        "--data",
+        &s(&m1),
+        "--report",
+        &s(&kuka),
+    ]);
+    assert!(!ok && err.contains("folder of the input"), "{err}");
+    assert_eq!(listing(&kuka), vec!["kuka_lwr4.urdf"]);
+}

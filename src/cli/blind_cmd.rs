@@ -112,6 +112,13 @@ pub fn run(a: Args) -> anyhow::Result<()> {
         description_uncertainty: a.description_uncertainty,
     };
     opts.validate().map_err(super::option_error)?;
+    if let Some(dir) = &a.out {
+        let inputs: Vec<PathBuf> = physid::io::robot_files(&a.scenario.to_string_lossy(), &[])
+            .into_iter()
+            .chain([a.scenario.clone()])
+            .collect();
+        physid::io::check_result_dir(dir, &inputs)?;
+    }
     let (base, model, _) = physid::sim::scenario::load(&a.scenario)?;
     let diagnose_opts = opts.diagnose_options();
     let start = std::time::Instant::now();
@@ -206,6 +213,13 @@ fn run_real(a: Args, robot: &str) -> anyhow::Result<()> {
         baseline: a.real_baseline,
     };
     opts.validate().map_err(super::option_error)?;
+    if let Some(dir) = &a.out {
+        let inputs: Vec<PathBuf> = physid::io::robot_files(robot, &[])
+            .into_iter()
+            .chain(a.real.iter().cloned())
+            .collect();
+        physid::io::check_result_dir(dir, &inputs)?;
+    }
     let model = physid::io::load_robot(robot)?;
     let bases = semireal::bases(&model, &a.real, &opts)?;
     let dopts = opts.diagnose_options();

@@ -76,6 +76,15 @@ pub fn run(a: Args) -> anyhow::Result<()> {
         )
         .collect();
     physid::io::check_distinct_recordings(&roles)?;
+    if let Some(dir) = &a.report {
+        let inputs: Vec<PathBuf> = a
+            .robot
+            .files()
+            .into_iter()
+            .chain(paths.iter().map(|p| p.to_path_buf()))
+            .collect();
+        physid::io::check_result_dir(dir, &inputs)?;
+    }
     if !a.baseline_data.is_empty() && a.description_uncertainty.is_none() {
         return Err(super::option_error(
             diagnose::DiagnoseError::BaselineWithoutUncertainty,

@@ -47,6 +47,11 @@ pub fn run(a: Args) -> anyhow::Result<()> {
         .map_err(|e| anyhow::anyhow!("{}: {e}", path.display()))?;
     let out =
         out.unwrap_or_else(|| PathBuf::from("results").join(path.file_stem().unwrap_or_default()));
+    let inputs: Vec<PathBuf> = physid::io::robot_files(&scenario_path.to_string_lossy(), &[])
+        .into_iter()
+        .chain([path.to_path_buf(), scenario_path.clone()])
+        .collect();
+    physid::io::check_result_dir(&out, &inputs)?;
     // Every grid point is resolved (and checked) before anything is created or run: a bad
     // value fails fast, naming it, and leaves no empty result behind.
     let all = sweep::cells(&spec, &base, &scenario_path)?;

@@ -59,7 +59,7 @@ pub enum IoError {
         output: PathBuf,
         /// The file it would replace.
         input: PathBuf,
-        /// `the input` or `another output`.
+        /// `the input`, `another output` or `the folder of the input`.
         what: &'static str,
     },
     /// An unknown robot name.
@@ -172,6 +172,39 @@ pub fn check_outputs(outputs: &[&Path], inputs: &[&Path]) -> Result<(), IoError>
     Ok(())
 }
 
+/// Refuses, before any work, a result directory `dir` that is one of `inputs` or holds one of
+/// them (a result folder is written into, and an experiment's is replaced whole: given the
+/// folder of the scenario, it would take the scenario with it).
+pub fn check_result_dir(dir: &Path, inputs: &[PathBuf]) -> Result<(), IoError> {
+    let absolute = |p: &Path| -> Option<PathBuf> {
+        if let Ok(c) = p.canonicalize() {
+            return Some(c);
+        }
+        let parent = match p.parent() {
+            Some(d) if !d.as_os_str().is_empty() => d.canonicalize().ok()?,
+            _ => std::env::current_dir().ok()?,
+        };
+        Some(parent.join(p.file_name()?))
+    };
+    let Some(dir_abs) = absolute(dir) else {
+        return Ok(());
+    };
+    for input in inputs {
+        if absolute(input).is_some_and(|i| i.starts_with(&dir_abs)) {
+            return Err(IoError::OutputIsInput {
+                output: dir.to_path_buf(),
+                input: input.clone(),
+                what: "the folder of the input",
+            });
+        }
+    }
+    Ok(())
+}
+
+/// The file every physid result folder holds; a folder without it (and not empty) is not
+/// replaced by a new result.
+pub const RESULT_MARK: &str = "provenance.json";
+
 /// A result directory built beside its final place and moved there whole by [`Self::commit`],
 /// so a reader never sees half a result or a mix of two runs: until the commit, the files live
 /// in a hidden `.NAME.partial-XXXX` directory beside the target (removed on drop, and by the
@@ -190,6 +223,18 @@ impl StagingDir {
             return Err(IoError::invalid(
                 target,
                 "exists and is not a directory; give a directory for the results",
+            ));
+        }
+        let foreign = std::fs::read_dir(target)
+            .map(|mut entries| entries.next().is_some())
+            .unwrap_or(false)
+            && !target.join(RESULT_MARK).is_file();
+        if foreign {
+            return Err(IoError::invalid(
+                target,
+                format!(
+                    "is a folder physid did not write (no {RESULT_MARK}), and a result replaces its folder whole; give a new or empty folder, or an earlier result to replace"
+                ),
             ));
         }
         let name = target
