@@ -1,5 +1,5 @@
 //! A bounded mutation fuzz of every reader (CSV, URDF, robot TOML, scenario TOML, MCAP, sweep
-//! TOML): valid files are mutated (bytes flipped, inserted, deleted and duplicated; numbers
+//! TOML, rosbag2 metadata, STL meshes, diagnosis reports for --effects-from): valid files are mutated (bytes flipped, inserted, deleted and duplicated; numbers
 //! replaced by extreme values) from a fixed seed, and each reader must answer with a value or an
 //! error, never a panic (or an abort: a failed allocation ends the whole test binary).
 //! Deterministic: the same inputs every run, so a crash once found stays tested. Found so far,
@@ -183,4 +183,93 @@ fn the_mcap_reader_never_panics_on_mutated_logs() {
     });
     eprintln!("mcap: {runs} mutated inputs, {rejected} rejected with an error, 0 panics");
     assert!(rejected > runs / 10, "only {rejected} of {runs} rejected");
+}
+
+/// A rosbag2 `metadata.yaml`, the meshes a URDF names (binary STL) and a diagnosis report given
+/// to `identify --effects-from`: each mutated, answered with a value or an error, never a
+/// panic (the report through the binary: exit 0 or 2, never 101 or a signal).
+#[test]
+fn bag_metadata_meshes_and_reports_never_panic_when_mutated() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    // rosbag2: the metadata lists a storage file that exists.
+    let bag = d.join("bag");
+    std::fs::create_dir(&bag).unwrap();
+    std::fs::write(bag.join("run_0.db3"), b"").unwrap();
+    let metadata = "rosbag2_bagfile_information:\n  version: 5\n  storage_identifier: sqlite3\n  duration:\n    nanoseconds: 1000000000\n  relative_file_paths:\n    - run_0.db3\n  topics_with_message_count:\n    - topic_metadata:\n        name: /joint_states\n        type: sensor_msgs/msg/JointState\n      message_count: 100\n";
+    let (bags, bag_rejected) = fuzz(
+        "rosbag2 metadata",
+        metadata.as_bytes(),
+        &bag.join("metadata.yaml"),
+        &|_| io::rosbag2::files(&bag).is_ok(),
+    );
+    // A URDF whose link is bounded by a mutated STL.
+    let urdf = d.join("r.urdf");
+    std::fs::write(
+        &urdf,
+        r#"<robot name="r"><link name="base"/>
+  <link name="arm"><inertial><mass value="1"/><origin xyz="0.02 0.02 0.02"/>
+    <inertia ixx="1e-4" ixy="0" ixz="0" iyy="1e-4" iyz="0" izz="1e-4"/></inertial>
+    <collision><geometry><mesh filename="tet.stl"/></geometry></collision></link>
+  <joint name="j1" type="revolute"><parent link="base"/><child link="arm"/><axis xyz="0 0 1"/>
+    <limit lower="-1" upper="1" effort="5" velocity="2"/></joint></robot>"#,
+    )
+    .unwrap();
+    let (meshes, _) = fuzz(
+        "stl",
+        &common::tetrahedron_stl(4),
+        &d.join("tet.stl"),
+        &|_| io::load_robot(&urdf.to_string_lossy()).is_ok(),
+    );
+    eprintln!("rosbag2 metadata: {bags} mutated, {bag_rejected} rejected; stl: {meshes} mutated; 0 panics");
+    assert!(
+        bag_rejected > bags / 10,
+        "only {bag_rejected} of {bags} rejected"
+    );
+    // A diagnosis report of the KUKA arm, reduced to what identify reads from it.
+    let k = root().join("data/kuka_lwr4");
+    let short = d.join("short.csv");
+    let text = std::fs::read_to_string(k.join("measurements_1.csv")).unwrap();
+    std::fs::write(
+        &short,
+        text.lines().take(400).collect::<Vec<_>>().join("\n"),
+    )
+    .unwrap();
+    let report = r#"{"robot":"kuka-lwr","joints":["lwr_0_joint","lwr_1_joint","lwr_2_joint","lwr_3_joint","lwr_4_joint","lwr_5_joint","lwr_6_joint"],"effects":[{"kind":"torque_offset","param":null},{"kind":"stribeck","param":0.05},{"kind":"compliance","param":0.001}],"confirmed":[true,false,true]}"#;
+    let mut rng = ChaCha8Rng::seed_from_u64(0x5e907);
+    let file = d.join("report.json");
+    let (mut accepted, runs) = (0, 150);
+    for i in 0..runs {
+        let bytes = if i == 0 {
+            report.as_bytes().to_vec()
+        } else {
+            mutate(report.as_bytes(), &mut rng)
+        };
+        std::fs::write(&file, &bytes).unwrap();
+        let (code, _, err) = common::physid(&[
+            "identify",
+            "--robot",
+            &k.join("kuka_lwr4.urdf").to_string_lossy(),
+            "--data",
+            &short.to_string_lossy(),
+            "--constraints",
+            "none",
+            "--no-geometry-ellipsoids",
+            "--friction",
+            "viscous,coulomb",
+            "--effects-from",
+            &file.to_string_lossy(),
+        ]);
+        assert!(
+            code == 0 || code == 2,
+            "report mutation {i} ({}): exit {code}: {err}",
+            String::from_utf8_lossy(&bytes)
+        );
+        accepted += usize::from(code == 0);
+    }
+    eprintln!("reports: {runs} mutated, {accepted} accepted, the rest refused; 0 panics");
+    assert!(
+        accepted >= 1 && accepted < runs / 2,
+        "{accepted} of {runs} accepted"
+    );
 }
