@@ -26,6 +26,7 @@
 //! 7. the `physid` binary (`src/cli`): one clap `Args` per command, errors printed once.
 #![warn(missing_docs)]
 
+pub mod api;
 pub mod diagnose;
 pub mod dynamics;
 pub mod experiment;

@@ -2,6 +2,10 @@
 
 use super::RobotArgs;
 use anyhow::{anyhow, bail, Context};
+use physid::api::identify::{
+    confirmed_effects, constraint_set, theta_names, truth_errors, DataJson, Friction, IdentifyJson,
+    RunRange, Split, TruthError,
+};
 use physid::diagnose::calibrate::{parse_term, Calibration, Options as CalOptions, Run};
 use physid::diagnose::library::Variant;
 use physid::ident::{self, analysis, ConstraintSet, NormalEquations, Options};
@@ -508,32 +512,6 @@ pub struct Args {
     regularizer: ident::Regularizer,
 }
 
-/// The constraint set: the one given, else the tightest the description supports, and why.
-fn constraint_set(given: Option<ConstraintSet>, m: &Model) -> (ConstraintSet, Option<String>) {
-    if let Some(c) = given {
-        return (c, None);
-    }
-    let missing: Vec<String> = ident::bodies(m)
-        .into_iter()
-        .filter(|(_, _, e)| e.is_none())
-        .map(|(name, _, _)| name)
-        .collect();
-    if missing.is_empty() {
-        (
-            ConstraintSet::Ellipsoid,
-            Some("every body has a bounding ellipsoid".into()),
-        )
-    } else {
-        (
-            ConstraintSet::Consistent,
-            Some(format!(
-                "no bounding ellipsoid for {} (give them in a sidecar, see docs/robot-format.md)",
-                missing.join(", ")
-            )),
-        )
-    }
-}
-
 /// The effect terms from `--friction`, `--effects` and `--effects-from`.
 fn terms(a: &Args, model: &Model) -> anyhow::Result<Vec<Variant>> {
     let mut out = vec![];
@@ -556,69 +534,6 @@ fn terms(a: &Args, model: &Model) -> anyhow::Result<Vec<Variant>> {
     }
     if let Some(p) = &a.effects_from {
         out.extend(confirmed_effects(p, model)?);
-    }
-    Ok(out)
-}
-
-/// The effects a diagnosis report of this robot confirmed (its `effects[i]` with
-/// `confirmed[i]` true), the report checked first: both arrays of one length, `confirmed` of
-/// booleans, made for `model` (its robot name and joints), each term valid as `--effects`
-/// would require.
-fn confirmed_effects(path: &Path, model: &Model) -> anyhow::Result<Vec<Variant>> {
-    let text = physid::io::read_to_string(path)?;
-    let v: serde_json::Value =
-        serde_json::from_str(&text).with_context(|| format!("{}: not JSON", path.display()))?;
-    let at = path.display();
-    let (Some(effects), Some(confirmed)) = (v["effects"].as_array(), v["confirmed"].as_array())
-    else {
-        bail!("{at}: not a diagnosis report (no effects and confirmed arrays; write one with `physid diagnose --out DIR`)");
-    };
-    if effects.len() != confirmed.len() {
-        bail!(
-            "{at}: {} effects but {} confirmed flags: a report's arrays pair one to one",
-            effects.len(),
-            confirmed.len()
-        );
-    }
-    let joints: Vec<&str> = model.bodies.iter().map(|b| b.joint_name.as_str()).collect();
-    let theirs: Option<Vec<&str>> = v["joints"]
-        .as_array()
-        .map(|j| j.iter().filter_map(|x| x.as_str()).collect());
-    if v["robot"].as_str() != Some(model.name.as_str()) || theirs.as_deref() != Some(&joints[..]) {
-        bail!(
-            "{at}: the report is for robot {} with joints {:?}, not {} with joints {:?}",
-            v["robot"],
-            theirs.unwrap_or_default(),
-            model.name,
-            joints
-        );
-    }
-    let mut out = vec![];
-    for (i, (e, ok)) in effects.iter().zip(confirmed).enumerate() {
-        let Some(ok) = ok.as_bool() else {
-            bail!("{at}: confirmed[{i}] is {ok}, not true or false");
-        };
-        let kind = e["kind"]
-            .as_str()
-            .with_context(|| format!("{at}: effects[{i}].kind is not a string"))?;
-        let term = match &e["param"] {
-            serde_json::Value::Null => kind.to_string(),
-            p => match p.as_f64() {
-                Some(0.0) => kind.to_string(),
-                Some(p) => format!("{kind}:{p}"),
-                None => bail!("{at}: effects[{i}].param is {p}, not a number"),
-            },
-        };
-        let variant = parse_term(&term).map_err(|m| anyhow!("{at}: effects[{i}]: {m}"))?;
-        if variant.kind.gridded() && !variant.kind.valid_param(variant.param, model.dof()) {
-            bail!(
-                "{at}: effects[{i}]: {term}: {} out of range",
-                variant.kind.grid_meaning()
-            );
-        }
-        if ok {
-            out.push(variant);
-        }
     }
     Ok(out)
 }
@@ -1033,108 +948,6 @@ struct Report {
     fit: Fit,
 }
 
-/// One data file and what the pipeline did to it.
-#[derive(Clone, serde::Serialize, schemars::JsonSchema)]
-pub struct DataJson {
-    /// The file.
-    file: PathBuf,
-    /// Runs, gaps, bridged, trimmed and dropped samples, derived signals, locked and still
-    /// joints.
-    pipeline: physid::prepare::Report,
-}
-
-/// One body's errors against the ground truth.
-#[derive(Clone, serde::Serialize, schemars::JsonSchema)]
-pub struct TruthError {
-    /// Body or rotor name.
-    name: String,
-    /// `|Δm|/m`.
-    mass_rel: f64,
-    /// `‖Δc‖` (m).
-    com_m: f64,
-    /// `‖ΔI_C‖/‖I_C‖`.
-    inertia_rel: f64,
-    /// `‖ΔJ‖/‖J‖`.
-    j_rel: f64,
-}
-
-/// A run and its sample range (`[start, end)`, indices of the file as read).
-#[derive(serde::Serialize, schemars::JsonSchema)]
-pub struct RunRange {
-    file: PathBuf,
-    range: [usize; 2],
-    /// Samples of the range that were fitted or scored (after the pipeline's trimming and
-    /// splitting).
-    samples_used: usize,
-}
-
-/// The training or validation part of `identify --json`.
-#[derive(serde::Serialize, schemars::JsonSchema)]
-pub struct Split {
-    /// The first run's sample range.
-    range: Option<[usize; 2]>,
-    runs: Vec<RunRange>,
-    /// RMS of `Y θ − τ` per joint (N m); null for a locked joint (its torque is not fitted).
-    rms: Vec<Option<f64>>,
-    /// Over all joints (N m).
-    rms_overall: f64,
-}
-
-/// Friction per joint.
-#[derive(serde::Serialize, schemars::JsonSchema)]
-pub struct Friction {
-    /// `B` (N m s/rad).
-    viscous: Vec<f64>,
-    /// `B_c` (N m).
-    coulomb: Vec<f64>,
-}
-
-/// `identify --json` (docs/identify-json.md; JSON Schema docs/schemas/identify.schema.json).
-#[derive(serde::Serialize, schemars::JsonSchema)]
-pub struct IdentifyJson {
-    data: PathBuf,
-    robot: String,
-    constraints: ConstraintSet,
-    constraints_default_because: Option<String>,
-    train: Split,
-    validation: Option<Split>,
-    bodies: Vec<ident::IdentifiedBody>,
-    friction: Friction,
-    effects: Vec<physid::diagnose::calibrate::TermFit>,
-    scenario_effects: Option<String>,
-    objective: f64,
-    constraints_hold: bool,
-    solver: ident::SolverInfo,
-    end_to_end_seconds: f64,
-    identifiability: analysis::Identifiability,
-    parameter_names: Vec<String>,
-    theta: Vec<f64>,
-    truth_errors: Option<Vec<TruthError>>,
-    /// What the data pipeline did to each file read in memory.
-    data_pipeline: Vec<DataJson>,
-    /// Joints held at their logged position, whose torque is not fitted.
-    locked_joints: Vec<String>,
-}
-
-/// Per-body errors against the ground truth, when the data are a physid log that carries it.
-fn truth_errors(data: &Path, m: &Model, theta: &nalgebra::DVector<f64>) -> Option<Vec<TruthError>> {
-    ground_truth(data, m).map(|truth| {
-        let tm = m.with_parameters(&truth).expect("same layout");
-        let errs = physid::experiment::body_errors(&tm, theta);
-        physid::ident::bodies(m)
-            .into_iter()
-            .zip(errs)
-            .map(|((name, _, _), e)| TruthError {
-                name,
-                mass_rel: e[0],
-                com_m: e[1],
-                inertia_rel: e[2],
-                j_rel: e[3],
-            })
-            .collect::<Vec<_>>()
-    })
-}
-
 /// Writes the identified model as URDF, warning when its inertias are not consistent.
 fn write_urdf(p: &Path, robot: &str, rep: &Report, m: &Model) -> anyhow::Result<()> {
     let r = &rep.r;
@@ -1244,15 +1057,6 @@ fn print_json(a: &Args, m: &Model, rep: &Report) -> anyhow::Result<()> {
     let v = physid::io::versioned("identify", &v);
     println!("{}", serde_json::to_string_pretty(&v)?);
     Ok(())
-}
-
-/// The names of θ's entries: the model's, then each effect coefficient as `kind[i]`.
-fn theta_names(m: &Model, terms: &[physid::diagnose::calibrate::TermFit]) -> Vec<String> {
-    let mut names = m.parameter_names();
-    for t in terms {
-        names.extend((0..t.coefficients.len()).map(|i| format!("{}[{i}]", t.kind.name())));
-    }
-    names
 }
 
 /// The text report: bodies, friction, effects, errors, consistency, identifiability, truth.
@@ -1456,17 +1260,6 @@ fn print_identifiability(idf: &analysis::Identifiability) {
 }
 
 /// The ground-truth θ in a physid MCAP's metadata, if its parameter names match the model's.
-fn ground_truth(path: &Path, model: &Model) -> Option<nalgebra::DVector<f64>> {
-    if path.extension().and_then(|e| e.to_str()) != Some("mcap") {
-        return None;
-    }
-    let log = physid::io::mcap_log::read(path).ok()?;
-    let md = log.metadata.get("ground_truth_parameters")?;
-    let names: Vec<String> = serde_json::from_str(md.get("names")?).ok()?;
-    let values: Vec<f64> = serde_json::from_str(md.get("values")?).ok()?;
-    (names == model.parameter_names()).then(|| nalgebra::DVector::from_vec(values))
-}
-
 /// Below this identifiable fraction an effect coefficient is reported as absorbed.
 const ABSORBED: f64 = 0.1;
 

@@ -50,7 +50,7 @@ fn nullable_numbers(v: &mut Value) {
 /// The schema of `output`, with the two fields every physid JSON carries.
 pub fn schema(output: &str) -> anyhow::Result<Value> {
     let s = match output {
-        "identify" => schemars::schema_for!(super::identify_cmd::IdentifyJson),
+        "identify" => schemars::schema_for!(physid::api::identify::IdentifyJson),
         "diagnose" => schemars::schema_for!(physid::diagnose::Diagnosis),
         "blind_scores" => schemars::schema_for!(physid::experiment::blind::Scores),
         "blind_real_scores" => schemars::schema_for!(physid::experiment::semireal::RealScores),

@@ -1,0 +1,36 @@
+//! The library's entry points per command, the floor the `physid` binary and the Python
+//! package stand on: typed options in, a typed report out that is also the command's JSON
+//! contract (docs/schemas/), errors as values naming the file, field or option at fault.
+//!
+//! This floor is being filled command by command (issue 28); `identify`'s contracts, its
+//! default constraint set, its ground-truth errors and the reading of a diagnosis report for
+//! `--effects-from` live here so far.
+
+pub mod identify;
+
+use std::path::PathBuf;
+
+/// An error of an entry point, naming what is at fault.
+#[derive(Debug, thiserror::Error)]
+pub enum ApiError {
+    /// A file could not be read.
+    #[error(transparent)]
+    Io(#[from] crate::io::IoError),
+    /// A file's content is not what the option needs.
+    #[error("{}: {message}", path.display())]
+    Invalid {
+        /// The file.
+        path: PathBuf,
+        /// What is wrong, naming the field.
+        message: String,
+    },
+}
+
+impl ApiError {
+    pub(crate) fn invalid(path: &std::path::Path, message: impl Into<String>) -> Self {
+        ApiError::Invalid {
+            path: path.to_path_buf(),
+            message: message.into(),
+        }
+    }
+}
