@@ -2,11 +2,13 @@
 //! docs/schemas/identify.schema.json), its default constraint set, the ground-truth errors of a
 //! physid log, and the effects a diagnosis report confirmed (`--effects-from`).
 
+use super::data::{in_memory, Data, Span, SquaredErrors};
 use super::ApiError;
-use crate::diagnose::calibrate::{parse_term, TermFit};
+use crate::diagnose::calibrate::{parse_term, Calibration, Options as CalOptions, Run, TermFit};
 use crate::diagnose::library::Variant;
-use crate::ident::{self, analysis, ConstraintSet};
+use crate::ident::{self, analysis, ConstraintSet, NormalEquations, Options};
 use crate::model::Model;
+use crate::trajectory::Trajectory;
 use nalgebra::DVector;
 use std::path::{Path, PathBuf};
 
@@ -252,4 +254,103 @@ pub fn theta_names(m: &Model, terms: &[TermFit]) -> Vec<String> {
         names.extend((0..t.coefficients.len()).map(|i| format!("{}[{i}]", t.kind.name())));
     }
     names
+}
+
+/// An identification and what scores it.
+pub struct Fit {
+    /// The identified model (and effect coefficients after it in `theta`).
+    pub identified: ident::Identified,
+    /// The model's own normal equations over the training spans.
+    pub normal_equations: NormalEquations,
+    /// The effect terms' fits (empty without terms).
+    pub terms: Vec<TermFit>,
+    /// The calibration (with its options), when there are effect terms.
+    calibration: Option<(Calibration, CalOptions)>,
+}
+
+impl Fit {
+    /// θ of the model's layout (without effect coefficients).
+    pub fn model_theta(&self, m: &Model) -> DVector<f64> {
+        self.identified.theta.rows(0, m.layout().len).into_owned()
+    }
+
+    /// Per-joint (`None` for locked joints) and overall RMS torque error over `spans` of
+    /// `data` (N m), every sample the pipeline kept scored.
+    pub fn errors(
+        &self,
+        m: &Model,
+        data: &[Data],
+        spans: &[Span],
+        locked: &[usize],
+    ) -> Result<(Vec<Option<f64>>, f64), ApiError> {
+        if let Some((cal, copts)) = &self.calibration {
+            let pieces = in_memory(data, spans);
+            let (per, _) = crate::diagnose::calibrate::rms_error(m, cal, &as_runs(&pieces), copts);
+            let count = pieces.iter().map(Trajectory::len).sum();
+            return Ok(SquaredErrors::from_rms(&per, count).rms(locked));
+        }
+        let mut acc = SquaredErrors::new(m.dof());
+        for s in spans {
+            acc = acc + data[s.file].squared_errors(m, &self.identified.theta, s.range.clone())?;
+        }
+        Ok(acc.rms(locked))
+    }
+}
+
+/// Identifies `m` from the `train` spans of `data` under `opts`: the model's own problem
+/// (normal equations summed over the spans, streamed files included), or with effect `terms`
+/// the calibration of [`crate::diagnose::calibrate`] (in memory); the `locked` joints' rows
+/// left out.
+pub fn fit(
+    m: &Model,
+    data: &[Data],
+    train: &[Span],
+    opts: &Options,
+    terms: Vec<Variant>,
+    locked: &[usize],
+) -> Result<Fit, ApiError> {
+    if terms.is_empty() {
+        let mut ne = NormalEquations::new(m.dof(), m.layout().len)
+            .excluding(locked)
+            .finish();
+        for s in train {
+            ne = ne.merged(&data[s.file].normal_equations(m, s.range.clone(), locked)?);
+        }
+        let identified = ident::identify(m, &ne, &m.parameters(), opts)?;
+        return Ok(Fit {
+            identified,
+            normal_equations: ne,
+            terms: vec![],
+            calibration: None,
+        });
+    }
+    let pieces = in_memory(data, train);
+    let cutoff = train
+        .iter()
+        .find_map(|s| data[s.file].report())
+        .map_or(crate::prepare::default_cutoff(1e3), |r| r.cutoff);
+    let copts = CalOptions {
+        ident: opts.clone(),
+        terms,
+        processing_cutoff: cutoff,
+        excluded: locked.to_vec(),
+    };
+    let cal = crate::diagnose::calibrate::calibrate(m, &as_runs(&pieces), &copts)?;
+    Ok(Fit {
+        identified: cal.identified.clone(),
+        normal_equations: cal.rigid.clone(),
+        terms: cal.terms.clone(),
+        calibration: Some((cal, copts)),
+    })
+}
+
+/// Whole trajectories as the calibration's runs.
+fn as_runs(pieces: &[Trajectory]) -> Vec<Run<'_>> {
+    pieces
+        .iter()
+        .map(|t| Run {
+            trajectory: t,
+            range: 0..t.len(),
+        })
+        .collect()
 }

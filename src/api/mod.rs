@@ -4,8 +4,10 @@
 //!
 //! This floor is being filled command by command (issue 28); `identify`'s contracts, its
 //! default constraint set, its ground-truth errors and the reading of a diagnosis report for
-//! `--effects-from` live here so far.
+//! `--effects-from` live here so far, with the data it reads (`api::data`: files in memory or streamed, spans of
+//! them) and the fit itself (`api::identify::fit`).
 
+pub mod data;
 pub mod identify;
 
 use std::path::PathBuf;
@@ -16,6 +18,9 @@ pub enum ApiError {
     /// A file could not be read.
     #[error(transparent)]
     Io(#[from] crate::io::IoError),
+    /// The identification failed (a non-finite problem, the solver).
+    #[error(transparent)]
+    Ident(#[from] crate::ident::IdentError),
     /// A file's content is not what the option needs.
     #[error("{}: {message}", path.display())]
     Invalid {

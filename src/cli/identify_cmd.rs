@@ -2,16 +2,15 @@
 
 use super::RobotArgs;
 use anyhow::{anyhow, bail, Context};
+use physid::api::data::{locked_joints, Data, Span};
 use physid::api::identify::{
-    confirmed_effects, constraint_set, theta_names, truth_errors, DataJson, Friction, IdentifyJson,
-    RunRange, Split, TruthError,
+    confirmed_effects, constraint_set, theta_names, truth_errors, DataJson, Fit, Friction,
+    IdentifyJson, RunRange, Split, TruthError,
 };
-use physid::diagnose::calibrate::{parse_term, Calibration, Options as CalOptions, Run};
+use physid::diagnose::calibrate::parse_term;
 use physid::diagnose::library::Variant;
 use physid::ident::{self, analysis, ConstraintSet, NormalEquations, Options};
-use physid::io::samples;
 use physid::model::Model;
-use physid::trajectory::Trajectory;
 use serde_json::json;
 use std::ops::Range;
 use std::path::{Path, PathBuf};
@@ -104,6 +103,28 @@ impl ReadArgs {
     }
 }
 
+/// `--topic` and `--stamp` given for no bag at all are an error (they cannot mean what the
+/// user meant); given with some bags, a warning for each other file.
+fn check_bag_options(paths: &[&Path], read: &ReadArgs) -> anyhow::Result<()> {
+    let is_bag = |p: &Path| p.is_dir() || p.extension().and_then(|e| e.to_str()) == Some("mcap");
+    if !read.bag_only() {
+        return Ok(());
+    }
+    if let Some(first) = paths.first().filter(|_| !paths.iter().any(|p| is_bag(p))) {
+        bail!(
+            "{}: --topic and --stamp apply to MCAP files and rosbag2 directories only, and no data file given is one",
+            first.display()
+        );
+    }
+    for path in paths.iter().filter(|p| !is_bag(p)) {
+        eprintln!(
+            "warning: {}: --topic and --stamp apply to MCAP files and rosbag2 directories only",
+            path.display()
+        );
+    }
+    Ok(())
+}
+
 /// Loads data files read together (see [`physid::io::load_all`]: one cutoff for all),
 /// printing what the pipeline did to each and warnings.
 pub fn load_data(
@@ -111,27 +132,30 @@ pub fn load_data(
     model: &Model,
     read: &ReadArgs,
 ) -> anyhow::Result<Vec<physid::io::LoadedData>> {
-    let is_bag = |p: &Path| p.is_dir() || p.extension().and_then(|e| e.to_str()) == Some("mcap");
-    if read.bag_only() {
-        // Given for no bag at all, the option cannot mean what the user meant.
-        if let Some(first) = paths.first().filter(|_| !paths.iter().any(|p| is_bag(p))) {
-            bail!(
-                "{}: --topic and --stamp apply to MCAP files and rosbag2 directories only, and no data file given is one",
-                first.display()
-            );
-        }
-        for path in paths.iter().filter(|p| !is_bag(p)) {
-            eprintln!(
-                "warning: {}: --topic and --stamp apply to MCAP files and rosbag2 directories only",
-                path.display()
-            );
-        }
-    }
+    check_bag_options(paths, read)?;
     let loaded = physid::io::load_all(paths, model, &read.options(model)?)?;
     for (path, l) in paths.iter().zip(&loaded) {
         print_notes(path, l);
     }
     Ok(loaded)
+}
+
+/// Opens data files read together, large CSV files streamed unless `in_memory`
+/// ([`Data::open_all`]), printing what the pipeline did to each file read in memory.
+fn open_data(
+    paths: &[&Path],
+    model: &Model,
+    read: &ReadArgs,
+    in_memory: bool,
+) -> anyhow::Result<Vec<Data>> {
+    check_bag_options(paths, read)?;
+    let data = Data::open_all(paths, model, &read.options(model)?, in_memory)?;
+    for (path, d) in paths.iter().zip(&data) {
+        if let Data::Memory(loaded) = d {
+            print_notes(path, loaded);
+        }
+    }
+    Ok(data)
 }
 
 /// What the pipeline did to one file, on standard error.
@@ -241,203 +265,6 @@ pub fn data_notes(r: &physid::prepare::Report) -> Vec<String> {
         out.push(format!("joint '{j}' never moves: its friction cannot be identified from these data (lock it with --lock {j}, or record a motion that moves it)"));
     }
     out
-}
-
-/// CSV files above this size with `ddq` columns are streamed (memory independent of length)
-/// when no effect terms are asked for; smaller files are read once into memory.
-const STREAM_ABOVE_BYTES: u64 = 64 << 20;
-
-/// One file of identification data: its runs in memory, or a large CSV with q̇ and q̈ streamed
-/// from disk.
-pub enum Data {
-    /// Loaded and prepared samples.
-    Memory(Box<physid::io::LoadedData>),
-    /// A streamable CSV, the robot's joint names and its sample count.
-    Csv(PathBuf, Vec<String>, usize),
-}
-
-impl Data {
-    /// Opens `paths` (read together): large CSV files with `dq` and `ddq` columns stream
-    /// (unless `in_memory`), the others are loaded and prepared with one cutoff.
-    pub fn open_all(
-        paths: &[&Path],
-        model: &Model,
-        read: &ReadArgs,
-        in_memory: bool,
-    ) -> anyhow::Result<Vec<Data>> {
-        let mut streamed = vec![];
-        for path in paths {
-            let large = std::fs::metadata(path).is_ok_and(|m| m.len() > STREAM_ABOVE_BYTES);
-            streamed.push(
-                !in_memory
-                    && large
-                    && read.lock.is_empty()
-                    && read.only.is_empty()
-                    && path.extension().and_then(|e| e.to_str()) == Some("csv")
-                    && samples::csv_streamable(path)?,
-            );
-        }
-        let loaded_paths: Vec<&Path> = paths
-            .iter()
-            .zip(&streamed)
-            .filter(|(_, s)| !**s)
-            .map(|(p, _)| *p)
-            .collect();
-        let mut loaded = load_data(&loaded_paths, model, read)?.into_iter();
-        let names: Vec<String> = model.bodies.iter().map(|b| b.joint_name.clone()).collect();
-        paths
-            .iter()
-            .zip(streamed)
-            .map(|(path, s)| {
-                Ok(if s {
-                    let len = samples::stream_csv(path, &names, 0..0, &mut |_, _| {})?;
-                    Data::Csv(path.to_path_buf(), names.clone(), len)
-                } else {
-                    Data::Memory(Box::new(
-                        loaded
-                            .next()
-                            .expect("one loaded file per path not streamed"),
-                    ))
-                })
-            })
-            .collect()
-    }
-    /// Samples in the file as read.
-    fn len(&self) -> usize {
-        match self {
-            Data::Memory(d) => d.report.samples_read,
-            Data::Csv(_, _, n) => *n,
-        }
-    }
-    /// The pipeline's report (none for a streamed file).
-    fn report(&self) -> Option<&physid::prepare::Report> {
-        match self {
-            Data::Memory(d) => Some(&d.report),
-            Data::Csv(..) => None,
-        }
-    }
-    /// Joints locked by the pipeline (their rows are not fitted).
-    fn locked(&self, m: &Model) -> Vec<usize> {
-        let names = self.report().map_or(&[][..], |r| &r.locked[..]);
-        m.bodies
-            .iter()
-            .enumerate()
-            .filter(|(_, b)| names.contains(&b.joint_name))
-            .map(|(j, _)| j)
-            .collect()
-    }
-    /// The runs' samples whose index in the file lies in `r` (in memory).
-    fn pieces(&self, r: &Range<usize>) -> Vec<Trajectory> {
-        match self {
-            Data::Memory(d) => d
-                .runs
-                .iter()
-                .filter_map(|run| run.within(r))
-                .map(|run| run.trajectory)
-                .collect(),
-            Data::Csv(..) => vec![],
-        }
-    }
-    /// Samples of `r` that the fit and the scores use.
-    fn used(&self, r: &Range<usize>) -> usize {
-        match self {
-            Data::Memory(_) => self.pieces(r).iter().map(Trajectory::len).sum(),
-            Data::Csv(..) => r.len(),
-        }
-    }
-    fn normal_equations(
-        &self,
-        m: &Model,
-        r: Range<usize>,
-        excluded: &[usize],
-    ) -> anyhow::Result<NormalEquations> {
-        Ok(match self {
-            Data::Memory(_) => {
-                let mut ne = NormalEquations::new(m.dof(), m.layout().len)
-                    .excluding(excluded)
-                    .finish();
-                for t in self.pieces(&r) {
-                    ne = ne.merged(&NormalEquations::from_trajectory_excluding(
-                        m,
-                        &t,
-                        0..t.len(),
-                        excluded,
-                    ));
-                }
-                ne
-            }
-            Data::Csv(p, names, _) => {
-                NormalEquations::from_stream(m, |sink| samples::stream_csv(p, names, r, sink))?.0
-            }
-        })
-    }
-    fn squared_errors(
-        &self,
-        m: &Model,
-        theta: &nalgebra::DVector<f64>,
-        r: Range<usize>,
-    ) -> anyhow::Result<SquaredErrors> {
-        Ok(match self {
-            Data::Memory(_) => {
-                let mut acc = SquaredErrors::new(m.dof());
-                for t in self.pieces(&r) {
-                    let (per, _) = analysis::rms_error(m, theta, &t, 0..t.len());
-                    acc = acc.add(SquaredErrors::from_rms(&per, t.len()));
-                }
-                acc
-            }
-            Data::Csv(p, names, _) => {
-                let (per, _) = analysis::rms_error_stream(m, theta, |sink| {
-                    samples::stream_csv(p, names, r.clone(), sink)
-                })?;
-                SquaredErrors::from_rms(&per, r.len())
-            }
-        })
-    }
-}
-
-/// Sums of squared torque errors per joint over several runs.
-#[derive(Clone, Debug)]
-struct SquaredErrors {
-    sum: Vec<f64>,
-    samples: usize,
-}
-
-impl SquaredErrors {
-    /// Nothing summed yet, for `n` joints.
-    fn new(n: usize) -> Self {
-        Self {
-            sum: vec![0.0; n],
-            samples: 0,
-        }
-    }
-    fn from_rms(rms: &[f64], samples: usize) -> Self {
-        Self {
-            sum: rms.iter().map(|r| r * r * samples as f64).collect(),
-            samples,
-        }
-    }
-    fn add(mut self, other: SquaredErrors) -> Self {
-        for (a, b) in self.sum.iter_mut().zip(&other.sum) {
-            *a += b;
-        }
-        self.samples += other.samples;
-        self
-    }
-    /// Per-joint RMS (N m; `None` for the `locked` joints, whose torque is not fitted) and the
-    /// RMS over the other joints.
-    fn rms(&self, locked: &[usize]) -> (Vec<Option<f64>>, f64) {
-        let k = self.samples.max(1) as f64;
-        let per = (0..self.sum.len())
-            .map(|j| (!locked.contains(&j)).then(|| (self.sum[j] / k).sqrt()))
-            .collect();
-        let fitted: Vec<f64> = (0..self.sum.len())
-            .filter(|j| !locked.contains(j))
-            .map(|j| self.sum[j])
-            .collect();
-        let all = (fitted.iter().sum::<f64>() / (k * fitted.len().max(1) as f64)).sqrt();
-        (per, all)
-    }
 }
 
 /// Identify inertial and friction parameters under a constraint set.
@@ -564,18 +391,35 @@ pub fn run(a: Args) -> anyhow::Result<()> {
         )
         .collect();
     physid::io::check_distinct_recordings(&roles)?;
-    let mut data = Data::open_all(&paths, m, &a.read, in_memory)?;
-    let vdata = data.split_off(a.data.len());
-    let train: Vec<Range<usize>> = match a.train.as_deref() {
-        Some(s) => vec![parse_range(s, data[0].len(), "--train")?],
-        None => data.iter().map(|d| 0..d.len()).collect(),
+    // Training files first, then the validation files: one data set, parts of it as spans.
+    let data = open_data(&paths, m, &a.read, in_memory)?;
+    let n_train = a.data.len();
+    let train: Vec<Span> = match a.train.as_deref() {
+        Some(s) => vec![Span {
+            file: 0,
+            range: parse_range(s, data[0].len(), "--train")?,
+        }],
+        None => (0..n_train)
+            .map(|file| Span {
+                file,
+                range: 0..data[file].len(),
+            })
+            .collect(),
     };
-    let validation: Vec<(&Data, Range<usize>)> = match a.validate.as_deref() {
-        Some(s) => vec![(&data[0], parse_range(s, data[0].len(), "--validate")?)],
-        None => vdata.iter().map(|d| (d, 0..d.len())).collect(),
+    let validation: Vec<Span> = match a.validate.as_deref() {
+        Some(s) => vec![Span {
+            file: 0,
+            range: parse_range(s, data[0].len(), "--validate")?,
+        }],
+        None => (n_train..data.len())
+            .map(|file| Span {
+                file,
+                range: 0..data[file].len(),
+            })
+            .collect(),
     };
-    let locked = locked_joints(m, data.iter().chain(&vdata));
-    let samples: usize = data.iter().zip(&train).map(|(d, r)| d.used(r)).sum();
+    let locked = locked_joints(m, &data);
+    let samples: usize = train.iter().map(|s| data[s.file].used(&s.range)).sum();
     let p = m.layout().len + physid::diagnose::calibrate::columns(&terms, m.dof());
     let equations = samples * (m.dof() - locked.len());
     if equations < p && !a.allow_few_samples {
@@ -584,26 +428,16 @@ pub fn run(a: Args) -> anyhow::Result<()> {
             a.data[0].display(),
         );
     }
-    let runs: Vec<(&Data, Range<usize>)> = data.iter().zip(train.iter().cloned()).collect();
     let start = std::time::Instant::now();
-    let fit = if terms.is_empty() {
-        fit_plain(m, &runs, &opts, &locked)?
-    } else {
-        fit_with_terms(m, &runs, &opts, terms, &locked)?
-    };
+    let fit = physid::api::identify::fit(m, &data, &train, &opts, terms, &locked)?;
     let total = start.elapsed().as_secs_f64();
-    let files = Files {
-        train: &data,
-        validate: &vdata,
-    };
     let report = score(
         &a,
         m,
         fit,
         (set, set_note),
-        &runs,
-        &validation,
-        files,
+        &data,
+        (&train, &validation),
         &locked,
         total,
     )?;
@@ -646,12 +480,7 @@ fn check_paths(a: &Args) -> anyhow::Result<()> {
 }
 
 /// The data files read: training and held-out.
-struct Files<'d> {
-    train: &'d [Data],
-    validate: &'d [Data],
-}
-
-/// The fit scored on the training and validation samples, with its identifiability and what
+/// The fit scored on the training and validation spans, with its identifiability and what
 /// the data pipeline did.
 #[allow(clippy::too_many_arguments)]
 fn score(
@@ -659,33 +488,36 @@ fn score(
     m: &Model,
     fit: Fit,
     (set, set_note): (ConstraintSet, Option<String>),
-    runs: &[(&Data, Range<usize>)],
-    validation: &[(&Data, Range<usize>)],
-    files: Files,
+    data: &[Data],
+    (train, validation): (&[Span], &[Span]),
     locked: &[usize],
     total: f64,
 ) -> anyhow::Result<Report> {
-    let (train_rms, train_all) = fit.errors(m, runs, locked)?;
+    let (train_rms, train_all) = fit.errors(m, data, train, locked)?;
     let val = if validation.is_empty() {
         None
     } else {
-        Some(fit.errors(m, validation, locked)?)
+        Some(fit.errors(m, data, validation, locked)?)
     };
-    let idf = analysis::identifiability(m, &fit.ne, &fit.model_theta(m));
-    let train: Vec<Range<usize>> = runs.iter().map(|(_, r)| r.clone()).collect();
+    let idf = analysis::identifiability(m, &fit.normal_equations, &fit.model_theta(m));
+    let ranges =
+        |spans: &[Span]| -> Vec<Range<usize>> { spans.iter().map(|s| s.range.clone()).collect() };
+    let used = |spans: &[Span]| -> Vec<usize> {
+        spans.iter().map(|s| data[s.file].used(&s.range)).collect()
+    };
     let vrange = validation
         .first()
-        .map(|(_, r)| r)
+        .map(|s| &s.range)
         .filter(|_| a.data.len() == 1);
-    warn_weak_data(&train[0], vrange, a.validate.is_some(), &idf);
-    let dt = files.train[0].report().map_or(1e-3, |r| r.period);
+    warn_weak_data(&train[0].range, vrange, a.validate.is_some(), &idf);
+    let dt = data[0].report().map_or(1e-3, |r| r.period);
     let snippet = (!fit.terms.is_empty())
         .then(|| physid::diagnose::calibrate::scenario_snippet(m, &fit.terms, dt));
-    let data = a
+    let pipelines = a
         .data
         .iter()
-        .zip(files.train)
-        .chain(a.validate_data.iter().zip(files.validate))
+        .chain(&a.validate_data)
+        .zip(data)
         .filter_map(|(f, d)| {
             d.report().map(|r| DataJson {
                 file: f.clone(),
@@ -696,24 +528,21 @@ fn score(
     Ok(Report {
         idf,
         truth_errors: (a.data.len() == 1)
-            .then(|| truth_errors(&a.data[0], m, &fit.r.theta))
+            .then(|| truth_errors(&a.data[0], m, &fit.identified.theta))
             .flatten(),
-        r: fit.r.clone(),
+        r: fit.identified.clone(),
         terms: fit.terms.clone(),
         snippet,
         set,
         set_note,
-        train,
+        train: ranges(train),
         train_rms,
         train_all,
-        vranges: validation.iter().map(|(_, r)| r.clone()).collect(),
+        vranges: ranges(validation),
         val,
         total,
-        used: (
-            runs.iter().map(|(d, r)| d.used(r)).collect(),
-            validation.iter().map(|(d, r)| d.used(r)).collect(),
-        ),
-        data,
+        used: (used(train), used(validation)),
+        data: pipelines,
         locked: locked
             .iter()
             .map(|&j| m.bodies[j].joint_name.clone())
@@ -764,120 +593,9 @@ fn write_outputs(a: &Args, m: &Model, rep: &Report) -> anyhow::Result<()> {
     }
     if let Some(p) = &a.export_problem {
         let opts = options(a, rep.set)?;
-        export_problem(p, a, rep.set, m, &rep.fit.ne, &opts, &rep.r)?;
+        export_problem(p, a, rep.set, m, &rep.fit.normal_equations, &opts, &rep.r)?;
     }
     Ok(())
-}
-
-/// An identification and what scores it.
-struct Fit {
-    r: ident::Identified,
-    /// The model's own normal equations over the training runs.
-    ne: NormalEquations,
-    terms: Vec<physid::diagnose::calibrate::TermFit>,
-    /// The calibration (with its options), when there are effect terms.
-    calibration: Option<(Calibration, CalOptions)>,
-}
-
-impl Fit {
-    /// θ of the model's layout (without effect coefficients).
-    fn model_theta(&self, m: &Model) -> nalgebra::DVector<f64> {
-        self.r.theta.rows(0, m.layout().len).into_owned()
-    }
-    /// Per-joint (`None` for locked joints) and overall RMS over runs (N m), every sample the
-    /// pipeline kept scored.
-    fn errors(
-        &self,
-        m: &Model,
-        runs: &[(&Data, Range<usize>)],
-        locked: &[usize],
-    ) -> anyhow::Result<(Vec<Option<f64>>, f64)> {
-        if let Some((cal, copts)) = &self.calibration {
-            let pieces = in_memory(runs);
-            let (per, _) = physid::diagnose::calibrate::rms_error(m, cal, &as_runs(&pieces), copts);
-            let count = pieces.iter().map(Trajectory::len).sum();
-            return Ok(SquaredErrors::from_rms(&per, count).rms(locked));
-        }
-        let mut acc = SquaredErrors::new(m.dof());
-        for (d, r) in runs {
-            acc = acc.add(d.squared_errors(m, &self.r.theta, r.clone())?);
-        }
-        Ok(acc.rms(locked))
-    }
-}
-
-/// The joints any data file locks (union, in joint order).
-fn locked_joints<'a>(m: &Model, data: impl Iterator<Item = &'a Data>) -> Vec<usize> {
-    let mut out: Vec<usize> = data.flat_map(|d| d.locked(m)).collect();
-    out.sort_unstable();
-    out.dedup();
-    out
-}
-
-/// The runs' samples in memory (each file's runs within its range).
-fn in_memory(runs: &[(&Data, Range<usize>)]) -> Vec<Trajectory> {
-    runs.iter().flat_map(|(d, r)| d.pieces(r)).collect()
-}
-
-/// Whole trajectories as the calibration's runs.
-fn as_runs(pieces: &[Trajectory]) -> Vec<Run<'_>> {
-    pieces
-        .iter()
-        .map(|t| Run {
-            trajectory: t,
-            range: 0..t.len(),
-        })
-        .collect()
-}
-
-/// The model's own identification, the normal equations summed over the runs.
-fn fit_plain(
-    m: &Model,
-    runs: &[(&Data, Range<usize>)],
-    opts: &Options,
-    locked: &[usize],
-) -> anyhow::Result<Fit> {
-    let mut ne = NormalEquations::new(m.dof(), m.layout().len)
-        .excluding(locked)
-        .finish();
-    for (d, r) in runs {
-        ne = ne.merged(&d.normal_equations(m, r.clone(), locked)?);
-    }
-    let r = ident::identify(m, &ne, &m.parameters(), opts)?;
-    Ok(Fit {
-        r,
-        ne,
-        terms: vec![],
-        calibration: None,
-    })
-}
-
-/// Identification with effect terms ([`physid::diagnose::calibrate`]).
-fn fit_with_terms(
-    m: &Model,
-    runs: &[(&Data, Range<usize>)],
-    opts: &Options,
-    terms: Vec<Variant>,
-    locked: &[usize],
-) -> anyhow::Result<Fit> {
-    let pieces = in_memory(runs);
-    let cutoff = runs
-        .iter()
-        .find_map(|(d, _)| d.report())
-        .map_or(physid::prepare::default_cutoff(1e3), |r| r.cutoff);
-    let copts = CalOptions {
-        ident: opts.clone(),
-        terms,
-        processing_cutoff: cutoff,
-        excluded: locked.to_vec(),
-    };
-    let cal = physid::diagnose::calibrate::calibrate(m, &as_runs(&pieces), &copts)?;
-    Ok(Fit {
-        r: cal.identified.clone(),
-        ne: cal.rigid.clone(),
-        terms: cal.terms.clone(),
-        calibration: Some((cal, copts)),
-    })
 }
 
 /// Warnings where the data cannot support the answer: validation samples that are also

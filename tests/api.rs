@@ -1,0 +1,67 @@
+//! The library's entry points (`physid::api`) on their own, without the binary: a large CSV
+//! streamed from disk identifies the same model as the same file read into memory, and the
+//! ground truth of a physid log scores the fit.
+
+mod common;
+
+use common::root;
+use physid::api::data::{locked_joints, Data, Span};
+use physid::api::identify::{self, fit};
+use physid::ident::{ConstraintSet, Options};
+
+#[test]
+fn a_streamed_csv_fits_as_the_same_file_in_memory() {
+    let (mut sc, model, _) =
+        physid::sim::scenario::load(&root().join("scenarios/cheetah3_shell.toml")).unwrap();
+    sc.simulation.duration = 2.0;
+    let rec = physid::sim::run(&model, &sc, &mut |_| {}).unwrap();
+    let dir = tempfile::tempdir().unwrap();
+    let csv = dir.path().join("leg.csv");
+    physid::io::samples::write_csv(&csv, &rec.processed).unwrap();
+    let opts = physid::io::DataOptions::default();
+    let memory = Data::open_all(&[csv.as_path()], &model, &opts, true).unwrap();
+    assert!(matches!(memory[0], Data::Memory(_)));
+    let joints: Vec<String> = model.bodies.iter().map(|b| b.joint_name.clone()).collect();
+    let streamed = vec![Data::Csv {
+        path: csv.clone(),
+        joints,
+        samples: memory[0].len(),
+    }];
+    let n = memory[0].len();
+    assert_eq!(n, rec.processed.len());
+    let train = [Span {
+        file: 0,
+        range: 0..n * 3 / 4,
+    }];
+    let validation = [Span {
+        file: 0,
+        range: n * 3 / 4..n,
+    }];
+    let set = identify::constraint_set(None, &model);
+    assert_eq!(set.0, ConstraintSet::Ellipsoid, "{:?}", set.1);
+    let opts = Options::new(ConstraintSet::Consistent);
+    let locked = locked_joints(&model, &memory);
+    assert!(locked.is_empty());
+    let a = fit(&model, &memory, &train, &opts, vec![], &locked).unwrap();
+    let b = fit(&model, &streamed, &train, &opts, vec![], &locked).unwrap();
+    let scale = a.identified.theta.amax();
+    let diff = (&a.identified.theta - &b.identified.theta).amax();
+    assert!(
+        diff <= 1e-8 * scale,
+        "θ differs by {diff:e} (scale {scale:e})"
+    );
+    assert!(a.identified.constraints_hold);
+    let (per_a, all_a) = a.errors(&model, &memory, &validation, &locked).unwrap();
+    let (per_b, all_b) = b.errors(&model, &streamed, &validation, &locked).unwrap();
+    assert!((all_a - all_b).abs() <= 1e-9 * all_a, "{all_a} vs {all_b}");
+    assert_eq!(per_a.len(), 3);
+    assert!(per_b
+        .iter()
+        .all(|r| r.is_some_and(|r| r > 0.0 && r.is_finite())));
+    // The validation error sits at the simulated torque noise, not far above it.
+    let noise = sc.sensors.torque_noise;
+    assert!(
+        all_a < 3.0 * noise && all_a > 0.3 * noise,
+        "{all_a} vs noise {noise}"
+    );
+}
