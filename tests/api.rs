@@ -65,3 +65,63 @@ fn a_streamed_csv_fits_as_the_same_file_in_memory() {
         "{all_a} vs noise {noise}"
     );
 }
+
+#[test]
+fn a_simulation_through_the_library_reports_and_logs_what_it_ran() {
+    use physid::api::simulate::{simulate, SimulateOptions};
+    let opts = SimulateOptions {
+        duration: Some(1.0),
+        seed: Some(7),
+        ..Default::default()
+    };
+    let path = root().join("scenarios/cheetah3_shell.toml");
+    let mut calls = 0;
+    let run = simulate(&path, &opts, &mut |_| calls += 1).unwrap();
+    assert!(calls > 0);
+    assert_eq!(run.scenario.simulation.seed, 7);
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("leg.mcap");
+    run.write_mcap(&out).unwrap();
+    let report = run.report(&out);
+    let rate = run.scenario.simulation.rate;
+    assert_eq!(report.samples, (rate * 1.0).round() as usize);
+    assert_eq!(report.engine, "physid");
+    // physid's own inverse dynamics explains its own integration to round-off.
+    let worst = report
+        .physid_inverse_dynamics_residual
+        .max
+        .iter()
+        .cloned()
+        .fold(0.0, f64::max);
+    assert!(worst < 1e-6, "{worst}");
+    // The log carries the ground truth the identification scores against.
+    let truth = identify::ground_truth(&out, &run.model).unwrap();
+    assert_eq!(truth, run.model.parameters());
+    // A bad override is an error naming the scenario, not a panic.
+    let bad = SimulateOptions {
+        duration: Some(-1.0),
+        ..Default::default()
+    };
+    let err = simulate(&path, &bad, &mut |_| {})
+        .err()
+        .unwrap()
+        .to_string();
+    assert!(err.contains("cheetah3_shell.toml"), "{err}");
+}
+
+#[test]
+fn a_robot_described_through_the_library_lists_bodies_then_rotors() {
+    let model = physid::io::load_robot("cheetah3").unwrap();
+    let v = physid::api::model::describe(&model);
+    assert_eq!(v.dof, 3);
+    assert_eq!(v.rotors, 3);
+    assert_eq!(v.bodies.len(), 6);
+    assert_eq!(v.parameters, model.layout().len);
+    let total: f64 = v.bodies.iter().map(|b| b.mass).sum();
+    assert!((total - v.total_mass).abs() < 1e-12 * total);
+    // The gravity torque at q0 is the inverse dynamics at rest there.
+    let mut d = physid::dynamics::Data::new(&model);
+    let zero = vec![0.0; 3];
+    let g = physid::dynamics::rnea(&model, &mut d, &v.q0, &zero, &zero).clone();
+    assert_eq!(g.as_slice(), &v.gravity_torque_q0[..]);
+}

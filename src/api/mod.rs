@@ -4,11 +4,14 @@
 //!
 //! This floor is being filled command by command (issue 28); `identify`'s contracts, its
 //! default constraint set, its ground-truth errors and the reading of a diagnosis report for
-//! `--effects-from` live here so far, with the data it reads (`api::data`: files in memory or streamed, spans of
+//! `--effects-from` live here so far (and `api::simulate`: the run, its report and logs; `api::model`: a robot described; `api::provenance`: an experiment's provenance), with the data it reads (`api::data`: files in memory or streamed, spans of
 //! them) and the fit itself (`api::identify::fit`).
 
 pub mod data;
 pub mod identify;
+pub mod model;
+pub mod provenance;
+pub mod simulate;
 
 use std::path::PathBuf;
 
@@ -21,6 +24,15 @@ pub enum ApiError {
     /// The identification failed (a non-finite problem, the solver).
     #[error(transparent)]
     Ident(#[from] crate::ident::IdentError),
+    /// A simulation failed (a scenario value, the integration).
+    #[error("simulating {}", path.display())]
+    Simulation {
+        /// The scenario file.
+        path: PathBuf,
+        /// What failed.
+        #[source]
+        source: crate::sim::simulate::SimError,
+    },
     /// A file's content is not what the option needs.
     #[error("{}: {message}", path.display())]
     Invalid {

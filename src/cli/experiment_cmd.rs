@@ -1,6 +1,7 @@
 //! `physid experiment`: the sample-size experiment, written to `results/NAME/`.
 
 use anyhow::Context;
+use physid::api::provenance::Provenance;
 use physid::experiment::{self, plots, tables};
 use std::fmt::Write;
 use std::path::{Path, PathBuf};
@@ -101,7 +102,7 @@ fn write_run(
     let md = summary_markdown(path, spec, &summary, &sets, wall, threads)?;
     physid::io::write_atomic(&out.join("summary.md"), md.as_bytes())?;
     write_plots(&summary, &sets, out)?;
-    write_provenance(path, text, spec, out, threads, wall)?;
+    Provenance::new(path, text, spec, threads, wall).write(out)?;
     Ok((long, summary))
 }
 
@@ -110,7 +111,7 @@ fn provenance_metadata(path: &Path, spec: &experiment::ExperimentSpec) -> Vec<(S
     vec![(
         "physid.provenance".to_string(),
         serde_json::json!({
-            "scenario_file": path, "git_revision": git_revision(),
+            "scenario_file": path, "git_revision": physid::api::provenance::git_revision(),
             "seeds": (spec.first_seed..spec.first_seed + spec.seeds as u64).collect::<Vec<_>>(),
         })
         .to_string(),
@@ -201,7 +202,7 @@ fn run_motions(
         &out.join("excitations.json"),
         serde_json::to_string_pretty(&physid::io::versioned("excitations", &json))?.as_bytes(),
     )?;
-    write_provenance(path, text, spec, out, threads, wall)?;
+    Provenance::new(path, text, spec, threads, wall).write(out)?;
     staging.commit()?;
     println!(
         "{} motions × {} seeds in {wall:.1} s on {threads} threads; wrote {}/",
@@ -390,96 +391,4 @@ fn write_plots(
         &out.join("parameter_error.svg"),
     )?;
     Ok(())
-}
-
-/// The git revision of the working directory, or `unknown`.
-fn git_revision() -> String {
-    std::process::Command::new("git")
-        .args(["rev-parse", "HEAD"])
-        .output()
-        .ok()
-        .filter(|o| o.status.success())
-        .map(|o| String::from_utf8_lossy(&o.stdout).trim().to_string())
-        .unwrap_or_else(|| "unknown".into())
-}
-
-/// `provenance.json` of an experiment (schema `physid.provenance/1`, docs/schemas/).
-#[derive(serde::Serialize, schemars::JsonSchema)]
-pub struct Provenance {
-    /// The scenario file as given.
-    scenario_file: std::path::PathBuf,
-    /// Its text.
-    scenario: String,
-    /// The experiment settings used.
-    experiment: experiment::ExperimentSpec,
-    /// The seeds run.
-    seeds: Vec<u64>,
-    /// `git rev-parse HEAD` of the working directory, or `unknown`.
-    git_revision: String,
-    /// Versions of the numerical dependencies (from Cargo.lock) and the OpenBLAS linked.
-    dependencies: serde_json::Map<String, serde_json::Value>,
-    /// Worker threads.
-    threads: usize,
-    /// Wall time of the experiment (s).
-    wall_seconds: f64,
-}
-
-/// `provenance.json`: the scenario, seeds, git revision, versions, threads and wall time.
-fn write_provenance(
-    path: &Path,
-    text: &str,
-    spec: &experiment::ExperimentSpec,
-    out: &Path,
-    threads: usize,
-    wall: f64,
-) -> anyhow::Result<()> {
-    let git = git_revision();
-    let prov = Provenance {
-        scenario_file: path.to_path_buf(),
-        scenario: text.to_string(),
-        experiment: spec.clone(),
-        seeds: (spec.first_seed..spec.first_seed + spec.seeds as u64).collect(),
-        git_revision: git,
-        dependencies: dependency_versions(),
-        threads,
-        wall_seconds: wall,
-    };
-    physid::io::write_atomic(
-        &out.join("provenance.json"),
-        serde_json::to_string_pretty(&physid::io::versioned("provenance", &prov))?.as_bytes(),
-    )?;
-    Ok(())
-}
-
-/// Versions of the numerical dependencies, read from the Cargo.lock the binary was built with.
-fn dependency_versions() -> serde_json::Map<String, serde_json::Value> {
-    const LOCK: &str = include_str!("../../Cargo.lock");
-    let wanted = [
-        "nalgebra",
-        "clarabel",
-        "rapier3d-f64",
-        "polars",
-        "rayon",
-        "mcap",
-    ];
-    let mut out = serde_json::Map::new();
-    let mut name = "";
-    for line in LOCK.lines() {
-        if let Some(n) = line.strip_prefix("name = \"") {
-            name = n.trim_end_matches('"');
-        } else if let Some(v) = line.strip_prefix("version = \"") {
-            if wanted.contains(&name) {
-                out.insert(
-                    name.to_string(),
-                    serde_json::Value::String(v.trim_end_matches('"').to_string()),
-                );
-            }
-        }
-    }
-    // The BLAS/LAPACK is the system's, linked by build.rs: record which library file.
-    out.insert(
-        "openblas".to_string(),
-        serde_json::Value::String(env!("PHYSID_OPENBLAS").to_string()),
-    );
-    out
 }

@@ -1,78 +1,9 @@
 //! `physid model`: a robot's bodies, rotors, mass properties and consistency margins.
 
 use super::RobotArgs;
-use physid::dynamics::{crba, rnea, Data};
+use physid::dynamics::{crba, Data};
 use physid::model::Model;
 use physid::spatial::{ConsistencyReport, Ellipsoid, InertialParams};
-
-/// An ellipsoid: centre (m), semi-axes (m, ascending), `Q_s` (m²).
-#[derive(serde::Serialize, schemars::JsonSchema)]
-pub struct EllipsoidJson {
-    center: Vec<f64>,
-    semi_axes: Vec<f64>,
-    qs: Vec<Vec<f64>>,
-}
-
-/// One body or rotor: its ten parameters (paper order, own frame), mass (kg), CoM (m),
-/// principal moments about the CoM (kg m²), consistency margins, bounding ellipsoid.
-#[derive(serde::Serialize, schemars::JsonSchema)]
-pub struct BodyJson {
-    ellipsoid: Option<EllipsoidJson>,
-    name: String,
-    pi: Vec<f64>,
-    mass: f64,
-    com: Option<Vec<f64>>,
-    principal_moments: Option<Vec<f64>>,
-    consistency: ConsistencyReport,
-}
-
-/// One joint: friction and limits `[lower, upper, velocity, effort]`.
-#[derive(serde::Serialize, schemars::JsonSchema)]
-pub struct JointJson {
-    name: String,
-    friction: physid::model::JointFriction,
-    limits: [f64; 4],
-}
-
-/// `model --json` (schema `physid.model/1`, docs/schemas/).
-#[derive(serde::Serialize, schemars::JsonSchema)]
-pub struct ModelJson {
-    name: String,
-    dof: usize,
-    rotors: usize,
-    rotor_model: physid::model::RotorModel,
-    /// kg.
-    total_mass: f64,
-    parameters: usize,
-    bodies: Vec<BodyJson>,
-    joints: Vec<JointJson>,
-    /// The reference configuration (rad): zero clamped into the limits.
-    q0: Vec<f64>,
-    /// Gravity torque at `q0` (N m).
-    gravity_torque_q0: Vec<f64>,
-}
-
-fn ellipsoid_json(e: &Ellipsoid) -> EllipsoidJson {
-    EllipsoidJson {
-        center: e.center.as_slice().to_vec(),
-        semi_axes: e.semi_axes().as_slice().to_vec(),
-        qs: (0..3)
-            .map(|i| (0..3).map(|j| e.qs[(i, j)]).collect())
-            .collect(),
-    }
-}
-
-fn body_json(name: &str, p: &InertialParams, e: Option<&Ellipsoid>) -> BodyJson {
-    BodyJson {
-        ellipsoid: e.map(ellipsoid_json),
-        name: name.to_string(),
-        pi: p.0.as_slice().to_vec(),
-        mass: p.mass(),
-        com: p.com().map(|c| c.as_slice().to_vec()),
-        principal_moments: p.principal_moments().map(|(v, _)| v.as_slice().to_vec()),
-        consistency: p.consistency(e),
-    }
-}
 
 /// Describe a robot: bodies, rotors, mass properties, consistency margins, and its dynamics at
 /// a reference configuration.
@@ -92,54 +23,16 @@ pub fn run(a: Args) -> anyhow::Result<()> {
 
 /// Prints the model summary.
 pub fn describe(m: &Model, as_json: bool) -> anyhow::Result<()> {
-    let mut bodies = vec![];
-    for b in &m.bodies {
-        bodies.push(body_json(&b.name, &b.inertia, b.bounding.as_ref()));
-        if let Some(r) = &b.rotor {
-            bodies.push(body_json(&r.name, &r.inertia, r.bounding.as_ref()));
-        }
-    }
-    let q0: Vec<f64> = m
-        .bodies
-        .iter()
-        .map(|b| 0.0f64.clamp(b.limits.lower, b.limits.upper))
-        .collect();
-    let mut d = Data::new(m);
-    let zero = vec![0.0; m.dof()];
-    let g = rnea(m, &mut d, &q0, &zero, &zero).clone();
-    let h = crba(m, &mut d, &q0).clone();
+    let v = physid::api::model::describe(m);
     if as_json {
-        let v = ModelJson {
-            name: m.name.clone(),
-            dof: m.dof(),
-            rotors: m.rotor_count(),
-            rotor_model: m.rotor_model,
-            total_mass: m.total_mass(),
-            parameters: m.layout().len,
-            bodies,
-            joints: m
-                .bodies
-                .iter()
-                .map(|b| JointJson {
-                    name: b.joint_name.clone(),
-                    friction: b.friction,
-                    limits: [
-                        b.limits.lower,
-                        b.limits.upper,
-                        b.limits.velocity,
-                        b.limits.effort,
-                    ],
-                })
-                .collect(),
-            q0: q0.clone(),
-            gravity_torque_q0: g.as_slice().to_vec(),
-        };
         println!(
             "{}",
             serde_json::to_string_pretty(&physid::io::versioned("model", &v))?
         );
         return Ok(());
     }
+    let (q0, g) = (&v.q0, &v.gravity_torque_q0);
+    let h = crba(m, &mut Data::new(m), q0).clone();
     println!(
         "{}: {} joints, {} rotors ({:?} model), {:.4} kg, {} parameters",
         m.name,
@@ -182,10 +75,7 @@ pub fn describe(m: &Model, as_json: bool) -> anyhow::Result<()> {
             format!("[{}, {}]", b.limits.lower, b.limits.upper)
         );
     }
-    println!(
-        "\nat q = {q0:?}: gravity torque g(q) = {:.4?} N m",
-        g.as_slice()
-    );
+    println!("\nat q = {q0:?}: gravity torque g(q) = {:.4?} N m", g);
     println!("mass matrix H(q) [kg m^2]:{h:.5}");
     Ok(())
 }

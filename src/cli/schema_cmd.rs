@@ -54,9 +54,9 @@ pub fn schema(output: &str) -> anyhow::Result<Value> {
         "diagnose" => schemars::schema_for!(physid::diagnose::Diagnosis),
         "blind_scores" => schemars::schema_for!(physid::experiment::blind::Scores),
         "blind_real_scores" => schemars::schema_for!(physid::experiment::semireal::RealScores),
-        "provenance" => schemars::schema_for!(super::experiment_cmd::Provenance),
-        "simulate" => schemars::schema_for!(super::simulate_cmd::SimulateJson),
-        "model" => schemars::schema_for!(super::model_cmd::ModelJson),
+        "provenance" => schemars::schema_for!(physid::api::provenance::Provenance),
+        "simulate" => schemars::schema_for!(physid::api::simulate::SimulateJson),
+        "model" => schemars::schema_for!(physid::api::model::ModelJson),
         "excite" => schemars::schema_for!(super::excite_cmd::ExciteJson),
         other => anyhow::bail!("no schema for '{other}'"),
     };

@@ -1,32 +1,8 @@
 //! `physid simulate`.
 
-use anyhow::Context;
-use physid::io::{mcap_log, samples};
+use physid::api::simulate::{simulate, SimulateOptions};
 use physid::sim::scenario::Engine;
 use std::path::PathBuf;
-
-/// `simulate --json` (schema `physid.simulate/1`, docs/schemas/).
-#[derive(serde::Serialize, schemars::JsonSchema)]
-pub struct SimulateJson {
-    scenario: std::path::PathBuf,
-    out: std::path::PathBuf,
-    engine: String,
-    samples: usize,
-    /// s.
-    simulated_seconds: f64,
-    /// s.
-    wall_seconds: f64,
-    real_time_factor: f64,
-    excitation: physid::sim::report::Excitation,
-    physid_inverse_dynamics_residual: Residual,
-}
-
-/// How well physid's inverse dynamics explains the recording, per joint (N m).
-#[derive(serde::Serialize, schemars::JsonSchema)]
-pub struct Residual {
-    rms: Vec<f64>,
-    max: Vec<f64>,
-}
 
 /// Simulate a scenario's excitation experiment and log it to MCAP (and CSV).
 #[derive(clap::Args, Debug)]
@@ -74,16 +50,6 @@ pub fn run(a: Args) -> anyhow::Result<()> {
         .chain(robot_files.iter().map(|p| p.as_path()))
         .collect();
     physid::io::check_outputs(&outputs, &inputs)?;
-    let (mut sc, model, text) = physid::sim::scenario::load(path)?;
-    if let Some(e) = engine {
-        sc.simulation.engine = e;
-    }
-    if let Some(d) = duration {
-        sc.simulation.duration = d;
-    }
-    if let Some(s) = seed {
-        sc.simulation.seed = s;
-    }
     let bar = indicatif::ProgressBar::new(1000);
     bar.set_style(
         indicatif::ProgressStyle::with_template(
@@ -92,55 +58,37 @@ pub fn run(a: Args) -> anyhow::Result<()> {
         .expect("valid template")
         .progress_chars("=> "),
     );
-    let start = std::time::Instant::now();
-    let rec = physid::sim::run(&model, &sc, &mut |f| bar.set_position((f * 1000.0) as u64))
-        .with_context(|| format!("simulating {}", path.display()))?;
-    let wall = start.elapsed().as_secs_f64();
+    let opts = SimulateOptions {
+        engine,
+        duration,
+        seed,
+    };
+    let run = simulate(path, &opts, &mut |f| bar.set_position((f * 1000.0) as u64));
     bar.finish_and_clear();
-    let theta = model.parameters();
-    let names = model.parameter_names();
-    let engine_name = format!("{:?}", sc.simulation.engine).to_lowercase();
-    mcap_log::write(
-        out,
-        &rec,
-        &mcap_log::LogMeta {
-            scenario_toml: &text,
-            engine: &engine_name,
-            parameters: (&names, theta.as_slice()),
-        },
-    )?;
+    let run = run?;
+    run.write_mcap(out)?;
     if let Some(c) = csv {
-        samples::write_csv(c, &rec.processed)?;
+        run.write_csv(c)?;
     }
-    let ex = physid::sim::report::excitation(&model, &rec.truth, 10);
-    let (cons_rms, cons_max) = physid::sim::report::engine_consistency(&model, &rec);
-    let sim_s = sc.simulation.duration;
+    let report = run.report(out);
     if json {
-        let v = SimulateJson {
-            scenario: path.to_path_buf(),
-            out: out.to_path_buf(),
-            engine: engine_name.to_string(),
-            samples: rec.truth.len(),
-            simulated_seconds: sim_s,
-            wall_seconds: wall,
-            real_time_factor: sim_s / wall,
-            excitation: ex,
-            physid_inverse_dynamics_residual: Residual {
-                rms: cons_rms,
-                max: cons_max,
-            },
-        };
         println!(
             "{}",
-            serde_json::to_string_pretty(&physid::io::versioned("simulate", &v))?
+            serde_json::to_string_pretty(&physid::io::versioned("simulate", &report))?
         );
         return Ok(());
     }
+    let (rec, ex, wall) = (&run.recording, &report.excitation, report.wall_seconds);
+    let (sim_s, engine_name) = (report.simulated_seconds, &report.engine);
+    let (cons_rms, cons_max) = (
+        &report.physid_inverse_dynamics_residual.rms,
+        &report.physid_inverse_dynamics_residual.max,
+    );
     println!(
         "{}: {} samples ({sim_s} s at {} Hz, engine {engine_name}) in {wall:.2} s wall = {:.0}x real time",
         path.display(),
         rec.truth.len(),
-        sc.simulation.rate,
+        run.scenario.simulation.rate,
         sim_s / wall
     );
     println!(
@@ -162,8 +110,8 @@ pub fn run(a: Args) -> anyhow::Result<()> {
     );
     println!(
         "physid inverse dynamics on this trajectory: residual RMS {} N m, max {} N m",
-        fmt_e(&cons_rms),
-        fmt_e(&cons_max)
+        fmt_e(cons_rms),
+        fmt_e(cons_max)
     );
     println!(
         "wrote {}{}",
