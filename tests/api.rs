@@ -125,3 +125,42 @@ fn a_robot_described_through_the_library_lists_bodies_then_rotors() {
     let g = physid::dynamics::rnea(&model, &mut d, &v.q0, &zero, &zero).clone();
     assert_eq!(g.as_slice(), &v.gravity_torque_q0[..]);
 }
+
+#[test]
+fn a_diagnosis_through_the_library_checks_its_inputs_first() {
+    use physid::api::diagnose::{diagnose, Runs};
+    let (mut sc, model, _) =
+        physid::sim::scenario::load(&root().join("scenarios/cheetah3_shell.toml")).unwrap();
+    sc.simulation.duration = 1.0;
+    let run = physid::sim::run(&model, &sc, &mut |_| {})
+        .unwrap()
+        .processed;
+    let opts = physid::diagnose::Options::default();
+    // Baseline runs without the uncertainty the change is judged within.
+    let runs = Runs {
+        train: vec![run.clone()],
+        validate: vec![],
+        baseline: vec![run.clone()],
+    };
+    let err = diagnose(&model, runs, 0.3, &opts)
+        .err()
+        .unwrap()
+        .to_string();
+    assert!(err.contains("--description-uncertainty"), "{err}");
+    // A holdout that leaves nothing to train or to validate on.
+    let runs = Runs {
+        train: vec![run],
+        ..Default::default()
+    };
+    let err = diagnose(&model, runs, 1.5, &opts)
+        .err()
+        .unwrap()
+        .to_string();
+    assert!(err.contains("1.5"), "{err}");
+    // No runs at all.
+    let err = diagnose(&model, Runs::default(), 0.3, &opts)
+        .err()
+        .unwrap()
+        .to_string();
+    assert!(err.contains("no training data"), "{err}");
+}

@@ -4,10 +4,11 @@
 //!
 //! This floor is being filled command by command (issue 28); `identify`'s contracts, its
 //! default constraint set, its ground-truth errors and the reading of a diagnosis report for
-//! `--effects-from` live here so far (and `api::simulate`: the run, its report and logs; `api::model`: a robot described; `api::provenance`: an experiment's provenance), with the data it reads (`api::data`: files in memory or streamed, spans of
+//! `--effects-from` live here so far (and `api::simulate`: the run, its report and logs; `api::model`: a robot described; `api::provenance`: an experiment's provenance; `api::diagnose`: a diagnosis, or what changed against baseline runs), with the data it reads (`api::data`: files in memory or streamed, spans of
 //! them) and the fit itself (`api::identify::fit`).
 
 pub mod data;
+pub mod diagnose;
 pub mod identify;
 pub mod model;
 pub mod provenance;
@@ -24,6 +25,16 @@ pub enum ApiError {
     /// The identification failed (a non-finite problem, the solver).
     #[error(transparent)]
     Ident(#[from] crate::ident::IdentError),
+    /// The diagnosis failed or its options are invalid.
+    #[error(transparent)]
+    Diagnose(#[from] crate::diagnose::DiagnoseError),
+    /// The baseline runs could not be diagnosed and calibrated.
+    #[error("diagnosing and calibrating the baseline (--baseline-data)")]
+    Baseline {
+        /// What failed.
+        #[source]
+        source: crate::diagnose::DiagnoseError,
+    },
     /// A simulation failed (a scenario value, the integration).
     #[error("simulating {}", path.display())]
     Simulation {

@@ -100,20 +100,20 @@ pub fn run(a: Args) -> anyhow::Result<()> {
     };
     let train_runs = runs(&train);
     warn_short(&train_runs);
-    let d = if baseline.is_empty() {
-        diagnose::diagnose_runs(&model, train_runs, runs(&validate), a.holdout, &opts)?
-    } else {
-        let before =
-            diagnose::baseline::Baseline::calibrate(&model, runs(&baseline), a.holdout, &opts)
-                .context("diagnosing and calibrating the baseline (--baseline-data)")?;
-        let standing: Vec<&str> = before.standing.iter().map(|v| v.kind.name()).collect();
+    let runs = physid::api::diagnose::Runs {
+        train: train_runs,
+        validate: runs(&validate),
+        baseline: runs(&baseline),
+    };
+    let baseline_runs = runs.baseline.len();
+    let outcome = physid::api::diagnose::diagnose(&model, runs, a.holdout, &opts)?;
+    if let Some(standing) = &outcome.standing {
         eprintln!(
-            "baseline: the description calibrated on {} run(s); standing effects taken out of the data: {}",
-            runs(&baseline).len(),
+            "baseline: the description calibrated on {baseline_runs} run(s); standing effects taken out of the data: {}",
             if standing.is_empty() { "none".to_string() } else { standing.join(", ") }
         );
-        before.diagnose_change(&model, train_runs, runs(&validate), a.holdout, &opts)?
-    };
+    }
+    let d = outcome.diagnosis;
     if let Some(dir) = &a.report {
         diagnose::report::write(dir, &d)
             .with_context(|| format!("writing the report to {}", dir.display()))?;
