@@ -164,3 +164,25 @@ fn a_diagnosis_through_the_library_checks_its_inputs_first() {
         .to_string();
     assert!(err.contains("no training data"), "{err}");
 }
+
+#[test]
+fn a_design_is_checked_in_simulation_through_the_library() {
+    use physid::api::excite::check_in_simulation;
+    let path = root().join("scenarios/excitation/base.toml");
+    let (_, model, text) = physid::sim::scenario::load(&path).unwrap();
+    let text = text.replace("duration = ", "duration = 3.0 #");
+    let opts = physid::sim::design::DesignOptions::default();
+    let check = check_in_simulation(&model, &text, &opts, 10.0).unwrap();
+    assert_eq!(check.joints.len(), model.dof());
+    for (u, b) in check.joints.iter().zip(&model.bodies) {
+        assert_eq!(u.joint, b.joint_name);
+        assert!(u.q_range[0] <= u.q_range[1] && u.velocity.is_finite() && u.torque >= 0.0);
+    }
+    assert_eq!(check.within, check.joints.iter().all(|u| u.within));
+    // A text that is not a scenario is named as the designed scenario, not a panic.
+    let err = check_in_simulation(&model, "[robot", &opts, 10.0)
+        .err()
+        .unwrap()
+        .to_string();
+    assert!(err.starts_with("the designed scenario"), "{err}");
+}

@@ -4,11 +4,12 @@
 //!
 //! This floor is being filled command by command (issue 28); `identify`'s contracts, its
 //! default constraint set, its ground-truth errors and the reading of a diagnosis report for
-//! `--effects-from` live here so far (and `api::simulate`: the run, its report and logs; `api::model`: a robot described; `api::provenance`: an experiment's provenance; `api::diagnose`: a diagnosis, or what changed against baseline runs), with the data it reads (`api::data`: files in memory or streamed, spans of
+//! `--effects-from` live here so far (and `api::simulate`: the run, its report and logs; `api::model`: a robot described; `api::provenance`: an experiment's provenance; `api::diagnose`: a diagnosis, or what changed against baseline runs; `api::excite`: a design's contract and its check in simulation), with the data it reads (`api::data`: files in memory or streamed, spans of
 //! them) and the fit itself (`api::identify::fit`).
 
 pub mod data;
 pub mod diagnose;
+pub mod excite;
 pub mod identify;
 pub mod model;
 pub mod provenance;
@@ -34,6 +35,16 @@ pub enum ApiError {
         /// What failed.
         #[source]
         source: crate::diagnose::DiagnoseError,
+    },
+    /// A designed scenario is not valid.
+    #[error("the designed scenario: {0}")]
+    Designed(String),
+    /// The designed excitation could not be simulated.
+    #[error("simulating the designed excitation")]
+    DesignedSimulation {
+        /// What failed.
+        #[source]
+        source: crate::sim::simulate::SimError,
     },
     /// A simulation failed (a scenario value, the integration).
     #[error("simulating {}", path.display())]

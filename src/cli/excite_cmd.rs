@@ -3,6 +3,7 @@
 
 use anyhow::Context;
 use clap::ValueEnum;
+use physid::api::excite::{check_in_simulation, ExciteJson, SimulatedUse};
 use physid::model::Model;
 use physid::sim::design::{self, Design, DesignOptions, Objective};
 use physid::sim::scenario::ExcitationSpec;
@@ -98,40 +99,6 @@ enum ObjectiveArg {
     Condition,
 }
 
-/// The limits as the simulated robot used them (peak over the run / the robot's own limit,
-/// no margin).
-#[derive(serde::Serialize, schemars::JsonSchema)]
-pub struct SimulatedUse {
-    /// Joint name.
-    joint: String,
-    /// Lowest and highest angle reached (rad).
-    q_range: [f64; 2],
-    /// The robot's position limits (rad; null: none).
-    q_limits: [f64; 2],
-    /// Peak speed over the speed limit.
-    velocity: f64,
-    /// Peak acceleration in the motion's band (rad/s²; the true acceleration low-passed at 5×
-    /// the highest harmonic).
-    acceleration: f64,
-    /// Peak torque over the effort limit.
-    torque: f64,
-    /// Every peak inside its limit.
-    within: bool,
-}
-
-/// `excite --json` (schema `physid.excite/1`, docs/schemas/).
-#[derive(serde::Serialize, schemars::JsonSchema)]
-pub struct ExciteJson {
-    /// The design.
-    design: Design,
-    /// The scenario written, if any.
-    out: Option<PathBuf>,
-    /// The check in simulation (null with --no-check).
-    simulated: Option<Vec<SimulatedUse>>,
-    /// Every simulated peak inside the robot's limits and the acceleration limit.
-    within_limits: Option<bool>,
-}
-
 /// `physid excite`.
 pub fn run(a: Args) -> anyhow::Result<()> {
     if !(a.duration.is_finite() && a.duration > 0.0) {
@@ -201,8 +168,8 @@ pub fn run(a: Args) -> anyhow::Result<()> {
         (None, None)
     } else {
         let band = 5.0 * a.harmonics as f64 * a.base_frequency;
-        let (s, ok) = check_in_simulation(&base, &text, &opts, band)?;
-        (Some(s), Some(ok))
+        let check = check_in_simulation(&base.model, &text, &opts, band)?;
+        (Some(check.joints), Some(check.within))
     };
     // A design that leaves a limit in simulation is not written.
     if within != Some(false) {
@@ -431,69 +398,6 @@ impl Base {
 /// Computed-torque gains for a robot without a base excitation (1/s², 1/s).
 fn default_gains(n: usize) -> (Vec<f64>, Vec<f64>, bool) {
     (vec![400.0; n], vec![40.0; n], true)
-}
-
-/// Simulates the scenario `text` (its robot is `base.model`) and compares each joint's peaks
-/// with the robot's limits (position, speed, torque: the true motion) and the acceleration
-/// limit (the true acceleration low-passed at `band` Hz, zero phase, without the first and
-/// last second: the tracking controller's reaction to encoder quantization adds broadband
-/// jitter of a few rad/s² that is not part of the motion, and its start-up a transient).
-fn check_in_simulation(
-    base: &Base,
-    text: &str,
-    opts: &DesignOptions,
-    band: f64,
-) -> anyhow::Result<(Vec<SimulatedUse>, bool)> {
-    let sc: physid::sim::scenario::Scenario = toml::from_str(text)?;
-    sc.validate(base.model.dof())?;
-    let rec = physid::sim::run(&base.model, &sc, &mut |_| {})
-        .context("simulating the designed excitation")?;
-    let tr = &rec.truth;
-    let rate = sc.simulation.rate;
-    let sos = physid::signal::butterworth_lowpass(2, band.min(0.4 * rate), rate)?;
-    // The tracking controller's start-up and the filter's ends: the first and last second.
-    let settle = (rate as usize).min(tr.len() / 4);
-    let mut ok = true;
-    let uses = base
-        .model
-        .bodies
-        .iter()
-        .enumerate()
-        .map(|(j, b)| {
-            let col = |f: &dyn Fn(usize) -> f64| (0..tr.len()).map(f).collect::<Vec<f64>>();
-            let q = col(&|k| tr.q_at(k)[j]);
-            let qd = col(&|k| tr.qd_at(k)[j].abs());
-            let qdd: Vec<f64> = sos
-                .filtfilt(&col(&|k| tr.qdd_at(k).map_or(0.0, |a| a[j])))
-                .iter()
-                .skip(settle)
-                .take(tr.len().saturating_sub(2 * settle))
-                .map(|x| x.abs())
-                .collect();
-            let tau = col(&|k| tr.tau_at(k)[j].abs());
-            let max = |v: &[f64]| v.iter().copied().fold(f64::NEG_INFINITY, f64::max);
-            let min = |v: &[f64]| v.iter().copied().fold(f64::INFINITY, f64::min);
-            let l = &b.limits;
-            let ratio = |p: f64, lim: f64| if lim.is_finite() { p / lim } else { 0.0 };
-            let mut u = SimulatedUse {
-                joint: b.joint_name.clone(),
-                q_range: [min(&q), max(&q)],
-                q_limits: [l.lower, l.upper],
-                velocity: ratio(max(&qd), l.velocity),
-                acceleration: max(&qdd),
-                torque: ratio(max(&tau), l.effort),
-                within: false,
-            };
-            u.within = u.q_range[0] >= l.lower
-                && u.q_range[1] <= l.upper
-                && u.velocity <= 1.0
-                && u.torque <= 1.0
-                && u.acceleration <= opts.acceleration_limit(j);
-            ok &= u.within;
-            u
-        })
-        .collect();
-    Ok((uses, ok))
 }
 
 fn print_design(d: &Design, simulated: Option<&[SimulatedUse]>, a: &Args) {

@@ -57,7 +57,7 @@ pub fn schema(output: &str) -> anyhow::Result<Value> {
         "provenance" => schemars::schema_for!(physid::api::provenance::Provenance),
         "simulate" => schemars::schema_for!(physid::api::simulate::SimulateJson),
         "model" => schemars::schema_for!(physid::api::model::ModelJson),
-        "excite" => schemars::schema_for!(super::excite_cmd::ExciteJson),
+        "excite" => schemars::schema_for!(physid::api::excite::ExciteJson),
         other => anyhow::bail!("no schema for '{other}'"),
     };
     let mut v = serde_json::to_value(s)?;
