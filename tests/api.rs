@@ -186,3 +186,66 @@ fn a_design_is_checked_in_simulation_through_the_library() {
         .to_string();
     assert!(err.starts_with("the designed scenario"), "{err}");
 }
+
+#[test]
+fn batch_dynamics_agree_with_each_other_and_refuse_bad_shapes() {
+    use physid::api::dynamics::{inverse_dynamics, mass_matrices, regressors};
+    use physid::api::ApiError;
+    let model = physid::io::load_robot(
+        &root()
+            .join("data/kuka_lwr4/kuka_lwr4.urdf")
+            .to_string_lossy(),
+    )
+    .unwrap();
+    let (n, p, count) = (model.dof(), model.layout().len, 50);
+    let wave = |k: usize, j: usize, s: f64| ((k * 7 + j * 3) as f64 * 0.13 * s).sin() * s;
+    let q: Vec<f64> = (0..count * n).map(|i| wave(i / n, i % n, 1.0)).collect();
+    let qd: Vec<f64> = (0..count * n).map(|i| wave(i / n, i % n, 1.7)).collect();
+    let qdd: Vec<f64> = (0..count * n).map(|i| wave(i / n, i % n, 2.3)).collect();
+    let tau = inverse_dynamics(&model, &q, &qd, &qdd).unwrap();
+    let y = regressors(&model, &q, &qd, &qdd).unwrap();
+    let h = mass_matrices(&model, &q).unwrap();
+    assert_eq!(
+        (tau.len(), y.len(), h.len()),
+        (count * n, count * n * p, count * n * n)
+    );
+    // Y θ = τ sample by sample (a second algorithm: the regressor against RNEA + friction).
+    let theta = model.parameters();
+    let mut worst: f64 = 0.0;
+    for k in 0..count {
+        for i in 0..n {
+            let row = &y[(k * n + i) * p..(k * n + i + 1) * p];
+            let y_theta: f64 = row.iter().zip(theta.iter()).map(|(a, b)| a * b).sum();
+            worst = worst.max((y_theta - tau[k * n + i]).abs());
+        }
+        // H symmetric and positive on the diagonal.
+        for i in 0..n {
+            assert!(h[k * n * n + i * n + i] > 0.0);
+            for j in 0..n {
+                let (a, b) = (h[k * n * n + i * n + j], h[k * n * n + j * n + i]);
+                assert!((a - b).abs() <= 1e-12 * a.abs().max(1.0));
+            }
+        }
+    }
+    assert!(worst < 1e-9, "Y θ − τ up to {worst:e} N m");
+    // The same numbers on one thread as on several.
+    let one = rayon::ThreadPoolBuilder::new()
+        .num_threads(1)
+        .build()
+        .unwrap();
+    assert_eq!(
+        one.install(|| inverse_dynamics(&model, &q, &qd, &qdd).unwrap()),
+        tau
+    );
+    // Shapes and values are checked, naming the array and the sample.
+    let err = |r: Result<Vec<f64>, ApiError>| r.err().unwrap().to_string();
+    let e = err(inverse_dynamics(&model, &q[..n * 3 + 1], &qd, &qdd));
+    assert!(e.contains("q has") && e.contains("whole number"), "{e}");
+    let e = err(inverse_dynamics(&model, &q, &qd[..n * 2], &qdd));
+    assert!(e.contains("qd has 2 samples, q has 50"), "{e}");
+    let mut bad = qdd.clone();
+    bad[n * 4 + 2] = f64::NAN;
+    let e = err(regressors(&model, &q, &qd, &bad));
+    assert!(e.contains("qdd: sample 4, joint 2 is NaN"), "{e}");
+    assert!(inverse_dynamics(&model, &[], &[], &[]).unwrap().is_empty());
+}

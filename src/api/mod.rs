@@ -4,11 +4,13 @@
 //!
 //! This floor is being filled command by command (issue 28); `identify`'s contracts, its
 //! default constraint set, its ground-truth errors and the reading of a diagnosis report for
-//! `--effects-from` live here so far (and `api::simulate`: the run, its report and logs; `api::model`: a robot described; `api::provenance`: an experiment's provenance; `api::diagnose`: a diagnosis, or what changed against baseline runs; `api::excite`: a design's contract and its check in simulation), with the data it reads (`api::data`: files in memory or streamed, spans of
+//! `--effects-from` live here so far (and `api::simulate`: the run, its report and logs; `api::model`: a robot described; `api::provenance`: an experiment's provenance; `api::diagnose`: a diagnosis, or what changed against baseline runs; `api::excite`: a design's contract and its check in simulation; `api::dynamics`: inverse
+//! dynamics, mass matrices and regressors over many samples, shapes checked), with the data it reads (`api::data`: files in memory or streamed, spans of
 //! them) and the fit itself (`api::identify::fit`).
 
 pub mod data;
 pub mod diagnose;
+pub mod dynamics;
 pub mod excite;
 pub mod identify;
 pub mod model;
@@ -26,6 +28,9 @@ pub enum ApiError {
     /// The identification failed (a non-finite problem, the solver).
     #[error(transparent)]
     Ident(#[from] crate::ident::IdentError),
+    /// An array given to a batch routine has the wrong shape or a non-finite value.
+    #[error(transparent)]
+    Shape(#[from] dynamics::ShapeError),
     /// The diagnosis failed or its options are invalid.
     #[error(transparent)]
     Diagnose(#[from] crate::diagnose::DiagnoseError),
