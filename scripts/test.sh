@@ -17,11 +17,11 @@ setup_browser
 setup_python
 "$PHYSID_VENV/bin/python" -c "import numpy, mujoco, pinocchio; print('numpy', numpy.__version__, 'mujoco', mujoco.__version__, 'pinocchio', pinocchio.__version__)"
 
-step "cargo fmt --check"
-cargo fmt --check
+step "cargo fmt --all --check"
+cargo fmt --all --check
 
-step "cargo clippy --all-targets -- -D warnings"
-cargo clippy --quiet --release --all-targets -- -D warnings
+step "cargo clippy --workspace --all-targets -- -D warnings"
+cargo clippy --quiet --release --workspace --all-targets -- -D warnings
 
 step "cargo test --release"
 cargo test --release 2>&1 | tee "$CARGO_TARGET_DIR/physid-test.log" | grep -E '^(test result|running|test .*FAILED|failures)' || true
@@ -36,7 +36,13 @@ export PHYSID_BIN="$CARGO_TARGET_DIR/release/physid"
 py_passed=0; py_failed=0
 main_out=$(mktemp -d)
 trap 'rm -rf "$main_out"' EXIT
-for s in check_pinocchio check_mujoco check_cvxpy check_rosbag check_panda check_schemas check_report_html check_main_outputs; do
+# The Python package (python/): the extension built in the shared target dir, put beside the
+# package's pure part in a temporary folder (what `pip install ./python` installs).
+cargo build --quiet --release -p physid-python
+export PHYSID_PYTHON="$main_out/python"
+mkdir -p "$PHYSID_PYTHON" && cp -r python/physid "$PHYSID_PYTHON/"
+cp "$CARGO_TARGET_DIR/release/lib_physid.so" "$PHYSID_PYTHON/physid/_physid.abi3.so"
+for s in check_pinocchio check_mujoco check_cvxpy check_rosbag check_panda check_schemas check_report_html check_python_package check_main_outputs; do
   if [ "$s" = check_main_outputs ]; then
     step "the README's main command (bash scripts/run.sh), outputs parsed"
     out=$( { bash scripts/run.sh --out "$main_out/sample_size" >"$main_out/run.log" 2>&1 ||
