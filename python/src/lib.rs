@@ -36,9 +36,11 @@ fn samples(name: &str, a: &PyReadonlyArrayDyn<'_, f64>, n: usize) -> PyResult<(V
     let count = match shape[..] {
         [m] if m == n => 1,
         [s, m] if m == n => s,
-        _ => return Err(value_error(format!(
+        _ => {
+            return Err(value_error(format!(
             "{name} has shape {shape:?}: give (samples, {n}) or ({n},) for the robot's {n} joints"
-        ))),
+        )))
+        }
     };
     Ok((view.iter().copied().collect(), count))
 }
