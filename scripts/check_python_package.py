@@ -10,7 +10,8 @@ Checked:
   predicts held-out torques of that robot (relative RMS below 1e-9 by least squares, 1e-5
   under the consistent set's LMI margin), and equals `physid identify`
   on the same samples written as CSV (theta to 1e-9);
-- bad arrays raise ValueError naming the array, sample and joint.
+- bad arrays raise ValueError naming the array, sample and joint;
+- python/examples/identify_from_arrays.py runs.
 
 usage: python scripts/check_python_package.py [--package DIR]   (DIR holds physid/ with the
 extension built: see scripts/test.sh; default: $PHYSID_PYTHON)
@@ -143,6 +144,14 @@ try:
     check("a missing robot file raises", False)
 except ValueError as e:
     check("a missing robot file raises ValueError naming it", "/nonexistent/arm.urdf" in str(e), f"({e})")
+
+# The example a user copies runs as shipped.
+example = os.path.join(os.path.dirname(KUKA_URDF), "..", "..", "python", "examples", "identify_from_arrays.py")
+res = subprocess.run([sys.executable, example], capture_output=True, text=True,
+                     cwd=os.path.join(os.path.dirname(KUKA_URDF), "..", ".."),
+                     env={**os.environ, "PYTHONPATH": package})
+check("python/examples/identify_from_arrays.py runs", res.returncode == 0 and "constraints hold: True" in res.stdout,
+      res.stderr[-300:])
 
 print(f"{passed} passed, {failed} failed")
 sys.exit(1 if failed else 0)
