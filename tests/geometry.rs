@@ -106,7 +106,7 @@ fn margin_missing_meshes_fixed_links_and_sidecar() {
     // The mesh found through --package-dir gives l2 its bound.
     let pkg = dir.path().join("pkgs/gone/meshes");
     std::fs::create_dir_all(&pkg).unwrap();
-    std::fs::write(pkg.join("l2.stl"), tetra_stl()).unwrap();
+    std::fs::write(pkg.join("l2.stl"), common::tetrahedron_stl(4)).unwrap();
     let opts = RobotOptions {
         package_dirs: vec![dir.path().join("pkgs")],
         ..Default::default()
@@ -201,27 +201,4 @@ fn kuka_ellipsoids_from_geometry_give_plausible_masses_and_a_better_held_out_fit
         rms(&default),
         rms(&consistent)
     );
-}
-
-/// A binary STL of one tetrahedron with vertices 0, 0.1 x, 0.1 y, 0.1 z.
-fn tetra_stl() -> Vec<u8> {
-    let v = [
-        [0.0f32, 0.0, 0.0],
-        [0.1, 0.0, 0.0],
-        [0.0, 0.1, 0.0],
-        [0.0, 0.0, 0.1],
-    ];
-    let faces = [[0, 2, 1], [0, 1, 3], [0, 3, 2], [1, 2, 3]];
-    let mut b = vec![0u8; 80];
-    b.extend((faces.len() as u32).to_le_bytes());
-    for f in faces {
-        b.extend([0u8; 12]);
-        for i in f {
-            for x in v[i] {
-                b.extend(x.to_le_bytes());
-            }
-        }
-        b.extend([0u8; 2]);
-    }
-    b
 }

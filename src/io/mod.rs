@@ -86,19 +86,22 @@ pub fn read_to_string(path: &Path) -> Result<String, IoError> {
     })
 }
 
+/// `p` as an absolute path: canonical when it exists, else its canonical parent directory and
+/// file name (an output not yet written); none when neither resolves.
+fn absolute(p: &Path) -> Option<PathBuf> {
+    if let Ok(c) = p.canonicalize() {
+        return Some(c);
+    }
+    let parent = match p.parent() {
+        Some(d) if !d.as_os_str().is_empty() => d.canonicalize().ok()?,
+        _ => std::env::current_dir().ok()?,
+    };
+    Some(parent.join(p.file_name()?))
+}
+
 /// Whether `a` and `b` name the same file: by canonical path when both exist, else by their
 /// absolute form (canonical parent directory and file name).
 pub fn same_file(a: &Path, b: &Path) -> bool {
-    let absolute = |p: &Path| -> Option<PathBuf> {
-        if let Ok(c) = p.canonicalize() {
-            return Some(c);
-        }
-        let parent = match p.parent() {
-            Some(d) if !d.as_os_str().is_empty() => d.canonicalize().ok()?,
-            _ => std::env::current_dir().ok()?,
-        };
-        Some(parent.join(p.file_name()?))
-    };
     match (absolute(a), absolute(b)) {
         (Some(x), Some(y)) => x == y,
         _ => false,
@@ -176,16 +179,6 @@ pub fn check_outputs(outputs: &[&Path], inputs: &[&Path]) -> Result<(), IoError>
 /// them (a result folder is written into, and an experiment's is replaced whole: given the
 /// folder of the scenario, it would take the scenario with it).
 pub fn check_result_dir(dir: &Path, inputs: &[PathBuf]) -> Result<(), IoError> {
-    let absolute = |p: &Path| -> Option<PathBuf> {
-        if let Ok(c) = p.canonicalize() {
-            return Some(c);
-        }
-        let parent = match p.parent() {
-            Some(d) if !d.as_os_str().is_empty() => d.canonicalize().ok()?,
-            _ => std::env::current_dir().ok()?,
-        };
-        Some(parent.join(p.file_name()?))
-    };
     let Some(dir_abs) = absolute(dir) else {
         return Ok(());
     };
