@@ -45,6 +45,30 @@ fn samples(name: &str, a: &PyReadonlyArrayDyn<'_, f64>, n: usize) -> PyResult<(V
     Ok((view.iter().copied().collect(), count))
 }
 
+/// Positions, velocities and accelerations as flat sample-major vectors, and q's samples (the
+/// library checks that the others have as many).
+struct States {
+    q: Vec<f64>,
+    qd: Vec<f64>,
+    qdd: Vec<f64>,
+    samples: usize,
+}
+
+fn states(
+    q: &PyReadonlyArrayDyn<'_, f64>,
+    qd: &PyReadonlyArrayDyn<'_, f64>,
+    qdd: &PyReadonlyArrayDyn<'_, f64>,
+    n: usize,
+) -> PyResult<States> {
+    let (q, count) = samples("q", q, n)?;
+    Ok(States {
+        q,
+        qd: samples("qd", qd, n)?.0,
+        qdd: samples("qdd", qdd, n)?.0,
+        samples: count,
+    })
+}
+
 /// A robot: the built-in leg (`"cheetah3"`), a URDF file, or a robot TOML file.
 #[pyclass(frozen, module = "physid")]
 struct Robot {
@@ -101,11 +125,12 @@ impl Robot {
         qdd: PyReadonlyArrayDyn<'py, f64>,
     ) -> PyResult<Bound<'py, PyArray2<f64>>> {
         let n = self.model.dof();
-        let ((q, s), (qd, _), (qdd, _)) = (
-            samples("q", &q, n)?,
-            samples("qd", &qd, n)?,
-            samples("qdd", &qdd, n)?,
-        );
+        let States {
+            q,
+            qd,
+            qdd,
+            samples: s,
+        } = states(&q, &qd, &qdd, n)?;
         let tau = py
             .allow_threads(|| api::dynamics::inverse_dynamics(&self.model, &q, &qd, &qdd))
             .map_err(value_error)?;
@@ -135,11 +160,12 @@ impl Robot {
         qdd: PyReadonlyArrayDyn<'py, f64>,
     ) -> PyResult<Bound<'py, PyArray3<f64>>> {
         let (n, p) = (self.model.dof(), self.model.layout().len);
-        let ((q, s), (qd, _), (qdd, _)) = (
-            samples("q", &q, n)?,
-            samples("qd", &qd, n)?,
-            samples("qdd", &qdd, n)?,
-        );
+        let States {
+            q,
+            qd,
+            qdd,
+            samples: s,
+        } = states(&q, &qd, &qdd, n)?;
         let y = py
             .allow_threads(|| api::dynamics::regressors(&self.model, &q, &qd, &qdd))
             .map_err(value_error)?;
@@ -190,11 +216,16 @@ fn identify_arrays<'py>(
     let mut opts = Options::new(set);
     opts.prior_weight = prior_weight;
     opts.validate().map_err(value_error)?;
-    let (q, s) = samples("q", &q, n)?;
+    let States {
+        q,
+        qd,
+        qdd,
+        samples: s,
+    } = states(&q, &qd, &qdd, n)?;
     let mut tr = Trajectory::new(robot.joint_names(), true);
     tr.q = q;
-    tr.qd = samples("qd", &qd, n)?.0;
-    tr.qdd = Some(samples("qdd", &qdd, n)?.0);
+    tr.qd = qd;
+    tr.qdd = Some(qdd);
     tr.tau = samples("tau", &tau, n)?.0;
     for (name, v) in [("qd", &tr.qd), ("tau", &tr.tau)] {
         if v.len() != s * n {
