@@ -113,11 +113,7 @@ pub fn run(a: Args) -> anyhow::Result<()> {
     };
     opts.validate().map_err(super::option_error)?;
     if let Some(dir) = &a.out {
-        let inputs: Vec<PathBuf> = physid::io::robot_files(&a.scenario.to_string_lossy(), &[])
-            .into_iter()
-            .chain([a.scenario.clone()])
-            .collect();
-        physid::io::check_result_dir(dir, &inputs)?;
+        physid::io::check_result_dir(dir, &physid::io::scenario_files(&a.scenario))?;
     }
     let (base, model, _) = physid::sim::scenario::load(&a.scenario)?;
     let diagnose_opts = opts.diagnose_options();

@@ -37,10 +37,9 @@ pub fn run(a: Args) -> anyhow::Result<()> {
     spec.validate()
         .map_err(|e| anyhow::anyhow!("{}: {e}", path.display()))?;
     let base = path.parent().unwrap_or(std::path::Path::new("."));
-    let inputs: Vec<std::path::PathBuf> = physid::io::robot_files(&path.to_string_lossy(), &[])
+    let inputs: Vec<std::path::PathBuf> = physid::io::scenario_files(path)
         .into_iter()
         .chain(spec.excitations.iter().map(|e| base.join(&e.scenario)))
-        .chain([path.to_path_buf()])
         .collect();
     physid::io::check_result_dir(&a.out, &inputs)?;
     let pool = super::thread_pool(threads)?;

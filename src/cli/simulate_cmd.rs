@@ -45,10 +45,8 @@ pub fn run(a: Args) -> anyhow::Result<()> {
     let (duration, seed) = (a.duration, a.seed);
     let outputs: Vec<&std::path::Path> = std::iter::once(out.as_path()).chain(csv).collect();
     // The scenario and every file its robot reads (URDF, sidecar, meshes) are inputs.
-    let robot_files = physid::io::robot_files(&path.to_string_lossy(), &[]);
-    let inputs: Vec<&std::path::Path> = std::iter::once(path.as_path())
-        .chain(robot_files.iter().map(|p| p.as_path()))
-        .collect();
+    let files = physid::io::scenario_files(path);
+    let inputs: Vec<&std::path::Path> = files.iter().map(|p| p.as_path()).collect();
     physid::io::check_outputs(&outputs, &inputs)?;
     let bar = indicatif::ProgressBar::new(1000);
     bar.set_style(

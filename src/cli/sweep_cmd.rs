@@ -47,9 +47,9 @@ pub fn run(a: Args) -> anyhow::Result<()> {
         .map_err(|e| anyhow::anyhow!("{}: {e}", path.display()))?;
     let out =
         out.unwrap_or_else(|| PathBuf::from("results").join(path.file_stem().unwrap_or_default()));
-    let inputs: Vec<PathBuf> = physid::io::robot_files(&scenario_path.to_string_lossy(), &[])
+    let inputs: Vec<PathBuf> = physid::io::scenario_files(&scenario_path)
         .into_iter()
-        .chain([path.to_path_buf(), scenario_path.clone()])
+        .chain([path.to_path_buf()])
         .collect();
     physid::io::check_result_dir(&out, &inputs)?;
     // Every grid point is resolved (and checked) before anything is created or run: a bad

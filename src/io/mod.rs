@@ -458,6 +458,12 @@ pub fn robot_files(arg: &str, package_dirs: &[PathBuf]) -> Vec<PathBuf> {
     out
 }
 
+/// Every file a scenario (or robot TOML) file reads: itself, and its robot's URDF, sidecar
+/// and meshes ([`robot_files`]).
+pub fn scenario_files(path: &Path) -> Vec<PathBuf> {
+    robot_files(&path.to_string_lossy(), &[])
+}
+
 /// The sidecar written beside an exported URDF: `arm.urdf` → `arm.physid.toml`.
 pub fn sidecar_path(urdf: &Path) -> PathBuf {
     let stem = urdf
