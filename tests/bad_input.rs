@@ -879,6 +879,22 @@ fn a_result_folder_never_holds_or_replaces_an_input() {
         "{err}"
     );
     assert_eq!(std::fs::read(&urdf).unwrap(), before);
+    // excite --scenario onto the URDF its base scenario's robot reads (was overwritten).
+    let (ok, err) = physid(&[
+        "excite",
+        "--scenario",
+        &s(&ksc),
+        "--duration",
+        "4",
+        "--no-check",
+        "--out",
+        &s(&urdf),
+    ]);
+    assert!(
+        !ok && err.contains("refusing to write over the input"),
+        "{err}"
+    );
+    assert_eq!(std::fs::read(&urdf).unwrap(), before);
     // blind and diagnose results into the folder of their inputs.
     let (ok, err) = physid(&[
         "blind",

@@ -298,7 +298,7 @@ impl Base {
                 dir,
                 range,
                 gains,
-                inputs: vec![path.clone()],
+                inputs: physid::io::scenario_files(path),
             })
         } else {
             let robot = a
