@@ -194,6 +194,13 @@ pub fn check_result_dir(dir: &Path, inputs: &[PathBuf]) -> Result<(), IoError> {
     Ok(())
 }
 
+/// A tempfile error's text without the temporary file's path it ends in (`… at path "…"`):
+/// the user gave another path, which the caller names.
+fn without_temp_path(e: &std::io::Error) -> String {
+    let text = e.to_string();
+    text.split(" at path ").next().unwrap_or(&text).to_string()
+}
+
 /// The file every physid result folder holds; a folder without it (and not empty) is not
 /// replaced by a new result.
 pub const RESULT_MARK: &str = "provenance.json";
@@ -253,9 +260,7 @@ impl StagingDir {
             .prefix(&prefix)
             .tempdir_in(&parent)
             .map_err(|e| {
-                // tempfile's error names the hidden staging folder; the user gave `target`.
-                let text = e.to_string();
-                let text = text.split(" at path ").next().unwrap_or(&text);
+                let text = without_temp_path(&e);
                 IoError::invalid(
                     target,
                     format!(
@@ -378,15 +383,10 @@ pub fn new_temp_beside(path: &Path) -> Result<tempfile::NamedTempFile, IoError> 
         Some(d) if !d.as_os_str().is_empty() => d.to_path_buf(),
         _ => PathBuf::from("."),
     };
-    // tempfile's errors name the temporary file; the user gave `path`.
     let tmp = tempfile::Builder::new()
         .prefix(PARTIAL_PREFIX)
         .tempfile_in(&dir)
-        .map_err(|e| {
-            let text = e.to_string();
-            let text = text.split(" at path ").next().unwrap_or(&text).to_string();
-            fs_err(std::io::Error::new(e.kind(), text))
-        })?;
+        .map_err(|e| fs_err(std::io::Error::new(e.kind(), without_temp_path(&e))))?;
     #[cfg(unix)]
     {
         use std::os::unix::fs::PermissionsExt;
