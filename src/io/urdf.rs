@@ -141,7 +141,11 @@ pub fn from_str(
         });
     }
     let warnings = duplicate_elements(xml);
-    let rates = rate_limits(xml, path)?;
+    // The attributes urdf-rs does not read, from one parse of the text.
+    let doc = roxmltree::Document::parse(xml).ok();
+    let rates = doc
+        .as_ref()
+        .map_or(Ok(HashMap::new()), |d| rate_limits(d, path))?;
     let robot = urdf_rs::read_from_string(&first_origin_only(xml)).map_err(|e| IoError::Parse {
         path: path.to_path_buf(),
         message: format!("not a valid URDF: {e}"),
@@ -163,7 +167,7 @@ pub fn from_str(
         mimics,
     } = walk(&robot, &link_idx, &children, root, &lookup)?;
     let mut warnings = warnings;
-    warnings.extend(empty_ranges(xml));
+    warnings.extend(doc.as_ref().map_or(vec![], empty_ranges));
     for b in &mut bodies {
         if let Some(&(acceleration, jerk)) = rates.get(&b.joint_name) {
             b.limits.acceleration = acceleration.unwrap_or(b.limits.acceleration);
@@ -213,21 +217,11 @@ pub fn from_str(
 /// equal: a range the joint cannot move in. Both zero is also what URDF readers give when the
 /// attributes are left out, and is read as unlimited; other equal values are kept, and the
 /// joint should be locked (`--lock`).
-fn empty_ranges(xml: &str) -> Vec<String> {
-    let Ok(doc) = roxmltree::Document::parse(xml) else {
-        return vec![];
-    };
+fn empty_ranges(doc: &roxmltree::Document) -> Vec<String> {
     let moving =
         |j: &roxmltree::Node| matches!(j.attribute("type"), Some("revolute") | Some("prismatic"));
     let mut out = vec![];
-    for joint in doc
-        .root_element()
-        .children()
-        .filter(|n| n.has_tag_name("joint") && moving(n))
-    {
-        let Some(limit) = joint.children().find(|n| n.has_tag_name("limit")) else {
-            continue;
-        };
+    for (joint, limit) in joint_limits(doc).filter(|(j, _)| moving(j)) {
         let value = |a: &str| {
             limit
                 .attribute(a)
@@ -249,25 +243,28 @@ fn empty_ranges(xml: &str) -> Vec<String> {
     out
 }
 
+/// Each top-level `<joint>` with its `<limit>` (joints without one left out).
+fn joint_limits<'a, 'input>(
+    doc: &'a roxmltree::Document<'input>,
+) -> impl Iterator<Item = (roxmltree::Node<'a, 'input>, roxmltree::Node<'a, 'input>)> {
+    doc.root_element()
+        .children()
+        .filter(|n| n.has_tag_name("joint"))
+        .filter_map(|joint| {
+            let limit = joint.children().find(|n| n.has_tag_name("limit"))?;
+            Some((joint, limit))
+        })
+}
+
 /// Per joint name, `<limit acceleration jerk>` as given.
 type RateLimits = HashMap<String, (Option<f64>, Option<f64>)>;
 
 /// Per joint, the `acceleration` and `jerk` attributes of its `<limit>` (not part of the URDF
 /// standard, which urdfdom ignores; some descriptions carry them for planners). A value that
 /// is not a number is an error naming the joint.
-fn rate_limits(xml: &str, path: &Path) -> Result<RateLimits, IoError> {
-    let Ok(doc) = roxmltree::Document::parse(xml) else {
-        return Ok(HashMap::new());
-    };
+fn rate_limits(doc: &roxmltree::Document, path: &Path) -> Result<RateLimits, IoError> {
     let mut out = HashMap::new();
-    for joint in doc
-        .root_element()
-        .children()
-        .filter(|n| n.has_tag_name("joint"))
-    {
-        let Some(limit) = joint.children().find(|n| n.has_tag_name("limit")) else {
-            continue;
-        };
+    for (joint, limit) in joint_limits(doc) {
         let name = joint.attribute("name").unwrap_or("");
         let read = |attr: &str| -> Result<Option<f64>, IoError> {
             limit
