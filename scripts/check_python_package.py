@@ -139,6 +139,16 @@ for name, args, words in [
         check(f"bad input ({name}) raises", False, "(no error)")
     except ValueError as e:
         check(f"bad input ({name}) raises ValueError naming it", words in str(e), f"({e})")
+z, nan_at = np.zeros((3, n)), np.where(np.arange(3 * n).reshape(3, n) == n + 2, np.nan, 0.0)
+for name, args, words in [
+    ("NaN torque", (z, z, z, nan_at), "tau: sample 1, joint 2 is NaN"),
+    ("sample counts", (z, np.zeros((2, n)), z, z), "qd has 2 samples, q has 3"),
+]:
+    try:
+        physid.identify_arrays(robot, *args)
+        check(f"identify_arrays bad input ({name}) raises", False, "(no error)")
+    except ValueError as e:
+        check(f"identify_arrays bad input ({name}) raises ValueError naming it", words in str(e), f"({e})")
 try:
     physid.Robot("/nonexistent/arm.urdf")
     check("a missing robot file raises", False)

@@ -222,33 +222,15 @@ fn identify_arrays<'py>(
         qdd,
         samples: s,
     } = states(&q, &qd, &qdd, n)?;
+    let tau = samples("tau", &tau, n)?.0;
+    // Lengths, sample counts and finiteness, named by array, sample and joint.
+    api::dynamics::samples(m, &q, &[("qd", &qd), ("qdd", &qdd), ("tau", &tau)])
+        .map_err(value_error)?;
     let mut tr = Trajectory::new(robot.joint_names(), true);
     tr.q = q;
     tr.qd = qd;
     tr.qdd = Some(qdd);
-    tr.tau = samples("tau", &tau, n)?.0;
-    for (name, v) in [("qd", &tr.qd), ("tau", &tr.tau)] {
-        if v.len() != s * n {
-            return Err(value_error(format!(
-                "{name} has {} samples, q has {s}",
-                v.len() / n
-            )));
-        }
-    }
-    if tr.qdd.as_ref().is_some_and(|a| a.len() != s * n) {
-        return Err(value_error(format!("qdd does not have q's {s} samples")));
-    }
-    // Every value finite (the batch check names the array, sample and joint).
-    api::dynamics::inverse_dynamics(m, &tr.q, &tr.qd, tr.qdd.as_deref().unwrap_or(&[]))
-        .map_err(value_error)?;
-    if let Some(i) = tr.tau.iter().position(|x| !x.is_finite()) {
-        return Err(value_error(format!(
-            "tau: sample {}, joint {} is {}",
-            i / n,
-            i % n,
-            tr.tau[i]
-        )));
-    }
+    tr.tau = tau;
     tr.t = (0..s).map(|k| k as f64 * 1e-3).collect();
     let identified = py
         .allow_threads(|| {

@@ -47,8 +47,9 @@ pub enum ShapeError {
     },
 }
 
-/// The number of samples in `q` (and in each of `others`), every value finite.
-fn samples(
+/// The number of samples in `q` (and in each of `others`, which must hold as many), every value
+/// finite: the check every batch routine makes before any work.
+pub fn samples(
     model: &Model,
     q: &[f64],
     others: &[(&'static str, &[f64])],
