@@ -265,3 +265,260 @@ impl SquaredErrors {
         (per, all)
     }
 }
+
+/// A note or warning about the data or the run, for the user (the binary prints each on
+/// standard error as `note: …` or `warning: …`; Python issues warnings).
+#[derive(Clone, Debug, PartialEq, Eq, serde::Serialize)]
+pub struct Notice {
+    /// A warning (the answer may be wrong), or a note (what was done).
+    pub warning: bool,
+    /// What happened, naming the file.
+    pub text: String,
+}
+
+impl Notice {
+    /// A note: what was done.
+    pub fn note(text: impl Into<String>) -> Self {
+        Notice {
+            warning: false,
+            text: text.into(),
+        }
+    }
+
+    /// A warning: the answer may not be what the user meant.
+    pub fn warning(text: impl Into<String>) -> Self {
+        Notice {
+            warning: true,
+            text: text.into(),
+        }
+    }
+}
+
+impl std::fmt::Display for Notice {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        let level = if self.warning { "warning" } else { "note" };
+        write!(f, "{level}: {}", self.text)
+    }
+}
+
+/// Whether `path` is read as a bag (an MCAP file or a rosbag2 directory).
+fn is_bag(path: &Path) -> bool {
+    path.is_dir() || path.extension().and_then(|e| e.to_str()) == Some("mcap")
+}
+
+/// `--topic` and `--stamp` (options of bags) given for no bag at all are an error (they cannot
+/// mean what the user meant); given with some bags, a warning for each other file.
+pub fn bag_option_notices(paths: &[&Path], read: &DataOptions) -> Result<Vec<Notice>, ApiError> {
+    if read.topic.is_none() && read.stamp == crate::io::mcap_log::Stamp::Log {
+        return Ok(vec![]);
+    }
+    if let Some(first) = paths.first().filter(|_| !paths.iter().any(|p| is_bag(p))) {
+        return Err(ApiError::invalid(
+            first,
+            "--topic and --stamp apply to MCAP files and rosbag2 directories only, and no data file given is one",
+        ));
+    }
+    Ok(paths
+        .iter()
+        .filter(|p| !is_bag(p))
+        .map(|p| {
+            Notice::warning(format!(
+                "{}: --topic and --stamp apply to MCAP files and rosbag2 directories only",
+                p.display()
+            ))
+        })
+        .collect())
+}
+
+/// What reading did to one file: joints and messages left out, and the pipeline's changes
+/// ([`pipeline_notes`]).
+pub fn file_notices(path: &Path, loaded: &LoadedData) -> Vec<Notice> {
+    let mut out = vec![];
+    if !loaded.ignored_joints.is_empty() {
+        out.push(Notice::note(format!(
+            "{} has joints the robot does not have, left out: {}",
+            path.display(),
+            loaded.ignored_joints.join(", ")
+        )));
+    }
+    if loaded.skipped_messages > 0 {
+        out.push(Notice::note(format!(
+            "{}: {} joint-state messages name none of the robot's joints (another publisher on the topic), skipped",
+            path.display(),
+            loaded.skipped_messages
+        )));
+    }
+    for line in pipeline_notes(&loaded.report) {
+        let text = format!("{}: {line}", path.display());
+        out.push(if line.starts_with("joint") {
+            Notice::warning(text)
+        } else {
+            Notice::note(text)
+        });
+    }
+    out
+}
+
+/// What the pipeline did to one file, one line per kind of change (nothing for clean data
+/// with accelerations).
+pub fn pipeline_notes(r: &crate::prepare::Report) -> Vec<String> {
+    let mut out = vec![];
+    if !r.gaps.is_empty() {
+        out.push(gap_note(r));
+    }
+    if r.missing_bridged > 0 {
+        out.push(format!(
+            "{} missing samples bridged at {} places (the derivatives interpolate across them)",
+            r.missing_bridged, r.dropouts_bridged
+        ));
+    }
+    if r.duplicates > 0 {
+        out.push(format!("{} duplicated samples dropped", r.duplicates));
+    }
+    out.extend(time_base_note(r));
+    if r.derived_qd || r.derived_qdd {
+        out.push(derived_note(r));
+    }
+    if r.samples_kept < r.samples_read {
+        out.push(format!(
+            "{} of {} samples used",
+            r.samples_kept, r.samples_read
+        ));
+    }
+    out.extend(joint_notes(r));
+    out
+}
+
+/// The time jumps a file was split at (the first five).
+fn gap_note(r: &crate::prepare::Report) -> String {
+    let gaps: Vec<String> = r
+        .gaps
+        .iter()
+        .take(5)
+        .map(|g| format!("{:+.3} s before sample {}", g.seconds, g.sample))
+        .collect();
+    format!(
+        "split into {} runs at {} time jump{} ({}{}): no signal is differentiated across them",
+        r.runs + usize::from(r.dropped_short > 0),
+        r.gaps.len(),
+        if r.gaps.len() == 1 { "" } else { "s" },
+        gaps.join(", "),
+        if r.gaps.len() > 5 { ", …" } else { "" }
+    )
+}
+
+/// How scattered time stamps were placed (nothing for a uniform clock).
+fn time_base_note(r: &crate::prepare::Report) -> Option<String> {
+    use crate::prepare::TimeBase;
+    match r.time_base {
+        TimeBase::Uniform => None,
+        TimeBase::Stamps => Some(format!("time stamps scatter by {:.1} % of the period (RMS); the samples agree with their stamps, which are used", 100.0 * r.jitter)),
+        TimeBase::ClockSlots => Some(format!("time stamps scatter by {:.1} % of the period (RMS); the samples agree with a uniform clock, so each is placed at its clock slot", 100.0 * r.jitter)),
+    }
+}
+
+/// Which signals were derived, with which filter, and what the filter's settling cost.
+fn derived_note(r: &crate::prepare::Report) -> String {
+    let what = match (r.derived_qd, r.derived_qdd) {
+        (true, true) => "no velocities or accelerations: q̇ and q̈ derived",
+        (true, false) => "no velocities: q̇ derived",
+        _ => "no accelerations: q̈ derived",
+    };
+    format!(
+        "{what} (central difference, zero-phase {:.3} Hz Butterworth{}); {} samples trimmed at the ends of the runs ({} at each end, the filter's settling){}",
+        r.cutoff,
+        r.band_edge.map_or(String::new(), |e| format!(", 4 times the motion's band edge {e:.3} Hz over all files read")),
+        r.trimmed,
+        r.settle_samples,
+        if r.dropped_short > 0 { format!(", {} samples of pieces too short to keep", r.dropped_short) } else { String::new() }
+    )
+}
+
+/// Unmeasured, locked and still joints.
+fn joint_notes(r: &crate::prepare::Report) -> Vec<String> {
+    let mut out = vec![];
+    for j in &r.unmeasured {
+        out.push(format!("joint '{j}': its torque is zero in every sample (not measured): locked, its torque is not fitted"));
+    }
+    let asked: Vec<&str> = r
+        .locked
+        .iter()
+        .filter(|j| !r.unmeasured.contains(j))
+        .map(String::as_str)
+        .collect();
+    if !asked.is_empty() {
+        out.push(format!(
+            "locked (held at their logged position, torque not fitted): {}",
+            asked.join(", ")
+        ));
+    }
+    for j in r.still.iter().filter(|j| !r.locked.contains(j)) {
+        out.push(format!("joint '{j}' never moves: its friction cannot be identified from these data (lock it with --lock {j}, or record a motion that moves it)"));
+    }
+    out
+}
+
+/// How data files are read, as a user gives it: the bag options, the pipeline's cutoff and
+/// the joints to lock (or the only joints to fit).
+#[derive(Clone, Debug, Default)]
+pub struct ReadOptions {
+    /// The `JointState` topic of an MCAP file or rosbag2 directory (default: physid's
+    /// processed signals if the log has them, else `/joint_states`).
+    pub topic: Option<String>,
+    /// Which time stamps a joint state: the recorder's or the message header's.
+    pub stamp: crate::io::mcap_log::Stamp,
+    /// Low-pass cutoff (Hz) of the derived signals; default 20 Hz, at most a tenth of the
+    /// sample rate.
+    pub cutoff: Option<f64>,
+    /// Joints held at their logged position (their torque not fitted).
+    pub lock: Vec<String>,
+    /// Fit only these joints' torques (every other joint locked); not with `lock`.
+    pub only: Vec<String>,
+}
+
+impl ReadOptions {
+    /// The library's reading options for `model`, checked: joints named exist, `only`
+    /// becomes the other joints locked, the cutoff is a positive frequency.
+    pub fn resolve(&self, model: &Model) -> Result<DataOptions, ApiError> {
+        let joints: Vec<String> = model.bodies.iter().map(|b| b.joint_name.clone()).collect();
+        if !self.lock.is_empty() && !self.only.is_empty() {
+            return Err(ApiError::Options(
+                "--lock and --only: give one of them (--only locks every other joint)".into(),
+            ));
+        }
+        let flag = if self.only.is_empty() { "lock" } else { "only" };
+        if let Some(j) = self
+            .lock
+            .iter()
+            .chain(&self.only)
+            .find(|j| !joints.contains(j))
+        {
+            return Err(ApiError::Options(format!(
+                "--{flag}: the robot has no joint '{j}' (its joints: {})",
+                joints.join(", ")
+            )));
+        }
+        let lock = if self.only.is_empty() {
+            self.lock.clone()
+        } else {
+            joints
+                .into_iter()
+                .filter(|j| !self.only.contains(j))
+                .collect()
+        };
+        if let Some(c) = self.cutoff.filter(|c| !(c.is_finite() && *c > 0.0)) {
+            return Err(ApiError::Options(format!(
+                "--cutoff must be a positive frequency in Hz, got {c}"
+            )));
+        }
+        Ok(DataOptions {
+            topic: self.topic.clone(),
+            stamp: self.stamp,
+            prepare: crate::prepare::Options {
+                cutoff: self.cutoff,
+                lock,
+                band_edge: None,
+            },
+        })
+    }
+}

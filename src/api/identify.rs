@@ -2,7 +2,10 @@
 //! docs/schemas/identify.schema.json), its default constraint set, the ground-truth errors of a
 //! physid log, and the effects a diagnosis report confirmed (`--effects-from`).
 
-use super::data::{in_memory, Data, Span, SquaredErrors};
+use super::data::{
+    bag_option_notices, file_notices, in_memory, locked_joints, Data, Notice, ReadOptions, Span,
+    SquaredErrors,
+};
 use super::ApiError;
 use crate::diagnose::calibrate::{parse_term, Calibration, Options as CalOptions, Run, TermFit};
 use crate::diagnose::library::Variant;
@@ -10,6 +13,7 @@ use crate::ident::{self, analysis, ConstraintSet, NormalEquations, Options};
 use crate::model::Model;
 use crate::trajectory::Trajectory;
 use nalgebra::DVector;
+use std::ops::Range;
 use std::path::{Path, PathBuf};
 
 /// One data file and what the pipeline did to it.
@@ -353,4 +357,494 @@ fn as_runs(pieces: &[Trajectory]) -> Vec<Run<'_>> {
             range: 0..t.len(),
         })
         .collect()
+}
+
+/// Samples `[start, end)` of a file as read (indices, end exclusive); an open side is the
+/// file's first or last sample.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct SampleRange {
+    /// The first sample (default 0).
+    pub start: Option<usize>,
+    /// One past the last sample (default: the file's length).
+    pub end: Option<usize>,
+}
+
+impl SampleRange {
+    /// Parses `a:b` (either side may be empty); `what` names the option in errors.
+    pub fn parse(s: &str, what: &str) -> Result<Self, ApiError> {
+        let (a, b) = s.split_once(':').ok_or_else(|| {
+            ApiError::Options(format!("{what}: '{s}' is not a range like 0:5000"))
+        })?;
+        let index = |x: &str| -> Result<Option<usize>, ApiError> {
+            if x.is_empty() {
+                return Ok(None);
+            }
+            x.parse()
+                .map(Some)
+                .map_err(|e| ApiError::Options(format!("{what}: '{x}' is not a sample index: {e}")))
+        };
+        Ok(SampleRange {
+            start: index(a)?,
+            end: index(b)?,
+        })
+    }
+
+    /// The range within a file of `len` samples, or an error naming `what` when it is empty or
+    /// reaches past the file.
+    pub fn within(&self, len: usize, what: &str) -> Result<Range<usize>, ApiError> {
+        let (a, b) = (self.start.unwrap_or(0), self.end.unwrap_or(len));
+        if a >= b || b > len {
+            return Err(ApiError::Options(format!(
+                "{what}: {a}:{b} is not a non-empty range within the {len} samples"
+            )));
+        }
+        Ok(a..b)
+    }
+}
+
+/// What `identify` is asked: the runs, which samples train and validate, the constraint set,
+/// the effect terms and the prior.
+#[derive(Clone, Debug)]
+pub struct IdentifyOptions {
+    /// Training runs: physid MCAP logs, other MCAP files or rosbag2 directories with
+    /// `JointState`, or CSV; joined without differentiating across their seams.
+    pub data: Vec<PathBuf>,
+    /// Held-out runs (all their samples).
+    pub validate_data: Vec<PathBuf>,
+    /// Training samples of the one training run (default all).
+    pub train: Option<SampleRange>,
+    /// Validation samples of the one training run (not with `validate_data`).
+    pub validate: Option<SampleRange>,
+    /// The constraint set; `None`: the tightest the description supports.
+    pub constraints: Option<ConstraintSet>,
+    /// Effect terms identified with the model (friction extras, library effects).
+    pub terms: Vec<Variant>,
+    /// Weight `w` of the prior term (the description's parameters as the prior).
+    pub prior_weight: f64,
+    /// Margin `ε` of the strict matrix inequalities.
+    pub eps: f64,
+    /// The prior term's form.
+    pub regularizer: ident::Regularizer,
+    /// How the files are read.
+    pub read: ReadOptions,
+    /// Accept fewer equations than parameters (the prior decides the rest).
+    pub allow_few_samples: bool,
+}
+
+impl IdentifyOptions {
+    /// Training on `data`, every other option at its default (the CLI's).
+    pub fn new(data: Vec<PathBuf>) -> Self {
+        let defaults = Options::new(ConstraintSet::Consistent);
+        IdentifyOptions {
+            data,
+            validate_data: vec![],
+            train: None,
+            validate: None,
+            constraints: None,
+            terms: vec![],
+            prior_weight: defaults.prior_weight,
+            eps: defaults.eps,
+            regularizer: defaults.regularizer,
+            read: ReadOptions::default(),
+            allow_few_samples: false,
+        }
+    }
+
+    /// The options checked against each other: at least one run; sample ranges only of one
+    /// run; `validate` or `validate_data`, not both; the same recording never twice.
+    pub fn validate(&self) -> Result<(), ApiError> {
+        if self.data.is_empty() {
+            return Err(ApiError::Options("--data: give at least one run".into()));
+        }
+        if self.data.len() > 1 && (self.train.is_some() || self.validate.is_some()) {
+            return Err(ApiError::Options("--train and --validate pick samples of one --data file; with several runs, give whole runs (--validate-data for held-out runs)".into()));
+        }
+        if self.validate.is_some() && !self.validate_data.is_empty() {
+            return Err(ApiError::Options(
+                "give --validate or --validate-data, not both".into(),
+            ));
+        }
+        let roles: Vec<(&str, &Path)> = (self.data.iter().map(|p| ("--data", p.as_path())))
+            .chain(
+                self.validate_data
+                    .iter()
+                    .map(|p| ("--validate-data", p.as_path())),
+            )
+            .collect();
+        crate::io::check_distinct_recordings(&roles)?;
+        Ok(())
+    }
+
+    /// The identification's options under `set`, checked.
+    pub fn ident(&self, set: ConstraintSet) -> Result<Options, ApiError> {
+        let mut opts = Options::new(set);
+        opts.prior_weight = self.prior_weight;
+        opts.eps = self.eps;
+        opts.regularizer = self.regularizer;
+        opts.validate()?;
+        Ok(opts)
+    }
+
+    /// Every data file, training runs first.
+    fn files(&self) -> Vec<&Path> {
+        self.data
+            .iter()
+            .chain(&self.validate_data)
+            .map(PathBuf::as_path)
+            .collect()
+    }
+}
+
+/// The data read for an identification: the files, and which samples train and validate.
+struct Opened {
+    data: Vec<Data>,
+    train: Vec<Span>,
+    validation: Vec<Span>,
+    locked: Vec<usize>,
+    notices: Vec<Notice>,
+}
+
+/// Opens the runs (large CSV files streamed unless effect terms need them in memory) and
+/// picks the training and validation spans.
+fn open(m: &Model, o: &IdentifyOptions) -> Result<Opened, ApiError> {
+    let paths = o.files();
+    let read = o.read.resolve(m)?;
+    let mut notices = bag_option_notices(&paths, &read)?;
+    let data = Data::open_all(&paths, m, &read, !o.terms.is_empty())?;
+    for (path, d) in paths.iter().zip(&data) {
+        if let Data::Memory(loaded) = d {
+            notices.extend(file_notices(path, loaded));
+        }
+    }
+    let whole = |files: Range<usize>| -> Vec<Span> {
+        files
+            .map(|file| Span {
+                file,
+                range: 0..data[file].len(),
+            })
+            .collect()
+    };
+    let first = |r: &SampleRange, what: &str| -> Result<Vec<Span>, ApiError> {
+        Ok(vec![Span {
+            file: 0,
+            range: r.within(data[0].len(), what)?,
+        }])
+    };
+    let n_train = o.data.len();
+    let train = match &o.train {
+        Some(r) => first(r, "--train")?,
+        None => whole(0..n_train),
+    };
+    let validation = match &o.validate {
+        Some(r) => first(r, "--validate")?,
+        None => whole(n_train..data.len()),
+    };
+    let locked = locked_joints(m, &data);
+    Ok(Opened {
+        data,
+        train,
+        validation,
+        locked,
+        notices,
+    })
+}
+
+/// What one identification found, with its scores and what the data pipeline did: the
+/// report behind `identify`'s text and JSON.
+pub struct Identification {
+    /// The identified model (effect coefficients after the model's parameters in `theta`).
+    pub identified: ident::Identified,
+    /// The effect terms' fits (empty without terms).
+    pub terms: Vec<TermFit>,
+    /// The terms as a scenario `[[effects]]` snippet.
+    pub snippet: Option<String>,
+    /// The constraint set identified under.
+    pub set: ConstraintSet,
+    /// Why the default constraint set was chosen (when none was given).
+    pub set_note: Option<String>,
+    /// Training runs (files) and their sample ranges.
+    pub train: Vec<(PathBuf, Range<usize>)>,
+    /// Training RMS torque error per joint (N m; `None`: locked) and over all joints.
+    pub train_rms: (Vec<Option<f64>>, f64),
+    /// Validation runs and their sample ranges (empty when nothing was held out).
+    pub validation: Vec<(PathBuf, Range<usize>)>,
+    /// Validation RMS torque error per joint and overall, when anything was held out.
+    pub validation_rms: Option<(Vec<Option<f64>>, f64)>,
+    /// Samples fitted per training run and scored per validation run (after the pipeline).
+    pub used: (Vec<usize>, Vec<usize>),
+    /// Which parameters the data determine.
+    pub identifiability: analysis::Identifiability,
+    /// Errors against the ground truth a physid log carries (one training run only).
+    pub truth_errors: Option<Vec<TruthError>>,
+    /// Wall time of the fit (s): normal equations (streamed files read again), solve.
+    pub total_seconds: f64,
+    /// What the pipeline did to each file read in memory.
+    pub data: Vec<DataJson>,
+    /// Joints whose torque is not fitted.
+    pub locked: Vec<String>,
+    /// The model's own normal equations over the training samples.
+    pub normal_equations: NormalEquations,
+    /// Notes and warnings about the data and the answer, in the order they arose.
+    pub notices: Vec<Notice>,
+}
+
+/// Identifies `m` from the runs of `o`: reads them, fits under the constraint set, scores the
+/// fit on the training and validation samples and reports identifiability and (for a physid
+/// log) the errors against its ground truth.
+pub fn identify(m: &Model, o: &IdentifyOptions) -> Result<Identification, ApiError> {
+    identify_reporting(m, o, &mut |_| {})
+}
+
+/// [`identify`], handing each notice to `notify` as it arises (what the pipeline did to each
+/// file before the fit, warnings about the answer after it), so a caller shows them even when
+/// the fit then fails; the report keeps them all in `notices` too.
+pub fn identify_reporting(
+    m: &Model,
+    o: &IdentifyOptions,
+    notify: &mut dyn FnMut(&Notice),
+) -> Result<Identification, ApiError> {
+    o.validate()?;
+    let (set, set_note) = constraint_set(o.constraints, m);
+    let opts = o.ident(set)?;
+    let opened = open(m, o)?;
+    opened.notices.iter().for_each(&mut *notify);
+    check_equations(m, o, &opened)?;
+    let start = std::time::Instant::now();
+    let fit = fit(
+        m,
+        &opened.data,
+        &opened.train,
+        &opts,
+        o.terms.clone(),
+        &opened.locked,
+    )?;
+    let total = start.elapsed().as_secs_f64();
+    let seen = opened.notices.len();
+    let report = score(m, o, fit, (set, set_note), opened, total)?;
+    report.notices[seen..].iter().for_each(notify);
+    Ok(report)
+}
+
+/// Enough equations for the parameters, unless the user accepts a fit decided by the prior.
+fn check_equations(m: &Model, o: &IdentifyOptions, d: &Opened) -> Result<(), ApiError> {
+    let samples: usize = d.train.iter().map(|s| d.data[s.file].used(&s.range)).sum();
+    let p = m.layout().len + crate::diagnose::calibrate::columns(&o.terms, m.dof());
+    let equations = samples * (m.dof() - d.locked.len());
+    if equations < p && !o.allow_few_samples {
+        return Err(ApiError::invalid(
+            &o.data[0],
+            format!("{samples} samples give {equations} equations for {p} parameters: the fit is decided by the prior; give more samples, or --allow-few-samples if that is what you want"),
+        ));
+    }
+    Ok(())
+}
+
+/// The fit scored on the training and validation spans, with its identifiability, what the
+/// data pipeline did and warnings where the data cannot support the answer.
+fn score(
+    m: &Model,
+    o: &IdentifyOptions,
+    fit: Fit,
+    (set, set_note): (ConstraintSet, Option<String>),
+    d: Opened,
+    total_seconds: f64,
+) -> Result<Identification, ApiError> {
+    let train_rms = fit.errors(m, &d.data, &d.train, &d.locked)?;
+    let validation_rms = if d.validation.is_empty() {
+        None
+    } else {
+        Some(fit.errors(m, &d.data, &d.validation, &d.locked)?)
+    };
+    let identifiability = analysis::identifiability(m, &fit.normal_equations, &fit.model_theta(m));
+    let files = o.files();
+    let named = |spans: &[Span]| -> Vec<(PathBuf, Range<usize>)> {
+        spans
+            .iter()
+            .map(|s| (files[s.file].to_path_buf(), s.range.clone()))
+            .collect()
+    };
+    let used = |spans: &[Span]| -> Vec<usize> {
+        spans
+            .iter()
+            .map(|s| d.data[s.file].used(&s.range))
+            .collect()
+    };
+    let mut notices = d.notices.clone();
+    notices.extend(weak_data_warnings(o, &d, &identifiability));
+    let dt = d.data[0].report().map_or(1e-3, |r| r.period);
+    let snippet = (!fit.terms.is_empty())
+        .then(|| crate::diagnose::calibrate::scenario_snippet(m, &fit.terms, dt));
+    let data = files
+        .iter()
+        .zip(&d.data)
+        .filter_map(|(f, data)| {
+            data.report().map(|r| DataJson {
+                file: f.to_path_buf(),
+                pipeline: r.clone(),
+            })
+        })
+        .collect();
+    Ok(Identification {
+        truth_errors: (o.data.len() == 1)
+            .then(|| truth_errors(&o.data[0], m, &fit.identified.theta))
+            .flatten(),
+        identified: fit.identified,
+        terms: fit.terms,
+        snippet,
+        set,
+        set_note,
+        train: named(&d.train),
+        train_rms,
+        validation: named(&d.validation),
+        validation_rms,
+        used: (used(&d.train), used(&d.validation)),
+        identifiability,
+        total_seconds,
+        data,
+        locked: d
+            .locked
+            .iter()
+            .map(|&j| m.bodies[j].joint_name.clone())
+            .collect(),
+        normal_equations: fit.normal_equations,
+        notices,
+    })
+}
+
+/// Warnings where the data cannot support the answer: validation samples that are also
+/// training samples, and data that excite far fewer parameter directions than the model has.
+fn weak_data_warnings(
+    o: &IdentifyOptions,
+    d: &Opened,
+    idf: &analysis::Identifiability,
+) -> Vec<Notice> {
+    let mut out = vec![];
+    let train = &d.train[0].range;
+    if let (Some(_), Some(v)) = (&o.validate, d.validation.first()) {
+        let v = &v.range;
+        let overlap = v
+            .end
+            .min(train.end)
+            .saturating_sub(v.start.max(train.start));
+        if overlap > 0 {
+            out.push(Notice::warning(format!(
+                "--train {}:{} and --validate {}:{} share {overlap} samples: the validation error is not a held-out error",
+                train.start, train.end, v.start, v.end
+            )));
+        }
+    }
+    if 2 * idf.rank < idf.parameters {
+        out.push(Notice::warning(format!(
+            "the data excite {} of {} parameter directions: the rest comes from the prior (the robot description), not from the data; record a motion that moves every joint",
+            idf.rank, idf.parameters
+        )));
+    }
+    out
+}
+
+impl Identification {
+    /// θ of the model's layout (without effect coefficients).
+    pub fn model_theta(&self, m: &Model) -> DVector<f64> {
+        self.identified.theta.rows(0, m.layout().len).into_owned()
+    }
+
+    /// The identified model: `m` with the identified inertias and friction.
+    pub fn model(&self, m: &Model) -> Result<Model, ApiError> {
+        let r = &self.identified;
+        let mut im = m.with_parameters(&self.model_theta(m))?;
+        for (j, b) in im.bodies.iter_mut().enumerate() {
+            b.friction.viscous = r.viscous[j];
+            b.friction.coulomb = r.coulomb[j];
+        }
+        Ok(im)
+    }
+
+    /// Writes the identified model as URDF at `path`: the URDF of `robot` (as given to load
+    /// `m`) with only its `<inertial>` and `<dynamics>` changed, plus the sidecar; a warning
+    /// when its inertias are not physically consistent.
+    pub fn write_urdf(&self, path: &Path, robot: &str, m: &Model) -> Result<Vec<Notice>, ApiError> {
+        let im = self.model(m)?;
+        crate::io::export_urdf(path, robot, m, &im, self.snippet.as_deref())?;
+        let consistent =
+            ident::constraints_hold(m, &self.model_theta(m), ConstraintSet::Consistent);
+        Ok(if !self.identified.constraints_hold || !consistent {
+            vec![Notice::warning(format!(
+                "{} holds physically inconsistent inertias (identified with '{}')",
+                path.display(),
+                self.set.name()
+            ))]
+        } else {
+            vec![]
+        })
+    }
+
+    /// The bodies that are not physically consistent (`J(π)` not positive definite), each
+    /// with its smallest eigenvalue of `J`.
+    pub fn inconsistent_bodies(&self) -> Vec<String> {
+        self.identified
+            .bodies
+            .iter()
+            .filter(|b| {
+                b.consistency.min_eig_pseudo.is_nan() || b.consistency.min_eig_pseudo <= 0.0
+            })
+            .map(|b| {
+                format!(
+                    "{} (min eig J = {:.3e})",
+                    b.name, b.consistency.min_eig_pseudo
+                )
+            })
+            .collect()
+    }
+
+    /// The report as `identify --json` (docs/identify-json.md).
+    pub fn json(&self, m: &Model) -> IdentifyJson {
+        let r = &self.identified;
+        let runs = |spans: &[(PathBuf, Range<usize>)], used: &[usize]| -> Vec<RunRange> {
+            spans
+                .iter()
+                .zip(used)
+                .map(|((f, r), &u)| RunRange {
+                    file: f.clone(),
+                    range: [r.start, r.end],
+                    samples_used: u,
+                })
+                .collect()
+        };
+        let (train_rms, train_all) = self.train_rms.clone();
+        IdentifyJson {
+            data: self.train[0].0.clone(),
+            robot: m.name.clone(),
+            constraints: self.set,
+            constraints_default_because: self.set_note.clone(),
+            train: Split {
+                range: Some([self.train[0].1.start, self.train[0].1.end]),
+                runs: runs(&self.train, &self.used.0),
+                rms: train_rms,
+                rms_overall: train_all,
+            },
+            validation: self.validation_rms.as_ref().map(|(rms, all)| Split {
+                range: self.validation.first().map(|(_, r)| [r.start, r.end]),
+                runs: runs(&self.validation, &self.used.1),
+                rms: rms.clone(),
+                rms_overall: *all,
+            }),
+            bodies: r.bodies.clone(),
+            friction: Friction {
+                viscous: r.viscous.clone(),
+                coulomb: r.coulomb.clone(),
+            },
+            effects: self.terms.clone(),
+            scenario_effects: self.snippet.clone(),
+            objective: r.objective,
+            constraints_hold: r.constraints_hold,
+            solver: r.solver.clone(),
+            end_to_end_seconds: self.total_seconds,
+            identifiability: self.identifiability.clone(),
+            parameter_names: theta_names(m, &self.terms),
+            theta: r.theta.as_slice().to_vec(),
+            truth_errors: self.truth_errors.clone(),
+            data_pipeline: self.data.clone(),
+            locked_joints: self.locked.clone(),
+        }
+    }
 }

@@ -60,6 +60,12 @@ pub enum ApiError {
         #[source]
         source: crate::sim::simulate::SimError,
     },
+    /// A model could not be built (parameters of the wrong length).
+    #[error(transparent)]
+    Model(#[from] crate::model::ModelError),
+    /// An option's value is not valid (the message names the option).
+    #[error("{0}")]
+    Options(String),
     /// A file's content is not what the option needs.
     #[error("{}: {message}", path.display())]
     Invalid {
@@ -75,6 +81,20 @@ impl ApiError {
         ApiError::Invalid {
             path: path.to_path_buf(),
             message: message.into(),
+        }
+    }
+}
+
+use crate::options::OptionError;
+
+impl OptionError for ApiError {
+    /// The invalid option of the identification or the diagnosis beneath, if that is the
+    /// error.
+    fn invalid_option(&self) -> Option<(&'static str, &'static str, f64)> {
+        match self {
+            ApiError::Ident(e) => e.invalid_option(),
+            ApiError::Diagnose(e) => e.invalid_option(),
+            _ => None,
         }
     }
 }

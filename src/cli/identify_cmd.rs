@@ -1,42 +1,19 @@
-//! `physid identify`.
+//! `physid identify`: the flags read into [`IdentifyOptions`], the library's
+//! [`identify`](physid::api::identify::identify) run, its report printed (text or JSON) and
+//! written (URDF, effects, the problem).
 
 use super::RobotArgs;
-use anyhow::{anyhow, bail, Context};
-use physid::api::data::{locked_joints, Data, Span};
+use anyhow::{anyhow, bail};
+use physid::api::data::ReadOptions;
 use physid::api::identify::{
-    confirmed_effects, constraint_set, theta_names, truth_errors, DataJson, Fit, Friction,
-    IdentifyJson, RunRange, Split, TruthError,
+    confirmed_effects, identify_reporting, Identification, IdentifyOptions, SampleRange,
 };
 use physid::diagnose::calibrate::parse_term;
 use physid::diagnose::library::Variant;
 use physid::ident::{self, analysis, ConstraintSet, NormalEquations, Options};
 use physid::model::Model;
 use serde_json::json;
-use std::ops::Range;
 use std::path::{Path, PathBuf};
-
-/// Parses `a:b` (sample indices, end exclusive; either side may be empty).
-pub fn parse_range(s: &str, len: usize, what: &str) -> anyhow::Result<Range<usize>> {
-    let (a, b) = s
-        .split_once(':')
-        .with_context(|| format!("{what}: '{s}' is not a range like 0:5000"))?;
-    let a: usize = if a.is_empty() {
-        0
-    } else {
-        a.parse()
-            .with_context(|| format!("{what}: '{a}' is not a sample index"))?
-    };
-    let b: usize = if b.is_empty() {
-        len
-    } else {
-        b.parse()
-            .with_context(|| format!("{what}: '{b}' is not a sample index"))?
-    };
-    if a >= b || b > len {
-        bail!("{what}: {a}:{b} is not a non-empty range within the {len} samples");
-    }
-    Ok(a..b)
-}
 
 /// How data files are read and prepared: `--topic` and `--stamp` for MCAP files and rosbag2
 /// directories; the pipeline's cutoff and locked joints for all.
@@ -64,65 +41,16 @@ pub struct ReadArgs {
 }
 
 impl ReadArgs {
-    /// The library's reading options for `model` (`--only` becomes the other joints locked).
-    pub fn options(&self, model: &Model) -> anyhow::Result<physid::io::DataOptions> {
-        let joints: Vec<String> = model.bodies.iter().map(|b| b.joint_name.clone()).collect();
-        for j in self.lock.iter().chain(&self.only) {
-            if !joints.contains(j) {
-                bail!(
-                    "--{}: the robot has no joint '{j}' (its joints: {})",
-                    if self.only.is_empty() { "lock" } else { "only" },
-                    joints.join(", ")
-                );
-            }
-        }
-        let lock = if self.only.is_empty() {
-            self.lock.clone()
-        } else {
-            joints
-                .into_iter()
-                .filter(|j| !self.only.contains(j))
-                .collect()
-        };
-        if let Some(c) = self.cutoff.filter(|c| !(c.is_finite() && *c > 0.0)) {
-            bail!("--cutoff must be a positive frequency in Hz, got {c}");
-        }
-        Ok(physid::io::DataOptions {
+    /// The library's reading options, as given.
+    pub fn options(&self) -> ReadOptions {
+        ReadOptions {
             topic: self.topic.clone(),
             stamp: self.stamp,
-            prepare: physid::prepare::Options {
-                cutoff: self.cutoff,
-                lock,
-                band_edge: None,
-            },
-        })
+            cutoff: self.cutoff,
+            lock: self.lock.clone(),
+            only: self.only.clone(),
+        }
     }
-    /// Whether any reading option applies only to bags (for a warning on other files).
-    fn bag_only(&self) -> bool {
-        self.topic.is_some() || self.stamp != physid::io::mcap_log::Stamp::Log
-    }
-}
-
-/// `--topic` and `--stamp` given for no bag at all are an error (they cannot mean what the
-/// user meant); given with some bags, a warning for each other file.
-fn check_bag_options(paths: &[&Path], read: &ReadArgs) -> anyhow::Result<()> {
-    let is_bag = |p: &Path| p.is_dir() || p.extension().and_then(|e| e.to_str()) == Some("mcap");
-    if !read.bag_only() {
-        return Ok(());
-    }
-    if let Some(first) = paths.first().filter(|_| !paths.iter().any(|p| is_bag(p))) {
-        bail!(
-            "{}: --topic and --stamp apply to MCAP files and rosbag2 directories only, and no data file given is one",
-            first.display()
-        );
-    }
-    for path in paths.iter().filter(|p| !is_bag(p)) {
-        eprintln!(
-            "warning: {}: --topic and --stamp apply to MCAP files and rosbag2 directories only",
-            path.display()
-        );
-    }
-    Ok(())
 }
 
 /// Loads data files read together (see [`physid::io::load_all`]: one cutoff for all),
@@ -132,139 +60,17 @@ pub fn load_data(
     model: &Model,
     read: &ReadArgs,
 ) -> anyhow::Result<Vec<physid::io::LoadedData>> {
-    check_bag_options(paths, read)?;
-    let loaded = physid::io::load_all(paths, model, &read.options(model)?)?;
-    for (path, l) in paths.iter().zip(&loaded) {
-        print_notes(path, l);
+    let read = read.options().resolve(model)?;
+    for notice in physid::api::data::bag_option_notices(paths, &read)? {
+        eprintln!("{notice}");
     }
-    Ok(loaded)
-}
-
-/// Opens data files read together, large CSV files streamed unless `in_memory`
-/// ([`Data::open_all`]), printing what the pipeline did to each file read in memory.
-fn open_data(
-    paths: &[&Path],
-    model: &Model,
-    read: &ReadArgs,
-    in_memory: bool,
-) -> anyhow::Result<Vec<Data>> {
-    check_bag_options(paths, read)?;
-    let data = Data::open_all(paths, model, &read.options(model)?, in_memory)?;
-    for (path, d) in paths.iter().zip(&data) {
-        if let Data::Memory(loaded) = d {
-            print_notes(path, loaded);
+    let loaded = physid::io::load_all(paths, model, &read)?;
+    for (path, l) in paths.iter().zip(&loaded) {
+        for notice in physid::api::data::file_notices(path, l) {
+            eprintln!("{notice}");
         }
     }
-    Ok(data)
-}
-
-/// What the pipeline did to one file, on standard error.
-fn print_notes(path: &Path, loaded: &physid::io::LoadedData) {
-    if !loaded.ignored_joints.is_empty() {
-        eprintln!(
-            "note: {} has joints the robot does not have, left out: {}",
-            path.display(),
-            loaded.ignored_joints.join(", ")
-        );
-    }
-    if loaded.skipped_messages > 0 {
-        eprintln!(
-            "note: {}: {} joint-state messages name none of the robot's joints (another publisher on the topic), skipped",
-            path.display(),
-            loaded.skipped_messages
-        );
-    }
-    for line in data_notes(&loaded.report) {
-        eprintln!(
-            "{}: {}: {line}",
-            if line.starts_with("joint") {
-                "warning"
-            } else {
-                "note"
-            },
-            path.display()
-        );
-    }
-}
-
-/// What the pipeline did to one file, one line per kind of change (nothing for clean data
-/// with accelerations).
-pub fn data_notes(r: &physid::prepare::Report) -> Vec<String> {
-    use physid::prepare::TimeBase;
-    let mut out = vec![];
-    if !r.gaps.is_empty() {
-        let gaps: Vec<String> = r
-            .gaps
-            .iter()
-            .take(5)
-            .map(|g| format!("{:+.3} s before sample {}", g.seconds, g.sample))
-            .collect();
-        out.push(format!(
-            "split into {} runs at {} time jump{} ({}{}): no signal is differentiated across them",
-            r.runs + usize::from(r.dropped_short > 0),
-            r.gaps.len(),
-            if r.gaps.len() == 1 { "" } else { "s" },
-            gaps.join(", "),
-            if r.gaps.len() > 5 { ", …" } else { "" }
-        ));
-    }
-    if r.missing_bridged > 0 {
-        out.push(format!(
-            "{} missing samples bridged at {} places (the derivatives interpolate across them)",
-            r.missing_bridged, r.dropouts_bridged
-        ));
-    }
-    if r.duplicates > 0 {
-        out.push(format!("{} duplicated samples dropped", r.duplicates));
-    }
-    match r.time_base {
-        TimeBase::Uniform => {}
-        TimeBase::Stamps => out.push(format!("time stamps scatter by {:.1} % of the period (RMS); the samples agree with their stamps, which are used", 100.0 * r.jitter)),
-        TimeBase::ClockSlots => out.push(format!("time stamps scatter by {:.1} % of the period (RMS); the samples agree with a uniform clock, so each is placed at its clock slot", 100.0 * r.jitter)),
-    }
-    if r.derived_qd || r.derived_qdd {
-        let what = match (r.derived_qd, r.derived_qdd) {
-            (true, true) => "no velocities or accelerations: q̇ and q̈ derived",
-            (true, false) => "no velocities: q̇ derived",
-            _ => "no accelerations: q̈ derived",
-        };
-        out.push(format!(
-            "{what} (central difference, zero-phase {:.3} Hz Butterworth{}); {} samples trimmed at the ends of the runs ({} at each end, the filter's settling){}",
-            r.cutoff,
-            r.band_edge.map_or(String::new(), |e| format!(", 4 times the motion's band edge {e:.3} Hz over all files read")),
-            r.trimmed,
-            r.settle_samples,
-            if r.dropped_short > 0 { format!(", {} samples of pieces too short to keep", r.dropped_short) } else { String::new() }
-        ));
-    }
-    if r.samples_kept < r.samples_read {
-        out.push(format!(
-            "{} of {} samples used",
-            r.samples_kept, r.samples_read
-        ));
-    }
-    for j in &r.unmeasured {
-        out.push(format!("joint '{j}': its torque is zero in every sample (not measured): locked, its torque is not fitted"));
-    }
-    let asked: Vec<&String> = r
-        .locked
-        .iter()
-        .filter(|j| !r.unmeasured.contains(j))
-        .collect();
-    if !asked.is_empty() {
-        out.push(format!(
-            "locked (held at their logged position, torque not fitted): {}",
-            asked
-                .iter()
-                .map(|s| s.as_str())
-                .collect::<Vec<_>>()
-                .join(", ")
-        ));
-    }
-    for j in r.still.iter().filter(|j| !r.locked.contains(j)) {
-        out.push(format!("joint '{j}' never moves: its friction cannot be identified from these data (lock it with --lock {j}, or record a motion that moves it)"));
-    }
-    out
+    Ok(loaded)
 }
 
 /// Identify inertial and friction parameters under a constraint set.
@@ -365,96 +171,53 @@ fn terms(a: &Args, model: &Model) -> anyhow::Result<Vec<Variant>> {
     Ok(out)
 }
 
+/// The library's options from the flags, but for the effect terms (which need the model).
+fn options(a: &Args) -> anyhow::Result<IdentifyOptions> {
+    let range = |s: &Option<String>, what: &str| {
+        s.as_deref()
+            .map(|s| SampleRange::parse(s, what))
+            .transpose()
+    };
+    let mut o = IdentifyOptions::new(a.data.clone());
+    o.validate_data = a.validate_data.clone();
+    o.train = range(&a.train, "--train")?;
+    o.validate = range(&a.validate, "--validate")?;
+    o.constraints = a.constraints;
+    o.prior_weight = a.prior_weight;
+    o.eps = a.eps;
+    o.regularizer = a.regularizer;
+    o.read = a.read.options();
+    o.allow_few_samples = a.allow_few_samples;
+    Ok(o)
+}
+
 /// Runs the identification and prints the report.
 pub fn run(a: Args) -> anyhow::Result<()> {
     check_paths(&a)?;
+    let mut opts = options(&a)?;
+    opts.validate().map_err(super::option_error)?;
     let model = a.robot.load()?;
     let m = &model;
-    let (set, set_note) = constraint_set(a.constraints, m);
-    let opts = options(&a, set)?;
-    let terms = terms(&a, m)?;
-    if a.export_problem.is_some() && !terms.is_empty() {
+    opts.terms = terms(&a, m)?;
+    if a.export_problem.is_some() && !opts.terms.is_empty() {
         bail!("--export-problem writes the model's own problem: leave out the extra --friction terms and --effects");
     }
-    let in_memory = !terms.is_empty();
-    let paths: Vec<&Path> = a
-        .data
-        .iter()
-        .chain(&a.validate_data)
-        .map(PathBuf::as_path)
-        .collect();
-    let roles: Vec<(&str, &Path)> = (a.data.iter().map(|p| ("--data", p.as_path())))
-        .chain(
-            a.validate_data
-                .iter()
-                .map(|p| ("--validate-data", p.as_path())),
-        )
-        .collect();
-    physid::io::check_distinct_recordings(&roles)?;
-    // Training files first, then the validation files: one data set, parts of it as spans.
-    let data = open_data(&paths, m, &a.read, in_memory)?;
-    let n_train = a.data.len();
-    let train: Vec<Span> = match a.train.as_deref() {
-        Some(s) => vec![Span {
-            file: 0,
-            range: parse_range(s, data[0].len(), "--train")?,
-        }],
-        None => (0..n_train)
-            .map(|file| Span {
-                file,
-                range: 0..data[file].len(),
-            })
-            .collect(),
-    };
-    let validation: Vec<Span> = match a.validate.as_deref() {
-        Some(s) => vec![Span {
-            file: 0,
-            range: parse_range(s, data[0].len(), "--validate")?,
-        }],
-        None => (n_train..data.len())
-            .map(|file| Span {
-                file,
-                range: 0..data[file].len(),
-            })
-            .collect(),
-    };
-    let locked = locked_joints(m, &data);
-    let samples: usize = train.iter().map(|s| data[s.file].used(&s.range)).sum();
-    let p = m.layout().len + physid::diagnose::calibrate::columns(&terms, m.dof());
-    let equations = samples * (m.dof() - locked.len());
-    if equations < p && !a.allow_few_samples {
-        bail!(
-            "{}: {samples} samples give {equations} equations for {p} parameters: the fit is decided by the prior; give more samples, or --allow-few-samples if that is what you want",
-            a.data[0].display(),
-        );
-    }
-    let start = std::time::Instant::now();
-    let fit = physid::api::identify::fit(m, &data, &train, &opts, terms, &locked)?;
-    let total = start.elapsed().as_secs_f64();
-    let report = score(
-        &a,
-        m,
-        fit,
-        (set, set_note),
-        &data,
-        (&train, &validation),
-        &locked,
-        total,
-    )?;
-    write_outputs(&a, m, &report)?;
+    let report = identify_reporting(m, &opts, &mut |notice| eprintln!("{notice}"))
+        .map_err(super::option_error)?;
+    write_outputs(&a, m, &opts, &report)?;
     if a.json {
-        print_json(&a, m, &report)?;
+        let v = physid::io::versioned("identify", &report.json(m));
+        println!("{}", serde_json::to_string_pretty(&v)?);
     } else {
         print_text(&a, m, &report);
     }
     if a.require_consistent {
-        require_consistent(&report.r)?;
+        require_consistent(&report)?;
     }
     Ok(())
 }
 
-/// Outputs never onto inputs or each other; `--train`/`--validate` with one data file and
-/// without `--validate-data`.
+/// Outputs never onto inputs or each other.
 fn check_paths(a: &Args) -> anyhow::Result<()> {
     let robot_file = Path::new(&a.robot.robot);
     let mut inputs: Vec<&Path> = a.data.iter().map(PathBuf::as_path).collect();
@@ -470,118 +233,36 @@ fn check_paths(a: &Args) -> anyhow::Result<()> {
         .map(PathBuf::as_path)
         .collect();
     physid::io::check_outputs(&outputs, &inputs)?;
-    if a.data.len() > 1 && (a.train.is_some() || a.validate.is_some()) {
-        bail!("--train and --validate pick samples of one --data file; with several runs, give whole runs (--validate-data for held-out runs)");
-    }
-    if a.validate.is_some() && !a.validate_data.is_empty() {
-        bail!("give --validate or --validate-data, not both");
-    }
     Ok(())
-}
-
-/// The data files read: training and held-out.
-/// The fit scored on the training and validation spans, with its identifiability and what
-/// the data pipeline did.
-#[allow(clippy::too_many_arguments)]
-fn score(
-    a: &Args,
-    m: &Model,
-    fit: Fit,
-    (set, set_note): (ConstraintSet, Option<String>),
-    data: &[Data],
-    (train, validation): (&[Span], &[Span]),
-    locked: &[usize],
-    total: f64,
-) -> anyhow::Result<Report> {
-    let (train_rms, train_all) = fit.errors(m, data, train, locked)?;
-    let val = if validation.is_empty() {
-        None
-    } else {
-        Some(fit.errors(m, data, validation, locked)?)
-    };
-    let idf = analysis::identifiability(m, &fit.normal_equations, &fit.model_theta(m));
-    let ranges =
-        |spans: &[Span]| -> Vec<Range<usize>> { spans.iter().map(|s| s.range.clone()).collect() };
-    let used = |spans: &[Span]| -> Vec<usize> {
-        spans.iter().map(|s| data[s.file].used(&s.range)).collect()
-    };
-    let vrange = validation
-        .first()
-        .map(|s| &s.range)
-        .filter(|_| a.data.len() == 1);
-    warn_weak_data(&train[0].range, vrange, a.validate.is_some(), &idf);
-    let dt = data[0].report().map_or(1e-3, |r| r.period);
-    let snippet = (!fit.terms.is_empty())
-        .then(|| physid::diagnose::calibrate::scenario_snippet(m, &fit.terms, dt));
-    let pipelines = a
-        .data
-        .iter()
-        .chain(&a.validate_data)
-        .zip(data)
-        .filter_map(|(f, d)| {
-            d.report().map(|r| DataJson {
-                file: f.clone(),
-                pipeline: r.clone(),
-            })
-        })
-        .collect();
-    Ok(Report {
-        idf,
-        truth_errors: (a.data.len() == 1)
-            .then(|| truth_errors(&a.data[0], m, &fit.identified.theta))
-            .flatten(),
-        r: fit.identified.clone(),
-        terms: fit.terms.clone(),
-        snippet,
-        set,
-        set_note,
-        train: ranges(train),
-        train_rms,
-        train_all,
-        vranges: ranges(validation),
-        val,
-        total,
-        used: (used(train), used(validation)),
-        data: pipelines,
-        locked: locked
-            .iter()
-            .map(|&j| m.bodies[j].joint_name.clone())
-            .collect(),
-        fit,
-    })
 }
 
 /// `--require-consistent`: every body physically consistent (`J(π) ≻ 0`), or exit code 1
 /// naming the bodies that are not.
-fn require_consistent(r: &ident::Identified) -> anyhow::Result<()> {
-    let bad: Vec<String> = r
-        .bodies
-        .iter()
-        .filter(|b| b.consistency.min_eig_pseudo.is_nan() || b.consistency.min_eig_pseudo <= 0.0)
-        .map(|b| {
-            format!(
-                "{} (min eig J = {:.3e})",
-                b.name, b.consistency.min_eig_pseudo
-            )
-        })
-        .collect();
+fn require_consistent(rep: &Identification) -> anyhow::Result<()> {
+    let bad = rep.inconsistent_bodies();
     if bad.is_empty() {
-        Ok(())
-    } else {
-        Err(super::Failed(format!(
-            "--require-consistent: {} of {} bodies are not physically consistent: {}",
-            bad.len(),
-            r.bodies.len(),
-            bad.join(", ")
-        ))
-        .into())
+        return Ok(());
     }
+    Err(super::Failed(format!(
+        "--require-consistent: {} of {} bodies are not physically consistent: {}",
+        bad.len(),
+        rep.identified.bodies.len(),
+        bad.join(", ")
+    ))
+    .into())
 }
 
 /// `--out-urdf`, `--out-effects` and `--export-problem`.
-fn write_outputs(a: &Args, m: &Model, rep: &Report) -> anyhow::Result<()> {
+fn write_outputs(
+    a: &Args,
+    m: &Model,
+    opts: &IdentifyOptions,
+    rep: &Identification,
+) -> anyhow::Result<()> {
     if let Some(p) = &a.out_urdf {
-        write_urdf(p, &a.robot.robot, rep, m)?;
+        for notice in rep.write_urdf(p, &a.robot.robot, m)? {
+            eprintln!("{notice}");
+        }
     }
     match (&a.out_effects, &rep.snippet) {
         (Some(p), Some(s)) => physid::io::write_atomic(p, s.as_bytes())?,
@@ -592,96 +273,8 @@ fn write_outputs(a: &Args, m: &Model, rep: &Report) -> anyhow::Result<()> {
         _ => {}
     }
     if let Some(p) = &a.export_problem {
-        let opts = options(a, rep.set)?;
-        export_problem(p, a, rep.set, m, &rep.fit.normal_equations, &opts, &rep.r)?;
-    }
-    Ok(())
-}
-
-/// Warnings where the data cannot support the answer: validation samples that are also
-/// training samples, and data that excite far fewer parameter directions than the model has.
-fn warn_weak_data(
-    train: &Range<usize>,
-    validate: Option<&Range<usize>>,
-    same_file: bool,
-    idf: &analysis::Identifiability,
-) {
-    if let Some(v) = validate.filter(|_| same_file) {
-        let overlap = v
-            .end
-            .min(train.end)
-            .saturating_sub(v.start.max(train.start));
-        if overlap > 0 {
-            eprintln!(
-                "warning: --train {}:{} and --validate {}:{} share {overlap} samples: the validation error is not a held-out error",
-                train.start, train.end, v.start, v.end
-            );
-        }
-    }
-    if 2 * idf.rank < idf.parameters {
-        eprintln!(
-            "warning: the data excite {} of {} parameter directions: the rest comes from the prior (the robot description), not from the data; record a motion that moves every joint",
-            idf.rank, idf.parameters
-        );
-    }
-}
-
-/// The identification's options from the flags, checked.
-fn options(a: &Args, set: ConstraintSet) -> anyhow::Result<Options> {
-    let mut opts = Options::new(set);
-    opts.prior_weight = a.prior_weight;
-    opts.eps = a.eps;
-    opts.regularizer = a.regularizer;
-    opts.validate().map_err(super::option_error)?;
-    Ok(opts)
-}
-
-/// What one identification found, for the outputs.
-struct Report {
-    r: ident::Identified,
-    /// The effect terms' fits (empty without terms).
-    terms: Vec<physid::diagnose::calibrate::TermFit>,
-    /// The terms as a scenario `[[effects]]` snippet.
-    snippet: Option<String>,
-    set: ConstraintSet,
-    /// Why the default constraint set was chosen (when none was given).
-    set_note: Option<String>,
-    /// Training samples per run.
-    train: Vec<Range<usize>>,
-    train_rms: Vec<Option<f64>>,
-    train_all: f64,
-    /// Validation samples per validation run.
-    vranges: Vec<Range<usize>>,
-    val: Option<(Vec<Option<f64>>, f64)>,
-    idf: analysis::Identifiability,
-    truth_errors: Option<Vec<TruthError>>,
-    total: f64,
-    /// Samples fitted per training run and scored per validation run (after the pipeline).
-    used: (Vec<usize>, Vec<usize>),
-    /// What the pipeline did to each file read in memory.
-    data: Vec<DataJson>,
-    /// Joints whose torque is not fitted.
-    locked: Vec<String>,
-    /// The fit itself (normal equations, calibration), for the outputs.
-    fit: Fit,
-}
-
-/// Writes the identified model as URDF, warning when its inertias are not consistent.
-fn write_urdf(p: &Path, robot: &str, rep: &Report, m: &Model) -> anyhow::Result<()> {
-    let r = &rep.r;
-    let theta = r.theta.rows(0, m.layout().len).into_owned();
-    let mut im = m.with_parameters(&theta)?;
-    for (j, b) in im.bodies.iter_mut().enumerate() {
-        b.friction.viscous = r.viscous[j];
-        b.friction.coulomb = r.coulomb[j];
-    }
-    physid::io::export_urdf(p, robot, m, &im, rep.snippet.as_deref())?;
-    if !r.constraints_hold || !ident::constraints_hold(m, &theta, ConstraintSet::Consistent) {
-        eprintln!(
-            "warning: {} holds physically inconsistent inertias (identified with '{}')",
-            p.display(),
-            rep.set.name()
-        );
+        let ident = opts.ident(rep.set)?;
+        export_problem(p, m, &rep.normal_equations, &ident, &rep.identified)?;
     }
     Ok(())
 }
@@ -691,8 +284,6 @@ fn write_urdf(p: &Path, robot: &str, rep: &Report, m: &Model) -> anyhow::Result<
 /// parameter columns and ellipsoid.
 fn export_problem(
     p: &Path,
-    a: &Args,
-    set: ConstraintSet,
     m: &Model,
     ne: &NormalEquations,
     opts: &Options,
@@ -707,8 +298,8 @@ fn export_problem(
         .collect();
     let l = m.layout();
     let v = json!({
-        "constraints": set, "eps": a.eps, "H": rows, "g": g.as_slice(), "c": c,
-        "regularizer": a.regularizer, "w": a.prior_weight, "prior": prior.as_slice(),
+        "constraints": opts.constraints, "eps": opts.eps, "H": rows, "g": g.as_slice(), "c": c,
+        "regularizer": opts.regularizer, "w": opts.prior_weight, "prior": prior.as_slice(),
         "bodies": bodies, "friction_cols": (l.viscous_col..l.len).collect::<Vec<_>>(),
         "physid": {"objective": r.objective, "theta": r.theta.as_slice(), "status": r.solver.status},
     });
@@ -717,74 +308,14 @@ fn export_problem(
     Ok(())
 }
 
-/// The JSON report (docs/identify-json.md).
-fn print_json(a: &Args, m: &Model, rep: &Report) -> anyhow::Result<()> {
-    let r = &rep.r;
-    let runs = |files: &[PathBuf], ranges: &[Range<usize>], used: &[usize]| -> Vec<RunRange> {
-        files
-            .iter()
-            .zip(ranges)
-            .zip(used)
-            .map(|((f, r), &u)| RunRange {
-                file: f.clone(),
-                range: [r.start, r.end],
-                samples_used: u,
-            })
-            .collect()
-    };
-    let vfiles: &[PathBuf] = if a.validate.is_some() {
-        &a.data[..1]
-    } else {
-        &a.validate_data
-    };
-    let v = IdentifyJson {
-        data: a.data[0].clone(),
-        robot: m.name.clone(),
-        constraints: rep.set,
-        constraints_default_because: rep.set_note.clone(),
-        train: Split {
-            range: Some([rep.train[0].start, rep.train[0].end]),
-            runs: runs(&a.data, &rep.train, &rep.used.0),
-            rms: rep.train_rms.clone(),
-            rms_overall: rep.train_all,
-        },
-        validation: rep.val.as_ref().map(|(rms, all)| Split {
-            range: rep.vranges.first().map(|r| [r.start, r.end]),
-            runs: runs(vfiles, &rep.vranges, &rep.used.1),
-            rms: rms.clone(),
-            rms_overall: *all,
-        }),
-        bodies: r.bodies.clone(),
-        friction: Friction {
-            viscous: r.viscous.clone(),
-            coulomb: r.coulomb.clone(),
-        },
-        effects: rep.terms.clone(),
-        scenario_effects: rep.snippet.clone(),
-        objective: r.objective,
-        constraints_hold: r.constraints_hold,
-        solver: r.solver.clone(),
-        end_to_end_seconds: rep.total,
-        identifiability: rep.idf.clone(),
-        parameter_names: theta_names(m, &rep.terms),
-        theta: r.theta.as_slice().to_vec(),
-        truth_errors: rep.truth_errors.clone(),
-        data_pipeline: rep.data.clone(),
-        locked_joints: rep.locked.clone(),
-    };
-    let v = physid::io::versioned("identify", &v);
-    println!("{}", serde_json::to_string_pretty(&v)?);
-    Ok(())
-}
-
 /// The text report: bodies, friction, effects, errors, consistency, identifiability, truth.
-fn print_text(a: &Args, m: &Model, rep: &Report) {
+fn print_text(a: &Args, m: &Model, rep: &Identification) {
     print_header(a, m, rep);
     print_identified_bodies(m, rep);
     print_joints(m, rep);
     print_terms(&rep.terms, m);
     print_fit(rep);
-    print_identifiability(&rep.idf);
+    print_identifiability(&rep.identifiability);
     if let Some(errs) = &rep.truth_errors {
         println!("\nagainst the ground truth in the log (relative errors; CoM in m):");
         println!(
@@ -801,14 +332,14 @@ fn print_text(a: &Args, m: &Model, rep: &Report) {
 }
 
 /// Robot, set, data, parameter count and solve time.
-fn print_header(a: &Args, m: &Model, rep: &Report) {
-    let r = &rep.r;
+fn print_header(a: &Args, m: &Model, rep: &Identification) {
+    let r = &rep.identified;
     let used: usize = rep.used.0.iter().sum();
     let on = if a.data.len() == 1 {
         format!(
             "samples {}..{} of {} ({used} used)",
-            rep.train[0].start,
-            rep.train[0].end,
+            rep.train[0].1.start,
+            rep.train[0].1.end,
             a.data[0].display()
         )
     } else {
@@ -833,7 +364,7 @@ fn print_header(a: &Args, m: &Model, rep: &Report) {
         r.solver.status,
         r.solver.seconds * 1e3,
         r.solver.iterations,
-        rep.total * 1e3
+        rep.total_seconds * 1e3
     );
     if let Some(why) = &rep.set_note {
         println!("constraints '{}' by default: {why}", rep.set.name());
@@ -841,12 +372,12 @@ fn print_header(a: &Args, m: &Model, rep: &Report) {
 }
 
 /// Each body's identified mass properties; a mass the data do not determine is marked `~`.
-fn print_identified_bodies(m: &Model, rep: &Report) {
+fn print_identified_bodies(m: &Model, rep: &Identification) {
     let names = m.parameter_names();
-    let se = &rep.idf.standard_errors;
+    let se = &rep.identifiability.standard_errors;
     let mut undetermined = 0;
     let (rows, marks): (Vec<_>, Vec<char>) = rep
-        .r
+        .identified
         .bodies
         .iter()
         .map(|b| {
@@ -873,8 +404,8 @@ fn print_identified_bodies(m: &Model, rep: &Report) {
 
 /// Friction and RMS per joint; friction the data cannot determine (a locked joint, or one that
 /// never moves) shows `—`.
-fn print_joints(m: &Model, rep: &Report) {
-    let r = &rep.r;
+fn print_joints(m: &Model, rep: &Identification) {
+    let r = &rep.identified;
     let width = m
         .bodies
         .iter()
@@ -893,7 +424,7 @@ fn print_joints(m: &Model, rep: &Report) {
         .flat_map(|d| d.pipeline.still.iter())
         .collect();
     for (j, b) in m.bodies.iter().enumerate() {
-        let known = rep.train_rms[j].is_some() && !still.contains(&&b.joint_name);
+        let known = rep.train_rms.0[j].is_some() && !still.contains(&&b.joint_name);
         let friction = |v: f64| {
             if known {
                 format!("{v:.4}")
@@ -906,19 +437,21 @@ fn print_joints(m: &Model, rep: &Report) {
             b.joint_name,
             friction(r.viscous[j]),
             friction(r.coulomb[j]),
-            cell(rep.train_rms[j]),
-            rep.val.as_ref().map_or("-".into(), |(v, _)| cell(v[j]))
+            cell(rep.train_rms.0[j]),
+            rep.validation_rms
+                .as_ref()
+                .map_or("-".into(), |(v, _)| cell(v[j]))
         );
     }
 }
 
 /// Overall RMS, consistency and the constraints' state.
-fn print_fit(rep: &Report) {
-    let r = &rep.r;
+fn print_fit(rep: &Identification) {
+    let r = &rep.identified;
     println!(
         "overall RMS: train {:.4} N m{}",
-        rep.train_all,
-        rep.val
+        rep.train_rms.1,
+        rep.validation_rms
             .as_ref()
             .map_or(String::new(), |(_, v)| format!(", validation {v:.4} N m"))
     );
