@@ -42,8 +42,12 @@ cargo build --quiet --release -p physid-python
 export PHYSID_PYTHON="$main_out/python"
 mkdir -p "$PHYSID_PYTHON" && cp -r python/physid "$PHYSID_PYTHON/"
 cp "$CARGO_TARGET_DIR/release/lib_physid.so" "$PHYSID_PYTHON/physid/_physid.abi3.so"
-for s in check_pinocchio check_mujoco check_cvxpy check_rosbag check_panda check_schemas check_report_html check_python_package check_main_outputs; do
-  if [ "$s" = check_main_outputs ]; then
+for s in check_pinocchio check_mujoco check_cvxpy check_rosbag check_panda check_schemas check_report_html check_python_package pytest check_main_outputs; do
+  if [ "$s" = pytest ]; then
+    step "the Python package's tests (pytest python/tests)"
+    out=$("$PHYSID_VENV/bin/python" -m pytest -q -p no:cacheprovider python/tests 2>&1) && rc=0 || rc=$?
+    [ "$rc" != 0 ] || echo "$out" | grep -qE '[0-9]+ failed' || out="$out (0 failed)"
+  elif [ "$s" = check_main_outputs ]; then
     step "the README's main command (bash scripts/run.sh), outputs parsed"
     out=$( { bash scripts/run.sh --out "$main_out/sample_size" >"$main_out/run.log" 2>&1 ||
                { tail -n 20 "$main_out/run.log"; exit 1; }; } &&

@@ -5,6 +5,19 @@
 pub trait OptionError {
     /// `(option field, what it must be, the value given)` when this is an invalid option.
     fn invalid_option(&self) -> Option<(&'static str, &'static str, f64)>;
+
+    /// The error as the CLI and the Python package word it, the option named as its flag
+    /// (`processing_cutoff` is `--cutoff`, other fields `--field-name`); `None` for any other
+    /// error.
+    fn flag_message(&self) -> Option<String> {
+        self.invalid_option().map(|(option, expected, value)| {
+            let flag = match option {
+                "processing_cutoff" => "cutoff".to_string(),
+                other => other.replace('_', "-"),
+            };
+            format!("--{flag} must be {expected}, got {value}")
+        })
+    }
 }
 
 /// Implements [`OptionError`] for an error enum with an `InvalidOption { option, expected,

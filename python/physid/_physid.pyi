@@ -1,16 +1,32 @@
 """Type stubs of the extension module physid._physid."""
 
-from typing import Any, Optional
+import os
+from typing import Any, Optional, Sequence, Union
 
 import numpy as np
 import numpy.typing as npt
 
 Array = npt.NDArray[np.float64]
+Path = Union[str, os.PathLike[str]]
+Paths = Union[Path, Sequence[Path]]
+Names = Union[str, Sequence[str]]
+SampleRange = Union[str, tuple[Optional[int], Optional[int]], range]
 
 class Robot:
     """A robot: "cheetah3" (the built-in leg), a URDF file, or a robot TOML file."""
 
-    def __init__(self, robot: str) -> None: ...
+    def __init__(
+        self,
+        robot: Path,
+        *,
+        rotor_model: Optional[str] = None,
+        no_rotors: bool = False,
+        ellipsoid_margin: Optional[float] = None,
+        package_dirs: Optional[Paths] = None,
+        no_geometry_ellipsoids: bool = False,
+    ) -> None:
+        """Load the robot; the keyword arguments are the CLI's robot flags. Loader warnings are
+        issued as physid.PhysidWarning."""
     @property
     def name(self) -> str: ...
     @property
@@ -29,6 +45,73 @@ class Robot:
         """Y(q, qd, qdd) with Y @ theta = tau, shape (samples, n, p)."""
     def describe(self) -> dict[str, Any]:
         """The JSON of `physid model --json`."""
+
+class Identification:
+    """What identify found; to_dict() is `physid identify --json`."""
+
+    @property
+    def theta(self) -> Array:
+        """The identified parameters: the model's, then the effect terms' coefficients."""
+    @property
+    def parameter_names(self) -> list[str]: ...
+    @property
+    def constraints(self) -> str:
+        """The constraint set identified under."""
+    @property
+    def constraints_hold(self) -> bool: ...
+    @property
+    def train_rms(self) -> float:
+        """RMS torque error on the training samples (N m)."""
+    @property
+    def validation_rms(self) -> Optional[float]:
+        """RMS torque error on the held-out samples (N m), None when nothing was held out."""
+    @property
+    def notices(self) -> list[str]:
+        """Notes and warnings as the CLI prints them."""
+    def bodies(self) -> Any:
+        """pandas DataFrame: name, m, hx, ..., Izz, min_eig_I, min_eig_J, tr_JQ, consistent."""
+    def joints(self) -> Any:
+        """pandas DataFrame: joint, viscous, coulomb, train_rms, validation_rms."""
+    def to_dict(self) -> dict[str, Any]:
+        """The report as `physid identify --json` prints it."""
+    def write_urdf(self, path: Path) -> None:
+        """Write the identified model as URDF plus its sidecar; never over an input."""
+
+def identify(
+    robot: Robot,
+    data: Paths,
+    *,
+    validate_data: Optional[Paths] = None,
+    train: Optional[SampleRange] = None,
+    validate: Optional[SampleRange] = None,
+    constraints: Optional[str] = None,
+    friction: Optional[Names] = None,
+    effects: Optional[Names] = None,
+    effects_from: Optional[Path] = None,
+    prior_weight: float = 1e-6,
+    eps: float = 1e-6,
+    regularizer: str = "euclidean",
+    topic: Optional[str] = None,
+    stamp: str = "log",
+    cutoff: Optional[float] = None,
+    lock: Optional[Names] = None,
+    only: Optional[Names] = None,
+    allow_few_samples: bool = False,
+) -> Identification:
+    """Identify from data files (CSV, MCAP, rosbag2) as `physid identify` does."""
+
+def load(
+    robot: Robot,
+    data: Paths,
+    *,
+    topic: Optional[str] = None,
+    stamp: str = "log",
+    cutoff: Optional[float] = None,
+    lock: Optional[Names] = None,
+    only: Optional[Names] = None,
+) -> list[dict[str, Any]]:
+    """Read files through physid's pipeline: per file its runs (t, q, qd, qdd, tau, index),
+    pipeline report and notices."""
 
 def identify_arrays(
     robot: Robot,

@@ -6,16 +6,27 @@
 
 use numpy::{IntoPyArray, PyArray1, PyArray2, PyArray3, PyArrayMethods, PyReadonlyArrayDyn};
 use physid::api;
+use physid::api::data::{Notice, ReadOptions};
+use physid::api::identify::{IdentifyOptions, SampleRange};
+use physid::api::model::RobotOptions;
 use physid::ident::{ConstraintSet, NormalEquations, Options};
-use physid::model::Model;
+use physid::model::{Model, RotorModel};
 use physid::trajectory::Trajectory;
 use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
+use std::path::{Path, PathBuf};
 
 /// A library error as a Python `ValueError` with its message.
 fn value_error(e: impl std::fmt::Display) -> PyErr {
     PyValueError::new_err(e.to_string())
+}
+
+/// A library entry point's error as a Python `ValueError` with the CLI's message (an invalid
+/// option named as its flag).
+fn api_error(e: api::ApiError) -> PyErr {
+    use physid::options::OptionError;
+    PyValueError::new_err(e.flag_message().unwrap_or_else(|| e.to_string()))
 }
 
 /// A JSON value (as physid writes it, with its schema) as Python objects.
@@ -25,6 +36,12 @@ fn to_python<'py>(
     value: &impl serde::Serialize,
 ) -> PyResult<Bound<'py, PyAny>> {
     let text = serde_json::to_string(&physid::io::versioned(schema, value)).map_err(value_error)?;
+    py.import("json")?.call_method1("loads", (text,))
+}
+
+/// A value as Python objects through its JSON form (no schema tag).
+fn plain<'py>(py: Python<'py>, value: &impl serde::Serialize) -> PyResult<Bound<'py, PyAny>> {
+    let text = serde_json::to_string(value).map_err(value_error)?;
     py.import("json")?.call_method1("loads", (text,))
 }
 
@@ -73,14 +90,55 @@ fn states(
 #[pyclass(frozen, module = "physid")]
 struct Robot {
     model: Model,
+    /// The robot as given (`cheetah3` or a file), for outputs that copy its URDF.
+    source: String,
 }
 
 #[pymethods]
 impl Robot {
+    /// Loads `robot` (`"cheetah3"`, a URDF or a robot TOML path); `rotor_model` (`"full"` or
+    /// `"reflected"`), `no_rotors`, `ellipsoid_margin` (m), `package_dirs` and
+    /// `no_geometry_ellipsoids` as the CLI's robot flags. The loader's warnings are issued as
+    /// `PhysidWarning`.
     #[new]
-    fn new(robot: &str) -> PyResult<Self> {
-        let model = physid::io::load_robot(robot).map_err(value_error)?;
-        Ok(Robot { model })
+    #[pyo3(signature = (robot, *, rotor_model = None, no_rotors = false, ellipsoid_margin = None,
+        package_dirs = None, no_geometry_ellipsoids = false))]
+    fn new(
+        py: Python<'_>,
+        robot: &Bound<'_, PyAny>,
+        rotor_model: Option<&str>,
+        no_rotors: bool,
+        ellipsoid_margin: Option<f64>,
+        package_dirs: Option<&Bound<'_, PyAny>>,
+        no_geometry_ellipsoids: bool,
+    ) -> PyResult<Self> {
+        let robot: PathBuf = robot.extract().map_err(|_| {
+            value_error("robot: give \"cheetah3\" or a path to a URDF or robot TOML")
+        })?;
+        let rotor_model = match rotor_model {
+            None => None,
+            Some("full") => Some(RotorModel::Full),
+            Some("reflected") => Some(RotorModel::Reflected),
+            Some(other) => {
+                return Err(value_error(format!(
+                    "--rotor-model: '{other}' is not one of full, reflected"
+                )))
+            }
+        };
+        let opts = RobotOptions {
+            robot: robot.to_string_lossy().into_owned(),
+            rotor_model,
+            no_rotors,
+            ellipsoid_margin,
+            package_dirs: paths("package_dirs", package_dirs)?,
+            no_geometry_ellipsoids,
+        };
+        let (model, notices) = py.allow_threads(|| opts.load()).map_err(api_error)?;
+        warn(py, &notices)?;
+        Ok(Robot {
+            model,
+            source: opts.robot,
+        })
     }
 
     /// The robot's name.
@@ -256,6 +314,368 @@ fn identify_arrays<'py>(
     Ok(out)
 }
 
+/// A list of paths from a path or a sequence of paths (`str` or `os.PathLike`).
+fn paths(what: &str, v: Option<&Bound<'_, PyAny>>) -> PyResult<Vec<PathBuf>> {
+    let Some(v) = v else { return Ok(vec![]) };
+    if let Ok(one) = v.extract::<PathBuf>() {
+        return Ok(vec![one]);
+    }
+    v.extract::<Vec<PathBuf>>()
+        .map_err(|_| value_error(format!("{what}: give a path or a list of paths")))
+}
+
+/// A list of names from `"a,b"` or `["a", "b"]`.
+fn names(v: Option<&Bound<'_, PyAny>>) -> PyResult<Vec<String>> {
+    let Some(v) = v else { return Ok(vec![]) };
+    if let Ok(s) = v.extract::<String>() {
+        return Ok(s.split(',').map(|x| x.trim().to_string()).collect());
+    }
+    v.extract::<Vec<String>>()
+}
+
+/// A sample range from `"a:b"`, `(a, b)` or `range(a, b)` (`None`: the file's end).
+fn sample_range(what: &str, v: Option<&Bound<'_, PyAny>>) -> PyResult<Option<SampleRange>> {
+    let Some(v) = v else { return Ok(None) };
+    if let Ok(s) = v.extract::<String>() {
+        return SampleRange::parse(&s, what).map(Some).map_err(value_error);
+    }
+    if let Ok((a, b)) = v.extract::<(Option<usize>, Option<usize>)>() {
+        return Ok(Some(SampleRange { start: a, end: b }));
+    }
+    if v.is_instance_of::<pyo3::types::PyRange>() {
+        let (a, b, step): (usize, usize, isize) = (
+            v.getattr("start")?.extract()?,
+            v.getattr("stop")?.extract()?,
+            v.getattr("step")?.extract()?,
+        );
+        if step == 1 {
+            return Ok(Some(SampleRange {
+                start: Some(a),
+                end: Some(b),
+            }));
+        }
+    }
+    Err(value_error(format!(
+        "{what}: give \"a:b\", (a, b) or range(a, b) of sample indices (non-negative, step 1)"
+    )))
+}
+
+/// How files are read, from the keyword arguments shared by `load` and `identify`.
+fn read_options(
+    topic: Option<String>,
+    stamp: &str,
+    cutoff: Option<f64>,
+    lock: Option<&Bound<'_, PyAny>>,
+    only: Option<&Bound<'_, PyAny>>,
+) -> PyResult<ReadOptions> {
+    Ok(ReadOptions {
+        topic,
+        stamp: stamp
+            .parse()
+            .map_err(|e| value_error(format!("--stamp: {e}")))?,
+        cutoff,
+        lock: names(lock)?,
+        only: names(only)?,
+    })
+}
+
+/// Raises each warning among `notices` as a Python `physid.PhysidWarning` (notes are kept in
+/// the result only).
+fn warn(py: Python<'_>, notices: &[Notice]) -> PyResult<()> {
+    let category = py.import("physid")?.getattr("PhysidWarning")?;
+    for n in notices.iter().filter(|n| n.warning) {
+        PyErr::warn(py, &category, &std::ffi::CString::new(n.text.clone())?, 1)?;
+    }
+    Ok(())
+}
+
+/// Reads data files (CSV, MCAP, rosbag2) for `robot` through physid's pipeline (gaps split into
+/// runs, q̇ and q̈ derived where not logged, one cutoff for all files). Returns per file a dict:
+/// `runs` (each with `t`, `q`, `qd`, `qdd`, `tau` arrays and `index`, each sample's index in the
+/// file), `pipeline` (what was done, as `identify --json` reports it) and `notices`.
+#[pyfunction]
+#[pyo3(signature = (robot, data, *, topic = None, stamp = "log", cutoff = None, lock = None, only = None))]
+#[allow(clippy::too_many_arguments)]
+fn load<'py>(
+    py: Python<'py>,
+    robot: &Robot,
+    data: &Bound<'py, PyAny>,
+    topic: Option<String>,
+    stamp: &str,
+    cutoff: Option<f64>,
+    lock: Option<&Bound<'py, PyAny>>,
+    only: Option<&Bound<'py, PyAny>>,
+) -> PyResult<Vec<Bound<'py, PyDict>>> {
+    let m = &robot.model;
+    let files = paths("data", Some(data))?;
+    let read = read_options(topic, stamp, cutoff, lock, only)?
+        .resolve(m)
+        .map_err(value_error)?;
+    let refs: Vec<&Path> = files.iter().map(PathBuf::as_path).collect();
+    let mut notices = api::data::bag_option_notices(&refs, &read).map_err(value_error)?;
+    let loaded = py
+        .allow_threads(|| physid::io::load_all(&refs, m, &read))
+        .map_err(value_error)?;
+    let n = m.dof();
+    let mut out = vec![];
+    for (path, l) in refs.iter().zip(&loaded) {
+        let file_notes = api::data::file_notices(path, l);
+        let d = PyDict::new(py);
+        let mut runs = vec![];
+        for r in &l.runs {
+            let tr = &r.trajectory;
+            let s = tr.t.len();
+            let run = PyDict::new(py);
+            run.set_item("t", tr.t.clone().into_pyarray(py))?;
+            for (key, v) in [("q", &tr.q), ("qd", &tr.qd), ("tau", &tr.tau)] {
+                run.set_item(key, v.clone().into_pyarray(py).reshape([s, n])?)?;
+            }
+            let qdd = tr.qdd.clone().unwrap_or_default();
+            run.set_item("qdd", qdd.into_pyarray(py).reshape([s, n])?)?;
+            run.set_item("index", r.index.clone())?;
+            runs.push(run);
+        }
+        d.set_item("file", path.to_path_buf())?;
+        d.set_item("runs", runs)?;
+        d.set_item("pipeline", plain(py, &l.report)?)?;
+        d.set_item(
+            "notices",
+            file_notes.iter().map(|n| n.to_string()).collect::<Vec<_>>(),
+        )?;
+        notices.extend(file_notes);
+        out.push(d);
+    }
+    warn(py, &notices)?;
+    Ok(out)
+}
+
+/// What `identify` found (the report behind `physid identify`): `to_dict()` is its `--json`.
+#[pyclass(frozen, module = "physid")]
+struct Identification {
+    report: api::identify::Identification,
+    model: Model,
+    source: String,
+    inputs: Vec<PathBuf>,
+}
+
+#[pymethods]
+impl Identification {
+    /// θ as identified: the model's parameters, then the effect terms' coefficients.
+    #[getter]
+    fn theta<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<f64>> {
+        self.report
+            .identified
+            .theta
+            .as_slice()
+            .to_vec()
+            .into_pyarray(py)
+    }
+
+    /// The names of θ's entries.
+    #[getter]
+    fn parameter_names(&self) -> Vec<String> {
+        api::identify::theta_names(&self.model, &self.report.terms)
+    }
+
+    /// The constraint set identified under.
+    #[getter]
+    fn constraints(&self) -> &'static str {
+        self.report.set.name()
+    }
+
+    /// Whether the constraint set's matrix inequalities hold at the answer.
+    #[getter]
+    fn constraints_hold(&self) -> bool {
+        self.report.identified.constraints_hold
+    }
+
+    /// RMS torque error over all fitted joints on the training samples (N m).
+    #[getter]
+    fn train_rms(&self) -> f64 {
+        self.report.train_rms.1
+    }
+
+    /// RMS torque error on the held-out samples (N m), `None` when nothing was held out.
+    #[getter]
+    fn validation_rms(&self) -> Option<f64> {
+        self.report.validation_rms.as_ref().map(|v| v.1)
+    }
+
+    /// The notes and warnings, as `physid identify` prints them.
+    #[getter]
+    fn notices(&self) -> Vec<String> {
+        self.report.notices.iter().map(|n| n.to_string()).collect()
+    }
+
+    /// Each body's (and rotor's) identified π and its consistency margins, one row per body:
+    /// a pandas DataFrame (`name`, `m`, `hx` … `Izz`, `min_eig_I`, `min_eig_J`, `tr_JQ`,
+    /// `consistent`).
+    fn bodies<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
+        let b = &self.report.identified.bodies;
+        let cols = PyDict::new(py);
+        cols.set_item("name", b.iter().map(|b| b.name.clone()).collect::<Vec<_>>())?;
+        for (k, key) in physid::spatial::PARAM_NAMES.iter().enumerate() {
+            cols.set_item(*key, b.iter().map(|b| b.pi[k]).collect::<Vec<_>>())?;
+        }
+        let c = |f: fn(&physid::spatial::ConsistencyReport) -> Option<f64>| {
+            b.iter().map(|b| f(&b.consistency)).collect::<Vec<_>>()
+        };
+        cols.set_item("min_eig_I", c(|c| Some(c.min_eig_spatial)))?;
+        cols.set_item("min_eig_J", c(|c| Some(c.min_eig_pseudo)))?;
+        cols.set_item("tr_JQ", c(|c| c.trace_jq))?;
+        let consistent: Vec<bool> = b.iter().map(|b| b.consistency.consistent()).collect();
+        cols.set_item("consistent", consistent)?;
+        frame(py, cols)
+    }
+
+    /// One row per joint: `joint`, `viscous` (N m s/rad), `coulomb` (N m) and the RMS torque
+    /// errors `train_rms` and `validation_rms` (N m; NaN for a locked joint or nothing held out).
+    fn joints<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
+        let r = &self.report;
+        let n = self.model.dof();
+        let cols = PyDict::new(py);
+        let names: Vec<String> = self
+            .model
+            .bodies
+            .iter()
+            .map(|b| b.joint_name.clone())
+            .collect();
+        cols.set_item("joint", names)?;
+        cols.set_item("viscous", r.identified.viscous.clone())?;
+        cols.set_item("coulomb", r.identified.coulomb.clone())?;
+        let rms = |v: Option<&Vec<Option<f64>>>| -> Vec<f64> {
+            (0..n)
+                .map(|j| v.and_then(|v| v[j]).unwrap_or(f64::NAN))
+                .collect()
+        };
+        cols.set_item("train_rms", rms(Some(&r.train_rms.0)))?;
+        cols.set_item(
+            "validation_rms",
+            rms(r.validation_rms.as_ref().map(|v| &v.0)),
+        )?;
+        frame(py, cols)
+    }
+
+    /// The report as `physid identify --json` prints it.
+    fn to_dict<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
+        to_python(py, "identify", &self.report.json(&self.model))
+    }
+
+    /// Writes the identified model as URDF (the robot's own URDF with only `<inertial>` and
+    /// `<dynamics>` changed, plus the sidecar `<name>.physid.toml`); never over an input.
+    fn write_urdf(&self, py: Python<'_>, path: PathBuf) -> PyResult<()> {
+        let sidecar = physid::io::sidecar_path(&path);
+        let mut inputs: Vec<PathBuf> = self.inputs.clone();
+        inputs.extend(physid::io::robot_files(&self.source, &[]));
+        let refs: Vec<&Path> = inputs.iter().map(PathBuf::as_path).collect();
+        physid::io::check_outputs(&[&path, &sidecar], &refs).map_err(value_error)?;
+        let notices = self
+            .report
+            .write_urdf(&path, &self.source, &self.model)
+            .map_err(value_error)?;
+        warn(py, &notices)
+    }
+
+    fn __repr__(&self) -> String {
+        let v = self
+            .validation_rms()
+            .map_or(String::new(), |v| format!(", validation RMS {v:.4} N m"));
+        format!(
+            "Identification('{}', {}, constraints hold: {}, train RMS {:.4} N m{v})",
+            self.model.name,
+            self.report.set.name(),
+            if self.report.identified.constraints_hold {
+                "True"
+            } else {
+                "False"
+            },
+            self.report.train_rms.1
+        )
+    }
+}
+
+/// A pandas DataFrame of `columns`; an ImportError that says how to get pandas without it.
+fn frame<'py>(py: Python<'py>, columns: Bound<'py, PyDict>) -> PyResult<Bound<'py, PyAny>> {
+    let pandas = py.import("pandas").map_err(|_| {
+        pyo3::exceptions::PyImportError::new_err(
+            "tables are pandas DataFrames: pip install pandas (or use to_dict())",
+        )
+    })?;
+    pandas.getattr("DataFrame")?.call1((columns,))
+}
+
+/// Identifies `robot` from data files as `physid identify` does, its flags as keyword
+/// arguments: `data` (a path or list: CSV, MCAP, rosbag2), `validate_data`, `train` and
+/// `validate` (`"a:b"`, `(a, b)` or `range(a, b)`), `constraints`, `friction`, `effects`,
+/// `effects_from`, `prior_weight`, `eps`, `regularizer`, `topic`, `stamp`, `cutoff`, `lock`,
+/// `only`, `allow_few_samples`. Warnings are raised as `physid.PhysidWarning`; the GIL is
+/// released while it runs.
+#[pyfunction]
+#[pyo3(signature = (robot, data, *, validate_data = None, train = None, validate = None,
+    constraints = None, friction = None, effects = None, effects_from = None,
+    prior_weight = 1e-6, eps = 1e-6, regularizer = "euclidean", topic = None, stamp = "log",
+    cutoff = None, lock = None, only = None, allow_few_samples = false))]
+#[allow(clippy::too_many_arguments)]
+fn identify<'py>(
+    py: Python<'py>,
+    robot: &Robot,
+    data: &Bound<'py, PyAny>,
+    validate_data: Option<&Bound<'py, PyAny>>,
+    train: Option<&Bound<'py, PyAny>>,
+    validate: Option<&Bound<'py, PyAny>>,
+    constraints: Option<&str>,
+    friction: Option<&Bound<'py, PyAny>>,
+    effects: Option<&Bound<'py, PyAny>>,
+    effects_from: Option<PathBuf>,
+    prior_weight: f64,
+    eps: f64,
+    regularizer: &str,
+    topic: Option<String>,
+    stamp: &str,
+    cutoff: Option<f64>,
+    lock: Option<&Bound<'py, PyAny>>,
+    only: Option<&Bound<'py, PyAny>>,
+    allow_few_samples: bool,
+) -> PyResult<Identification> {
+    let m = &robot.model;
+    let mut o = IdentifyOptions::new(paths("data", Some(data))?);
+    o.validate_data = paths("validate_data", validate_data)?;
+    o.train = sample_range("--train", train)?;
+    o.validate = sample_range("--validate", validate)?;
+    o.constraints = constraints
+        .map(str::parse)
+        .transpose()
+        .map_err(|e| value_error(format!("--constraints: {e}")))?;
+    let friction = match friction {
+        Some(f) => names(Some(f))?,
+        None => vec!["viscous".into(), "coulomb".into()],
+    };
+    o.terms = api::identify::parse_terms(&friction, &names(effects)?).map_err(value_error)?;
+    if let Some(p) = &effects_from {
+        o.terms
+            .extend(api::identify::confirmed_effects(p, m).map_err(value_error)?);
+    }
+    o.prior_weight = prior_weight;
+    o.eps = eps;
+    o.regularizer = regularizer
+        .parse()
+        .map_err(|e| value_error(format!("--regularizer: {e}")))?;
+    o.read = read_options(topic, stamp, cutoff, lock, only)?;
+    o.allow_few_samples = allow_few_samples;
+    let mut inputs: Vec<PathBuf> = o.data.iter().chain(&o.validate_data).cloned().collect();
+    inputs.extend(effects_from);
+    let report = py
+        .allow_threads(|| api::identify::identify(m, &o))
+        .map_err(api_error)?;
+    warn(py, &report.notices)?;
+    Ok(Identification {
+        report,
+        model: m.clone(),
+        source: robot.source.clone(),
+        inputs,
+    })
+}
+
 /// physid's version.
 #[pyfunction]
 fn version() -> &'static str {
@@ -265,7 +685,10 @@ fn version() -> &'static str {
 #[pymodule]
 fn _physid(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<Robot>()?;
+    m.add_class::<Identification>()?;
     m.add_function(wrap_pyfunction!(identify_arrays, m)?)?;
+    m.add_function(wrap_pyfunction!(identify, m)?)?;
+    m.add_function(wrap_pyfunction!(load, m)?)?;
     m.add_function(wrap_pyfunction!(version, m)?)?;
     Ok(())
 }

@@ -359,6 +359,31 @@ fn as_runs(pieces: &[Trajectory]) -> Vec<Run<'_>> {
         .collect()
 }
 
+/// The effect terms of `friction` (viscous and coulomb, the model's own and always listed,
+/// plus any of `offset`, `direction`, `stribeck:<v>`) and `effects` (library terms such as
+/// `tilt`, `cogging:<harmonic>`); errors name the flag.
+pub fn parse_terms(friction: &[String], effects: &[String]) -> Result<Vec<Variant>, ApiError> {
+    let mut out = vec![];
+    let mut has = [false; 2];
+    for f in friction {
+        match f.trim() {
+            "viscous" => has[0] = true,
+            "coulomb" => has[1] = true,
+            t if t == "offset" || t == "direction" || t.starts_with("stribeck") => out.push(
+                parse_term(t).map_err(|e| ApiError::Options(format!("--friction: {e}")))?,
+            ),
+            t => return Err(ApiError::Options(format!("--friction: unknown term '{t}' (viscous, coulomb, offset, direction, stribeck:<v>)"))),
+        }
+    }
+    if has != [true, true] {
+        return Err(ApiError::Options("--friction: viscous and coulomb are the model's own friction (paper eq. 9) and always identified; list them, then the terms to add (e.g. viscous,coulomb,offset)".into()));
+    }
+    for e in effects {
+        out.push(parse_term(e.trim()).map_err(|e| ApiError::Options(format!("--effects: {e}")))?);
+    }
+    Ok(out)
+}
+
 /// Samples `[start, end)` of a file as read (indices, end exclusive); an open side is the
 /// file's first or last sample.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]

@@ -144,3 +144,68 @@ pub fn describe(m: &Model) -> ModelJson {
         gravity_torque_q0: g.as_slice().to_vec(),
     }
 }
+
+/// Which robot and how it is built: what every command that loads a robot is given.
+#[derive(Clone, Debug, Default)]
+pub struct RobotOptions {
+    /// `cheetah3` (the built-in leg), a `.urdf` file, or a `.toml` file with a `[robot]` table.
+    pub robot: String,
+    /// Override the rotor treatment (full spinning bodies, or reflected armature).
+    pub rotor_model: Option<crate::model::RotorModel>,
+    /// Drop the rotors (the link-only model).
+    pub no_rotors: bool,
+    /// URDF robots: lengthen every semi-axis of the geometry's bounding ellipsoids (m).
+    pub ellipsoid_margin: Option<f64>,
+    /// URDF robots: folders holding ROS packages, for `package://` meshes.
+    pub package_dirs: Vec<std::path::PathBuf>,
+    /// URDF robots: take no bounding ellipsoids from the geometry (only a sidecar's).
+    pub no_geometry_ellipsoids: bool,
+}
+
+impl RobotOptions {
+    /// The robot `robot` as described, every option at its default.
+    pub fn new(robot: &str) -> Self {
+        RobotOptions {
+            robot: robot.to_string(),
+            ..Default::default()
+        }
+    }
+
+    /// Loads the robot, with the loader's warnings (a mesh not found, an inertia outside its
+    /// geometry's ellipsoid, …) as notices naming the robot file.
+    pub fn load(&self) -> Result<(Model, Vec<super::data::Notice>), super::ApiError> {
+        if let Some(d) = self.package_dirs.iter().find(|d| !d.is_dir()) {
+            let why = if d.exists() {
+                "is not a folder"
+            } else {
+                "does not exist"
+            };
+            return Err(super::ApiError::Options(format!(
+                "--package-dir {}: {why}",
+                d.display()
+            )));
+        }
+        let opts = crate::io::robot_spec::RobotOptions {
+            ellipsoid_margin: self.ellipsoid_margin,
+            package_dirs: self.package_dirs.clone(),
+            geometry_ellipsoids: self.no_geometry_ellipsoids.then_some(false),
+        };
+        let (mut m, warnings) = crate::io::load_robot_with(&self.robot, &opts)?;
+        if self.no_rotors {
+            m = m.without_rotors();
+        }
+        if let Some(r) = self.rotor_model {
+            m = m.with_rotor_model(r);
+        }
+        let notices = warnings
+            .into_iter()
+            .map(|w| super::data::Notice::warning(format!("{}: {w}", self.robot)))
+            .collect();
+        Ok((m, notices))
+    }
+
+    /// Every file the robot reads (its URDF, sidecar, meshes): inputs no output may replace.
+    pub fn files(&self) -> Vec<std::path::PathBuf> {
+        crate::io::robot_files(&self.robot, &self.package_dirs)
+    }
+}

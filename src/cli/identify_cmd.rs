@@ -3,12 +3,12 @@
 //! written (URDF, effects, the problem).
 
 use super::RobotArgs;
-use anyhow::{anyhow, bail};
+use anyhow::bail;
 use physid::api::data::ReadOptions;
 use physid::api::identify::{
-    confirmed_effects, identify_reporting, Identification, IdentifyOptions, SampleRange,
+    confirmed_effects, identify_reporting, parse_terms, Identification, IdentifyOptions,
+    SampleRange,
 };
-use physid::diagnose::calibrate::parse_term;
 use physid::diagnose::library::Variant;
 use physid::ident::{self, analysis, ConstraintSet, NormalEquations, Options};
 use physid::model::Model;
@@ -147,24 +147,7 @@ pub struct Args {
 
 /// The effect terms from `--friction`, `--effects` and `--effects-from`.
 fn terms(a: &Args, model: &Model) -> anyhow::Result<Vec<Variant>> {
-    let mut out = vec![];
-    let mut has = [false; 2];
-    for f in &a.friction {
-        match f.trim() {
-            "viscous" => has[0] = true,
-            "coulomb" => has[1] = true,
-            t if t == "offset" || t == "direction" || t.starts_with("stribeck") => {
-                out.push(parse_term(t).map_err(|e| anyhow!("--friction: {e}"))?)
-            }
-            t => bail!("--friction: unknown term '{t}' (viscous, coulomb, offset, direction, stribeck:<v>)"),
-        }
-    }
-    if has != [true, true] {
-        bail!("--friction: viscous and coulomb are the model's own friction (paper eq. 9) and always identified; list them, then the terms to add (e.g. viscous,coulomb,offset)");
-    }
-    for e in &a.effects {
-        out.push(parse_term(e.trim()).map_err(|e| anyhow!("--effects: {e}"))?);
-    }
+    let mut out = parse_terms(&a.friction, &a.effects)?;
     if let Some(p) = &a.effects_from {
         out.extend(confirmed_effects(p, model)?);
     }

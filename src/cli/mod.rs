@@ -61,23 +61,13 @@ impl std::fmt::Display for Failed {
 
 impl std::error::Error for Failed {}
 
-/// An option error from a library `Options::validate()`, with the option named as its flag
-/// (`processing_cutoff` is `--cutoff`, other fields `--field-name`).
-fn flag_error(option: &str, expected: &str, value: f64) -> anyhow::Error {
-    let flag = match option {
-        "processing_cutoff" => "cutoff".to_string(),
-        other => other.replace('_', "-"),
-    };
-    anyhow::anyhow!("--{flag} must be {expected}, got {value}")
-}
-
 /// A library error as the binary reports it: an invalid option named as its flag.
 fn option_error<E>(e: E) -> anyhow::Error
 where
     E: physid::options::OptionError + std::error::Error + Send + Sync + 'static,
 {
-    match e.invalid_option() {
-        Some((option, expected, value)) => flag_error(option, expected, value),
+    match e.flag_message() {
+        Some(message) => anyhow::anyhow!(message),
         None => e.into(),
     }
 }

@@ -1,6 +1,7 @@
 //! The robot options every command that loads a robot shares.
 
 use clap::ValueEnum;
+use physid::api::model::RobotOptions;
 use physid::model::{Model, RotorModel};
 
 /// Which robot, and how its rotors are modelled.
@@ -35,40 +36,31 @@ enum RotorArg {
 }
 
 impl RobotArgs {
-    /// Every file the robot reads (its URDF, sidecar, meshes): inputs no output may replace.
-    pub(super) fn files(&self) -> Vec<std::path::PathBuf> {
-        physid::io::robot_files(&self.robot, &self.package_dir)
-    }
-
-    pub(super) fn load(&self) -> anyhow::Result<Model> {
-        if let Some(d) = self.package_dir.iter().find(|d| !d.is_dir()) {
-            anyhow::bail!(
-                "--package-dir {}: {}",
-                d.display(),
-                if d.exists() {
-                    "is not a folder"
-                } else {
-                    "does not exist"
-                }
-            );
-        }
-        let opts = physid::io::robot_spec::RobotOptions {
-            ellipsoid_margin: self.ellipsoid_margin,
-            package_dirs: self.package_dir.clone(),
-            geometry_ellipsoids: self.no_geometry_ellipsoids.then_some(false),
-        };
-        let (mut m, warnings) = physid::io::load_robot_with(&self.robot, &opts)?;
-        for w in warnings {
-            eprintln!("warning: {}: {w}", self.robot);
-        }
-        if self.no_rotors {
-            m = m.without_rotors();
-        }
-        if let Some(r) = self.rotor_model {
-            m = m.with_rotor_model(match r {
+    /// The library's robot options, as given.
+    pub(super) fn options(&self) -> RobotOptions {
+        RobotOptions {
+            robot: self.robot.clone(),
+            rotor_model: self.rotor_model.map(|r| match r {
                 RotorArg::Full => RotorModel::Full,
                 RotorArg::Reflected => RotorModel::Reflected,
-            });
+            }),
+            no_rotors: self.no_rotors,
+            ellipsoid_margin: self.ellipsoid_margin,
+            package_dirs: self.package_dir.clone(),
+            no_geometry_ellipsoids: self.no_geometry_ellipsoids,
+        }
+    }
+
+    /// Every file the robot reads (its URDF, sidecar, meshes): inputs no output may replace.
+    pub(super) fn files(&self) -> Vec<std::path::PathBuf> {
+        self.options().files()
+    }
+
+    /// Loads the robot, printing the loader's warnings.
+    pub(super) fn load(&self) -> anyhow::Result<Model> {
+        let (m, notices) = self.options().load()?;
+        for n in notices {
+            eprintln!("{n}");
         }
         Ok(m)
     }
