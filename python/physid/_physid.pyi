@@ -66,6 +66,9 @@ class Identification:
     def validation_rms(self) -> Optional[float]:
         """RMS torque error on the held-out samples (N m), None when nothing was held out."""
     @property
+    def seconds(self) -> float:
+        """Wall time of the library's own identify call (s)."""
+    @property
     def notices(self) -> list[str]:
         """Notes and warnings as the CLI prints them."""
     def bodies(self) -> Any:

@@ -314,6 +314,38 @@ fn identify_arrays<'py>(
     Ok(out)
 }
 
+/// Runs `work` on its own thread with the GIL released, checking for Ctrl-C (and any other
+/// pending Python signal) every 50 ms: an interrupt raises `KeyboardInterrupt` at once, the
+/// abandoned work finishing in the background with its result dropped (the library has no
+/// cancellation point inside one solve; nothing it writes is touched by these calls).
+fn interruptible<T: Send + 'static>(
+    py: Python<'_>,
+    work: impl FnOnce() -> T + Send + 'static,
+) -> PyResult<T> {
+    let (tx, rx) = std::sync::mpsc::channel();
+    std::thread::Builder::new()
+        .name("physid".into())
+        .spawn(move || {
+            let _ = tx.send(work());
+        })
+        .map_err(|e| value_error(format!("could not start a worker thread: {e}")))?;
+    let mut rx = rx;
+    loop {
+        let tick = std::time::Duration::from_millis(50);
+        let (got, back) = py.allow_threads(move || (rx.recv_timeout(tick), rx));
+        rx = back;
+        match got {
+            Ok(out) => return Ok(out),
+            Err(std::sync::mpsc::RecvTimeoutError::Timeout) => py.check_signals()?,
+            Err(std::sync::mpsc::RecvTimeoutError::Disconnected) => {
+                return Err(pyo3::exceptions::PyRuntimeError::new_err(
+                    "physid's worker thread panicked: please report this with its input",
+                ))
+            }
+        }
+    }
+}
+
 /// A list of paths from a path or a sequence of paths (`str` or `os.PathLike`).
 fn paths(what: &str, v: Option<&Bound<'_, PyAny>>) -> PyResult<Vec<PathBuf>> {
     let Some(v) = v else { return Ok(vec![]) };
@@ -413,9 +445,12 @@ fn load<'py>(
         .map_err(value_error)?;
     let refs: Vec<&Path> = files.iter().map(PathBuf::as_path).collect();
     let mut notices = api::data::bag_option_notices(&refs, &read).map_err(value_error)?;
-    let loaded = py
-        .allow_threads(|| physid::io::load_all(&refs, m, &read))
-        .map_err(value_error)?;
+    let (model, owned) = (m.clone(), files.clone());
+    let loaded = interruptible(py, move || {
+        let refs: Vec<&Path> = owned.iter().map(PathBuf::as_path).collect();
+        physid::io::load_all(&refs, &model, &read)
+    })?
+    .map_err(value_error)?;
     let n = m.dof();
     let mut out = vec![];
     for (path, l) in refs.iter().zip(&loaded) {
@@ -453,6 +488,8 @@ fn load<'py>(
 #[pyclass(frozen, module = "physid")]
 struct Identification {
     report: api::identify::Identification,
+    /// Wall time of the library's `identify` call (s).
+    seconds: f64,
     model: Model,
     source: String,
     inputs: Vec<PathBuf>,
@@ -499,6 +536,13 @@ impl Identification {
     #[getter]
     fn validation_rms(&self) -> Option<f64> {
         self.report.validation_rms.as_ref().map(|v| v.1)
+    }
+
+    /// Wall time of the library's own `identify` call (s): reading, fit, scores; what the
+    /// Python call adds is the rest of its wall time.
+    #[getter]
+    fn seconds(&self) -> f64 {
+        self.seconds
     }
 
     /// The notes and warnings, as `physid identify` prints them.
@@ -664,12 +708,17 @@ fn identify<'py>(
     o.allow_few_samples = allow_few_samples;
     let mut inputs: Vec<PathBuf> = o.data.iter().chain(&o.validate_data).cloned().collect();
     inputs.extend(effects_from);
-    let report = py
-        .allow_threads(|| api::identify::identify(m, &o))
-        .map_err(api_error)?;
+    let model = m.clone();
+    let (report, seconds) = interruptible(py, move || {
+        let start = std::time::Instant::now();
+        let report = api::identify::identify(&model, &o);
+        (report, start.elapsed().as_secs_f64())
+    })?;
+    let report = report.map_err(api_error)?;
     warn(py, &report.notices)?;
     Ok(Identification {
         report,
+        seconds,
         model: m.clone(),
         source: robot.source.clone(),
         inputs,

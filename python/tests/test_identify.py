@@ -160,3 +160,41 @@ def test_the_examples_run(tmp_path):
                          capture_output=True, text=True, cwd=ROOT, env=env)
     assert out.returncode == 0, out.stderr
     assert "constraints hold: True" in out.stdout and (tmp_path / "kuka_identified.urdf").exists()
+
+
+def physid_workers():
+    """The process's threads named 'physid' (the workers of interruptible calls; Linux)."""
+    tasks = "/proc/self/task"
+    return [t for t in os.listdir(tasks) if open(f"{tasks}/{t}/comm").read().strip() == "physid"]
+
+
+def test_ctrl_c_interrupts_a_long_identify(kuka, tmp_path):
+    import _thread
+    import threading
+    import time
+
+    # Run 1 twenty times over (100,000 samples), so that the fit is still running when the
+    # interrupt comes.
+    lines = open(kuka_run(1)).read().splitlines()
+    span = float(lines[-1].split(",", 1)[0]) + 0.001
+    rows = [lines[0]]
+    for k in range(20):
+        for r in lines[1:]:
+            t, rest = r.split(",", 1)
+            rows.append(f"{float(t) + k * span:.6f},{rest}")
+    long = tmp_path / "long.csv"
+    long.write_text("\n".join(rows) + "\n")
+    assert physid_workers() == []
+    timer = threading.Timer(0.3, _thread.interrupt_main)
+    timer.start()
+    with pytest.raises(KeyboardInterrupt):
+        quiet_identify(kuka, str(long), constraints="consistent")
+    # Interrupted, not finished: the abandoned fit is still running in its worker ...
+    assert len(physid_workers()) == 1
+    # ... which ends by itself, and the next call works.
+    for _ in range(1200):
+        if not physid_workers():
+            break
+        time.sleep(0.05)
+    assert physid_workers() == []
+    assert quiet_identify(kuka, kuka_run(2), constraints="consistent").constraints_hold

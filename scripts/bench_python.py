@@ -1,0 +1,78 @@
+"""What the Python package adds, side by side in one run:
+
+- `physid.identify` called from Python against the library's own time for the same call
+  (`Identification.seconds`, measured inside the extension): the real KUKA runs 1 and 2, run 3
+  held out, consistent set with a torque offset (median of 9 calls);
+- the regressor of 10,000 KUKA samples: one `Robot.regressor` call on numpy arrays against
+  pinocchio's `computeJointTorqueRegressor` called from Python in a loop over the same samples
+  (the way a Python user writes it), best of 5.
+
+usage: python scripts/bench_python.py [--package DIR]   (DIR holds physid/ with the extension
+built, as scripts/test.sh makes it; default: $PHYSID_PYTHON)
+"""
+import os
+import statistics
+import sys
+import time
+import warnings
+
+import numpy as np
+import pinocchio as pin
+
+from physid_common import KUKA_URDF, ROOT
+
+argv = sys.argv[1:]
+package = argv[argv.index("--package") + 1] if "--package" in argv else os.environ.get("PHYSID_PYTHON")
+if not package:
+    sys.exit("give --package DIR or $PHYSID_PYTHON (a folder holding the built physid package)")
+sys.path.insert(0, package)
+import physid  # noqa: E402
+
+warnings.simplefilter("ignore", physid.PhysidWarning)
+runs = [os.path.join(ROOT, "data", "kuka_lwr4", f"measurements_{k}.csv") for k in (1, 2, 3)]
+robot = physid.Robot(KUKA_URDF)
+
+wall, own = [], []
+for _ in range(9):
+    t = time.perf_counter()
+    fit = physid.identify(robot, runs[:2], validate_data=runs[2], constraints="consistent",
+                          friction="viscous,coulomb,offset")
+    wall.append(time.perf_counter() - t)
+    own.append(fit.seconds)
+w, o = statistics.median(wall), statistics.median(own)
+print(f"identify, KUKA runs 1+2, run 3 held out: Python {w * 1e3:.1f} ms, library {o * 1e3:.1f} ms, "
+      f"Python adds {100 * (w - o) / o:.1f} %")
+
+rng = np.random.default_rng(1)
+n, count = robot.dof, 10_000
+q, qd, qdd = (rng.uniform(-1.5, 1.5, (count, n)) for _ in range(3))
+model = pin.buildModelFromUrdf(KUKA_URDF)
+data = model.createData()
+idx = [model.joints[model.getJointId(j)].idx_v for j in robot.joint_names]
+
+
+def physid_regressor():
+    return robot.regressor(q, qd, qdd)
+
+
+def pinocchio_regressor():
+    out = np.empty((count, model.nv, 10 * (model.njoints - 1)))
+    for k in range(count):
+        Q, V, A = (np.zeros(model.nq) for _ in range(3))
+        Q[idx], V[idx], A[idx] = q[k], qd[k], qdd[k]
+        out[k] = pin.computeJointTorqueRegressor(model, data, Q, V, A)
+    return out
+
+
+def best(f, reps=5):
+    times = []
+    for _ in range(reps):
+        t = time.perf_counter()
+        f()
+        times.append(time.perf_counter() - t)
+    return min(times)
+
+
+tp, tq = best(physid_regressor), best(pinocchio_regressor)
+print(f"regressor of {count} samples: physid {tp * 1e3:.1f} ms (one call), pinocchio {tq * 1e3:.1f} ms "
+      f"(Python loop): pinocchio / physid = {tq / tp:.1f}x")
