@@ -12,6 +12,8 @@ The Rust library (Wensing, Kim & Slotine, RA-L 2018) in Python, over numpy array
     tau = robot.inverse_dynamics(q, qd, qdd)         # (samples, n) arrays
     Y = robot.regressor(q, qd, qdd)                  # (samples, n, p), Y @ theta = tau
     runs = physid.load(robot, "run.mcap")            # a file through physid's data pipeline
+    d = physid.diagnose(robot, "run3.csv", baseline_data="run2.csv",
+                        description_uncertainty=0.05)   # what changed; shows as HTML in a notebook
 
 Errors raise ValueError with the CLI's message (naming the flag, file, sample or joint);
 warnings about the data or the answer are issued as PhysidWarning.
@@ -22,12 +24,23 @@ class PhysidWarning(UserWarning):
     """A warning about the data or the answer (the CLI prints it as `warning: ...`)."""
 
 
-from ._physid import Identification, Robot, identify, identify_arrays, load, version  # noqa: E402
+from ._physid import (  # noqa: E402
+    Diagnosis,
+    Identification,
+    Robot,
+    diagnose,
+    identify,
+    identify_arrays,
+    load,
+    version,
+)
 
 __all__ = [
+    "Diagnosis",
     "Identification",
     "PhysidWarning",
     "Robot",
+    "diagnose",
     "identify",
     "identify_arrays",
     "load",

@@ -103,6 +103,51 @@ def identify(
 ) -> Identification:
     """Identify from data files (CSV, MCAP, rosbag2) as `physid identify` does."""
 
+class Diagnosis:
+    """A diagnosis of the gap between a description and its runs; to_dict() is
+    `physid diagnose --json`; shows itself as the HTML report in a notebook."""
+
+    @property
+    def verdict(self) -> str: ...
+    @property
+    def summary(self) -> str: ...
+    @property
+    def effects(self) -> list[str]:
+        """The effects found, in the order they were selected."""
+    @property
+    def standing(self) -> Optional[list[str]]:
+        """What-changed mode: the baseline's standing effects taken out of the data."""
+    @property
+    def notices(self) -> list[str]: ...
+    def gap(self) -> Any:
+        """pandas DataFrame: per joint the validation RMS of the description, the nominal
+        model, after each effect, and the noise floor (N m)."""
+    def to_dict(self) -> dict[str, Any]: ...
+    def markdown(self) -> str: ...
+    def html(self) -> str:
+        """The self-contained HTML report, plots inline."""
+    def _repr_html_(self) -> str: ...
+    def write_report(self, path: Path) -> None:
+        """report.html, report.md, report.json and SVG plots into a folder (never an input's)."""
+
+def diagnose(
+    robot: Robot,
+    data: Paths,
+    *,
+    validate: Optional[Paths] = None,
+    baseline_data: Optional[Paths] = None,
+    constraints: str = "consistent",
+    holdout: float = 0.3,
+    description_uncertainty: Optional[float] = None,
+    payload_any_body: bool = False,
+    topic: Optional[str] = None,
+    stamp: str = "log",
+    cutoff: Optional[float] = None,
+    lock: Optional[Names] = None,
+    only: Optional[Names] = None,
+) -> Diagnosis:
+    """Diagnose the gap between the description and its runs as `physid diagnose` does."""
+
 def load(
     robot: Robot,
     data: Paths,

@@ -2,11 +2,13 @@
 //! [`crate::diagnose::Diagnosis`], schema docs/schemas/diagnose.schema.json), or "what
 //! changed" against baseline runs of the same robot.
 
+use super::data::{bag_option_notices, file_notices, Notice, ReadOptions};
 use super::ApiError;
 use crate::diagnose::baseline::Baseline;
 use crate::diagnose::{self, DiagnoseError, Diagnosis, Options};
 use crate::model::Model;
 use crate::trajectory::Trajectory;
+use std::path::{Path, PathBuf};
 
 /// The runs a diagnosis reads, as prepared by the data pipeline.
 #[derive(Clone, Debug, Default)]
@@ -26,6 +28,9 @@ pub struct Outcome {
     pub diagnosis: Diagnosis,
     /// With baseline runs: the standing effects taken out of the changed runs (kind names).
     pub standing: Option<Vec<String>>,
+    /// How many baseline runs (after the pipeline's splitting) the description was
+    /// calibrated on.
+    pub baseline_runs: usize,
 }
 
 /// Diagnoses `model` on `runs` with `opts`, holding out `holdout` of the training runs when no
@@ -44,11 +49,13 @@ pub fn diagnose(
         return Ok(Outcome {
             diagnosis,
             standing: None,
+            baseline_runs: 0,
         });
     }
     if opts.description_uncertainty.is_none() {
         return Err(DiagnoseError::BaselineWithoutUncertainty.into());
     }
+    let baseline_runs = runs.baseline.len();
     let before = Baseline::calibrate(model, runs.baseline, holdout, opts)
         .map_err(|source| ApiError::Baseline { source })?;
     let standing = before
@@ -60,5 +67,125 @@ pub fn diagnose(
     Ok(Outcome {
         diagnosis,
         standing: Some(standing),
+        baseline_runs,
+    })
+}
+
+/// What `diagnose` is asked, as files: the runs, how they are read, the hold-out fraction and
+/// the diagnosis' settings.
+#[derive(Clone, Debug)]
+pub struct DiagnoseOptions {
+    /// Training runs (CSV, MCAP, rosbag2).
+    pub data: Vec<PathBuf>,
+    /// Validation runs; none: the last `holdout` of the training runs is held out.
+    pub validate: Vec<PathBuf>,
+    /// Runs of the same robot before the change ("what changed"; needs the description's
+    /// uncertainty).
+    pub baseline_data: Vec<PathBuf>,
+    /// How the files are read.
+    pub read: ReadOptions,
+    /// Fraction held out for validation when no validation run is given.
+    pub holdout: f64,
+    /// The diagnosis' settings (its `processing_cutoff` is set from the data pipeline).
+    pub diagnosis: Options,
+}
+
+impl DiagnoseOptions {
+    /// Diagnosing on `data`, every other option at its default (the CLI's).
+    pub fn new(data: Vec<PathBuf>) -> Self {
+        DiagnoseOptions {
+            data,
+            validate: vec![],
+            baseline_data: vec![],
+            read: ReadOptions::default(),
+            holdout: 0.3,
+            diagnosis: Options::default(),
+        }
+    }
+
+    /// The settings checked, then the files against each other: at least one training run,
+    /// the same recording never in two roles, baseline runs only with the description's
+    /// uncertainty.
+    pub fn validate(&self) -> Result<(), ApiError> {
+        self.diagnosis.validate()?;
+        if self.data.is_empty() {
+            return Err(ApiError::Options("--data: give at least one run".into()));
+        }
+        let roles: Vec<(&str, &Path)> = (self.data.iter().map(|p| ("--data", p.as_path())))
+            .chain(self.validate.iter().map(|p| ("--validate", p.as_path())))
+            .chain(
+                self.baseline_data
+                    .iter()
+                    .map(|p| ("--baseline-data", p.as_path())),
+            )
+            .collect();
+        crate::io::check_distinct_recordings(&roles)?;
+        if !self.baseline_data.is_empty() && self.diagnosis.description_uncertainty.is_none() {
+            return Err(DiagnoseError::BaselineWithoutUncertainty.into());
+        }
+        Ok(())
+    }
+
+    /// Every data file: training, validation, baseline.
+    pub fn files(&self) -> Vec<&Path> {
+        self.data
+            .iter()
+            .chain(&self.validate)
+            .chain(&self.baseline_data)
+            .map(PathBuf::as_path)
+            .collect()
+    }
+}
+
+/// Diagnoses `model` on the files of `o` (read together, one cutoff for all), handing each
+/// notice to `notify` as it arises: what the pipeline did to each file, and a warning when the
+/// training runs are too short for a decisive verdict.
+pub fn diagnose_files(
+    model: &Model,
+    o: &DiagnoseOptions,
+    notify: &mut dyn FnMut(&Notice),
+) -> Result<Outcome, ApiError> {
+    o.validate()?;
+    let paths = o.files();
+    let read = o.read.resolve(model)?;
+    bag_option_notices(&paths, &read)?
+        .iter()
+        .for_each(&mut *notify);
+    let mut train = crate::io::load_all(&paths, model, &read)?;
+    for (path, l) in paths.iter().zip(&train) {
+        file_notices(path, l).iter().for_each(&mut *notify);
+    }
+    let baseline = train.split_off(o.data.len() + o.validate.len());
+    let validate = train.split_off(o.data.len());
+    let mut opts = o.diagnosis.clone();
+    // The effect columns are processed like the data: at the pipeline's cutoff.
+    opts.processing_cutoff = train[0].report.cutoff;
+    let runs = |d: &[crate::io::LoadedData]| -> Vec<Trajectory> {
+        d.iter().flat_map(|l| l.trajectories()).collect()
+    };
+    let train = runs(&train);
+    if let Some(w) = short_training(&train, &opts) {
+        notify(&w);
+    }
+    let runs = Runs {
+        train,
+        validate: runs(&validate),
+        baseline: runs(&baseline),
+    };
+    diagnose(model, runs, o.holdout, &opts)
+}
+
+/// A warning when the training runs together last less than `min_decisive_seconds` (the
+/// cross-validation blocks and the noise floor then rest on few repetitions of the motion).
+fn short_training(runs: &[Trajectory], opts: &Options) -> Option<Notice> {
+    let min = opts.min_decisive_seconds;
+    let seconds: f64 = runs
+        .iter()
+        .filter_map(|r| r.sample_period().map(|dt| dt * r.len() as f64))
+        .sum();
+    (seconds < min).then(|| {
+        Notice::warning(format!(
+            "{seconds:.1} s of training data: below {min} s the blocks of the cross-validation and the noise floor rest on few repetitions of the motion, and a verdict of \"unexplained\" or \"no effect\" becomes \"undecided\""
+        ))
     })
 }

@@ -2,6 +2,7 @@
 
 use super::RobotArgs;
 use anyhow::Context as _;
+use physid::api::diagnose::{diagnose_files, DiagnoseOptions};
 use physid::diagnose::{self, Diagnosis};
 use physid::ident::ConstraintSet;
 use std::path::PathBuf;
@@ -52,64 +53,34 @@ pub struct Args {
 
 /// `physid diagnose`.
 pub fn run(a: Args) -> anyhow::Result<()> {
-    let mut opts = diagnose::Options {
+    let mut o = DiagnoseOptions::new(a.data.clone());
+    o.validate = a.validate.clone();
+    o.baseline_data = a.baseline_data.clone();
+    o.read = a.read.options();
+    o.holdout = a.holdout;
+    o.diagnosis = diagnose::Options {
         constraints: a.constraints,
         description_uncertainty: a.description_uncertainty,
         every_body: a.payload_any_body,
         ..Default::default()
     };
-    opts.validate().map_err(super::option_error)?;
+    o.diagnosis.validate().map_err(super::option_error)?;
     let model = a.robot.load()?;
-    let paths: Vec<&std::path::Path> = a
-        .data
-        .iter()
-        .chain(&a.validate)
-        .chain(&a.baseline_data)
-        .map(PathBuf::as_path)
-        .collect();
-    let roles: Vec<(&str, &std::path::Path)> = (a.data.iter().map(|p| ("--data", p.as_path())))
-        .chain(a.validate.iter().map(|p| ("--validate", p.as_path())))
-        .chain(
-            a.baseline_data
-                .iter()
-                .map(|p| ("--baseline-data", p.as_path())),
-        )
-        .collect();
-    physid::io::check_distinct_recordings(&roles)?;
     if let Some(dir) = &a.report {
         let inputs: Vec<PathBuf> = a
             .robot
             .files()
             .into_iter()
-            .chain(paths.iter().map(|p| p.to_path_buf()))
+            .chain(o.files().iter().map(|p| p.to_path_buf()))
             .collect();
         physid::io::check_result_dir(dir, &inputs)?;
     }
-    if !a.baseline_data.is_empty() && a.description_uncertainty.is_none() {
-        return Err(super::option_error(
-            diagnose::DiagnoseError::BaselineWithoutUncertainty,
-        ));
-    }
-    let mut train = super::identify_cmd::load_data(&paths, &model, &a.read)?;
-    let baseline = train.split_off(a.data.len() + a.validate.len());
-    let validate = train.split_off(a.data.len());
-    // The effect columns are processed like the data: at the pipeline's cutoff.
-    opts.processing_cutoff = train[0].report.cutoff;
-    let runs = |d: &[physid::io::LoadedData]| -> Vec<_> {
-        d.iter().flat_map(|l| l.trajectories()).collect()
-    };
-    let train_runs = runs(&train);
-    warn_short(&train_runs);
-    let runs = physid::api::diagnose::Runs {
-        train: train_runs,
-        validate: runs(&validate),
-        baseline: runs(&baseline),
-    };
-    let baseline_runs = runs.baseline.len();
-    let outcome = physid::api::diagnose::diagnose(&model, runs, a.holdout, &opts)?;
+    let outcome =
+        diagnose_files(&model, &o, &mut |n| eprintln!("{n}")).map_err(super::option_error)?;
     if let Some(standing) = &outcome.standing {
         eprintln!(
-            "baseline: the description calibrated on {baseline_runs} run(s); standing effects taken out of the data: {}",
+            "baseline: the description calibrated on {} run(s); standing effects taken out of the data: {}",
+            outcome.baseline_runs,
             if standing.is_empty() { "none".to_string() } else { standing.join(", ") }
         );
     }
@@ -128,21 +99,6 @@ pub fn run(a: Args) -> anyhow::Result<()> {
         print_text(&d);
     }
     Ok(())
-}
-
-/// Warns when the training runs together last less than the library's `min_decisive_seconds`
-/// (the cross-validation blocks and the noise floor then rest on few repetitions of the motion).
-fn warn_short(runs: &[physid::trajectory::Trajectory]) {
-    let min = physid::diagnose::Options::default().min_decisive_seconds;
-    let seconds: f64 = runs
-        .iter()
-        .filter_map(|r| r.sample_period().map(|dt| dt * r.len() as f64))
-        .sum();
-    if seconds < min {
-        eprintln!(
-            "warning: {seconds:.1} s of training data: below {min} s the blocks of the cross-validation and the noise floor rest on few repetitions of the motion, and a verdict of \"unexplained\" or \"no effect\" becomes \"undecided\""
-        );
-    }
 }
 
 /// The diagnosis as text: where, which, how far, and the summary.

@@ -53,26 +53,6 @@ impl ReadArgs {
     }
 }
 
-/// Loads data files read together (see [`physid::io::load_all`]: one cutoff for all),
-/// printing what the pipeline did to each and warnings.
-pub fn load_data(
-    paths: &[&Path],
-    model: &Model,
-    read: &ReadArgs,
-) -> anyhow::Result<Vec<physid::io::LoadedData>> {
-    let read = read.options().resolve(model)?;
-    for notice in physid::api::data::bag_option_notices(paths, &read)? {
-        eprintln!("{notice}");
-    }
-    let loaded = physid::io::load_all(paths, model, &read)?;
-    for (path, l) in paths.iter().zip(&loaded) {
-        for notice in physid::api::data::file_notices(path, l) {
-            eprintln!("{notice}");
-        }
-    }
-    Ok(loaded)
-}
-
 /// Identify inertial and friction parameters under a constraint set.
 #[derive(clap::Args, Debug)]
 pub struct Args {

@@ -31,7 +31,7 @@ fn plot_err<E: std::fmt::Display>(path: &Path) -> impl Fn(E) -> ReportError + '_
     }
 }
 
-/// Grouped bars ([`crate::io::plot::grouped_bars`]) written to `path`; returns the SVG.
+/// Grouped bars ([`crate::io::plot::grouped_bars`]) as SVG; errors name the plot's file `path`.
 fn bars(
     path: &Path,
     title: &str,
@@ -39,10 +39,7 @@ fn bars(
     labels: &[String],
     series: &[(String, Vec<f64>)],
 ) -> Result<String, ReportError> {
-    let svg =
-        crate::io::plot::grouped_bars(title, ylabel, labels, series).map_err(plot_err(path))?;
-    crate::io::write_atomic(path, svg.as_bytes())?;
-    Ok(svg)
+    crate::io::plot::grouped_bars(title, ylabel, labels, series).map_err(plot_err(path))
 }
 
 /// Residual PSD per joint, before (solid) and after (thin) the selected effects, log-log,
@@ -111,7 +108,6 @@ fn spectrum_plot(path: &Path, d: &Diagnosis) -> Result<Option<String>, ReportErr
         legend_outside(&legend_area, &entries).map_err(plot_err(path))?;
         root.present().map_err(plot_err(path))?;
     }
-    crate::io::write_atomic(path, svg.as_bytes())?;
     Ok(Some(svg))
 }
 
@@ -408,6 +404,22 @@ pub fn write(dir: &Path, d: &Diagnosis) -> Result<(), ReportError> {
         .expect("a diagnosis serializes");
     crate::io::write_atomic(&dir.join("report.json"), json.as_bytes())?;
     crate::io::write_atomic(&dir.join("report.md"), markdown(d).as_bytes())?;
+    let plots = draw(d, dir)?;
+    for (name, svg) in &plots {
+        crate::io::write_atomic(&dir.join(name), svg.as_bytes())?;
+    }
+    crate::io::write_atomic(&dir.join("report.html"), html(d, &plots).as_bytes())?;
+    Ok(())
+}
+
+/// The report's plots as `(file name, SVG)`, in the order the HTML report shows them: how far
+/// each step takes the gap, where the residual lies, its spectrum (when there is one).
+pub fn plots(d: &Diagnosis) -> Result<Vec<(String, String)>, ReportError> {
+    draw(d, Path::new(""))
+}
+
+/// [`plots`], errors naming the plot's file in `dir`.
+fn draw(d: &Diagnosis, dir: &Path) -> Result<Vec<(String, String)>, ReportError> {
     // Where: RMS per regime kind (rows) and joint (series), regimes in the breakdown's order.
     let mut regimes: Vec<String> = vec![];
     for r in &d.breakdown.regimes {
@@ -484,8 +496,7 @@ pub fn write(dir: &Path, d: &Diagnosis) -> Result<(), ReportError> {
     .into_iter()
     .filter_map(|(name, svg)| svg.map(|s| (name.to_string(), s)))
     .collect();
-    crate::io::write_atomic(&dir.join("report.html"), html(d, &plots).as_bytes())?;
-    Ok(())
+    Ok(plots)
 }
 
 /// Text escaped for HTML.
