@@ -12,6 +12,7 @@ The Rust library (Wensing, Kim & Slotine, RA-L 2018) in Python, over numpy array
     tau = robot.inverse_dynamics(q, qd, qdd)         # (samples, n) arrays
     Y = robot.regressor(q, qd, qdd)                  # (samples, n, p), Y @ theta = tau
     runs = physid.load(robot, "run.mcap")            # a file through physid's data pipeline
+    sim = physid.simulate("scenarios/cheetah3_shell.toml", "run.mcap")   # sim.truth["q"], sim.to_dict()
     d = physid.diagnose(robot, "run3.csv", baseline_data="run2.csv",
                         description_uncertainty=0.05)   # what changed; shows as HTML in a notebook
 
@@ -32,6 +33,7 @@ from ._physid import (  # noqa: E402
     identify,
     identify_arrays,
     load,
+    simulate,
     version,
 )
 
@@ -44,6 +46,7 @@ __all__ = [
     "identify",
     "identify_arrays",
     "load",
+    "simulate",
     "version",
 ]
 __version__ = version()

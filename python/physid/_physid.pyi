@@ -1,7 +1,7 @@
 """Type stubs of the extension module physid._physid."""
 
 import os
-from typing import Any, Optional, Sequence, Union
+from typing import Any, Callable, Optional, Sequence, Union
 
 import numpy as np
 import numpy.typing as npt
@@ -147,6 +147,35 @@ def diagnose(
     only: Optional[Names] = None,
 ) -> Diagnosis:
     """Diagnose the gap between the description and its runs as `physid diagnose` does."""
+
+class Simulation:
+    """A simulated excitation experiment, its log written; to_dict() is `physid simulate --json`."""
+
+    @property
+    def truth(self) -> dict[str, Array]:
+        """t, q, qd, qdd, tau (the actuators' torque), friction and effects (its parts)."""
+    @property
+    def measured(self) -> dict[str, Array]:
+        """What the robot logs: t, q, qd, qdd, tau."""
+    @property
+    def processed(self) -> dict[str, Array]:
+        """The identification input (what csv= writes): t, q, qd, qdd, tau."""
+    @property
+    def robot(self) -> Robot:
+        """The scenario's robot, the ground truth."""
+    def to_dict(self) -> dict[str, Any]: ...
+
+def simulate(
+    scenario: Path,
+    out: Path,
+    *,
+    csv: Optional[Path] = None,
+    engine: Optional[str] = None,
+    duration: Optional[float] = None,
+    seed: Optional[int] = None,
+    progress: Optional[Callable[[float], None]] = None,
+) -> Simulation:
+    """Simulate a scenario and log it to MCAP (and CSV), as `physid simulate` does."""
 
 def load(
     robot: Robot,

@@ -1,0 +1,104 @@
+"""physid.simulate against the CLI, its signals against the robot's own inverse dynamics,
+progress, identification of the simulated log against its ground truth, and bad inputs."""
+import json
+import os
+import subprocess
+
+import numpy as np
+import pytest
+
+import physid
+from conftest import ROOT
+from test_identify import without_timings
+
+SHELL = os.path.join(ROOT, "scenarios", "cheetah3_shell.toml")
+TIMINGS = {"wall_seconds", "real_time_factor"}
+
+
+def strip(report):
+    report = without_timings(report)
+    return {k: v for k, v in report.items() if k not in TIMINGS | {"out"}}
+
+
+@pytest.fixture(scope="module")
+def run(tmp_path_factory):
+    d = tmp_path_factory.mktemp("sim")
+    seen = []
+    sim = physid.simulate(SHELL, str(d / "run.mcap"), csv=str(d / "run.csv"), duration=2.0, seed=3,
+                          progress=seen.append)
+    return sim, d, seen
+
+
+def test_simulation_equals_the_cli(run, tmp_path):
+    sim, d, _ = run
+    binary = os.environ.get("PHYSID_BIN")
+    out = subprocess.run([binary, "simulate", SHELL, "--out", str(tmp_path / "cli.mcap"), "--csv",
+                          str(tmp_path / "cli.csv"), "--duration", "2", "--seed", "3", "--json"],
+                         capture_output=True, text=True, cwd=ROOT)
+    assert out.returncode == 0, out.stderr
+    ref = json.loads(out.stdout)
+    got = sim.to_dict()
+    assert strip(got) == strip(ref) and got["out"] == str(d / "run.mcap")
+    assert (d / "run.csv").read_bytes() == (tmp_path / "cli.csv").read_bytes()
+
+
+def test_signals_are_the_robots_own_dynamics(run):
+    sim, d, _ = run
+    truth, robot = sim.truth, sim.robot
+    n = robot.dof
+    assert truth["q"].shape == (len(truth["t"]), n) and len(truth["t"]) == sim.to_dict()["samples"]
+    # The actuators' torque is the rigid-body torque (the regressor times the true inertias,
+    # friction columns zeroed) plus the true friction and effect torques.
+    theta = robot.parameters()
+    theta[-2 * n:] = 0.0
+    rigid = robot.regressor(truth["q"], truth["qd"], truth["qdd"]) @ theta
+    scale = np.max(np.abs(truth["tau"]))
+    residual = rigid + truth["friction"] + truth["effects"] - truth["tau"]
+    assert np.max(np.abs(residual)) <= 1e-12 * scale
+    csv = np.loadtxt(d / "run.csv", delimiter=",", skiprows=1)
+    p = sim.processed
+    assert np.allclose(csv[:, 0], p["t"], rtol=0, atol=1e-9)
+    assert np.allclose(csv[:, 1:1 + n], p["q"], rtol=1e-12, atol=1e-12)
+
+
+def test_progress_reaches_one_in_order(run):
+    _, _, seen = run
+    assert len(seen) >= 10 and seen[-1] == 1.0 and seen == sorted(seen)
+
+
+def test_the_simulated_log_identifies_near_its_truth(run):
+    sim, d, _ = run
+    fit = physid.identify(physid.Robot("cheetah3"), str(d / "run.mcap"), constraints="ellipsoid")
+    errors = fit.to_dict()["truth_errors"]
+    assert errors is not None and len(errors) == 6
+    assert fit.constraints_hold
+
+
+@pytest.mark.parametrize(
+    "kw, message",
+    [
+        (dict(engine="bullet"), "--engine: 'bullet' is not one of physid, rapier"),
+        (dict(duration=-1.0), "scenario simulation.duration: -1 must be a finite number > 0"),
+    ],
+)
+def test_bad_options(tmp_path, kw, message):
+    with pytest.raises(ValueError, match=message):
+        physid.simulate(SHELL, str(tmp_path / "x.mcap"), **kw)
+    assert not (tmp_path / "x.mcap").exists()
+
+
+def test_outputs_never_replace_inputs(tmp_path):
+    before = open(SHELL, "rb").read()
+    with pytest.raises(ValueError, match="refusing to write over the input"):
+        physid.simulate(SHELL, SHELL)
+    assert open(SHELL, "rb").read() == before
+    with pytest.raises(ValueError, match="nope.toml"):
+        physid.simulate(str(tmp_path / "nope.toml"), str(tmp_path / "x.mcap"))
+
+
+def test_a_failing_progress_callback_raises_its_error(tmp_path):
+    def boom(f):
+        raise RuntimeError("stop here")
+
+    with pytest.raises(RuntimeError, match="stop here"):
+        physid.simulate(SHELL, str(tmp_path / "x.mcap"), duration=0.5, progress=boom)
