@@ -27,9 +27,11 @@ class PhysidWarning(UserWarning):
 
 from ._physid import (  # noqa: E402
     Diagnosis,
+    Experiment,
     Identification,
     Robot,
     diagnose,
+    experiment,
     identify,
     identify_arrays,
     load,
@@ -39,10 +41,12 @@ from ._physid import (  # noqa: E402
 
 __all__ = [
     "Diagnosis",
+    "Experiment",
     "Identification",
     "PhysidWarning",
     "Robot",
     "diagnose",
+    "experiment",
     "identify",
     "identify_arrays",
     "load",

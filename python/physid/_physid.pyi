@@ -177,6 +177,27 @@ def simulate(
 ) -> Simulation:
     """Simulate a scenario and log it to MCAP (and CSV), as `physid simulate` does."""
 
+class Experiment:
+    """The sample-size experiment: every (seed, n_s, constraint set) cell."""
+
+    def rows(self) -> Any:
+        """pandas DataFrame: the CLI's rows.csv."""
+    def summary(self) -> Any:
+        """pandas DataFrame: median and quartiles over seeds (the CLI's summary.csv)."""
+    @property
+    def constraints(self) -> list[str]: ...
+    @property
+    def seconds(self) -> float: ...
+
+def experiment(
+    scenario: Path,
+    *,
+    seeds: Optional[int] = None,
+    threads: Optional[int] = None,
+    progress: Optional[Callable[[int, int], None]] = None,
+) -> Experiment:
+    """Run a scenario's sample-size experiment as `physid experiment` does."""
+
 def load(
     robot: Robot,
     data: Paths,

@@ -329,6 +329,14 @@ pub fn write_csv(path: &Path, df: &mut DataFrame) -> Result<(), IoError> {
     write_atomically(path, |f| CsvWriter::new(f).finish(df))
 }
 
+/// A table as CSV text, as [`write_csv`] writes it (for callers that hand it on in memory, e.g.
+/// the Python package's DataFrames).
+pub fn csv_text(df: &mut DataFrame) -> PolarsResult<String> {
+    let mut bytes = vec![];
+    CsvWriter::new(&mut bytes).finish(df)?;
+    String::from_utf8(bytes).map_err(|e| PolarsError::ComputeError(e.to_string().into()))
+}
+
 /// Reads a Parquet table (for merging sweep shards and tests).
 pub fn read_parquet(path: &Path) -> Result<DataFrame, IoError> {
     let f = std::fs::File::open(path).map_err(|source| IoError::Fs {
