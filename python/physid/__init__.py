@@ -26,10 +26,12 @@ class PhysidWarning(UserWarning):
 
 
 from ._physid import (  # noqa: E402
+    Comparison,
     Diagnosis,
     Experiment,
     Identification,
     Robot,
+    compare,
     diagnose,
     experiment,
     identify,
@@ -40,11 +42,13 @@ from ._physid import (  # noqa: E402
 )
 
 __all__ = [
+    "Comparison",
     "Diagnosis",
     "Experiment",
     "Identification",
     "PhysidWarning",
     "Robot",
+    "compare",
     "diagnose",
     "experiment",
     "identify",

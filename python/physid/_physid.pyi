@@ -198,6 +198,33 @@ def experiment(
 ) -> Experiment:
     """Run a scenario's sample-size experiment as `physid experiment` does."""
 
+class Comparison:
+    """A comparison of results (`physid compare`): per group medians, ratio, p-value, outcome."""
+
+    @property
+    def regressions(self) -> int: ...
+    @property
+    def too_few(self) -> int: ...
+    def groups(self) -> Any:
+        """pandas DataFrame: point, n_s, set, pairs, medians, median_ratio, p_value, outcome."""
+    def markdown(self) -> str: ...
+    def junit(self) -> str: ...
+    def to_dict(self) -> dict[str, Any]: ...
+
+def compare(
+    result: Path,
+    *,
+    baseline: Optional[Path] = None,
+    variant: Optional[str] = None,
+    metric: Optional[str] = None,
+    tolerance: Optional[float] = None,
+    alpha: Optional[float] = None,
+    min_pairs: Optional[int] = None,
+    allow_too_few: bool = False,
+    max_n_s: Optional[int] = None,
+) -> Comparison:
+    """Compare results against a baseline folder, or two constraint sets (variant="A<=B")."""
+
 def load(
     robot: Robot,
     data: Paths,
