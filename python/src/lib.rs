@@ -460,22 +460,13 @@ fn load<'py>(
         physid::io::load_all(&refs, &model, &read)
     })?
     .map_err(value_error)?;
-    let n = m.dof();
     let mut out = vec![];
     for (path, l) in refs.iter().zip(&loaded) {
         let file_notes = api::data::file_notices(path, l);
         let d = PyDict::new(py);
         let mut runs = vec![];
         for r in &l.runs {
-            let tr = &r.trajectory;
-            let s = tr.t.len();
-            let run = PyDict::new(py);
-            run.set_item("t", tr.t.clone().into_pyarray(py))?;
-            for (key, v) in [("q", &tr.q), ("qd", &tr.qd), ("tau", &tr.tau)] {
-                run.set_item(key, v.clone().into_pyarray(py).reshape([s, n])?)?;
-            }
-            let qdd = tr.qdd.clone().unwrap_or_default();
-            run.set_item("qdd", qdd.into_pyarray(py).reshape([s, n])?)?;
+            let run = trajectory_dict(py, &r.trajectory)?;
             run.set_item("index", r.index.clone())?;
             runs.push(run);
         }
@@ -578,7 +569,7 @@ impl Identification {
         cols.set_item("tr_JQ", c(|c| c.trace_jq))?;
         let consistent: Vec<bool> = b.iter().map(|b| b.consistency.consistent()).collect();
         cols.set_item("consistent", consistent)?;
-        frame(py, cols)
+        frame(py, cols.into_any())
     }
 
     /// One row per joint: `joint`, `viscous` (N m s/rad), `coulomb` (N m) and the RMS torque
@@ -606,7 +597,7 @@ impl Identification {
             "validation_rms",
             rms(r.validation_rms.as_ref().map(|v| &v.0)),
         )?;
-        frame(py, cols)
+        frame(py, cols.into_any())
     }
 
     /// The report as `physid identify --json` prints it.
@@ -647,14 +638,18 @@ impl Identification {
     }
 }
 
-/// A pandas DataFrame of `columns`; an ImportError that says how to get pandas without it.
-fn frame<'py>(py: Python<'py>, columns: Bound<'py, PyDict>) -> PyResult<Bound<'py, PyAny>> {
-    let pandas = py.import("pandas").map_err(|_| {
+/// The pandas module, or an ImportError that says how to get it.
+fn pandas(py: Python<'_>) -> PyResult<Bound<'_, PyModule>> {
+    py.import("pandas").map_err(|_| {
         pyo3::exceptions::PyImportError::new_err(
-            "tables are pandas DataFrames: pip install pandas (or use to_dict())",
+            "tables are pandas DataFrames: pip install pandas (the package's extra 'tables')",
         )
-    })?;
-    pandas.getattr("DataFrame")?.call1((columns,))
+    })
+}
+
+/// A pandas DataFrame of `data` (a dict of columns or a list of records).
+fn frame<'py>(py: Python<'py>, data: Bound<'py, PyAny>) -> PyResult<Bound<'py, PyAny>> {
+    pandas(py)?.getattr("DataFrame")?.call1((data,))
 }
 
 /// Identifies `robot` from data files as `physid identify` does, its flags as keyword
@@ -804,7 +799,7 @@ impl Diagnosis {
             "noise_floor",
             g.iter().map(|g| g.noise_floor).collect::<Vec<_>>(),
         )?;
-        frame(py, cols)
+        frame(py, cols.into_any())
     }
 
     /// The report as `physid diagnose --json` prints it.
@@ -1056,11 +1051,8 @@ fn simulate(
 /// the CLI's CSV.
 fn pandas_of<'py>(py: Python<'py>, csv: Result<String, String>) -> PyResult<Bound<'py, PyAny>> {
     let text = csv.map_err(value_error)?;
-    let pandas = py.import("pandas").map_err(|_| {
-        pyo3::exceptions::PyImportError::new_err("tables are pandas DataFrames: pip install pandas")
-    })?;
     let buffer = py.import("io")?.getattr("StringIO")?.call1((text,))?;
-    pandas.getattr("read_csv")?.call1((buffer,))
+    pandas(py)?.getattr("read_csv")?.call1((buffer,))
 }
 
 /// The sample-size experiment of a scenario (`physid experiment`): every (seed, n_s,
@@ -1221,13 +1213,7 @@ impl Comparison {
     /// Every group as a pandas DataFrame: point, n_s, set, pairs, reference_median,
     /// candidate_median, median_ratio, p_value, outcome.
     fn groups<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
-        let records = plain(py, &self.cmp.groups)?;
-        let pandas = py.import("pandas").map_err(|_| {
-            pyo3::exceptions::PyImportError::new_err(
-                "tables are pandas DataFrames: pip install pandas",
-            )
-        })?;
-        pandas.getattr("DataFrame")?.call1((records,))
+        frame(py, plain(py, &self.cmp.groups)?)
     }
 
     /// The comparison as `physid compare` prints it (Markdown).
