@@ -23,7 +23,9 @@
 //!    description test, magnitudes, gap, verdict);
 //! 6. [`experiment`]: the sample-size experiment of the paper's last figure, sweeps, the blind
 //!    benchmark;
-//! 7. the `physid` binary (`src/cli`): one clap `Args` per command, errors printed once.
+//! 7. [`api`]: the library's entry point per command, typed options in, typed reports out;
+//! 8. the `physid` binary (its own crate, `cli/`): one clap `Args` per command, errors printed
+//!    once.
 #![warn(missing_docs)]
 
 pub mod api;

@@ -1,13 +1,14 @@
 //! Diagnosis, part one: where the residual lies. An unmodelled low-speed effect (Stribeck
 //! friction) must show up concentrated at low speed; a clean run must leave only noise.
 
+mod common;
+
 use physid::diagnose::{breakdown, residuals};
 use physid::ident::{self, ConstraintSet, NormalEquations, Options};
 use physid::sim::scenario::EffectSpec;
 
 fn run(effects: Vec<EffectSpec>) -> physid::diagnose::Breakdown {
-    let path =
-        std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("scenarios/cheetah3_shell.toml");
+    let path = common::root().join("scenarios/cheetah3_shell.toml");
     let (mut sc, m, _) = physid::sim::scenario::load(&path).unwrap();
     sc.simulation.duration = 12.0;
     sc.effects = effects;
@@ -92,7 +93,7 @@ use physid::diagnose::{diagnose, Diagnosis, Options as DiagOptions, Verdict};
 
 /// The blind benchmark's scenario, 20 s, with `effects`; diagnosed on the first 70 % / last 30 %.
 fn diagnosed(effects: Vec<EffectSpec>, seed: u64) -> Diagnosis {
-    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("scenarios/blind.toml");
+    let path = common::root().join("scenarios/blind.toml");
     let (mut sc, m, _) = physid::sim::scenario::load(&path).unwrap();
     sc.simulation.seed = seed;
     sc.effects = effects;
@@ -245,7 +246,7 @@ fn the_gamma_test_recovers_the_noise_of_a_periodic_motion() {
 
 #[test]
 fn blind_cases_are_diagnosed_from_files_and_scored() {
-    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("scenarios/blind.toml");
+    let path = common::root().join("scenarios/blind.toml");
     let (sc, m, _) = physid::sim::scenario::load(&path).unwrap();
     let dir = tempfile::tempdir().unwrap();
     let e = physid::experiment::blind::DESCRIPTION_ERROR;
@@ -280,85 +281,8 @@ fn blind_cases_are_diagnosed_from_files_and_scored() {
 }
 
 #[test]
-fn the_cli_diagnoses_a_file_and_names_bad_input() {
-    let dir = tempfile::tempdir().unwrap();
-    let exe = env!("CARGO_BIN_EXE_physid");
-    let sc = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("scenarios/blind.toml");
-    let (mut s, m, _) = physid::sim::scenario::load(&sc).unwrap();
-    s.simulation.duration = 8.0;
-    s.effects = vec![EffectSpec::Spring {
-        stiffness: vec![6.0, 6.0, 6.0],
-        rest: vec![0.0, -0.5, 1.2],
-    }];
-    let rec = physid::sim::run(&m, &s, &mut |_| {}).unwrap();
-    let csv = dir.path().join("run.csv");
-    physid::io::samples::write_csv(&csv, &rec.processed).unwrap();
-    let report = dir.path().join("report");
-    let out = std::process::Command::new(exe)
-        .args(["diagnose", "--robot", "cheetah3", "--json", "--data"])
-        .arg(&csv)
-        .arg("--report")
-        .arg(&report)
-        .output()
-        .unwrap();
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    let j: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
-    assert_eq!(j["effects"][0]["kind"], "spring");
-    assert_eq!(
-        j["samples"][0].as_u64().unwrap() + j["samples"][1].as_u64().unwrap(),
-        8000
-    );
-    for f in [
-        "report.md",
-        "report.json",
-        "where.svg",
-        "spectrum.svg",
-        "how_far.svg",
-    ] {
-        assert!(report.join(f).exists(), "{f} missing");
-    }
-    // The JSON on standard output and in the report name physid's version and their schema.
-    assert_eq!(j["schema"], "physid.diagnose/1");
-    assert_eq!(j["physid_version"], env!("CARGO_PKG_VERSION"));
-    let file: serde_json::Value =
-        serde_json::from_str(&std::fs::read_to_string(report.join("report.json")).unwrap())
-            .unwrap();
-    assert_eq!(file["schema"], "physid.diagnose/1");
-    // A robot with another joint count: the error names the file.
-    let out = std::process::Command::new(exe)
-        .args(["diagnose", "--robot", "cheetah3", "--no-rotors", "--data"])
-        .arg(dir.path().join("missing.csv"))
-        .output()
-        .unwrap();
-    assert!(!out.status.success());
-    assert!(String::from_utf8_lossy(&out.stderr).contains("missing.csv"));
-    // A negative description uncertainty is refused by name.
-    let out = std::process::Command::new(exe)
-        .args([
-            "diagnose",
-            "--robot",
-            "cheetah3",
-            "--description-uncertainty=-0.1",
-            "--data",
-        ])
-        .arg(&csv)
-        .output()
-        .unwrap();
-    assert!(!out.status.success());
-    assert!(
-        String::from_utf8_lossy(&out.stderr).contains("--description-uncertainty"),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-}
-
-#[test]
 fn several_training_runs_are_cross_validated_one_run_out() {
-    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("scenarios/blind.toml");
+    let path = common::root().join("scenarios/blind.toml");
     let (mut sc, m, _) = physid::sim::scenario::load(&path).unwrap();
     sc.simulation.duration = 6.0;
     sc.effects = vec![EffectSpec::Spring {
@@ -397,7 +321,7 @@ fn diagnosed_against_description(
     seed: u64,
     told: Option<f64>,
 ) -> Diagnosis {
-    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("scenarios/blind.toml");
+    let path = common::root().join("scenarios/blind.toml");
     let (mut sc, m, _) = physid::sim::scenario::load(&path).unwrap();
     sc.simulation.seed = seed;
     sc.effects = effects;
@@ -560,7 +484,7 @@ fn joined_runs_of_one_motion_keep_their_difference_out_of_the_noise_floor() {
     // Across the two runs every sample's nearest neighbour is the same instant of the other
     // run, whose residual differs by the payload's torque: the noise floor must come from
     // neighbours within a run and stay at the sensor noise (0.3 N m).
-    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("scenarios/blind.toml");
+    let path = common::root().join("scenarios/blind.toml");
     let (mut sc, m, _) = physid::sim::scenario::load(&path).unwrap();
     sc.simulation.duration = 8.0;
     let payload = EffectSpec::Payload {
@@ -595,7 +519,7 @@ fn joined_runs_of_one_motion_keep_their_difference_out_of_the_noise_floor() {
 
 #[test]
 fn three_seconds_of_clean_data_are_undecided_not_unexplained() {
-    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("scenarios/blind.toml");
+    let path = common::root().join("scenarios/blind.toml");
     let (mut sc, m, _) = physid::sim::scenario::load(&path).unwrap();
     sc.simulation.seed = 3;
     let rec = physid::sim::run(&m, &sc, &mut |_| {}).unwrap();
@@ -732,7 +656,7 @@ fn a_payload_beside_a_visible_effect_is_still_tested_against_the_description() {
 /// (`(kg, body number, centre in the body's frame)`) and Stribeck friction, 30 s of Fourier
 /// excitation at 500 Hz (seed `seed`).
 fn kuka_twin(payload: Option<(f64, usize, [f64; 3])>, seed: u64) -> physid::trajectory::Trajectory {
-    let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR"));
+    let root = common::root();
     let urdf = root.join("data/kuka_lwr4/kuka_lwr4.urdf");
     let payload = payload.map_or(String::new(), |(mass, body, c)| {
         format!(
@@ -778,7 +702,7 @@ velocity = [0.1, 0.1, 0.1, 0.1, 0.1, 0.1, 0.1]
 
 /// The KUKA LWR4+ URDF as a description (with its geometry's ellipsoids).
 fn kuka_description() -> physid::model::Model {
-    let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR"));
+    let root = common::root();
     let urdf = root.join("data/kuka_lwr4/kuka_lwr4.urdf");
     physid::io::load_robot_with(urdf.to_str().unwrap(), &Default::default())
         .unwrap()

@@ -2,14 +2,15 @@
 //! equation (written out here independently), and every run stays exactly consistent with the
 //! inverse dynamics of the robot as it really is.
 
+mod common;
+
 use physid::dynamics::{rnea, Data};
 use physid::model::Model;
 use physid::sim::scenario::{EffectSpec, Scenario};
 use physid::trajectory::Recording;
 
 fn clean() -> (Scenario, Model) {
-    let path =
-        std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("scenarios/cheetah3_shell.toml");
+    let path = common::root().join("scenarios/cheetah3_shell.toml");
     let (mut sc, m, _) = physid::sim::scenario::load(&path).unwrap();
     sc.simulation.duration = 1.5;
     sc.sensors.torque_noise = 0.0;

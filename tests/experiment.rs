@@ -2,11 +2,13 @@
 //! qualitative result tested with statistics over seeds (a small version of
 //! scenarios/sample_size.toml).
 
+mod common;
+
 use physid::experiment::{self, median_iqr, ExperimentSpec, Row};
 use physid::ident::ConstraintSet;
 
 fn setup() -> (physid::sim::scenario::Scenario, physid::model::Model) {
-    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("scenarios/sample_size.toml");
+    let path = common::root().join("scenarios/sample_size.toml");
     let (sc, m, _) = physid::sim::scenario::load(&path).unwrap();
     (sc, m)
 }

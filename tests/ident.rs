@@ -2,6 +2,8 @@
 //! every constraint set, constraints that hold (checked independently of the solver) on noisy
 //! data, agreement of the direct and cone solutions, and clear errors.
 
+mod common;
+
 use nalgebra::{DMatrix, DVector, SymmetricEigen};
 use physid::dynamics::{regressor, rnea_with_friction, Data};
 use physid::ident::{self, analysis, ConstraintSet, NormalEquations, Options, SolveStatus};
@@ -102,8 +104,7 @@ fn direct_and_cone_least_squares_agree() {
 
 #[test]
 fn noisy_data_constrained_estimates_satisfy_their_constraints_and_ols_does_not() {
-    let path =
-        std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("scenarios/cheetah3_shell.toml");
+    let path = common::root().join("scenarios/cheetah3_shell.toml");
     let (mut sc, m, _) = physid::sim::scenario::load(&path).unwrap();
     sc.simulation.duration = 4.0;
     let rec = physid::sim::run(&m, &sc, &mut |_| {}).unwrap();

@@ -1,6 +1,8 @@
 //! Robot descriptions in and out: the TOML leg equals the built-in, URDF import of the real
 //! KUKA LWR4+ file, URDF and MJCF export round trips, and clear errors for bad input.
 
+mod common;
+
 use physid::dynamics::{regressor, rnea, Data};
 use physid::io::{self, robot_toml, urdf, IoError};
 use physid::model::random::random_state;
@@ -8,7 +10,7 @@ use physid::model::{cheetah3, Model};
 use std::path::{Path, PathBuf};
 
 fn kuka_path() -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("data/kuka_lwr4/kuka_lwr4.urdf")
+    common::root().join("data/kuka_lwr4/kuka_lwr4.urdf")
 }
 
 /// Two models describe the same dynamics: equal torques and regressors on random states.
@@ -38,7 +40,7 @@ fn assert_same_dynamics(a: &Model, b: &Model, tol: f64) {
 
 #[test]
 fn toml_leg_is_the_builtin_leg() {
-    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenarios/cheetah3_leg.toml");
+    let path = common::root().join("scenarios/cheetah3_leg.toml");
     let from_file = robot_toml::load(&path).unwrap();
     let builtin = cheetah3::leg();
     assert_same_dynamics(&from_file, &builtin, 1e-14);
@@ -199,10 +201,7 @@ fn bad_toml_gets_file_line_and_key() {
     let p = write("unknown.toml", "[robot]\nbuiltin = \"cheetah4\"\n");
     let e = robot_toml::load(&p).unwrap_err().to_string();
     assert!(e.contains("cheetah4"), "{e}");
-    let good = std::fs::read_to_string(
-        Path::new(env!("CARGO_MANIFEST_DIR")).join("scenarios/cheetah3_leg.toml"),
-    )
-    .unwrap();
+    let good = std::fs::read_to_string(common::root().join("scenarios/cheetah3_leg.toml")).unwrap();
     let p = write(
         "mass.toml",
         &good.replacen("pi = [1.6452", "pi = [-1.6452", 1),

@@ -3,6 +3,8 @@
 //! an extra joint and absolute time stamps reads as the same samples as one in the robot's
 //! order. Before, names were only counted: a shuffled bag gave a 47 N m model with exit 0.
 
+mod common;
+
 use physid::io;
 use serde::Serialize;
 use std::path::Path;
@@ -166,7 +168,7 @@ fn write_bag_with(
 
 #[test]
 fn a_bag_in_another_joint_order_with_an_extra_joint_reads_as_the_robot_order() {
-    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
+    let root = common::root();
     let (mut sc, model, _) =
         physid::sim::scenario::load(&root.join("scenarios/cheetah3_shell.toml")).unwrap();
     sc.simulation.duration = 0.5;
@@ -217,7 +219,7 @@ fn a_bag_in_another_joint_order_with_an_extra_joint_reads_as_the_robot_order() {
 }
 
 fn short_recording() -> (physid::model::Model, physid::trajectory::Trajectory) {
-    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
+    let root = common::root();
     let (mut sc, model, _) =
         physid::sim::scenario::load(&root.join("scenarios/cheetah3_shell.toml")).unwrap();
     sc.simulation.duration = 0.3;

@@ -7,6 +7,8 @@
 //! the gap to dt → 0 (Richardson) must leave less than 2% of the smallest gap, i.e. the two
 //! engines describe the same dynamics and differ only by rapier's integration error.
 
+mod common;
+
 use nalgebra::DVector;
 use physid::dynamics::Data;
 use physid::model::{cheetah3, Model};
@@ -113,8 +115,7 @@ fn rapier_engine_rejects_what_it_cannot_map() {
 /// (rotor bodies held at N q by DOF coupling), explained by physid's inverse dynamics.
 #[test]
 fn rapier_closed_loop_with_geared_rotors_matches_physid_full_rotor_model() {
-    let path =
-        std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("scenarios/cheetah3_shell.toml");
+    let path = common::root().join("scenarios/cheetah3_shell.toml");
     let (mut sc, m, _) = physid::sim::scenario::load(&path).unwrap();
     sc.simulation.duration = 2.0;
     sc.simulation.engine = physid::sim::scenario::Engine::Rapier;

@@ -1,4 +1,5 @@
-//! Helpers shared by the integration tests that run the `physid` binary.
+//! Helpers shared by the integration tests: the library's (`tests/`) and the binary's
+//! (`cli/tests/`, which include this file by path).
 
 use std::process::Command;
 
@@ -6,7 +7,7 @@ use std::process::Command;
 /// killed), stdout, stderr.
 #[allow(dead_code)]
 pub fn physid(args: &[&str]) -> (i32, String, String) {
-    let o = Command::new(env!("CARGO_BIN_EXE_physid"))
+    let o = command()
         .args(args)
         .env_remove("GITHUB_STEP_SUMMARY")
         .output()
@@ -18,10 +19,35 @@ pub fn physid(args: &[&str]) -> (i32, String, String) {
     )
 }
 
-/// The repository's root (where `Cargo.toml` is).
+/// The `physid` binary built for this test run: only the CLI crate's tests (`cli/tests/`) have
+/// it, the library's tests run without it.
+#[allow(dead_code)]
+pub fn exe() -> &'static str {
+    match option_env!("CARGO_BIN_EXE_physid") {
+        Some(exe) => exe,
+        None => panic!("the physid binary exists for the CLI crate's tests (cli/tests/) only"),
+    }
+}
+
+/// A command running the `physid` binary from the repository's root (where relative defaults
+/// such as `scenarios/blind.toml` resolve, as for a user in a checkout).
+#[allow(dead_code)]
+pub fn command() -> Command {
+    let mut command = Command::new(exe());
+    command.current_dir(root());
+    command
+}
+
+/// The repository's root (the workspace's: where `scenarios/` and `data/` are), from the
+/// library's tests and the CLI crate's alike.
 #[allow(dead_code)]
 pub fn root() -> std::path::PathBuf {
-    std::path::PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+    let manifest = std::path::Path::new(env!("CARGO_MANIFEST_DIR"));
+    manifest
+        .ancestors()
+        .find(|dir| dir.join("scenarios").is_dir())
+        .unwrap_or(manifest)
+        .to_path_buf()
 }
 
 /// A binary STL of one tetrahedron (4 triangles; vertices 0, 0.1 x, 0.1 y, 0.1 z, in m), its
@@ -47,4 +73,18 @@ pub fn tetrahedron_stl(claimed: u32) -> Vec<u8> {
         out.extend([0u8; 2]);
     }
     out
+}
+
+/// `scenarios/cheetah3_shell.toml` made to diverge: stiff PD gains, one RK4 substep, no motor
+/// model (voltage limits would tame it). The robot is still the built-in leg, whose effort
+/// limits the caller lifts (on the model, or by writing the leg out without them).
+#[allow(dead_code)]
+pub fn diverging_shell_scenario() -> String {
+    std::fs::read_to_string(root().join("scenarios/cheetah3_shell.toml"))
+        .unwrap()
+        .replace("kp = [1500.0, 1500.0, 1500.0]", "kp = [5e8, 5e8, 5e8]")
+        .replace("substeps = 4", "substeps = 1")
+        .replace("motor_kt = 0.266", "")
+        .replace("motor_resistance = 0.45", "")
+        .replace("supply_voltage = 65.0", "")
 }

@@ -1,6 +1,7 @@
 //! `physid sweep`: sharded and resumed runs give exactly the single run's table; bad grid values
 //! fail before any cell runs, naming the key.
 
+#[path = "../../tests/common/mod.rs"]
 mod common;
 
 use std::path::Path;
@@ -12,7 +13,7 @@ fn physid(args: &[&str]) -> (i32, String) {
 }
 
 fn sweep_file(dir: &Path, grid: &str) -> String {
-    let base = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenarios/sample_size.toml");
+    let base = common::root().join("scenarios/sample_size.toml");
     let p = dir.join("sweep.toml");
     std::fs::write(
         &p,

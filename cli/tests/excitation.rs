@@ -3,6 +3,7 @@
 //! simulation, on the leg and on the KUKA arm), does not depend on the thread count, and
 //! identifies better than the random motion within the same limits.
 
+#[path = "../../tests/common/mod.rs"]
 mod common;
 
 use common::{physid, root};

@@ -2,12 +2,12 @@
 //! test for `physid`, a temporary directory for `target/physid-ci`) and pass against the
 //! committed baseline; the GitHub Actions and GitLab CI recipes carry each of them.
 
-use std::path::Path;
-use std::process::Command;
+#[path = "../../tests/common/mod.rs"]
+mod common;
 
 #[test]
 fn the_ci_recipe_runs_and_passes_against_the_committed_baseline() {
-    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
+    let root = &common::root();
     let doc = std::fs::read_to_string(root.join("docs/ci.md")).unwrap();
     let begin = doc.find("# physid-ci-begin").expect("begin marker");
     let end = doc.find("# physid-ci-end").expect("end marker");
@@ -51,7 +51,7 @@ fn the_ci_recipe_runs_and_passes_against_the_committed_baseline() {
             }
         }
         args.push(cur);
-        let o = Command::new(env!("CARGO_BIN_EXE_physid"))
+        let o = common::command()
             .args(&args)
             .current_dir(root)
             .env_remove("GITHUB_STEP_SUMMARY")

@@ -3,9 +3,9 @@
 
 use std::path::Path;
 
+#[path = "../../tests/common/mod.rs"]
 mod common;
 use common::physid;
-use std::process::Command;
 
 const HEADER: &str = "t,q1,q2,q3,dq1,dq2,dq3,ddq1,ddq2,ddq3,tau1,tau2,tau3";
 
@@ -105,7 +105,7 @@ fn bad_data_files_get_errors_naming_the_sample_or_field() {
 fn identify_json_has_the_documented_fields() {
     let dir = tempfile::tempdir().unwrap();
     let data = dir.path().join("s.mcap");
-    let scenario = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenarios/cheetah3_shell.toml");
+    let scenario = common::root().join("scenarios/cheetah3_shell.toml");
     let (code, _, err) = physid(&[
         "simulate",
         scenario.to_str().unwrap(),
@@ -155,7 +155,7 @@ fn identify_json_has_the_documented_fields() {
 
 #[test]
 fn a_closed_output_pipe_is_not_a_panic() {
-    let mut child = Command::new(env!("CARGO_BIN_EXE_physid"))
+    let mut child = common::command()
         .args(["model", "--robot", "cheetah3"])
         .stdout(std::process::Stdio::piped())
         .stderr(std::process::Stdio::piped())
@@ -171,9 +171,9 @@ fn a_closed_output_pipe_is_not_a_panic() {
 fn require_consistent_exits_1_naming_the_inconsistent_bodies() {
     // Exit codes: 1 when the result fails a requirement asked for, 0 when it meets it, 2 for
     // an error. Least squares on the real KUKA run leaves bodies physically inconsistent.
-    let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("data/kuka_lwr4");
+    let root = common::root().join("data/kuka_lwr4");
     let run = |set: &str, extra: &[&str]| {
-        let o = std::process::Command::new(env!("CARGO_BIN_EXE_physid"))
+        let o = common::command()
             .args([
                 "identify",
                 "--data",

@@ -2,8 +2,11 @@
 //! previous run's, or the new run's), never a partial directory or a mix of two runs: the
 //! result is built in a hidden staging directory beside the target and renamed into place.
 
+#[path = "../../tests/common/mod.rs"]
+mod common;
+
 use std::path::Path;
-use std::process::{Command, Stdio};
+use std::process::Stdio;
 use std::time::Duration;
 
 const FILES: [&str; 8] = [
@@ -55,8 +58,8 @@ fn complete_result(dir: &Path) -> Option<u64> {
 }
 
 fn experiment(out: &Path, seeds: &str) -> std::process::Child {
-    let scenario = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenarios/sample_size.toml");
-    Command::new(env!("CARGO_BIN_EXE_physid"))
+    let scenario = common::root().join("scenarios/sample_size.toml");
+    common::command()
         .arg("experiment")
         .arg(scenario)
         .args(["--seeds", seeds, "--threads", "1", "--out"])
@@ -122,7 +125,7 @@ fn a_killed_experiment_never_leaves_a_partial_or_mixed_result() {
 #[test]
 fn a_killed_sweep_leaves_whole_cells_and_never_a_mixed_merge() {
     let dir = tempfile::tempdir().unwrap();
-    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
+    let root = common::root();
     std::fs::copy(
         root.join("scenarios/sample_size.toml"),
         dir.path().join("sc.toml"),
@@ -138,7 +141,7 @@ fn a_killed_sweep_leaves_whole_cells_and_never_a_mixed_merge() {
     .unwrap();
     let out = dir.path().join("out");
     let run = || {
-        Command::new(env!("CARGO_BIN_EXE_physid"))
+        common::command()
             .arg("sweep")
             .arg(&sweep)
             .args(["--threads", "1", "--out"])

@@ -3,6 +3,7 @@
 //! period), columns named by joint in another order, and a gripper joint the robot does not
 //! have. `identify` must give the held-out error of the clean files, and say what it did.
 
+#[path = "../../tests/common/mod.rs"]
 mod common;
 
 use common::{physid, root};

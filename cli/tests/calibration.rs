@@ -7,6 +7,7 @@
 
 use std::path::{Path, PathBuf};
 
+#[path = "../../tests/common/mod.rs"]
 mod common;
 use common::physid;
 
@@ -16,7 +17,7 @@ const PITCH: f64 = -0.01;
 
 /// The shell experiment with an offset and a tilt injected, simulated for `seed` into CSV.
 fn simulate(dir: &Path, seed: u64) -> PathBuf {
-    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
+    let root = common::root();
     let base = std::fs::read_to_string(root.join("scenarios/cheetah3_shell.toml")).unwrap();
     let scenario = dir.join(format!("offset_tilt_{seed}.toml"));
     std::fs::write(
@@ -103,7 +104,7 @@ fn offset_and_tilt_are_recovered_and_replay() {
         .map(|e| e["kind"].as_str().unwrap())
         .collect();
     assert_eq!(kinds, ["torque_offset", "tilt"]);
-    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
+    let root = common::root();
     let base = std::fs::read_to_string(root.join("scenarios/cheetah3_shell.toml")).unwrap();
     let replay = dir.path().join("replay.toml");
     std::fs::write(&replay, format!("{base}\n{text}")).unwrap();
@@ -190,7 +191,7 @@ const PYTHON_OFFSET_RMS: [f64; 7] = [0.70, 0.44, 0.27, 0.45, 0.31, 0.35, 0.24];
 
 #[test]
 fn kuka_offset_model_reaches_the_python_reference_and_the_confirmed_effects_beat_it() {
-    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
+    let root = common::root();
     let k = root.join("data/kuka_lwr4");
     let f = |n: &str| k.join(n).to_str().unwrap().to_string();
     let (r1, r2, r3, urdf) = (

@@ -2,6 +2,7 @@
 //! solid fixed to the flange added (the payload's own inverse dynamics at the logged q, q̇, q̈),
 //! diagnosed from a description identified on run 1, as files a robot writes (t, q, τ).
 
+#[path = "../../tests/common/mod.rs"]
 mod common;
 
 use common::{physid, root};

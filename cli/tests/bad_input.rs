@@ -2,6 +2,7 @@
 //! huge allocation, or an output written over an input. Each case here was a crash, a hang or
 //! silent damage before (issue 13's list).
 
+#[path = "../../tests/common/mod.rs"]
 mod common;
 
 use common::root;

@@ -1,11 +1,12 @@
 //! The JSON Schemas committed in docs/schemas/ are the ones the types generate now
 //! (`physid schema NAME`); scripts/check_schemas.py validates real outputs against them.
 
-use std::process::Command;
+#[path = "../../tests/common/mod.rs"]
+mod common;
 
 #[test]
 fn the_committed_json_schemas_are_current() {
-    let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR"));
+    let root = common::root();
     for (name, arg) in [
         ("identify", "identify"),
         ("diagnose", "diagnose"),
@@ -16,10 +17,7 @@ fn the_committed_json_schemas_are_current() {
         ("model", "model"),
         ("excite", "excite"),
     ] {
-        let o = Command::new(env!("CARGO_BIN_EXE_physid"))
-            .args(["schema", arg])
-            .output()
-            .unwrap();
+        let o = common::command().args(["schema", arg]).output().unwrap();
         assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
         let generated: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
         let path = root.join(format!("docs/schemas/{name}.schema.json"));

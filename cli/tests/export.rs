@@ -2,6 +2,7 @@
 //! change, the sidecar carries the ellipsoids and effects, and loading the pair gives back the
 //! identified model exactly.
 
+#[path = "../../tests/common/mod.rs"]
 mod common;
 
 use common::physid;
@@ -30,7 +31,7 @@ fn without_patched_elements(xml: &str) -> String {
 
 #[test]
 fn identified_kuka_patches_its_own_urdf_and_round_trips() {
-    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
+    let root = common::root();
     let k = root.join("data/kuka_lwr4");
     let urdf = k.join("kuka_lwr4.urdf");
     let dir = tempfile::tempdir().unwrap();
@@ -159,7 +160,7 @@ fn dynamics_keeps_its_other_attributes_when_friction_is_written() {
     // The Panda's <dynamics D="1" K="7000" damping="0.003" friction="0.0" mu_coulomb="0"
     // mu_viscous="16"/> carries a simulator's joint stiffness and friction: only damping and
     // friction change. Before, the element was rewritten whole and the rest was lost.
-    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
+    let root = common::root();
     let urdf = root.join("data/panda/example-robot-data/robots/panda_description/urdf/panda.urdf");
     let xml = std::fs::read_to_string(&urdf).unwrap();
     let model = io::load_robot(urdf.to_str().unwrap()).unwrap();

@@ -2,6 +2,7 @@
 //! wrist from its STL mesh), fixed links merge into their body, a sidecar overrides, a missing
 //! mesh leaves the body without a bound and says why, and `identify`'s default follows.
 
+#[path = "../../tests/common/mod.rs"]
 mod common;
 
 use common::physid;
@@ -9,10 +10,10 @@ use nalgebra::Vector3;
 use physid::io::robot_spec::RobotOptions;
 use physid::io::{self, urdf};
 use physid::spatial::Ellipsoid;
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 
 fn kuka() -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("data/kuka_lwr4/kuka_lwr4.urdf")
+    common::root().join("data/kuka_lwr4/kuka_lwr4.urdf")
 }
 
 fn inside(e: &Ellipsoid, x: &Vector3<f64>) -> bool {
@@ -146,7 +147,7 @@ fn margin_missing_meshes_fixed_links_and_sidecar() {
 
 /// Runs identify on the KUKA logs (runs 1 + 2 train, run 3 held out) and returns its JSON.
 fn identify_kuka(extra: &[&str]) -> serde_json::Value {
-    let k = Path::new(env!("CARGO_MANIFEST_DIR")).join("data/kuka_lwr4");
+    let k = common::root().join("data/kuka_lwr4");
     let f = |n: &str| k.join(n).to_string_lossy().into_owned();
     let (r, d1, d2, d3) = (
         f("kuka_lwr4.urdf"),

@@ -7,6 +7,7 @@
 //! reserved it and aborted; now every record length is bounded before reading), and a CDR string
 //! length of 4 GB (bounded by the message's own size).
 
+#[path = "../../tests/common/mod.rs"]
 mod common;
 
 use common::root;

@@ -2,6 +2,7 @@
 //! torque noise) fails with exit 1, a readable Markdown table and a JUnit failure; constraint
 //! variants within one run; errors exit 2.
 
+#[path = "../../tests/common/mod.rs"]
 mod common;
 
 use common::physid;
@@ -10,7 +11,7 @@ use std::path::{Path, PathBuf};
 /// The sample-size scenario cut to 8 seeds and sizes 30..300, with `torque_noise` (N m), run
 /// into `dir/name`.
 fn experiment(dir: &Path, name: &str, torque_noise: f64) -> PathBuf {
-    let base = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenarios/sample_size.toml");
+    let base = common::root().join("scenarios/sample_size.toml");
     let text = std::fs::read_to_string(base).unwrap();
     let text = text
         .replace(
@@ -126,7 +127,7 @@ fn compare_passes_a_rerun_and_fails_a_degraded_run() {
 /// A copy of the committed CI baseline's rows (CSV only) in `dir/name`, each row passed
 /// through `edit` (None: dropped).
 fn baseline_copy(dir: &Path, name: &str, edit: &dyn Fn(&str) -> Option<String>) -> PathBuf {
-    let src = Path::new(env!("CARGO_MANIFEST_DIR")).join("results/ci_baseline/rows.csv");
+    let src = common::root().join("results/ci_baseline/rows.csv");
     let text = std::fs::read_to_string(src).unwrap();
     let mut lines = text.lines();
     let mut out = vec![lines.next().unwrap().to_string()];
