@@ -249,3 +249,50 @@ fn batch_dynamics_agree_with_each_other_and_refuse_bad_shapes() {
     assert!(e.contains("qdd: sample 4, joint 2 is NaN"), "{e}");
     assert!(inverse_dynamics(&model, &[], &[], &[]).unwrap().is_empty());
 }
+
+#[test]
+fn excite_designs_writes_within_limits_and_names_a_bad_option_as_its_flag() {
+    use physid::api::excite::{excite, ExciteOptions};
+    use physid::options::OptionError;
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("designed.toml");
+    let opts = ExciteOptions {
+        iterations: 20,
+        starts: 2,
+        duration: 3.0,
+        out: Some(out.clone()),
+        ..Default::default()
+    };
+    let mut notices = vec![];
+    let e = excite(&opts, &mut |n| notices.push(n)).unwrap();
+    assert!(notices.is_empty(), "{notices:?}");
+    assert_eq!(e.within_limits(), Some(true));
+    assert_eq!(e.written.as_deref(), Some(out.as_path()));
+    assert_eq!(std::fs::read_to_string(&out).unwrap(), e.scenario);
+    // The written scenario is one the simulator accepts for this robot, with the design's
+    // duration.
+    let sc: physid::sim::scenario::Scenario = toml::from_str(&e.scenario).unwrap();
+    sc.validate(e.model.dof()).unwrap();
+    assert_eq!(sc.simulation.duration, 3.0);
+    let json = e.json(Some(out.clone()));
+    assert_eq!(json.within_limits, Some(true));
+    assert_eq!(json.simulated.as_ref().map(Vec::len), Some(3));
+
+    let bad = ExciteOptions {
+        rate: -1.0,
+        ..opts.clone()
+    };
+    let err = excite(&bad, &mut |_| {}).unwrap_err();
+    assert_eq!(
+        err.flag_message().as_deref(),
+        Some("--rate must be a sample rate in (0, 100000] Hz, got -1")
+    );
+    let bad = ExciteOptions {
+        margin: 0.95,
+        out: Some(dir.path().join("never.toml")),
+        ..opts
+    };
+    let err = excite(&bad, &mut |_| {}).unwrap_err();
+    assert!(err.flag_message().unwrap().starts_with("--margin must be"));
+    assert!(!dir.path().join("never.toml").exists());
+}

@@ -13,6 +13,7 @@ The Rust library (Wensing, Kim & Slotine, RA-L 2018) in Python, over numpy array
     Y = robot.regressor(q, qd, qdd)                  # (samples, n, p), Y @ theta = tau
     runs = physid.load(robot, "run.mcap")            # a file through physid's data pipeline
     sim = physid.simulate("scenarios/cheetah3_shell.toml", "run.mcap")   # sim.truth["q"], sim.to_dict()
+    e = physid.excite(robot, out="designed.toml")    # an excitation within the robot's limits
     d = physid.diagnose(robot, "run3.csv", baseline_data="run2.csv",
                         description_uncertainty=0.05)   # what changed; shows as HTML in a notebook
 
@@ -28,11 +29,13 @@ class PhysidWarning(UserWarning):
 from ._physid import (  # noqa: E402
     Comparison,
     Diagnosis,
+    Excitation,
     Experiment,
     Identification,
     Robot,
     compare,
     diagnose,
+    excite,
     experiment,
     identify,
     identify_arrays,
@@ -44,12 +47,14 @@ from ._physid import (  # noqa: E402
 __all__ = [
     "Comparison",
     "Diagnosis",
+    "Excitation",
     "Experiment",
     "Identification",
     "PhysidWarning",
     "Robot",
     "compare",
     "diagnose",
+    "excite",
     "experiment",
     "identify",
     "identify_arrays",

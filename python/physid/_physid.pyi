@@ -177,6 +177,55 @@ def simulate(
 ) -> Simulation:
     """Simulate a scenario and log it to MCAP (and CSV), as `physid simulate` does."""
 
+class Excitation:
+    """A designed excitation; to_dict() is `physid excite --json`."""
+
+    @property
+    def scenario(self) -> str:
+        """The scenario's TOML text, the design as its [excitation]."""
+    @property
+    def within_limits(self) -> Optional[bool]:
+        """Every simulated peak inside the robot's limits (None: not checked)."""
+    @property
+    def written(self) -> Optional[Path]:
+        """The scenario file written (None: none asked for, or the check failed)."""
+    @property
+    def design(self) -> dict[str, Any]:
+        """The design: series, objective value, condition, identifiable, limits, limit_use."""
+    @property
+    def notices(self) -> list[str]:
+        """Notes and warnings, also raised as PhysidWarning."""
+    def reference(self, rate: float = 1000.0) -> dict[str, Array]:
+        """The reference trajectory t, q, qd, qdd (tau zero) at `rate` Hz."""
+    def limits(self) -> Any:
+        """Per joint, peaks over the robot's limits in simulation (pandas DataFrame)."""
+    def to_dict(self) -> dict[str, Any]: ...
+
+def excite(
+    robot: Union[Robot, Path, None] = None,
+    *,
+    scenario: Optional[Path] = None,
+    duration: float = 20.0,
+    harmonics: int = 5,
+    base_frequency: float = 0.5,
+    objective: str = "d-optimal",
+    seed: int = 1,
+    iterations: int = 1000,
+    starts: int = 4,
+    margin: float = 0.15,
+    max_acceleration: Optional[Sequence[float]] = None,
+    max_jerk: Optional[Sequence[float]] = None,
+    ramp: Optional[float] = None,
+    samples: int = 200,
+    rate: float = 1000.0,
+    out: Optional[Path] = None,
+    csv: Optional[Path] = None,
+    mcap: Optional[Path] = None,
+    check: bool = True,
+    threads: Optional[int] = None,
+) -> Excitation:
+    """Design an excitation within the robot's limits, as `physid excite` does."""
+
 class Experiment:
     """The sample-size experiment: every (seed, n_s, constraint set) cell."""
 

@@ -1,11 +1,16 @@
-//! `excite`: the JSON contract of a designed excitation ([`ExciteJson`], schema
-//! docs/schemas/excite.schema.json) and its check in simulation against the robot's limits
-//! (the design itself is [`crate::sim::design`]).
+//! `excite`: design an excitation for a robot or a base scenario ([`excite`] with
+//! [`ExciteOptions`]; the optimization itself is [`crate::sim::design`]), write it as a
+//! scenario that `simulate` and `experiment` run as is, check it in simulation against the
+//! robot's limits ([`check_in_simulation`]), and score a motion designed elsewhere
+//! ([`score_motion`]). [`ExciteJson`] is the JSON contract (docs/schemas/excite.schema.json).
 
+use super::data::Notice;
 use super::ApiError;
 use crate::model::Model;
-use crate::sim::design::{Design, DesignOptions};
-use std::path::PathBuf;
+use crate::sim::design::{self, Design, DesignOptions, Objective};
+use crate::sim::scenario::ExcitationSpec;
+use crate::trajectory::Trajectory;
+use std::path::{Path, PathBuf};
 
 /// The limits as the simulated robot used them (peak over the run / the robot's own limit,
 /// no margin).
@@ -114,4 +119,507 @@ pub fn check_in_simulation(
         })
         .collect();
     Ok(LimitCheck { joints, within: ok })
+}
+
+/// Where a design starts.
+#[derive(Clone, Debug)]
+pub enum ExciteFrom {
+    /// A base scenario file: its robot, simulation, sensors, processing and experiment are
+    /// kept and its excitation replaced; a Fourier excitation's `offset ± amplitude` narrows the
+    /// joint ranges.
+    Scenario(PathBuf),
+    /// A robot (`cheetah3`, a .urdf or a robot TOML) under physid's default scenario (0.3 N m
+    /// torque noise, 20 Hz Butterworth, computed-torque tracking).
+    Robot(String),
+}
+
+/// `excite`'s settings, the CLI's flags; [`ExciteOptions::validate`] checks those it can
+/// without the robot (the design's own are checked by [`DesignOptions::validate`]).
+#[derive(Clone, Debug)]
+pub struct ExciteOptions {
+    /// Where the design starts.
+    pub from: ExciteFrom,
+    /// The written scenario's duration (s).
+    pub duration: f64,
+    /// Harmonics per joint.
+    pub harmonics: usize,
+    /// Fundamental frequency (Hz).
+    pub base_frequency: f64,
+    /// What is maximized.
+    pub objective: Objective,
+    /// Seed of the random starts and steps.
+    pub seed: u64,
+    /// Optimization steps per start (0: a random excitation scaled into the limits).
+    pub iterations: usize,
+    /// Random starts (the best is kept).
+    pub starts: usize,
+    /// Fraction of every limit left free.
+    pub margin: f64,
+    /// Acceleration limits (rad/s²), one or one per joint; none: the description's, else
+    /// [`design::SAFE_ACCELERATION`].
+    pub max_acceleration: Option<Vec<f64>>,
+    /// Jerk limits (rad/s³), as `max_acceleration`.
+    pub max_jerk: Option<Vec<f64>>,
+    /// Rest ramps at both ends (s); none: one period, at most a quarter of the duration.
+    pub ramp: Option<f64>,
+    /// Samples per period at which the information is evaluated.
+    pub samples: usize,
+    /// Sample rate of the reference trajectory written to `csv` and `mcap` (Hz).
+    pub rate: f64,
+    /// The scenario written (TOML), if any.
+    pub out: Option<PathBuf>,
+    /// The reference trajectory (t, q, q̇, q̈ per joint) as CSV, if any.
+    pub csv: Option<PathBuf>,
+    /// The reference trajectory as MCAP, if any.
+    pub mcap: Option<PathBuf>,
+    /// Simulate the design and compare its peaks with the robot's limits.
+    pub check: bool,
+}
+
+impl Default for ExciteOptions {
+    fn default() -> Self {
+        let d = DesignOptions::default();
+        Self {
+            from: ExciteFrom::Robot("cheetah3".into()),
+            duration: d.duration,
+            harmonics: d.harmonics,
+            base_frequency: d.base_frequency,
+            objective: d.objective,
+            seed: d.seed,
+            iterations: d.iterations,
+            starts: d.starts,
+            margin: d.margin,
+            max_acceleration: None,
+            max_jerk: None,
+            ramp: None,
+            samples: d.samples,
+            rate: 1000.0,
+            out: None,
+            csv: None,
+            mcap: None,
+            check: true,
+        }
+    }
+}
+
+impl ExciteOptions {
+    /// The duration and the reference trajectory's rate.
+    pub fn validate(&self) -> Result<(), ApiError> {
+        if !(self.duration.is_finite() && self.duration > 0.0) {
+            return Err(ApiError::invalid_option(
+                "duration",
+                "a positive number of seconds",
+                self.duration,
+            ));
+        }
+        if !(self.rate.is_finite() && self.rate > 0.0 && self.rate <= 1e5) {
+            return Err(ApiError::invalid_option(
+                "rate",
+                "a sample rate in (0, 100000] Hz",
+                self.rate,
+            ));
+        }
+        Ok(())
+    }
+
+    /// The design's settings for `model`, its rate limits defaulted from the description
+    /// (the joints defaulted to physid's safe limits are returned, to be told to the user).
+    pub fn design_options(&self, model: &Model) -> (DesignOptions, Vec<String>) {
+        let (max_acceleration, max_jerk, defaulted) = design::rate_limits(
+            model,
+            self.max_acceleration.as_deref(),
+            self.max_jerk.as_deref(),
+        );
+        let ramp = self
+            .ramp
+            .unwrap_or_else(|| (1.0 / self.base_frequency).min(0.25 * self.duration));
+        let opts = DesignOptions {
+            harmonics: self.harmonics,
+            base_frequency: self.base_frequency,
+            objective: self.objective,
+            seed: self.seed,
+            iterations: self.iterations,
+            starts: self.starts,
+            margin: self.margin,
+            max_acceleration,
+            max_jerk,
+            ramp,
+            duration: self.duration,
+            samples: self.samples,
+        };
+        (opts, defaulted)
+    }
+}
+
+/// A designed excitation: the design, the scenario that runs it, its check in simulation.
+#[derive(Clone, Debug)]
+pub struct Excitation {
+    /// The robot it was designed for.
+    pub model: Model,
+    /// The design.
+    pub design: Design,
+    /// The settings it was made with (rate limits as used).
+    pub options: DesignOptions,
+    /// The scenario's text: the base's tables as they were, the design as its excitation.
+    pub scenario: String,
+    /// The check in simulation (none when not asked for).
+    pub check: Option<LimitCheck>,
+    /// The scenario written to (none when not asked for, or when the check failed: a design
+    /// that leaves a limit in simulation is not written, nor is its trajectory).
+    pub written: Option<PathBuf>,
+}
+
+impl Excitation {
+    /// Every simulated peak inside the robot's limits (none: not checked).
+    pub fn within_limits(&self) -> Option<bool> {
+        self.check.as_ref().map(|c| c.within)
+    }
+
+    /// The JSON contract (`excite --json`, schema `physid.excite/1`); `out` is the scenario
+    /// asked for, written or not.
+    pub fn json(&self, out: Option<PathBuf>) -> ExciteJson {
+        ExciteJson {
+            design: self.design.clone(),
+            out,
+            simulated: self.check.as_ref().map(|c| c.joints.clone()),
+            within_limits: self.within_limits(),
+        }
+    }
+}
+
+/// Designs an excitation (in the current rayon pool), checks it in simulation when asked and
+/// writes the scenario and trajectory when it stays within the limits. Each notice (the
+/// loader's warnings, rate limits defaulted) is handed to `notify` as it arises.
+pub fn excite(
+    opts: &ExciteOptions,
+    notify: &mut dyn FnMut(Notice),
+) -> Result<Excitation, ApiError> {
+    opts.validate()?;
+    let base = ExciteBase::load(&opts.from, notify)?;
+    let (design_opts, defaulted) = opts.design_options(&base.model);
+    if !defaulted.is_empty() {
+        notify(Notice::note(format!(
+            "the description gives no acceleration or jerk limit for {}: designing within {} rad/s² and {} rad/s³ (give --max-acceleration and --max-jerk)",
+            defaulted.join(", "),
+            design::SAFE_ACCELERATION,
+            design::SAFE_JERK
+        )));
+    }
+    design_opts.validate()?;
+    let outputs: Vec<&Path> = [&opts.out, &opts.csv, &opts.mcap]
+        .into_iter()
+        .flatten()
+        .map(PathBuf::as_path)
+        .collect();
+    let inputs: Vec<&Path> = base.inputs.iter().map(PathBuf::as_path).collect();
+    crate::io::check_outputs(&outputs, &inputs)?;
+    let d = design::design(&base.model, base.range.as_deref(), &design_opts)?;
+    let scenario = base.scenario_text(&d, &design_opts, opts.out.as_deref())?;
+    let check = if opts.check {
+        let band = 5.0 * opts.harmonics as f64 * opts.base_frequency;
+        Some(check_in_simulation(
+            &base.model,
+            &scenario,
+            &design_opts,
+            band,
+        )?)
+    } else {
+        None
+    };
+    let mut written = None;
+    if check.as_ref().is_none_or(|c| c.within) {
+        if let Some(out) = &opts.out {
+            crate::io::write_atomic(out, scenario.as_bytes())?;
+            written = Some(out.clone());
+        }
+        let reference = || reference_trajectory(&base.model, &d.series, opts.duration, opts.rate);
+        if let Some(p) = &opts.csv {
+            crate::io::samples::write_reference_csv(p, &reference())?;
+        }
+        if let Some(p) = &opts.mcap {
+            crate::io::mcap_log::write_reference(p, &reference())?;
+        }
+    }
+    Ok(Excitation {
+        model: base.model,
+        design: d,
+        options: design_opts,
+        scenario,
+        check,
+        written,
+    })
+}
+
+/// The designed reference trajectory (t, q, q̇, q̈ per joint, named by joint; zero torque)
+/// sampled at `rate` Hz over `duration` s (an [`Excitation`]'s: its `model`,
+/// `design.series` and `options.duration`).
+pub fn reference_trajectory(
+    model: &Model,
+    series: &design::FourierSeries,
+    duration: f64,
+    rate: f64,
+) -> Trajectory {
+    let names: Vec<String> = model.bodies.iter().map(|b| b.joint_name.clone()).collect();
+    let samples = (duration * rate).round() as usize + 1;
+    let mut tr = Trajectory::new(names.clone(), true);
+    let zero = vec![0.0; names.len()];
+    for k in 0..samples {
+        let t = k as f64 / rate;
+        let [q, qd, qdd] = series.at(t);
+        tr.push(t, &q, &qd, Some(&qdd), &zero);
+    }
+    tr
+}
+
+/// A motion's information measures (`excite --score`): the design's three objectives on the
+/// true states of a simulated run.
+#[derive(Clone, Debug, serde::Serialize)]
+pub struct MotionScore {
+    /// `log det F / r`.
+    pub d_optimal: f64,
+    /// `log λ_min(F)`.
+    pub e_optimal: f64,
+    /// The condition number `κ(F)`.
+    pub condition: f64,
+    /// Samples scored.
+    pub samples: usize,
+}
+
+/// Simulates the base scenario's own excitation for `opts.duration` s and scores its true
+/// states (to compare a motion designed elsewhere); only a scenario has its own excitation.
+pub fn score_motion(
+    opts: &ExciteOptions,
+    notify: &mut dyn FnMut(Notice),
+) -> Result<MotionScore, ApiError> {
+    opts.validate()?;
+    if !matches!(opts.from, ExciteFrom::Scenario(_)) {
+        return Err(ApiError::Options(
+            "scoring a motion needs a base scenario (its excitation is what is scored)".into(),
+        ));
+    }
+    let base = ExciteBase::load(&opts.from, notify)?;
+    let (design_opts, _) = opts.design_options(&base.model);
+    design_opts.validate()?;
+    let mut sc: crate::sim::scenario::Scenario =
+        toml::from_str(&base.text).map_err(|e| ApiError::Options(e.to_string()))?;
+    sc.simulation.duration = opts.duration;
+    let rec = crate::sim::run(&base.model, &sc, &mut |_| {})
+        .map_err(|source| ApiError::DesignedSimulation { source })?;
+    let tr = &rec.truth;
+    let states = (0..tr.len()).filter_map(|k| Some([tr.q_at(k), tr.qd_at(k), tr.qdd_at(k)?]));
+    let [d, e, c] = design::score_states(&base.model, base.range.as_deref(), &design_opts, states)?;
+    Ok(MotionScore {
+        d_optimal: d,
+        e_optimal: e,
+        condition: (-c).exp(),
+        samples: tr.len(),
+    })
+}
+
+/// The tracking controller's gains (1/s², 1/s) and whether it feeds the inverse dynamics
+/// forward.
+#[derive(Clone, Debug)]
+struct Gains {
+    kp: Vec<f64>,
+    kd: Vec<f64>,
+    computed_torque: bool,
+}
+
+impl Gains {
+    /// Computed-torque gains for a robot without a base excitation.
+    fn default_for(n: usize) -> Self {
+        Gains {
+            kp: vec![400.0; n],
+            kd: vec![40.0; n],
+            computed_torque: true,
+        }
+    }
+}
+
+/// What a design starts from: the robot, the scenario table it goes into, the joint ranges.
+struct ExciteBase {
+    model: Model,
+    /// The scenario's text (the base file's, or physid's defaults for a robot).
+    text: String,
+    /// The base file's directory (relative robot paths resolve against it).
+    dir: PathBuf,
+    /// Per joint `(lower, upper)` from a base Fourier excitation.
+    range: Option<Vec<(f64, f64)>>,
+    /// Gains of the tracking controller.
+    gains: Gains,
+    /// Files read (no output may replace them).
+    inputs: Vec<PathBuf>,
+}
+
+impl ExciteBase {
+    fn load(from: &ExciteFrom, notify: &mut dyn FnMut(Notice)) -> Result<Self, ApiError> {
+        match from {
+            ExciteFrom::Scenario(path) => Self::from_scenario(path),
+            ExciteFrom::Robot(robot) => Self::from_robot(robot, notify),
+        }
+    }
+
+    fn from_scenario(path: &Path) -> Result<Self, ApiError> {
+        let (sc, model, text) = crate::sim::scenario::load(path)?;
+        let n = model.dof();
+        let (range, gains) = match &sc.excitation {
+            ExcitationSpec::Fourier {
+                amplitude,
+                offset,
+                coefficients,
+                kp,
+                kd,
+                computed_torque,
+                ..
+            } => (
+                coefficients.is_none().then(|| {
+                    offset
+                        .iter()
+                        .zip(amplitude)
+                        .map(|(o, a)| (o - a, o + a))
+                        .collect()
+                }),
+                Gains {
+                    kp: kp.clone(),
+                    kd: kd.clone(),
+                    computed_torque: *computed_torque,
+                },
+            ),
+            _ => (None, Gains::default_for(n)),
+        };
+        Ok(Self {
+            model,
+            text,
+            dir: path.parent().unwrap_or(Path::new("")).to_path_buf(),
+            range,
+            gains,
+            inputs: crate::io::scenario_files(path),
+        })
+    }
+
+    fn from_robot(robot: &str, notify: &mut dyn FnMut(Notice)) -> Result<Self, ApiError> {
+        let (model, warnings) = crate::io::load_robot_with(robot, &Default::default())?;
+        for w in warnings {
+            notify(Notice::warning(format!("{robot}: {w}")));
+        }
+        let n = model.dof();
+        let robot_table = if robot == "cheetah3" {
+            "builtin = \"cheetah3\"".to_string()
+        } else {
+            format!("urdf = {}", toml::Value::String(robot.to_string()))
+        };
+        let text = format!(
+            "[robot]\n{robot_table}\n\n[simulation]\nduration = 1.0\nrate = 1000.0\nsubsteps = 4\nseed = 1\nfriction_velocity = 0.01\n\n[excitation]\nkind = \"passive\"\n\n[sensors]\ntorque_noise = 0.3\nvelocity_feedback = \"finite_difference\"\n\n[processing]\nmethod = \"butterworth\"\ncutoff = 20.0\norder = 2\n"
+        );
+        let dir = std::env::current_dir().map_err(|source| crate::io::IoError::Fs {
+            path: PathBuf::from("."),
+            source,
+        })?;
+        Ok(Self {
+            model,
+            text,
+            dir,
+            range: None,
+            gains: Gains::default_for(n),
+            inputs: crate::io::robot_files(robot, &[]),
+        })
+    }
+
+    /// The scenario text with the design as its excitation and `opts.duration` (the base
+    /// file's other tables, comments included, as they were); a relative URDF path rewritten
+    /// relative to `out`'s folder.
+    fn scenario_text(
+        &self,
+        d: &Design,
+        opts: &DesignOptions,
+        out: Option<&Path>,
+    ) -> Result<String, ApiError> {
+        use toml_edit::{value, Item};
+        let mut doc: toml_edit::DocumentMut = self
+            .text
+            .parse()
+            .map_err(|e| ApiError::Designed(format!("re-reading the base scenario: {e}")))?;
+        let mut ex = self.excitation_table(d);
+        ex.decor_mut()
+            .set_prefix(format!("\n{}", design_header(d, opts)));
+        doc["excitation"] = Item::Table(ex);
+        doc["simulation"]["duration"] = value(opts.duration);
+        if let Some(u) = doc["robot"].get("urdf").and_then(|v| v.as_str()) {
+            let urdf = self.dir.join(u);
+            let urdf = urdf.canonicalize().unwrap_or(urdf);
+            let out_dir = out
+                .and_then(Path::parent)
+                .filter(|p| !p.as_os_str().is_empty())
+                .unwrap_or(Path::new("."));
+            let out_dir = out_dir
+                .canonicalize()
+                .map_err(|source| crate::io::IoError::Fs {
+                    path: out_dir.to_path_buf(),
+                    source,
+                })?;
+            let rel = pathdiff::diff_paths(&urdf, &out_dir).unwrap_or(urdf);
+            doc["robot"]["urdf"] = value(rel.display().to_string());
+        }
+        Ok(doc.to_string())
+    }
+
+    /// The `[excitation]` table of a design: its Fourier coefficients and the tracking gains.
+    fn excitation_table(&self, d: &Design) -> toml_edit::Table {
+        use toml_edit::{value, Array, Item, Table};
+        let s = &d.series;
+        let list = |v: &[f64]| Array::from_iter(v.iter().copied());
+        let rows = |m: &[Vec<f64>]| Array::from_iter(m.iter().map(|r| list(r)));
+        let mut ex = Table::new();
+        ex["kind"] = value("fourier");
+        ex["harmonics"] = value(s.sin.first().map_or(0, |r| r.len()) as i64);
+        ex["base_frequency"] = value(s.base_frequency);
+        ex["offset"] = value(list(&s.offset));
+        ex["kp"] = value(list(&self.gains.kp));
+        ex["kd"] = value(list(&self.gains.kd));
+        ex["computed_torque"] = value(self.gains.computed_torque);
+        if let Some(w) = s.window {
+            ex["ramp"] = value(w.ramp);
+        }
+        if self.gains.computed_torque {
+            ex["friction_feedforward"] = value(true);
+        }
+        let mut c = Table::new();
+        c["sin"] = value(rows(&s.sin));
+        c["cos"] = value(rows(&s.cos));
+        ex["coefficients"] = Item::Table(c);
+        ex
+    }
+}
+
+/// Whether the design was optimized (more evaluations than random starts) or is the best
+/// random start.
+pub fn design_kind(d: &Design, starts: usize) -> &'static str {
+    if d.evaluations > starts {
+        "optimized"
+    } else {
+        "random"
+    }
+}
+
+/// The comment above a written `[excitation]`: how it was designed and how good it is.
+fn design_header(d: &Design, opts: &DesignOptions) -> String {
+    let s = &d.series;
+    format!(
+        "# Designed by `physid excite` (physid {}): {} Fourier excitation, {} harmonics at {} Hz,\n# objective {} = {:.4} (best random start {:.4}), condition number {:.3e}, seed {}, margin {},\n# acceleration limit {:?} rad/s², jerk limit {:?} rad/s³, ramp {} s. {} of {} parameter combinations identifiable. Limits kept and used: `physid excite --json`.\n",
+        env!("CARGO_PKG_VERSION"),
+        design_kind(d, opts.starts),
+        opts.harmonics,
+        opts.base_frequency,
+        crate::io::serde_name(&d.objective),
+        d.value,
+        d.start_value,
+        d.condition,
+        opts.seed,
+        opts.margin,
+        d.limits.acceleration.iter().map(|x| x / (1.0 - opts.margin)).collect::<Vec<_>>(),
+        d.limits.jerk.iter().map(|x| x / (1.0 - opts.margin)).collect::<Vec<_>>(),
+        s.window.map_or(0.0, |w| w.ramp),
+        d.identifiable,
+        d.parameters,
+    )
 }

@@ -41,6 +41,19 @@ pub enum ApiError {
         #[source]
         source: crate::diagnose::DiagnoseError,
     },
+    /// No excitation can be designed with these settings for this robot.
+    #[error(transparent)]
+    Design(#[from] crate::sim::design::DesignError),
+    /// An option of an entry point out of its range.
+    #[error("{option} = {value}: expected {expected}")]
+    InvalidOption {
+        /// The option.
+        option: &'static str,
+        /// What it must be.
+        expected: &'static str,
+        /// The value given.
+        value: f64,
+    },
     /// A designed scenario is not valid.
     #[error("the designed scenario: {0}")]
     Designed(String),
@@ -77,6 +90,14 @@ pub enum ApiError {
 }
 
 impl ApiError {
+    pub(crate) fn invalid_option(option: &'static str, expected: &'static str, value: f64) -> Self {
+        ApiError::InvalidOption {
+            option,
+            expected,
+            value,
+        }
+    }
+
     pub(crate) fn invalid(path: &std::path::Path, message: impl Into<String>) -> Self {
         ApiError::Invalid {
             path: path.to_path_buf(),
@@ -94,6 +115,12 @@ impl OptionError for ApiError {
         match self {
             ApiError::Ident(e) => e.invalid_option(),
             ApiError::Diagnose(e) => e.invalid_option(),
+            ApiError::Design(e) => e.invalid_option(),
+            ApiError::InvalidOption {
+                option,
+                expected,
+                value,
+            } => Some((option, expected, *value)),
             _ => None,
         }
     }

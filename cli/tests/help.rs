@@ -1,0 +1,39 @@
+//! The binary's help: the product's description first (the same as the library's manifest
+//! says, whichever crate clap reads it from), and every command documented.
+
+#[path = "../../tests/common/mod.rs"]
+mod common;
+
+#[test]
+fn the_help_leads_with_the_products_description_and_lists_every_command() {
+    let manifest: toml::Table =
+        toml::from_str(&std::fs::read_to_string(common::root().join("Cargo.toml")).unwrap())
+            .unwrap();
+    let description = manifest["package"]["description"].as_str().unwrap();
+    let (code, help, _) = common::physid(&["--help"]);
+    assert_eq!(code, 0);
+    assert_eq!(help.lines().next(), Some(description), "{help}");
+    let commands = [
+        "diagnose",
+        "blind",
+        "model",
+        "dynamics",
+        "simulate",
+        "identify",
+        "experiment",
+        "sweep",
+        "excite",
+        "export",
+        "compare",
+        "schema",
+    ];
+    for c in commands {
+        assert!(
+            help.contains(&format!("  {c} ")),
+            "{c} missing from:\n{help}"
+        );
+        let (code, text, err) = common::physid(&[c, "--help"]);
+        assert_eq!(code, 0, "{c}: {err}");
+        assert!(text.contains(&format!("Usage: physid {c}")), "{text}");
+    }
+}
