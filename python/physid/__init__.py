@@ -33,6 +33,7 @@ from ._physid import (  # noqa: E402
     Experiment,
     Identification,
     Robot,
+    Sweep,
     compare,
     diagnose,
     excite,
@@ -41,6 +42,7 @@ from ._physid import (  # noqa: E402
     identify_arrays,
     load,
     simulate,
+    sweep,
     version,
 )
 
@@ -52,6 +54,7 @@ __all__ = [
     "Identification",
     "PhysidWarning",
     "Robot",
+    "Sweep",
     "compare",
     "diagnose",
     "excite",
@@ -60,6 +63,7 @@ __all__ = [
     "identify_arrays",
     "load",
     "simulate",
+    "sweep",
     "version",
 ]
 __version__ = version()

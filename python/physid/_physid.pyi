@@ -226,6 +226,34 @@ def excite(
 ) -> Excitation:
     """Design an excitation within the robot's limits, as `physid excite` does."""
 
+class Sweep:
+    """A parameter sweep's result: its folder, what ran, the merged tables once complete."""
+
+    @property
+    def out(self) -> Path: ...
+    @property
+    def cells(self) -> dict[str, int]:
+        """total, shard, ran, missing, stale."""
+    @property
+    def merged(self) -> bool: ...
+    @property
+    def markdown(self) -> str:
+        """summary.md (ValueError while cells are missing)."""
+    def rows(self) -> Any:
+        """rows.csv as a pandas DataFrame (ValueError while cells are missing)."""
+    def summary(self) -> Any:
+        """summary.csv as a pandas DataFrame."""
+
+def sweep(
+    sweep: Path,
+    *,
+    out: Optional[Path] = None,
+    shard: Optional[tuple[int, int]] = None,
+    threads: Optional[int] = None,
+    progress: Optional[Callable[[int, int], None]] = None,
+) -> Sweep:
+    """Run a parameter sweep (resumable, shardable), as `physid sweep` does."""
+
 class Experiment:
     """The sample-size experiment: every (seed, n_s, constraint set) cell."""
 

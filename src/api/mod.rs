@@ -16,6 +16,7 @@ pub mod identify;
 pub mod model;
 pub mod provenance;
 pub mod simulate;
+pub mod sweep;
 
 use std::path::PathBuf;
 
@@ -54,6 +55,29 @@ pub enum ApiError {
         /// The value given.
         value: f64,
     },
+    /// A file-system operation on a result folder failed.
+    #[error("{action} {}", path.display())]
+    Fs {
+        /// What was being done ("creating", "reading", "removing").
+        action: &'static str,
+        /// The file or folder.
+        path: PathBuf,
+        /// The operating-system error.
+        #[source]
+        source: std::io::Error,
+    },
+    /// A sweep cell failed.
+    #[error("cell {id}")]
+    Cell {
+        /// The cell's id.
+        id: String,
+        /// What failed.
+        #[source]
+        source: Box<crate::experiment::sweep::SweepError>,
+    },
+    /// A table could not be built.
+    #[error(transparent)]
+    Table(#[from] polars::prelude::PolarsError),
     /// A designed scenario is not valid.
     #[error("the designed scenario: {0}")]
     Designed(String),
