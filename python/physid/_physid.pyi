@@ -71,9 +71,9 @@ class Identification:
     @property
     def notices(self) -> list[str]:
         """Notes and warnings as the CLI prints them."""
-    def bodies(self) -> Any:
+    def bodies(self, backend: str = "pandas") -> Any:
         """pandas DataFrame: name, m, hx, ..., Izz, min_eig_I, min_eig_J, tr_JQ, consistent."""
-    def joints(self) -> Any:
+    def joints(self, backend: str = "pandas") -> Any:
         """pandas DataFrame: joint, viscous, coulomb, train_rms, validation_rms."""
     def to_dict(self) -> dict[str, Any]:
         """The report as `physid identify --json` prints it."""
@@ -119,7 +119,7 @@ class Diagnosis:
         """What-changed mode: the baseline's standing effects taken out of the data."""
     @property
     def notices(self) -> list[str]: ...
-    def gap(self) -> Any:
+    def gap(self, backend: str = "pandas") -> Any:
         """pandas DataFrame: per joint the validation RMS of the description, the nominal
         model, after each effect, and the noise floor (N m)."""
     def to_dict(self) -> dict[str, Any]: ...
@@ -197,7 +197,7 @@ class Excitation:
         """Notes and warnings, also raised as PhysidWarning."""
     def reference(self, rate: float = 1000.0) -> dict[str, Array]:
         """The reference trajectory t, q, qd, qdd (tau zero) at `rate` Hz."""
-    def limits(self) -> Any:
+    def limits(self, backend: str = "pandas") -> Any:
         """Per joint, peaks over the robot's limits in simulation (pandas DataFrame)."""
     def to_dict(self) -> dict[str, Any]: ...
 
@@ -239,9 +239,9 @@ class Sweep:
     @property
     def markdown(self) -> str:
         """summary.md (ValueError while cells are missing)."""
-    def rows(self) -> Any:
+    def rows(self, backend: str = "pandas") -> Any:
         """rows.csv as a pandas DataFrame (ValueError while cells are missing)."""
-    def summary(self) -> Any:
+    def summary(self, backend: str = "pandas") -> Any:
         """summary.csv as a pandas DataFrame."""
 
 def sweep(
@@ -257,9 +257,9 @@ def sweep(
 class Experiment:
     """The sample-size experiment: every (seed, n_s, constraint set) cell."""
 
-    def rows(self) -> Any:
+    def rows(self, backend: str = "pandas") -> Any:
         """pandas DataFrame: the CLI's rows.csv."""
-    def summary(self) -> Any:
+    def summary(self, backend: str = "pandas") -> Any:
         """pandas DataFrame: median and quartiles over seeds (the CLI's summary.csv)."""
     @property
     def constraints(self) -> list[str]: ...
@@ -282,7 +282,7 @@ class Comparison:
     def regressions(self) -> int: ...
     @property
     def too_few(self) -> int: ...
-    def groups(self) -> Any:
+    def groups(self, backend: str = "pandas") -> Any:
         """pandas DataFrame: point, n_s, set, pairs, medians, median_ratio, p_value, outcome."""
     def markdown(self) -> str: ...
     def junit(self) -> str: ...

@@ -14,7 +14,7 @@ use physid::model::{Model, RotorModel};
 use physid::trajectory::Trajectory;
 use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
-use pyo3::types::PyDict;
+use pyo3::types::{PyBytes, PyDict};
 use std::path::{Path, PathBuf};
 
 /// A library error as a Python `ValueError` with its message.
@@ -558,7 +558,8 @@ impl Identification {
     /// Each body's (and rotor's) identified π and its consistency margins, one row per body:
     /// a pandas DataFrame (`name`, `m`, `hx` … `Izz`, `min_eig_I`, `min_eig_J`, `tr_JQ`,
     /// `consistent`).
-    fn bodies<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
+    #[pyo3(signature = (backend = "pandas"))]
+    fn bodies<'py>(&self, py: Python<'py>, backend: &str) -> PyResult<Bound<'py, PyAny>> {
         let b = &self.report.identified.bodies;
         let cols = PyDict::new(py);
         cols.set_item("name", b.iter().map(|b| b.name.clone()).collect::<Vec<_>>())?;
@@ -573,12 +574,13 @@ impl Identification {
         cols.set_item("tr_JQ", c(|c| c.trace_jq))?;
         let consistent: Vec<bool> = b.iter().map(|b| b.consistency.consistent()).collect();
         cols.set_item("consistent", consistent)?;
-        frame(py, cols.into_any())
+        frame(py, cols.into_any(), backend)
     }
 
     /// One row per joint: `joint`, `viscous` (N m s/rad), `coulomb` (N m) and the RMS torque
     /// errors `train_rms` and `validation_rms` (N m; NaN for a locked joint or nothing held out).
-    fn joints<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
+    #[pyo3(signature = (backend = "pandas"))]
+    fn joints<'py>(&self, py: Python<'py>, backend: &str) -> PyResult<Bound<'py, PyAny>> {
         let r = &self.report;
         let n = self.model.dof();
         let cols = PyDict::new(py);
@@ -601,7 +603,7 @@ impl Identification {
             "validation_rms",
             rms(r.validation_rms.as_ref().map(|v| &v.0)),
         )?;
-        frame(py, cols.into_any())
+        frame(py, cols.into_any(), backend)
     }
 
     /// The report as `physid identify --json` prints it.
@@ -643,17 +645,31 @@ impl Identification {
 }
 
 /// The pandas module, or an ImportError that says how to get it.
-fn pandas(py: Python<'_>) -> PyResult<Bound<'_, PyModule>> {
-    py.import("pandas").map_err(|_| {
-        pyo3::exceptions::PyImportError::new_err(
-            "tables are pandas DataFrames: pip install pandas (the package's extra 'tables')",
-        )
+/// The DataFrame library a table is returned in: `"pandas"` (the default) or `"polars"`.
+fn frames<'py>(py: Python<'py>, backend: &str) -> PyResult<Bound<'py, PyModule>> {
+    let extra = match backend {
+        "pandas" => "the package's extra 'tables'",
+        "polars" => "the package's extra 'polars'",
+        other => {
+            return Err(value_error(format!(
+                "backend: '{other}' is not one of pandas, polars"
+            )))
+        }
+    };
+    py.import(backend).map_err(|_| {
+        pyo3::exceptions::PyImportError::new_err(format!(
+            "tables as {backend} DataFrames: pip install {backend} ({extra})"
+        ))
     })
 }
 
 /// A pandas DataFrame of `data` (a dict of columns or a list of records).
-fn frame<'py>(py: Python<'py>, data: Bound<'py, PyAny>) -> PyResult<Bound<'py, PyAny>> {
-    pandas(py)?.getattr("DataFrame")?.call1((data,))
+fn frame<'py>(
+    py: Python<'py>,
+    data: Bound<'py, PyAny>,
+    backend: &str,
+) -> PyResult<Bound<'py, PyAny>> {
+    frames(py, backend)?.getattr("DataFrame")?.call1((data,))
 }
 
 /// Identifies `robot` from data files as `physid identify` does, its flags as keyword
@@ -781,7 +797,8 @@ impl Diagnosis {
 
     /// The gap per joint: validation RMS (N m) of the description as given, the re-identified
     /// nominal model, after every effect found, and the noise floor — a pandas DataFrame.
-    fn gap<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
+    #[pyo3(signature = (backend = "pandas"))]
+    fn gap<'py>(&self, py: Python<'py>, backend: &str) -> PyResult<Bound<'py, PyAny>> {
         let g = &self.diagnosis.gap;
         let cols = PyDict::new(py);
         cols.set_item(
@@ -803,7 +820,7 @@ impl Diagnosis {
             "noise_floor",
             g.iter().map(|g| g.noise_floor).collect::<Vec<_>>(),
         )?;
-        frame(py, cols.into_any())
+        frame(py, cols.into_any(), backend)
     }
 
     /// The report as `physid diagnose --json` prints it.
@@ -1055,14 +1072,15 @@ impl Excitation {
 
     /// Per joint, the limits as the simulated robot used them (peak over the run / its own
     /// limit) as a pandas DataFrame; empty when not checked.
-    fn limits<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
+    #[pyo3(signature = (backend = "pandas"))]
+    fn limits<'py>(&self, py: Python<'py>, backend: &str) -> PyResult<Bound<'py, PyAny>> {
         let rows: Vec<&api::excite::SimulatedUse> = self
             .inner
             .check
             .iter()
             .flat_map(|c| c.joints.iter())
             .collect();
-        frame(py, plain(py, &rows)?)
+        frame(py, plain(py, &rows)?, backend)
     }
 
     /// The report as `physid excite --json` prints it.
@@ -1275,10 +1293,19 @@ fn simulate(
 
 /// A table's CSV text (or why it could not be made) as a pandas DataFrame: the columns of
 /// the CLI's CSV.
-fn pandas_of<'py>(py: Python<'py>, csv: Result<String, String>) -> PyResult<Bound<'py, PyAny>> {
+/// A table written by the library as CSV text, read back as a DataFrame of `backend`.
+fn table_of<'py>(
+    py: Python<'py>,
+    csv: Result<String, String>,
+    backend: &str,
+) -> PyResult<Bound<'py, PyAny>> {
     let text = csv.map_err(value_error)?;
-    let buffer = py.import("io")?.getattr("StringIO")?.call1((text,))?;
-    pandas(py)?.getattr("read_csv")?.call1((buffer,))
+    let module = frames(py, backend)?;
+    let buffer = py
+        .import("io")?
+        .getattr("BytesIO")?
+        .call1((PyBytes::new(py, text.as_bytes()),))?;
+    module.getattr("read_csv")?.call1((buffer,))
 }
 
 /// The sample-size experiment of a scenario (`physid experiment`): every (seed, n_s,
@@ -1312,13 +1339,15 @@ impl Experiment {
 impl Experiment {
     /// One row per (seed, n_s, constraint set): validation and training RMS (N m), parameter
     /// errors against the truth, consistency, solver status and time (the CLI's rows.csv).
-    fn rows<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
-        pandas_of(py, self.csv(false))
+    #[pyo3(signature = (backend = "pandas"))]
+    fn rows<'py>(&self, py: Python<'py>, backend: &str) -> PyResult<Bound<'py, PyAny>> {
+        table_of(py, self.csv(false), backend)
     }
 
     /// Median and quartiles over seeds per n_s × constraint set (the CLI's summary.csv).
-    fn summary<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
-        pandas_of(py, self.csv(true))
+    #[pyo3(signature = (backend = "pandas"))]
+    fn summary<'py>(&self, py: Python<'py>, backend: &str) -> PyResult<Bound<'py, PyAny>> {
+        table_of(py, self.csv(true), backend)
     }
 
     /// The constraint sets compared, loosest first.
@@ -1451,13 +1480,15 @@ impl Sweep {
     }
 
     /// One row per (grid point, seed, n_s, constraint set): the CLI's rows.csv.
-    fn rows<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
-        pandas_of(py, self.table(0))
+    #[pyo3(signature = (backend = "pandas"))]
+    fn rows<'py>(&self, py: Python<'py>, backend: &str) -> PyResult<Bound<'py, PyAny>> {
+        table_of(py, self.table(0), backend)
     }
 
     /// Medians and quartiles over seeds per (grid point, n_s, set): summary.csv.
-    fn summary<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
-        pandas_of(py, self.table(1))
+    #[pyo3(signature = (backend = "pandas"))]
+    fn summary<'py>(&self, py: Python<'py>, backend: &str) -> PyResult<Bound<'py, PyAny>> {
+        table_of(py, self.table(1), backend)
     }
 
     /// summary.md.
@@ -1577,8 +1608,9 @@ impl Comparison {
 
     /// Every group as a pandas DataFrame: point, n_s, set, pairs, reference_median,
     /// candidate_median, median_ratio, p_value, outcome.
-    fn groups<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
-        frame(py, plain(py, &self.cmp.groups)?)
+    #[pyo3(signature = (backend = "pandas"))]
+    fn groups<'py>(&self, py: Python<'py>, backend: &str) -> PyResult<Bound<'py, PyAny>> {
+        frame(py, plain(py, &self.cmp.groups)?, backend)
     }
 
     /// The comparison as `physid compare` prints it (Markdown).
