@@ -522,3 +522,15 @@ impl ReadOptions {
         })
     }
 }
+
+/// The runs of a command's roles (`("--data", runs)`, `("--validate-data", runs)`, …) are
+/// distinct recordings: the same file (or a copy of it) in two places is an error naming both
+/// flags, as it would score a fit on its own training data.
+pub fn check_distinct_runs(roles: &[(&str, &[PathBuf])]) -> Result<(), ApiError> {
+    let files: Vec<(&str, &Path)> = roles
+        .iter()
+        .flat_map(|(flag, runs)| runs.iter().map(move |p| (*flag, p.as_path())))
+        .collect();
+    crate::io::check_distinct_recordings(&files)?;
+    Ok(())
+}

@@ -111,15 +111,11 @@ impl DiagnoseOptions {
         if self.data.is_empty() {
             return Err(ApiError::Options("--data: give at least one run".into()));
         }
-        let roles: Vec<(&str, &Path)> = (self.data.iter().map(|p| ("--data", p.as_path())))
-            .chain(self.validate.iter().map(|p| ("--validate", p.as_path())))
-            .chain(
-                self.baseline_data
-                    .iter()
-                    .map(|p| ("--baseline-data", p.as_path())),
-            )
-            .collect();
-        crate::io::check_distinct_recordings(&roles)?;
+        super::data::check_distinct_runs(&[
+            ("--data", &self.data),
+            ("--validate", &self.validate),
+            ("--baseline-data", &self.baseline_data),
+        ])?;
         if !self.baseline_data.is_empty() && self.diagnosis.description_uncertainty.is_none() {
             return Err(DiagnoseError::BaselineWithoutUncertainty.into());
         }

@@ -489,14 +489,10 @@ impl IdentifyOptions {
                 "give --validate or --validate-data, not both".into(),
             ));
         }
-        let roles: Vec<(&str, &Path)> = (self.data.iter().map(|p| ("--data", p.as_path())))
-            .chain(
-                self.validate_data
-                    .iter()
-                    .map(|p| ("--validate-data", p.as_path())),
-            )
-            .collect();
-        crate::io::check_distinct_recordings(&roles)?;
+        super::data::check_distinct_runs(&[
+            ("--data", &self.data),
+            ("--validate-data", &self.validate_data),
+        ])?;
         Ok(())
     }
 
