@@ -38,7 +38,7 @@ fn a_streamed_csv_fits_as_the_same_file_in_memory() {
         range: n * 3 / 4..n,
     }];
     let set = identify::constraint_set(None, &model);
-    assert_eq!(set.0, ConstraintSet::Ellipsoid, "{:?}", set.1);
+    assert_eq!(set.set, ConstraintSet::Ellipsoid, "{:?}", set.because);
     let opts = Options::new(ConstraintSet::Consistent);
     let locked = locked_joints(&model, &memory);
     assert!(locked.is_empty());
@@ -51,8 +51,9 @@ fn a_streamed_csv_fits_as_the_same_file_in_memory() {
         "θ differs by {diff:e} (scale {scale:e})"
     );
     assert!(a.identified.constraints_hold);
-    let (per_a, all_a) = a.errors(&model, &memory, &validation, &locked).unwrap();
-    let (per_b, all_b) = b.errors(&model, &streamed, &validation, &locked).unwrap();
+    let a = a.errors(&model, &memory, &validation, &locked).unwrap();
+    let b = b.errors(&model, &streamed, &validation, &locked).unwrap();
+    let (per_a, all_a, per_b, all_b) = (a.per_joint, a.overall, b.per_joint, b.overall);
     assert!((all_a - all_b).abs() <= 1e-9 * all_a, "{all_a} vs {all_b}");
     assert_eq!(per_a.len(), 3);
     assert!(per_b

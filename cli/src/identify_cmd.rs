@@ -297,12 +297,12 @@ fn print_text(a: &Args, m: &Model, rep: &Identification) {
 /// Robot, set, data, parameter count and solve time.
 fn print_header(a: &Args, m: &Model, rep: &Identification) {
     let r = &rep.identified;
-    let used: usize = rep.used.0.iter().sum();
+    let used: usize = rep.train.runs.iter().map(|r| r.samples_used).sum();
     let on = if a.data.len() == 1 {
         format!(
             "samples {}..{} of {} ({used} used)",
-            rep.train[0].1.start,
-            rep.train[0].1.end,
+            rep.train.runs[0].range[0],
+            rep.train.runs[0].range[1],
             a.data[0].display()
         )
     } else {
@@ -387,7 +387,7 @@ fn print_joints(m: &Model, rep: &Identification) {
         .flat_map(|d| d.pipeline.still.iter())
         .collect();
     for (j, b) in m.bodies.iter().enumerate() {
-        let known = rep.train_rms.0[j].is_some() && !still.contains(&&b.joint_name);
+        let known = rep.train.rms[j].is_some() && !still.contains(&&b.joint_name);
         let friction = |v: f64| {
             if known {
                 format!("{v:.4}")
@@ -400,10 +400,10 @@ fn print_joints(m: &Model, rep: &Identification) {
             b.joint_name,
             friction(r.viscous[j]),
             friction(r.coulomb[j]),
-            cell(rep.train_rms.0[j]),
-            rep.validation_rms
+            cell(rep.train.rms[j]),
+            rep.validation
                 .as_ref()
-                .map_or("-".into(), |(v, _)| cell(v[j]))
+                .map_or("-".into(), |v| cell(v.rms[j]))
         );
     }
 }
@@ -413,10 +413,11 @@ fn print_fit(rep: &Identification) {
     let r = &rep.identified;
     println!(
         "overall RMS: train {:.4} N m{}",
-        rep.train_rms.1,
-        rep.validation_rms
-            .as_ref()
-            .map_or(String::new(), |(_, v)| format!(", validation {v:.4} N m"))
+        rep.train.rms_overall,
+        rep.validation.as_ref().map_or(String::new(), |v| format!(
+            ", validation {:.4} N m",
+            v.rms_overall
+        ))
     );
     let inconsistent: Vec<&str> = r
         .bodies

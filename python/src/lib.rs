@@ -283,7 +283,8 @@ fn identify_arrays<'py>(
         .map(|c| c.parse::<ConstraintSet>())
         .transpose()
         .map_err(value_error)?;
-    let (set, because) = api::identify::constraint_set(given, m);
+    let chosen = api::identify::constraint_set(given, m);
+    let (set, because) = (chosen.set, chosen.because);
     let mut opts = Options::new(set);
     opts.prior_weight = prior_weight;
     opts.validate().map_err(value_error)?;
@@ -533,13 +534,13 @@ impl Identification {
     /// RMS torque error over all fitted joints on the training samples (N m).
     #[getter]
     fn train_rms(&self) -> f64 {
-        self.report.train_rms.1
+        self.report.train.rms_overall
     }
 
     /// RMS torque error on the held-out samples (N m), `None` when nothing was held out.
     #[getter]
     fn validation_rms(&self) -> Option<f64> {
-        self.report.validation_rms.as_ref().map(|v| v.1)
+        self.report.validation.as_ref().map(|v| v.rms_overall)
     }
 
     /// Wall time of the library's own `identify` call (s): reading, fit, scores; what the
@@ -598,11 +599,8 @@ impl Identification {
                 .map(|j| v.and_then(|v| v[j]).unwrap_or(f64::NAN))
                 .collect()
         };
-        cols.set_item("train_rms", rms(Some(&r.train_rms.0)))?;
-        cols.set_item(
-            "validation_rms",
-            rms(r.validation_rms.as_ref().map(|v| &v.0)),
-        )?;
+        cols.set_item("train_rms", rms(Some(&r.train.rms)))?;
+        cols.set_item("validation_rms", rms(r.validation.as_ref().map(|v| &v.rms)))?;
         frame(py, cols.into_any(), backend)
     }
 
@@ -639,7 +637,7 @@ impl Identification {
             } else {
                 "False"
             },
-            self.report.train_rms.1
+            self.report.train.rms_overall
         )
     }
 }

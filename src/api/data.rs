@@ -252,18 +252,27 @@ impl SquaredErrors {
 
     /// Per-joint RMS (N m; `None` for the `locked` joints, whose torque is not fitted) and the
     /// RMS over the other joints.
-    pub fn rms(&self, locked: &[usize]) -> (Vec<Option<f64>>, f64) {
+    pub fn rms(&self, locked: &[usize]) -> Rms {
         let k = self.samples.max(1) as f64;
-        let per = (0..self.sum.len())
+        let per_joint = (0..self.sum.len())
             .map(|j| (!locked.contains(&j)).then(|| (self.sum[j] / k).sqrt()))
             .collect();
         let fitted: Vec<f64> = (0..self.sum.len())
             .filter(|j| !locked.contains(j))
             .map(|j| self.sum[j])
             .collect();
-        let all = (fitted.iter().sum::<f64>() / (k * fitted.len().max(1) as f64)).sqrt();
-        (per, all)
+        let overall = (fitted.iter().sum::<f64>() / (k * fitted.len().max(1) as f64)).sqrt();
+        Rms { per_joint, overall }
     }
+}
+
+/// RMS torque errors of a fit over some runs.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Rms {
+    /// Per joint (N m; `None` for a locked joint, whose torque is not fitted).
+    pub per_joint: Vec<Option<f64>>,
+    /// Over the fitted joints (N m).
+    pub overall: f64,
 }
 
 /// A note or warning about the data or the run, for the user (the binary prints each on

@@ -3,8 +3,8 @@
 //! physid log, and the effects a diagnosis report confirmed (`--effects-from`).
 
 use super::data::{
-    bag_option_notices, file_notices, in_memory, locked_joints, Data, Notice, ReadOptions, Span,
-    SquaredErrors,
+    bag_option_notices, file_notices, in_memory, locked_joints, Data, Notice, ReadOptions, Rms,
+    Span, SquaredErrors,
 };
 use super::ApiError;
 use crate::diagnose::calibrate::{parse_term, Calibration, Options as CalOptions, Run, TermFit};
@@ -42,7 +42,7 @@ pub struct TruthError {
 }
 
 /// A run and its sample range (`[start, end)`, indices of the file as read).
-#[derive(serde::Serialize, schemars::JsonSchema)]
+#[derive(Clone, Debug, serde::Serialize, schemars::JsonSchema)]
 pub struct RunRange {
     /// The data file.
     pub file: PathBuf,
@@ -54,7 +54,7 @@ pub struct RunRange {
 }
 
 /// The training or validation part of `identify --json`.
-#[derive(serde::Serialize, schemars::JsonSchema)]
+#[derive(Clone, Debug, serde::Serialize, schemars::JsonSchema)]
 pub struct Split {
     /// The first run's sample range.
     pub range: Option<[usize; 2]>,
@@ -120,11 +120,20 @@ pub struct IdentifyJson {
     pub locked_joints: Vec<String>,
 }
 
+/// A constraint set and, when it was chosen for the user, why.
+#[derive(Clone, Debug, PartialEq)]
+pub struct ChosenSet {
+    /// The set identified under.
+    pub set: ConstraintSet,
+    /// Why it was the default (`None`: the user gave it).
+    pub because: Option<String>,
+}
+
 /// The constraint set: the one given, else the tightest the description supports, and why
 /// (`ellipsoid` when every body has a bounding ellipsoid, else `consistent`).
-pub fn constraint_set(given: Option<ConstraintSet>, m: &Model) -> (ConstraintSet, Option<String>) {
-    if let Some(c) = given {
-        return (c, None);
+pub fn constraint_set(given: Option<ConstraintSet>, m: &Model) -> ChosenSet {
+    if let Some(set) = given {
+        return ChosenSet { set, because: None };
     }
     let missing: Vec<String> = ident::bodies(m)
         .into_iter()
@@ -132,18 +141,18 @@ pub fn constraint_set(given: Option<ConstraintSet>, m: &Model) -> (ConstraintSet
         .map(|(name, _, _)| name)
         .collect();
     if missing.is_empty() {
-        (
-            ConstraintSet::Ellipsoid,
-            Some("every body has a bounding ellipsoid".into()),
-        )
+        ChosenSet {
+            set: ConstraintSet::Ellipsoid,
+            because: Some("every body has a bounding ellipsoid".into()),
+        }
     } else {
-        (
-            ConstraintSet::Consistent,
-            Some(format!(
+        ChosenSet {
+            set: ConstraintSet::Consistent,
+            because: Some(format!(
                 "no bounding ellipsoid for {} (give them in a sidecar, see docs/robot-format.md)",
                 missing.join(", ")
             )),
-        )
+        }
     }
 }
 
@@ -286,7 +295,7 @@ impl Fit {
         data: &[Data],
         spans: &[Span],
         locked: &[usize],
-    ) -> Result<(Vec<Option<f64>>, f64), ApiError> {
+    ) -> Result<Rms, ApiError> {
         if let Some((cal, copts)) = &self.calibration {
             let pieces = in_memory(data, spans);
             let (per, _) = crate::diagnose::calibrate::rms_error(m, cal, &as_runs(&pieces), copts);
@@ -583,16 +592,11 @@ pub struct Identification {
     pub set: ConstraintSet,
     /// Why the default constraint set was chosen (when none was given).
     pub set_note: Option<String>,
-    /// Training runs (files) and their sample ranges.
-    pub train: Vec<(PathBuf, Range<usize>)>,
-    /// Training RMS torque error per joint (N m; `None`: locked) and over all joints.
-    pub train_rms: (Vec<Option<f64>>, f64),
-    /// Validation runs and their sample ranges (empty when nothing was held out).
-    pub validation: Vec<(PathBuf, Range<usize>)>,
-    /// Validation RMS torque error per joint and overall, when anything was held out.
-    pub validation_rms: Option<(Vec<Option<f64>>, f64)>,
-    /// Samples fitted per training run and scored per validation run (after the pipeline).
-    pub used: (Vec<usize>, Vec<usize>),
+    /// The training runs (files, sample ranges, samples fitted) and the RMS torque error on
+    /// them.
+    pub train: Split,
+    /// The validation runs and the RMS error on them, when anything was held out.
+    pub validation: Option<Split>,
     /// Which parameters the data determine.
     pub identifiability: analysis::Identifiability,
     /// Errors against the ground truth a physid log carries (one training run only).
@@ -625,8 +629,8 @@ pub fn identify_reporting(
     notify: &mut dyn FnMut(&Notice),
 ) -> Result<Identification, ApiError> {
     o.validate()?;
-    let (set, set_note) = constraint_set(o.constraints, m);
-    let opts = o.ident(set)?;
+    let chosen = constraint_set(o.constraints, m);
+    let opts = o.ident(chosen.set)?;
     let opened = open(m, o)?;
     opened.notices.iter().for_each(&mut *notify);
     check_equations(m, o, &opened)?;
@@ -641,7 +645,7 @@ pub fn identify_reporting(
     )?;
     let total = start.elapsed().as_secs_f64();
     let seen = opened.notices.len();
-    let report = score(m, o, fit, (set, set_note), opened, total)?;
+    let report = score(m, o, fit, chosen, opened, total)?;
     report.notices[seen..].iter().for_each(notify);
     Ok(report)
 }
@@ -666,7 +670,7 @@ fn score(
     m: &Model,
     o: &IdentifyOptions,
     fit: Fit,
-    (set, set_note): (ConstraintSet, Option<String>),
+    chosen: ChosenSet,
     d: Opened,
     total_seconds: f64,
 ) -> Result<Identification, ApiError> {
@@ -678,18 +682,21 @@ fn score(
     };
     let identifiability = analysis::identifiability(m, &fit.normal_equations, &fit.model_theta(m));
     let files = o.files();
-    let named = |spans: &[Span]| -> Vec<(PathBuf, Range<usize>)> {
-        spans
+    let split = |spans: &[Span], rms: Rms| Split {
+        range: spans.first().map(|s| [s.range.start, s.range.end]),
+        runs: spans
             .iter()
-            .map(|s| (files[s.file].to_path_buf(), s.range.clone()))
-            .collect()
+            .map(|s| RunRange {
+                file: files[s.file].to_path_buf(),
+                range: [s.range.start, s.range.end],
+                samples_used: d.data[s.file].used(&s.range),
+            })
+            .collect(),
+        rms: rms.per_joint,
+        rms_overall: rms.overall,
     };
-    let used = |spans: &[Span]| -> Vec<usize> {
-        spans
-            .iter()
-            .map(|s| d.data[s.file].used(&s.range))
-            .collect()
-    };
+    let train = split(&d.train, train_rms);
+    let validation = validation_rms.map(|rms| split(&d.validation, rms));
     let mut notices = d.notices.clone();
     notices.extend(weak_data_warnings(o, &d, &identifiability));
     let dt = d.data[0].report().map_or(1e-3, |r| r.period);
@@ -712,13 +719,10 @@ fn score(
         identified: fit.identified,
         terms: fit.terms,
         snippet,
-        set,
-        set_note,
-        train: named(&d.train),
-        train_rms,
-        validation: named(&d.validation),
-        validation_rms,
-        used: (used(&d.train), used(&d.validation)),
+        set: chosen.set,
+        set_note: chosen.because,
+        train,
+        validation,
         identifiability,
         total_seconds,
         data,
@@ -820,35 +824,13 @@ impl Identification {
     /// The report as `identify --json` (docs/identify-json.md).
     pub fn json(&self, m: &Model) -> IdentifyJson {
         let r = &self.identified;
-        let runs = |spans: &[(PathBuf, Range<usize>)], used: &[usize]| -> Vec<RunRange> {
-            spans
-                .iter()
-                .zip(used)
-                .map(|((f, r), &u)| RunRange {
-                    file: f.clone(),
-                    range: [r.start, r.end],
-                    samples_used: u,
-                })
-                .collect()
-        };
-        let (train_rms, train_all) = self.train_rms.clone();
         IdentifyJson {
-            data: self.train[0].0.clone(),
+            data: self.train.runs[0].file.clone(),
             robot: m.name.clone(),
             constraints: self.set,
             constraints_default_because: self.set_note.clone(),
-            train: Split {
-                range: Some([self.train[0].1.start, self.train[0].1.end]),
-                runs: runs(&self.train, &self.used.0),
-                rms: train_rms,
-                rms_overall: train_all,
-            },
-            validation: self.validation_rms.as_ref().map(|(rms, all)| Split {
-                range: self.validation.first().map(|(_, r)| [r.start, r.end]),
-                runs: runs(&self.validation, &self.used.1),
-                rms: rms.clone(),
-                rms_overall: *all,
-            }),
+            train: self.train.clone(),
+            validation: self.validation.clone(),
             bodies: r.bodies.clone(),
             friction: Friction {
                 viscous: r.viscous.clone(),
