@@ -278,3 +278,33 @@ fn the_library_crate_has_no_command_line_dependencies() {
     let bin = &cli["bin"].as_array().unwrap()[0];
     assert_eq!(bin["name"].as_str(), Some("physid"));
 }
+
+#[test]
+fn the_api_floor_returns_named_types_not_tuples() {
+    // The entry points the binary and the Python package stand on return and hold named
+    // types (a field per value, documented), never an anonymous tuple or a String error.
+    let api = common::root().join("src/api");
+    let mut files = vec![];
+    rust_files(&api, &mut files);
+    let mut found = vec![];
+    for file in &files {
+        let text = code(&std::fs::read_to_string(file).unwrap());
+        for (i, line) in text.lines().enumerate() {
+            let t = line.trim_start();
+            let public = t.starts_with("pub fn ") || (t.starts_with("pub ") && t.contains(": "));
+            let tuple = (t.contains("-> (") && !t.contains("-> ()"))
+                || (t.contains("Result<(") && !t.contains("Result<()"))
+                || t.contains(", String>")
+                || (t.starts_with("pub ") && !t.starts_with("pub fn") && t.contains(": ("));
+            if public && tuple {
+                found.push(format!(
+                    "{}:{}: {t}",
+                    file.strip_prefix(&api).unwrap().display(),
+                    i + 1
+                ));
+            }
+        }
+    }
+    assert!(files.len() >= 8, "src/api not found");
+    assert!(found.is_empty(), "in the api floor:\n{}", found.join("\n"));
+}

@@ -58,7 +58,7 @@ impl RobotArgs {
 
     /// Loads the robot, printing the loader's warnings.
     pub(super) fn load(&self) -> anyhow::Result<Model> {
-        let (m, notices) = self.options().load()?;
+        let physid::api::model::LoadedRobot { model: m, notices } = self.options().load()?;
         for n in notices {
             eprintln!("{n}");
         }

@@ -145,7 +145,8 @@ impl Robot {
             package_dirs: paths("package_dirs", package_dirs)?,
             no_geometry_ellipsoids,
         };
-        let (model, notices) = py.allow_threads(|| opts.load()).map_err(api_error)?;
+        let api::model::LoadedRobot { model, notices } =
+            py.allow_threads(|| opts.load()).map_err(api_error)?;
         warn(py, &notices)?;
         Ok(Robot {
             model,

@@ -224,7 +224,7 @@ impl ExciteOptions {
 
     /// The design's settings for `model`, its rate limits defaulted from the description
     /// (the joints defaulted to physid's safe limits are returned, to be told to the user).
-    pub fn design_options(&self, model: &Model) -> (DesignOptions, Vec<String>) {
+    pub fn design_options(&self, model: &Model) -> DesignSettings {
         let (max_acceleration, max_jerk, defaulted) = design::rate_limits(
             model,
             self.max_acceleration.as_deref(),
@@ -247,8 +247,21 @@ impl ExciteOptions {
             duration: self.duration,
             samples: self.samples,
         };
-        (opts, defaulted)
+        DesignSettings {
+            options: opts,
+            defaulted,
+        }
     }
+}
+
+/// The design's settings for a robot, and which joints' rate limits were defaulted.
+#[derive(Clone, Debug)]
+pub struct DesignSettings {
+    /// The settings.
+    pub options: DesignOptions,
+    /// Joints without an acceleration or jerk limit in the description, designed within
+    /// [`design::SAFE_ACCELERATION`] and [`design::SAFE_JERK`].
+    pub defaulted: Vec<String>,
 }
 
 /// A designed excitation: the design, the scenario that runs it, its check in simulation.
@@ -296,7 +309,10 @@ pub fn excite(
 ) -> Result<Excitation, ApiError> {
     opts.validate()?;
     let base = ExciteBase::load(&opts.from, notify)?;
-    let (design_opts, defaulted) = opts.design_options(&base.model);
+    let DesignSettings {
+        options: design_opts,
+        defaulted,
+    } = opts.design_options(&base.model);
     if !defaulted.is_empty() {
         notify(Notice::note(format!(
             "the description gives no acceleration or jerk limit for {}: designing within {} rad/s² and {} rad/s³ (give --max-acceleration and --max-jerk)",
@@ -398,7 +414,7 @@ pub fn score_motion(
         ));
     }
     let base = ExciteBase::load(&opts.from, notify)?;
-    let (design_opts, _) = opts.design_options(&base.model);
+    let design_opts = opts.design_options(&base.model).options;
     design_opts.validate()?;
     let mut sc: crate::sim::scenario::Scenario =
         toml::from_str(&base.text).map_err(|e| ApiError::Options(e.to_string()))?;

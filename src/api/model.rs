@@ -162,6 +162,15 @@ pub struct RobotOptions {
     pub no_geometry_ellipsoids: bool,
 }
 
+/// A robot as loaded, with what the loader had to say about its description.
+#[derive(Clone, Debug)]
+pub struct LoadedRobot {
+    /// The model.
+    pub model: Model,
+    /// The loader's warnings, naming the robot file.
+    pub notices: Vec<super::data::Notice>,
+}
+
 impl RobotOptions {
     /// The robot `robot` as described, every option at its default.
     pub fn new(robot: &str) -> Self {
@@ -173,7 +182,7 @@ impl RobotOptions {
 
     /// Loads the robot, with the loader's warnings (a mesh not found, an inertia outside its
     /// geometry's ellipsoid, …) as notices naming the robot file.
-    pub fn load(&self) -> Result<(Model, Vec<super::data::Notice>), super::ApiError> {
+    pub fn load(&self) -> Result<LoadedRobot, super::ApiError> {
         if let Some(d) = self.package_dirs.iter().find(|d| !d.is_dir()) {
             let why = if d.exists() {
                 "is not a folder"
@@ -201,7 +210,7 @@ impl RobotOptions {
             .into_iter()
             .map(|w| super::data::Notice::warning(format!("{}: {w}", self.robot)))
             .collect();
-        Ok((m, notices))
+        Ok(LoadedRobot { model: m, notices })
     }
 
     /// Every file the robot reads (its URDF, sidecar, meshes): inputs no output may replace.
