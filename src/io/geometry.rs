@@ -27,6 +27,8 @@ pub struct GeometryOptions {
     pub margin: f64,
     /// Do not compute ellipsoids from geometry at all.
     pub ignore_geometry: bool,
+    /// Where computed ellipsoids are cached (by the content of the geometry they bound).
+    pub cache: super::cache::CacheDir,
 }
 
 /// Where the URDF file lives and how to search for meshes.
@@ -253,9 +255,16 @@ fn mesh_pieces(path: &Path, scale: &Vector3<f64>) -> Result<Vec<Piece>, String> 
 
 /// The minimum-volume ellipsoid of `pieces`, grown by the margin, or why there is none.
 pub(crate) fn bound(pieces: &[Piece], opts: &GeometryOptions) -> Result<Ellipsoid, String> {
-    bounding::minimum_volume_ellipsoid(pieces)
-        .map(|e| bounding::with_margin(&e, opts.margin))
-        .map_err(|e| e.to_string())
+    let key = super::cache::key(pieces);
+    let e = match super::cache::get(&key, &opts.cache) {
+        Some(e) => e,
+        None => {
+            let e = bounding::minimum_volume_ellipsoid(pieces).map_err(|e| e.to_string())?;
+            super::cache::put(&key, &e, &opts.cache);
+            e
+        }
+    };
+    Ok(bounding::with_margin(&e, opts.margin))
 }
 
 /// Pieces of a link moved into a body's frame by the link's pose in that frame.

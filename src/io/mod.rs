@@ -2,6 +2,7 @@
 //! place that touches the file system. Every error names the file and the element at fault;
 //! every file is written atomically (temporary file, then rename).
 
+pub mod cache;
 pub mod geometry;
 pub mod mcap_log;
 pub mod mjcf;

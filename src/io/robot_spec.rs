@@ -202,6 +202,7 @@ impl RobotOptions {
             ignore_geometry: self
                 .geometry_ellipsoids
                 .map_or(base.ignore_geometry, |g| !g),
+            cache: base.cache.clone(),
         }
     }
 }

@@ -145,6 +145,7 @@ impl RobotSpec {
                 package_dirs: self.package_dirs.clone(),
                 margin: self.ellipsoid_margin.unwrap_or(0.0),
                 ignore_geometry: self.geometry_ellipsoids == Some(false),
+                ..Default::default()
             },
             gravity: self.gravity,
             rotor_model: self.rotor_model,

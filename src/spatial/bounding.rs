@@ -80,6 +80,23 @@ impl Piece {
         }
     }
 
+    /// The piece as bytes for a content key: a tag and every coordinate's bits in a fixed
+    /// order (equal bytes, equal piece).
+    pub fn to_bytes(&self) -> Vec<u8> {
+        let (tag, numbers): (u8, Vec<f64>) = match self {
+            Piece::Point(p) => (0, p.iter().copied().collect()),
+            Piece::Ball { center, radius } => {
+                (1, center.iter().copied().chain([*radius]).collect())
+            }
+            Piece::Disc { center, span } => {
+                (2, center.iter().chain(span.iter()).copied().collect())
+            }
+        };
+        std::iter::once(tag)
+            .chain(numbers.iter().flat_map(|x| x.to_bits().to_le_bytes()))
+            .collect()
+    }
+
     /// The same piece in another frame: `x ↦ rot x + pos`, `rot` a rotation.
     pub fn moved(&self, rot: &Matrix3<f64>, pos: &Vector3<f64>) -> Piece {
         match self {
