@@ -37,15 +37,8 @@ pub fn run(a: Args) -> anyhow::Result<()> {
         "give --mjcf FILE and/or --urdf FILE"
     );
     if let Some(p) = &a.mjcf {
-        physid::io::write_atomic(p, physid::io::mjcf::to_string(&m).as_bytes())?;
-        let lost = physid::io::mjcf::unwritten(&m);
-        if !lost.is_empty() {
-            eprintln!(
-                "warning: {}: {} meshes are in a format MuJoCo does not read (STL and OBJ only) and are not in the MJCF: {}",
-                p.display(),
-                lost.len(),
-                lost.join(", ")
-            );
+        for n in physid::api::export::write_mjcf(&m, p, &a.robot.files())? {
+            eprintln!("{n}");
         }
         eprintln!("wrote {}", p.display());
     }

@@ -45,6 +45,10 @@ class Robot:
         """Y(q, qd, qdd) with Y @ theta = tau, shape (samples, n, p)."""
     def describe(self) -> dict[str, Any]:
         """The JSON of `physid model --json`."""
+    def write_mjcf(self, path: Path) -> None:
+        """The robot as MJCF (rotors as armature), as `physid export --mjcf`."""
+    def write_urdf(self, path: Path) -> None:
+        """The robot as URDF with its sidecar, as `physid export --urdf`."""
 
 class Identification:
     """What identify found; to_dict() is `physid identify --json`."""
@@ -77,6 +81,8 @@ class Identification:
         """pandas DataFrame: joint, viscous, coulomb, train_rms, validation_rms."""
     def to_dict(self) -> dict[str, Any]:
         """The report as `physid identify --json` prints it."""
+    def write_mjcf(self, path: Path) -> None:
+        """The identified model as MJCF (rotors as armature); never over an input."""
     def write_urdf(self, path: Path) -> None:
         """Write the identified model as URDF plus its sidecar; never over an input."""
 

@@ -155,6 +155,27 @@ impl Robot {
         })
     }
 
+    /// Writes the robot as MJCF for MuJoCo (rotors as joint armature), never over an input;
+    /// meshes MuJoCo cannot read are left out with a `PhysidWarning`.
+    fn write_mjcf(&self, py: Python<'_>, path: PathBuf) -> PyResult<()> {
+        let inputs = physid::io::robot_files(&self.source, &[]);
+        let notices = api::export::write_mjcf(&self.model, &path, &inputs).map_err(api_error)?;
+        warn(py, &notices)
+    }
+
+    /// Writes the robot as URDF with its sidecar `<name>.physid.toml` (a URDF robot's own
+    /// file with `<inertial>` and `<dynamics>` rewritten, else a new file), never over an
+    /// input.
+    fn write_urdf(&self, path: PathBuf) -> PyResult<()> {
+        let robot = if self.as_file {
+            self.source.as_str()
+        } else {
+            ""
+        };
+        let inputs = physid::io::robot_files(&self.source, &[]);
+        api::export::write_urdf(&self.model, robot, &path, &inputs).map_err(api_error)
+    }
+
     /// The robot's name.
     #[getter]
     fn name(&self) -> String {
@@ -622,6 +643,16 @@ impl Identification {
             .report
             .write_urdf(&path, &self.source, &self.model)
             .map_err(value_error)?;
+        warn(py, &notices)
+    }
+
+    /// Writes the identified model as MJCF for MuJoCo (rotors as joint armature), never over
+    /// an input.
+    fn write_mjcf(&self, py: Python<'_>, path: PathBuf) -> PyResult<()> {
+        let identified = self.report.model(&self.model).map_err(api_error)?;
+        let mut inputs: Vec<PathBuf> = self.inputs.clone();
+        inputs.extend(physid::io::robot_files(&self.source, &[]));
+        let notices = api::export::write_mjcf(&identified, &path, &inputs).map_err(api_error)?;
         warn(py, &notices)
     }
 

@@ -12,6 +12,7 @@ pub mod data;
 pub mod diagnose;
 pub mod dynamics;
 pub mod excite;
+pub mod export;
 pub mod identify;
 pub mod model;
 pub mod provenance;
