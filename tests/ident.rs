@@ -347,3 +347,46 @@ fn base_parameters_are_the_identifiable_combinations_with_errors() {
     // A parameter that is not identifiable alone has no finite standard error.
     assert!(idf.standard_errors[col("abad_rotor.m")].is_infinite());
 }
+
+#[test]
+fn the_parallel_assembly_is_the_same_whatever_the_thread_count_and_matches_one_pass() {
+    // The normal equations are summed in fixed chunks in parallel: bit for bit the same sums
+    // on one thread and on four, and the same as one sequential pass over the samples up to
+    // rounding (a different order of additions).
+    let m = cheetah3::leg();
+    let tr = exact_data(&m, 5000, 3);
+    let pool = |threads| {
+        rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .build()
+            .unwrap()
+    };
+    let one = pool(1).install(|| NormalEquations::from_trajectory(&m, &tr, 100..4900));
+    let four = pool(4).install(|| NormalEquations::from_trajectory(&m, &tr, 100..4900));
+    assert_eq!(one.yty, four.yty);
+    assert_eq!(one.ytt, four.ytt);
+    assert_eq!((one.tt, one.samples), (four.tt, four.samples));
+    assert_eq!(one.samples, 4800);
+    let mut d = Data::new(&m);
+    let mut y = DMatrix::zeros(m.dof(), m.layout().len);
+    let mut yty = DMatrix::<f64>::zeros(y.ncols(), y.ncols());
+    for k in 100..4900 {
+        regressor(
+            &m,
+            &mut d,
+            tr.q_at(k),
+            tr.qd_at(k),
+            tr.qdd_at(k).unwrap(),
+            &mut y,
+        );
+        yty += y.transpose() * &y;
+    }
+    let scale = yty.amax();
+    assert!(
+        (&one.yty - &yty).amax() <= 1e-12 * scale,
+        "{:e}",
+        (&one.yty - &yty).amax() / scale
+    );
+    assert!(one.yty.iter().all(|x| x.is_finite()));
+    assert_eq!(one.yty, one.yty.transpose());
+}

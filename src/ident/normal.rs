@@ -10,6 +10,10 @@ use nalgebra::{DMatrix, DVector};
 /// Rows per block before the `YᵀY` update (a multiple of every joint count up to 8).
 const BLOCK_SAMPLES: usize = 128;
 
+/// Samples per chunk of a parallel accumulation. Fixed, so that the chunks, the order in which
+/// their sums are added, and so every result, do not depend on the thread count.
+const CHUNK_SAMPLES: usize = 2048;
+
 /// Calls `f(k, Y_k)` with the regressor of every sample `k` in `range` of `tr`, which must carry
 /// q̈ (one workspace and one output matrix for the whole range).
 pub fn for_each_regressor(
@@ -156,7 +160,9 @@ impl NormalEquations {
         self
     }
 
-    /// Accumulates samples `range` of a trajectory (which must carry q̈) for `model`.
+    /// Accumulates samples `range` of a trajectory (which must carry q̈) for `model`, in
+    /// chunks of fixed length in parallel (the current rayon pool): the same sums whatever the
+    /// thread count.
     pub fn from_trajectory(model: &Model, tr: &Trajectory, range: std::ops::Range<usize>) -> Self {
         Self::from_trajectory_excluding(model, tr, range, &[])
     }
@@ -168,9 +174,26 @@ impl NormalEquations {
         range: std::ops::Range<usize>,
         excluded: &[usize],
     ) -> Self {
-        let mut ne = Self::new(model.dof(), model.layout().len).excluding(excluded);
-        for_each_regressor(model, tr, range, &mut |k, y| ne.add(y, tr.tau_at(k)));
-        ne.finish()
+        use rayon::prelude::*;
+        let empty = || Self::new(model.dof(), model.layout().len).excluding(excluded);
+        let chunks: Vec<std::ops::Range<usize>> = range
+            .clone()
+            .step_by(CHUNK_SAMPLES)
+            .map(|start| start..(start + CHUNK_SAMPLES).min(range.end))
+            .collect();
+        // Chunks in parallel (the regressor and its rank-k updates), their sums added in
+        // chunk order.
+        let parts: Vec<Self> = chunks
+            .into_par_iter()
+            .map(|chunk| {
+                let mut ne = empty();
+                for_each_regressor(model, tr, chunk, &mut |k, y| ne.add(y, tr.tau_at(k)));
+                ne.finish()
+            })
+            .collect();
+        parts
+            .iter()
+            .fold(empty().finish(), |sum, part| sum.merged(part))
     }
 
     /// Accumulates the samples a source streams (e.g. a CSV read from disk by
