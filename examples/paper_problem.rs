@@ -24,7 +24,15 @@ fn main() {
     let cores = std::thread::available_parallelism().map_or(1, |n| n.get());
     let pools: Vec<(usize, rayon::ThreadPool)> = [1, cores]
         .into_iter()
-        .map(|t| (t, rayon::ThreadPoolBuilder::new().num_threads(t).build().unwrap()))
+        .map(|t| {
+            (
+                t,
+                rayon::ThreadPoolBuilder::new()
+                    .num_threads(t)
+                    .build()
+                    .unwrap(),
+            )
+        })
         .collect();
     let mut times = vec![(vec![], vec![]); pools.len()];
     let mut objective = vec![0.0; pools.len()];
