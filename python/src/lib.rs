@@ -1036,6 +1036,7 @@ fn thread_pool(threads: Option<usize>) -> PyResult<rayon::ThreadPool> {
     let workers = threads.filter(|&t| t > 0).unwrap_or(cores).min(cores);
     rayon::ThreadPoolBuilder::new()
         .num_threads(workers)
+        .thread_name(|i| format!("physid-rayon-{i}"))
         .build()
         .map_err(value_error)
 }
@@ -1729,6 +1730,12 @@ fn version() -> &'static str {
 
 #[pymodule]
 fn _physid(m: &Bound<'_, PyModule>) -> PyResult<()> {
+    // The library's parallel loops (the normal equations' chunks) run on rayon's global pool.
+    // Named here: threads spawned from a call's worker would otherwise inherit its name
+    // ("physid") and look like abandoned workers. An error means a pool already exists.
+    let _ = rayon::ThreadPoolBuilder::new()
+        .thread_name(|i| format!("physid-rayon-{i}"))
+        .build_global();
     m.add_class::<Robot>()?;
     m.add_class::<Identification>()?;
     m.add_class::<Diagnosis>()?;
