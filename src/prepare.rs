@@ -87,9 +87,13 @@ impl Logged {
             let t = self.t[k];
             check_value(k, t, "t", "t", t)?;
             for (name, v) in groups {
-                if let Some(v) = v {
-                    for j in 0..n {
-                        check_value(k, t, name, &format!("{name}{}", j + 1), v[k * n + j])?;
+                let Some(v) = v else { continue };
+                let limit = crate::trajectory::max_abs(name).0;
+                for j in 0..n {
+                    let x = v[k * n + j];
+                    // The field's name is only written out for a value that fails.
+                    if !(x.is_finite() && x.abs() <= limit) {
+                        check_value(k, t, name, &format!("{name}{}", j + 1), x)?;
                     }
                 }
             }
