@@ -8,7 +8,7 @@
 set -euo pipefail
 cd "$(dirname "$0")/.."
 source scripts/setup.sh
-step() { printf '\n== %s\n' "$*"; }
+step() { printf '\n== %s (at %d s)\n' "$*" "$SECONDS"; }
 
 step "setup (system packages, Python venv $PHYSID_VENV)"
 setup_rust
@@ -65,4 +65,5 @@ done
 echo
 echo "rust: $rust_passed passed; python checks: $py_passed passed, $py_failed failed"
 echo "total: $((rust_passed + py_passed)) passed, $py_failed failed"
+echo "wall time: $SECONDS s"
 [ "$py_failed" = 0 ]
