@@ -166,10 +166,10 @@ const fn row(kind: Kind, name: &'static str, columns: ColumnCount, fill: Fill) -
     }
 }
 
-/// One row per kind, in report order ([`Kind::ALL`]).
-pub(super) const KIND_TABLE: [KindSpec; 13] = {
+/// One row per kind, in report order ([`Kind::ALL`], whose length is this table's).
+pub(super) const KIND_TABLE: &[KindSpec] = {
     use ColumnCount::{Fixed, PerJoint};
-    [
+    &[
         KindSpec {
             magnitude: ("offset", "N m"),
             replay: |_, c, _, _| Some(EffectSpec::TorqueOffset { offset: c.to_vec() }),
@@ -429,10 +429,10 @@ pub(super) const KIND_TABLE: [KindSpec; 13] = {
 
 impl Kind {
     /// Every kind, in report order.
-    pub const ALL: [Kind; 13] = {
-        let mut all = [Kind::TorqueOffset; 13];
+    pub const ALL: [Kind; KIND_TABLE.len()] = {
+        let mut all = [Kind::TorqueOffset; KIND_TABLE.len()];
         let mut i = 0;
-        while i < 13 {
+        while i < KIND_TABLE.len() {
             all[i] = KIND_TABLE[i].kind;
             i += 1;
         }
@@ -866,6 +866,47 @@ fn draw_payload(model: &Model, rng: &mut ChaCha8Rng, _: f64) -> (Option<EffectSp
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// Each variant's number, written out by hand. The match is exhaustive: a new variant does
+    /// not compile until it is numbered here (the next number, with `variants` below raised),
+    /// and the test then fails until it has its row in the effect table. `Kind::ALL` takes its
+    /// length from the table, so a row cannot be left out of it.
+    fn number(k: Kind) -> usize {
+        match k {
+            Kind::TorqueOffset => 0,
+            Kind::TorqueGain => 1,
+            Kind::TimeDelay => 2,
+            Kind::Spring => 3,
+            Kind::Stribeck => 4,
+            Kind::AsymmetricCoulomb => 5,
+            Kind::LoadDependentFriction => 6,
+            Kind::Cogging => 7,
+            Kind::RotorInertia => 8,
+            Kind::Tilt => 9,
+            Kind::Compliance => 10,
+            Kind::Backlash => 11,
+            Kind::Payload => 12,
+        }
+    }
+
+    #[test]
+    fn every_variant_has_a_row_and_is_in_all() {
+        let variants = 13;
+        let mut seen = vec![false; variants];
+        for k in Kind::ALL {
+            let i = number(k);
+            assert!(
+                i < variants && !seen[i],
+                "{k:?} numbered {i}, twice or past {variants}"
+            );
+            seen[i] = true;
+        }
+        assert!(
+            seen.iter().all(|s| *s),
+            "variants without a row in KIND_TABLE: {seen:?}"
+        );
+        assert_eq!(KIND_TABLE.len(), variants);
+    }
 
     #[test]
     fn every_kind_has_one_row_with_a_unique_name() {
