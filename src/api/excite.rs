@@ -348,12 +348,15 @@ pub fn excite(
             crate::io::write_atomic(out, scenario.as_bytes())?;
             written = Some(out.clone());
         }
-        let reference = || reference_trajectory(&base.model, &d.series, opts.duration, opts.rate);
-        if let Some(p) = &opts.csv {
-            crate::io::samples::write_reference_csv(p, &reference())?;
-        }
-        if let Some(p) = &opts.mcap {
-            crate::io::mcap_log::write_reference(p, &reference())?;
+        // Sampled once for both files.
+        if opts.csv.is_some() || opts.mcap.is_some() {
+            let reference = reference_trajectory(&base.model, &d.series, opts.duration, opts.rate);
+            if let Some(p) = &opts.csv {
+                crate::io::samples::write_reference_csv(p, &reference)?;
+            }
+            if let Some(p) = &opts.mcap {
+                crate::io::mcap_log::write_reference(p, &reference)?;
+            }
         }
     }
     Ok(Excitation {
