@@ -363,6 +363,12 @@ fn draw_payload(slot: Slot, model: &Model, rng: &mut ChaCha8Rng) -> Injection {
 /// any diagnosis can name. Payloads and friction changes keep their physical draws.
 pub const VISIBLE: (f64, f64) = (1.5, 2.5);
 
+/// The largest error of a torque constant [`make_visible`] scales a gain to: a drawn 15–30 %
+/// scaled by [`MAX_SCALE`] would reach 120 %, a torque read with its sign reversed (a gain of
+/// −0.2), which no robot logs; a gain that stays below the visible growth at this bound is left
+/// there and scored among the cases that are not visible.
+pub const MAX_GAIN_ERROR: f64 = 0.5;
+
 /// The largest factor [`make_visible`] scales a drawn effect by.
 pub const MAX_SCALE: f64 = 4.0;
 
@@ -398,14 +404,21 @@ pub fn description_rms(logged: &Logged, description: &Model) -> Option<f64> {
     (count > 0 && sum.is_finite()).then(|| (sum / count as f64).sqrt())
 }
 
-/// A library effect scaled by `s` about "no effect" (gains about 1, stiffness as 1/k, a
-/// delay in whole samples, at least one), with its magnitudes; `None` for what is not scaled.
+/// A library effect scaled by `s` about "no effect" (gains about 1, at most
+/// [`MAX_GAIN_ERROR`] off; stiffness as 1/k, a delay in whole samples, at least one), with its
+/// magnitudes; `None` for what is not scaled.
 fn scaled(inj: &Injection, s: f64, rate: f64) -> Option<(EffectSpec, Vec<f64>)> {
     let times = |v: &[f64]| v.iter().map(|x| x * s).collect::<Vec<f64>>();
     let spec = match inj.spec.as_ref()? {
-        EffectSpec::TorqueGain { gain } => EffectSpec::TorqueGain {
-            gain: gain.iter().map(|g| 1.0 + (g - 1.0) * s).collect(),
-        },
+        EffectSpec::TorqueGain { gain } => {
+            let gain: Vec<f64> = gain
+                .iter()
+                .map(|g| 1.0 + ((g - 1.0) * s).clamp(-MAX_GAIN_ERROR, MAX_GAIN_ERROR))
+                .collect();
+            let median = crate::diagnose::median(&gain);
+            let relative = gain.iter().map(|g| g - median).collect();
+            return Some((EffectSpec::TorqueGain { gain }, relative));
+        }
         EffectSpec::TorqueOffset { offset } => EffectSpec::TorqueOffset {
             offset: times(offset),
         },
@@ -1094,5 +1107,25 @@ mod tests {
             1000.0,
         );
         assert_eq!(same.magnitudes, small.magnitudes);
+        // Asked for more than a physical gain gives (a 30 % error cut on the knee, growth 10):
+        // scaled to the bound and no further, never a torque read with its sign reversed.
+        let mut gain = vec![1.0; n];
+        gain[n - 1] = 0.7;
+        let large = Injection {
+            spec: Some(EffectSpec::TorqueGain { gain }),
+            magnitudes: vec![0.0, 0.0, -0.3],
+            visible: Some(10.0),
+            ..small.clone()
+        };
+        let (bounded, growth) = make_visible(&large, &base, 1000.0);
+        let Some(EffectSpec::TorqueGain { gain }) = &bounded.spec else {
+            panic!("{:?}", bounded.spec)
+        };
+        assert!(
+            (gain[n - 1] - (1.0 - MAX_GAIN_ERROR)).abs() < 1e-12,
+            "{gain:?}"
+        );
+        assert_eq!(bounded.magnitudes, vec![0.0, 0.0, -MAX_GAIN_ERROR]);
+        assert!(growth > 1.0 && growth < 10.0, "{growth}");
     }
 }
