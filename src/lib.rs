@@ -7,6 +7,9 @@
 //! The crate is built in floors; each module imports only from the floors below its own
 //! (checked by `tests/layering.rs`; docs/architecture.md §6):
 //!
+//! 0. [`conic`]: the one builder of conic programs for Clarabel (PSD, second-order and
+//!    exponential cones, the log-det device), used by identification and the bounding
+//!    ellipsoids;
 //! 1. [`spatial`] (Featherstone's spatial algebra, the inertial parameters `π` with `I(π)`,
 //!    `J(π)` and the ellipsoid conditions), [`signal`] (filters, differentiation), [`linalg`]
 //!    (scaling, least squares, minimum-norm solves), [`trajectory`] (joint time series,
@@ -29,6 +32,7 @@
 #![warn(missing_docs)]
 
 pub mod api;
+pub mod conic;
 pub mod diagnose;
 pub mod dynamics;
 pub mod experiment;

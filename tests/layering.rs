@@ -9,7 +9,8 @@ use std::path::{Path, PathBuf};
 
 /// The floor of each top-level module of the library (the binary, crate `physid-cli` in cli/,
 /// is the floor above them all and reaches the library through `physid::` only).
-const FLOORS: [(&str, u8); 14] = [
+const FLOORS: [(&str, u8); 15] = [
+    ("conic", 0),
     ("spatial", 1),
     ("options", 1),
     ("signal", 1),

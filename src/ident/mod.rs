@@ -24,6 +24,7 @@ pub mod normal;
 
 pub use normal::NormalEquations;
 
+use crate::conic::{AffineSym, ConeRows};
 use crate::model::Model;
 use crate::spatial::{ConsistencyReport, InertialParams};
 use clarabel::algebra::CscMatrix;
@@ -544,47 +545,20 @@ fn upper_csc(m: &DMatrix<f64>) -> CscMatrix<f64> {
     CscMatrix::new(n, n, colptr, rowval, nzval)
 }
 
-/// The constraint rows `A x + s = b`, `s` in `cones`, assembled as triplets of `A`.
-#[derive(Default)]
-struct ConeRows {
-    ai: Vec<usize>,
-    aj: Vec<usize>,
-    av: Vec<f64>,
-    b: Vec<f64>,
-    cones: Vec<SupportedConeT<f64>>,
-}
-
-impl ConeRows {
-    /// The index of the next row.
-    fn next_row(&self) -> usize {
-        self.b.len()
-    }
-    /// `A[row, col] = v` (zeros skipped).
-    fn entry(&mut self, row: usize, col: usize, v: f64) {
-        if v != 0.0 {
-            self.ai.push(row);
-            self.aj.push(col);
-            self.av.push(v);
+/// `M(π) − ε 1 ⪰ 0` for the body whose ten parameters start at `col` (scaled by `d`):
+/// `s = svec(M(π)) − ε svec(1)`, i.e. `A = −svec(M_k) d_k`, `b = −ε svec(1)`.
+fn lmi_rows(rows: &mut ConeRows, lmi: Lmi, col: usize, eps: f64, d: &[f64]) {
+    let r0 = rows.next_row();
+    for (k, colv) in lmi.basis().iter().enumerate() {
+        for (r, v) in colv.iter().enumerate() {
+            rows.entry(r0 + r, col + k, -v * d[col + k]);
         }
     }
-    /// Ends a cone of `rows` rows whose `b` entries are all `b`.
-    fn close(&mut self, rows: usize, b: f64, cone: SupportedConeT<f64>) {
-        self.b.extend(std::iter::repeat_n(b, rows));
-        self.cones.push(cone);
-    }
-    /// `M(π) − ε 1 ⪰ 0` for the body whose ten parameters start at `col` (scaled by `d`):
-    /// `s = svec(M(π)) − ε svec(1)`, i.e. `A = −svec(M_k) d_k`, `b = −ε svec(1)`.
-    fn lmi(&mut self, lmi: Lmi, col: usize, eps: f64, d: &[f64]) {
-        let r0 = self.next_row();
-        for (k, colv) in lmi.basis().iter().enumerate() {
-            for (r, v) in colv.iter().enumerate() {
-                self.entry(r0 + r, col + k, -v * d[col + k]);
-            }
-        }
-        let eye = DMatrix::<f64>::identity(lmi.dim(), lmi.dim()) * eps;
-        self.b.extend(lmi::svec(&eye).iter().map(|x| -x));
-        self.cones.push(SupportedConeT::PSDTriangleConeT(lmi.dim()));
-    }
+    let eye = DMatrix::<f64>::identity(lmi.dim(), lmi.dim()) * eps;
+    rows.close(
+        lmi::svec(&eye).iter().map(|x| -x),
+        SupportedConeT::PSDTriangleConeT(lmi.dim()),
+    );
 }
 
 /// Builds and solves the cone program in scaled variables.
@@ -638,12 +612,12 @@ fn physical_rows(
     for (name, col, ell) in bodies(model) {
         match set {
             ConstraintSet::None => {}
-            ConstraintSet::Semi => rows.lmi(Lmi::Spatial, col, opts.eps, d),
-            ConstraintSet::Consistent => rows.lmi(Lmi::Pseudo, col, opts.eps, d),
+            ConstraintSet::Semi => lmi_rows(rows, Lmi::Spatial, col, opts.eps, d),
+            ConstraintSet::Consistent => lmi_rows(rows, Lmi::Pseudo, col, opts.eps, d),
             ConstraintSet::Ellipsoid => {
                 let e = ell.ok_or_else(|| IdentError::MissingEllipsoid(name.clone()))?;
-                rows.lmi(Lmi::Pseudo, col, opts.eps, d);
-                rows.lmi(Lmi::Com(e), col, 0.0, d);
+                lmi_rows(rows, Lmi::Pseudo, col, opts.eps, d);
+                lmi_rows(rows, Lmi::Com(e), col, 0.0, d);
                 let form = lmi::trace_jq_form(&e);
                 nonneg.push((0..10).map(|k| (col + k, form[k])).collect());
             }
@@ -670,8 +644,13 @@ fn logdet_rows(
     rows: &mut ConeRows,
 ) -> Result<(), IdentError> {
     let p = prior.len();
-    let s2 = std::f64::consts::SQRT_2;
-    let jbasis = Lmi::Pseudo.basis();
+    let jbasis: Vec<nalgebra::Matrix4<f64>> = (0..10)
+        .map(|k| {
+            let mut e = nalgebra::SVector::<f64, 10>::zeros();
+            e[k] = 1.0;
+            InertialParams(e).pseudo_inertia()
+        })
+        .collect();
     // L's lower-triangular entries (i >= j) in order; `lpos(i, j)` is the variable offset.
     let lentries: Vec<(usize, usize)> = (0..4).flat_map(|j| (j..4).map(move |i| (i, j))).collect();
     let lpos = |i: usize, j: usize| {
@@ -686,46 +665,27 @@ fn logdet_rows(
             .try_inverse()
             .filter(|_| j0.cholesky().is_some())
             .ok_or_else(|| IdentError::InconsistentPrior(name.clone()))?;
-        for k in 0..10 {
-            let mut e = nalgebra::SVector::<f64, 10>::zeros();
-            e[k] = 1.0;
-            q[col + k] += w * (j0inv * InertialParams(e).pseudo_inertia()).trace() * d[col + k];
+        for (k, m_k) in jbasis.iter().enumerate() {
+            q[col + k] += w * (j0inv * m_k).trace() * d[col + k];
         }
         let base = p + 14 * bi;
         for i in 0..4 {
             q[base + 10 + i] = -w;
         }
-        // svec of the 8×8 matrix: entry (r, c) with r <= c, column by column.
-        let r0 = rows.next_row();
-        let mut idx = 0usize;
-        for c in 0..8 {
-            for r in 0..=c {
-                let row = r0 + idx;
-                if c < 4 {
-                    // J block: linear in π.
-                    let jidx = c * (c + 1) / 2 + r;
-                    for (k, colv) in jbasis.iter().enumerate() {
-                        rows.entry(row, col + k, -colv[jidx] * d[col + k]);
+        // J(π) entry by entry, its terms over the body's scaled parameters (zeros left out).
+        let mut j = AffineSym::new(4);
+        for (k, m_k) in jbasis.iter().enumerate() {
+            for c in 0..4 {
+                for r in 0..=c {
+                    let v = m_k[(r, c)] * d[col + k];
+                    if v != 0.0 {
+                        j.at(r, c).1.push((col + k, v));
                     }
-                } else if r < 4 && r >= c - 4 {
-                    // Off-diagonal block (r, c−4) = L[r][c−4] (lower triangular), ×√2.
-                    rows.entry(row, base + lpos(r, c - 4), -s2);
-                } else if r == c {
-                    // diag(L).
-                    rows.entry(row, base + lpos(r - 4, r - 4), -1.0);
                 }
-                idx += 1;
             }
         }
-        rows.close(idx, 0.0, SupportedConeT::PSDTriangleConeT(8));
-        for i in 0..4 {
-            // s = (u_i, 1, L_ii) in K_exp.
-            let row = rows.next_row();
-            rows.entry(row, base + 10 + i, -1.0);
-            rows.entry(row + 2, base + lpos(i, i), -1.0);
-            rows.b.extend([0.0, 1.0, 0.0]);
-            rows.cones.push(SupportedConeT::ExponentialConeT());
-        }
+        let factor = |r: usize, c: usize| (r >= c).then(|| base + lpos(r, c));
+        rows.log_det(j, factor, |i| base + 10 + i);
     }
     Ok(())
 }
@@ -739,8 +699,7 @@ fn nonnegative_rows(nonneg: &[Vec<(usize, f64)>], d: &[f64], rows: &mut ConeRows
         }
     }
     rows.close(
-        nonneg.len(),
-        0.0,
+        std::iter::repeat_n(0.0, nonneg.len()),
         SupportedConeT::NonnegativeConeT(nonneg.len()),
     );
 }
@@ -755,14 +714,7 @@ fn run_clarabel(
     d: &[f64],
 ) -> Result<(DVector<f64>, SolverInfo), IdentError> {
     let nv = q.len();
-    let ConeRows {
-        ai,
-        aj,
-        av,
-        b,
-        cones,
-    } = rows;
-    let a = CscMatrix::new_from_triplets(b.len(), nv, ai, aj, av);
+    let (a, b, cones) = rows.into_parts(nv);
     let settings = DefaultSettings {
         verbose: false,
         max_iter: 200,

@@ -21,8 +21,9 @@
 //! milliseconds. The paper's `Q_s` follows as `A⁻²` and the centre as `x_s = −A⁻¹ b`.
 
 use super::Ellipsoid;
+use crate::conic::{AffineSym, ConeRows};
 use clarabel::algebra::CscMatrix;
-use clarabel::solver::{DefaultSettings, DefaultSolver, IPSolver, SolverStatus, SupportedConeT};
+use clarabel::solver::{DefaultSettings, DefaultSolver, IPSolver, SolverStatus};
 use nalgebra::{Matrix3, Matrix3x2, SymmetricEigen, Vector3};
 
 /// A convex piece of a body's geometry: `{center + F u : ‖u‖ ≤ 1}` (m, body frame).
@@ -273,57 +274,6 @@ fn z_var(i: usize, j: usize) -> usize {
     Z0 + i * (i + 1) / 2 + j
 }
 
-/// Rows of `A x + s = b` with cones, as triplets.
-#[derive(Default)]
-struct Rows {
-    ai: Vec<usize>,
-    aj: Vec<usize>,
-    av: Vec<f64>,
-    b: Vec<f64>,
-    cones: Vec<SupportedConeT<f64>>,
-}
-
-/// A symmetric affine matrix `M(x) = M₀ + Σ_k x_k M_k`, entry by entry (upper triangle).
-struct AffineSym {
-    n: usize,
-    /// Per upper-triangle entry `(i, j)`, `i ≤ j`: constant and `(variable, coefficient)` terms.
-    entries: Vec<(f64, Vec<(usize, f64)>)>,
-}
-
-impl AffineSym {
-    fn new(n: usize) -> Self {
-        Self {
-            n,
-            entries: vec![(0.0, vec![]); n * (n + 1) / 2],
-        }
-    }
-
-    fn at(&mut self, i: usize, j: usize) -> &mut (f64, Vec<(usize, f64)>) {
-        let (i, j) = (i.min(j), i.max(j));
-        &mut self.entries[j * (j + 1) / 2 + i]
-    }
-
-    /// Appends `svec(M(x)) ∈ PSD` (Clarabel's column-wise upper triangle, off-diagonals ×√2).
-    fn push_psd(self, rows: &mut Rows) {
-        let r0 = rows.b.len();
-        let s2 = std::f64::consts::SQRT_2;
-        for j in 0..self.n {
-            for i in 0..=j {
-                let k = j * (j + 1) / 2 + i;
-                let w = if i == j { 1.0 } else { s2 };
-                let (c, terms) = &self.entries[k];
-                rows.b.push(w * c);
-                for &(v, coef) in terms {
-                    rows.ai.push(r0 + k);
-                    rows.aj.push(v);
-                    rows.av.push(-w * coef);
-                }
-            }
-        }
-        rows.cones.push(SupportedConeT::PSDTriangleConeT(self.n));
-    }
-}
-
 /// `(A p + b)_r` as `(variable, coefficient)` terms.
 fn affine_image(p: &Vector3<f64>, r: usize) -> Vec<(usize, f64)> {
     let mut t: Vec<(usize, f64)> = (0..3).map(|k| (a_var(r, k), p[k])).collect();
@@ -336,47 +286,30 @@ fn linear_image(v: &Vector3<f64>, r: usize) -> Vec<(usize, f64)> {
     (0..3).map(|k| (a_var(r, k), v[k])).collect()
 }
 
-/// `log det A ≥ Σ tᵢ`: `[[A, Z], [Zᵀ, diag Z]] ⪰ 0` and `(tᵢ, 1, Zᵢᵢ) ∈ K_exp`.
-fn push_log_det(rows: &mut Rows) {
-    let mut m = AffineSym::new(6);
+/// `log det A ≥ Σ tᵢ` ([`crate::conic`]'s device, the factor `Zᵀ` upper triangular).
+fn push_log_det(rows: &mut ConeRows) {
+    let mut a = AffineSym::new(3);
     for i in 0..3 {
         for j in i..3 {
-            m.at(i, j).1.push((a_var(i, j), 1.0));
+            a.at(i, j).1.push((a_var(i, j), 1.0));
         }
-        for j in 0..=i {
-            // Upper-right block (row j, column 3 + i) holds Z[(i, j)]ᵀ = Zᵀ[(j, i)].
-            m.at(j, 3 + i).1.push((z_var(i, j), 1.0));
-        }
-        m.at(3 + i, 3 + i).1.push((z_var(i, i), 1.0));
     }
-    m.push_psd(rows);
-    for i in 0..3 {
-        let r = rows.b.len();
-        rows.ai.extend([r, r + 2]);
-        rows.aj.extend([T0 + i, z_var(i, i)]);
-        rows.av.extend([-1.0, -1.0]);
-        rows.b.extend([0.0, 1.0, 0.0]);
-        rows.cones.push(SupportedConeT::ExponentialConeT());
-    }
+    // The factor's entry (row j, column i), j ≤ i, is Z[(i, j)].
+    let factor = |j: usize, i: usize| (j <= i).then(|| z_var(i, j));
+    rows.log_det(a, factor, |i| T0 + i);
 }
 
 /// `‖A p + b‖ ≤ 1` (a second-order cone).
-fn push_point(p: &Vector3<f64>, rows: &mut Rows) {
-    let r0 = rows.b.len();
-    rows.b.extend([1.0, 0.0, 0.0, 0.0]);
-    for r in 0..3 {
-        for (v, c) in affine_image(p, r) {
-            rows.ai.push(r0 + 1 + r);
-            rows.aj.push(v);
-            rows.av.push(-c);
-        }
-    }
-    rows.cones.push(SupportedConeT::SecondOrderConeT(4));
+fn push_point(p: &Vector3<f64>, rows: &mut ConeRows) {
+    let image: Vec<Vec<(usize, f64)>> = std::iter::once(vec![])
+        .chain((0..3).map(|r| affine_image(p, r)))
+        .collect();
+    rows.second_order(&[1.0, 0.0, 0.0, 0.0], &image);
 }
 
 /// The S-procedure LMI for `{c + F u} ⊆ E` with multiplier variable `lambda`, and `λ ≥ 0` is
 /// implied by the LMI's lower-right block.
-fn push_piece(c: &Vector3<f64>, f: &[Vector3<f64>], lambda: usize, rows: &mut Rows) {
+fn push_piece(c: &Vector3<f64>, f: &[Vector3<f64>], lambda: usize, rows: &mut ConeRows) {
     let k = f.len();
     let mut m = AffineSym::new(4 + k);
     for r in 0..3 {
@@ -390,7 +323,7 @@ fn push_piece(c: &Vector3<f64>, f: &[Vector3<f64>], lambda: usize, rows: &mut Ro
     for col in 0..k {
         m.at(4 + col, 4 + col).1.push((lambda, 1.0));
     }
-    m.push_psd(rows);
+    rows.psd(&m);
 }
 
 /// Indices of the points extreme along the 26 directions of a cube's faces, edges and corners.
@@ -413,7 +346,7 @@ fn extreme_points(points: &[Vector3<f64>]) -> Vec<usize> {
 
 /// Solves the program of the module docs for `pieces` (normalized coordinates): `(A, b)`.
 fn solve_program(pieces: &[Piece]) -> Result<(Matrix3<f64>, Vector3<f64>), BoundingError> {
-    let mut rows = Rows::default();
+    let mut rows = ConeRows::default();
     push_log_det(&mut rows);
     let mut lambdas = 0;
     for p in pieces {
@@ -428,14 +361,7 @@ fn solve_program(pieces: &[Piece]) -> Result<(Matrix3<f64>, Vector3<f64>), Bound
     let nv = L0 + lambdas;
     let mut q = vec![0.0; nv];
     q[T0..T0 + 3].fill(-1.0);
-    let Rows {
-        ai,
-        aj,
-        av,
-        b,
-        cones,
-    } = rows;
-    let a = CscMatrix::new_from_triplets(b.len(), nv, ai, aj, av);
+    let (a, b, cones) = rows.into_parts(nv);
     let p = CscMatrix::zeros((nv, nv));
     let settings = DefaultSettings {
         verbose: false,
