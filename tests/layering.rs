@@ -111,6 +111,152 @@ fn every_module_imports_only_from_lower_floors() {
     );
 }
 
+/// The sibling files a file of `folder` (its path under `src/`, e.g. `diagnose`) names: as
+/// `super::name` or `crate::folder::name`, for `name` among `siblings` (mod.rs is not one).
+fn sibling_imports(code: &str, folder: &str, siblings: &[String]) -> Vec<String> {
+    let prefixes = [
+        "super::".to_string(),
+        format!("crate::{}::", folder.replace('/', "::")),
+    ];
+    let mut out = vec![];
+    for prefix in &prefixes {
+        for (i, _) in code.match_indices(prefix.as_str()) {
+            let rest = &code[i + prefix.len()..];
+            // `super::{a, b::c}` names several.
+            let names: Vec<String> = if let Some(group) = rest.strip_prefix('{') {
+                let group = &group[..group.find('}').unwrap_or(group.len())];
+                group
+                    .split(',')
+                    .map(|s| s.trim().split("::").next().unwrap_or("").to_string())
+                    .collect()
+            } else {
+                vec![rest
+                    .chars()
+                    .take_while(|c| c.is_alphanumeric() || *c == '_')
+                    .collect()]
+            };
+            out.extend(names.into_iter().filter(|n| siblings.contains(n)));
+        }
+    }
+    out.sort();
+    out.dedup();
+    out
+}
+
+/// A cycle in `edges` (file → the siblings it imports), as its files in order, if any.
+fn find_cycle(edges: &std::collections::BTreeMap<String, Vec<String>>) -> Option<Vec<String>> {
+    fn visit(
+        node: &str,
+        edges: &std::collections::BTreeMap<String, Vec<String>>,
+        path: &mut Vec<String>,
+        done: &mut Vec<String>,
+    ) -> Option<Vec<String>> {
+        if let Some(at) = path.iter().position(|p| p == node) {
+            return Some(path[at..].to_vec());
+        }
+        if done.iter().any(|d| d == node) {
+            return None;
+        }
+        path.push(node.to_string());
+        for next in edges.get(node).into_iter().flatten() {
+            if let Some(c) = visit(next, edges, path, done) {
+                return Some(c);
+            }
+        }
+        path.pop();
+        done.push(node.to_string());
+        None
+    }
+    let mut done = vec![];
+    edges
+        .keys()
+        .find_map(|k| visit(k, edges, &mut vec![], &mut done))
+}
+
+#[test]
+fn no_import_circle_among_the_files_of_a_folder() {
+    let src = common::root().join("src");
+    let mut folders = vec![];
+    let mut stack = vec![src.clone()];
+    while let Some(dir) = stack.pop() {
+        for entry in std::fs::read_dir(&dir).unwrap() {
+            let path = entry.unwrap().path();
+            if path.is_dir() {
+                stack.push(path.clone());
+                folders.push(path);
+            }
+        }
+    }
+    let mut circles = vec![];
+    let mut edges_seen = 0;
+    for dir in &folders {
+        let folder = dir
+            .strip_prefix(&src)
+            .unwrap()
+            .to_string_lossy()
+            .to_string();
+        let files: Vec<PathBuf> = std::fs::read_dir(dir)
+            .unwrap()
+            .map(|e| e.unwrap().path())
+            .filter(|p| p.extension().is_some_and(|e| e == "rs"))
+            .collect();
+        let stem = |p: &Path| p.file_stem().unwrap().to_string_lossy().to_string();
+        let siblings: Vec<String> = files
+            .iter()
+            .map(|p| stem(p))
+            .filter(|s| s != "mod")
+            .collect();
+        let mut edges = std::collections::BTreeMap::new();
+        for f in files.iter().filter(|p| stem(p) != "mod") {
+            let code = code(&std::fs::read_to_string(f).unwrap());
+            let to: Vec<String> = sibling_imports(&code, &folder, &siblings)
+                .into_iter()
+                .filter(|t| *t != stem(f))
+                .collect();
+            edges_seen += to.len();
+            edges.insert(stem(f), to);
+        }
+        if let Some(c) = find_cycle(&edges) {
+            circles.push(format!("src/{folder}: {} -> {}", c.join(" -> "), c[0]));
+        }
+    }
+    assert!(
+        edges_seen > 20,
+        "only {edges_seen} imports between sibling files: the scan is broken"
+    );
+    assert!(
+        circles.is_empty(),
+        "import circles:\n{}",
+        circles.join("\n")
+    );
+}
+
+#[test]
+fn the_circle_check_sees_a_circle_when_there_is_one() {
+    let siblings = vec![
+        "kinds".to_string(),
+        "library".to_string(),
+        "context".to_string(),
+    ];
+    let code = code(
+        "use super::library::{Context, Kind};\nuse super::{context, residual};\n// super::kinds\n",
+    );
+    assert_eq!(
+        sibling_imports(&code, "diagnose", &siblings),
+        vec!["context".to_string(), "library".to_string()]
+    );
+    let mut edges = std::collections::BTreeMap::new();
+    edges.insert("a".to_string(), vec!["b".to_string()]);
+    edges.insert("b".to_string(), vec!["c".to_string()]);
+    edges.insert("c".to_string(), vec![]);
+    assert_eq!(find_cycle(&edges), None);
+    edges.insert("c".to_string(), vec!["a".to_string()]);
+    assert_eq!(
+        find_cycle(&edges),
+        Some(vec!["a".to_string(), "b".to_string(), "c".to_string()])
+    );
+}
+
 #[test]
 fn no_library_function_is_longer_than_120_lines() {
     let src = common::root().join("src");

@@ -8,7 +8,7 @@
 //! (`crate::sim::effects`), e.g. the columns of an acting friction are `−∂τ_effect/∂c` because the
 //! motor torque must overcome it.
 
-use super::library::{Context, Sample, Scratch};
+use super::context::{backlash_widths, Context, Sample, Scratch};
 use crate::dynamics::{regressor, sign, Data};
 use crate::model::Model;
 use crate::sim::scenario::EffectSpec;
@@ -520,7 +520,7 @@ impl Kind {
             Grid::CoggingHarmonic => (1..=8).map(f64::from).collect(),
             Grid::Body => (1..=n).map(|b| b as f64).collect(),
             Grid::Compliance => (0..4).map(|i| 0.5e-3 * 2f64.powi(i)).collect(),
-            Grid::BacklashWidth => (0..3).map(|i| 0.01 * 2f64.powi(i)).collect(),
+            Grid::BacklashWidth => backlash_widths(),
             Grid::None => vec![0.0],
         }
     }
@@ -651,16 +651,6 @@ impl Kind {
     ) -> (Option<EffectSpec>, Vec<f64>) {
         (self.spec().draw)(model, rng, rate)
     }
-}
-
-/// The dead-zone widths (rad) whose motor offsets the columns need (the backlash grid):
-/// [`super::library::Context`] runs a dead zone at each.
-pub(super) fn dead_zone_widths(n: usize) -> Vec<f64> {
-    Kind::ALL
-        .into_iter()
-        .filter(|k| k.spec().grid == Grid::BacklashWidth)
-        .flat_map(|k| k.grid(n))
-        .collect()
 }
 
 /// What data separates two kinds the data could not tell apart.

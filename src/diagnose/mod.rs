@@ -22,6 +22,7 @@ pub mod anchor;
 pub mod baseline;
 pub mod breakdown;
 pub mod calibrate;
+pub mod context;
 mod diagnosis;
 mod explain;
 mod gap;

@@ -455,27 +455,16 @@ const JOINT_STATE_TYPES: [&str; 2] = ["sensor_msgs/msg/JointState", "sensor_msgs
 /// physid's own sample type.
 const JOINT_SAMPLE_TYPE: &str = "physid_msgs/msg/JointSample";
 
-/// Reads joint states from an MCAP file or a rosbag2 directory (its `metadata.yaml` and the
-/// files it lists, in order; MCAP or SQLite storage). Times are integer nanoseconds from the
-/// first message of the whole log (absolute stamps, ~1.7e18 ns, would lose their last digits
-/// in an f64). The topic must carry `sensor_msgs/msg/JointState`; otherwise the error names
-/// its type and the topics that do. Errors name the file, the topic and the message.
+/// Reads joint states from one MCAP file (a rosbag2 directory, MCAP or SQLite, is read by
+/// [`super::read_joint_log`]). Times are integer nanoseconds from the first message of the
+/// log (absolute stamps, ~1.7e18 ns, would lose their last digits in an f64). The topic must
+/// carry `sensor_msgs/msg/JointState`; otherwise the error names its type and the topics that
+/// do. Errors name the file, the topic and the message.
 pub fn read_with(path: &Path, opts: &ReadOptions) -> Result<Log, IoError> {
-    use super::rosbag2::{self, Storage};
-    let (files, storage) = if path.is_dir() {
-        rosbag2::files(path)?
-    } else {
-        (vec![path.to_path_buf()], Storage::Mcap)
-    };
     let mut reader = Reader::new(opts);
-    for file in &files {
-        match storage {
-            Storage::Mcap => reader.mcap_file(file)?,
-            Storage::Sqlite3 => rosbag2::read_sqlite(file, &mut reader)?,
-        }
-    }
+    reader.mcap_file(path)?;
     let mut log = reader.finish(path)?;
-    log.files = files;
+    log.files = vec![path.to_path_buf()];
     Ok(log)
 }
 
@@ -496,7 +485,7 @@ pub(crate) struct Reader<'a> {
 
 impl<'a> Reader<'a> {
     /// A reader that has seen nothing yet.
-    fn new(opts: &'a ReadOptions) -> Self {
+    pub(crate) fn new(opts: &'a ReadOptions) -> Self {
         Self {
             opts,
             t0: [None; 2],
@@ -509,7 +498,7 @@ impl<'a> Reader<'a> {
         }
     }
 
-    fn mcap_file(&mut self, path: &Path) -> Result<(), IoError> {
+    pub(crate) fn mcap_file(&mut self, path: &Path) -> Result<(), IoError> {
         let bytes = std::fs::read(path).map_err(|source| IoError::Fs {
             path: path.to_path_buf(),
             source,
@@ -567,7 +556,7 @@ impl<'a> Reader<'a> {
 
     /// The log read, or an error naming what the topic asked for is and which topics carry
     /// joint states.
-    fn finish(self, path: &Path) -> Result<Log, IoError> {
+    pub(crate) fn finish(self, path: &Path) -> Result<Log, IoError> {
         let bad = |m: String| IoError::invalid(path, m);
         let topic = &self.opts.topic;
         let states: Vec<&str> = self

@@ -599,6 +599,28 @@ pub fn load_all(
         .collect()
 }
 
+/// Reads joint states from an MCAP file or a rosbag2 directory (its `metadata.yaml` and the
+/// files it lists, in order; MCAP or SQLite storage) into one log, times from its first
+/// message ([`mcap_log::read_with`] for one file). Errors name the file, the topic and the
+/// message.
+pub fn read_joint_log(path: &Path, opts: &mcap_log::ReadOptions) -> Result<mcap_log::Log, IoError> {
+    let (files, storage) = if path.is_dir() {
+        rosbag2::files(path)?
+    } else {
+        (vec![path.to_path_buf()], rosbag2::Storage::Mcap)
+    };
+    let mut reader = mcap_log::Reader::new(opts);
+    for file in &files {
+        match storage {
+            rosbag2::Storage::Mcap => reader.mcap_file(file)?,
+            rosbag2::Storage::Sqlite3 => rosbag2::read_sqlite(file, &mut reader)?,
+        }
+    }
+    let mut log = reader.finish(path)?;
+    log.files = files;
+    Ok(log)
+}
+
 /// The samples of a data file as logged, matched to `model`'s joints: the samples, the file's
 /// joints the robot lacks, and the joint-state messages skipped (naming none of its joints).
 pub fn load_logged(
@@ -617,7 +639,7 @@ pub fn load_logged(
             stamp: opts.stamp,
             joints: Some(names.clone()),
         };
-        let log = mcap_log::read_with(path, &ropts)?;
+        let log = read_joint_log(path, &ropts)?;
         let logged = match (&opts.topic, log.processed) {
             (None, Some(processed)) => processed.into(),
             _ => log.measured,
