@@ -231,6 +231,79 @@ fn no_import_circle_among_the_files_of_a_folder() {
     );
 }
 
+/// The names a file reaches through `super::` that are not sibling modules: items of its
+/// folder's `mod.rs` (a back arrow to the parent that calls it).
+fn back_arrows(code: &str, siblings: &[String]) -> Vec<String> {
+    let mut out = vec![];
+    for (i, _) in code.match_indices("super::") {
+        let rest = &code[i + "super::".len()..];
+        let names: Vec<String> = if let Some(group) = rest.strip_prefix('{') {
+            let group = &group[..group.find('}').unwrap_or(group.len())];
+            group
+                .split(',')
+                .map(|s| s.trim().split("::").next().unwrap_or("").to_string())
+                .collect()
+        } else {
+            vec![rest
+                .chars()
+                .take_while(|c| c.is_alphanumeric() || *c == '_')
+                .collect()]
+        };
+        out.extend(
+            names
+                .into_iter()
+                .filter(|n| !n.is_empty() && n != "self" && !siblings.contains(n)),
+        );
+    }
+    out.sort();
+    out.dedup();
+    out
+}
+
+/// Folders whose `mod.rs` only declares and re-exports: a pipeline of steps (its files import
+/// each other, never the parent that runs them). Other folders keep the floor's shared types
+/// in `mod.rs` (`io::IoError`, `dynamics::Data`, `model::Model`), which their files build on.
+const PIPELINE_FOLDERS: [&str; 1] = ["diagnose"];
+
+#[test]
+fn no_back_arrow_to_mod_rs_inside_a_pipeline_folder() {
+    let src = common::root().join("src");
+    let mut arrows = vec![];
+    let mut files_seen = 0;
+    for folder in PIPELINE_FOLDERS {
+        let dir = src.join(folder);
+        let files: Vec<PathBuf> = std::fs::read_dir(&dir)
+            .unwrap()
+            .map(|e| e.unwrap().path())
+            .filter(|p| p.extension().is_some_and(|e| e == "rs"))
+            .collect();
+        let stem = |p: &Path| p.file_stem().unwrap().to_string_lossy().to_string();
+        let siblings: Vec<String> = files
+            .iter()
+            .map(|p| stem(p))
+            .filter(|s| s != "mod")
+            .collect();
+        for f in files.iter().filter(|p| stem(p) != "mod") {
+            files_seen += 1;
+            let code = code(&std::fs::read_to_string(f).unwrap());
+            for name in back_arrows(&code, &siblings) {
+                arrows.push(format!("src/{folder}/{}.rs: super::{name}", stem(f)));
+            }
+        }
+    }
+    assert!(files_seen > 15, "only {files_seen} files scanned");
+    assert!(
+        arrows.is_empty(),
+        "imports of mod.rs items inside a pipeline folder:\n{}",
+        arrows.join("\n")
+    );
+    let stage = code("use super::{stage::Stage, residual};\nuse super::Stage;\n");
+    assert_eq!(
+        back_arrows(&stage, &["stage".into(), "residual".into()]),
+        vec!["Stage".to_string()]
+    );
+}
+
 #[test]
 fn the_circle_check_sees_a_circle_when_there_is_one() {
     let siblings = vec![

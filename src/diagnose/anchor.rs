@@ -31,8 +31,9 @@
 //! effect: that is what stating `ε` risks.
 
 use super::library::Kind;
+use super::residual::{finite_mean_square, mask_slow, residual_rms};
 use super::select::Folds;
-use super::{finite_mean_square, mask_slow, residual_rms, Stage};
+use super::stage::Stage;
 use crate::ident::NormalEquations;
 use crate::linalg::{least_squares, min_norm_solve};
 use crate::model::Model;
@@ -568,16 +569,16 @@ pub(crate) fn test_description(
     })
 }
 
-/// The information matrix of `model`'s parameters identified on `data` as [`super::fit_nominal`]
+/// The information matrix of `model`'s parameters identified on `data` as [`super::stage::fit_nominal`]
 /// does: `w YᵀY` over the joint-samples at or above the speed threshold, `w = 1/(s² τ_c)` with
 /// `s²` the fit's residual mean square and `τ_c` its correlation time (samples), the same
-/// weight the ladder gives its own data ([`Options::description_information`](super::Options::description_information)).
+/// weight the ladder gives its own data ([`Options::description_information`](super::options::Options::description_information)).
 pub fn information(
     model: &Model,
     data: &crate::trajectory::Trajectory,
-    opts: &super::Options,
-) -> Result<DMatrix<f64>, super::DiagnoseError> {
-    let fit = super::fit_nominal(model, data, opts)?;
+    opts: &super::options::Options,
+) -> Result<DMatrix<f64>, super::options::DiagnoseError> {
+    let fit = super::stage::fit_nominal(model, data, opts)?;
     let mut ne = crate::ident::NormalEquations::new(model.dof(), model.layout().len);
     super::library::Context::new(model, &fit.theta, data, opts.processing_cutoff).for_each_row(
         data,
@@ -588,9 +589,9 @@ pub fn information(
     );
     let ne = ne.finish();
     let ctx = super::library::Context::new(model, &fit.theta, data, opts.processing_cutoff);
-    let (_, res) = super::residual_rms(&ctx, data, &[], &fit.theta, opts.min_speed);
-    let masked = super::mask_slow(data, &res, opts.min_speed);
-    let s2 = super::finite_mean_square(&masked);
+    let (_, res) = super::residual::residual_rms(&ctx, data, &[], &fit.theta, opts.min_speed);
+    let masked = super::residual::mask_slow(data, &res, opts.min_speed);
+    let s2 = super::residual::finite_mean_square(&masked);
     let tau_c = correlation_time(&masked, model.dof(), data.sample_rate().unwrap_or(1.0));
     Ok(&ne.yty / (s2 * tau_c).max(1e-300))
 }

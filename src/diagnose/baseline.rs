@@ -11,8 +11,10 @@
 //!    one stated: the ladder from it ([`super::ladder`]) names what changed.
 
 use super::calibrate::{self, Calibration, Run};
+use super::diagnosis::Diagnosis;
 use super::library::{Context, Variant};
-use super::{diagnose_runs, DiagnoseError, Diagnosis, Options};
+use super::options::{DiagnoseError, Options};
+use super::pipeline::diagnose_runs;
 use crate::model::Model;
 use crate::trajectory::Trajectory;
 
@@ -57,7 +59,7 @@ impl Baseline {
         let standing: Vec<Variant> = diagnosis
             .effects
             .iter()
-            .filter(|e| e.evidence == super::Evidence::CrossValidation)
+            .filter(|e| e.evidence == super::diagnosis::Evidence::CrossValidation)
             .map(|e| Variant {
                 kind: e.kind,
                 param: e.param,

@@ -2,10 +2,10 @@
 //! verdict, and the whole [`Diagnosis`] (serialized as `report.json` and `--json`).
 
 use super::anchor;
+use super::breakdown::Breakdown;
 use super::library::Kind;
 use super::select;
 use super::spectrum;
-use super::Breakdown;
 use crate::ident::ConstraintSet;
 use serde::Serialize;
 
@@ -116,7 +116,7 @@ pub enum Verdict {
     /// description reveals.
     Absorbed,
     /// Nothing was selected, and the data are too short to tell "unexplained" from "no
-    /// effect" ([`super::Options::min_decisive_seconds`]).
+    /// effect" ([`super::options::Options::min_decisive_seconds`]).
     Undecided,
 }
 
@@ -172,7 +172,7 @@ pub struct Diagnosis {
     pub gap_closed: f64,
     /// Whether a generic smooth function of each joint's speed and angle still predicts the
     /// final validation residual (an effect outside the library).
-    pub structure_left: super::StructureLeft,
+    pub structure_left: super::structure::StructureLeft,
     /// Validation RMS per joint and overall (N m) with the confirmed effects only (refitted),
     /// when some selected effect is not confirmed.
     pub confirmed_only: Option<(Vec<f64>, f64)>,

@@ -13,7 +13,8 @@
 use super::diagnosis::DescriptionStep;
 use super::gap::Ladder;
 use super::library::Variant;
-use super::{mean_square, residual_rms, Stage};
+use super::residual::{mean_square, residual_rms};
+use super::stage::Stage;
 use crate::linalg::least_squares;
 use nalgebra::{DMatrix, DVector};
 

@@ -3,7 +3,11 @@
 //! test, [`super::noise`]), the fraction of the gap closed, and whether each cross-validated
 //! effect is confirmed on the held-out data.
 
-use super::{mask_slow, mean_square, noise, residual_rms, DiagnoseError, JointGap, Stage};
+use super::diagnosis::JointGap;
+use super::noise;
+use super::options::DiagnoseError;
+use super::residual::{mask_slow, mean_square, residual_rms};
+use super::stage::Stage;
 use crate::trajectory::Trajectory;
 use nalgebra::DVector;
 

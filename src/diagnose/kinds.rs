@@ -685,7 +685,7 @@ fn same(c: &[f64], _: usize, _: f64) -> Vec<f64> {
 /// already carries the gain, so `τ = Y θ + β τ̂` with `τ̂ ≈ τ` gives `1 + g = 1/(1 − β)`.
 fn gain_magnitudes(c: &[f64], _: usize, _: f64) -> Vec<f64> {
     let g: Vec<f64> = c.iter().map(|b| b / (1.0 - b)).collect();
-    let m = super::median(&g);
+    let m = super::stats::median(&g);
     g.iter().map(|x| x - m).collect()
 }
 
@@ -777,7 +777,7 @@ fn draw_gain(m: &Model, rng: &mut ChaCha8Rng, _: f64) -> (Option<EffectSpec>, Ve
     let j = rng.random_range(0..n);
     let mut gain = vec![1.0; n];
     gain[j] += signed(rng, 0.15, 0.3);
-    let med = super::median(&gain);
+    let med = super::stats::median(&gain);
     let relative = gain.iter().map(|g| g - med).collect();
     (Some(EffectSpec::TorqueGain { gain }), relative)
 }

@@ -29,41 +29,18 @@
 //! A body's freed parameters whose mass change is positive and physically consistent are
 //! reported as a payload; otherwise as a change of the body.
 
+use super::anchor;
 use super::library::{Context, Kind, Variant};
+use super::residual::{finite_mean_square, mask_slow, mean_square, residual_rms};
 use super::select::Folds;
-use super::{anchor, finite_mean_square, mask_slow, mean_square, residual_rms, Stage};
+use super::stage::Stage;
 use crate::linalg::least_squares;
 use crate::model::Model;
 use crate::spatial::InertialParams;
 use nalgebra::{DMatrix, DVector};
 use serde::Serialize;
 
-/// The ladder's settings.
-#[derive(Clone, Debug, PartialEq)]
-pub struct Settings {
-    /// Held-out blocks of the t statistic.
-    pub blocks: usize,
-    /// Smallest block t statistic of a step's held-out improvement.
-    pub min_t: f64,
-    /// Smallest relative reduction of the held-out mean square a step must bring.
-    pub min_reduction: f64,
-    /// Candidates within this fraction of the winner's reduction are ambiguous with it.
-    pub tie: f64,
-    /// At most this many steps.
-    pub max_steps: usize,
-}
-
-impl Default for Settings {
-    fn default() -> Self {
-        Self {
-            blocks: 10,
-            min_t: 3.0,
-            min_reduction: 0.02,
-            tie: 0.1,
-            max_steps: 6,
-        }
-    }
-}
+pub use super::options::LadderSettings as Settings;
 
 /// What one step explains.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -170,63 +147,6 @@ pub struct Ladder {
     /// Their posterior standard errors.
     #[serde(skip)]
     pub(crate) coefficient_se: Vec<Vec<f64>>,
-}
-
-impl Ladder {
-    /// The explanations as the diagnosis's effect estimates (described by the description
-    /// test's evidence: they depart from the description), friction left out.
-    pub(crate) fn estimates(&self, stage: &Stage) -> Vec<super::EffectEstimate> {
-        let n = stage.model.dof();
-        let g = stage.model.gravity.norm().max(1e-12);
-        let effects = self.chosen.iter().filter_map(|e| match e {
-            Explanation::Effect(v) => Some(*v),
-            Explanation::Friction => None,
-        });
-        effects
-            .zip(self.coefficients.iter().zip(&self.coefficient_se))
-            .map(|(v, (c, se))| {
-                let (name, unit) = v.kind.magnitude();
-                let values = super::magnitudes_of(v.kind, c, n, g);
-                let single = values.len() == 1;
-                let magnitudes = values
-                    .iter()
-                    .enumerate()
-                    .map(|(i, &value)| super::Magnitude {
-                        joint: super::magnitude::joint_label(stage, single, i, v),
-                        value,
-                        se: super::magnitude::magnitude_se(v.kind, c, se, n, g, i),
-                        unit: unit.into(),
-                        identifiable: 1.0,
-                    })
-                    .collect();
-                super::EffectEstimate {
-                    kind: v.kind,
-                    evidence: super::Evidence::Description,
-                    param: v.param,
-                    magnitude_name: name.into(),
-                    magnitudes,
-                    ambiguous_with: vec![],
-                    separate_by: None,
-                }
-            })
-            .collect()
-    }
-
-    /// The rungs from the first explanation on (the description as given and within its
-    /// uncertainty left out), as the diagnosis's description steps.
-    pub(crate) fn description_steps(&self) -> Vec<super::DescriptionStep> {
-        self.rungs
-            .iter()
-            .skip(2)
-            .map(|r| super::DescriptionStep {
-                step: r.step.clone(),
-                kind: r.kind,
-                param: r.param,
-                rms: r.rms.clone(),
-                overall: r.overall,
-            })
-            .collect()
-    }
 }
 
 /// Normal equations of `[Y | E]` about one linearization point: the training data summed,
@@ -668,30 +588,6 @@ pub(crate) fn ladder(stage: &Stage, eps: f64, selected: &[Variant], settings: &S
         coefficients,
         coefficient_se,
     }
-}
-
-/// The ladder from the description when its uncertainty is stated, its first explanation added
-/// to `effects` when cross-validation and the description test did not name it (a payload on
-/// any body, an absorbed tilt or gain beside a linearized effect); its later steps stay in the
-/// ladder (on perturbed simulated descriptions they are mostly the description's own errors).
-pub(crate) fn from_description(
-    stage: &Stage,
-    selection: &super::select::Selection,
-    effects: &mut Vec<super::EffectEstimate>,
-) -> Option<Ladder> {
-    let selected: Vec<Variant> = selection
-        .chosen
-        .iter()
-        .map(|&v| stage.folds.variants[v])
-        .collect();
-    let eps = stage.opts.description_uncertainty?;
-    let l = ladder(stage, eps, &selected, &stage.opts.ladder);
-    if let Some(e) = l.estimates(stage).into_iter().next() {
-        if !effects.iter().any(|x| x.group().any(|k| k == e.kind)) {
-            effects.push(e);
-        }
-    }
-    Some(l)
 }
 
 /// Per chosen effect, the posterior standard errors of its coefficients (in `set` order,

@@ -4,9 +4,11 @@
 //! of its columns that the rigid-body regressor does not explain.
 
 use super::anchor;
+use super::diagnosis::{EffectEstimate, Evidence, Magnitude};
+use super::kinds::separate_by;
 use super::library::{Kind, Variant};
 use super::select::Selection;
-use super::{separate_by, EffectEstimate, Evidence, Magnitude, Stage};
+use super::stage::Stage;
 use nalgebra::{DMatrix, DVector};
 
 /// The physical magnitudes of `kind` from its coefficients `c` for `n` joints under gravity of

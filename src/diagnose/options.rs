@@ -22,13 +22,13 @@ pub struct Options {
     /// Low-pass cutoff (Hz) of the data's processing, for the compliance columns.
     pub processing_cutoff: f64,
     /// The ladder from the description's settings.
-    pub ladder: super::ladder::Settings,
+    pub ladder: LadderSettings,
     /// The residual counts as unexplained when its validation mean square exceeds the noise
     /// floor's by this factor.
     pub unexplained_ratio: f64,
     /// The final residual has structure outside the library when a generic smooth function
     /// of each joint's speed and angle, fitted on training, lowers its validation mean square
-    /// significantly and by at least this fraction ([`super::StructureLeft`]).
+    /// significantly and by at least this fraction ([`super::structure::StructureLeft`]).
     pub structure_threshold: f64,
     /// Relative uncertainty `ε` of the description's inertial parameters: when given, effects
     /// that identification absorbs are tested against the description ([`super::anchor`]).
@@ -41,7 +41,7 @@ pub struct Options {
     /// Training data shorter than this (s) cannot support "unexplained" or "no effect": the
     /// cross-validation blocks and the noise floor rest on too few repetitions of the motion
     /// (the verdicts were measured on 20 s and more). Such a verdict becomes
-    /// [`super::Verdict::Undecided`].
+    /// [`super::diagnosis::Verdict::Undecided`].
     pub min_decisive_seconds: f64,
     /// Search effects that act on one body (a payload) over every body; otherwise only the
     /// last body is offered (inner bodies' parameters are often not separable from their
@@ -189,3 +189,30 @@ pub enum DiagnoseError {
 }
 
 crate::options::option_error!(DiagnoseError);
+
+/// The ladder's settings.
+#[derive(Clone, Debug, PartialEq)]
+pub struct LadderSettings {
+    /// Held-out blocks of the t statistic.
+    pub blocks: usize,
+    /// Smallest block t statistic of a step's held-out improvement.
+    pub min_t: f64,
+    /// Smallest relative reduction of the held-out mean square a step must bring.
+    pub min_reduction: f64,
+    /// Candidates within this fraction of the winner's reduction are ambiguous with it.
+    pub tie: f64,
+    /// At most this many steps.
+    pub max_steps: usize,
+}
+
+impl Default for LadderSettings {
+    fn default() -> Self {
+        Self {
+            blocks: 10,
+            min_t: 3.0,
+            min_reduction: 0.02,
+            tie: 0.1,
+            max_steps: 6,
+        }
+    }
+}

@@ -1,7 +1,7 @@
 //! Reports: a diagnosis as Markdown, JSON and SVG plots (residual by regime, residual spectrum
 //! before and after, validation RMS per joint before and after each effect).
 
-use super::Diagnosis;
+use super::diagnosis::Diagnosis;
 use crate::io::plot::{colour, legend_outside, tick, Mark, LEGEND_WIDTH};
 use crate::io::{md_cell, IoError};
 use plotters::prelude::*;
@@ -270,8 +270,8 @@ fn effects_section(d: &Diagnosis) -> String {
                 String::new()
             },
             match e.evidence {
-                super::Evidence::CrossValidation => e.magnitude_name.clone(),
-                super::Evidence::Description =>
+                super::diagnosis::Evidence::CrossValidation => e.magnitude_name.clone(),
+                super::diagnosis::Evidence::Description =>
                     format!("{} (found against the description)", e.magnitude_name),
             }
         );

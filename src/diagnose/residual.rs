@@ -6,19 +6,6 @@ use super::library::{self, Context};
 use crate::trajectory::Trajectory;
 use nalgebra::DVector;
 
-pub(crate) fn median(v: &[f64]) -> f64 {
-    let mut s = v.to_vec();
-    s.sort_by(f64::total_cmp);
-    let m = s.len();
-    if m == 0 {
-        0.0
-    } else if m % 2 == 1 {
-        s[m / 2]
-    } else {
-        0.5 * (s[m / 2 - 1] + s[m / 2])
-    }
-}
-
 /// The residual `res` (sample-major over `tr`) with the joint-samples slower than `min_speed`
 /// set to NaN (left out of every fit and error).
 pub(crate) fn mask_slow(tr: &Trajectory, res: &[f64], min_speed: f64) -> Vec<f64> {

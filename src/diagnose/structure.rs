@@ -14,7 +14,8 @@
 //! reduction is significant (t ≥ [`T_MIN`]) and not negligible (at least
 //! `Options::structure_threshold`).
 
-use super::{mask_slow, Stage};
+use super::residual::mask_slow;
+use super::stage::Stage;
 use crate::trajectory::Trajectory;
 use nalgebra::{DMatrix, DVector};
 use serde::Serialize;

@@ -1,9 +1,10 @@
 //! The **verdict** and the one-paragraph summary of a diagnosis.
 
 use super::anchor;
+use super::diagnosis::{EffectEstimate, Verdict};
 use super::gap::HowFar;
 use super::library::{self, Kind};
-use super::{EffectEstimate, StructureLeft, Verdict};
+use super::structure::StructureLeft;
 
 /// The verdict from what was selected and whether the final residual stays above the noise
 /// floor by more than `unexplained_ratio` (in mean square) or still has structure a generic

@@ -1,0 +1,90 @@
+//! The ladder from the description read as the diagnosis's results: its explanations as
+//! effect estimates, its rungs as the description's steps, and its first explanation added to
+//! the effects when neither cross-validation nor the description test named it.
+
+use super::diagnosis::{DescriptionStep, EffectEstimate, Evidence, Magnitude};
+use super::ladder::{self, Explanation, Ladder};
+use super::library::Variant;
+use super::magnitude;
+use super::select::Selection;
+use super::stage::Stage;
+
+/// The ladder from the description when its uncertainty is stated, its first explanation added
+/// to `effects` when cross-validation and the description test did not name it (a payload on
+/// any body, an absorbed tilt or gain beside a linearized effect); its later steps stay in the
+/// ladder (on perturbed simulated descriptions they are mostly the description's own errors).
+pub(crate) fn from_description(
+    stage: &Stage,
+    selection: &Selection,
+    effects: &mut Vec<EffectEstimate>,
+) -> Option<Ladder> {
+    let selected: Vec<Variant> = selection
+        .chosen
+        .iter()
+        .map(|&v| stage.folds.variants[v])
+        .collect();
+    let eps = stage.opts.description_uncertainty?;
+    let l = ladder::ladder(stage, eps, &selected, &stage.opts.ladder);
+    if let Some(e) = estimates(&l, stage).into_iter().next() {
+        if !effects.iter().any(|x| x.group().any(|k| k == e.kind)) {
+            effects.push(e);
+        }
+    }
+    Some(l)
+}
+
+/// The explanations as the diagnosis's effect estimates (described by the description
+/// test's evidence: they depart from the description), friction left out.
+pub(crate) fn estimates(ladder: &Ladder, stage: &Stage) -> Vec<EffectEstimate> {
+    let n = stage.model.dof();
+    let g = stage.model.gravity.norm().max(1e-12);
+    let effects = ladder.chosen.iter().filter_map(|e| match e {
+        Explanation::Effect(v) => Some(*v),
+        Explanation::Friction => None,
+    });
+    effects
+        .zip(ladder.coefficients.iter().zip(&ladder.coefficient_se))
+        .map(|(v, (c, se))| {
+            let (name, unit) = v.kind.magnitude();
+            let values = magnitude::magnitudes_of(v.kind, c, n, g);
+            let single = values.len() == 1;
+            let magnitudes = values
+                .iter()
+                .enumerate()
+                .map(|(i, &value)| Magnitude {
+                    joint: magnitude::joint_label(stage, single, i, v),
+                    value,
+                    se: magnitude::magnitude_se(v.kind, c, se, n, g, i),
+                    unit: unit.into(),
+                    identifiable: 1.0,
+                })
+                .collect();
+            EffectEstimate {
+                kind: v.kind,
+                evidence: Evidence::Description,
+                param: v.param,
+                magnitude_name: name.into(),
+                magnitudes,
+                ambiguous_with: vec![],
+                separate_by: None,
+            }
+        })
+        .collect()
+}
+
+/// The rungs from the first explanation on (the description as given and within its
+/// uncertainty left out), as the diagnosis's description steps.
+pub(crate) fn description_steps(ladder: &Ladder) -> Vec<DescriptionStep> {
+    ladder
+        .rungs
+        .iter()
+        .skip(2)
+        .map(|r| DescriptionStep {
+            step: r.step.clone(),
+            kind: r.kind,
+            param: r.param,
+            rms: r.rms.clone(),
+            overall: r.overall,
+        })
+        .collect()
+}

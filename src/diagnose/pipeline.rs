@@ -1,0 +1,215 @@
+//! The diagnosis as a sequence of steps over one [`Stage`]: the nominal fit, the selection,
+//! the description test, how far, the effects' magnitudes, the ladder from the description, the
+//! structure left, the verdict and its summary; [`diagnose_runs`] joins the user's runs first.
+
+use super::breakdown::{self, breakdown};
+use super::diagnosis::{DescriptionStep, Diagnosis, EffectEstimate, Verdict};
+use super::kinds::Kind;
+use super::options::{DiagnoseError, Options};
+use super::residual::{mean_square, residual_rms};
+use super::stage::{check_data, fit_nominal, Stage};
+use super::structure::{self, StructureLeft};
+use super::{anchor, described, explain, gap, library, magnitude, select, verdict};
+use crate::model::Model;
+use crate::trajectory::Trajectory;
+
+/// The whole diagnosis: the nominal model fitted on `train` (its constraint set
+/// `opts.constraints`), effects selected by cross-validation on `train` and, when the
+/// description's uncertainty is stated and cross-validation finds nothing, against the
+/// description; everything scored on `validate` (where, how far, noise floor). Both
+/// trajectories must carry q̈.
+pub fn diagnose(
+    model: &Model,
+    train: &Trajectory,
+    validate: &Trajectory,
+    opts: &Options,
+) -> Result<Diagnosis, DiagnoseError> {
+    opts.validate()?;
+    check_data(model, train, validate)?;
+    let nominal = fit_nominal(model, train, opts)?;
+    let stage = Stage::new(model, train, validate, opts, nominal.theta.clone());
+    let selection =
+        select::forward_select(&stage.folds, model, &stage.ident_opts, &opts.selection)?;
+    let (description_test, description_test_skipped) = run_description_test(&stage, &selection)?;
+    let anchored: &[anchor::Step] = description_test.as_ref().map_or(&[], |r| &r.steps);
+    let n_cv = selection.chosen.len();
+    let chosen: Vec<usize> = selection
+        .chosen
+        .iter()
+        .copied()
+        .chain(anchored.iter().map(|s| s.variant))
+        .collect();
+    let ladder = gap::ladder(&stage, &chosen)?;
+    let mut effects = magnitude::cross_validated(&stage, &selection, &ladder.final_theta);
+    effects.extend(magnitude::against_description(&stage, anchored));
+    let from_description = described::from_description(&stage, &selection, &mut effects);
+    let how_far = gap::how_far(&stage, &chosen, n_cv, &ladder)?;
+    let explained_from_description = match &from_description {
+        Some(l) => described::description_steps(l),
+        None => explain::from_description(&stage, &chosen, &ladder),
+    };
+    let final_variants: Vec<_> = chosen.iter().map(|&v| stage.folds.variants[v]).collect();
+    let (_, final_train_res) = residual_rms(
+        &stage.ctx_train,
+        train,
+        &final_variants,
+        &ladder.final_theta,
+        opts.min_speed,
+    );
+    let structure_left = structure::structure_left(
+        &stage,
+        &final_train_res,
+        &ladder.final_res,
+        opts.structure_threshold,
+    );
+    let train_seconds = train
+        .sample_period()
+        .map_or(0.0, |dt| dt * train.len() as f64);
+    let verdict = match verdict::verdict(
+        selection.steps.len(),
+        anchored.len(),
+        &how_far,
+        opts.unexplained_ratio,
+        structure_left.remains,
+    ) {
+        Verdict::Unexplained | Verdict::NoEffect if train_seconds < opts.min_decisive_seconds => {
+            Verdict::Undecided
+        }
+        v => v,
+    };
+    let description_overall = mean_square(&ladder.description_rms).sqrt();
+    let summary = summary_text(
+        model,
+        (
+            description_overall,
+            train_seconds,
+            opts.min_decisive_seconds,
+        ),
+        &how_far,
+        verdict,
+        (&effects, n_cv),
+        description_test.as_ref(),
+        (&structure_left, &explained_from_description),
+    );
+    Ok(Diagnosis {
+        confirmed: how_far.confirmed,
+        confirmed_only: how_far.confirmed_only,
+        robot: model.name.clone(),
+        joints: model_joint_names(model),
+        samples: [train.len(), validate.len()],
+        constraints: opts.constraints,
+        nominal_constraints_hold: nominal.constraints_hold,
+        breakdown: breakdown(validate, 0..validate.len(), &ladder.nominal_res),
+        spectra: breakdown::spectra(model, validate, &ladder.nominal_res),
+        spectra_after: breakdown::spectra(model, validate, &ladder.final_res),
+        selection,
+        description_test,
+        description_test_skipped,
+        ladder: from_description,
+        effects,
+        gap: how_far.gap,
+        description_overall,
+        explained_from_description,
+        overall: how_far.overall,
+        noise_floor: how_far.floor_ms.sqrt(),
+        gap_closed: how_far.gap_closed,
+        structure_left,
+        verdict,
+        summary,
+    })
+}
+
+/// Absorbed effects, against the description when its uncertainty is stated, beside what
+/// cross-validation chose, unless a chosen effect's columns only approximate it (a delay to
+/// first order, a rotor without its gyroscopic terms): what they miss biases θ in ways the
+/// prior test would misread as an absorbed effect. Returns the test, or why it did not run.
+fn run_description_test(
+    stage: &Stage,
+    selection: &select::Selection,
+) -> Result<(Option<anchor::Report>, Option<String>), DiagnoseError> {
+    // Absorbed effects, against the description when its uncertainty is stated, beside what
+    // cross-validation chose, unless a chosen effect's columns only approximate it (a delay to
+    // first order, a rotor without its gyroscopic terms): what they miss biases θ in ways the
+    // prior test would misread as an absorbed effect.
+    let linearized: Vec<Kind> = selection
+        .chosen
+        .iter()
+        .map(|&v| stage.folds.variants[v].kind)
+        .filter(|k| k.approximate())
+        .collect();
+    let description_test = match stage.opts.description_uncertainty {
+        Some(eps) if linearized.is_empty() => {
+            Some(anchor::test_description(stage, eps, &selection.chosen)?)
+        }
+        _ => None,
+    };
+    let description_test_skipped = (stage.opts.description_uncertainty.is_some()
+        && description_test.is_none())
+    .then(|| {
+        format!(
+            "not run: cross-validation selected {}, whose columns only approximate it (linearized about the nominal model, or a rotor without its gyroscopic terms); what they miss would bias the parameters the test compares",
+            library::names(&linearized, false)
+        )
+    });
+    Ok((description_test, description_test_skipped))
+}
+
+/// The diagnosis's one-paragraph summary.
+#[allow(clippy::too_many_arguments)]
+fn summary_text(
+    model: &Model,
+    (description_overall, train_seconds, min_decisive): (f64, f64, f64),
+    how_far: &gap::HowFar,
+    verdict: Verdict,
+    (effects, n_cv): (&[EffectEstimate], usize),
+    description_test: Option<&anchor::Report>,
+    (structure_left, explained): (&StructureLeft, &[DescriptionStep]),
+) -> String {
+    let mut summary = format!(
+        "the description as given predicts the validation data with {:.3} N m RMS (re-identified: {:.3} N m); {}",
+        description_overall,
+        how_far.overall[0],
+        verdict::summary(verdict, effects, n_cv, how_far, description_test)
+    );
+    summary += &verdict::structure_summary(structure_left, &model_joint_names(model));
+    summary += &explain::summary(explained, description_overall);
+    if verdict == Verdict::Undecided {
+        summary += &format!(
+            " (only {train_seconds:.1} s of training data, below the {} s on which a verdict of \"unexplained\" or \"no effect\" can be trusted: record longer runs)",
+            min_decisive
+        );
+    }
+    summary
+}
+
+fn model_joint_names(model: &Model) -> Vec<String> {
+    model.bodies.iter().map(|b| b.joint_name.clone()).collect()
+}
+
+/// The diagnosis of runs as a user gives them: training runs and validation runs, each joined
+/// end to end. With several training runs the selection leaves one run out; without validation
+/// runs the last `holdout` fraction of the joined training runs is held out.
+pub fn diagnose_runs(
+    model: &Model,
+    train_runs: Vec<Trajectory>,
+    validate_runs: Vec<Trajectory>,
+    holdout: f64,
+    opts: &Options,
+) -> Result<Diagnosis, DiagnoseError> {
+    let lens: Vec<usize> = train_runs.iter().map(|r| r.len()).collect();
+    let all = Trajectory::concatenate(train_runs).ok_or(DiagnoseError::NoData)?;
+    let mut opts = opts.clone();
+    let (train, val) = match Trajectory::concatenate(validate_runs) {
+        None => {
+            if !(holdout > 0.0 && holdout < 1.0) {
+                return Err(DiagnoseError::Holdout(holdout));
+            }
+            all.holdout_split(holdout)
+        }
+        Some(val) => {
+            opts.train_runs = lens;
+            (all, val)
+        }
+    };
+    diagnose(model, &train, &val, &opts)
+}
