@@ -290,7 +290,9 @@ impl Trajectory {
     }
 
     /// Joins runs end to end; each run's times are shifted to continue the joined ones by their
-    /// mean sample period (1 ms after a single sample). `None` for no runs.
+    /// mean sample period, or the next run's when the joined ones are a single sample (1 ms
+    /// only between two single samples, which no analysis uses: identification and the
+    /// diagnosis need many). `None` for no runs.
     pub fn concatenate(parts: Vec<Trajectory>) -> Option<Trajectory> {
         let mut it = parts.into_iter();
         let mut out = it.next()?;
@@ -300,7 +302,10 @@ impl Trajectory {
                 out = p;
                 continue;
             }
-            let dt = out.sample_period().unwrap_or(1e-3);
+            let dt = out
+                .sample_period()
+                .or_else(|| p.sample_period())
+                .unwrap_or(1e-3);
             let shift = out.t[m - 1] + dt - p.t[0];
             for k in 0..p.len() {
                 out.push(
@@ -373,4 +378,38 @@ pub struct Recording {
     pub measured: Trajectory,
     /// Offline-processed q, q̇, q̈ and torque: the identification input.
     pub processed: Trajectory,
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn run(t0: f64, m: usize, dt: f64) -> Trajectory {
+        let mut tr = Trajectory::new(vec!["j".into()], false);
+        for k in 0..m {
+            tr.push(t0 + k as f64 * dt, &[0.0], &[0.0], None, &[0.0]);
+        }
+        tr
+    }
+
+    fn close(a: &[f64], b: &[f64]) -> bool {
+        a.len() == b.len() && a.iter().zip(b).all(|(x, y)| (x - y).abs() < 1e-12)
+    }
+
+    #[test]
+    fn a_single_sample_run_is_continued_at_the_next_run_s_period() {
+        let joined = Trajectory::concatenate(vec![run(5.0, 1, 0.0), run(9.0, 3, 2e-3)]).unwrap();
+        assert!(
+            close(&joined.t, &[5.0, 5.002, 5.004, 5.006]),
+            "{:?}",
+            joined.t
+        );
+        // The joined runs' own period when they have one.
+        let joined = Trajectory::concatenate(vec![run(0.0, 2, 1e-2), run(3.0, 2, 2e-3)]).unwrap();
+        assert!(
+            close(&joined.t, &[0.0, 0.01, 0.02, 0.022]),
+            "{:?}",
+            joined.t
+        );
+    }
 }

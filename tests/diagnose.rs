@@ -800,3 +800,45 @@ fn a_payload_on_an_inner_link_of_the_kuka_twin_is_found_on_that_link() {
         mass.se
     );
 }
+
+#[test]
+fn data_whose_time_stamps_do_not_advance_are_refused_by_name() {
+    // 100 samples all stamped 0 s: no sample period to filter or differentiate at (the effect
+    // columns once took 1 ms for it, silently).
+    let m = physid::model::cheetah3::leg();
+    let names: Vec<String> = m.bodies.iter().map(|b| b.joint_name.clone()).collect();
+    let n = names.len();
+    let frozen = |t: &dyn Fn(usize) -> f64| {
+        let mut tr = physid::trajectory::Trajectory::new(names.clone(), true);
+        for k in 0..100 {
+            let q: Vec<f64> = (0..n).map(|j| 0.01 * (k + j) as f64).collect();
+            tr.push(t(k), &q, &vec![0.1; n], Some(&vec![0.0; n]), &vec![1.0; n]);
+        }
+        tr
+    };
+    let still = frozen(&|_| 0.0);
+    let moving = frozen(&|k| k as f64 * 1e-3);
+    let opts = physid::diagnose::Options::default();
+    let err = physid::diagnose::diagnose(&m, &still, &moving, &opts).unwrap_err();
+    assert!(
+        matches!(
+            err,
+            physid::diagnose::DiagnoseError::NoSamplePeriod {
+                which: "training",
+                samples: 100,
+                ..
+            }
+        ),
+        "{err:?}"
+    );
+    assert!(
+        err.to_string()
+            .contains("training data span 0 s over 100 samples"),
+        "{err}"
+    );
+    let err = physid::diagnose::diagnose(&m, &moving, &still, &opts).unwrap_err();
+    assert!(
+        err.to_string().starts_with("validation data span 0 s"),
+        "{err}"
+    );
+}

@@ -9,6 +9,14 @@ use crate::model::Model;
 use crate::trajectory::Trajectory;
 use nalgebra::{DMatrix, DVector, Vector3};
 
+/// The sample period (s) of `tr`, `None` when it has none to give (fewer than two samples, or
+/// time stamps that do not advance): then nothing is differentiated or filtered, and the
+/// columns made of processed signals (compliance, backlash) are zero, never computed at a
+/// made-up rate. The diagnosis refuses such data up front (`stage::check_data`).
+pub(super) fn sample_period(tr: &Trajectory) -> Option<f64> {
+    tr.sample_period().filter(|dt| dt.is_finite() && *dt > 0.0)
+}
+
 /// The backlash grid: the dead-zone widths (rad) whose motor offsets [`Context`] runs (the
 /// kind table's backlash grid is this).
 pub(super) fn backlash_widths() -> Vec<f64> {
@@ -68,8 +76,10 @@ pub struct Context<'a> {
 /// central difference; unfiltered differences if the filter cannot be built.
 fn processed_like_encoder(x: &[f64], tr: &Trajectory, cutoff: f64) -> [Vec<f64>; 3] {
     let (m, n) = (tr.len(), tr.dof());
-    let dt = tr.sample_period().unwrap_or(1e-3);
     let mut out = [vec![0.0; x.len()], vec![0.0; x.len()], vec![0.0; x.len()]];
+    let Some(dt) = sample_period(tr) else {
+        return out;
+    };
     for j in 0..n {
         let col: Vec<f64> = (0..m).map(|k| x[k * n + j]).collect();
         for (o, v) in out.iter_mut().zip(process_column(&col, dt, cutoff)) {
@@ -99,8 +109,11 @@ const OWN_LAGS: usize = 2;
 /// `−OWN_LAGS..=OWN_LAGS` (time-invariant away from the ends), for [`without_own`].
 type OwnTaps = [[f64; 2 * OWN_LAGS + 1]; 3];
 
-/// [`OwnTaps`] at sample period `dt` (s) and `cutoff` (Hz).
-fn own_taps(dt: f64, cutoff: f64) -> OwnTaps {
+/// [`OwnTaps`] at sample period `dt` (s) and `cutoff` (Hz); zero without a period.
+fn own_taps(dt: Option<f64>, cutoff: f64) -> OwnTaps {
+    let Some(dt) = dt else {
+        return [[0.0; 2 * OWN_LAGS + 1]; 3];
+    };
     let centre = 2000;
     let mut impulse = vec![0.0; 2 * centre + 1];
     impulse[centre] = 1.0;
@@ -123,7 +136,9 @@ fn without_own(
     taps: &OwnTaps,
 ) -> [Vec<f64>; 3] {
     let (m, n) = (tr.len(), tr.dof());
-    let dt = tr.sample_period().unwrap_or(1e-3);
+    let Some(dt) = sample_period(tr) else {
+        return out;
+    };
     let w = OWN_LAGS;
     // The zero-phase filter's start-up transient at the ends of the data (not of the data's own
     // processing, which saw the whole run, but of this one): columns there are left at zero.
@@ -161,7 +176,9 @@ fn processed_without_own(x: &[f64], tr: &Trajectory, cutoff: f64, taps: &OwnTaps
 /// (sample-major), divided by the width: `sim::effects::DeadZone` with the model's rotors.
 fn dead_zone_offsets(model: &Model, tau: &[f64], tr: &Trajectory, width: f64) -> Vec<f64> {
     let n = tr.dof();
-    let dt = tr.sample_period().unwrap_or(1e-3);
+    let Some(dt) = sample_period(tr) else {
+        return vec![0.0; tau.len()];
+    };
     let effects = [crate::sim::scenario::EffectSpec::Backlash {
         width: vec![width; n],
     }];
@@ -219,7 +236,7 @@ impl<'a> Context<'a> {
         // differentiated twice through the 20 Hz filter, adds ~0.05 N m on the blind scenario;
         // the prediction's friction jumps fall a few samples off the delivered torque's and its
         // column lost the attribution to delay, cogging and spring.
-        let taps = own_taps(tr.sample_period().unwrap_or(1e-3), cutoff);
+        let taps = own_taps(sample_period(tr), cutoff);
         let logged = processed_like_encoder(&tr.tau, tr, cutoff);
         // The side of the dead zone follows the torque actually delivered: the logged torque,
         // low-passed (one crossing where the noisy torque chatters about zero), drives the
@@ -342,7 +359,7 @@ mod tests {
             .collect();
         let tr = one_joint(&smooth);
         let full = processed_like_encoder(&smooth, &tr, 20.0);
-        let taps = own_taps(1e-3, 20.0);
+        let taps = own_taps(Some(1e-3), 20.0);
         let own = processed_without_own(&smooth, &tr, 20.0, &taps);
         // A 1.3 Hz sine is nearly a straight line over seven samples: the same processing
         // (angle, rate, acceleration: amplitudes 1, 8.2, 67) where the ends are not zeroed, but

@@ -156,6 +156,16 @@ pub enum DiagnoseError {
         /// Samples needed.
         min: usize,
     },
+    /// A data set whose time stamps span no time (its sample period is not positive).
+    #[error("{which} data span {span} s over {samples} samples: the diagnosis needs time stamps that advance (a positive sample period)")]
+    NoSamplePeriod {
+        /// `training` or `validation`.
+        which: &'static str,
+        /// Last time stamp minus the first (s).
+        span: f64,
+        /// Samples given.
+        samples: usize,
+    },
     /// No joint moves fast enough to estimate the noise floor.
     #[error(
         "no joint moves faster than {min_speed} rad/s often enough to estimate the noise floor"

@@ -35,7 +35,7 @@ pub fn fit_nominal(
 }
 
 /// Both data sets fit the robot and the diagnosis: same joints, accelerations present, at least
-/// [`MIN_SAMPLES`] samples.
+/// [`MIN_SAMPLES`] samples, time stamps that advance.
 pub(super) fn check_data(
     model: &Model,
     train: &Trajectory,
@@ -58,6 +58,13 @@ pub(super) fn check_data(
                 which,
                 samples: tr.len(),
                 min: MIN_SAMPLES,
+            });
+        }
+        if super::context::sample_period(tr).is_none() {
+            return Err(DiagnoseError::NoSamplePeriod {
+                which,
+                span: tr.t[tr.len() - 1] - tr.t[0],
+                samples: tr.len(),
             });
         }
     }
