@@ -21,7 +21,11 @@ fn a_streamed_csv_fits_as_the_same_file_in_memory() {
     let opts = physid::io::DataOptions::default();
     let memory = Data::open_all(&[csv.as_path()], &model, &opts, true).unwrap();
     assert!(matches!(memory[0], Data::Memory(_)));
-    let joints: Vec<String> = model.bodies.iter().map(|b| b.joint_name.clone()).collect();
+    let joints: Vec<String> = model
+        .bodies()
+        .iter()
+        .map(|b| b.joint_name.clone())
+        .collect();
     let streamed = vec![Data::Csv {
         path: csv.clone(),
         joints,
@@ -175,7 +179,7 @@ fn a_design_is_checked_in_simulation_through_the_library() {
     let opts = physid::sim::design::DesignOptions::default();
     let check = check_in_simulation(&model, &text, &opts, 10.0).unwrap();
     assert_eq!(check.joints.len(), model.dof());
-    for (u, b) in check.joints.iter().zip(&model.bodies) {
+    for (u, b) in check.joints.iter().zip(model.bodies()) {
         assert_eq!(u.joint, b.joint_name);
         assert!(u.q_range[0] <= u.q_range[1] && u.velocity.is_finite() && u.torque >= 0.0);
     }

@@ -271,7 +271,7 @@ fn blind_cases_are_diagnosed_from_files_and_scored() {
     // on, and its links' masses carry errors of the stated size.
     let given = physid::io::load_robot(dir.path().join("c/robot.urdf").to_str().unwrap()).unwrap();
     assert_eq!(given.rotor_count(), 0);
-    for (b, t) in given.bodies.iter().zip(&m.with_rotors_frozen().bodies) {
+    for (b, t) in given.bodies().iter().zip(m.with_rotors_frozen().bodies()) {
         let rel = (b.inertia.mass() - t.inertia.mass()) / t.inertia.mass();
         assert!(rel != 0.0 && rel.abs() < 5.0 * e, "{}: {rel}", b.name);
     }
@@ -425,7 +425,7 @@ fn a_tilted_base_is_revealed_by_the_description_and_clean_data_claim_nothing() {
 #[test]
 fn a_payload_on_the_last_body_is_revealed_by_the_description() {
     let m = physid::model::cheetah3::leg();
-    let tip = m.bodies[2].bounding.as_ref().unwrap().center * 2.0;
+    let tip = m.bodies()[2].bounding.as_ref().unwrap().center * 2.0;
     let com = tip * 0.8;
     let d = diagnosed_against_description(
         vec![EffectSpec::Payload {
@@ -616,7 +616,7 @@ fn a_payload_beside_a_visible_effect_is_still_tested_against_the_description() {
     // Cogging (visible: cross-validation selects it) and a 0.6 kg payload (absorbed): the test
     // against the description runs beside the cogging's exact columns and finds the payload.
     let m = physid::model::cheetah3::leg();
-    let com = m.bodies[2].bounding.as_ref().unwrap().center * 1.6;
+    let com = m.bodies()[2].bounding.as_ref().unwrap().center * 1.6;
     let effects = vec![
         EffectSpec::Cogging {
             amplitude: vec![0.0, 1.5, 0.0],
@@ -792,7 +792,7 @@ fn a_payload_on_an_inner_link_of_the_kuka_twin_is_found_on_that_link() {
         .unwrap_or_else(|| panic!("no payload: {}", d.summary));
     assert_eq!(e.param, 5.0, "body {}: {}", e.param, d.summary);
     let mass = &e.magnitudes[0];
-    assert_eq!(mass.joint, description.bodies[4].joint_name);
+    assert_eq!(mass.joint, description.bodies()[4].joint_name);
     assert!(
         (mass.value - 2.0).abs() < 0.3 && mass.se < 0.5,
         "payload {} ± {} kg vs 2",
@@ -806,7 +806,7 @@ fn data_whose_time_stamps_do_not_advance_are_refused_by_name() {
     // 100 samples all stamped 0 s: no sample period to filter or differentiate at (the effect
     // columns once took 1 ms for it, silently).
     let m = physid::model::cheetah3::leg();
-    let names: Vec<String> = m.bodies.iter().map(|b| b.joint_name.clone()).collect();
+    let names: Vec<String> = m.bodies().iter().map(|b| b.joint_name.clone()).collect();
     let n = names.len();
     let frozen = |t: &dyn Fn(usize) -> f64| {
         let mut tr = physid::trajectory::Trajectory::new(names.clone(), true);

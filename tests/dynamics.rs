@@ -45,7 +45,7 @@ fn regressor_times_parameters_equals_rnea_plus_friction() {
             regressor(m, &mut d, &q, &qd, &qdd, &mut y);
             let tau = dynamics::rnea_with_friction(m, &mut d, &q, &qd, &qdd);
             let err = (&y * &theta - &tau).norm() / tau.norm();
-            assert!(err < 1e-10, "{}: relative error {err:e}", m.name);
+            assert!(err < 1e-10, "{}: relative error {err:e}", m.name());
         }
     }
 }
@@ -77,7 +77,7 @@ fn regressor_columns_are_derivatives_of_rnea_in_the_parameters() {
             assert!(
                 (&fd - &col).norm() < 1e-9 * (1.0 + col.norm()),
                 "{} column {c}: {fd} vs {col}",
-                m.name
+                m.name()
             );
         }
     }
@@ -93,12 +93,12 @@ fn mass_matrix_is_symmetric_positive_definite_and_matches_rnea_columns() {
         assert!(
             (&h - h.transpose()).norm() < 1e-14 * h.norm(),
             "{}: H not symmetric",
-            m.name
+            m.name()
         );
         assert!(
             h.clone().cholesky().is_some(),
             "{}: H not positive definite",
-            m.name
+            m.name()
         );
         // Column j of H = τ(q, 0, e_j) − τ(q, 0, 0) without gravity.
         let no_g = m.clone().with_gravity(nalgebra::Vector3::zeros());
@@ -110,7 +110,7 @@ fn mass_matrix_is_symmetric_positive_definite_and_matches_rnea_columns() {
             assert!(
                 (col - h.column(j)).norm() < 1e-12 * (1.0 + h.norm()),
                 "{}: column {j}",
-                m.name
+                m.name()
             );
         }
     }
@@ -127,7 +127,7 @@ fn forward_dynamics_inverts_rnea() {
                 .unwrap()
                 .clone();
             let want = DVector::from_vec(qdd.clone());
-            assert!(rel(&got, &want) < 1e-9, "{}: {got} vs {want}", m.name);
+            assert!(rel(&got, &want) < 1e-9, "{}: {got} vs {want}", m.name());
         }
     }
 }
@@ -144,7 +144,7 @@ fn kinetic_energy_from_body_velocities_equals_half_qd_h_qd() {
         assert!(
             (t - t2).abs() < 1e-12 * (1.0 + t.abs()),
             "{}: {t} vs {t2}",
-            m.name
+            m.name()
         );
     }
 }
@@ -176,7 +176,7 @@ fn power_balance_tau_dot_qd_equals_energy_rate() {
             assert!(
                 (de - power).abs() < 1e-6 * scale,
                 "{}: dE/dt {de} vs τ·q̇ {power}",
-                m.name
+                m.name()
             );
         }
     }
@@ -200,7 +200,7 @@ fn gravity_torque_is_the_gradient_of_potential_energy() {
             assert!(
                 (du - g[i]).abs() < 1e-7 * (1.0 + g.norm()),
                 "{} joint {i}: {du} vs {}",
-                m.name,
+                m.name(),
                 g[i]
             );
         }
@@ -227,7 +227,7 @@ fn coriolis_matrix_satisfies_the_skew_symmetry_of_h_dot_minus_2c() {
         assert!(
             (lhs - rhs).abs() < 1e-6 * (1.0 + lhs.abs()),
             "{}: {lhs} vs {rhs}",
-            m.name
+            m.name()
         );
     }
 }
@@ -272,7 +272,7 @@ fn rotor_gyroscopic_coupling_is_what_the_reflected_model_drops() {
     let hr = crba(&refl, &mut Data::new(&refl), &q).clone();
     let diff = &hf - &hr;
     // Knee rotor sits on the thigh: its coupling with the hip joint is N I_axis (both about y).
-    let r = full.bodies[2].rotor.as_ref().unwrap();
+    let r = full.bodies()[2].rotor.as_ref().unwrap();
     let a = r.joint.axis();
     let i_axis = a.dot(&(r.inertia.ibar() * a));
     assert!(
@@ -307,7 +307,7 @@ fn frozen_rotors_are_the_reflected_model_without_its_armature() {
             assert!(
                 err < 1e-10 * hr.norm(),
                 "{}: H differs by {err}",
-                model.name
+                model.name()
             );
             let zero = vec![0.0; n];
             let gr = rnea(&reflected, &mut dr, &q, &zero, &zero).clone();
@@ -315,7 +315,7 @@ fn frozen_rotors_are_the_reflected_model_without_its_armature() {
             assert!(
                 (&gr - &gf).norm() < 1e-10 * (1.0 + gr.norm()),
                 "{}",
-                model.name
+                model.name()
             );
         }
     }

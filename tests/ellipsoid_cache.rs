@@ -21,7 +21,7 @@ fn kuka_ellipsoids(dir: &Path) -> Vec<Option<Ellipsoid>> {
     };
     let urdf = common::root().join("data/kuka_lwr4/kuka_lwr4.urdf");
     let (m, _) = physid::io::urdf::load(&urdf, &extras).unwrap();
-    m.bodies.iter().map(|b| b.bounding).collect()
+    m.bodies().iter().map(|b| b.bounding).collect()
 }
 
 fn files(dir: &Path) -> Vec<std::path::PathBuf> {

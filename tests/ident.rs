@@ -13,7 +13,7 @@ use physid::trajectory::Trajectory;
 /// Noise-free samples with exact `sign` friction: τ = Y θ exactly.
 fn exact_data(m: &Model, count: usize, seed: u64) -> Trajectory {
     let mut d = Data::new(m);
-    let names = m.bodies.iter().map(|b| b.joint_name.clone()).collect();
+    let names = m.bodies().iter().map(|b| b.joint_name.clone()).collect();
     let mut tr = Trajectory::new(names, true);
     for k in 0..count {
         let [q, qd, qdd] = random_state(seed * 100_000 + k as u64, m.dof(), 2.0);
@@ -169,9 +169,9 @@ fn bad_identification_requests_are_clear_errors() {
         "{e}"
     );
     let bare = m.without_rotors();
-    let mut bodies = bare.bodies.clone();
+    let mut bodies = bare.bodies().to_vec();
     bodies[1].bounding = None;
-    let no_ell = Model::new("x", bodies, bare.gravity).unwrap();
+    let no_ell = Model::new("x", bodies, bare.gravity()).unwrap();
     let tr2 = exact_data(&no_ell, 100, 5);
     let ne2 = NormalEquations::from_trajectory(&no_ell, &tr2, 0..100);
     let e = ident::identify(

@@ -44,7 +44,7 @@ fn toml_leg_is_the_builtin_leg() {
     let from_file = robot_toml::load(&path).unwrap();
     let builtin = cheetah3::leg();
     assert_same_dynamics(&from_file, &builtin, 1e-14);
-    for (a, b) in from_file.bodies.iter().zip(&builtin.bodies) {
+    for (a, b) in from_file.bodies().iter().zip(builtin.bodies()) {
         assert_eq!(a.name, b.name);
         assert_eq!(a.friction, b.friction);
         assert!((a.limits.effort - b.limits.effort).abs() < 1e-12);
@@ -61,7 +61,7 @@ fn toml_leg_is_the_builtin_leg() {
 fn kuka_urdf_loads_with_seven_joints_and_merged_fixed_links() {
     let m = io::load_robot(kuka_path().to_str().unwrap()).unwrap();
     assert_eq!(m.dof(), 7);
-    let names: Vec<_> = m.bodies.iter().map(|b| b.joint_name.as_str()).collect();
+    let names: Vec<_> = m.bodies().iter().map(|b| b.joint_name.as_str()).collect();
     assert_eq!(
         names,
         [
@@ -75,7 +75,7 @@ fn kuka_urdf_loads_with_seven_joints_and_merged_fixed_links() {
         ]
     );
     // A serial chain.
-    for (i, b) in m.bodies.iter().enumerate() {
+    for (i, b) in m.bodies().iter().enumerate() {
         assert_eq!(b.parent, i.checked_sub(1));
     }
     assert!(
@@ -115,13 +115,13 @@ fn mjcf_export_lumps_rotors_and_writes_armature() {
     assert!(text.contains("<body name=\"abad_rotor\""), "{text}");
     assert_eq!(text.matches("armature=").count(), 3);
     // Knee armature N² I_yy of the knee rotor, about 10.6² × 1.4e-3 kg m².
-    let r = m.bodies[2].rotor.as_ref().unwrap();
+    let r = m.bodies()[2].rotor.as_ref().unwrap();
     let arm = 10.6f64.powi(2) * r.inertia.ibar()[(1, 1)];
     assert!(text.contains(&format!("armature=\"{arm}\"")), "{text}");
     // Lumping conserves mass: the abad rotor sits on the base, the others are lumped.
     let lumped = io::mjcf::lumped_inertias(&m);
     let total: f64 = lumped.iter().map(|p| p.mass()).sum();
-    let abad_rotor = m.bodies[0].rotor.as_ref().unwrap().inertia.mass();
+    let abad_rotor = m.bodies()[0].rotor.as_ref().unwrap().inertia.mass();
     assert!((total + abad_rotor - m.total_mass()).abs() < 1e-12);
 }
 
@@ -259,8 +259,8 @@ coulomb = 1.5
     std::fs::write(&p, toml).unwrap();
     let m = robot_toml::load(&p).unwrap();
     assert_eq!(m.rotor_count(), 1);
-    let r = m.bodies[2].rotor.as_ref().unwrap();
+    let r = m.bodies()[2].rotor.as_ref().unwrap();
     assert_eq!(r.gear_ratio, 100.0);
-    assert_eq!(m.bodies[2].friction.coulomb, 1.5);
+    assert_eq!(m.bodies()[2].friction.coulomb, 1.5);
     assert_eq!(m.layout().len, 80 + 14);
 }

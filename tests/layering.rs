@@ -528,3 +528,25 @@ fn the_api_floor_returns_named_types_not_tuples() {
     assert!(files.len() >= 8, "src/api not found");
     assert!(found.is_empty(), "in the api floor:\n{}", found.join("\n"));
 }
+
+#[test]
+fn the_model_is_immutable_its_fields_private() {
+    // pinocchio's Model: read through accessors, changed only by building another
+    // (`with_parameters`, `with_bodies_edited`, ...), so that no edit leaves its layout stale.
+    let text = std::fs::read_to_string(common::root().join("src/model/mod.rs")).unwrap();
+    let start = text
+        .find("pub struct Model {")
+        .expect("Model in src/model/mod.rs");
+    let body = &text[start..start + text[start..].find("\n}").unwrap()];
+    let public: Vec<&str> = body
+        .lines()
+        .skip(1)
+        .map(str::trim)
+        .filter(|l| l.starts_with("pub"))
+        .collect();
+    assert!(
+        body.lines().count() > 5,
+        "the scan did not find Model's fields"
+    );
+    assert!(public.is_empty(), "public fields of Model: {public:?}");
+}

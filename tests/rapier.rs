@@ -96,7 +96,7 @@ fn rapier_engine_rejects_what_it_cannot_map() {
     let m = (0..100)
         .map(|seed| physid::model::random::random_tree(seed, 6))
         .find(|m| {
-            m.bodies
+            m.bodies()
                 .iter()
                 .any(|b| matches!(b.joint, physid::model::Joint::Prismatic { .. }))
         })

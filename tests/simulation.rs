@@ -48,7 +48,7 @@ fn clean_frictionless_data_satisfy_the_regressor_equation_exactly() {
     let dir = tempfile::tempdir().unwrap();
     let (sc, m, _) = from_text(dir.path(), "clean.toml", &text).unwrap();
     assert!(m
-        .bodies
+        .bodies()
         .iter()
         .all(|b| b.friction.coulomb == 0.0 && b.friction.viscous == 0.0));
     let rec = run(&sc, &m);
@@ -82,7 +82,7 @@ fn shell_experiment_stays_within_limits_and_excites_every_joint() {
     assert_eq!(rec.truth.len(), 20_000);
     let ex = physid::sim::report::excitation(&m, &rec.truth, 10);
     eprintln!("{ex:?}");
-    for (j, b) in m.bodies.iter().enumerate() {
+    for (j, b) in m.bodies().iter().enumerate() {
         let [lo, hi] = ex.q_range[j];
         assert!(
             lo >= b.limits.lower && hi <= b.limits.upper,
@@ -247,11 +247,11 @@ fn a_diverging_run_names_time_and_joint_and_writes_nothing() {
     // written out without limits, is in cli/tests/simulate_cli.rs).
     let (mut sc, m, _) = physid::sim::scenario::load(&p).unwrap();
     let m = {
-        let mut bodies = m.bodies.clone();
+        let mut bodies = m.bodies().to_vec();
         for b in &mut bodies {
             b.limits.effort = f64::INFINITY;
         }
-        physid::model::Model::new(m.name.clone(), bodies, m.gravity).unwrap()
+        physid::model::Model::new(m.name(), bodies, m.gravity()).unwrap()
     };
     sc.simulation.duration = 2.0;
     let e = physid::sim::run(&m, &sc, &mut |_| {})

@@ -73,9 +73,9 @@ pub fn dynamics_json(
         states.push(json!({"q": q, "qd": qd, "qdd": qdd, "tau": tau.as_slice(), "Y": rows(&y), "H": rows(&h)}));
     }
     let v = json!({
-        "model": m.name, "rotor_model": m.rotor_model,
-        "joint_names": m.bodies.iter().map(|b| b.joint_name.clone()).collect::<Vec<_>>(),
-        "body_names": m.bodies.iter().map(|b| b.name.clone()).collect::<Vec<_>>(),
+        "model": m.name(), "rotor_model": m.rotor_model(),
+        "joint_names": m.bodies().iter().map(|b| b.joint_name.clone()).collect::<Vec<_>>(),
+        "body_names": m.bodies().iter().map(|b| b.name.clone()).collect::<Vec<_>>(),
         "parameter_names": m.parameter_names(), "theta": m.parameters().as_slice(),
         "samples": states,
     });

@@ -322,7 +322,7 @@ fn print_header(a: &Args, m: &Model, rep: &Identification) {
     };
     println!(
         "{}: '{}' on {on} ({count}), {} in {:.1} ms ({} iterations, {:.1} ms end to end)",
-        m.name,
+        m.name(),
         rep.set.name(),
         r.solver.status,
         r.solver.seconds * 1e3,
@@ -370,7 +370,7 @@ fn print_identified_bodies(m: &Model, rep: &Identification) {
 fn print_joints(m: &Model, rep: &Identification) {
     let r = &rep.identified;
     let width = m
-        .bodies
+        .bodies()
         .iter()
         .map(|b| b.joint_name.len())
         .max()
@@ -386,7 +386,7 @@ fn print_joints(m: &Model, rep: &Identification) {
         .iter()
         .flat_map(|d| d.pipeline.still.iter())
         .collect();
-    for (j, b) in m.bodies.iter().enumerate() {
+    for (j, b) in m.bodies().iter().enumerate() {
         let known = rep.train.rms[j].is_some() && !still.contains(&&b.joint_name);
         let friction = |v: f64| {
             if known {

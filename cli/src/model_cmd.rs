@@ -35,15 +35,15 @@ pub fn describe(m: &Model, as_json: bool) -> anyhow::Result<()> {
     let h = crba(m, &mut Data::new(m), q0).clone();
     println!(
         "{}: {} joints, {} rotors ({:?} model), {:.4} kg, {} parameters",
-        m.name,
+        m.name(),
         m.dof(),
         m.rotor_count(),
-        m.rotor_model,
+        m.rotor_model(),
         m.total_mass(),
         m.layout().len
     );
     let mut rows = vec![];
-    for b in &m.bodies {
+    for b in m.bodies() {
         rows.push((
             b.name.clone(),
             b.inertia,
@@ -63,7 +63,7 @@ pub fn describe(m: &Model, as_json: bool) -> anyhow::Result<()> {
         "\n{:<14} {:>8} {:>12} {:>12} {:>22}",
         "joint", "N", "B [Nms/rad]", "Bc [Nm]", "limits [rad]"
     );
-    for b in &m.bodies {
+    for b in m.bodies() {
         println!(
             "{:<14} {:>8} {:>12.3} {:>12.3} {:>22}",
             b.joint_name,
@@ -98,7 +98,7 @@ fn print_ellipsoids(m: &Model) {
         }
         None => println!("{name:<12} {:>30}", "none"),
     };
-    for b in &m.bodies {
+    for b in m.bodies() {
         row(&b.name, b.bounding.as_ref());
         if let Some(r) = &b.rotor {
             row(&r.name, r.bounding.as_ref());

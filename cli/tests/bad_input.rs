@@ -735,7 +735,7 @@ fn meshes_and_masses_no_robot_has_are_named() {
     // The sound mesh gives the link its ellipsoid, without a warning.
     let (m, warnings) = load(urdf("tet.stl", "1 1 1", "1")).unwrap();
     assert!(warnings.is_empty(), "{warnings:?}");
-    assert!(m.bodies[0].bounding.is_some());
+    assert!(m.bodies()[0].bounding.is_some());
     let (_, warnings) = load(urdf("bad.stl", "1 1 1", "1")).unwrap();
     assert!(
         warnings
@@ -789,7 +789,7 @@ fn an_empty_joint_range_is_named() {
             .any(|w| w.contains("joint 'j1'") && w.contains("empty range")),
         "{warnings:?}"
     );
-    assert!(m.bodies[0].limits.lower.is_infinite());
+    assert!(m.bodies()[0].limits.lower.is_infinite());
     let ok = ONE_JOINT_URDF.replace("EFFORT", "5");
     let (_, warnings) = io::urdf::from_str(&ok, Path::new("r.urdf"), &Default::default()).unwrap();
     assert!(

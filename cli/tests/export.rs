@@ -78,7 +78,7 @@ fn identified_kuka_patches_its_own_urdf_and_round_trips() {
     );
     let (back, _) = io::load_robot_with(side.to_str().unwrap(), &Default::default()).unwrap();
     let (orig, _) = io::load_robot_with(urdf.to_str().unwrap(), &Default::default()).unwrap();
-    for (i, b) in back.bodies.iter().enumerate() {
+    for (i, b) in back.bodies().iter().enumerate() {
         let pi: Vec<f64> = v["bodies"][i]["pi"]
             .as_array()
             .unwrap()
@@ -99,7 +99,7 @@ fn identified_kuka_patches_its_own_urdf_and_round_trips() {
             fr["coulomb"][i].as_f64().unwrap(),
         );
         assert!((b.friction.viscous - bv).abs() < 1e-12 && (b.friction.coulomb - bc).abs() < 1e-12);
-        let (e, e0) = (b.bounding.unwrap(), orig.bodies[i].bounding.unwrap());
+        let (e, e0) = (b.bounding.unwrap(), orig.bodies()[i].bounding.unwrap());
         assert!((e.qs - e0.qs).norm() < 1e-12 && (e.center - e0.center).norm() < 1e-12);
     }
 
@@ -164,11 +164,12 @@ fn dynamics_keeps_its_other_attributes_when_friction_is_written() {
     let urdf = root.join("data/panda/example-robot-data/robots/panda_description/urdf/panda.urdf");
     let xml = std::fs::read_to_string(&urdf).unwrap();
     let model = io::load_robot(urdf.to_str().unwrap()).unwrap();
-    let mut identified = model.clone();
-    for (j, b) in identified.bodies.iter_mut().enumerate() {
-        b.friction.viscous = 0.25 + 0.01 * j as f64;
-        b.friction.coulomb = 0.5;
-    }
+    let identified = model
+        .with_bodies_edited(|j, b| {
+            b.friction.viscous = 0.25 + 0.01 * j as f64;
+            b.friction.coulomb = 0.5;
+        })
+        .unwrap();
     let out = io::urdf_patch::patch(&xml, &urdf, &model, &identified).unwrap();
     let joint1 = &out[out.find("<joint name=\"panda_joint1\"").unwrap()..];
     let dynamics = &joint1[joint1.find("<dynamics").unwrap()..];

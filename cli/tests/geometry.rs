@@ -25,11 +25,11 @@ fn inside(e: &Ellipsoid, x: &Vector3<f64>) -> bool {
 fn every_kuka_body_is_bounded_by_its_own_geometry() {
     let (m, warnings) = io::load_robot_with(kuka().to_str().unwrap(), &Default::default()).unwrap();
     assert!(
-        m.bodies.iter().all(|b| b.bounding.is_some()),
+        m.bodies().iter().all(|b| b.bounding.is_some()),
         "{warnings:?}"
     );
     // lwr_1_link: spheres r = 0.07 at (0,0,0) and (0,0.06,0.2), a tilted cylinder between.
-    let e1 = m.bodies[0].bounding.unwrap();
+    let e1 = m.bodies()[0].bounding.unwrap();
     for c in [Vector3::zeros(), Vector3::new(0.0, 0.06, 0.2)] {
         for u in [
             Vector3::x(),
@@ -46,7 +46,7 @@ fn every_kuka_body_is_bounded_by_its_own_geometry() {
     assert!(a.x > 0.07 && a.z < 0.07 + 0.2 && a.z > 0.15, "{a}");
     // lwr_6_link has only meshes; its collision mesh is not shipped, its visual STL is: the
     // bound comes from that mesh's hull (the STL spans ±0.071 m in x about the joint axis).
-    let e6 = m.bodies[5].bounding.unwrap();
+    let e6 = m.bodies()[5].bounding.unwrap();
     assert!(
         e6.semi_axes().x > 0.071 - 1e-3 && e6.semi_axes().z < 0.1,
         "{}",
@@ -84,12 +84,12 @@ fn margin_missing_meshes_fixed_links_and_sidecar() {
     std::fs::write(&path, urdf_text).unwrap();
     let (m, warnings) = urdf::load(&path, &Default::default()).unwrap();
     // l1 and the tool sphere fixed 0.5 m above it are one body: the bound covers both.
-    let e = m.bodies[0].bounding.unwrap();
+    let e = m.bodies()[0].bounding.unwrap();
     assert!(
         inside(&e, &Vector3::new(0.0, 0.0, 0.55)) && inside(&e, &Vector3::new(0.05, 0.05, -0.2))
     );
     // l2's mesh is nowhere: no bound, and a warning naming the link and the file.
-    assert!(m.bodies[1].bounding.is_none());
+    assert!(m.bodies()[1].bounding.is_none());
     assert!(
         warnings
             .iter()
@@ -102,7 +102,7 @@ fn margin_missing_meshes_fixed_links_and_sidecar() {
         ..Default::default()
     };
     let (wide, _) = io::load_robot_with(path.to_str().unwrap(), &opts).unwrap();
-    let grown = wide.bodies[0].bounding.unwrap().semi_axes() - e.semi_axes();
+    let grown = wide.bodies()[0].bounding.unwrap().semi_axes() - e.semi_axes();
     assert!((grown - Vector3::repeat(0.01)).norm() < 1e-12, "{grown}");
     // The mesh found through --package-dir gives l2 its bound.
     let pkg = dir.path().join("pkgs/gone/meshes");
@@ -113,7 +113,7 @@ fn margin_missing_meshes_fixed_links_and_sidecar() {
         ..Default::default()
     };
     let (found, _) = io::load_robot_with(path.to_str().unwrap(), &opts).unwrap();
-    let e2 = found.bodies[1].bounding.unwrap();
+    let e2 = found.bodies()[1].bounding.unwrap();
     for v in [
         [0.0, 0.0, 0.0],
         [0.1, 0.0, 0.0],
@@ -131,7 +131,8 @@ fn margin_missing_meshes_fixed_links_and_sidecar() {
     .unwrap();
     let (side, _) = io::load_robot_with(toml.to_str().unwrap(), &Default::default()).unwrap();
     assert!(
-        (side.bodies[0].bounding.unwrap().semi_axes() - Vector3::new(0.3, 0.3, 0.6)).norm() < 1e-12
+        (side.bodies()[0].bounding.unwrap().semi_axes() - Vector3::new(0.3, 0.3, 0.6)).norm()
+            < 1e-12
     );
 
     // `physid model` lists the bounds, and a body without one as "none".

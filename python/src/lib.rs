@@ -179,7 +179,7 @@ impl Robot {
     /// The robot's name.
     #[getter]
     fn name(&self) -> String {
-        self.model.name.clone()
+        self.model.name().to_string()
     }
 
     /// Number of joints.
@@ -192,7 +192,7 @@ impl Robot {
     #[getter]
     fn joint_names(&self) -> Vec<String> {
         self.model
-            .bodies
+            .bodies()
             .iter()
             .map(|b| b.joint_name.clone())
             .collect()
@@ -274,7 +274,7 @@ impl Robot {
     fn __repr__(&self) -> String {
         format!(
             "Robot('{}', {} joints, {} parameters)",
-            self.model.name,
+            self.model.name(),
             self.model.dof(),
             self.model.layout().len
         )
@@ -609,7 +609,7 @@ impl Identification {
         let cols = PyDict::new(py);
         let names: Vec<String> = self
             .model
-            .bodies
+            .bodies()
             .iter()
             .map(|b| b.joint_name.clone())
             .collect();
@@ -662,7 +662,7 @@ impl Identification {
             .map_or(String::new(), |v| format!(", validation RMS {v:.4} N m"));
         format!(
             "Identification('{}', {}, constraints hold: {}, train RMS {:.4} N m{v})",
-            self.model.name,
+            self.model.name(),
             self.report.set.name(),
             if self.report.identified.constraints_hold {
                 "True"
@@ -1432,7 +1432,11 @@ fn experiment(
     }
     let pool = thread_pool(threads)?;
     let (joints, bodies) = (
-        model.bodies.iter().map(|b| b.joint_name.clone()).collect(),
+        model
+            .bodies()
+            .iter()
+            .map(|b| b.joint_name.clone())
+            .collect(),
         physid::ident::bodies(&model)
             .into_iter()
             .map(|(n, _, _)| n)

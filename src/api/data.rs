@@ -67,7 +67,11 @@ impl Data {
             .map(|(p, _)| *p)
             .collect();
         let mut loaded = crate::io::load_all(&loaded_paths, model, read)?.into_iter();
-        let joints: Vec<String> = model.bodies.iter().map(|b| b.joint_name.clone()).collect();
+        let joints: Vec<String> = model
+            .bodies()
+            .iter()
+            .map(|b| b.joint_name.clone())
+            .collect();
         paths
             .iter()
             .zip(streamed)
@@ -114,7 +118,7 @@ impl Data {
     /// Joints locked by the pipeline (their rows are not fitted).
     pub fn locked(&self, m: &Model) -> Vec<usize> {
         let names = self.report().map_or(&[][..], |r| &r.locked[..]);
-        m.bodies
+        m.bodies()
             .iter()
             .enumerate()
             .filter(|(_, b)| names.contains(&b.joint_name))
@@ -489,7 +493,11 @@ impl ReadOptions {
     /// The library's reading options for `model`, checked: joints named exist, `only`
     /// becomes the other joints locked, the cutoff is a positive frequency.
     pub fn resolve(&self, model: &Model) -> Result<DataOptions, ApiError> {
-        let joints: Vec<String> = model.bodies.iter().map(|b| b.joint_name.clone()).collect();
+        let joints: Vec<String> = model
+            .bodies()
+            .iter()
+            .map(|b| b.joint_name.clone())
+            .collect();
         if !self.lock.is_empty() && !self.only.is_empty() {
             return Err(ApiError::Options(
                 "--lock and --only: give one of them (--only locks every other joint)".into(),

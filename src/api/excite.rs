@@ -81,7 +81,7 @@ pub fn check_in_simulation(
     let settle = (rate as usize).min(tr.len() / 4);
     let mut ok = true;
     let joints = model
-        .bodies
+        .bodies()
         .iter()
         .enumerate()
         .map(|(j, b)| {
@@ -378,7 +378,11 @@ pub fn reference_trajectory(
     duration: f64,
     rate: f64,
 ) -> Trajectory {
-    let names: Vec<String> = model.bodies.iter().map(|b| b.joint_name.clone()).collect();
+    let names: Vec<String> = model
+        .bodies()
+        .iter()
+        .map(|b| b.joint_name.clone())
+        .collect();
     let samples = (duration * rate).round() as usize + 1;
     let mut tr = Trajectory::new(names.clone(), true);
     let zero = vec![0.0; names.len()];

@@ -212,16 +212,20 @@ pub fn confirmed_effects(path: &Path, model: &Model) -> Result<Vec<Variant>, Api
             confirmed.len()
         )));
     }
-    let joints: Vec<&str> = model.bodies.iter().map(|b| b.joint_name.as_str()).collect();
+    let joints: Vec<&str> = model
+        .bodies()
+        .iter()
+        .map(|b| b.joint_name.as_str())
+        .collect();
     let theirs: Option<Vec<&str>> = v["joints"]
         .as_array()
         .map(|j| j.iter().filter_map(|x| x.as_str()).collect());
-    if v["robot"].as_str() != Some(model.name.as_str()) || theirs.as_deref() != Some(&joints[..]) {
+    if v["robot"].as_str() != Some(model.name()) || theirs.as_deref() != Some(&joints[..]) {
         return Err(bad(format!(
             "the report is for robot {} with joints {:?}, not {} with joints {:?}",
             v["robot"],
             theirs.unwrap_or_default(),
-            model.name,
+            model.name(),
             joints
         )));
     }
@@ -729,7 +733,7 @@ fn score(
         locked: d
             .locked
             .iter()
-            .map(|&j| m.bodies[j].joint_name.clone())
+            .map(|&j| m.bodies()[j].joint_name.clone())
             .collect(),
         normal_equations: fit.normal_equations,
         notices,
@@ -776,11 +780,12 @@ impl Identification {
     /// The identified model: `m` with the identified inertias and friction.
     pub fn model(&self, m: &Model) -> Result<Model, ApiError> {
         let r = &self.identified;
-        let mut im = m.with_parameters(&self.model_theta(m))?;
-        for (j, b) in im.bodies.iter_mut().enumerate() {
-            b.friction.viscous = r.viscous[j];
-            b.friction.coulomb = r.coulomb[j];
-        }
+        let im = m
+            .with_parameters(&self.model_theta(m))?
+            .with_bodies_edited(|j, b| {
+                b.friction.viscous = r.viscous[j];
+                b.friction.coulomb = r.coulomb[j];
+            })?;
         Ok(im)
     }
 
@@ -826,7 +831,7 @@ impl Identification {
         let r = &self.identified;
         IdentifyJson {
             data: self.train.runs[0].file.clone(),
-            robot: m.name.clone(),
+            robot: m.name().to_string(),
             constraints: self.set,
             constraints_default_because: self.set_note.clone(),
             train: self.train.clone(),

@@ -99,7 +99,7 @@ pub fn body_json(name: &str, p: &InertialParams, e: Option<&Ellipsoid>) -> BodyJ
 
 /// The reference configuration (rad): zero clamped into each joint's limits.
 pub fn reference_configuration(m: &Model) -> Vec<f64> {
-    m.bodies
+    m.bodies()
         .iter()
         .map(|b| 0.0f64.clamp(b.limits.lower, b.limits.upper))
         .collect()
@@ -109,7 +109,7 @@ pub fn reference_configuration(m: &Model) -> Vec<f64> {
 /// configuration and the gravity torque there.
 pub fn describe(m: &Model) -> ModelJson {
     let mut bodies = vec![];
-    for b in &m.bodies {
+    for b in m.bodies() {
         bodies.push(body_json(&b.name, &b.inertia, b.bounding.as_ref()));
         if let Some(r) = &b.rotor {
             bodies.push(body_json(&r.name, &r.inertia, r.bounding.as_ref()));
@@ -119,15 +119,15 @@ pub fn describe(m: &Model) -> ModelJson {
     let zero = vec![0.0; m.dof()];
     let g = rnea(m, &mut Data::new(m), &q0, &zero, &zero).clone();
     ModelJson {
-        name: m.name.clone(),
+        name: m.name().to_string(),
         dof: m.dof(),
         rotors: m.rotor_count(),
-        rotor_model: m.rotor_model,
+        rotor_model: m.rotor_model(),
         total_mass: m.total_mass(),
         parameters: m.layout().len,
         bodies,
         joints: m
-            .bodies
+            .bodies()
             .iter()
             .map(|b| JointJson {
                 name: b.joint_name.clone(),

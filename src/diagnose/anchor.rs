@@ -91,7 +91,7 @@ pub fn prior_precision(model: &Model, eps: f64) -> DMatrix<f64> {
         p.view_mut((c, c), (10, 10))
             .copy_from(&body_precision(pi, eps));
     };
-    for (i, b) in model.bodies.iter().enumerate() {
+    for (i, b) in model.bodies().iter().enumerate() {
         put(10 * i, &b.inertia);
         if let (Some(c), Some(r)) = (l.rotor_col[i], &b.rotor) {
             put(c, &r.inertia);
@@ -130,14 +130,14 @@ pub fn perturbed_description<R: Rng>(model: &Model, eps: f64, rng: &mut R) -> Mo
             }
         }
     };
-    let mut out = model.clone();
-    for b in &mut out.bodies {
-        b.inertia = draw(&b.inertia);
-        if let Some(r) = b.rotor.as_mut() {
-            r.inertia = draw(&r.inertia);
-        }
-    }
-    out
+    model
+        .with_bodies_edited(|_, b| {
+            b.inertia = draw(&b.inertia);
+            if let Some(r) = b.rotor.as_mut() {
+                r.inertia = draw(&r.inertia);
+            }
+        })
+        .expect("consistent inertias drawn about a valid model keep it valid")
 }
 
 /// `τ_c`: the nominal residual's long-run variance over its variance (samples per independent
@@ -665,17 +665,17 @@ mod tests {
         let m = crate::model::cheetah3::leg();
         let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(1);
         let k = 400;
-        let thigh = &m.bodies[1].inertia;
+        let thigh = &m.bodies()[1].inertia;
         let p = body_precision(thigh, 0.1);
         let (mut rel, mut quad) = (vec![], vec![]);
         for _ in 0..k {
             let d = perturbed_description(&m, 0.1, &mut rng);
-            for b in &d.bodies {
+            for b in d.bodies() {
                 assert!(b.inertia.min_eig_pseudo() > 0.0, "{}", b.name);
                 let r = b.rotor.as_ref().unwrap();
                 assert!(r.inertia.min_eig_pseudo() > 0.0, "{}", r.name);
             }
-            let q = &d.bodies[1].inertia;
+            let q = &d.bodies()[1].inertia;
             rel.push((q.mass() - thigh.mass()) / thigh.mass());
             let dp = q.0 - thigh.0;
             quad.push(dp.dot(&(p * dp)));

@@ -130,7 +130,10 @@ pub(crate) fn spectra(model: &Model, tr: &Trajectory, res: &[f64]) -> Vec<spectr
     (0..n)
         .map(|j| {
             let col = |f: &dyn Fn(usize) -> f64| (0..m).map(f).collect::<Vec<f64>>();
-            let gear = model.bodies[j].rotor.as_ref().map_or(1.0, |r| r.gear_ratio);
+            let gear = model.bodies()[j]
+                .rotor
+                .as_ref()
+                .map_or(1.0, |r| r.gear_ratio);
             let signals = vec![
                 ("q".to_string(), col(&|k| tr.q_at(k)[j])),
                 ("qd".to_string(), col(&|k| tr.qd_at(k)[j])),

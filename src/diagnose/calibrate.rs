@@ -253,7 +253,7 @@ fn term_fits(
     identifiable: &[f64],
 ) -> Vec<TermFit> {
     let n = model.dof();
-    let g = model.gravity.norm();
+    let g = model.gravity().norm();
     let mut c = model.layout().len;
     terms
         .iter()
@@ -352,9 +352,9 @@ mod tests {
         let model = crate::model::cheetah3::leg();
         for (roll, pitch) in [(0.01, -0.02), (-0.003, 0.0), (0.05, 0.04)] {
             let spec = crate::sim::scenario::EffectSpec::Tilt { roll, pitch };
-            let tilted = crate::sim::effects::true_robot(&model, &[spec]).gravity;
+            let tilted = crate::sim::effects::true_robot(&model, &[spec]).gravity();
             // The library's coefficients: Δg along u₁ = x and u₂ = −y.
-            let dg = tilted - model.gravity;
+            let dg = tilted - model.gravity();
             let Some(crate::sim::scenario::EffectSpec::Tilt { roll: r, pitch: p }) =
                 Kind::Tilt.replay(&model, &[dg.x, -dg.y], 0.0, 1e-3)
             else {

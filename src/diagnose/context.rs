@@ -253,7 +253,10 @@ impl<'a> Context<'a> {
             slack.push((width, processed_without_own(&unit, tr, cutoff, &taps)));
         }
         let defl = without_own(logged, &tr.tau, tr, cutoff, &taps);
-        let g = model.gravity.try_normalize(1e-12).unwrap_or(-Vector3::z());
+        let g = model
+            .gravity()
+            .try_normalize(1e-12)
+            .unwrap_or(-Vector3::z());
         let a = if g.x.abs() < 0.9 {
             Vector3::x()
         } else {
@@ -262,7 +265,7 @@ impl<'a> Context<'a> {
         let u1 = (a - g * g.dot(&a)).normalize();
         let u2 = g.cross(&u1);
         let gear = model
-            .bodies
+            .bodies()
             .iter()
             .map(|b| b.rotor.as_ref().map_or(1.0, |r| r.gear_ratio))
             .collect();

@@ -37,7 +37,7 @@ pub(crate) fn from_description(
 /// test's evidence: they depart from the description), friction left out.
 pub(crate) fn estimates(ladder: &Ladder, stage: &Stage) -> Vec<EffectEstimate> {
     let n = stage.model.dof();
-    let g = stage.model.gravity.norm().max(1e-12);
+    let g = stage.model.gravity().norm().max(1e-12);
     let effects = ladder.chosen.iter().filter_map(|e| match e {
         Explanation::Effect(v) => Some(*v),
         Explanation::Friction => None,

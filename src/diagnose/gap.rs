@@ -210,7 +210,7 @@ fn joint_gaps(stage: &Stage, ladder: &Ladder, floor_var: &[f64]) -> Vec<JointGap
             let floor = floor_var[j];
             let den = nominal * nominal - floor;
             JointGap {
-                joint: stage.model.bodies[j].joint_name.clone(),
+                joint: stage.model.bodies()[j].joint_name.clone(),
                 description: ladder.description_rms[j],
                 nominal,
                 after: per_step_rms[1..].iter().map(|r| r[j]).collect(),

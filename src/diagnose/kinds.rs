@@ -319,7 +319,7 @@ pub(super) const KIND_TABLE: &[KindSpec] = {
             // Joints without a rotor in the description keep zero columns.
             ..row(Kind::Cogging, "cogging", PerJoint(2), |x, s, _, z, c| {
                 (0..s.n)
-                    .filter(|&j| x.model.bodies[j].rotor.is_some())
+                    .filter(|&j| x.model.bodies()[j].rotor.is_some())
                     .for_each(|j| {
                         let a = s.param * x.gear[j] * s.q[j];
                         z[(j, c + j)] = a.sin();
@@ -735,7 +735,7 @@ fn fill_tilt(x: &Context, s: &Sample, w: &mut Scratch, z: &mut DMatrix<f64>, c: 
 /// `c₀, c₁` (m/s²) along the library's tilt directions `u₁, u₂`; `None` if the model's gravity
 /// is not along −z.
 fn tilt_angles(model: &Model, c: &[f64]) -> Option<(f64, f64)> {
-    let g = model.gravity;
+    let g = model.gravity();
     let g0 = g.norm();
     if g0 == 0.0 || (g / g0 + Vector3::z()).norm() > 1e-9 {
         return None;
@@ -788,7 +788,7 @@ fn draw_spring(model: &Model, rng: &mut ChaCha8Rng, _: f64) -> (Option<EffectSpe
     let n = model.dof();
     let k = per_joint(rng, n, 3.0, 10.0);
     let rest = model
-        .bodies
+        .bodies()
         .iter()
         .map(|b| {
             let mid = if b.limits.lower.is_finite() && b.limits.upper.is_finite() {
@@ -839,7 +839,7 @@ fn draw_payload(model: &Model, rng: &mut ChaCha8Rng, _: f64) -> (Option<EffectSp
     let n = model.dof();
     let mass = uniform(rng, 0.3, 1.0);
     let body = n;
-    let tip = model.bodies[body - 1]
+    let tip = model.bodies()[body - 1]
         .bounding
         .as_ref()
         .map_or(Vector3::zeros(), |e| e.center * 2.0);

@@ -58,7 +58,7 @@ impl Explanation {
         match self {
             Explanation::Effect(v) if v.kind.is_body_change() => {
                 match v.kind.body(v.param, model.dof()) {
-                    Some(b) => format!("{reads_as} on {}", model.bodies[b].name),
+                    Some(b) => format!("{reads_as} on {}", model.bodies()[b].name),
                     None => format!("{reads_as} on body {}", v.param),
                 }
             }
@@ -669,7 +669,7 @@ fn prior_precision(model: &Model, eps: f64) -> DMatrix<f64> {
         p.view_mut((c, c), (10, 10))
             .copy_from(&anchor::body_precision(&floored(pi), eps));
     };
-    for (i, b) in model.bodies.iter().enumerate() {
+    for (i, b) in model.bodies().iter().enumerate() {
         put(10 * i, &b.inertia);
         if let (Some(c), Some(r)) = (l.rotor_col[i], &b.rotor) {
             put(c, &r.inertia);
@@ -708,7 +708,7 @@ fn bodies_consistent(
             let dm = fit.w[c];
             let com = (dm > 0.0)
                 .then(|| nalgebra::Vector3::new(fit.w[c + 1], fit.w[c + 2], fit.w[c + 3]) / dm);
-            let inside = com.is_none_or(|x| match &model.bodies[b].bounding {
+            let inside = com.is_none_or(|x| match &model.bodies()[b].bounding {
                 Some(e) => e.scaled(2.0).contains(&x),
                 None => x.norm() <= 1.0,
             });
@@ -960,13 +960,13 @@ fn body_changes(stage: &Stage, fit: &Fit, set: &[Explanation]) -> Vec<BodyChange
             // the joint axes trades with its neighbours'): judged by its mass and centre only.
             let com_ok = pi
                 .com()
-                .is_some_and(|x| match &stage.model.bodies[b].bounding {
+                .is_some_and(|x| match &stage.model.bodies()[b].bounding {
                     Some(e) => e.scaled(2.0).contains(&x),
                     None => x.norm() <= 1.0,
                 });
             let payload = mass > 3.0 * mass_se && com_ok;
             out.push(BodyChange {
-                body: stage.model.bodies[b].name.clone(),
+                body: stage.model.bodies()[b].name.clone(),
                 payload,
                 mass,
                 mass_se,

@@ -71,9 +71,9 @@ impl<'a> Identifiable<'a> {
 pub(crate) fn joint_label(stage: &Stage, single: bool, i: usize, variant: Variant) -> String {
     let n = stage.model.dof();
     match (single, variant.kind.body(variant.param, n)) {
-        (true, Some(b)) => stage.model.bodies[b].joint_name.clone(),
+        (true, Some(b)) => stage.model.bodies()[b].joint_name.clone(),
         (true, None) => "robot".to_string(),
-        (false, _) => stage.model.bodies[i].joint_name.clone(),
+        (false, _) => stage.model.bodies()[i].joint_name.clone(),
     }
 }
 
@@ -86,7 +86,7 @@ pub(crate) fn cross_validated(
     final_theta: &DVector<f64>,
 ) -> Vec<EffectEstimate> {
     let n = stage.model.dof();
-    let g = stage.model.gravity.norm().max(1e-12);
+    let g = stage.model.gravity().norm().max(1e-12);
     let folds = &stage.folds;
     let p0 = stage.model.layout().len;
     let identifiable = Identifiable::new(&stage.all.yty, p0);
@@ -162,7 +162,7 @@ fn jackknife_se(per_fold: &[Vec<f64>], i: usize) -> f64 {
 /// propagated to first order, identified through the description (identifiable fraction 1).
 pub(crate) fn against_description(stage: &Stage, steps: &[anchor::Step]) -> Vec<EffectEstimate> {
     let n = stage.model.dof();
-    let g = stage.model.gravity.norm().max(1e-12);
+    let g = stage.model.gravity().norm().max(1e-12);
     steps
         .iter()
         .map(|st| {

@@ -94,7 +94,7 @@ pub fn diagnose(
     Ok(Diagnosis {
         confirmed: how_far.confirmed,
         confirmed_only: how_far.confirmed_only,
-        robot: model.name.clone(),
+        robot: model.name().to_string(),
         joints: model_joint_names(model),
         samples: [train.len(), validate.len()],
         constraints: opts.constraints,
@@ -183,7 +183,11 @@ fn summary_text(
 }
 
 fn model_joint_names(model: &Model) -> Vec<String> {
-    model.bodies.iter().map(|b| b.joint_name.clone()).collect()
+    model
+        .bodies()
+        .iter()
+        .map(|b| b.joint_name.clone())
+        .collect()
 }
 
 /// The diagnosis of runs as a user gives them: training runs and validation runs, each joined

@@ -23,9 +23,9 @@ pub fn crba<'a>(model: &Model, data: &'a mut Data, q: &[f64]) -> &'a DMatrix<f64
 /// `q`), filling `data.h`.
 pub(crate) fn crba_from_transforms(model: &Model, data: &mut Data) {
     let n = model.dof();
-    let full = model.rotor_model == RotorModel::Full;
+    let full = model.rotor_model() == RotorModel::Full;
     data.ic.copy_from_slice(&data.inertia);
-    for (i, b) in model.bodies.iter().enumerate() {
+    for (i, b) in model.bodies().iter().enumerate() {
         if let (Some(p), Some(_)) = (b.parent, &b.rotor) {
             let ir = data.inertia_rot[i].expressed_in_parent(&data.x_rot[i]);
             data.ic[p] = data.ic[p].add(&ir);
@@ -33,7 +33,7 @@ pub(crate) fn crba_from_transforms(model: &Model, data: &mut Data) {
     }
     data.h.fill(0.0);
     for i in (0..n).rev() {
-        let b = &model.bodies[i];
+        let b = &model.bodies()[i];
         if let Some(p) = b.parent {
             let up = data.ic[i].expressed_in_parent(&data.x_up[i]);
             data.ic[p] = data.ic[p].add(&up);
@@ -41,7 +41,7 @@ pub(crate) fn crba_from_transforms(model: &Model, data: &mut Data) {
         let mut f = data.ic[i].mul_motion(&data.s[i]);
         data.h[(i, i)] = data.s[i].dot(&f);
         let mut j = i;
-        while let Some(p) = model.bodies[j].parent {
+        while let Some(p) = model.bodies()[j].parent {
             f = data.x_up[j].inv_apply_force(&f);
             j = p;
             data.h[(i, j)] = data.s[j].dot(&f);
@@ -59,7 +59,7 @@ pub(crate) fn crba_from_transforms(model: &Model, data: &mut Data) {
                         let hij = data.s[j].dot(&f);
                         data.h[(i, j)] += hij;
                         data.h[(j, i)] += hij;
-                        match model.bodies[j].parent {
+                        match model.bodies()[j].parent {
                             Some(pp) => {
                                 f = data.x_up[j].inv_apply_force(&f);
                                 j = pp;

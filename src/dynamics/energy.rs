@@ -11,13 +11,13 @@ pub fn kinetic_energy(model: &Model, data: &mut Data, q: &[f64], qd: &[f64]) -> 
     let zero = vec![0.0; model.dof()];
     forward_pass(model, data, q, qd, &zero, false);
     let mut t = 0.0;
-    for (i, b) in model.bodies.iter().enumerate() {
+    for (i, b) in model.bodies().iter().enumerate() {
         let v = &data.v[i];
         t += 0.5 * v.dot(&data.inertia[i].mul_motion(v));
         if b.rotor.is_some() {
             let vr = &data.v_rot[i];
             t += 0.5 * vr.dot(&data.inertia_rot[i].mul_motion(vr));
-            if model.rotor_model == RotorModel::Reflected {
+            if model.rotor_model() == RotorModel::Reflected {
                 t += 0.5 * armature(model, i) * qd[i] * qd[i];
             }
         }
@@ -28,9 +28,9 @@ pub fn kinetic_energy(model: &Model, data: &mut Data, q: &[f64], qd: &[f64]) -> 
 /// Potential energy `U = −Σ g · (m p_c)` over links and rotors (J), zero at the base origin.
 pub fn potential_energy(model: &Model, data: &mut Data, q: &[f64]) -> f64 {
     kinematics::update_world(model, data, q);
-    let g = model.gravity;
+    let g = model.gravity();
     let mut u = 0.0;
-    for (i, b) in model.bodies.iter().enumerate() {
+    for (i, b) in model.bodies().iter().enumerate() {
         let x0 = &data.x_world[i];
         let mh = |ii: &crate::spatial::RigidInertia, x: &crate::spatial::Transform| {
             x.e.tr_mul(&ii.h) + x.r * ii.m

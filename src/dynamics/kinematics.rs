@@ -8,7 +8,7 @@ use nalgebra::{DMatrix, Vector3};
 /// Fills `data.x_world[i]` (base to body `i`) for configuration `q`, with the joint transforms.
 pub fn update_world(model: &Model, data: &mut Data, q: &[f64]) {
     update_transforms(model, data, q);
-    for (i, b) in model.bodies.iter().enumerate() {
+    for (i, b) in model.bodies().iter().enumerate() {
         data.x_world[i] = match b.parent {
             Some(p) => data.x_up[i].compose(&data.x_world[p]),
             None => data.x_up[i],

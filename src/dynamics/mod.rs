@@ -98,9 +98,9 @@ impl Data {
             s_rot: vec![Motion::zero(); n],
             v_rot: vec![Motion::zero(); n],
             a_rot: vec![Motion::zero(); n],
-            inertia: model.bodies.iter().map(|b| b.inertia.rigid()).collect(),
+            inertia: model.bodies().iter().map(|b| b.inertia.rigid()).collect(),
             inertia_rot: model
-                .bodies
+                .bodies()
                 .iter()
                 .map(|b| b.rotor.as_ref().map_or(zero_i, |r| r.inertia.rigid()))
                 .collect(),
@@ -125,7 +125,7 @@ impl Data {
 /// The fictitious base acceleration `a_0 = [0; −g]` that accounts for gravity (RBDA §5.3).
 #[inline]
 pub fn base_acceleration(model: &Model) -> Motion {
-    Motion::new(Default::default(), -model.gravity)
+    Motion::new(Default::default(), -model.gravity())
 }
 
 /// Joint and rotor transforms for configuration `q`: fills `x_up`, `s`, `x_rot`, `s_rot`.
@@ -134,8 +134,8 @@ pub fn base_acceleration(model: &Model) -> Motion {
 /// `S_rot = N [axis; 0]`; reflected model: `X_rot = X_rot,0` (frozen) and `S_rot = 0`.
 pub fn update_transforms(model: &Model, data: &mut Data, q: &[f64]) {
     debug_assert!(data.fits(model));
-    let full = model.rotor_model == RotorModel::Full;
-    for (i, b) in model.bodies.iter().enumerate() {
+    let full = model.rotor_model() == RotorModel::Full;
+    for (i, b) in model.bodies().iter().enumerate() {
         data.s[i] = b.joint.motion_subspace();
         data.x_up[i] = b.joint.transform(q[i]).compose(&b.x_tree);
         if let Some(r) = &b.rotor {
@@ -172,7 +172,7 @@ pub fn forward_pass(
     } else {
         Motion::zero()
     };
-    for (i, b) in model.bodies.iter().enumerate() {
+    for (i, b) in model.bodies().iter().enumerate() {
         let (v_p, a_p) = match b.parent {
             Some(p) => (data.v[p], data.a[p]),
             None => (Motion::zero(), a0),
@@ -197,7 +197,10 @@ pub fn forward_pass(
 /// ([`Rotor::armature`]).
 #[inline]
 pub fn armature(model: &Model, i: usize) -> f64 {
-    model.bodies[i].rotor.as_ref().map_or(0.0, Rotor::armature)
+    model.bodies()[i]
+        .rotor
+        .as_ref()
+        .map_or(0.0, Rotor::armature)
 }
 
 /// Checks that joint vectors have the model's length (a programming error otherwise).

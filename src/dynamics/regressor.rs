@@ -77,9 +77,9 @@ pub fn regressor(
     forward_pass(model, data, q, qd, qdd, true);
     let y = y.as_mut_slice();
     y.fill(0.0);
-    let full = model.rotor_model == RotorModel::Full;
+    let full = model.rotor_model() == RotorModel::Full;
     for i in 0..n {
-        let b = &model.bodies[i];
+        let b = &model.bodies()[i];
         // Joint axes of the support of i, in body i coordinates.
         data.s_anc[i * n + i] = data.s[i];
         if let Some(p) = b.parent {

@@ -21,13 +21,13 @@ pub fn rnea<'a>(
     check_len(model, "qd", qd);
     check_len(model, "qdd", qdd);
     forward_pass(model, data, q, qd, qdd, true);
-    let full = model.rotor_model == RotorModel::Full;
+    let full = model.rotor_model() == RotorModel::Full;
     for i in 0..model.dof() {
         let (ii, v) = (&data.inertia[i], data.v[i]);
         data.f[i] = ii.mul_motion(&data.a[i]) + v.cross_force(&ii.mul_motion(&v));
     }
     for i in (0..model.dof()).rev() {
-        let b = &model.bodies[i];
+        let b = &model.bodies()[i];
         let mut tau = data.s[i].dot(&data.f[i]);
         let mut to_parent = data.x_up[i].inv_apply_force(&data.f[i]);
         if b.rotor.is_some() {
@@ -54,7 +54,7 @@ pub fn friction_torque(model: &Model, qd: &[f64]) -> DVector<f64> {
     DVector::from_iterator(
         model.dof(),
         model
-            .bodies
+            .bodies()
             .iter()
             .zip(qd)
             .map(|(b, &w)| b.friction.viscous * w + b.friction.coulomb * sign(w)),

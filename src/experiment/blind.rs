@@ -67,20 +67,21 @@ impl Change {
 
     /// The robot `model` with the change.
     pub fn apply(&self, model: &Model) -> Model {
-        let mut m = model.clone();
-        match self {
-            Change::Friction { scale } => {
-                for (b, s) in m.bodies.iter_mut().zip(scale) {
+        let last = model.dof() - 1;
+        let edited = match self {
+            Change::Friction { scale } => model.with_bodies_edited(|j, b| {
+                if let Some(s) = scale.get(j) {
                     b.friction.viscous *= s;
                     b.friction.coulomb *= s;
                 }
-            }
-            Change::Mass { scale } => {
-                let last = m.bodies.len() - 1;
-                m.bodies[last].inertia.0 *= *scale;
-            }
-        }
-        m
+            }),
+            Change::Mass { scale } => model.with_bodies_edited(|j, b| {
+                if j == last {
+                    b.inertia.0 *= *scale;
+                }
+            }),
+        };
+        edited.expect("positive scales keep a valid model valid")
     }
 }
 
@@ -181,7 +182,7 @@ fn draw_change(slot: usize, model: &Model, rng: &mut ChaCha8Rng) -> Injected {
     };
     let magnitudes = match &change {
         Change::Mass { scale } => {
-            vec![(scale - 1.0) * model.bodies[model.dof() - 1].inertia.mass()]
+            vec![(scale - 1.0) * model.bodies()[model.dof() - 1].inertia.mass()]
         }
         Change::Friction { scale } => scale.clone(),
     };

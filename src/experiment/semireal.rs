@@ -332,7 +332,7 @@ fn draw_payload(slot: Slot, model: &Model, rng: &mut ChaCha8Rng) -> Injection {
             break u;
         }
     };
-    let com = match &model.bodies[body].bounding {
+    let com = match &model.bodies()[body].bounding {
         Some(e) => {
             let l =
                 e.qs.cholesky()
@@ -512,7 +512,7 @@ pub fn inject(logged: &Logged, description: &Model, inj: &Injection) -> Logged {
         (Slot::Friction, _) => {
             for k in 0..rows {
                 for j in 0..n {
-                    let f = &description.bodies[j].friction;
+                    let f = &description.bodies()[j].friction;
                     let w = qd[k * n + j];
                     let extra = f.viscous * w + f.coulomb * crate::dynamics::sign(w);
                     out.tau[k * n + j] += (inj.magnitudes[j] - 1.0) * extra;
@@ -688,7 +688,7 @@ fn score_case(
         })
         .collect();
     let bodies = ladder.map_or(&[][..], |l| &l.bodies[..]);
-    let body_name = inj.body.map(|b| model.bodies[b].name.clone());
+    let body_name = inj.body.map(|b| model.bodies()[b].name.clone());
     let first = steps.first();
     let names_body = |r: &diagnose::ladder::Rung, b: &str| {
         let on = |s: &str| s.ends_with(&format!(" on {b}")) || s.ends_with(&format!(" of {b}"));
@@ -922,7 +922,11 @@ mod tests {
             }
         }
         Logged {
-            joint_names: model.bodies.iter().map(|b| b.joint_name.clone()).collect(),
+            joint_names: model
+                .bodies()
+                .iter()
+                .map(|b| b.joint_name.clone())
+                .collect(),
             t,
             q,
             qd: Some(qd),
@@ -1018,7 +1022,11 @@ mod tests {
     fn exact(model: &Model) -> Logged {
         let n = model.dof();
         let mut log = Logged {
-            joint_names: model.bodies.iter().map(|b| b.joint_name.clone()).collect(),
+            joint_names: model
+                .bodies()
+                .iter()
+                .map(|b| b.joint_name.clone())
+                .collect(),
             t: vec![],
             q: vec![],
             qd: Some(vec![]),

@@ -362,12 +362,12 @@ pub struct Identified {
 /// The bodies of a model in parameter order: `(name, first column, ellipsoid)`.
 pub fn bodies(model: &Model) -> Vec<(String, usize, Option<crate::spatial::Ellipsoid>)> {
     let mut out: Vec<_> = model
-        .bodies
+        .bodies()
         .iter()
         .enumerate()
         .map(|(i, b)| (b.name.clone(), 10 * i, b.bounding))
         .collect();
-    for (i, b) in model.bodies.iter().enumerate() {
+    for (i, b) in model.bodies().iter().enumerate() {
         if let (Some(c), Some(r)) = (model.layout().rotor_col[i], &b.rotor) {
             out.push((r.name.clone(), c, r.bounding));
         }

@@ -26,8 +26,8 @@ fn v3(v: &Vector3<f64>) -> String {
 
 /// Each body's inertia with the rotors mounted on it lumped in (body frame).
 pub fn lumped_inertias(model: &Model) -> Vec<InertialParams> {
-    let mut out: Vec<InertialParams> = model.bodies.iter().map(|b| b.inertia).collect();
-    for b in &model.bodies {
+    let mut out: Vec<InertialParams> = model.bodies().iter().map(|b| b.inertia).collect();
+    for b in model.bodies() {
         if let (Some(p), Some(r)) = (b.parent, &b.rotor) {
             out[p] = InertialParams(out[p].0 + r.inertia.transformed(&r.x_rot.inverse()).0);
         }
@@ -76,10 +76,10 @@ fn mujoco_reads(path: &std::path::Path) -> bool {
 
 /// Every body's shapes by the name their geoms take (`world` for the static base's).
 fn named_shapes(model: &Model) -> Vec<(&str, &[Shape])> {
-    std::iter::once(("world", &model.base_shapes[..]))
+    std::iter::once(("world", model.base_shapes()))
         .chain(
             model
-                .bodies
+                .bodies()
                 .iter()
                 .map(|b| (b.name.as_str(), &b.shapes[..])),
         )
@@ -202,7 +202,7 @@ fn joint(b: &crate::model::Body) -> String {
 }
 
 fn body(model: &Model, inertias: &[InertialParams], i: usize, depth: usize, s: &mut String) {
-    let b = &model.bodies[i];
+    let b = &model.bodies()[i];
     let pad = "  ".repeat(depth + 2);
     let _ = writeln!(
         s,
@@ -220,7 +220,7 @@ fn body(model: &Model, inertias: &[InertialParams], i: usize, depth: usize, s: &
     if let Some(e) = &b.bounding {
         let _ = writeln!(s, "{pad}  {}", ellipsoid_geom(e));
     }
-    for c in (0..model.dof()).filter(|&c| model.bodies[c].parent == Some(i)) {
+    for c in (0..model.dof()).filter(|&c| model.bodies()[c].parent == Some(i)) {
         body(model, inertias, c, depth + 1, s);
     }
     let _ = writeln!(s, "{pad}</body>");
@@ -230,7 +230,7 @@ fn body(model: &Model, inertias: &[InertialParams], i: usize, depth: usize, s: &
 pub fn to_string(model: &Model) -> String {
     let inertias = lumped_inertias(model);
     let mut s = String::new();
-    let _ = writeln!(s, "<mujoco model=\"{}\">", model.name);
+    let _ = writeln!(s, "<mujoco model=\"{}\">", model.name());
     let _ = writeln!(
         s,
         "  <compiler angle=\"radian\" inertiafromgeom=\"false\"/>"
@@ -238,7 +238,7 @@ pub fn to_string(model: &Model) -> String {
     let _ = writeln!(
         s,
         "  <option gravity=\"{}\" timestep=\"0.001\" integrator=\"RK4\"/>",
-        v3(&model.gravity)
+        v3(&model.gravity())
     );
     let meshes = mesh_assets(model);
     if !meshes.is_empty() {
@@ -253,21 +253,21 @@ pub fn to_string(model: &Model) -> String {
         let _ = writeln!(s, "  </asset>");
     }
     let _ = writeln!(s, "  <worldbody>");
-    for (k, sh) in model.base_shapes.iter().enumerate() {
+    for (k, sh) in model.base_shapes().iter().enumerate() {
         if let Some(g) = shape_geom("world", k, sh) {
             let _ = writeln!(s, "    {g}");
         }
     }
     // Rotors on the fixed base: static bodies welded to the world, so that the model's mass
     // is complete; their spin inertia acts through their joint's armature.
-    for b in model.bodies.iter().filter(|b| b.parent.is_none()) {
+    for b in model.bodies().iter().filter(|b| b.parent.is_none()) {
         if let Some(r) = &b.rotor {
             let _ = writeln!(s, "    <body name=\"{}\" {}>", r.name, pose_attrs(&r.x_rot));
             let _ = writeln!(s, "      {}", inertial(&r.inertia));
             let _ = writeln!(s, "    </body>");
         }
     }
-    for i in (0..model.dof()).filter(|&i| model.bodies[i].parent.is_none()) {
+    for i in (0..model.dof()).filter(|&i| model.bodies()[i].parent.is_none()) {
         body(model, &inertias, i, 0, &mut s);
     }
     let _ = writeln!(s, "  </worldbody>");

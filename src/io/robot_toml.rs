@@ -266,11 +266,11 @@ pub fn from_spec_with(
             o.rotors = r;
         }
         let m = cheetah3::leg_with(&o).map_err(model_err)?;
-        let mut bodies = m.bodies.clone();
+        let mut bodies = m.bodies().to_vec();
         let ident = vec![Transform::identity(); bodies.len()];
         extras.apply(&mut bodies, &ident, path)?;
-        let gravity = extras.gravity.map_or(m.gravity, Vector3::from);
-        Model::new(m.name.clone(), bodies, gravity).map_err(model_err)?
+        let gravity = extras.gravity.map_or(m.gravity(), Vector3::from);
+        Model::new(m.name().to_string(), bodies, gravity).map_err(model_err)?
     } else if let Some(u) = &spec.urdf {
         let upath = path.parent().unwrap_or(Path::new(".")).join(u);
         let (m, warnings) = super::urdf::load(&upath, &extras)?;

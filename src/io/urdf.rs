@@ -691,7 +691,7 @@ fn check_bounds(
             .iter()
             .any(|e| e.body.as_deref() == Some(name) && e.strict)
     };
-    let elements = model.bodies.iter().flat_map(|b| {
+    let elements = model.bodies().iter().flat_map(|b| {
         std::iter::once((&b.name, &b.inertia, b.bounding.as_ref())).chain(
             b.rotor
                 .as_ref()
@@ -788,9 +788,9 @@ pub fn to_string(model: &Model) -> String {
     let mut links = vec![link("base", &InertialParams::zero())];
     let mut joints = vec![];
     let parent_link =
-        |p: Option<usize>| p.map_or("base".to_string(), |p| model.bodies[p].name.clone());
+        |p: Option<usize>| p.map_or("base".to_string(), |p| model.bodies()[p].name.clone());
     let finite_or = |v: f64, d: f64| if v.is_finite() { v } else { d };
-    for b in &model.bodies {
+    for b in model.bodies() {
         links.push(link(&b.name, &b.inertia));
         let (jt, axis) = match b.joint {
             Joint::Revolute { axis } if b.limits.lower.is_finite() => {
@@ -874,7 +874,7 @@ pub fn to_string(model: &Model) -> String {
         }
     }
     let robot = urdf_rs::Robot {
-        name: model.name.clone(),
+        name: model.name().to_string(),
         version: None,
         links,
         joints,

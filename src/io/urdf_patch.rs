@@ -136,7 +136,7 @@ pub fn patch(xml: &str, path: &Path, model: &Model, identified: &Model) -> Resul
             .find(|n| n.has_tag_name(tag) && n.attribute("name") == Some(name))
     };
     let mut edits: Vec<Edit> = vec![];
-    for (b, bi) in model.bodies.iter().zip(&identified.bodies) {
+    for (b, bi) in model.bodies().iter().zip(identified.bodies()) {
         let link =
             named("link", &b.name).ok_or_else(|| bad(format!("no <link name=\"{}\">", b.name)))?;
         edits.extend(link_edit(xml, link, Some(&bi.inertia), ""));
@@ -251,8 +251,8 @@ pub fn sidecar(
     urdf_rotors: &[String],
     effects: Option<&str>,
 ) -> String {
-    let g = model.gravity;
-    let rotor_model = match model.rotor_model {
+    let g = model.gravity();
+    let rotor_model = match model.rotor_model() {
         crate::model::RotorModel::Full => "full",
         crate::model::RotorModel::Reflected => "reflected",
     };
@@ -260,13 +260,13 @@ pub fn sidecar(
         "# physid sidecar of {urdf_file}: what URDF cannot carry. Use it as --robot <this file>.\n[robot]\nurdf = \"{urdf_file}\"\ngeometry_ellipsoids = false\nrotor_model = \"{rotor_model}\"\ngravity = [{}, {}, {}]\n",
         g.x, g.y, g.z
     );
-    for b in &model.bodies {
+    for b in model.bodies() {
         if let Some(r) = b.rotor.as_ref().filter(|r| !urdf_rotors.contains(&r.name)) {
             s.push('\n');
             s.push_str(&rotor_toml(&b.joint_name, r));
         }
     }
-    for b in &model.bodies {
+    for b in model.bodies() {
         if let Some(e) = &b.bounding {
             s.push('\n');
             s.push_str(&ellipsoid_toml(&b.name, e, &b.inertia));

@@ -388,7 +388,7 @@ mod tests {
     fn truth_lies_inside_every_bounding_ellipsoid_with_margin() {
         let m = leg();
         let mut margins = vec![];
-        for b in &m.bodies {
+        for b in m.bodies() {
             let r = b.inertia.consistency(b.bounding.as_ref());
             margins.push((
                 b.name.clone(),
@@ -432,7 +432,7 @@ mod tests {
         assert_eq!(m.rotor_count(), 3);
         assert_eq!(m.layout().len, 66);
         assert_eq!(m.layout().rotor_col, vec![Some(30), Some(40), Some(50)]);
-        assert!((m.bodies[0].limits.effort - 288.32).abs() < 1e-9);
+        assert!((m.bodies()[0].limits.effort - 288.32).abs() < 1e-9);
         let names = m.parameter_names();
         assert_eq!(names[17], "thigh.Iyy");
         assert_eq!(names[59], "knee_rotor.Izz");

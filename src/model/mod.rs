@@ -283,16 +283,16 @@ pub struct ParamLayout {
 #[derive(Clone, Debug, PartialEq)]
 pub struct Model {
     /// Robot name.
-    pub name: String,
+    name: String,
     /// Bodies, parents first.
-    pub bodies: Vec<Body>,
+    bodies: Vec<Body>,
     /// Gravity in the base frame (m/s²).
-    pub gravity: Vector3<f64>,
+    gravity: Vector3<f64>,
     /// How rotors enter the dynamics.
-    pub rotor_model: RotorModel,
+    rotor_model: RotorModel,
     /// The static base's shapes as the description gives them (in the base frame), for export
     /// only.
-    pub base_shapes: Vec<Shape>,
+    base_shapes: Vec<Shape>,
     /// Rotor on the base frame's pose is fixed; rotors on bodies move with them.
     layout: ParamLayout,
     /// `support[i]`: joint `i` and its ancestors, nearest first.
@@ -393,6 +393,47 @@ impl Model {
             }
         }
         m
+    }
+
+    /// The robot's name.
+    pub fn name(&self) -> &str {
+        &self.name
+    }
+
+    /// The bodies, parents first (body `i` moves with joint `i`).
+    pub fn bodies(&self) -> &[Body] {
+        &self.bodies
+    }
+
+    /// Gravity in the base frame (m/s²).
+    pub fn gravity(&self) -> Vector3<f64> {
+        self.gravity
+    }
+
+    /// How rotors enter the dynamics.
+    pub fn rotor_model(&self) -> RotorModel {
+        self.rotor_model
+    }
+
+    /// The static base's shapes as the description gives them (base frame), for export only.
+    pub fn base_shapes(&self) -> &[Shape] {
+        &self.base_shapes
+    }
+
+    /// A copy with each body edited by `edit(i, body)`, validated again as [`Model::new`]
+    /// validates (the tree, the rotors, finite parameters), its name, gravity, rotor model and
+    /// base shapes kept: the model stays immutable, and an edit cannot leave its layout stale.
+    pub fn with_bodies_edited(
+        &self,
+        mut edit: impl FnMut(usize, &mut Body),
+    ) -> Result<Model, ModelError> {
+        let mut bodies = self.bodies.clone();
+        for (i, b) in bodies.iter_mut().enumerate() {
+            edit(i, b);
+        }
+        Ok(Model::new(self.name.clone(), bodies, self.gravity)?
+            .with_rotor_model(self.rotor_model)
+            .with_base_shapes(self.base_shapes.clone()))
     }
 
     /// Number of degrees of freedom (one per joint).

@@ -57,7 +57,7 @@ pub fn rate_limits(
                     if v.is_finite() {
                         v
                     } else {
-                        let name = &model.bodies[j].joint_name;
+                        let name = &model.bodies()[j].joint_name;
                         if !defaulted.contains(name) {
                             defaulted.push(name.clone());
                         }
@@ -69,10 +69,10 @@ pub fn rate_limits(
     };
     let a = pick(
         acceleration,
-        &|j| model.bodies[j].limits.acceleration,
+        &|j| model.bodies()[j].limits.acceleration,
         SAFE_ACCELERATION,
     );
-    let k = pick(jerk, &|j| model.bodies[j].limits.jerk, SAFE_JERK);
+    let k = pick(jerk, &|j| model.bodies()[j].limits.jerk, SAFE_JERK);
     (a, k, defaulted)
 }
 
@@ -321,7 +321,7 @@ impl Limits {
             jerk: vec![],
             effort: vec![],
         };
-        for (j, b) in model.bodies.iter().enumerate() {
+        for (j, b) in model.bodies().iter().enumerate() {
             let (mut lo, mut hi) = (b.limits.lower, b.limits.upper);
             if let Some(r) = range.and_then(|r| r.get(j)) {
                 lo = lo.max(r.0);
@@ -636,7 +636,7 @@ impl Problem<'_> {
         let torque = self.torque_ratio(s, data, 4 * self.opts.samples);
         let ratio = |a: f64, b: f64| if b.is_finite() { a / b } else { 0.0 };
         self.model
-            .bodies
+            .bodies()
             .iter()
             .enumerate()
             .map(|(j, b)| {
@@ -774,7 +774,7 @@ fn check_holding_torque(model: &Model, limits: &Limits) -> Result<(), DesignErro
     let mut data = Data::new(model);
     let zero = vec![0.0; n];
     let tau = rnea_with_friction(model, &mut data, &limits.centre(), &zero, &zero);
-    for (j, b) in model.bodies.iter().enumerate() {
+    for (j, b) in model.bodies().iter().enumerate() {
         if tau[j].abs() > limits.effort[j] {
             return Err(DesignError::TorqueInfeasible {
                 joint: b.joint_name.clone(),

@@ -43,7 +43,10 @@ pub fn physical_torque(
                 harmonic,
                 phase,
             } => (0..n).for_each(|j| {
-                let gear = model.bodies[j].rotor.as_ref().map_or(1.0, |r| r.gear_ratio);
+                let gear = model.bodies()[j]
+                    .rotor
+                    .as_ref()
+                    .map_or(1.0, |r| r.gear_ratio);
                 let ph = phase.get(j).copied().unwrap_or(0.0);
                 out[j] -= amplitude[j] * (harmonic[j] * gear * q[j] + ph).sin();
             }),
@@ -127,7 +130,7 @@ impl DeadZone {
         })?;
         let n = width.len();
         let inertia = model
-            .bodies
+            .bodies()
             .iter()
             .map(|b| b.rotor.as_ref().map_or(0.0, |r| r.armature()))
             .collect();
@@ -195,7 +198,7 @@ pub fn true_robot(model: &Model, effects: &[EffectSpec]) -> Model {
             EffectSpec::Tilt { roll, pitch } => {
                 let r =
                     rot_axis_angle(&Vector3::y(), *pitch) * rot_axis_angle(&Vector3::x(), *roll);
-                m = m.clone().with_gravity(r.transpose() * m.gravity);
+                m = m.clone().with_gravity(r.transpose() * m.gravity());
             }
             EffectSpec::Payload {
                 mass,
@@ -209,11 +212,11 @@ pub fn true_robot(model: &Model, effects: &[EffectSpec]) -> Model {
                     &Vector3::from(*com),
                     &(Matrix3::identity() * (0.4 * mass * radius * radius)),
                 );
-                let mut bodies = m.bodies.clone();
+                let mut bodies = m.bodies().to_vec();
                 bodies[on].inertia = InertialParams(bodies[on].inertia.0 + sphere.0);
-                m = Model::new(m.name.clone(), bodies, m.gravity)
+                m = Model::new(m.name().to_string(), bodies, m.gravity())
                     .expect("adding a payload keeps the model valid")
-                    .with_rotor_model(m.rotor_model);
+                    .with_rotor_model(m.rotor_model());
             }
             _ => {}
         }
@@ -227,7 +230,7 @@ mod tests {
 
     fn zone(width: f64) -> (DeadZone, f64) {
         let leg = crate::model::cheetah3::leg();
-        let j = leg.bodies[1].rotor.as_ref().expect("rotor").armature();
+        let j = leg.bodies()[1].rotor.as_ref().expect("rotor").armature();
         let zone = DeadZone::new(
             &leg,
             &[EffectSpec::Backlash {

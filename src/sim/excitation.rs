@@ -213,7 +213,7 @@ impl Controller {
                 let (body, offset) = match point {
                     Some(p) => (
                         model
-                            .bodies
+                            .bodies()
                             .iter()
                             .position(|b| b.name == p.body)
                             .ok_or_else(|| ScenarioError {
@@ -266,7 +266,7 @@ impl Controller {
                 for _ in 0..40 {
                     seeds.push(
                         model
-                            .bodies
+                            .bodies()
                             .iter()
                             .map(|b| {
                                 let (lo, hi) = (b.limits.lower.max(-3.0), b.limits.upper.min(3.0));
@@ -379,7 +379,7 @@ pub fn solve_ik(
         let jjt = &j * j.transpose() + nalgebra::Matrix3::identity() * lambda2;
         let Some(inv) = jjt.try_inverse() else { break };
         let dq = j.transpose() * (inv * e);
-        for (i, b) in model.bodies.iter().enumerate() {
+        for (i, b) in model.bodies().iter().enumerate() {
             q[i] = (q[i] + dq[i]).clamp(b.limits.lower, b.limits.upper);
         }
     }

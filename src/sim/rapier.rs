@@ -92,7 +92,7 @@ impl RapierSim {
         let mut parents = vec![];
         let mut axes = vec![];
         let mut rotors = vec![];
-        for (i, b) in model.bodies.iter().enumerate() {
+        for (i, b) in model.bodies().iter().enumerate() {
             let Joint::Revolute { axis } = b.joint else {
                 return Err(RapierError::Unsupported(format!(
                     "joint '{}' is prismatic",
@@ -157,7 +157,7 @@ impl RapierSim {
                 dt,
                 ..Default::default()
             },
-            gravity: vec3(&model.gravity),
+            gravity: vec3(&model.gravity()),
             handles,
             links: rb,
             parents,

@@ -111,7 +111,11 @@ pub fn simulate(
         (Some(kt), Some(r), Some(v)) => Some((kt, r, v)),
         _ => None,
     };
-    let names: Vec<String> = model.bodies.iter().map(|b| b.joint_name.clone()).collect();
+    let names: Vec<String> = model
+        .bodies()
+        .iter()
+        .map(|b| b.joint_name.clone())
+        .collect();
     let mut truth = Trajectory::new(names.clone(), true);
     let mut measured = Trajectory::new(names.clone(), true);
     let (mut friction_log, mut effects_log) = (
@@ -238,7 +242,7 @@ fn initial_guess(model: &Model, s: &SimulationSpec) -> Vec<f64> {
     match &s.initial_q {
         Some(q) => q.clone(),
         None => model
-            .bodies
+            .bodies()
             .iter()
             .enumerate()
             .map(|(i, b)| {
@@ -279,7 +283,7 @@ fn integrator<'a>(
 fn actuate(model: &Model, cmd: &[f64], qd: &[f64], motor: Option<(f64, f64, f64)>) -> Vec<f64> {
     (0..model.dof())
         .map(|j| {
-            let b = &model.bodies[j];
+            let b = &model.bodies()[j];
             let mut lim = b.limits.effort;
             if let (Some((kt, r, v)), Some(rot)) = (motor, &b.rotor) {
                 lim = lim.min(back_emf_limit(cmd[j], qd[j], rot.gear_ratio, kt, r, v));
@@ -301,7 +305,7 @@ fn check_state(
         if !q[j].is_finite() || !qd[j].is_finite() || qd[j].abs() > max_speed {
             return Err(SimError::Diverged {
                 t,
-                joint: model.bodies[j].joint_name.clone(),
+                joint: model.bodies()[j].joint_name.clone(),
                 what: format!(
                     "reached q = {:.4} rad, q̇ = {:.4} rad/s (limit {} rad/s)",
                     q[j], qd[j], max_speed
@@ -323,7 +327,7 @@ impl Loads<'_> {
     fn friction(&self, qd: &[f64]) -> Vec<f64> {
         let vs = self.scenario.simulation.friction_velocity;
         self.model
-            .bodies
+            .bodies()
             .iter()
             .zip(qd)
             .map(|(b, &w)| b.friction.viscous * w + b.friction.coulomb * (w / vs).tanh())
