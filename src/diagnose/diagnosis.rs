@@ -116,7 +116,7 @@ pub enum Verdict {
     /// description reveals.
     Absorbed,
     /// Nothing was selected, and the data are too short to tell "unexplained" from "no
-    /// effect" ([`super::options::Options::min_decisive_seconds`]).
+    /// effect" ([`super::Options::min_decisive_seconds`]).
     Undecided,
 }
 
