@@ -353,7 +353,58 @@ pub struct Report {
     /// Accepted steps.
     pub steps: Vec<Step>,
     /// Why it stopped.
-    pub stop: String,
+    #[schemars(with = "String")]
+    pub stop: TestStop,
+}
+
+/// Why the description test stopped. Serialized as its sentence ([`std::fmt::Display`]).
+#[derive(Clone, Debug, PartialEq)]
+pub enum TestStop {
+    /// The maximum number of effects was reached.
+    MaxEffects(usize),
+    /// No absorbed candidate was left.
+    NoCandidate,
+    /// The best remaining candidate's statistic stayed below its threshold.
+    BelowThreshold {
+        /// The candidate.
+        kind: Kind,
+        /// Its statistic `Δ`.
+        statistic: f64,
+        /// Its `χ²` threshold.
+        threshold: f64,
+    },
+    /// A step passed on the training data but not again on the held-out data, and was
+    /// dropped with those after it.
+    NotConfirmed(Kind),
+}
+
+impl std::fmt::Display for TestStop {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            Self::MaxEffects(max) => write!(f, "reached the maximum of {max} effects"),
+            Self::NoCandidate => f.write_str("no candidate left"),
+            Self::BelowThreshold {
+                kind,
+                statistic,
+                threshold,
+            } => write!(
+                f,
+                "best remaining candidate {} has Δ = {statistic:.1} below its χ² threshold {threshold:.1}",
+                kind.name()
+            ),
+            Self::NotConfirmed(kind) => write!(
+                f,
+                "{} passed on the training data but not again on the held-out data (dropped)",
+                kind.name()
+            ),
+        }
+    }
+}
+
+impl Serialize for TestStop {
+    fn serialize<S: serde::Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+        s.collect_str(self)
+    }
 }
 
 /// Forward selection by the description test over the variants of `folds` that are absorbed
@@ -368,7 +419,7 @@ pub fn select(
     exclude: &[Kind],
     max: usize,
     tie: f64,
-) -> (Vec<Step>, String) {
+) -> (Vec<Step>, TestStop) {
     let mut base = folds.columns(chosen);
     let cols = |vi: usize| -> Vec<usize> {
         let d = folds.variants[vi].kind.columns(folds.n);
@@ -396,7 +447,7 @@ pub fn select(
     let mut steps = vec![];
     let stop = loop {
         if steps.len() >= max {
-            break format!("reached the maximum of {max} effects");
+            break TestStop::MaxEffects(max);
         }
         let mut best: Vec<(usize, Test, Fit)> = vec![];
         for kind in Kind::ALL {
@@ -433,7 +484,7 @@ pub fn select(
             best.extend(top);
         }
         if best.is_empty() {
-            break "no candidate left".into();
+            break TestStop::NoCandidate;
         }
         // Best Akaike information first: `Δ` is twice the log-likelihood ratio, so `Δ − 2d`
         // weighs what a kind explains against its columns (kinds differ in `d`).
@@ -442,12 +493,11 @@ pub fn select(
         let tests: Vec<Test> = best.iter().map(|(_, t, _)| t.clone()).collect();
         let top = &tests[0];
         if top.statistic < top.threshold {
-            break format!(
-                "best remaining candidate {} has Δ = {:.1} below its χ² threshold {:.1}",
-                top.kind.name(),
-                top.statistic,
-                top.threshold
-            );
+            break TestStop::BelowThreshold {
+                kind: top.kind,
+                statistic: top.statistic,
+                threshold: top.threshold,
+            };
         }
         let cut = z(top) * (1.0 - tie);
         let ties: Vec<usize> = (0..best.len())
@@ -553,10 +603,7 @@ pub(crate) fn test_description(
             })
             .count();
         if passed < steps.len() {
-            stop = format!(
-                "{} passed on the training data but not again on the held-out data (dropped)",
-                steps[passed].kind.name()
-            );
+            stop = TestStop::NotConfirmed(steps[passed].kind);
             steps.truncate(passed);
         }
     }

@@ -245,13 +245,68 @@ pub struct Selection {
     /// Accepted steps in order.
     pub steps: Vec<Step>,
     /// Why it stopped, with the best rejected candidate's score.
-    pub stop: String,
+    #[schemars(with = "String")]
+    pub stop: SelectionStop,
     /// Indices of the chosen variants (into [`Folds::variants`]).
     #[serde(skip)]
     pub chosen: Vec<usize>,
     /// Cross-validation of the final set.
     #[serde(skip)]
     pub final_cv: Option<Cv>,
+}
+
+/// Why the forward selection stopped. Serialized as its sentence ([`std::fmt::Display`]).
+#[derive(Clone, Debug, PartialEq)]
+pub enum SelectionStop {
+    /// The maximum number of effects was reached.
+    MaxEffects(usize),
+    /// Every kind was tried or none could be fitted.
+    NoCandidate,
+    /// The best remaining candidate did not lower the cross-validated error enough in enough
+    /// blocks.
+    NotSignificant {
+        /// The candidate.
+        kind: Kind,
+        /// Its relative reduction of the cross-validated mean square.
+        reduction: f64,
+        /// Blocks it improved, of `blocks`.
+        improved: usize,
+        /// Cross-validation blocks.
+        blocks: usize,
+        /// The reduction a step needs.
+        min_reduction: f64,
+        /// The blocks a step must improve.
+        needed: usize,
+    },
+}
+
+impl std::fmt::Display for SelectionStop {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            Self::MaxEffects(max) => write!(f, "reached the maximum of {max} effects"),
+            Self::NoCandidate => f.write_str("no candidate left"),
+            Self::NotSignificant {
+                kind,
+                reduction,
+                improved,
+                blocks,
+                min_reduction,
+                needed,
+            } => write!(
+                f,
+                "best remaining candidate {} lowers the cross-validated error by {:.1} % in {improved}/{blocks} blocks (needs {:.1} % in {needed}/{blocks})",
+                kind.name(),
+                100.0 * reduction,
+                100.0 * min_reduction,
+            ),
+        }
+    }
+}
+
+impl Serialize for SelectionStop {
+    fn serialize<S: serde::Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+        s.collect_str(self)
+    }
 }
 
 /// Forward selection with the stopping rule of the module documentation.
@@ -268,7 +323,7 @@ pub fn forward_select(
     let mut steps = vec![];
     let stop = loop {
         if steps.len() >= settings.max_effects {
-            break format!("reached the maximum of {} effects", settings.max_effects);
+            break SelectionStop::MaxEffects(settings.max_effects);
         }
         let used: Vec<Kind> = chosen
             .iter()
@@ -298,7 +353,7 @@ pub fn forward_select(
             best.extend(top);
         }
         if best.is_empty() {
-            break "no candidate left".into();
+            break SelectionStop::NoCandidate;
         }
         best.sort_by(|a, b| a.1.mse.total_cmp(&b.1.mse));
         let score = |(vi, cv): &(usize, Cv)| Score {
@@ -315,16 +370,14 @@ pub fn forward_select(
         // All but one block must improve; with fewer than four blocks, all of them.
         let needed = if k >= 4 { k - 1 } else { k };
         if top.reduction < settings.min_reduction || top.blocks_improved < needed {
-            break format!(
-                "best remaining candidate {} lowers the cross-validated error by {:.1} % in {}/{} blocks (needs {:.1} % in {}/{})",
-                top.kind.name(),
-                100.0 * top.reduction,
-                top.blocks_improved,
-                k,
-                100.0 * settings.min_reduction,
+            break SelectionStop::NotSignificant {
+                kind: top.kind,
+                reduction: top.reduction,
+                improved: top.blocks_improved,
+                blocks: k,
+                min_reduction: settings.min_reduction,
                 needed,
-                k
-            );
+            };
         }
         // Ties: within `tie` of the winner's reduction.
         let cut = top.reduction * (1.0 - settings.tie);
@@ -367,4 +420,28 @@ pub fn forward_select(
         chosen,
         final_cv: Some(current),
     })
+}
+
+#[cfg(test)]
+mod stop_tests {
+    use super::*;
+
+    #[test]
+    fn a_stop_reads_and_serializes_as_its_sentence() {
+        let stop = SelectionStop::NotSignificant {
+            kind: Kind::Cogging,
+            reduction: 0.0104,
+            improved: 3,
+            blocks: 5,
+            min_reduction: 0.03,
+            needed: 4,
+        };
+        let text = "best remaining candidate cogging lowers the cross-validated error by 1.0 % in 3/5 blocks (needs 3.0 % in 4/5)";
+        assert_eq!(stop.to_string(), text);
+        assert_eq!(serde_json::to_string(&stop).unwrap(), format!("\"{text}\""));
+        assert_eq!(
+            serde_json::to_string(&SelectionStop::MaxEffects(3)).unwrap(),
+            "\"reached the maximum of 3 effects\""
+        );
+    }
 }
