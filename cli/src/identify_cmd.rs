@@ -88,9 +88,7 @@ pub struct Args {
     /// Coulomb), stribeck:<v> (Stribeck excess with velocity v rad/s).
     #[arg(long, value_delimiter = ',', default_value = "viscous,coulomb")]
     friction: Vec<String>,
-    /// Effect terms from the diagnosis library, comma-separated (e.g. tilt,time_delay,
-    /// torque_gain,payload; cogging:<harmonic>; compliance:<1/k of the secant>, default the tangent); see docs/diagnose.md.
-    #[arg(long, value_delimiter = ',')]
+    #[arg(long, value_delimiter = ',', help = effects_help())]
     effects: Vec<String>,
     /// Take the effects a diagnosis confirmed: its report.json (`physid diagnose --out`).
     #[arg(long)]
@@ -514,4 +512,12 @@ fn print_terms(terms: &[physid::diagnose::calibrate::TermFit], m: &Model) {
             );
         }
     }
+}
+
+/// `--effects`'s help, listing every kind of the effect table (a kind added there appears here).
+fn effects_help() -> String {
+    format!(
+        "Effect terms from the diagnosis library, comma-separated: {}; see docs/diagnose.md",
+        physid::diagnose::calibrate::term_syntax()
+    )
 }

@@ -37,3 +37,22 @@ fn the_help_leads_with_the_products_description_and_lists_every_command() {
         assert!(text.contains(&format!("Usage: physid {c}")), "{text}");
     }
 }
+
+#[test]
+fn identify_s_help_lists_every_effect_kind_with_its_grid() {
+    let (code, help, _) = common::physid(&["identify", "--help"]);
+    assert_eq!(code, 0);
+    // Every kind of the table (the help is built from it; backlash was once missing).
+    for kind in physid::diagnose::library::Kind::ALL {
+        assert!(
+            help.contains(kind.name()),
+            "{} missing:\n{help}",
+            kind.name()
+        );
+    }
+    let flat = help.split_whitespace().collect::<Vec<_>>().join(" ");
+    assert!(
+        flat.contains("backlash[:<width of the secant, rad: 0.01, 0.02 or 0.04; 0: the tangent>]"),
+        "{flat}"
+    );
+}

@@ -275,6 +275,20 @@ fn term_fits(
         .collect()
 }
 
+/// The terms [`parse_term`] reads, from the effect table: each kind's name, with `:<value>` for
+/// a kind searched over a grid (`[:<value>]` where it has a default), e.g. for a command's help.
+pub fn term_syntax() -> String {
+    Kind::ALL
+        .into_iter()
+        .map(|k| match (k.gridded(), k.default_param().is_some()) {
+            (false, _) => k.name().to_string(),
+            (true, true) => format!("{}[:<{}>]", k.name(), k.grid_meaning()),
+            (true, false) => format!("{}:<{}>", k.name(), k.grid_meaning()),
+        })
+        .collect::<Vec<_>>()
+        .join(", ")
+}
+
 /// Parses a term: a kind's name (`torque_offset`, `tilt`, …), or one of the friction aliases
 /// `offset`, `direction` (direction-dependent Coulomb), `stribeck:<v rad/s>`; kinds with a grid
 /// take their value after `:` (`cogging:<harmonic>`).
