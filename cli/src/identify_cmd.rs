@@ -88,7 +88,10 @@ pub struct Args {
     /// Coulomb), stribeck:<v> (Stribeck excess with velocity v rad/s).
     #[arg(long, value_delimiter = ',', default_value = "viscous,coulomb")]
     friction: Vec<String>,
-    #[arg(long, value_delimiter = ',', help = effects_help())]
+    // Every kind of the effect table (a kind added there appears here).
+    #[arg(long, value_delimiter = ',', help = format!(
+        "Effect terms from the diagnosis library, comma-separated: {}; see docs/diagnose.md",
+        physid::diagnose::calibrate::term_syntax()))]
     effects: Vec<String>,
     /// Take the effects a diagnosis confirmed: its report.json (`physid diagnose --out`).
     #[arg(long)]
@@ -512,12 +515,4 @@ fn print_terms(terms: &[physid::diagnose::calibrate::TermFit], m: &Model) {
             );
         }
     }
-}
-
-/// `--effects`'s help, listing every kind of the effect table (a kind added there appears here).
-fn effects_help() -> String {
-    format!(
-        "Effect terms from the diagnosis library, comma-separated: {}; see docs/diagnose.md",
-        physid::diagnose::calibrate::term_syntax()
-    )
 }
