@@ -232,6 +232,20 @@ def excite(
 ) -> Excitation:
     """Design an excitation within the robot's limits, as `physid excite` does."""
 
+def score_motion(
+    scenario: Path,
+    *,
+    duration: float = 20.0,
+    harmonics: int = 5,
+    base_frequency: float = 0.5,
+    objective: str = "d-optimal",
+    margin: float = 0.15,
+    samples: int = 200,
+    rate: float = 1000.0,
+    threads: Optional[int] = None,
+) -> dict[str, Any]:
+    """A scenario's own motion scored as `physid excite --score --json` scores it."""
+
 class Sweep:
     """A parameter sweep's result: its folder, what ran, the merged tables once complete."""
 

@@ -1252,6 +1252,55 @@ fn excite(
     })
 }
 
+/// Scores the motion a scenario already has (`physid excite --score`): its own excitation
+/// simulated for `duration` s and the information of its true states under the design's
+/// weighting (`objective`, `margin` and the Fourier keywords as for `excite`). Returns a dict
+/// equal to `excite --score --json`: `d_optimal` (log det F / r), `e_optimal` (log λ_min(F)),
+/// `condition` (κ(F)), `samples`. Ctrl-C interrupts it.
+#[pyfunction]
+#[pyo3(signature = (scenario, *, duration = 20.0, harmonics = 5, base_frequency = 0.5,
+    objective = "d-optimal", margin = 0.15, samples = 200, rate = 1000.0, threads = None))]
+#[allow(clippy::too_many_arguments)]
+fn score_motion<'py>(
+    py: Python<'py>,
+    scenario: PathBuf,
+    duration: f64,
+    harmonics: usize,
+    base_frequency: f64,
+    objective: &str,
+    margin: f64,
+    samples: usize,
+    rate: f64,
+    threads: Option<usize>,
+) -> PyResult<Bound<'py, PyDict>> {
+    let opts = api::excite::ExciteOptions {
+        from: api::excite::ExciteFrom::Scenario(scenario),
+        duration,
+        harmonics,
+        base_frequency,
+        objective: self::objective(objective)?,
+        margin,
+        samples,
+        rate,
+        check: false,
+        ..api::excite::ExciteOptions::default()
+    };
+    let pool = thread_pool(threads)?;
+    let (result, notices) = interruptible(py, move || {
+        let mut notices = vec![];
+        let result = pool.install(|| api::excite::score_motion(&opts, &mut |n| notices.push(n)));
+        (result, notices)
+    })?;
+    warn(py, &notices)?;
+    let s = result.map_err(api_error)?;
+    let out = PyDict::new(py);
+    out.set_item("d_optimal", s.d_optimal)?;
+    out.set_item("e_optimal", s.e_optimal)?;
+    out.set_item("condition", s.condition)?;
+    out.set_item("samples", s.samples)?;
+    Ok(out)
+}
+
 /// Simulates a scenario's excitation experiment and logs it to MCAP at `out` (and the
 /// processed samples as CSV at `csv`), as `physid simulate` does: `engine` (`"physid"` or
 /// `"rapier"`), `duration` (s) and `seed` override the scenario's. `progress`, if given, is
@@ -1750,6 +1799,7 @@ fn _physid(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<Sweep>()?;
     m.add_function(wrap_pyfunction!(sweep, m)?)?;
     m.add_function(wrap_pyfunction!(excite, m)?)?;
+    m.add_function(wrap_pyfunction!(score_motion, m)?)?;
     m.add_function(wrap_pyfunction!(compare, m)?)?;
     m.add_function(wrap_pyfunction!(experiment, m)?)?;
     m.add_function(wrap_pyfunction!(simulate, m)?)?;

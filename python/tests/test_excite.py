@@ -89,3 +89,22 @@ def test_bad_inputs_are_named_as_the_cli_names_them(tmp_path):
     with pytest.raises(ValueError, match="nope.urdf"):
         physid.excite(str(tmp_path / "nope.urdf"))
     assert list(tmp_path.iterdir()) == []
+
+
+def test_a_scenario_s_own_motion_is_scored_as_the_cli_scores_it(cli):
+    got = physid.score_motion(SHELL, duration=4.0)
+    ref = cli("excite", "--scenario", SHELL, "--score", "--duration", "4")
+    assert got == ref
+    assert got["samples"] > 3000 and np.isfinite(got["d_optimal"]) and got["condition"] >= 1.0
+    # The objective weights the score as it weights a design.
+    e = physid.score_motion(SHELL, duration=4.0, objective="e-optimal")
+    assert e == cli("excite", "--scenario", SHELL, "--score", "--duration", "4", "--objective", "e-optimal")
+
+
+def test_scoring_refuses_bad_input_by_name(tmp_path):
+    with pytest.raises(ValueError, match="nope.toml"):
+        physid.score_motion(str(tmp_path / "nope.toml"), duration=4.0)
+    with pytest.raises(ValueError, match="duration"):
+        physid.score_motion(SHELL, duration=-1.0)
+    with pytest.raises(ValueError, match="objective"):
+        physid.score_motion(SHELL, objective="best")
