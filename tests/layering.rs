@@ -111,33 +111,49 @@ fn every_module_imports_only_from_lower_floors() {
     );
 }
 
+/// The names that follow each `prefix` in `code`: `prefix{a, b::c}` names `a` and `b`.
+fn names_after(code: &str, prefix: &str) -> Vec<String> {
+    let mut out = vec![];
+    for (i, _) in code.match_indices(prefix) {
+        let rest = &code[i + prefix.len()..];
+        if let Some(group) = rest.strip_prefix('{') {
+            let group = &group[..group.find('}').unwrap_or(group.len())];
+            out.extend(
+                group
+                    .split(',')
+                    .map(|s| s.trim().split("::").next().unwrap_or("").to_string()),
+            );
+        } else {
+            out.push(
+                rest.chars()
+                    .take_while(|c| c.is_alphanumeric() || *c == '_')
+                    .collect(),
+            );
+        }
+    }
+    out
+}
+
+/// The `.rs` files of `dir` other than `mod.rs`, as (module name, path).
+fn child_files(dir: &Path) -> Vec<(String, PathBuf)> {
+    std::fs::read_dir(dir)
+        .unwrap()
+        .map(|e| e.unwrap().path())
+        .filter(|p| p.extension().is_some_and(|e| e == "rs"))
+        .map(|p| (p.file_stem().unwrap().to_string_lossy().to_string(), p))
+        .filter(|(stem, _)| stem != "mod")
+        .collect()
+}
+
 /// The sibling files a file of `folder` (its path under `src/`, e.g. `diagnose`) names: as
 /// `super::name` or `crate::folder::name`, for `name` among `siblings` (mod.rs is not one).
 fn sibling_imports(code: &str, folder: &str, siblings: &[String]) -> Vec<String> {
-    let prefixes = [
-        "super::".to_string(),
-        format!("crate::{}::", folder.replace('/', "::")),
-    ];
-    let mut out = vec![];
-    for prefix in &prefixes {
-        for (i, _) in code.match_indices(prefix.as_str()) {
-            let rest = &code[i + prefix.len()..];
-            // `super::{a, b::c}` names several.
-            let names: Vec<String> = if let Some(group) = rest.strip_prefix('{') {
-                let group = &group[..group.find('}').unwrap_or(group.len())];
-                group
-                    .split(',')
-                    .map(|s| s.trim().split("::").next().unwrap_or("").to_string())
-                    .collect()
-            } else {
-                vec![rest
-                    .chars()
-                    .take_while(|c| c.is_alphanumeric() || *c == '_')
-                    .collect()]
-            };
-            out.extend(names.into_iter().filter(|n| siblings.contains(n)));
-        }
-    }
+    let crate_path = format!("crate::{}::", folder.replace('/', "::"));
+    let mut out: Vec<String> = ["super::", crate_path.as_str()]
+        .into_iter()
+        .flat_map(|prefix| names_after(code, prefix))
+        .filter(|n| siblings.contains(n))
+        .collect();
     out.sort();
     out.dedup();
     out
@@ -195,26 +211,17 @@ fn no_import_circle_among_the_files_of_a_folder() {
             .unwrap()
             .to_string_lossy()
             .to_string();
-        let files: Vec<PathBuf> = std::fs::read_dir(dir)
-            .unwrap()
-            .map(|e| e.unwrap().path())
-            .filter(|p| p.extension().is_some_and(|e| e == "rs"))
-            .collect();
-        let stem = |p: &Path| p.file_stem().unwrap().to_string_lossy().to_string();
-        let siblings: Vec<String> = files
-            .iter()
-            .map(|p| stem(p))
-            .filter(|s| s != "mod")
-            .collect();
+        let files = child_files(dir);
+        let siblings: Vec<String> = files.iter().map(|(stem, _)| stem.clone()).collect();
         let mut edges = std::collections::BTreeMap::new();
-        for f in files.iter().filter(|p| stem(p) != "mod") {
+        for (stem, f) in &files {
             let code = code(&std::fs::read_to_string(f).unwrap());
             let to: Vec<String> = sibling_imports(&code, &folder, &siblings)
                 .into_iter()
-                .filter(|t| *t != stem(f))
+                .filter(|t| t != stem)
                 .collect();
             edges_seen += to.len();
-            edges.insert(stem(f), to);
+            edges.insert(stem.clone(), to);
         }
         if let Some(c) = find_cycle(&edges) {
             circles.push(format!("src/{folder}: {} -> {}", c.join(" -> "), c[0]));
@@ -234,27 +241,10 @@ fn no_import_circle_among_the_files_of_a_folder() {
 /// The names a file reaches through `super::` that are not sibling modules: items of its
 /// folder's `mod.rs` (a back arrow to the parent that calls it).
 fn back_arrows(code: &str, siblings: &[String]) -> Vec<String> {
-    let mut out = vec![];
-    for (i, _) in code.match_indices("super::") {
-        let rest = &code[i + "super::".len()..];
-        let names: Vec<String> = if let Some(group) = rest.strip_prefix('{') {
-            let group = &group[..group.find('}').unwrap_or(group.len())];
-            group
-                .split(',')
-                .map(|s| s.trim().split("::").next().unwrap_or("").to_string())
-                .collect()
-        } else {
-            vec![rest
-                .chars()
-                .take_while(|c| c.is_alphanumeric() || *c == '_')
-                .collect()]
-        };
-        out.extend(
-            names
-                .into_iter()
-                .filter(|n| !n.is_empty() && n != "self" && !siblings.contains(n)),
-        );
-    }
+    let mut out: Vec<String> = names_after(code, "super::")
+        .into_iter()
+        .filter(|n| !n.is_empty() && n != "self" && !siblings.contains(n))
+        .collect();
     out.sort();
     out.dedup();
     out
@@ -271,23 +261,13 @@ fn no_back_arrow_to_mod_rs_inside_a_pipeline_folder() {
     let mut arrows = vec![];
     let mut files_seen = 0;
     for folder in PIPELINE_FOLDERS {
-        let dir = src.join(folder);
-        let files: Vec<PathBuf> = std::fs::read_dir(&dir)
-            .unwrap()
-            .map(|e| e.unwrap().path())
-            .filter(|p| p.extension().is_some_and(|e| e == "rs"))
-            .collect();
-        let stem = |p: &Path| p.file_stem().unwrap().to_string_lossy().to_string();
-        let siblings: Vec<String> = files
-            .iter()
-            .map(|p| stem(p))
-            .filter(|s| s != "mod")
-            .collect();
-        for f in files.iter().filter(|p| stem(p) != "mod") {
+        let files = child_files(&src.join(folder));
+        let siblings: Vec<String> = files.iter().map(|(stem, _)| stem.clone()).collect();
+        for (stem, f) in &files {
             files_seen += 1;
             let code = code(&std::fs::read_to_string(f).unwrap());
             for name in back_arrows(&code, &siblings) {
-                arrows.push(format!("src/{folder}/{}.rs: super::{name}", stem(f)));
+                arrows.push(format!("src/{folder}/{stem}.rs: super::{name}"));
             }
         }
     }
