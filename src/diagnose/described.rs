@@ -2,7 +2,7 @@
 //! effect estimates, its rungs as the description's steps, and its first explanation added to
 //! the effects when neither cross-validation nor the description test named it.
 
-use super::diagnosis::{DescriptionStep, EffectEstimate, Evidence, Magnitude};
+use super::diagnosis::{DescriptionStep, EffectEstimate};
 use super::ladder::{self, Explanation, Ladder};
 use super::library::Variant;
 use super::magnitude;
@@ -36,39 +36,13 @@ pub(crate) fn from_description(
 /// The explanations as the diagnosis's effect estimates (described by the description
 /// test's evidence: they depart from the description), friction left out.
 pub(crate) fn estimates(ladder: &Ladder, stage: &Stage) -> Vec<EffectEstimate> {
-    let n = stage.model.dof();
-    let g = stage.model.gravity().norm().max(1e-12);
     let effects = ladder.chosen.iter().filter_map(|e| match e {
         Explanation::Effect(v) => Some(*v),
         Explanation::Friction => None,
     });
     effects
         .zip(ladder.coefficients.iter().zip(&ladder.coefficient_se))
-        .map(|(v, (c, se))| {
-            let (name, unit) = v.kind.magnitude();
-            let values = magnitude::magnitudes_of(v.kind, c, n, g);
-            let single = values.len() == 1;
-            let magnitudes = values
-                .iter()
-                .enumerate()
-                .map(|(i, &value)| Magnitude {
-                    joint: magnitude::joint_label(stage, single, i, v),
-                    value,
-                    se: magnitude::magnitude_se(v.kind, c, se, n, g, i),
-                    unit: unit.into(),
-                    identifiable: 1.0,
-                })
-                .collect();
-            EffectEstimate {
-                kind: v.kind,
-                evidence: Evidence::Description,
-                param: v.param,
-                magnitude_name: name.into(),
-                magnitudes,
-                ambiguous_with: vec![],
-                separate_by: None,
-            }
-        })
+        .map(|(v, (c, se))| magnitude::described_estimate(stage, v, c, se, vec![]))
         .collect()
 }
 

@@ -161,35 +161,49 @@ fn jackknife_se(per_fold: &[Vec<f64>], i: usize) -> f64 {
 /// The estimates of the effects found against the description: posterior magnitudes, errors
 /// propagated to first order, identified through the description (identifiable fraction 1).
 pub(crate) fn against_description(stage: &Stage, steps: &[anchor::Step]) -> Vec<EffectEstimate> {
-    let n = stage.model.dof();
-    let g = stage.model.gravity().norm().max(1e-12);
     steps
         .iter()
         .map(|st| {
             let v = stage.folds.variants[st.variant];
-            let (name, unit) = v.kind.magnitude();
-            let values = magnitudes_of(v.kind, &st.beta, n, g);
-            let single = values.len() == 1;
-            let magnitudes = values
-                .iter()
-                .enumerate()
-                .map(|(i, &value)| Magnitude {
-                    joint: joint_label(stage, single, i, v),
-                    value,
-                    se: magnitude_se(v.kind, &st.beta, &st.se, n, g, i),
-                    unit: unit.into(),
-                    identifiable: 1.0,
-                })
-                .collect();
-            EffectEstimate {
-                kind: v.kind,
-                evidence: Evidence::Description,
-                param: v.param,
-                magnitude_name: name.into(),
-                magnitudes,
-                separate_by: st.ambiguous_with.first().map(|&b| separate_by(v.kind, b)),
-                ambiguous_with: st.ambiguous_with.clone(),
-            }
+            described_estimate(stage, v, &st.beta, &st.se, st.ambiguous_with.clone())
         })
         .collect()
+}
+
+/// The estimate of variant `v` found against the description, from its coefficients `beta`
+/// and their posterior standard errors `se`: magnitudes with errors propagated to first order,
+/// identified through the description (identifiable fraction 1); what the data could not tell
+/// it apart from, with the data that would.
+pub(crate) fn described_estimate(
+    stage: &Stage,
+    v: Variant,
+    beta: &[f64],
+    se: &[f64],
+    ambiguous_with: Vec<Kind>,
+) -> EffectEstimate {
+    let n = stage.model.dof();
+    let g = stage.model.gravity().norm().max(1e-12);
+    let (name, unit) = v.kind.magnitude();
+    let values = magnitudes_of(v.kind, beta, n, g);
+    let single = values.len() == 1;
+    let magnitudes = values
+        .iter()
+        .enumerate()
+        .map(|(i, &value)| Magnitude {
+            joint: joint_label(stage, single, i, v),
+            value,
+            se: magnitude_se(v.kind, beta, se, n, g, i),
+            unit: unit.into(),
+            identifiable: 1.0,
+        })
+        .collect();
+    EffectEstimate {
+        kind: v.kind,
+        evidence: Evidence::Description,
+        param: v.param,
+        magnitude_name: name.into(),
+        magnitudes,
+        separate_by: ambiguous_with.first().map(|&b| separate_by(v.kind, b)),
+        ambiguous_with,
+    }
 }
