@@ -21,11 +21,7 @@ fn a_streamed_csv_fits_as_the_same_file_in_memory() {
     let opts = physid::io::DataOptions::default();
     let memory = Data::open_all(&[csv.as_path()], &model, &opts, true).unwrap();
     assert!(matches!(memory[0], Data::Memory(_)));
-    let joints: Vec<String> = model
-        .bodies()
-        .iter()
-        .map(|b| b.joint_name.clone())
-        .collect();
+    let joints: Vec<String> = model.joint_names();
     let streamed = vec![Data::Csv {
         path: csv.clone(),
         joints,

@@ -806,7 +806,7 @@ fn data_whose_time_stamps_do_not_advance_are_refused_by_name() {
     // 100 samples all stamped 0 s: no sample period to filter or differentiate at (the effect
     // columns once took 1 ms for it, silently).
     let m = physid::model::cheetah3::leg();
-    let names: Vec<String> = m.bodies().iter().map(|b| b.joint_name.clone()).collect();
+    let names: Vec<String> = m.joint_names();
     let n = names.len();
     let frozen = |t: &dyn Fn(usize) -> f64| {
         let mut tr = physid::trajectory::Trajectory::new(names.clone(), true);

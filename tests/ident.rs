@@ -13,7 +13,7 @@ use physid::trajectory::Trajectory;
 /// Noise-free samples with exact `sign` friction: τ = Y θ exactly.
 fn exact_data(m: &Model, count: usize, seed: u64) -> Trajectory {
     let mut d = Data::new(m);
-    let names = m.bodies().iter().map(|b| b.joint_name.clone()).collect();
+    let names = m.joint_names();
     let mut tr = Trajectory::new(names, true);
     for k in 0..count {
         let [q, qd, qdd] = random_state(seed * 100_000 + k as u64, m.dof(), 2.0);

@@ -425,11 +425,7 @@ fn csv_columns_named_by_joint_in_any_order_read_as_numbered_ones() {
         w.write_record(&rec).unwrap();
     }
     w.flush().unwrap();
-    let joints: Vec<String> = model
-        .bodies()
-        .iter()
-        .map(|b| b.joint_name.clone())
-        .collect();
+    let joints: Vec<String> = model.joint_names();
     assert_eq!(joints, names);
     let a = read(&numbered, &model, &Default::default()).0;
     let b = read(&dir.path().join("named.csv"), &model, &Default::default());

@@ -74,7 +74,7 @@ pub fn dynamics_json(
     }
     let v = json!({
         "model": m.name(), "rotor_model": m.rotor_model(),
-        "joint_names": m.bodies().iter().map(|b| b.joint_name.clone()).collect::<Vec<_>>(),
+        "joint_names": m.joint_names(),
         "body_names": m.bodies().iter().map(|b| b.name.clone()).collect::<Vec<_>>(),
         "parameter_names": m.parameter_names(), "theta": m.parameters().as_slice(),
         "samples": states,

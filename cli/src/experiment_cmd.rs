@@ -85,11 +85,7 @@ fn write_run(
     wall: f64,
     threads: usize,
 ) -> anyhow::Result<(polars::prelude::DataFrame, polars::prelude::DataFrame)> {
-    let joints: Vec<String> = model
-        .bodies()
-        .iter()
-        .map(|b| b.joint_name.clone())
-        .collect();
+    let joints: Vec<String> = model.joint_names();
     let body_names: Vec<String> = physid::ident::bodies(model)
         .into_iter()
         .map(|(n, _, _)| n)

@@ -191,11 +191,7 @@ impl Robot {
     /// Joint names, in the robot's order (the columns of every array).
     #[getter]
     fn joint_names(&self) -> Vec<String> {
-        self.model
-            .bodies()
-            .iter()
-            .map(|b| b.joint_name.clone())
-            .collect()
+        self.model.joint_names()
     }
 
     /// The names of θ's entries (per body and rotor `m, hx, …, Izz`, then friction).
@@ -607,12 +603,7 @@ impl Identification {
         let r = &self.report;
         let n = self.model.dof();
         let cols = PyDict::new(py);
-        let names: Vec<String> = self
-            .model
-            .bodies()
-            .iter()
-            .map(|b| b.joint_name.clone())
-            .collect();
+        let names: Vec<String> = self.model.joint_names();
         cols.set_item("joint", names)?;
         cols.set_item("viscous", r.identified.viscous.clone())?;
         cols.set_item("coulomb", r.identified.coulomb.clone())?;
@@ -1481,11 +1472,7 @@ fn experiment(
     }
     let pool = thread_pool(threads)?;
     let (joints, bodies) = (
-        model
-            .bodies()
-            .iter()
-            .map(|b| b.joint_name.clone())
-            .collect(),
+        model.joint_names(),
         physid::ident::bodies(&model)
             .into_iter()
             .map(|(n, _, _)| n)

@@ -67,11 +67,7 @@ impl Data {
             .map(|(p, _)| *p)
             .collect();
         let mut loaded = crate::io::load_all(&loaded_paths, model, read)?.into_iter();
-        let joints: Vec<String> = model
-            .bodies()
-            .iter()
-            .map(|b| b.joint_name.clone())
-            .collect();
+        let joints: Vec<String> = model.joint_names();
         paths
             .iter()
             .zip(streamed)
@@ -493,11 +489,7 @@ impl ReadOptions {
     /// The library's reading options for `model`, checked: joints named exist, `only`
     /// becomes the other joints locked, the cutoff is a positive frequency.
     pub fn resolve(&self, model: &Model) -> Result<DataOptions, ApiError> {
-        let joints: Vec<String> = model
-            .bodies()
-            .iter()
-            .map(|b| b.joint_name.clone())
-            .collect();
+        let joints: Vec<String> = model.joint_names();
         if !self.lock.is_empty() && !self.only.is_empty() {
             return Err(ApiError::Options(
                 "--lock and --only: give one of them (--only locks every other joint)".into(),

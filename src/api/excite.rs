@@ -378,11 +378,7 @@ pub fn reference_trajectory(
     duration: f64,
     rate: f64,
 ) -> Trajectory {
-    let names: Vec<String> = model
-        .bodies()
-        .iter()
-        .map(|b| b.joint_name.clone())
-        .collect();
+    let names: Vec<String> = model.joint_names();
     let samples = (duration * rate).round() as usize + 1;
     let mut tr = Trajectory::new(names.clone(), true);
     let zero = vec![0.0; names.len()];

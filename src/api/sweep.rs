@@ -98,11 +98,7 @@ pub fn plan(opts: &SweepOptions) -> Result<SweepPlan, ApiError> {
         mine: vec![],
         todo: vec![],
         stale: 0,
-        joints: model
-            .bodies()
-            .iter()
-            .map(|b| b.joint_name.clone())
-            .collect(),
+        joints: model.joint_names(),
     };
     plan.mine = (0..plan.cells.len())
         .filter(|&i| opts.shard.is_none_or(|(k, n)| plan.cells[i].index % n == k))

@@ -685,8 +685,7 @@ fn same(c: &[f64], _: usize, _: f64) -> Vec<f64> {
 /// already carries the gain, so `τ = Y θ + β τ̂` with `τ̂ ≈ τ` gives `1 + g = 1/(1 − β)`.
 fn gain_magnitudes(c: &[f64], _: usize, _: f64) -> Vec<f64> {
     let g: Vec<f64> = c.iter().map(|b| b / (1.0 - b)).collect();
-    let m = super::stats::median(&g);
-    g.iter().map(|x| x - m).collect()
+    super::stats::relative_to_median(&g)
 }
 
 /// A spring's stiffness and rest angle from its columns `[q, 1]`: `k q + b` with `q₀ = −b/k`.
@@ -777,8 +776,7 @@ fn draw_gain(m: &Model, rng: &mut ChaCha8Rng, _: f64) -> (Option<EffectSpec>, Ve
     let j = rng.random_range(0..n);
     let mut gain = vec![1.0; n];
     gain[j] += signed(rng, 0.15, 0.3);
-    let med = super::stats::median(&gain);
-    let relative = gain.iter().map(|g| g - med).collect();
+    let relative = super::stats::relative_to_median(&gain);
     (Some(EffectSpec::TorqueGain { gain }), relative)
 }
 

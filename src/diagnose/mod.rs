@@ -54,7 +54,7 @@ pub use options::{DiagnoseError, Options};
 pub use pipeline::{diagnose, diagnose_runs};
 pub(crate) use residual::{finite_mean_square, mask_slow, residual_rms};
 pub use stage::{fit_nominal, MIN_SAMPLES};
-pub(crate) use stats::median;
+pub(crate) use stats::{median, relative_to_median};
 pub use structure::StructureLeft;
 
 /// Smallest identifiable fraction of a magnitude worth reporting as a number (its column's part

@@ -95,7 +95,7 @@ pub fn diagnose(
         confirmed: how_far.confirmed,
         confirmed_only: how_far.confirmed_only,
         robot: model.name().to_string(),
-        joints: model_joint_names(model),
+        joints: model.joint_names(),
         samples: [train.len(), validate.len()],
         constraints: opts.constraints,
         nominal_constraints_hold: nominal.constraints_hold,
@@ -171,7 +171,7 @@ fn summary_text(
         how_far.overall[0],
         verdict::summary(verdict, effects, n_cv, how_far, description_test)
     );
-    summary += &verdict::structure_summary(structure_left, &model_joint_names(model));
+    summary += &verdict::structure_summary(structure_left, &model.joint_names());
     summary += &explain::summary(explained, description_overall);
     if verdict == Verdict::Undecided {
         summary += &format!(
@@ -180,14 +180,6 @@ fn summary_text(
         );
     }
     summary
-}
-
-fn model_joint_names(model: &Model) -> Vec<String> {
-    model
-        .bodies()
-        .iter()
-        .map(|b| b.joint_name.clone())
-        .collect()
 }
 
 /// The diagnosis of runs as a user gives them: training runs and validation runs, each joined

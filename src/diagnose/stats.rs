@@ -14,3 +14,11 @@ pub(crate) fn median(v: &[f64]) -> f64 {
         0.5 * (s[m / 2 - 1] + s[m / 2])
     }
 }
+
+/// `v` less its median: per-joint torque gains as the diagnosis reports them (a gain common to
+/// every joint is a scale of all inertial parameters, so only the joints' differences are
+/// identifiable).
+pub(crate) fn relative_to_median(v: &[f64]) -> Vec<f64> {
+    let m = median(v);
+    v.iter().map(|x| x - m).collect()
+}

@@ -415,8 +415,7 @@ fn scaled(inj: &Injection, s: f64, rate: f64) -> Option<(EffectSpec, Vec<f64>)> 
                 .iter()
                 .map(|g| 1.0 + ((g - 1.0) * s).clamp(-MAX_GAIN_ERROR, MAX_GAIN_ERROR))
                 .collect();
-            let median = crate::diagnose::median(&gain);
-            let relative = gain.iter().map(|g| g - median).collect();
+            let relative = crate::diagnose::relative_to_median(&gain);
             return Some((EffectSpec::TorqueGain { gain }, relative));
         }
         EffectSpec::TorqueOffset { offset } => EffectSpec::TorqueOffset {
@@ -922,11 +921,7 @@ mod tests {
             }
         }
         Logged {
-            joint_names: model
-                .bodies()
-                .iter()
-                .map(|b| b.joint_name.clone())
-                .collect(),
+            joint_names: model.joint_names(),
             t,
             q,
             qd: Some(qd),
@@ -1022,11 +1017,7 @@ mod tests {
     fn exact(model: &Model) -> Logged {
         let n = model.dof();
         let mut log = Logged {
-            joint_names: model
-                .bodies()
-                .iter()
-                .map(|b| b.joint_name.clone())
-                .collect(),
+            joint_names: model.joint_names(),
             t: vec![],
             q: vec![],
             qd: Some(vec![]),

@@ -628,11 +628,7 @@ pub fn load_logged(
     model: &Model,
     opts: &DataOptions,
 ) -> Result<(crate::prepare::Logged, Vec<String>, usize), IoError> {
-    let names: Vec<String> = model
-        .bodies()
-        .iter()
-        .map(|b| b.joint_name.clone())
-        .collect();
+    let names: Vec<String> = model.joint_names();
     let is_mcap = path.is_dir() || path.extension().and_then(|e| e.to_str()) == Some("mcap");
     let (read, mut ignored, skipped) = if is_mcap {
         let ropts = mcap_log::ReadOptions {

@@ -405,6 +405,11 @@ impl Model {
         &self.bodies
     }
 
+    /// The joints' names, in body order (joint `i` moves body `i`).
+    pub fn joint_names(&self) -> Vec<String> {
+        self.bodies.iter().map(|b| b.joint_name.clone()).collect()
+    }
+
     /// Gravity in the base frame (m/s²).
     pub fn gravity(&self) -> Vector3<f64> {
         self.gravity

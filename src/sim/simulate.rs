@@ -111,11 +111,7 @@ pub fn simulate(
         (Some(kt), Some(r), Some(v)) => Some((kt, r, v)),
         _ => None,
     };
-    let names: Vec<String> = model
-        .bodies()
-        .iter()
-        .map(|b| b.joint_name.clone())
-        .collect();
+    let names: Vec<String> = model.joint_names();
     let mut truth = Trajectory::new(names.clone(), true);
     let mut measured = Trajectory::new(names.clone(), true);
     let (mut friction_log, mut effects_log) = (
