@@ -51,6 +51,31 @@ fn a_streamed_csv_fits_as_the_same_file_in_memory() {
         "θ differs by {diff:e} (scale {scale:e})"
     );
     assert!(a.identified.constraints_hold);
+    // The information matrix for the sidecar: the same from the file read again from disk.
+    let ia = a
+        .information(&model, &memory, &train, &locked)
+        .unwrap()
+        .unwrap();
+    let ib = b
+        .information(&model, &streamed, &train, &locked)
+        .unwrap()
+        .unwrap();
+    let scale = ia.matrix.amax();
+    let diff = (&ia.matrix - &ib.matrix).amax();
+    assert!(
+        diff <= 1e-8 * scale,
+        "𝓘 differs by {diff:e} (scale {scale:e})"
+    );
+    assert_eq!((ia.samples, ib.samples), (n * 3 / 4, n * 3 / 4));
+    // Weighed by the fit's own residual, which sits at the torque noise.
+    let noise = sc.sensors.torque_noise;
+    assert!(ia.correlation_samples >= 1.0 && ia.correlation_samples.is_finite());
+    assert_eq!(ia.correlation_samples, ib.correlation_samples);
+    let s = ia.residual_rms;
+    assert!(s < 3.0 * noise && s > 0.3 * noise, "{s} vs noise {noise}");
+    let w = 1.0 / (s * s * ia.correlation_samples);
+    let yty = &a.normal_equations.yty;
+    assert!((&ia.matrix - yty * w).amax() <= 1e-12 * scale);
     let a = a.errors(&model, &memory, &validation, &locked).unwrap();
     let b = b.errors(&model, &streamed, &validation, &locked).unwrap();
     let (per_a, all_a, per_b, all_b) = (a.per_joint, a.overall, b.per_joint, b.overall);
@@ -60,7 +85,6 @@ fn a_streamed_csv_fits_as_the_same_file_in_memory() {
         .iter()
         .all(|r| r.is_some_and(|r| r > 0.0 && r.is_finite())));
     // The validation error sits at the simulated torque noise, not far above it.
-    let noise = sc.sensors.torque_noise;
     assert!(
         all_a < 3.0 * noise && all_a > 0.3 * noise,
         "{all_a} vs noise {noise}"

@@ -49,6 +49,10 @@ pub struct Args {
     /// --description-uncertainty.
     #[arg(long = "baseline-data", num_args = 1..)]
     baseline_data: Vec<PathBuf>,
+    /// Ignore the information matrix in the description's sidecar (`identify --out-urdf`
+    /// writes it; read from a sidecar given as --robot, or beside a URDF given as --robot).
+    #[arg(long)]
+    no_description_information: bool,
 }
 
 /// `physid diagnose`.
@@ -66,6 +70,11 @@ pub fn run(a: Args) -> anyhow::Result<()> {
     };
     o.diagnosis.validate().map_err(super::option_error)?;
     let model = a.robot.load()?;
+    if !a.no_description_information {
+        physid::api::information::apply(&a.robot.robot, &model, &mut o.diagnosis)?
+            .iter()
+            .for_each(|n| eprintln!("{n}"));
+    }
     if let Some(dir) = &a.report {
         let inputs: Vec<PathBuf> = a
             .robot

@@ -109,9 +109,9 @@ pub struct Args {
     /// Print JSON (schema: docs/identify-json.md).
     #[arg(long)]
     json: bool,
-    /// Write the identified model as URDF: the robot's own URDF with only its `<inertial>` and
-    /// `<dynamics>` changed (a new file for a built-in robot), plus a sidecar `<name>.physid.toml`
-    /// with what URDF cannot carry (bounding ellipsoids, sidecar rotors, identified effects).
+    /// Write the identified model as URDF (the robot's own with only `<inertial>`, `<dynamics>`
+    /// changed) and a sidecar `<name>.physid.toml` with what URDF cannot carry: ellipsoids,
+    /// rotors, effects, the fit's information matrix (`diagnose` reads it as its uncertainty).
     #[arg(long)]
     out_urdf: Option<PathBuf>,
     /// Write the optimization problem as JSON (for scripts/check_cvxpy.py).
@@ -152,6 +152,7 @@ fn options(a: &Args) -> anyhow::Result<IdentifyOptions> {
     o.regularizer = a.regularizer;
     o.read = a.read.options();
     o.allow_few_samples = a.allow_few_samples;
+    o.information = a.out_urdf.is_some();
     Ok(o)
 }
 

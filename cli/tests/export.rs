@@ -103,6 +103,23 @@ fn identified_kuka_patches_its_own_urdf_and_round_trips() {
         assert!((e.qs - e0.qs).norm() < 1e-12 && (e.center - e0.center).norm() < 1e-12);
     }
 
+    // The sidecar carries the fit's information matrix (the offsets' residual weighs it),
+    // read back onto the model whether the sidecar or the URDF beside it is the robot.
+    for robot in [side.to_str().unwrap(), o] {
+        let (m, _) = io::load_robot_with(robot, &Default::default()).unwrap();
+        let (info, notes) = physid::api::information::for_description(robot, &m).unwrap();
+        let info = info.expect("an information matrix");
+        assert_eq!(info.nrows(), m.layout().len);
+        assert!(notes[0].text.contains("5027 samples"), "{}", notes[0]);
+        let sym = (&info - info.transpose()).amax();
+        assert_eq!(sym, 0.0);
+        let eig = info.clone().symmetric_eigen().eigenvalues;
+        assert!(eig.min() >= -1e-9 * eig.max(), "{}", eig.min());
+        // The first link turns about the vertical: its mass is not seen (no information).
+        assert_eq!(info[(0, 0)], 0.0);
+        assert!(info.trace() > 0.0);
+    }
+
     // An output may not land on an input.
     let (code, _, err) = physid(&[
         "identify",

@@ -63,20 +63,25 @@ fn run(dir: &Path, r: usize, mass: f64, robot: &Path) -> PathBuf {
 }
 
 fn diagnose(robot: &Path, data: &Path, extra: &[&str]) -> serde_json::Value {
+    let mut args = vec!["--description-uncertainty", "0.05"];
+    args.extend(extra);
+    diagnose_stating(robot, data, &args).0
+}
+
+/// The diagnosis's JSON and its stderr, with `extra` flags only.
+fn diagnose_stating(robot: &Path, data: &Path, extra: &[&str]) -> (serde_json::Value, String) {
     let mut args = vec![
         "diagnose",
         "--robot",
         robot.to_str().unwrap(),
         "--data",
         data.to_str().unwrap(),
-        "--description-uncertainty",
-        "0.05",
         "--json",
     ];
     args.extend(extra);
     let (code, out, err) = physid(&args);
     assert_eq!(code, 0, "{err}");
-    serde_json::from_str(&out).unwrap()
+    (serde_json::from_str(&out).unwrap(), err)
 }
 
 /// The ladder's steps (after the two fixed rungs, before the re-identified one).
@@ -145,4 +150,28 @@ fn against_a_baseline_run_the_payload_is_named_first_and_the_only_body() {
     assert_eq!(bodies.len(), 1, "{bodies:?}");
     let mass = flange_payload(&d).expect("a payload on the flange");
     assert!((mass - 2.0).abs() <= 0.15 * 2.0, "mass {mass}");
+}
+
+#[test]
+fn the_description_s_own_information_from_its_sidecar_alone_weighs_the_payload() {
+    // identify --out-urdf wrote the fit's information matrix into the sidecar: with no
+    // --description-uncertainty the diagnosis runs the ladder on it (plus 5 % stated).
+    let dir = tempfile::tempdir().unwrap();
+    let robot = description(dir.path());
+    let loaded = run(dir.path(), 3, 2.0, &robot);
+    let (d, err) = diagnose_stating(&robot, &loaded, &[]);
+    assert!(
+        err.contains("described.physid.toml: the description's uncertainty from its identification's information matrix (5027 samples"),
+        "{err}"
+    );
+    assert!(err.contains("plus 5 % stated"), "{err}");
+    let s = steps(&d);
+    eprintln!("information alone: {s:?}; bodies {}", d["ladder"]["bodies"]);
+    assert!(s[0].starts_with("+ payload on"), "{s:?}");
+    let mass = flange_payload(&d).expect("a payload on the flange");
+    assert!((mass - 2.0).abs() <= 0.15 * 2.0, "mass {mass}");
+    // Told to ignore it, and given no uncertainty, there is no ladder from the description.
+    let (d, err) = diagnose_stating(&robot, &loaded, &["--no-description-information"]);
+    assert!(!err.contains("information matrix"), "{err}");
+    assert!(d["ladder"].is_null(), "{}", d["ladder"]);
 }

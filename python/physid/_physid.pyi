@@ -151,8 +151,11 @@ def diagnose(
     cutoff: Optional[float] = None,
     lock: Optional[Names] = None,
     only: Optional[Names] = None,
+    description_information: bool = True,
 ) -> Diagnosis:
-    """Diagnose the gap between the description and its runs as `physid diagnose` does."""
+    """Diagnose the gap between the description and its runs as `physid diagnose` does; a
+    description written by `Identification.write_urdf` carries its information matrix in its
+    sidecar, read unless `description_information=False`."""
 
 class Simulation:
     """A simulated excitation experiment, its log written; to_dict() is `physid simulate --json`."""

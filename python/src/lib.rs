@@ -751,6 +751,8 @@ fn identify<'py>(
         .map_err(|e| value_error(format!("--regularizer: {e}")))?;
     o.read = read_options(topic, stamp, cutoff, lock, only)?;
     o.allow_few_samples = allow_few_samples;
+    // For `write_urdf`'s sidecar: one more pass over the training samples.
+    o.information = true;
     let mut inputs: Vec<PathBuf> = o.data.iter().chain(&o.validate_data).cloned().collect();
     inputs.extend(effects_from);
     let model = m.clone();
@@ -884,12 +886,12 @@ impl Diagnosis {
 /// Diagnoses the gap between `robot` (the description) and its runs as `physid diagnose` does,
 /// its flags as keyword arguments: `data`, `validate`, `baseline_data` (paths), `constraints`,
 /// `holdout`, `description_uncertainty`, `payload_any_body`, `topic`, `stamp`, `cutoff`, `lock`,
-/// `only`. Warnings are raised as `physid.PhysidWarning`; Ctrl-C interrupts it.
+/// `only`; `description_information=False` is `--no-description-information`. Warnings are raised as `physid.PhysidWarning`; Ctrl-C interrupts it.
 #[pyfunction]
 #[pyo3(signature = (robot, data, *, validate = None, baseline_data = None,
     constraints = "consistent", holdout = 0.3, description_uncertainty = None,
     payload_any_body = false, topic = None, stamp = "log", cutoff = None, lock = None,
-    only = None))]
+    only = None, description_information = true))]
 #[allow(clippy::too_many_arguments)]
 fn diagnose<'py>(
     py: Python<'py>,
@@ -906,6 +908,7 @@ fn diagnose<'py>(
     cutoff: Option<f64>,
     lock: Option<&Bound<'py, PyAny>>,
     only: Option<&Bound<'py, PyAny>>,
+    description_information: bool,
 ) -> PyResult<Diagnosis> {
     let mut o = api::diagnose::DiagnoseOptions::new(paths("data", Some(data))?);
     o.validate = paths("validate", validate)?;
@@ -920,6 +923,12 @@ fn diagnose<'py>(
         every_body: payload_any_body,
         ..Default::default()
     };
+    let mut early = vec![];
+    if description_information && robot.as_file {
+        early = api::information::apply(&robot.source, &robot.model, &mut o.diagnosis)
+            .map_err(api_error)?;
+    }
+    warn(py, &early)?;
     let mut inputs: Vec<PathBuf> = o.files().iter().map(|p| p.to_path_buf()).collect();
     inputs.extend(physid::io::robot_files(&robot.source, &[]));
     let model = robot.model.clone();
@@ -930,6 +939,7 @@ fn diagnose<'py>(
     })?;
     warn(py, &notices)?;
     let outcome = outcome.map_err(api_error)?;
+    let notices = early.into_iter().chain(notices).collect();
     Ok(Diagnosis {
         diagnosis: outcome.diagnosis,
         standing: outcome.standing,

@@ -93,3 +93,24 @@ def test_the_example_runs(tmp_path):
     assert out.returncode == 0, out.stderr
     assert out.stdout.startswith("partially_explained - ")
     assert (tmp_path / "kuka_diagnosis" / "report.html").exists()
+
+
+def test_a_description_written_by_identify_carries_its_information(kuka, cli, tmp_path):
+    from test_identify import quiet_identify
+
+    fit = quiet_identify(kuka, kuka_run(1), constraints="consistent")
+    out = tmp_path / "identified.urdf"
+    fit.write_urdf(str(out))
+    assert "\n[information]\nsamples = 5027\n" in (tmp_path / "identified.physid.toml").read_text()
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", physid.PhysidWarning)
+        described = physid.Robot(str(out))
+        d = physid.diagnose(described, kuka_run(3))
+        off = physid.diagnose(described, kuka_run(3), description_information=False)
+    assert any("information matrix" in n and "5027 samples" in n for n in d.notices), d.notices
+    assert any("plus 5 % stated" in n for n in d.notices), d.notices
+    assert d.to_dict()["ladder"] is not None and off.to_dict()["ladder"] is None
+    ref = cli("diagnose", "--robot", str(out), "--data", kuka_run(3))
+    assert without_timings(d.to_dict()) == without_timings(ref)
+    ref_off = cli("diagnose", "--robot", str(out), "--data", kuka_run(3), "--no-description-information")
+    assert without_timings(off.to_dict()) == without_timings(ref_off)

@@ -172,6 +172,38 @@ impl Data {
         })
     }
 
+    /// Passes `(t, Y θ − τ)` (s, N m per joint) of every sample of `r` the fit uses to
+    /// `each` (streamed files read again).
+    pub fn for_each_residual(
+        &self,
+        m: &Model,
+        theta: &DVector<f64>,
+        r: Range<usize>,
+        each: &mut dyn FnMut(f64, &[f64]),
+    ) -> Result<(), ApiError> {
+        match self {
+            Data::Memory(_) => {
+                for t in self.pieces(&r) {
+                    analysis::residual_stream(
+                        m,
+                        theta,
+                        |sink| Ok::<usize, ApiError>(t.stream(0..t.len(), sink)),
+                        each,
+                    )?;
+                }
+            }
+            Data::Csv { path, joints, .. } => {
+                analysis::residual_stream(
+                    m,
+                    theta,
+                    |sink| samples::stream_csv(path, joints, r, sink),
+                    each,
+                )?;
+            }
+        }
+        Ok(())
+    }
+
     /// The squared torque errors of `theta` over the samples `r`.
     pub fn squared_errors(
         &self,

@@ -9,6 +9,7 @@ use super::data::{
 use super::ApiError;
 use crate::diagnose::calibrate::{parse_term, Calibration, Options as CalOptions, Run, TermFit};
 use crate::diagnose::library::Variant;
+use crate::ident::information::{Information, InformationError, ResidualStats};
 use crate::ident::{self, analysis, ConstraintSet, NormalEquations, Options};
 use crate::model::Model;
 use crate::trajectory::Trajectory;
@@ -314,6 +315,50 @@ impl Fit {
     }
 }
 
+impl Fit {
+    /// The fit's information matrix over the model's parameters: `YᵀY` of the `train` spans
+    /// (the `locked` joints' rows left out) over the noise `s² τ_c` of the fit's own residual
+    /// (effect terms included), read in one more pass (streamed files again from disk); the
+    /// inner error when the fit leaves no residual to weigh the data by.
+    pub fn information(
+        &self,
+        m: &Model,
+        data: &[Data],
+        train: &[Span],
+        locked: &[usize],
+    ) -> Result<Result<Information, InformationError>, ApiError> {
+        let mut stats = ResidualStats::new(m.dof());
+        let mut push = |t: f64, r: &[f64]| {
+            let mut r = r.to_vec();
+            locked.iter().for_each(|&j| r[j] = f64::NAN);
+            stats.push(t, &r);
+        };
+        if let Some((cal, copts)) = &self.calibration {
+            let pieces = in_memory(data, train);
+            crate::diagnose::calibrate::for_each_residual(
+                m,
+                cal,
+                &as_runs(&pieces),
+                copts,
+                &mut push,
+            );
+        } else {
+            let theta = self.model_theta(m);
+            for s in train {
+                data[s.file].for_each_residual(m, &theta, s.range.clone(), &mut push)?;
+            }
+        }
+        let ne = &self.normal_equations;
+        Ok(Information::new(
+            m.parameter_names(),
+            self.model_theta(m),
+            &ne.yty,
+            ne.samples,
+            &stats,
+        ))
+    }
+}
+
 /// Identifies `m` from the `train` spans of `data` under `opts`: the model's own problem
 /// (normal equations summed over the spans, streamed files included), or with effect `terms`
 /// the calibration of [`crate::diagnose::calibrate`] (in memory); the `locked` joints' rows
@@ -467,6 +512,10 @@ pub struct IdentifyOptions {
     pub read: ReadOptions,
     /// Accept fewer equations than parameters (the prior decides the rest).
     pub allow_few_samples: bool,
+    /// Compute the fit's information matrix ([`Identification::information`]; one more pass
+    /// over the training samples), which [`Identification::write_urdf`] writes into the
+    /// sidecar as the description's uncertainty.
+    pub information: bool,
 }
 
 impl IdentifyOptions {
@@ -485,6 +534,7 @@ impl IdentifyOptions {
             regularizer: defaults.regularizer,
             read: ReadOptions::default(),
             allow_few_samples: false,
+            information: false,
         }
     }
 
@@ -615,6 +665,9 @@ pub struct Identification {
     pub normal_equations: NormalEquations,
     /// Notes and warnings about the data and the answer, in the order they arose.
     pub notices: Vec<Notice>,
+    /// The fit's information matrix over the model's parameters when asked
+    /// ([`IdentifyOptions::information`]), or why there is none (a fit without residual).
+    pub information: Option<Result<Information, InformationError>>,
 }
 
 /// Identifies `m` from the runs of `o`: reads them, fits under the constraint set, scores the
@@ -649,7 +702,12 @@ pub fn identify_reporting(
     )?;
     let total = start.elapsed().as_secs_f64();
     let seen = opened.notices.len();
-    let report = score(m, o, fit, chosen, opened, total)?;
+    let information = match o.information {
+        true => Some(fit.information(m, &opened.data, &opened.train, &opened.locked)),
+        false => None,
+    };
+    let mut report = score(m, o, fit, chosen, opened, total)?;
+    report.information = information.transpose()?;
     report.notices[seen..].iter().for_each(notify);
     Ok(report)
 }
@@ -737,6 +795,7 @@ fn score(
             .collect(),
         normal_equations: fit.normal_equations,
         notices,
+        information: None,
     })
 }
 
@@ -794,18 +853,42 @@ impl Identification {
     /// when its inertias are not physically consistent.
     pub fn write_urdf(&self, path: &Path, robot: &str, m: &Model) -> Result<Vec<Notice>, ApiError> {
         let im = self.model(m)?;
-        crate::io::export_urdf(path, robot, m, &im, self.snippet.as_deref())?;
+        let extra = [
+            self.snippet.as_ref().map(|fx| {
+                format!("\n# Identified effects (physid identify), as a scenario's [[effects]] tables.\n{fx}")
+            }),
+            self.information
+                .as_ref()
+                .and_then(|i| i.as_ref().ok())
+                .map(super::information::sidecar_table),
+        ]
+        .into_iter()
+        .flatten()
+        .collect::<String>();
+        crate::io::export_urdf(
+            path,
+            robot,
+            m,
+            &im,
+            Some(extra.as_str()).filter(|s| !s.is_empty()),
+        )?;
         let consistent =
             ident::constraints_hold(m, &self.model_theta(m), ConstraintSet::Consistent);
-        Ok(if !self.identified.constraints_hold || !consistent {
-            vec![Notice::warning(format!(
+        let mut notices = vec![];
+        if !self.identified.constraints_hold || !consistent {
+            notices.push(Notice::warning(format!(
                 "{} holds physically inconsistent inertias (identified with '{}')",
                 path.display(),
                 self.set.name()
-            ))]
-        } else {
-            vec![]
-        })
+            )));
+        }
+        if let Some(Err(e)) = &self.information {
+            notices.push(Notice::warning(format!(
+                "{}: no information matrix in the sidecar ({e}): a diagnosis of it takes the description's uncertainty from --description-uncertainty alone",
+                path.display()
+            )));
+        }
+        Ok(notices)
     }
 
     /// The bodies that are not physically consistent (`J(π)` not positive definite), each

@@ -14,6 +14,7 @@ pub mod dynamics;
 pub mod excite;
 pub mod export;
 pub mod identify;
+pub mod information;
 pub mod model;
 pub mod provenance;
 pub mod simulate;

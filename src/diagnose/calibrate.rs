@@ -194,36 +194,55 @@ pub fn rms_error(
     opts: &Options,
 ) -> (Vec<f64>, f64) {
     let n = model.dof();
-    let theta = &calibration.identified.theta;
     let mut sq = vec![0.0; n];
     let mut count = 0usize;
-    for r in runs {
-        let ctx = Context::new(
-            model,
-            &calibration.nominal,
-            r.trajectory,
-            opts.processing_cutoff,
-        );
-        ctx.for_each_row(
-            r.trajectory,
-            r.range.clone(),
-            &opts.terms,
-            0.0,
-            &mut |_, z, tau| {
-                let pred = z * theta;
-                for j in 0..n {
-                    sq[j] += (tau[j] - pred[j]).powi(2);
-                }
-                count += 1;
-            },
-        );
-    }
+    for_each_residual(model, calibration, runs, opts, &mut |_, r| {
+        for j in 0..n {
+            sq[j] += r[j].powi(2);
+        }
+        count += 1;
+    });
     let per: Vec<f64> = sq
         .iter()
         .map(|s| (s / count.max(1) as f64).sqrt())
         .collect();
     let all = (sq.iter().sum::<f64>() / (count.max(1) * n) as f64).sqrt();
     (per, all)
+}
+
+/// Passes `(t, τ − Z θ)` (s, N m per joint) of each sample of `runs` to `each`: the residual
+/// of the calibrated model, effect columns included.
+pub fn for_each_residual(
+    model: &Model,
+    calibration: &Calibration,
+    runs: &[Run],
+    opts: &Options,
+    each: &mut dyn FnMut(f64, &[f64]),
+) {
+    let n = model.dof();
+    let theta = &calibration.identified.theta;
+    let mut r = vec![0.0; n];
+    for run in runs {
+        let ctx = Context::new(
+            model,
+            &calibration.nominal,
+            run.trajectory,
+            opts.processing_cutoff,
+        );
+        ctx.for_each_row(
+            run.trajectory,
+            run.range.clone(),
+            &opts.terms,
+            0.0,
+            &mut |k, z, tau| {
+                let pred = z * theta;
+                for j in 0..n {
+                    r[j] = tau[j] - pred[j];
+                }
+                each(run.trajectory.t[k], &r);
+            },
+        );
+    }
 }
 
 /// Extra columns of `terms` for `n` joints.

@@ -49,16 +49,12 @@ pub fn rms_error_stream<E>(
     theta: &DVector<f64>,
     source: impl FnOnce(&mut SampleSink) -> Result<usize, E>,
 ) -> Result<(Vec<f64>, f64), E> {
-    let (n, p) = (model.dof(), model.layout().len);
-    let mut d = Data::new(model);
-    let mut y = DMatrix::zeros(n, p);
+    let n = model.dof();
     let mut ss = vec![0.0; n];
     let mut count = 0usize;
-    source(&mut |_, s| {
-        regressor(model, &mut d, s.q, s.qd, s.qdd, &mut y);
-        let pred = &y * theta;
+    residual_stream(model, theta, source, &mut |_, r| {
         for j in 0..n {
-            ss[j] += (pred[j] - s.tau[j]).powi(2);
+            ss[j] += r[j].powi(2);
         }
         count += 1;
     })?;
@@ -67,6 +63,28 @@ pub fn rms_error_stream<E>(
         ss.iter().map(|v| (v / c).sqrt()).collect(),
         (ss.iter().sum::<f64>() / (c * n as f64)).sqrt(),
     ))
+}
+
+/// Passes `(t, Y θ − τ)` (s, N m per joint) of each sample a source streams to `each`; returns
+/// the source's total sample count.
+pub fn residual_stream<E>(
+    model: &Model,
+    theta: &DVector<f64>,
+    source: impl FnOnce(&mut SampleSink) -> Result<usize, E>,
+    each: &mut dyn FnMut(f64, &[f64]),
+) -> Result<usize, E> {
+    let (n, p) = (model.dof(), model.layout().len);
+    let mut d = Data::new(model);
+    let mut y = DMatrix::zeros(n, p);
+    let mut r = vec![0.0; n];
+    source(&mut |_, s| {
+        regressor(model, &mut d, s.q, s.qd, s.qdd, &mut y);
+        let pred = &y * theta;
+        for j in 0..n {
+            r[j] = pred[j] - s.tau[j];
+        }
+        each(s.t, &r);
+    })
 }
 
 /// One base parameter: a combination of the model's parameters that the data determine,

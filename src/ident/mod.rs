@@ -19,6 +19,7 @@
 //! result or an [`IdentError`]. No Clarabel type leaves this module.
 
 pub mod analysis;
+pub mod information;
 pub mod lmi;
 pub mod normal;
 

@@ -476,13 +476,13 @@ pub fn sidecar_path(urdf: &Path) -> PathBuf {
 /// Writes `identified` (a model with `model`'s structure) as URDF at `out`: the URDF behind
 /// `robot` patched in place ([`urdf_patch::patch`]) when there is one, else a new file
 /// ([`urdf::to_string`]); and beside it the sidecar ([`sidecar_path`], [`urdf_patch::sidecar`])
-/// with `effects` (scenario `[[effects]]` text) if given. Neither output may be an input.
+/// with `extra` TOML tables appended if given. Neither output may be an input.
 pub fn export_urdf(
     out: &Path,
     robot: &str,
     model: &Model,
     identified: &Model,
-    effects: Option<&str>,
+    extra: Option<&str>,
 ) -> Result<(), IoError> {
     let source = robot_urdf(robot)?;
     let side = sidecar_path(out);
@@ -498,8 +498,7 @@ pub fn export_urdf(
     let name = out
         .file_name()
         .map_or("robot.urdf".into(), |n| n.to_string_lossy().into_owned());
-    let side_text =
-        urdf_patch::sidecar(identified, &name, &urdf_patch::mimic_links(&text), effects);
+    let side_text = urdf_patch::sidecar(identified, &name, &urdf_patch::mimic_links(&text), extra);
     write_atomic(out, text.as_bytes())?;
     write_atomic(&side, side_text.as_bytes())
 }

@@ -243,13 +243,14 @@ fn rotor_toml(joint: &str, r: &crate::model::Rotor) -> String {
 /// The sidecar of an exported URDF: a physid robot file (`--robot` takes it) with what URDF
 /// cannot carry: the bounding ellipsoids (the exact ones the identification used, so
 /// `geometry_ellipsoids = false`), the rotor model and gravity, rotors the URDF does not hold
-/// (`urdf_rotors` names those it does, as mimic links), and any identified effects as scenario
-/// `[[effects]]` tables (ignored by the robot loader; copy them into a scenario to replay).
+/// (`urdf_rotors` names those it does, as mimic links), and `extra` tables appended as given
+/// (identify's effects as scenario `[[effects]]` tables and its `[information]`; the robot
+/// loader ignores them).
 pub fn sidecar(
     model: &Model,
     urdf_file: &str,
     urdf_rotors: &[String],
-    effects: Option<&str>,
+    extra: Option<&str>,
 ) -> String {
     let g = model.gravity();
     let rotor_model = match model.rotor_model() {
@@ -280,10 +281,7 @@ pub fn sidecar(
             s.push_str(&ellipsoid_toml(&r.name, e, &r.inertia));
         }
     }
-    if let Some(fx) = effects {
-        s.push_str(
-            "\n# Identified effects (physid identify), as a scenario's [[effects]] tables.\n",
-        );
+    if let Some(fx) = extra {
         s.push_str(fx);
     }
     s
