@@ -134,15 +134,43 @@ fn names_after(code: &str, prefix: &str) -> Vec<String> {
     out
 }
 
-/// The `.rs` files of `dir` other than `mod.rs`, as (module name, path).
+/// The child modules of `dir` as (module name, path): its `.rs` files other than `mod.rs`, and
+/// its folders with a `mod.rs` (that file's path).
 fn child_files(dir: &Path) -> Vec<(String, PathBuf)> {
     std::fs::read_dir(dir)
         .unwrap()
         .map(|e| e.unwrap().path())
-        .filter(|p| p.extension().is_some_and(|e| e == "rs"))
-        .map(|p| (p.file_stem().unwrap().to_string_lossy().to_string(), p))
+        .filter_map(|p| {
+            let name = p.file_stem().unwrap().to_string_lossy().to_string();
+            if p.is_dir() {
+                let m = p.join("mod.rs");
+                m.is_file().then_some((name, m))
+            } else {
+                p.extension()
+                    .is_some_and(|e| e == "rs")
+                    .then_some((name, p))
+            }
+        })
         .filter(|(stem, _)| stem != "mod")
         .collect()
+}
+
+/// The code a child module of a folder reaches its siblings with: a file's code, or for a
+/// folder module its `mod.rs` plus the `crate::` paths of its other files (their `super::` is
+/// the folder module itself, not a sibling).
+fn module_code(path: &Path) -> String {
+    let mut text = code(&std::fs::read_to_string(path).unwrap());
+    if path.file_name().is_some_and(|n| n == "mod.rs") {
+        for (_, nested) in child_files(path.parent().unwrap()) {
+            let inner = code(&std::fs::read_to_string(&nested).unwrap());
+            for (i, _) in inner.match_indices("crate::") {
+                let end = inner[i..].find([';', '\n']).map_or(inner.len(), |e| i + e);
+                text.push('\n');
+                text.push_str(&inner[i..end]);
+            }
+        }
+    }
+    text
 }
 
 /// The sibling files a file of `folder` (its path under `src/`, e.g. `diagnose`) names: as
@@ -215,7 +243,7 @@ fn no_import_circle_among_the_files_of_a_folder() {
         let siblings: Vec<String> = files.iter().map(|(stem, _)| stem.clone()).collect();
         let mut edges = std::collections::BTreeMap::new();
         for (stem, f) in &files {
-            let code = code(&std::fs::read_to_string(f).unwrap());
+            let code = module_code(f);
             let to: Vec<String> = sibling_imports(&code, &folder, &siblings)
                 .into_iter()
                 .filter(|t| t != stem)
@@ -265,7 +293,7 @@ fn no_back_arrow_to_mod_rs_inside_a_pipeline_folder() {
         let siblings: Vec<String> = files.iter().map(|(stem, _)| stem.clone()).collect();
         for (stem, f) in &files {
             files_seen += 1;
-            let code = code(&std::fs::read_to_string(f).unwrap());
+            let code = module_code(f);
             for name in back_arrows(&code, &siblings) {
                 arrows.push(format!("src/{folder}/{stem}.rs: super::{name}"));
             }
@@ -390,7 +418,7 @@ fn the_entry_modules_stay_short() {
 
 #[test]
 fn effect_kinds_are_matched_only_in_their_table() {
-    // A new effect kind is one row of the diagnosis's table (src/diagnose/kinds.rs): no other
+    // A new effect kind is one file of the diagnosis's table (src/diagnose/kinds/): no other
     // library file names a particular kind (tests and the CLI's flag names aside).
     let src = common::root().join("src");
     let mut files = vec![];
@@ -398,7 +426,7 @@ fn effect_kinds_are_matched_only_in_their_table() {
     let mut branching = vec![];
     for file in &files {
         let rel = file.strip_prefix(&src).unwrap();
-        if rel == Path::new("diagnose/kinds.rs") {
+        if rel.starts_with("diagnose/kinds") {
             continue;
         }
         let text = code(&std::fs::read_to_string(file).unwrap());
@@ -529,4 +557,56 @@ fn the_model_is_immutable_its_fields_private() {
         "the scan did not find Model's fields"
     );
     assert!(public.is_empty(), "public fields of Model: {public:?}");
+}
+
+#[test]
+fn every_effect_kind_has_its_own_file_and_one_line_in_the_table() {
+    // The kinds are the variants of `Kind`; each has `src/diagnose/kinds/<snake_case>.rs`
+    // holding its row (`SPEC`, naming that variant) and the table lists each file's row once.
+    let dir = common::root().join("src/diagnose/kinds");
+    let table = std::fs::read_to_string(dir.join("mod.rs")).unwrap();
+    let body = &table[table.find("pub enum Kind {").unwrap()..];
+    let body = &body[..body.find("\n}").unwrap()];
+    let variants: Vec<&str> = body
+        .lines()
+        .map(str::trim)
+        .filter(|l| l.ends_with(',') && !l.starts_with("//"))
+        .map(|l| l.trim_end_matches(','))
+        .collect();
+    assert!(variants.len() >= 13, "{variants:?}");
+    let snake = |v: &str| {
+        let mut out = String::new();
+        for (i, c) in v.chars().enumerate() {
+            if c.is_ascii_uppercase() && i > 0 {
+                out.push('_');
+            }
+            out.push(c.to_ascii_lowercase());
+        }
+        out
+    };
+    let files: Vec<String> = child_files(&dir).into_iter().map(|(n, _)| n).collect();
+    let mut missing = vec![];
+    for v in &variants {
+        let name = snake(v);
+        let path = dir.join(format!("{name}.rs"));
+        let Ok(text) = std::fs::read_to_string(&path) else {
+            missing.push(format!("{v}: no file {}", path.display()));
+            continue;
+        };
+        if !(text.contains("pub(super) const SPEC: KindSpec")
+            && text.contains(&format!("Kind::{v},")))
+        {
+            missing.push(format!("{v}: {name}.rs holds no SPEC row of Kind::{v}"));
+        }
+        let line = format!("    {name}::SPEC,\n");
+        if table.matches(&line).count() != 1 {
+            missing.push(format!("{v}: not once in KIND_TABLE"));
+        }
+    }
+    assert_eq!(
+        files.len(),
+        variants.len(),
+        "files {files:?} for kinds {variants:?}"
+    );
+    assert!(missing.is_empty(), "{}", missing.join("\n"));
 }

@@ -1,18 +1,32 @@
-//! The effect kinds of the library, one entry each in [`KIND_TABLE`]: its name, its regressor
-//! columns, its magnitudes, its scenario form (to replay a calibrated robot in the simulator) and
-//! the blind benchmark's draw. A new kind is one row here plus, if the simulator does not yet
-//! make it, one `sim::scenario::EffectSpec` variant with its physics (the simulator's floor does
-//! not know the diagnosis). Equations and units in `docs/diagnose.md`.
+//! The effect kinds of the library, one file each (`kinds/<name>.rs`, its `SPEC` one entry of
+//! [`KIND_TABLE`]): its name, its regressor columns, its magnitudes, its scenario form (to replay
+//! a calibrated robot in the simulator) and the blind benchmark's draw. A new kind is one file
+//! here, one line in the table and one `Kind` variant, plus, if the simulator does not yet make
+//! it, one `sim::scenario::EffectSpec` variant with its physics (the simulator's floor does not
+//! know the diagnosis). Equations and units in `docs/diagnose.md`.
 //!
 //! Sign convention: a coefficient is the physical magnitude of the injected effect
 //! (`crate::sim::effects`), e.g. the columns of an acting friction are `−∂τ_effect/∂c` because the
 //! motor torque must overcome it.
 
+mod asymmetric_coulomb;
+mod backlash;
+mod cogging;
+mod compliance;
+mod load_dependent_friction;
+mod payload;
+mod rotor_inertia;
+mod spring;
+mod stribeck;
+mod tilt;
+mod time_delay;
+mod torque_gain;
+mod torque_offset;
+
 use super::context::{backlash_widths, Context, Sample, Scratch};
-use crate::dynamics::{regressor, sign, Data};
 use crate::model::Model;
 use crate::sim::scenario::EffectSpec;
-use nalgebra::{DMatrix, Vector3};
+use nalgebra::DMatrix;
 use rand::Rng;
 use rand_chacha::ChaCha8Rng;
 use serde::Serialize;
@@ -167,265 +181,21 @@ const fn row(kind: Kind, name: &'static str, columns: ColumnCount, fill: Fill) -
 }
 
 /// One row per kind, in report order ([`Kind::ALL`], whose length is this table's).
-pub(super) const KIND_TABLE: &[KindSpec] = {
-    use ColumnCount::{Fixed, PerJoint};
-    &[
-        KindSpec {
-            magnitude: ("offset", "N m"),
-            replay: |_, c, _, _| Some(EffectSpec::TorqueOffset { offset: c.to_vec() }),
-            blind: Blind::SingleAndPair,
-            draw: |m, rng, _| {
-                let o: Vec<f64> = (0..m.dof()).map(|_| signed(rng, 1.0, 3.0)).collect();
-                (Some(EffectSpec::TorqueOffset { offset: o.clone() }), o)
-            },
-            ..row(
-                Kind::TorqueOffset,
-                "torque_offset",
-                PerJoint(1),
-                |_, s, _, z, c| (0..s.n).for_each(|j| z[(j, c + j)] = 1.0),
-            )
-        },
-        KindSpec {
-            magnitude: ("gain error relative to the median joint", "-"),
-            linearized: true,
-            magnitudes: gain_magnitudes,
-            // The column is the nominal prediction, which already carries the gain.
-            replay: |_, c, _, _| {
-                let gain = c.iter().map(|b| 1.0 / (1.0 - b)).collect();
-                Some(EffectSpec::TorqueGain { gain })
-            },
-            blind: Blind::Single,
-            draw: draw_gain,
-            ..row(
-                Kind::TorqueGain,
-                "torque_gain",
-                PerJoint(1),
-                |x, s, _, z, c| (0..s.n).for_each(|j| z[(j, c + j)] = x.pred[s.k * s.n + j]),
-            )
-        },
-        KindSpec {
-            // The logged torque lags: a "negative delay" is no delay, and was the best single
-            // column for a compliant transmission's encoder, which leads the link.
-            non_negative: true,
-            magnitude: ("delay", "s"),
-            linearized: true,
-            magnitudes: |c, _, _| vec![c[0]],
-            replay: |_, c, _, dt| {
-                let samples = (c[0] / dt).round();
-                (samples >= 1.0).then_some(EffectSpec::TimeDelay {
-                    samples: samples as usize,
-                })
-            },
-            blind: Blind::SingleAndPair,
-            draw: |_, rng, rate| {
-                let samples = rng.random_range(10..=30usize);
-                let delay = vec![samples as f64 / rate];
-                (Some(EffectSpec::TimeDelay { samples }), delay)
-            },
-            ..row(Kind::TimeDelay, "time_delay", Fixed(1), |x, s, _, z, c| {
-                (0..s.n).for_each(|j| z[(j, c)] = -x.pred_d[s.k * s.n + j])
-            })
-        },
-        KindSpec {
-            magnitude: ("stiffness", "N m/rad"),
-            magnitudes: |c, n, _| c[..n].to_vec(),
-            replay: replay_spring,
-            blind: Blind::SingleAndPair,
-            draw: draw_spring,
-            ..row(Kind::Spring, "spring", PerJoint(2), |_, s, _, z, c| {
-                (0..s.n).for_each(|j| {
-                    z[(j, c + j)] = s.q[j];
-                    z[(j, c + s.n + j)] = 1.0;
-                })
-            })
-        },
-        KindSpec {
-            non_negative: true,
-            magnitude: ("static excess F_s", "N m"),
-            grid: Grid::StribeckVelocity,
-            replay: |m, c, v, _| {
-                Some(EffectSpec::Stribeck {
-                    static_extra: c.to_vec(),
-                    velocity: vec![v; m.dof()],
-                })
-            },
-            blind: Blind::SingleAndPair,
-            draw: |m, rng, _| {
-                let fs = per_joint(rng, m.dof(), 0.5, 2.0);
-                let v = uniform(rng, 0.1, 0.4);
-                let velocity = vec![v; m.dof()];
-                let spec = EffectSpec::Stribeck {
-                    static_extra: fs.clone(),
-                    velocity,
-                };
-                (Some(spec), fs)
-            },
-            ..row(Kind::Stribeck, "stribeck", PerJoint(1), |_, s, _, z, c| {
-                (0..s.n).for_each(|j| {
-                    z[(j, c + j)] = (-(s.qd[j] / s.param).powi(2)).exp() * sign(s.qd[j])
-                })
-            })
-        },
-        KindSpec {
-            magnitude: ("forward excess delta", "N m"),
-            replay: |_, c, _, _| Some(EffectSpec::AsymmetricCoulomb { delta: c.to_vec() }),
-            blind: Blind::Single,
-            draw: |m, rng, _| {
-                let d = per_joint(rng, m.dof(), 1.0, 3.0);
-                (Some(EffectSpec::AsymmetricCoulomb { delta: d.clone() }), d)
-            },
-            ..row(
-                Kind::AsymmetricCoulomb,
-                "asymmetric_coulomb",
-                PerJoint(1),
-                |_, s, _, z, c| (0..s.n).for_each(|j| z[(j, c + j)] = sign(s.qd[j]).max(0.0)),
-            )
-        },
-        KindSpec {
-            non_negative: true,
-            magnitude: ("coefficient mu", "-"),
-            linearized: true,
-            replay: |_, c, _, _| {
-                let coefficient = c.to_vec();
-                Some(EffectSpec::LoadDependentFriction { coefficient })
-            },
-            blind: Blind::SingleAndPair,
-            draw: |m, rng, _| {
-                let mu = per_joint(rng, m.dof(), 0.1, 0.25);
-                let coefficient = mu.clone();
-                (Some(EffectSpec::LoadDependentFriction { coefficient }), mu)
-            },
-            // The predicted torque, not the measured one: a column carrying the measurement's
-            // own noise would "explain" it.
-            ..row(
-                Kind::LoadDependentFriction,
-                "load_dependent_friction",
-                PerJoint(1),
-                |x, s, _, z, c| {
-                    (0..s.n)
-                        .for_each(|j| z[(j, c + j)] = x.pred[s.k * s.n + j].abs() * sign(s.qd[j]))
-                },
-            )
-        },
-        KindSpec {
-            magnitude: ("amplitude", "N m"),
-            magnitude_pairs: true,
-            grid: Grid::CoggingHarmonic,
-            needs_rotor: true,
-            magnitudes: |c, n, _| (0..n).map(|j| c[j].hypot(c[n + j])).collect(),
-            replay: replay_cogging,
-            blind: Blind::SingleAndPair,
-            draw: draw_cogging,
-            // Joints without a rotor in the description keep zero columns.
-            ..row(Kind::Cogging, "cogging", PerJoint(2), |x, s, _, z, c| {
-                (0..s.n)
-                    .filter(|&j| x.model.bodies()[j].rotor.is_some())
-                    .for_each(|j| {
-                        let a = s.param * x.gear[j] * s.q[j];
-                        z[(j, c + j)] = a.sin();
-                        z[(j, c + s.n + j)] = a.cos();
-                    })
-            })
-        },
-        KindSpec {
-            non_negative: true,
-            magnitude: ("reflected inertia", "kg m^2"),
-            rotor_parameter: true,
-            approximate: true,
-            description: Some(Model::with_rotors_frozen),
-            blind: Blind::Single,
-            draw: |m, _, _| {
-                let armature = (0..m.dof())
-                    .map(|i| crate::dynamics::armature(m, i))
-                    .collect();
-                (None, armature)
-            },
-            ..row(
-                Kind::RotorInertia,
-                "rotor_inertia",
-                PerJoint(1),
-                |_, s, _, z, c| (0..s.n).for_each(|j| z[(j, c + j)] = s.qdd[j]),
-            )
-        },
-        KindSpec {
-            magnitude: ("tilt angle", "rad"),
-            linearized: true,
-            magnitudes: |c, _, g| vec![(c[0].hypot(c[1]) / g).atan()],
-            replay: |m, c, _, _| {
-                tilt_angles(m, c).map(|(roll, pitch)| EffectSpec::Tilt { roll, pitch })
-            },
-            blind: Blind::Single,
-            draw: draw_tilt,
-            ..row(Kind::Tilt, "tilt", Fixed(2), fill_tilt)
-        },
-        KindSpec {
-            non_negative: true,
-            magnitude: ("compliance 1/k", "rad/(N m)"),
-            linearized: true,
-            replay: |_, c, _, _| {
-                let stiffness = c.iter().map(|k| 1.0 / k).collect();
-                Some(EffectSpec::Compliance { stiffness })
-            },
-            blind: Blind::Single,
-            draw: |m, rng, _| {
-                let k = per_joint(rng, m.dof(), 300.0, 1000.0);
-                let kappa = k.iter().map(|k| 1.0 / k).collect();
-                (Some(EffectSpec::Compliance { stiffness: k }), kappa)
-            },
-            grid: Grid::Compliance,
-            // −d/dκ_j ID(q − κ_j τ_j e_j, q̇ − κ_j τ̇_j e_j, q̈ − κ_j τ̈_j e_j), as a secant at the
-            // grid's κ (Coulomb friction at the shifted velocity) or the tangent at 0.
-            ..row(
-                Kind::Compliance,
-                "compliance",
-                PerJoint(1),
-                |x, s, w, z, c| {
-                    let cols = x.encoder_shift_columns(&x.defl, s.param, s, w);
-                    z.columns_mut(c, s.n).copy_from(&cols);
-                },
-            )
-        },
-        KindSpec {
-            non_negative: true,
-            magnitude: ("dead-zone width b", "rad"),
-            linearized: true,
-            replay: |_, c, _, _| {
-                let width = c.iter().map(|b| b.max(0.0)).collect();
-                Some(EffectSpec::Backlash { width })
-            },
-            blind: Blind::Single,
-            draw: |m, rng, _| {
-                let b = per_joint(rng, m.dof(), 0.01, 0.03);
-                (Some(EffectSpec::Backlash { width: b.clone() }), b)
-            },
-            // −d/db_j ID(q − b_j s_j, q̇ − b_j ṡ_j, q̈ − b_j s̈_j) as a secant at the grid's
-            // width b_g, s the unit-width offset of a dead zone of width b_g driven by the
-            // low-passed logged torque, processed like the encoder (the tangent: s = ½ sign τ).
-            grid: Grid::BacklashWidth,
-            ..row(Kind::Backlash, "backlash", PerJoint(1), |x, s, w, z, c| {
-                let cols = x.encoder_shift_columns(x.slack(s.param), s.param, s, w);
-                z.columns_mut(c, s.n).copy_from(&cols);
-            })
-        },
-        KindSpec {
-            magnitude: ("payload mass", "kg"),
-            in_model_span: true,
-            grid: Grid::Body,
-            magnitudes: |c, _, _| vec![c[0]],
-            blind: Blind::Single,
-            draw: draw_payload,
-            // The body's own columns (links come first in θ, ten each).
-            ..row(Kind::Payload, "payload", Fixed(10), |_, s, _, z, c| {
-                let at = 10 * body_index(s.param, s.n);
-                for i in 0..s.n {
-                    for m in 0..10 {
-                        z[(i, c + m)] = z[(i, at + m)];
-                    }
-                }
-            })
-        },
-    ]
-};
+pub(super) const KIND_TABLE: &[KindSpec] = &[
+    torque_offset::SPEC,
+    torque_gain::SPEC,
+    time_delay::SPEC,
+    spring::SPEC,
+    stribeck::SPEC,
+    asymmetric_coulomb::SPEC,
+    load_dependent_friction::SPEC,
+    cogging::SPEC,
+    rotor_inertia::SPEC,
+    tilt::SPEC,
+    compliance::SPEC,
+    backlash::SPEC,
+    payload::SPEC,
+];
 
 impl Kind {
     /// Every kind, in report order.
@@ -681,77 +451,6 @@ fn same(c: &[f64], _: usize, _: f64) -> Vec<f64> {
     c.to_vec()
 }
 
-/// Torque gains relative to the median joint: the column is the nominal prediction, which
-/// already carries the gain, so `τ = Y θ + β τ̂` with `τ̂ ≈ τ` gives `1 + g = 1/(1 − β)`.
-fn gain_magnitudes(c: &[f64], _: usize, _: f64) -> Vec<f64> {
-    let g: Vec<f64> = c.iter().map(|b| b / (1.0 - b)).collect();
-    super::stats::relative_to_median(&g)
-}
-
-/// A spring's stiffness and rest angle from its columns `[q, 1]`: `k q + b` with `q₀ = −b/k`.
-fn replay_spring(m: &Model, c: &[f64], _: f64, _: f64) -> Option<EffectSpec> {
-    let n = m.dof();
-    let rest = (0..n)
-        .map(|j| if c[j] != 0.0 { -c[n + j] / c[j] } else { 0.0 })
-        .collect();
-    Some(EffectSpec::Spring {
-        stiffness: c[..n].to_vec(),
-        rest,
-    })
-}
-
-/// Cogging's amplitude and phase from its sine and cosine coefficients.
-fn replay_cogging(m: &Model, c: &[f64], h: f64, _: f64) -> Option<EffectSpec> {
-    let n = m.dof();
-    Some(EffectSpec::Cogging {
-        amplitude: (0..n).map(|j| c[j].hypot(c[n + j])).collect(),
-        harmonic: vec![h; n],
-        phase: (0..n).map(|j| c[n + j].atan2(c[j])).collect(),
-    })
-}
-
-/// Tilt columns: the gravity torque of the nominal model under gravity along each of the two
-/// directions perpendicular to the model's.
-fn fill_tilt(x: &Context, s: &Sample, w: &mut Scratch, z: &mut DMatrix<f64>, c: usize) {
-    let tilted = w.tilted.get_or_insert_with(|| {
-        x.perp
-            .iter()
-            .map(|u| {
-                let gm = x.model().clone().with_gravity(*u);
-                let gd = Data::new(&gm);
-                (gm, gd)
-            })
-            .collect()
-    });
-    for (i, (gm, gd)) in tilted.iter_mut().enumerate() {
-        regressor(gm, gd, s.q, &w.zeros, &w.zeros, &mut w.yg);
-        let col = &w.yg * &x.theta0;
-        (0..s.n).for_each(|j| z[(j, c + i)] = col[j]);
-    }
-}
-
-/// Roll and pitch (rad) of the scenario's tilt whose gravity has the calibrated components
-/// `c₀, c₁` (m/s²) along the library's tilt directions `u₁, u₂`; `None` if the model's gravity
-/// is not along −z.
-fn tilt_angles(model: &Model, c: &[f64]) -> Option<(f64, f64)> {
-    let g = model.gravity();
-    let g0 = g.norm();
-    if g0 == 0.0 || (g / g0 + Vector3::z()).norm() > 1e-9 {
-        return None;
-    }
-    // The library's directions for g along −z: u₁ = x, u₂ = ĝ × u₁ = −y; the coefficients are
-    // the tilted gravity's components along them (m/s²).
-    let (dx, dy) = (c[0] / g0, -c[1] / g0);
-    if dx * dx + dy * dy >= 1.0 {
-        return None;
-    }
-    let d = Vector3::new(dx, dy, -(1.0 - dx * dx - dy * dy).sqrt());
-    // The scenario's gravity is R_xᵀ(roll) R_yᵀ(pitch) g = g₀ (sin p, −sin r cos p, −cos r cos p).
-    let pitch = d.x.asin();
-    let roll = (-d.y).atan2(-d.z);
-    Some((roll, pitch))
-}
-
 fn uniform(rng: &mut ChaCha8Rng, lo: f64, hi: f64) -> f64 {
     lo + (hi - lo) * rng.random::<f64>()
 }
@@ -768,87 +467,6 @@ fn signed(rng: &mut ChaCha8Rng, lo: f64, hi: f64) -> f64 {
 /// `n` independent uniform draws in `[lo, hi)`.
 fn per_joint(rng: &mut ChaCha8Rng, n: usize, lo: f64, hi: f64) -> Vec<f64> {
     (0..n).map(|_| uniform(rng, lo, hi)).collect()
-}
-
-/// One joint's torque constant off by 15–30 %, reported relative to the median joint.
-fn draw_gain(m: &Model, rng: &mut ChaCha8Rng, _: f64) -> (Option<EffectSpec>, Vec<f64>) {
-    let n = m.dof();
-    let j = rng.random_range(0..n);
-    let mut gain = vec![1.0; n];
-    gain[j] += signed(rng, 0.15, 0.3);
-    let relative = super::stats::relative_to_median(&gain);
-    (Some(EffectSpec::TorqueGain { gain }), relative)
-}
-
-/// A spring per joint: stiffness 3–10 N m/rad about a rest angle within ±0.3 rad of
-/// the middle of the joint range.
-fn draw_spring(model: &Model, rng: &mut ChaCha8Rng, _: f64) -> (Option<EffectSpec>, Vec<f64>) {
-    let n = model.dof();
-    let k = per_joint(rng, n, 3.0, 10.0);
-    let rest = model
-        .bodies()
-        .iter()
-        .map(|b| {
-            let mid = if b.limits.lower.is_finite() && b.limits.upper.is_finite() {
-                0.5 * (b.limits.lower + b.limits.upper)
-            } else {
-                0.0
-            };
-            mid + uniform(rng, -0.3, 0.3)
-        })
-        .collect();
-    let spec = EffectSpec::Spring {
-        stiffness: k.clone(),
-        rest,
-    };
-    (Some(spec), k)
-}
-
-/// Cogging of amplitude 0.2–0.8 N m at one harmonic 1–8 of N q, random phases.
-fn draw_cogging(model: &Model, rng: &mut ChaCha8Rng, _: f64) -> (Option<EffectSpec>, Vec<f64>) {
-    let n = model.dof();
-    let a = per_joint(rng, n, 0.2, 0.8);
-    let h = rng.random_range(1..=8u32) as f64;
-    let phase = per_joint(rng, n, 0.0, std::f64::consts::TAU);
-    let spec = EffectSpec::Cogging {
-        amplitude: a.clone(),
-        harmonic: vec![h; n],
-        phase,
-    };
-    (Some(spec), a)
-}
-
-/// A base tilt of 0.2–0.35 rad in a random direction.
-fn draw_tilt(_: &Model, rng: &mut ChaCha8Rng, _: f64) -> (Option<EffectSpec>, Vec<f64>) {
-    let angle = uniform(rng, 0.2, 0.35);
-    let dir = uniform(rng, 0.0, std::f64::consts::TAU);
-    let spec = EffectSpec::Tilt {
-        roll: angle * dir.cos(),
-        pitch: angle * dir.sin(),
-    };
-    (Some(spec), vec![angle])
-}
-
-/// A 0.3–1 kg sphere of 3 cm radius on the last body, between the middle and the far end of
-/// it (taken as twice its bounding ellipsoid's centre from the joint). (Inner bodies are not
-/// drawn: on the leg their payloads are mostly not separable from the neighbours' parameters,
-/// docs/diagnose.md.)
-fn draw_payload(model: &Model, rng: &mut ChaCha8Rng, _: f64) -> (Option<EffectSpec>, Vec<f64>) {
-    let n = model.dof();
-    let mass = uniform(rng, 0.3, 1.0);
-    let body = n;
-    let tip = model.bodies()[body - 1]
-        .bounding
-        .as_ref()
-        .map_or(Vector3::zeros(), |e| e.center * 2.0);
-    let s = uniform(rng, 0.5, 1.0);
-    let spec = EffectSpec::Payload {
-        mass,
-        com: [s * tip.x, s * tip.y, s * tip.z],
-        radius: 0.03,
-        body: None,
-    };
-    (Some(spec), vec![mass])
 }
 
 #[cfg(test)]

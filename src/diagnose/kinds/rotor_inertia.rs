@@ -1,0 +1,28 @@
+//! `rotor_inertia`: Reflected rotor inertia `I_a q̈` left out of the model (kg m² per joint).
+//!
+//! One row of the effect table (`super::KIND_TABLE`); equations and units in docs/diagnose.md.
+
+use super::{row, Blind, ColumnCount::PerJoint, Kind, KindSpec};
+use crate::model::Model;
+
+/// The kind's row: name, columns, magnitudes, replay and the blind benchmark's draw.
+pub(super) const SPEC: KindSpec = KindSpec {
+    non_negative: true,
+    magnitude: ("reflected inertia", "kg m^2"),
+    rotor_parameter: true,
+    approximate: true,
+    description: Some(Model::with_rotors_frozen),
+    blind: Blind::Single,
+    draw: |m, _, _| {
+        let armature = (0..m.dof())
+            .map(|i| crate::dynamics::armature(m, i))
+            .collect();
+        (None, armature)
+    },
+    ..row(
+        Kind::RotorInertia,
+        "rotor_inertia",
+        PerJoint(1),
+        |_, s, _, z, c| (0..s.n).for_each(|j| z[(j, c + j)] = s.qdd[j]),
+    )
+};
