@@ -31,9 +31,10 @@ pub struct Args {
     /// turns the description test off).
     #[arg(long, allow_negative_numbers = true)]
     description_uncertainty: Option<f64>,
-    /// Keep each case's files (`caseI/robot.urdf`, `caseI/data.csv`) in this folder, to
-    /// re-diagnose a case by hand (`physid diagnose --robot DIR/case17/robot.urdf --data
-    /// DIR/case17/data.csv`); default: a temporary folder, removed.
+    /// Keep each case's files (`caseI/robot.urdf`, `caseI/data.csv`; with --real also the
+    /// sidecar with the description's information) in this folder, to re-diagnose a case by
+    /// hand (`physid diagnose --robot DIR/case17/robot.urdf --data DIR/case17/data.csv`, with
+    /// the same --description-uncertainty); default: a temporary folder, removed.
     #[arg(long)]
     keep_cases: Option<PathBuf>,
     /// Run only these cases (numbers below --cases, comma-separated); the scores cover them.

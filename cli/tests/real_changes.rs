@@ -175,3 +175,61 @@ fn the_description_s_own_information_from_its_sidecar_alone_weighs_the_payload()
     assert!(!err.contains("information matrix"), "{err}");
     assert!(d["ladder"].is_null(), "{}", d["ladder"]);
 }
+
+#[test]
+fn a_kept_semi_real_case_re_diagnosed_from_its_files_is_the_benchmark_s_case() {
+    // The case's description carries its information in the sidecar beside its URDF, so the
+    // files alone reproduce what the benchmark diagnosed (case 13 of seed 1: 2.9 kg on
+    // lwr_4_link).
+    let k = root().join("data/kuka_lwr4");
+    let runs: Vec<String> = (1..=3)
+        .map(|r| {
+            k.join(format!("measurements_{r}.csv"))
+                .to_string_lossy()
+                .into_owned()
+        })
+        .collect();
+    let dir = tempfile::tempdir().unwrap();
+    let (keep, out) = (dir.path().join("keep"), dir.path().join("out"));
+    let urdf = k.join("kuka_lwr4.urdf");
+    let (code, _, err) = physid(&[
+        "blind",
+        "--real",
+        &runs.join(","),
+        "--real-robot",
+        urdf.to_str().unwrap(),
+        "--cases",
+        "55",
+        "--seed",
+        "1",
+        "--description-uncertainty",
+        "0.05",
+        "--only",
+        "13",
+        "--keep-cases",
+        keep.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert_eq!(code, 0, "{err}");
+    let table = std::fs::read_to_string(out.join("cases.csv")).unwrap();
+    let row = table.lines().nth(1).unwrap();
+    assert!(
+        row.starts_with("13,") && row.contains(",payload,lwr_4_link,"),
+        "{row}"
+    );
+    let case = keep.join("case13");
+    let side = std::fs::read_to_string(case.join("robot.physid.toml")).unwrap();
+    assert!(side.contains("\n[information]\n"), "{side}");
+    let (d, err) = diagnose_stating(
+        &case.join("robot.urdf"),
+        &case.join("data.csv"),
+        &["--description-uncertainty", "0.05"],
+    );
+    assert!(err.contains("information matrix"), "{err}");
+    let s = steps(&d);
+    let found = row.split('"').nth(1).unwrap();
+    let first = found.split(" | ").next().unwrap();
+    assert_eq!(s[0], first, "{s:?} vs {found}");
+    assert_eq!(s[0], "+ payload on lwr_4_link");
+}

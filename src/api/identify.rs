@@ -860,7 +860,7 @@ impl Identification {
             self.information
                 .as_ref()
                 .and_then(|i| i.as_ref().ok())
-                .map(super::information::sidecar_table),
+                .map(Information::sidecar_table),
         ]
         .into_iter()
         .flatten()

@@ -619,12 +619,13 @@ pub(crate) fn test_description(
 /// The information matrix of `model`'s parameters identified on `data` as [`super::stage::fit_nominal`]
 /// does: `w YᵀY` over the joint-samples at or above the speed threshold, `w = 1/(s² τ_c)` with
 /// `s²` the fit's residual mean square and `τ_c` its correlation time (samples), the same
-/// weight the ladder gives its own data ([`Options::description_information`](super::options::Options::description_information)).
+/// weight the ladder gives its own data ([`Options::description_information`](super::options::Options::description_information));
+/// at the fitted parameters, as a sidecar writes it.
 pub fn information(
     model: &Model,
     data: &crate::trajectory::Trajectory,
     opts: &super::options::Options,
-) -> Result<DMatrix<f64>, super::options::DiagnoseError> {
+) -> Result<crate::ident::information::Information, super::options::DiagnoseError> {
     let fit = super::stage::fit_nominal(model, data, opts)?;
     let mut ne = crate::ident::NormalEquations::new(model.dof(), model.layout().len);
     super::library::Context::new(model, &fit.theta, data, opts.processing_cutoff).for_each_row(
@@ -640,7 +641,14 @@ pub fn information(
     let masked = super::residual::mask_slow(data, &res, opts.min_speed);
     let s2 = super::residual::finite_mean_square(&masked);
     let tau_c = correlation_time(&masked, model.dof(), data.sample_rate().unwrap_or(1.0));
-    Ok(&ne.yty / (s2 * tau_c).max(1e-300))
+    Ok(crate::ident::information::Information {
+        names: model.parameter_names(),
+        at: fit.theta.rows(0, model.layout().len).into_owned(),
+        matrix: &ne.yty / (s2 * tau_c).max(1e-300),
+        samples: data.len(),
+        residual_rms: s2.sqrt(),
+        correlation_samples: tau_c,
+    })
 }
 
 #[cfg(test)]

@@ -86,7 +86,7 @@ impl Baseline {
             .collect();
         let joined = Trajectory::concatenate(stripped).ok_or(DiagnoseError::NoData)?;
         // What the baseline determined is held, what it did not is free to move.
-        let information = super::anchor::information(&calibrated, &joined, opts)?;
+        let information = super::anchor::information(&calibrated, &joined, opts)?.matrix;
         Ok(Baseline {
             diagnosis,
             calibrated,

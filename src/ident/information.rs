@@ -9,7 +9,12 @@
 //! The residual is read one sample at a time ([`ResidualStats::push`]), so a file streamed from
 //! disk gives its information in flat memory.
 
+use crate::io::IoError;
+use crate::model::Model;
 use nalgebra::{DMatrix, DVector};
+use serde::Deserialize;
+use std::fmt::Write;
+use std::path::Path;
 
 /// Length of a batch of the batch means (s): long against the correlation of a residual left by
 /// friction and filtering, short against a run.
@@ -177,6 +182,165 @@ impl Information {
             correlation_samples: tau_c,
         })
     }
+}
+
+/// Largest relative change of a parameter between the sidecar's `at` and the description read
+/// (the URDF's text form of `m`, `c`, `I_c` rounds the last bits of `π`): beyond it the
+/// description was edited after it was identified and the information is not its own.
+const SAME_PARAMETER: f64 = 1e-6;
+
+impl Information {
+    /// The `[information]` table of a sidecar (TOML), numbers in shortest round-trip form.
+    pub fn sidecar_table(&self) -> String {
+        let mut s = String::from(
+            "\n# The identification's information matrix over the parameters below: YᵀY / (s² τ_c)\n# over its training samples (s: residual RMS, τ_c: residual correlation time in\n# samples). physid diagnose reads it as the description's uncertainty (docs/diagnose.md).\n[information]\n",
+        );
+        let list = |v: &mut dyn Iterator<Item = String>| v.collect::<Vec<String>>().join(", ");
+        let _ = writeln!(s, "samples = {}", self.samples);
+        let _ = writeln!(s, "residual_rms = {:e}", self.residual_rms);
+        let _ = writeln!(s, "correlation_samples = {:e}", self.correlation_samples);
+        let names = list(&mut self.names.iter().map(|n| format!("{n:?}")));
+        let _ = writeln!(s, "parameters = [{names}]");
+        let _ = writeln!(
+            s,
+            "at = [{}]",
+            list(&mut self.at.iter().map(|x| format!("{x:e}")))
+        );
+        s.push_str("matrix = [\n");
+        for row in self.matrix.row_iter() {
+            let _ = writeln!(
+                s,
+                "  [{}],",
+                list(&mut row.iter().map(|x| format!("{x:e}")))
+            );
+        }
+        s.push_str("]\n");
+        s
+    }
+}
+
+/// The `[information]` table as a sidecar holds it (read by [`SidecarInformation::read`]).
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct SidecarInformation {
+    /// Samples the identification fitted.
+    pub samples: usize,
+    /// Its residual RMS (N m).
+    pub residual_rms: f64,
+    correlation_samples: f64,
+    parameters: Vec<String>,
+    at: Vec<f64>,
+    matrix: Vec<Vec<f64>>,
+}
+
+impl SidecarInformation {
+    /// The `[information]` table of the sidecar at `path`, checked ([`check`]); `None` when it
+    /// has none; an error naming the file and the field when it is malformed.
+    pub fn read(path: &Path) -> Result<Option<Self>, IoError> {
+        let text = crate::io::read_to_string(path)?;
+        #[derive(Deserialize)]
+        struct Doc {
+            information: Option<toml::Value>,
+        }
+        let bad = |m: String| IoError::invalid(path, m);
+        let doc: Doc = toml::from_str(&text).map_err(|e| bad(e.to_string().trim_end().into()))?;
+        let Some(value) = doc.information else {
+            return Ok(None);
+        };
+        let table: SidecarInformation = value
+            .try_into()
+            .map_err(|e: toml::de::Error| bad(format!("[information]: {}", e.message())))?;
+        check(&table).map_err(|m| bad(format!("[information]: {m}")))?;
+        Ok(Some(table))
+    }
+
+    /// The table's matrix on `model`'s parameters, or why it does not describe this model.
+    pub fn onto(&self, model: &Model) -> Result<DMatrix<f64>, String> {
+        let names = model.parameter_names();
+        let values = model.parameters();
+        let mut col = Vec::with_capacity(self.parameters.len());
+        for (k, name) in self.parameters.iter().enumerate() {
+            let Some(c) = names.iter().position(|n| n == name) else {
+                return Err(format!(
+                    "it names {name:?}, which the robot as loaded does not have (rotors or joints changed since it was identified?)"
+                ));
+            };
+            let (a, b) = (self.at[k], values[c]);
+            if (a - b).abs() > SAME_PARAMETER * a.abs().max(b.abs()).max(1e-3) {
+                return Err(format!(
+                    "it was computed at {name} = {a:e}, the description has {b:e}: the description was changed after it was identified"
+                ));
+            }
+            col.push(c);
+        }
+        let mut m = DMatrix::zeros(names.len(), names.len());
+        for (i, &ci) in col.iter().enumerate() {
+            for (j, &cj) in col.iter().enumerate() {
+                m[(ci, cj)] = self.matrix[i][j];
+            }
+        }
+        Ok(m)
+    }
+}
+
+/// The table's own consistency: sizes, finite numbers, a symmetric matrix with a non-negative
+/// diagonal, distinct names.
+fn check(t: &SidecarInformation) -> Result<(), String> {
+    let p = t.parameters.len();
+    if t.at.len() != p {
+        return Err(format!("at has {} values for {p} parameters", t.at.len()));
+    }
+    if t.matrix.len() != p {
+        return Err(format!(
+            "matrix has {} rows for {p} parameters",
+            t.matrix.len()
+        ));
+    }
+    if let Some((i, row)) = t.matrix.iter().enumerate().find(|(_, r)| r.len() != p) {
+        return Err(format!(
+            "matrix row {i} has {} entries, expected {p}",
+            row.len()
+        ));
+    }
+    if let Some(i) = t.at.iter().position(|x| !x.is_finite()) {
+        return Err(format!("at[{i}] is not finite"));
+    }
+    for (i, row) in t.matrix.iter().enumerate() {
+        if let Some(j) = row.iter().position(|x| !x.is_finite()) {
+            return Err(format!("matrix[{i}][{j}] is not finite"));
+        }
+        if row[i] < 0.0 {
+            return Err(format!("matrix[{i}][{i}] = {} is negative", row[i]));
+        }
+    }
+    let scale = (0..p).map(|i| t.matrix[i][i]).fold(0.0, f64::max);
+    for i in 0..p {
+        for j in 0..i {
+            if (t.matrix[i][j] - t.matrix[j][i]).abs() > 1e-9 * scale {
+                return Err(format!(
+                    "matrix is not symmetric: [{i}][{j}] = {} but [{j}][{i}] = {}",
+                    t.matrix[i][j], t.matrix[j][i]
+                ));
+            }
+        }
+    }
+    let mut seen = std::collections::HashSet::new();
+    if let Some(dup) = t.parameters.iter().find(|n| !seen.insert(n.as_str())) {
+        return Err(format!("parameter {dup:?} named twice"));
+    }
+    if !(t.correlation_samples.is_finite() && t.correlation_samples >= 1.0) {
+        return Err(format!(
+            "correlation_samples = {} must be at least 1",
+            t.correlation_samples
+        ));
+    }
+    if !(t.residual_rms.is_finite() && t.residual_rms > 0.0) {
+        return Err(format!(
+            "residual_rms = {} must be positive",
+            t.residual_rms
+        ));
+    }
+    Ok(())
 }
 
 #[cfg(test)]
