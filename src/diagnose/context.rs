@@ -69,8 +69,6 @@ pub struct Context<'a> {
     /// Two unit vectors perpendicular to gravity (the tilt directions).
     pub(super) perp: [Vector3<f64>; 2],
     pub(super) gear: Vec<f64>,
-    /// The data's sample period (s), when its stamps advance.
-    pub(super) period: Option<f64>,
 }
 
 /// `x` (sample-major, `n` columns) processed like an encoder angle: `F(x)`, `F(D x)`,
@@ -281,24 +279,7 @@ impl<'a> Context<'a> {
             slack,
             perp: [u1, u2],
             gear,
-            period: sample_period(tr),
         }
-    }
-
-    /// `(Y θ̂₀)(t_k − d) − (Y θ̂₀)(t_k)` over the whole samples of `d` times the period, for
-    /// joint `j` of `n` (N m/s): the secant of a lag of `d` (s) of the predicted torque, its
-    /// Coulomb jumps included, the sample before the first held at the first; 0 without a
-    /// period or below one sample.
-    pub(super) fn lag_secant(&self, k: usize, j: usize, n: usize, d: f64) -> f64 {
-        let Some(dt) = self.period else {
-            return 0.0;
-        };
-        let m = (d / dt).round() as usize;
-        if m == 0 {
-            return 0.0;
-        }
-        let earlier = k.saturating_sub(m);
-        (self.pred[earlier * n + j] - self.pred[k * n + j]) / (m as f64 * dt)
     }
 
     /// The model.

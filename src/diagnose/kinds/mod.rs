@@ -97,8 +97,6 @@ pub(super) enum Grid {
     Compliance,
     /// Backlash width (rad) the columns are a secant at: 0.01 · 2^i, i = 0..2 (0: the tangent).
     BacklashWidth,
-    /// Lag (s) a delay's column is a secant at: 0 (the tangent) and 0.01 · 2^i, i = 0..5.
-    Lag,
 }
 
 /// Where the blind benchmark draws a kind.
@@ -293,9 +291,6 @@ impl Kind {
             Grid::Body => (1..=n).map(|b| b as f64).collect(),
             Grid::Compliance => (0..4).map(|i| 0.5e-3 * 2f64.powi(i)).collect(),
             Grid::BacklashWidth => backlash_widths(),
-            Grid::Lag => std::iter::once(0.0)
-                .chain((0..6).map(|i| 0.01 * 2f64.powi(i)))
-                .collect(),
             Grid::None => vec![0.0],
         }
     }
@@ -313,9 +308,7 @@ impl Kind {
     /// The grid value a term takes when none is given (`None`: one must be given).
     pub fn default_param(&self) -> Option<f64> {
         match self.spec().grid {
-            Grid::None | Grid::Body | Grid::Compliance | Grid::BacklashWidth | Grid::Lag => {
-                Some(0.0)
-            }
+            Grid::None | Grid::Body | Grid::Compliance | Grid::BacklashWidth => Some(0.0),
             Grid::StribeckVelocity | Grid::CoggingHarmonic => None,
         }
     }
@@ -327,7 +320,7 @@ impl Kind {
             Grid::None => param == 0.0,
             Grid::Body => param.fract() == 0.0 && param >= 0.0 && param <= n as f64,
             Grid::StribeckVelocity | Grid::CoggingHarmonic => param > 0.0 && param <= 1e3,
-            Grid::Compliance | Grid::Lag => (0.0..=1.0).contains(&param),
+            Grid::Compliance => (0.0..=1.0).contains(&param),
             Grid::BacklashWidth => param == 0.0 || self.grid(n).contains(&param),
         }
     }
@@ -340,7 +333,6 @@ impl Kind {
             Grid::Body => "body number from 1, default the last",
             Grid::Compliance => "compliance 1/k of the secant, rad/(N m); 0: the tangent",
             Grid::BacklashWidth => "width of the secant, rad: 0.01, 0.02 or 0.04; 0: the tangent",
-            Grid::Lag => "lag of the secant, s, in [0, 1]; 0: the tangent",
             Grid::None => "",
         }
     }
