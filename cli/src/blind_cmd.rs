@@ -34,9 +34,9 @@ pub struct Args {
     /// Keep each case's files (`caseI/robot.urdf`, `caseI/data.csv`; with --real also the
     /// sidecar with the description's information) in this folder, to re-diagnose a case by
     /// hand (`physid diagnose --robot DIR/case17/robot.urdf --data DIR/case17/data.csv`, with
-    /// the same --description-uncertainty; with --real the command processes the effect
-    /// columns at the pipeline's cutoff, the benchmark at 20 Hz, docs/diagnose.md); default: a
-    /// temporary folder, removed.
+    /// the same --description-uncertainty; with --real-baseline the benchmark's baseline is
+    /// processed at 20 Hz, the command's at the pipeline's cutoff); default: a temporary
+    /// folder, removed.
     #[arg(long)]
     keep_cases: Option<PathBuf>,
     /// Run only these cases (numbers below --cases, comma-separated); the scores cover them.

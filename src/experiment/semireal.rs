@@ -647,7 +647,9 @@ pub fn run_case(
     let start = std::time::Instant::now();
     let given = crate::io::load_robot(&robot.to_string_lossy())?;
     let information = described_information(&sidecar, &given)?;
-    let runs = crate::io::load_trajectory(&csv, &given)?.trajectories();
+    let loaded = crate::io::load_trajectory(&csv, &given)?;
+    let cutoff = loaded.report.cutoff;
+    let runs = loaded.trajectories();
     let diag_err = |source| RealError::Diagnose {
         context: format!("case {i}"),
         source,
@@ -656,8 +658,11 @@ pub fn run_case(
         b.diagnose_change(&given, runs, vec![], HOLDOUT, opts)
             .map_err(diag_err)?
     } else {
+        // As `physid diagnose` on the case's files: the effect columns processed at the data
+        // pipeline's cutoff.
         let opts = diagnose::Options {
             description_information: Some(information),
+            processing_cutoff: cutoff,
             ..opts.clone()
         };
         diagnose::diagnose_runs(&given, runs, vec![], HOLDOUT, &opts).map_err(diag_err)?
