@@ -517,8 +517,23 @@ fn the_api_floor_returns_named_types_not_tuples() {
     let mut found = vec![];
     for file in &files {
         let text = code(&std::fs::read_to_string(file).unwrap());
-        for (i, line) in text.lines().enumerate() {
-            let t = line.trim_start();
+        let lines: Vec<&str> = text.lines().collect();
+        for (i, line) in lines.iter().enumerate() {
+            let first = line.trim_start();
+            // A signature over several lines is read whole, up to its body or `;`.
+            let t = if first.starts_with("pub fn ") {
+                let mut sig = String::new();
+                for l in &lines[i..] {
+                    sig.push_str(l.trim());
+                    if l.contains('{') || l.trim_end().ends_with(';') {
+                        break;
+                    }
+                }
+                sig
+            } else {
+                first.to_string()
+            };
+            let t = t.as_str();
             let public = t.starts_with("pub fn ") || (t.starts_with("pub ") && t.contains(": "));
             let tuple = (t.contains("-> (") && !t.contains("-> ()"))
                 || (t.contains("Result<(") && !t.contains("Result<()"))

@@ -107,8 +107,8 @@ fn identified_kuka_patches_its_own_urdf_and_round_trips() {
     // read back onto the model whether the sidecar or the URDF beside it is the robot.
     for robot in [side.to_str().unwrap(), o] {
         let (m, _) = io::load_robot_with(robot, &Default::default()).unwrap();
-        let (info, notes) = physid::api::information::for_description(robot, &m).unwrap();
-        let info = info.expect("an information matrix");
+        let read = physid::api::information::for_description(robot, &m).unwrap();
+        let (info, notes) = (read.matrix.expect("an information matrix"), read.notices);
         assert_eq!(info.nrows(), m.layout().len);
         assert!(notes[0].text.contains("5027 samples"), "{}", notes[0]);
         let sym = (&info - info.transpose()).amax();

@@ -328,10 +328,11 @@ impl Fit {
         locked: &[usize],
     ) -> Result<Result<Information, InformationError>, ApiError> {
         let mut stats = ResidualStats::new(m.dof());
+        let mut fitted = vec![0.0; m.dof()];
         let mut push = |t: f64, r: &[f64]| {
-            let mut r = r.to_vec();
-            locked.iter().for_each(|&j| r[j] = f64::NAN);
-            stats.push(t, &r);
+            fitted.copy_from_slice(r);
+            locked.iter().for_each(|&j| fitted[j] = f64::NAN);
+            stats.push(t, &fitted);
         };
         if let Some((cal, copts)) = &self.calibration {
             let pieces = in_memory(data, train);

@@ -23,32 +23,43 @@ pub const STATED_WITH_INFORMATION: f64 = 0.05;
 /// the sidecar has no `[information]` table, names parameters the model does not have, or was
 /// written for other parameter values than the description's; an error naming the file and
 /// field when the table is malformed.
-pub fn for_description(
-    robot: &str,
-    model: &Model,
-) -> Result<(Option<DMatrix<f64>>, Vec<Notice>), ApiError> {
+pub fn for_description(robot: &str, model: &Model) -> Result<DescriptionInformation, ApiError> {
+    let none = DescriptionInformation {
+        matrix: None,
+        notices: vec![],
+    };
     let Some(path) = sidecar_of(robot) else {
-        return Ok((None, vec![]));
+        return Ok(none);
     };
     let Some(table) = SidecarInformation::read(&path)? else {
-        return Ok((None, vec![]));
+        return Ok(none);
     };
     let shown = path.display();
-    match table.onto(model) {
-        Ok(matrix) => Ok((
-            Some(matrix),
-            vec![Notice::note(format!(
+    Ok(match table.onto(model) {
+        Ok(matrix) => DescriptionInformation {
+            matrix: Some(matrix),
+            notices: vec![Notice::note(format!(
                 "{shown}: the description's uncertainty from its identification's information matrix ({} samples, residual RMS {:.3} N m)",
                 table.samples, table.residual_rms
             ))],
-        )),
-        Err(why) => Ok((
-            None,
-            vec![Notice::warning(format!(
+        },
+        Err(why) => DescriptionInformation {
+            matrix: None,
+            notices: vec![Notice::warning(format!(
                 "{shown}: [information] not used: {why}"
             ))],
-        )),
-    }
+        },
+    })
+}
+
+/// What a description's sidecar gives the diagnosis: its information matrix on the model's
+/// parameters, if any is usable, and the notes and warnings saying where it came from or why
+/// it is not used.
+pub struct DescriptionInformation {
+    /// The information matrix (model parameters × model parameters), when usable.
+    pub matrix: Option<DMatrix<f64>>,
+    /// What to show the user.
+    pub notices: Vec<Notice>,
 }
 
 /// The sidecar of a `--robot` argument: a TOML file itself, or the one beside a URDF.
@@ -71,8 +82,11 @@ pub fn apply(
     model: &Model,
     opts: &mut crate::diagnose::Options,
 ) -> Result<Vec<Notice>, ApiError> {
-    let (information, mut notices) = for_description(robot, model)?;
-    if let Some(info) = information {
+    let DescriptionInformation {
+        matrix,
+        mut notices,
+    } = for_description(robot, model)?;
+    if let Some(info) = matrix {
         opts.description_information = Some(info);
         if opts.description_uncertainty.is_none() {
             opts.description_uncertainty = Some(STATED_WITH_INFORMATION);
@@ -117,7 +131,9 @@ mod tests {
         let dir = tempfile::tempdir().unwrap();
         let path = dir.path().join("leg.physid.toml");
         std::fs::write(&path, text).unwrap();
-        for_description(path.to_str().unwrap(), model).map_err(|e| e.to_string())
+        for_description(path.to_str().unwrap(), model)
+            .map(|d| (d.matrix, d.notices))
+            .map_err(|e| e.to_string())
     }
 
     #[test]
@@ -157,11 +173,13 @@ mod tests {
             read("[robot]\nbuiltin = \"cheetah3\"\n", &model).unwrap().0,
             None
         );
-        assert_eq!(for_description("cheetah3", &model).unwrap().0, None);
+        assert_eq!(for_description("cheetah3", &model).unwrap().matrix, None);
         let dir = tempfile::tempdir().unwrap();
         let urdf = dir.path().join("arm.urdf");
         assert_eq!(
-            for_description(urdf.to_str().unwrap(), &model).unwrap().0,
+            for_description(urdf.to_str().unwrap(), &model)
+                .unwrap()
+                .matrix,
             None
         );
     }

@@ -628,7 +628,8 @@ pub fn information(
 ) -> Result<crate::ident::information::Information, super::options::DiagnoseError> {
     let fit = super::stage::fit_nominal(model, data, opts)?;
     let mut ne = crate::ident::NormalEquations::new(model.dof(), model.layout().len);
-    super::library::Context::new(model, &fit.theta, data, opts.processing_cutoff).for_each_row(
+    let ctx = super::library::Context::new(model, &fit.theta, data, opts.processing_cutoff);
+    ctx.for_each_row(
         data,
         0..data.len(),
         &[],
@@ -636,7 +637,6 @@ pub fn information(
         &mut |_, z, tau| ne.add(z, tau),
     );
     let ne = ne.finish();
-    let ctx = super::library::Context::new(model, &fit.theta, data, opts.processing_cutoff);
     let (_, res) = super::residual::residual_rms(&ctx, data, &[], &fit.theta, opts.min_speed);
     let masked = super::residual::mask_slow(data, &res, opts.min_speed);
     let s2 = super::residual::finite_mean_square(&masked);

@@ -201,20 +201,16 @@ pub fn bases(robot: &Model, paths: &[PathBuf], opts: &RealOptions) -> Result<Vec
         let runs = crate::io::load_trajectory(other, robot)?.trajectories();
         let data = crate::trajectory::Trajectory::concatenate(runs.clone())
             .ok_or(RealError::TooFewRuns(0))?;
-        let fit =
-            diagnose::fit_nominal(robot, &data, &dopts).map_err(|source| RealError::Diagnose {
-                context: format!("the description from {}", other.display()),
-                source,
-            })?;
+        // The nominal fit and its information on the other run (`at`: the fitted parameters).
         let information =
             diagnose::anchor::information(robot, &data, &dopts).map_err(|source| {
                 RealError::Diagnose {
-                    context: format!("the description's information from {}", other.display()),
+                    context: format!("the description from {}", other.display()),
                     source,
                 }
             })?;
         let description = robot
-            .with_parameters(&fit.theta)
+            .with_parameters(&information.at)
             .map_err(|e| RealError::Io(crate::io::IoError::invalid(other, e.to_string())))?;
         let (logged, _, _) =
             crate::io::load_logged(path, robot, &crate::io::DataOptions::default())?;
