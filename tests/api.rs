@@ -1,13 +1,76 @@
-//! The library's entry points (`physid::api`) on their own, without the binary: a large CSV
-//! streamed from disk identifies the same model as the same file read into memory, and the
+//! The library's entry points (`physid::api`) on their own, without the binary: a large CSV or
+//! MCAP streamed from disk identifies the same model as the same file read into memory, and the
 //! ground truth of a physid log scores the fit.
 
 mod common;
 
 use common::root;
-use physid::api::data::{locked_joints, Data, Span};
+use physid::api::data::{locked_joints, Data, Span, Streamed};
 use physid::api::identify::{self, fit};
 use physid::ident::{ConstraintSet, Options};
+
+#[test]
+fn a_streamed_mcap_fits_as_the_same_file_in_memory() {
+    let (mut sc, model, _) =
+        physid::sim::scenario::load(&root().join("scenarios/cheetah3_shell.toml")).unwrap();
+    sc.simulation.duration = 2.0;
+    let rec = physid::sim::run(&model, &sc, &mut |_| {}).unwrap();
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("leg.mcap");
+    let (names, theta) = (model.parameter_names(), model.parameters());
+    let meta = physid::io::mcap_log::LogMeta {
+        scenario_toml: "",
+        engine: "physid",
+        parameters: (&names, theta.as_slice()),
+    };
+    physid::io::mcap_log::write(&path, &rec, &meta).unwrap();
+    let opts = physid::io::DataOptions::default();
+    let memory = Data::open_all(&[path.as_path()], &model, &opts, true).unwrap();
+    let joints: Vec<String> = model.joint_names();
+    assert!(physid::io::mcap_stream::mcap_streamable(&path).unwrap());
+    let n = physid::io::mcap_stream::stream_mcap(&path, &joints, 0..0, &mut |_, _| {}).unwrap();
+    assert_eq!(
+        (n, memory[0].len()),
+        (rec.processed.len(), rec.processed.len())
+    );
+    // Every sample as the whole-file reader gives it, bit for bit.
+    let whole = memory[0].pieces(&(0..n));
+    assert_eq!(whole.len(), 1);
+    let mut seen = 0;
+    physid::io::mcap_stream::stream_mcap(&path, &joints, 5..n - 5, &mut |k, s| {
+        let tr = &whole[0];
+        let j = joints.len();
+        assert_eq!(s.t, tr.t[k], "sample {k}");
+        assert_eq!(s.q, &tr.q[k * j..(k + 1) * j]);
+        assert_eq!(s.qd, &tr.qd[k * j..(k + 1) * j]);
+        assert_eq!(s.qdd, &tr.qdd.as_ref().unwrap()[k * j..(k + 1) * j]);
+        assert_eq!(s.tau, &tr.tau[k * j..(k + 1) * j]);
+        seen += 1;
+    })
+    .unwrap();
+    assert_eq!(seen, n - 10);
+    let streamed = vec![Data::Stream {
+        format: Streamed::Mcap,
+        path: path.clone(),
+        joints,
+        samples: n,
+    }];
+    let train = [Span {
+        file: 0,
+        range: 0..n / 2,
+    }];
+    let opts = Options::new(ConstraintSet::Consistent);
+    let a = fit(&model, &memory, &train, &opts, vec![], &[]).unwrap();
+    let b = fit(&model, &streamed, &train, &opts, vec![], &[]).unwrap();
+    assert_eq!(a.identified.theta, b.identified.theta);
+    let validation = [Span {
+        file: 0,
+        range: n / 2..n,
+    }];
+    let ea = a.errors(&model, &memory, &validation, &[]).unwrap();
+    let eb = b.errors(&model, &streamed, &validation, &[]).unwrap();
+    assert!((ea.overall - eb.overall).abs() <= 1e-12 * ea.overall);
+}
 
 #[test]
 fn a_streamed_csv_fits_as_the_same_file_in_memory() {
@@ -22,7 +85,8 @@ fn a_streamed_csv_fits_as_the_same_file_in_memory() {
     let memory = Data::open_all(&[csv.as_path()], &model, &opts, true).unwrap();
     assert!(matches!(memory[0], Data::Memory(_)));
     let joints: Vec<String> = model.joint_names();
-    let streamed = vec![Data::Csv {
+    let streamed = vec![Data::Stream {
+        format: Streamed::Csv,
         path: csv.clone(),
         joints,
         samples: memory[0].len(),

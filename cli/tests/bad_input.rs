@@ -101,6 +101,59 @@ fn an_absurd_sample_is_an_error_naming_it_whether_read_or_streamed() {
 }
 
 #[test]
+fn a_streamed_mcap_names_the_file_message_and_joint_of_what_is_wrong() {
+    let dir = tempfile::tempdir().unwrap();
+    let (mut sc, model, text) =
+        physid::sim::scenario::load(&root().join("scenarios/cheetah3_shell.toml")).unwrap();
+    sc.simulation.duration = 0.05;
+    let mut rec = physid::sim::run(&model, &sc, &mut |_| {}).unwrap();
+    let (names, theta) = (model.parameter_names(), model.parameters());
+    let meta = io::mcap_log::LogMeta {
+        scenario_toml: &text,
+        engine: "physid",
+        parameters: (&names, theta.as_slice()),
+    };
+    let joints = model.joint_names();
+    let stream = |p: &std::path::Path, joints: &[String]| {
+        io::mcap_stream::stream_mcap(p, joints, 0..usize::MAX, &mut |_, _| {})
+    };
+    let good = dir.path().join("good.mcap");
+    io::mcap_log::write(&good, &rec, &meta).unwrap();
+    assert_eq!(stream(&good, &joints).unwrap(), rec.processed.len());
+    // A joint the robot has and the log does not.
+    let mut other = joints.clone();
+    other[1] = "elbow".into();
+    let msg = stream(&good, &other).unwrap_err().to_string();
+    assert!(
+        msg.contains("good.mcap") && msg.contains("no joint 'elbow'") && msg.contains("message 0"),
+        "{msg}"
+    );
+    // An absurd torque in sample 17.
+    let n = joints.len();
+    rec.processed.tau[17 * n + 2] = 1e300;
+    let absurd = dir.path().join("absurd.mcap");
+    io::mcap_log::write(&absurd, &rec, &meta).unwrap();
+    let msg = stream(&absurd, &joints).unwrap_err().to_string();
+    assert!(
+        msg.contains("absurd.mcap") && msg.contains("sample 17") && msg.contains(&joints[2]),
+        "{msg}"
+    );
+    // Cut short: an error naming the file, never a panic or a partial count.
+    let bytes = std::fs::read(&good).unwrap();
+    let cut = dir.path().join("cut.mcap");
+    std::fs::write(&cut, &bytes[..bytes.len() / 2]).unwrap();
+    let msg = stream(&cut, &joints).unwrap_err().to_string();
+    assert!(msg.contains("cut.mcap"), "{msg}");
+    // Not an MCAP at all.
+    let text_file = dir.path().join("notes.mcap");
+    std::fs::write(&text_file, "t,q1\n0,1\n").unwrap();
+    let msg = io::mcap_stream::mcap_streamable(&text_file)
+        .unwrap_err()
+        .to_string();
+    assert!(msg.contains("notes.mcap") && msg.contains("MCAP"), "{msg}");
+}
+
+#[test]
 fn an_output_never_replaces_an_input() {
     let dir = tempfile::tempdir().unwrap();
     // simulate SC.toml --out SC.toml: before, the scenario was replaced by the MCAP.

@@ -179,8 +179,14 @@ fn the_mcap_reader_never_panics_on_mutated_logs() {
     .unwrap();
     let seed = std::fs::read(&log).unwrap();
     assert!(io::mcap_log::read(&log).is_ok());
+    let joints = model.joint_names();
+    assert!(io::mcap_stream::stream_mcap(&log, &joints, 0..usize::MAX, &mut |_, _| {}).is_ok());
+    // The whole-file reader and the streaming one (the leg's joints' processed samples).
     let (runs, rejected) = fuzz("mcap", &seed, &dir.path().join("a.mcap"), &|p| {
-        io::mcap_log::read(p).is_ok()
+        let read = io::mcap_log::read(p).is_ok();
+        let streamed =
+            io::mcap_stream::stream_mcap(p, &joints, 0..usize::MAX, &mut |_, _| {}).is_ok();
+        read && streamed
     });
     eprintln!("mcap: {runs} mutated inputs, {rejected} rejected with an error, 0 panics");
     assert!(rejected > runs / 10, "only {rejected} of {runs} rejected");

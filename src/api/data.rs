@@ -1,26 +1,39 @@
-//! The data an entry point identifies from: each file's runs in memory, or a large CSV with
-//! q̇ and q̈ streamed from disk (memory independent of its length); parts of files as
-//! [`Span`]s; torque errors summed over them.
+//! The data an entry point identifies from: each file's runs in memory, or a large file with
+//! q̇ and q̈ (a CSV with `dq`/`ddq` columns, an MCAP with `/physid/processed` samples) streamed
+//! from disk (memory independent of its length); parts of files as [`Span`]s; torque errors
+//! summed over them.
 
 use super::ApiError;
 use crate::ident::{analysis, NormalEquations};
-use crate::io::{samples, DataOptions, LoadedData};
+use crate::io::{mcap_stream, samples, DataOptions, LoadedData};
 use crate::model::Model;
-use crate::trajectory::Trajectory;
+use crate::trajectory::{SampleSink, Trajectory};
 use nalgebra::DVector;
 use std::ops::Range;
 use std::path::{Path, PathBuf};
 
-/// CSV files above this size with `ddq` columns are streamed when no effect terms are asked
-/// for; smaller files are read once into memory.
+/// CSV files with `ddq` columns and MCAP files with processed samples above this size are
+/// streamed when no effect terms are asked for; smaller files are read once into memory.
 pub const STREAM_ABOVE_BYTES: u64 = 64 << 20;
+
+/// The format of a streamed file.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Streamed {
+    /// A CSV with `dq` and `ddq` columns ([`samples::stream_csv`]).
+    Csv,
+    /// An MCAP with `/physid/processed` samples carrying accelerations
+    /// ([`mcap_stream::stream_mcap`]).
+    Mcap,
+}
 
 /// One file of identification data.
 pub enum Data {
     /// Loaded and prepared samples.
     Memory(Box<LoadedData>),
-    /// A streamable CSV.
-    Csv {
+    /// A file streamed from disk.
+    Stream {
+        /// Its format.
+        format: Streamed,
         /// The file.
         path: PathBuf,
         /// The robot's joint names, in its order (the columns read).
@@ -40,9 +53,10 @@ pub struct Span {
 }
 
 impl Data {
-    /// Opens `paths` (read together): large CSV files with `dq` and `ddq` columns stream
-    /// (unless `in_memory`, or joints are locked), the others are loaded and prepared with one
-    /// cutoff ([`crate::io::load_all`]).
+    /// Opens `paths` (read together): large CSV files with `dq` and `ddq` columns and large
+    /// MCAP files with processed samples stream (unless `in_memory`, joints are locked, or a
+    /// topic is asked for), the others are loaded and prepared with one cutoff
+    /// ([`crate::io::load_all`]).
     pub fn open_all(
         paths: &[&Path],
         model: &Model,
@@ -52,18 +66,17 @@ impl Data {
         let mut streamed = vec![];
         for path in paths {
             let large = std::fs::metadata(path).is_ok_and(|m| m.len() > STREAM_ABOVE_BYTES);
-            streamed.push(
-                !in_memory
-                    && large
-                    && read.prepare.lock.is_empty()
-                    && path.extension().and_then(|e| e.to_str()) == Some("csv")
-                    && samples::csv_streamable(path)?,
-            );
+            let format = if in_memory || !large || !read.prepare.lock.is_empty() {
+                None
+            } else {
+                streamable(path, read)?
+            };
+            streamed.push(format);
         }
         let loaded_paths: Vec<&Path> = paths
             .iter()
             .zip(&streamed)
-            .filter(|(_, s)| !**s)
+            .filter(|(_, s)| s.is_none())
             .map(|(p, _)| *p)
             .collect();
         let mut loaded = crate::io::load_all(&loaded_paths, model, read)?.into_iter();
@@ -71,30 +84,56 @@ impl Data {
         paths
             .iter()
             .zip(streamed)
-            .map(|(path, s)| {
-                Ok(if s {
-                    let samples = samples::stream_csv(path, &joints, 0..0, &mut |_, _| {})?;
-                    Data::Csv {
-                        path: path.to_path_buf(),
-                        joints: joints.clone(),
-                        samples,
+            .map(|(path, format)| {
+                Ok(match format {
+                    Some(format) => {
+                        let mut file = Data::Stream {
+                            format,
+                            path: path.to_path_buf(),
+                            joints: joints.clone(),
+                            samples: 0,
+                        };
+                        let counted = file.stream(0..0, &mut |_, _| {})?;
+                        if let Data::Stream { samples, .. } = &mut file {
+                            *samples = counted;
+                        }
+                        file
                     }
-                } else {
-                    Data::Memory(Box::new(
+                    None => Data::Memory(Box::new(
                         loaded
                             .next()
                             .expect("one loaded file per path not streamed"),
-                    ))
+                    )),
                 })
             })
             .collect()
+    }
+
+    /// Passes the samples `r` of a streamed file to `sink` (none for one in memory); returns
+    /// its sample count.
+    fn stream(&self, r: Range<usize>, sink: &mut SampleSink) -> Result<usize, ApiError> {
+        Ok(match self {
+            Data::Memory(_) => 0,
+            Data::Stream {
+                format: Streamed::Csv,
+                path,
+                joints,
+                ..
+            } => samples::stream_csv(path, joints, r, sink)?,
+            Data::Stream {
+                format: Streamed::Mcap,
+                path,
+                joints,
+                ..
+            } => mcap_stream::stream_mcap(path, joints, r, sink)?,
+        })
     }
 
     /// Samples in the file as read.
     pub fn len(&self) -> usize {
         match self {
             Data::Memory(d) => d.report.samples_read,
-            Data::Csv { samples, .. } => *samples,
+            Data::Stream { samples, .. } => *samples,
         }
     }
 
@@ -107,7 +146,7 @@ impl Data {
     pub fn report(&self) -> Option<&crate::prepare::Report> {
         match self {
             Data::Memory(d) => Some(&d.report),
-            Data::Csv { .. } => None,
+            Data::Stream { .. } => None,
         }
     }
 
@@ -131,7 +170,7 @@ impl Data {
                 .filter_map(|run| run.within(r))
                 .map(|run| run.trajectory)
                 .collect(),
-            Data::Csv { .. } => vec![],
+            Data::Stream { .. } => vec![],
         }
     }
 
@@ -139,7 +178,7 @@ impl Data {
     pub fn used(&self, r: &Range<usize>) -> usize {
         match self {
             Data::Memory(_) => self.pieces(r).iter().map(Trajectory::len).sum(),
-            Data::Csv { .. } => r.len(),
+            Data::Stream { .. } => r.len(),
         }
     }
 
@@ -165,10 +204,7 @@ impl Data {
                 }
                 ne
             }
-            Data::Csv { path, joints, .. } => {
-                NormalEquations::from_stream(m, |sink| samples::stream_csv(path, joints, r, sink))?
-                    .0
-            }
+            Data::Stream { .. } => NormalEquations::from_stream(m, |sink| self.stream(r, sink))?.0,
         })
     }
 
@@ -192,13 +228,8 @@ impl Data {
                     )?;
                 }
             }
-            Data::Csv { path, joints, .. } => {
-                analysis::residual_stream(
-                    m,
-                    theta,
-                    |sink| samples::stream_csv(path, joints, r, sink),
-                    each,
-                )?;
+            Data::Stream { .. } => {
+                analysis::residual_stream(m, theta, |sink| self.stream(r, sink), each)?;
             }
         }
         Ok(())
@@ -220,14 +251,26 @@ impl Data {
                 }
                 acc
             }
-            Data::Csv { path, joints, .. } => {
-                let (per, _) = analysis::rms_error_stream(m, theta, |sink| {
-                    samples::stream_csv(path, joints, r.clone(), sink)
-                })?;
+            Data::Stream { .. } => {
+                let (per, _) =
+                    analysis::rms_error_stream(m, theta, |sink| self.stream(r.clone(), sink))?;
                 SquaredErrors::from_rms(&per, r.len())
             }
         })
     }
+}
+
+/// The format `path` streams in, if it does: a CSV with `dq` and `ddq` columns, or an MCAP with
+/// processed samples carrying accelerations when no topic is asked for.
+fn streamable(path: &Path, read: &DataOptions) -> Result<Option<Streamed>, ApiError> {
+    let extension = path.extension().and_then(|e| e.to_str());
+    Ok(match extension {
+        Some("csv") => samples::csv_streamable(path)?.then_some(Streamed::Csv),
+        Some("mcap") if read.topic.is_none() => {
+            mcap_stream::mcap_streamable(path)?.then_some(Streamed::Mcap)
+        }
+        _ => None,
+    })
 }
 
 /// The joints any data file locks (union, in joint order).

@@ -45,13 +45,13 @@ struct JointState {
 
 /// `physid_msgs/msg/JointSample`.
 #[derive(Serialize, Deserialize, Debug, Clone, PartialEq)]
-struct JointSample {
+pub(super) struct JointSample {
     header: Header,
-    name: Vec<String>,
-    position: Vec<f64>,
-    velocity: Vec<f64>,
-    acceleration: Vec<f64>,
-    effort: Vec<f64>,
+    pub(super) name: Vec<String>,
+    pub(super) position: Vec<f64>,
+    pub(super) velocity: Vec<f64>,
+    pub(super) acceleration: Vec<f64>,
+    pub(super) effort: Vec<f64>,
     friction: Vec<f64>,
     effects: Vec<f64>,
 }
@@ -83,7 +83,7 @@ fn prevalidate(bytes: &[u8]) -> Result<(), mcap::McapError> {
 /// allocates anything: a corrupt length would otherwise make it reserve up to 4 GB for one
 /// string. Alignment follows CDR: each primitive at a multiple of its size from the start of
 /// the payload (after the 4-byte encapsulation header).
-fn check_cdr_lengths(data: &[u8], float_sequences: usize) -> Result<(), String> {
+pub(super) fn check_cdr_lengths(data: &[u8], float_sequences: usize) -> Result<(), String> {
     let payload = data
         .get(4..)
         .ok_or("shorter than its CDR encapsulation header")?;
@@ -453,7 +453,7 @@ pub fn read(path: &Path) -> Result<Log, IoError> {
 /// The message types that are `sensor_msgs/JointState` (ROS 2, and ROS 1 in MCAP).
 const JOINT_STATE_TYPES: [&str; 2] = ["sensor_msgs/msg/JointState", "sensor_msgs/JointState"];
 /// physid's own sample type.
-const JOINT_SAMPLE_TYPE: &str = "physid_msgs/msg/JointSample";
+pub(super) const JOINT_SAMPLE_TYPE: &str = "physid_msgs/msg/JointSample";
 
 /// Reads joint states from one MCAP file (a rosbag2 directory, MCAP or SQLite, is read by
 /// [`super::read_joint_log`]). Times are integer nanoseconds from the first message of the

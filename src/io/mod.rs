@@ -5,6 +5,7 @@
 pub mod cache;
 pub mod geometry;
 pub mod mcap_log;
+pub mod mcap_stream;
 pub mod mjcf;
 pub mod plot;
 pub mod robot_spec;
