@@ -336,6 +336,25 @@ pub struct SampleRef<'a> {
     pub tau: &'a [f64],
 }
 
+/// The groups of a packed sample ([`SampleRef::packed`]), as a checked value names them.
+pub const SAMPLE_GROUPS: [&str; 4] = ["q", "dq", "ddq", "tau"];
+
+impl<'a> SampleRef<'a> {
+    /// The sample at time `t` (s) whose values are packed joint by joint in the groups
+    /// [`SAMPLE_GROUPS`]: `[q | q̇ | q̈ | τ]`, a quarter of `values` each (what a reader fills
+    /// one sample at a time).
+    pub fn packed(t: f64, values: &'a [f64]) -> Self {
+        let n = values.len() / 4;
+        Self {
+            t,
+            q: &values[..n],
+            qd: &values[n..2 * n],
+            qdd: &values[2 * n..3 * n],
+            tau: &values[3 * n..4 * n],
+        }
+    }
+}
+
 /// A source of samples given one at a time: called with a sink, it passes each sample to it
 /// as `(index, sample)` and returns the source's total sample count. A CSV streamed from disk is
 /// one (`io::samples::stream_csv`); a [`Trajectory`] is another ([`Trajectory::stream`]).

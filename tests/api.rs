@@ -11,19 +11,10 @@ use physid::ident::{ConstraintSet, Options};
 
 #[test]
 fn a_streamed_mcap_fits_as_the_same_file_in_memory() {
-    let (mut sc, model, _) =
-        physid::sim::scenario::load(&root().join("scenarios/cheetah3_shell.toml")).unwrap();
-    sc.simulation.duration = 2.0;
-    let rec = physid::sim::run(&model, &sc, &mut |_| {}).unwrap();
+    let common::ShellRun { model, rec, .. } = common::shell_run(2.0);
     let dir = tempfile::tempdir().unwrap();
     let path = dir.path().join("leg.mcap");
-    let (names, theta) = (model.parameter_names(), model.parameters());
-    let meta = physid::io::mcap_log::LogMeta {
-        scenario_toml: "",
-        engine: "physid",
-        parameters: (&names, theta.as_slice()),
-    };
-    physid::io::mcap_log::write(&path, &rec, &meta).unwrap();
+    common::write_mcap(&path, &model, &rec, "");
     let opts = physid::io::DataOptions::default();
     let memory = Data::open_all(&[path.as_path()], &model, &opts, true).unwrap();
     let joints: Vec<String> = model.joint_names();
@@ -74,10 +65,12 @@ fn a_streamed_mcap_fits_as_the_same_file_in_memory() {
 
 #[test]
 fn a_streamed_csv_fits_as_the_same_file_in_memory() {
-    let (mut sc, model, _) =
-        physid::sim::scenario::load(&root().join("scenarios/cheetah3_shell.toml")).unwrap();
-    sc.simulation.duration = 2.0;
-    let rec = physid::sim::run(&model, &sc, &mut |_| {}).unwrap();
+    let common::ShellRun {
+        scenario: sc,
+        model,
+        rec,
+        ..
+    } = common::shell_run(2.0);
     let dir = tempfile::tempdir().unwrap();
     let csv = dir.path().join("leg.csv");
     physid::io::samples::write_csv(&csv, &rec.processed).unwrap();

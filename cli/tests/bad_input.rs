@@ -103,22 +103,18 @@ fn an_absurd_sample_is_an_error_naming_it_whether_read_or_streamed() {
 #[test]
 fn a_streamed_mcap_names_the_file_message_and_joint_of_what_is_wrong() {
     let dir = tempfile::tempdir().unwrap();
-    let (mut sc, model, text) =
-        physid::sim::scenario::load(&root().join("scenarios/cheetah3_shell.toml")).unwrap();
-    sc.simulation.duration = 0.05;
-    let mut rec = physid::sim::run(&model, &sc, &mut |_| {}).unwrap();
-    let (names, theta) = (model.parameter_names(), model.parameters());
-    let meta = io::mcap_log::LogMeta {
-        scenario_toml: &text,
-        engine: "physid",
-        parameters: (&names, theta.as_slice()),
-    };
+    let common::ShellRun {
+        model,
+        mut rec,
+        text,
+        ..
+    } = common::shell_run(0.05);
     let joints = model.joint_names();
     let stream = |p: &std::path::Path, joints: &[String]| {
         io::mcap_stream::stream_mcap(p, joints, 0..usize::MAX, &mut |_, _| {})
     };
     let good = dir.path().join("good.mcap");
-    io::mcap_log::write(&good, &rec, &meta).unwrap();
+    common::write_mcap(&good, &model, &rec, &text);
     assert_eq!(stream(&good, &joints).unwrap(), rec.processed.len());
     // A joint the robot has and the log does not.
     let mut other = joints.clone();
@@ -132,7 +128,7 @@ fn a_streamed_mcap_names_the_file_message_and_joint_of_what_is_wrong() {
     let n = joints.len();
     rec.processed.tau[17 * n + 2] = 1e300;
     let absurd = dir.path().join("absurd.mcap");
-    io::mcap_log::write(&absurd, &rec, &meta).unwrap();
+    common::write_mcap(&absurd, &model, &rec, &text);
     let msg = stream(&absurd, &joints).unwrap_err().to_string();
     assert!(
         msg.contains("absurd.mcap") && msg.contains("sample 17") && msg.contains(&joints[2]),

@@ -160,23 +160,11 @@ fn text_readers_never_panic_on_mutated_files() {
 #[test]
 fn the_mcap_reader_never_panics_on_mutated_logs() {
     let dir = tempfile::tempdir().unwrap();
-    let (mut sc, model, text) =
-        physid::sim::scenario::load(&root().join("scenarios/cheetah3_shell.toml")).unwrap();
-    sc.simulation.duration = 0.03;
-    let rec = physid::sim::run(&model, &sc, &mut |_| {}).unwrap();
+    let common::ShellRun {
+        model, rec, text, ..
+    } = common::shell_run(0.03);
     let log = dir.path().join("seed.mcap");
-    let theta = model.parameters();
-    let names = model.parameter_names();
-    io::mcap_log::write(
-        &log,
-        &rec,
-        &io::mcap_log::LogMeta {
-            scenario_toml: &text,
-            engine: "physid",
-            parameters: (&names, theta.as_slice()),
-        },
-    )
-    .unwrap();
+    common::write_mcap(&log, &model, &rec, &text);
     let seed = std::fs::read(&log).unwrap();
     assert!(io::mcap_log::read(&log).is_ok());
     let joints = model.joint_names();

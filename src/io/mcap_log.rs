@@ -56,13 +56,22 @@ pub(super) struct JointSample {
     effects: Vec<f64>,
 }
 
+/// The longest record an MCAP file of `file_bytes` bytes may hold, checked before anything is
+/// allocated for one: 100 times the file (a compressed chunk's records), at least 64 MiB. A
+/// corrupt length inside a chunk would otherwise make a reader reserve exabytes and abort.
+pub(super) fn record_length_limit(file_bytes: u64) -> usize {
+    usize::try_from(file_bytes)
+        .unwrap_or(usize::MAX)
+        .saturating_mul(100)
+        .max(64 << 20)
+}
+
 /// Walks every record of an MCAP file, chunks decompressed, with each record's length bounded
-/// (by 100 times the file's size, at least 64 MiB) before anything is allocated for it: a
-/// corrupt length inside a chunk would otherwise make the message stream reserve exabytes and
-/// abort. The stream that reads the messages afterwards meets the same, checked records.
+/// ([`record_length_limit`]) before anything is allocated for it. The stream that reads the
+/// messages afterwards meets the same, checked records.
 fn prevalidate(bytes: &[u8]) -> Result<(), mcap::McapError> {
     use mcap::sans_io::{LinearReadEvent, LinearReader, LinearReaderOptions};
-    let limit = bytes.len().saturating_mul(100).max(64 << 20);
+    let limit = record_length_limit(bytes.len() as u64);
     let mut reader = LinearReader::new_with_options(
         LinearReaderOptions::default().with_record_length_limit(limit),
     );

@@ -4,13 +4,15 @@
 //!
 //! The file is read in blocks of at most 1 MiB through the `mcap` crate's sans-io reader (chunks
 //! decompressed one at a time, every record's length bounded before anything is allocated for
-//! it, as [`super::mcap_log`] bounds them), and each processed message is decoded, checked
-//! (finite values, increasing time) and handed on; nothing else is kept but the schema and
-//! channel tables.
+//! it: [`super::mcap_log::record_length_limit`]), and each processed message is decoded,
+//! checked (finite values, increasing time) and handed on; nothing else is kept but the schema
+//! and channel tables.
 
-use super::mcap_log::{check_cdr_lengths, JointSample, JOINT_SAMPLE_TYPE, TOPIC_PROCESSED};
+use super::mcap_log::{
+    check_cdr_lengths, record_length_limit, JointSample, JOINT_SAMPLE_TYPE, TOPIC_PROCESSED,
+};
 use super::IoError;
-use crate::trajectory::{check_value, SampleRef, SampleSink};
+use crate::trajectory::{check_value, SampleRef, SampleSink, SAMPLE_GROUPS};
 use mcap::records::Record;
 use mcap::sans_io::{LinearReadEvent, LinearReader, LinearReaderOptions};
 use std::collections::HashMap;
@@ -96,21 +98,13 @@ pub fn stream_mcap(
             let groups = [&s.position, &s.velocity, &s.acceleration, &s.effort];
             for (g, values) in groups.iter().enumerate() {
                 for (j, &i) in ix.iter().enumerate() {
-                    let (group, v) = (["q", "dq", "ddq", "tau"][g], values[i]);
-                    check_value(k, t, group, &robot[j], v).map_err(|e| at(e.to_string()))?;
+                    let v = values[i];
+                    check_value(k, t, SAMPLE_GROUPS[g], &robot[j], v)
+                        .map_err(|e| at(e.to_string()))?;
                     vals[g * n + j] = v;
                 }
             }
-            f(
-                k,
-                &SampleRef {
-                    t,
-                    q: &vals[..n],
-                    qd: &vals[n..2 * n],
-                    qdd: &vals[2 * n..3 * n],
-                    tau: &vals[3 * n..],
-                },
-            );
+            f(k, &SampleRef::packed(t, &vals));
         }
         k += 1;
         Ok(Flow::Go)
@@ -151,10 +145,7 @@ fn walk(
     let mut file = std::fs::File::open(path).map_err(fs_error)?;
     let size = file.metadata().map_err(fs_error)?.len();
     let bad = |m: String| IoError::invalid(path, m);
-    let limit = usize::try_from(size)
-        .unwrap_or(usize::MAX)
-        .saturating_mul(100)
-        .max(64 << 20);
+    let limit = record_length_limit(size);
     let mut reader = LinearReader::new_with_options(
         LinearReaderOptions::default().with_record_length_limit(limit),
     );
@@ -222,6 +213,7 @@ pub fn metadata(
     let bad = |m: String| IoError::invalid(path, m);
     let mut file = std::fs::File::open(path).map_err(fs_error)?;
     let size = file.metadata().map_err(fs_error)?.len();
+    // The summary's records are not compressed: none is longer than the file.
     let limit = usize::try_from(size).unwrap_or(usize::MAX).max(1 << 20);
     let mut reader = SummaryReader::new_with_options(
         SummaryReaderOptions::default()

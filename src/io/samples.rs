@@ -6,6 +6,7 @@
 
 use super::IoError;
 pub use crate::prepare::Logged;
+use crate::trajectory::SAMPLE_GROUPS;
 pub use crate::trajectory::{SampleError, SampleRef, SampleSink, Trajectory};
 use std::path::Path;
 
@@ -336,19 +337,10 @@ pub fn stream_csv(
         if range.contains(&k) {
             for (g, cs) in cols.iter().enumerate() {
                 for (j, &c) in cs.iter().enumerate() {
-                    vals[g * n + j] = checked(["q", "dq", "ddq", "tau"][g], c, t)?;
+                    vals[g * n + j] = checked(SAMPLE_GROUPS[g], c, t)?;
                 }
             }
-            f(
-                k,
-                &SampleRef {
-                    t,
-                    q: &vals[..n],
-                    qd: &vals[n..2 * n],
-                    qdd: &vals[2 * n..3 * n],
-                    tau: &vals[3 * n..],
-                },
-            );
+            f(k, &SampleRef::packed(t, &vals));
         }
         k += 1;
     }

@@ -88,3 +88,50 @@ pub fn diverging_shell_scenario() -> String {
         .replace("motor_resistance = 0.45", "")
         .replace("supply_voltage = 65.0", "")
 }
+
+/// The Cheetah-3 leg's shell experiment (`scenarios/cheetah3_shell.toml`) simulated for
+/// `duration` s.
+#[allow(dead_code)]
+pub struct ShellRun {
+    /// The scenario, its duration set.
+    pub scenario: physid::sim::scenario::Scenario,
+    /// The leg.
+    pub model: physid::model::Model,
+    /// What the simulation logged.
+    pub rec: physid::trajectory::Recording,
+    /// The scenario file's text.
+    pub text: String,
+}
+
+/// [`ShellRun`] for `duration` s.
+#[allow(dead_code)]
+pub fn shell_run(duration: f64) -> ShellRun {
+    let (mut scenario, model, text) =
+        physid::sim::scenario::load(&root().join("scenarios/cheetah3_shell.toml")).unwrap();
+    scenario.simulation.duration = duration;
+    let rec = physid::sim::run(&model, &scenario, &mut |_| {}).unwrap();
+    ShellRun {
+        scenario,
+        model,
+        rec,
+        text,
+    }
+}
+
+/// Writes `rec` as a physid MCAP log at `path`, with `model`'s parameters as its ground truth
+/// and `scenario_toml` as its scenario record.
+#[allow(dead_code)]
+pub fn write_mcap(
+    path: &std::path::Path,
+    model: &physid::model::Model,
+    rec: &physid::trajectory::Recording,
+    scenario_toml: &str,
+) {
+    let (names, theta) = (model.parameter_names(), model.parameters());
+    let meta = physid::io::mcap_log::LogMeta {
+        scenario_toml,
+        engine: "physid",
+        parameters: (&names, theta.as_slice()),
+    };
+    physid::io::mcap_log::write(path, rec, &meta).unwrap();
+}
