@@ -421,10 +421,7 @@ pub fn select(
     tie: f64,
 ) -> (Vec<Step>, TestStop) {
     let mut base = folds.columns(chosen);
-    let cols = |vi: usize| -> Vec<usize> {
-        let d = folds.variants[vi].kind.columns(folds.n);
-        (folds.offsets[vi]..folds.offsets[vi] + d).collect()
-    };
+    let cols = |vi: usize| variant_columns(folds, vi);
     // The first step's fits decide which variants are absorbed; they are kept for that step.
     let mut first: Vec<Option<Fit>> = (0..folds.variants.len())
         .map(|v| (!exclude.contains(&folds.variants[v].kind)).then(|| anchor.fit(&base, &cols(v))))
@@ -449,40 +446,16 @@ pub fn select(
         if steps.len() >= max {
             break TestStop::MaxEffects(max);
         }
-        let mut best: Vec<(usize, Test, Fit)> = vec![];
-        for kind in Kind::ALL {
-            if used.contains(&kind) {
-                continue;
-            }
-            let mut top: Option<(usize, Test, Fit)> = None;
-            for &vi in candidates
-                .iter()
-                .filter(|&&v| folds.variants[v].kind == kind)
-            {
-                let v = folds.variants[vi];
-                let cand = cols(vi);
-                let d = cand.len();
-                let f = match first[vi].take() {
-                    Some(f) if steps.is_empty() => f,
-                    _ => anchor.fit(&base, &cand),
-                };
-                let t = Test {
-                    kind,
-                    param: v.param,
-                    statistic: f.statistic,
-                    threshold: chi2_upper_quantile(d, per_test),
-                    columns: d,
-                    visible: f.visible.iter().copied().fold(0.0, f64::max),
-                };
-                if top
-                    .as_ref()
-                    .is_none_or(|(_, b, _)| t.statistic > b.statistic)
-                {
-                    top = Some((vi, t, f));
-                }
-            }
-            best.extend(top);
-        }
+        let mut best = best_per_kind(
+            anchor,
+            folds,
+            &candidates,
+            &mut first,
+            &base,
+            &used,
+            per_test,
+            steps.is_empty(),
+        );
         if best.is_empty() {
             break TestStop::NoCandidate;
         }
@@ -530,6 +503,61 @@ pub fn select(
         });
     };
     (steps, stop)
+}
+
+/// The columns of variant `vi` in the normal equations of `folds`.
+fn variant_columns(folds: &Folds, vi: usize) -> Vec<usize> {
+    let d = folds.variants[vi].kind.columns(folds.n);
+    (folds.offsets[vi]..folds.offsets[vi] + d).collect()
+}
+
+/// Per kind not `used`, its candidate variant of the largest statistic against `base`: the
+/// variant, its test and its fit (on the first step, the fits that chose the candidates).
+#[allow(clippy::too_many_arguments)]
+fn best_per_kind(
+    anchor: &Anchor,
+    folds: &Folds,
+    candidates: &[usize],
+    first: &mut [Option<Fit>],
+    base: &[usize],
+    used: &[Kind],
+    per_test: f64,
+    first_step: bool,
+) -> Vec<(usize, Test, Fit)> {
+    let mut best = vec![];
+    for kind in Kind::ALL {
+        if used.contains(&kind) {
+            continue;
+        }
+        let mut top: Option<(usize, Test, Fit)> = None;
+        for &vi in candidates
+            .iter()
+            .filter(|&&v| folds.variants[v].kind == kind)
+        {
+            let cand = variant_columns(folds, vi);
+            let d = cand.len();
+            let f = match first[vi].take() {
+                Some(f) if first_step => f,
+                _ => anchor.fit(base, &cand),
+            };
+            let t = Test {
+                kind,
+                param: folds.variants[vi].param,
+                statistic: f.statistic,
+                threshold: chi2_upper_quantile(d, per_test),
+                columns: d,
+                visible: f.visible.iter().copied().fold(0.0, f64::max),
+            };
+            if top
+                .as_ref()
+                .is_none_or(|(_, b, _)| t.statistic > b.statistic)
+            {
+                top = Some((vi, t, f));
+            }
+        }
+        best.extend(top);
+    }
+    best
 }
 
 /// The test against the description (docs/diagnose.md, "Absorbed effects"): candidates that

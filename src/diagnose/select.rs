@@ -309,6 +309,38 @@ impl Serialize for SelectionStop {
     }
 }
 
+/// Per kind not `used` (nor in the model's span), its variant of the least cross-validated
+/// error added to `chosen`; a fit that fails or is infeasible does not compete.
+fn best_per_kind(
+    folds: &Folds,
+    model: &Model,
+    opts: &Options,
+    chosen: &[usize],
+    used: &[Kind],
+) -> Vec<(usize, Cv)> {
+    let mut best = vec![];
+    for kind in Kind::ALL {
+        if used.contains(&kind) || kind.in_model_span() {
+            continue;
+        }
+        let mut top: Option<(usize, Cv)> = None;
+        for (vi, v) in folds.variants.iter().enumerate() {
+            if v.kind != kind {
+                continue;
+            }
+            let mut with = chosen.to_vec();
+            with.push(vi);
+            if let Ok(cv) = folds.cv(model, &with, opts) {
+                if top.as_ref().is_none_or(|(_, t)| cv.mse < t.mse) {
+                    top = Some((vi, cv));
+                }
+            }
+        }
+        best.extend(top);
+    }
+    best
+}
+
 /// Forward selection with the stopping rule of the module documentation.
 pub fn forward_select(
     folds: &Folds,
@@ -330,28 +362,7 @@ pub fn forward_select(
             .map(|&v| folds.variants[v].kind)
             .chain(steps.iter().flat_map(|s: &Step| s.ambiguous_with.clone()))
             .collect();
-        // Best variant of each kind not yet used.
-        let mut best: Vec<(usize, Cv)> = vec![];
-        for kind in Kind::ALL {
-            if used.contains(&kind) || kind.in_model_span() {
-                continue;
-            }
-            let mut top: Option<(usize, Cv)> = None;
-            for (vi, v) in folds.variants.iter().enumerate() {
-                if v.kind != kind {
-                    continue;
-                }
-                let mut with = chosen.clone();
-                with.push(vi);
-                // An infeasible or failed fit simply does not compete.
-                if let Ok(cv) = folds.cv(model, &with, opts) {
-                    if top.as_ref().is_none_or(|(_, t)| cv.mse < t.mse) {
-                        top = Some((vi, cv));
-                    }
-                }
-            }
-            best.extend(top);
-        }
+        let mut best = best_per_kind(folds, model, opts, &chosen, &used);
         if best.is_empty() {
             break SelectionStop::NoCandidate;
         }

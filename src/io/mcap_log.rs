@@ -247,81 +247,96 @@ pub fn write(path: &Path, rec: &Recording, meta: &LogMeta) -> Result<(), IoError
         let c_true = w
             .add_channel(sample, TOPIC_TRUTH, "cdr", &none)
             .map_err(mcap_err)?;
-        let names = rec.truth.joint_names.clone();
-        let n = names.len();
-        let row = |v: &[f64], k: usize| v[k * n..(k + 1) * n].to_vec();
-        for k in 0..rec.truth.len() {
-            let (header, ns) = stamp(rec.truth.t[k]);
-            let mh = |channel_id| mcap::records::MessageHeader {
-                channel_id,
-                sequence: k as u32,
-                log_time: ns,
-                publish_time: ns,
-            };
-            let m = &rec.measured;
-            let msg = JointState {
-                header: header.clone(),
-                name: names.clone(),
-                position: m.q_at(k).to_vec(),
-                velocity: m.qd_at(k).to_vec(),
-                effort: m.tau_at(k).to_vec(),
-            };
-            w.write_to_known_channel(&mh(c_meas), &cdr_bytes(&msg))
-                .map_err(mcap_err)?;
-            let p = &rec.processed;
-            let msg = JointSample {
-                header: header.clone(),
-                name: names.clone(),
-                position: p.q_at(k).to_vec(),
-                velocity: p.qd_at(k).to_vec(),
-                acceleration: p.qdd_at(k).map(<[f64]>::to_vec).unwrap_or_default(),
-                effort: p.tau_at(k).to_vec(),
-                friction: vec![],
-                effects: vec![],
-            };
-            w.write_to_known_channel(&mh(c_proc), &cdr_bytes(&msg))
-                .map_err(mcap_err)?;
-            let t = &rec.truth;
-            let msg = JointSample {
-                header,
-                name: names.clone(),
-                position: t.q_at(k).to_vec(),
-                velocity: t.qd_at(k).to_vec(),
-                acceleration: t.qdd_at(k).map(<[f64]>::to_vec).unwrap_or_default(),
-                effort: t.tau_at(k).to_vec(),
-                friction: row(&rec.friction, k),
-                effects: row(&rec.effects, k),
-            };
-            w.write_to_known_channel(&mh(c_true), &cdr_bytes(&msg))
-                .map_err(mcap_err)?;
-        }
-        let md = |name: &str, kv: Vec<(&str, String)>| mcap::records::Metadata {
-            name: name.into(),
-            metadata: kv.into_iter().map(|(k, v)| (k.to_string(), v)).collect(),
-        };
-        w.write_metadata(&md(
-            "physid",
-            vec![
-                ("format", FORMAT.into()),
-                ("version", env!("CARGO_PKG_VERSION").into()),
-                ("engine", meta.engine.into()),
-            ],
-        ))
-        .map_err(mcap_err)?;
-        w.write_metadata(&md("scenario", vec![("toml", meta.scenario_toml.into())]))
-            .map_err(mcap_err)?;
-        let (pn, pv) = meta.parameters;
-        w.write_metadata(&md(
-            "ground_truth_parameters",
-            vec![
-                ("names", serde_json::to_string(pn).expect("strings")),
-                ("values", serde_json::to_string(pv).expect("numbers")),
-            ],
-        ))
-        .map_err(mcap_err)?;
+        write_samples(&mut w, rec, [c_meas, c_proc, c_true]).map_err(mcap_err)?;
+        write_log_metadata(&mut w, meta).map_err(mcap_err)?;
         w.finish().map_err(mcap_err)?;
     }
     tmp.persist(path).map_err(|e| fs_err(e.error))?;
+    Ok(())
+}
+
+/// The recording's samples, one message per topic per sample: measured on `channels[0]`,
+/// processed on `channels[1]`, the truth on `channels[2]`.
+fn write_samples<W: std::io::Write + std::io::Seek>(
+    w: &mut mcap::Writer<W>,
+    rec: &Recording,
+    channels: [u16; 3],
+) -> Result<(), mcap::McapError> {
+    let [c_meas, c_proc, c_true] = channels;
+    let names = rec.truth.joint_names.clone();
+    let n = names.len();
+    let row = |v: &[f64], k: usize| v[k * n..(k + 1) * n].to_vec();
+    for k in 0..rec.truth.len() {
+        let (header, ns) = stamp(rec.truth.t[k]);
+        let mh = |channel_id| mcap::records::MessageHeader {
+            channel_id,
+            sequence: k as u32,
+            log_time: ns,
+            publish_time: ns,
+        };
+        let m = &rec.measured;
+        let msg = JointState {
+            header: header.clone(),
+            name: names.clone(),
+            position: m.q_at(k).to_vec(),
+            velocity: m.qd_at(k).to_vec(),
+            effort: m.tau_at(k).to_vec(),
+        };
+        w.write_to_known_channel(&mh(c_meas), &cdr_bytes(&msg))?;
+        let p = &rec.processed;
+        let msg = JointSample {
+            header: header.clone(),
+            name: names.clone(),
+            position: p.q_at(k).to_vec(),
+            velocity: p.qd_at(k).to_vec(),
+            acceleration: p.qdd_at(k).map(<[f64]>::to_vec).unwrap_or_default(),
+            effort: p.tau_at(k).to_vec(),
+            friction: vec![],
+            effects: vec![],
+        };
+        w.write_to_known_channel(&mh(c_proc), &cdr_bytes(&msg))?;
+        let t = &rec.truth;
+        let msg = JointSample {
+            header,
+            name: names.clone(),
+            position: t.q_at(k).to_vec(),
+            velocity: t.qd_at(k).to_vec(),
+            acceleration: t.qdd_at(k).map(<[f64]>::to_vec).unwrap_or_default(),
+            effort: t.tau_at(k).to_vec(),
+            friction: row(&rec.friction, k),
+            effects: row(&rec.effects, k),
+        };
+        w.write_to_known_channel(&mh(c_true), &cdr_bytes(&msg))?;
+    }
+    Ok(())
+}
+
+/// The log's metadata records: format and engine, the scenario, the ground truth.
+fn write_log_metadata<W: std::io::Write + std::io::Seek>(
+    w: &mut mcap::Writer<W>,
+    meta: &LogMeta,
+) -> Result<(), mcap::McapError> {
+    let md = |name: &str, kv: Vec<(&str, String)>| mcap::records::Metadata {
+        name: name.into(),
+        metadata: kv.into_iter().map(|(k, v)| (k.to_string(), v)).collect(),
+    };
+    w.write_metadata(&md(
+        "physid",
+        vec![
+            ("format", FORMAT.into()),
+            ("version", env!("CARGO_PKG_VERSION").into()),
+            ("engine", meta.engine.into()),
+        ],
+    ))?;
+    w.write_metadata(&md("scenario", vec![("toml", meta.scenario_toml.into())]))?;
+    let (pn, pv) = meta.parameters;
+    w.write_metadata(&md(
+        "ground_truth_parameters",
+        vec![
+            ("names", serde_json::to_string(pn).expect("strings")),
+            ("values", serde_json::to_string(pv).expect("numbers")),
+        ],
+    ))?;
     Ok(())
 }
 

@@ -219,6 +219,46 @@ pub fn from_spec_with(
     }
     .validate()
     .map_err(|m| IoError::invalid(path, format!("robot.ellipsoid_margin: {m}")))?;
+    check_ways(spec, path)?;
+    let model = if let Some(b) = &spec.builtin {
+        builtin_model(spec, b, &extras, path)?
+    } else if let Some(u) = &spec.urdf {
+        let upath = path.parent().unwrap_or(Path::new(".")).join(u);
+        let (m, warnings) = super::urdf::load(&upath, &extras)?;
+        return Ok((scaled(m, spec.ellipsoid_scale, path)?, warnings));
+    } else {
+        let mut bodies: Vec<Body> = vec![];
+        for (k, b) in spec.body.iter().enumerate() {
+            let body = body_from_spec(k, b, &bodies, path)?;
+            bodies.push(body);
+        }
+        let ident = vec![Transform::identity(); bodies.len()];
+        extras.apply(&mut bodies, &ident, path)?;
+        let gravity = extras
+            .gravity
+            .map_or(Vector3::new(0.0, 0.0, -STANDARD_GRAVITY), Vector3::from);
+        let name = spec.name.clone().unwrap_or_else(|| "robot".into());
+        Model::new(name, bodies, gravity).map_err(model_err)?
+    };
+    let model = model.with_rotor_model(extras.rotor_model.unwrap_or_default());
+    model.check_physical().map_err(model_err)?;
+    Ok((scaled(model, spec.ellipsoid_scale, path)?, vec![]))
+}
+
+/// `model` with its ellipsoids scaled by `scale` (`robot.ellipsoid_scale`), if given.
+fn scaled(model: Model, scale: Option<f64>, path: &Path) -> Result<Model, IoError> {
+    match scale {
+        None => Ok(model),
+        Some(s) if s.is_finite() && s > 0.0 => Ok(model.with_ellipsoids_scaled(s)),
+        Some(s) => Err(IoError::invalid(
+            path,
+            format!("robot.ellipsoid_scale: {s} must be > 0"),
+        )),
+    }
+}
+
+/// The `[robot]` table names exactly one way to build the robot, and only that way's keys.
+fn check_ways(spec: &RobotSpec, path: &Path) -> Result<(), IoError> {
     if spec.urdf.is_none()
         && (spec.ellipsoid_margin.is_some()
             || !spec.package_dirs.is_empty()
@@ -248,69 +288,42 @@ pub fn from_spec_with(
             "robot: `truth`, `gear_ratios` and `rotors` apply to the built-in leg only",
         ));
     }
-    let model = if let Some(b) = &spec.builtin {
-        if b != "cheetah3" {
-            return Err(IoError::invalid(
-                path,
-                format!("robot.builtin: unknown robot '{b}' (known: cheetah3)"),
-            ));
-        }
-        let mut o = LegOptions::default();
-        if let Some(t) = spec.truth {
-            o.truth = t;
-        }
-        if let Some(g) = spec.gear_ratios {
-            o.gear_ratios = g;
-        }
-        if let Some(r) = spec.rotors {
-            o.rotors = r;
-        }
-        let m = cheetah3::leg_with(&o).map_err(model_err)?;
-        let mut bodies = m.bodies().to_vec();
-        let ident = vec![Transform::identity(); bodies.len()];
-        extras.apply(&mut bodies, &ident, path)?;
-        let gravity = extras.gravity.map_or(m.gravity(), Vector3::from);
-        Model::new(m.name().to_string(), bodies, gravity).map_err(model_err)?
-    } else if let Some(u) = &spec.urdf {
-        let upath = path.parent().unwrap_or(Path::new(".")).join(u);
-        let (m, warnings) = super::urdf::load(&upath, &extras)?;
-        return Ok((
-            match spec.ellipsoid_scale {
-                Some(s) if s.is_finite() && s > 0.0 => m.with_ellipsoids_scaled(s),
-                Some(s) => {
-                    return Err(IoError::invalid(
-                        path,
-                        format!("robot.ellipsoid_scale: {s} must be > 0"),
-                    ))
-                }
-                None => m,
-            },
-            warnings,
-        ));
-    } else {
-        let mut bodies: Vec<Body> = vec![];
-        for (k, b) in spec.body.iter().enumerate() {
-            let body = body_from_spec(k, b, &bodies, path)?;
-            bodies.push(body);
-        }
-        let ident = vec![Transform::identity(); bodies.len()];
-        extras.apply(&mut bodies, &ident, path)?;
-        let gravity = extras
-            .gravity
-            .map_or(Vector3::new(0.0, 0.0, -STANDARD_GRAVITY), Vector3::from);
-        let name = spec.name.clone().unwrap_or_else(|| "robot".into());
-        Model::new(name, bodies, gravity).map_err(model_err)?
+    Ok(())
+}
+
+/// The built-in robot `name` with the table's options and extras.
+fn builtin_model(
+    spec: &RobotSpec,
+    name: &str,
+    extras: &RobotExtras,
+    path: &Path,
+) -> Result<Model, IoError> {
+    let model_err = |source| IoError::Model {
+        path: path.to_path_buf(),
+        source,
     };
-    let model = model.with_rotor_model(extras.rotor_model.unwrap_or_default());
-    model.check_physical().map_err(model_err)?;
-    match spec.ellipsoid_scale {
-        None => Ok((model, vec![])),
-        Some(s) if s.is_finite() && s > 0.0 => Ok((model.with_ellipsoids_scaled(s), vec![])),
-        Some(s) => Err(IoError::invalid(
+    if name != "cheetah3" {
+        return Err(IoError::invalid(
             path,
-            format!("robot.ellipsoid_scale: {s} must be > 0"),
-        )),
+            format!("robot.builtin: unknown robot '{name}' (known: cheetah3)"),
+        ));
     }
+    let mut o = LegOptions::default();
+    if let Some(t) = spec.truth {
+        o.truth = t;
+    }
+    if let Some(g) = spec.gear_ratios {
+        o.gear_ratios = g;
+    }
+    if let Some(r) = spec.rotors {
+        o.rotors = r;
+    }
+    let m = cheetah3::leg_with(&o).map_err(model_err)?;
+    let mut bodies = m.bodies().to_vec();
+    let ident = vec![Transform::identity(); bodies.len()];
+    extras.apply(&mut bodies, &ident, path)?;
+    let gravity = extras.gravity.map_or(m.gravity(), Vector3::from);
+    Model::new(m.name().to_string(), bodies, gravity).map_err(model_err)
 }
 
 /// Body `k` of an explicit tree; its parent must be `base` or one of the `earlier` bodies.

@@ -545,6 +545,26 @@ fn walk<'r>(
             attach.insert(child, (Some(bodies.len() - 1), Transform::identity()));
         }
     }
+    check_walked(robot, &attach, &done, bodies.len(), root, path)?;
+    Ok(Walk {
+        bodies,
+        body_parent_link_x,
+        shapes,
+        base,
+        mimics,
+    })
+}
+
+/// After the walk: every joint was reached from the root, and some joint moves.
+fn check_walked(
+    robot: &urdf_rs::Robot,
+    attach: &HashMap<&str, (Option<usize>, Transform)>,
+    done: &[bool],
+    bodies: usize,
+    root: &str,
+    path: &Path,
+) -> Result<(), IoError> {
+    let bad = |m: String| IoError::invalid(path, m);
     if done.iter().any(|d| !d) {
         let lost: Vec<&str> = robot
             .links
@@ -557,17 +577,10 @@ fn walk<'r>(
             lost.join(", ")
         )));
     }
-    if bodies.is_empty() {
+    if bodies == 0 {
         return Err(bad("the robot has no moving joints".to_string()));
     }
-
-    Ok(Walk {
-        bodies,
-        body_parent_link_x,
-        shapes,
-        base,
-        mimics,
-    })
+    Ok(())
 }
 
 /// A moving joint's body: its child link's inertia, the joint's limits (0/0 or continuous:

@@ -237,112 +237,68 @@ pub fn leg() -> Model {
     leg_with(&LegOptions::default()).expect("the built-in leg is valid")
 }
 
+/// One joint of the leg: its body, the rotor that drives it, and its travel (rad).
+struct LegJoint {
+    body: &'static str,
+    joint: &'static str,
+    parent: Option<usize>,
+    axis: Vector3<f64>,
+    x_tree: Transform,
+    link: &'static [f64; 10],
+    rotor: &'static str,
+    x_rot: Transform,
+    rotor_link: &'static [f64; 10],
+    travel: f64,
+}
+
 /// The leg with the given options.
 pub fn leg_with(o: &LegOptions) -> Result<Model, ModelError> {
     let rz_pi = rot_axis_angle(&Vector3::z(), std::f64::consts::PI);
     let hip_origin = Transform::from_pose(&rz_pi, &Vector3::new(0.0, ABAD_TO_HIP, 0.0));
-    let ell = bounding_ellipsoids();
-    let n = &o.gear_ratios;
-    let tau_max = |i: usize| n[i] * MOTOR_TAU_MAX;
-    let qd_max = |i: usize| BATTERY_V / MOTOR_KT / n[i];
-    let rotor = |name: &str,
-                 x_rot: Transform,
-                 axis: Vector3<f64>,
-                 i: usize,
-                 p: &[f64; 10],
-                 e: Ellipsoid| {
-        o.rotors.then(|| Rotor {
-            name: name.into(),
-            x_rot,
-            joint: crate::model::Joint::Revolute { axis },
-            gear_ratio: n[i],
-            inertia: params(p, o.truth),
-            bounding: Some(e),
-        })
-    };
-    let bodies = vec![
-        Body {
-            name: "abad".into(),
-            joint_name: "abad_joint".into(),
+    let joints = [
+        LegJoint {
+            body: "abad",
+            joint: "abad_joint",
             parent: None,
-            joint: Joint::Revolute { axis: Vector3::x() },
+            axis: Vector3::x(),
             x_tree: Transform::identity(),
-            inertia: params(&published::ABAD, o.truth),
-            bounding: Some(ell[0]),
-            shapes: vec![],
-            rotor: rotor(
-                "abad_rotor",
-                Transform::translation(&Vector3::new(0.0, -0.128, 0.0)),
-                Vector3::x(),
-                0,
-                &published::ABAD_ROTOR,
-                ell[3],
-            ),
-            friction: o.friction[0],
-            limits: JointLimits {
-                lower: -1.5,
-                upper: 1.5,
-                velocity: qd_max(0),
-                effort: tau_max(0),
-                acceleration: MAX_ACCELERATION,
-                jerk: MAX_JERK,
-            },
+            link: &published::ABAD,
+            rotor: "abad_rotor",
+            x_rot: Transform::translation(&Vector3::new(0.0, -0.128, 0.0)),
+            rotor_link: &published::ABAD_ROTOR,
+            travel: 1.5,
         },
-        Body {
-            name: "thigh".into(),
-            joint_name: "hip_joint".into(),
+        LegJoint {
+            body: "thigh",
+            joint: "hip_joint",
             parent: Some(0),
-            joint: Joint::Revolute { axis: Vector3::y() },
+            axis: Vector3::y(),
             x_tree: hip_origin,
-            inertia: params(&published::HIP, o.truth),
-            bounding: Some(ell[1]),
-            shapes: vec![],
-            rotor: rotor(
-                "hip_rotor",
-                hip_origin,
-                Vector3::y(),
-                1,
-                &published::HIP_ROTOR,
-                ell[4],
-            ),
-            friction: o.friction[1],
-            limits: JointLimits {
-                lower: -5.0,
-                upper: 5.0,
-                velocity: qd_max(1),
-                effort: tau_max(1),
-                acceleration: MAX_ACCELERATION,
-                jerk: MAX_JERK,
-            },
+            link: &published::HIP,
+            rotor: "hip_rotor",
+            x_rot: hip_origin,
+            rotor_link: &published::HIP_ROTOR,
+            travel: 5.0,
         },
-        Body {
-            name: "shank".into(),
-            joint_name: "knee_joint".into(),
+        LegJoint {
+            body: "shank",
+            joint: "knee_joint",
             parent: Some(1),
-            joint: Joint::Revolute { axis: Vector3::y() },
+            axis: Vector3::y(),
             x_tree: Transform::translation(&Vector3::new(0.0, 0.0, -THIGH_LENGTH)),
-            inertia: params(&published::KNEE, o.truth),
-            bounding: Some(ell[2]),
-            shapes: vec![],
-            rotor: rotor(
-                "knee_rotor",
-                Transform::identity(),
-                Vector3::y(),
-                2,
-                &published::KNEE_ROTOR,
-                ell[5],
-            ),
-            friction: o.friction[2],
-            limits: JointLimits {
-                lower: -2.6,
-                upper: 2.6,
-                velocity: qd_max(2),
-                effort: tau_max(2),
-                acceleration: MAX_ACCELERATION,
-                jerk: MAX_JERK,
-            },
+            link: &published::KNEE,
+            rotor: "knee_rotor",
+            x_rot: Transform::identity(),
+            rotor_link: &published::KNEE_ROTOR,
+            travel: 2.6,
         },
     ];
+    let ell = bounding_ellipsoids();
+    let bodies = joints
+        .iter()
+        .enumerate()
+        .map(|(i, j)| leg_body(o, i, j, ell[i], ell[i + 3]))
+        .collect();
     let model = Model::new(
         "cheetah3_leg",
         bodies,
@@ -352,6 +308,39 @@ pub fn leg_with(o: &LegOptions) -> Result<Model, ModelError> {
         model.check_physical()?;
     }
     Ok(model)
+}
+
+/// Body `i` of the leg from its joint `j`, with the link's and the rotor's bounding ellipsoids;
+/// the joint's speed and torque limits from the motor through the gear ratio.
+fn leg_body(o: &LegOptions, i: usize, j: &LegJoint, link: Ellipsoid, rotor: Ellipsoid) -> Body {
+    let n = o.gear_ratios[i];
+    Body {
+        name: j.body.into(),
+        joint_name: j.joint.into(),
+        parent: j.parent,
+        joint: Joint::Revolute { axis: j.axis },
+        x_tree: j.x_tree,
+        inertia: params(j.link, o.truth),
+        bounding: Some(link),
+        shapes: vec![],
+        rotor: o.rotors.then(|| Rotor {
+            name: j.rotor.into(),
+            x_rot: j.x_rot,
+            joint: Joint::Revolute { axis: j.axis },
+            gear_ratio: n,
+            inertia: params(j.rotor_link, o.truth),
+            bounding: Some(rotor),
+        }),
+        friction: o.friction[i],
+        limits: JointLimits {
+            lower: -j.travel,
+            upper: j.travel,
+            velocity: BATTERY_V / MOTOR_KT / n,
+            effort: n * MOTOR_TAU_MAX,
+            acceleration: MAX_ACCELERATION,
+            jerk: MAX_JERK,
+        },
+    }
 }
 
 #[cfg(test)]

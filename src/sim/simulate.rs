@@ -19,7 +19,8 @@
 
 use super::excitation::Controller;
 use super::scenario::{
-    Engine, Processing, Scenario, ScenarioError, SimulationSpec, VelocityFeedback,
+    EffectSpec, Engine, Processing, Scenario, ScenarioError, SensorSpec, SimulationSpec,
+    VelocityFeedback,
 };
 use crate::dynamics::{forward_dynamics, Data};
 use crate::model::Model;
@@ -103,10 +104,8 @@ pub fn simulate(
     let real = super::effects::true_robot(model, &scenario.effects);
     let real = &real;
     let mut engine = integrator(real, s, q0, qd0, h)?;
-    let mut rng = ChaCha8Rng::seed_from_u64(s.seed);
+    let mut sensors = SensorChain::new(model, scenario, dt);
     let se = &scenario.sensors;
-    let enc_noise = Normal::new(0.0, se.encoder_noise).expect("validated");
-    let tau_noise = Normal::new(0.0, se.torque_noise).expect("validated");
     let motor = match (se.motor_kt, se.motor_resistance, se.supply_voltage) {
         (Some(kt), Some(r), Some(v)) => Some((kt, r, v)),
         _ => None,
@@ -119,34 +118,12 @@ pub fn simulate(
         Vec::with_capacity(samples * n),
     );
     let loads = Loads { model, scenario };
-    let delay = super::effects::delay_samples(&scenario.effects);
-    let mut delivered: std::collections::VecDeque<Vec<f64>> =
-        std::collections::VecDeque::with_capacity(delay + 1);
-    let quantize = |x: f64| {
-        if se.encoder_step > 0.0 {
-            (x / se.encoder_step).round() * se.encoder_step
-        } else {
-            x
-        }
-    };
-    let mut q_enc_prev: Option<Vec<f64>> = None;
-    let mut dead_zone = super::effects::DeadZone::new(model, &scenario.effects);
     let mut last_report = 0usize;
     for k in 0..samples {
         let t = k as f64 / s.rate;
         let (q, qd) = engine.state();
         // 1. Sensors.
-        let q_enc: Vec<f64> = q
-            .iter()
-            .map(|&x| quantize(x + enc_noise.sample(&mut rng)))
-            .collect();
-        let qd_fb: Vec<f64> = match (se.velocity_feedback, &q_enc_prev) {
-            (VelocityFeedback::True, _) => qd.clone(),
-            (VelocityFeedback::FiniteDifference, Some(p)) => {
-                q_enc.iter().zip(p).map(|(a, b)| (a - b) / dt).collect()
-            }
-            (VelocityFeedback::FiniteDifference, None) => qd.clone(),
-        };
+        let (q_enc, qd_fb) = sensors.read(&q, &qd);
         // 2. Controller and actuators.
         let cmd = controller.torque(model, &mut cdata, t, &q_enc, &qd_fb);
         let tau_mot = actuate(model, cmd.as_slice(), &qd, motor);
@@ -158,22 +135,8 @@ pub fn simulate(
         truth.push(t, &q, &qd, Some(&qdd), &tau_mot);
         friction_log.extend_from_slice(&f);
         effects_log.extend_from_slice(&fx);
-        // The log: the torque delivered `delay` periods ago (a lag between torque and kinematics),
-        // through the sensor effects, plus current-sensing noise.
-        delivered.push_back(tau_mot.clone());
-        if delivered.len() > delay + 1 {
-            delivered.pop_front();
-        }
-        let lagged = delivered.front().expect("just pushed");
-        let logged: Vec<f64> = super::effects::logged_torque(&scenario.effects, lagged)
-            .into_iter()
-            .map(|t| t + tau_noise.sample(&mut rng))
-            .collect();
-        let offsets = dead_zone.as_mut().map(|d| d.step(&tau_mot, dt));
-        let q_log =
-            super::effects::logged_angle(&scenario.effects, &q_enc, &tau_mot, offsets.as_deref());
+        let (q_log, logged) = sensors.log(q_enc, &tau_mot);
         measured.push(t, &q_log, &qd_fb, Some(&vec![0.0; n]), &logged);
-        q_enc_prev = Some(q_enc);
         check_state(model, engine.as_ref(), t + dt, s.max_speed)?;
         if k * 100 / samples > last_report {
             last_report = k * 100 / samples;
@@ -192,6 +155,85 @@ pub fn simulate(
         measured,
         processed,
     })
+}
+
+/// What the robot's sensors and its log make of the true state and torque: encoder noise and
+/// quantization, the controller's velocity feedback, a torque logged `delay` periods late
+/// through the sensor effects plus current-sensing noise, and a motor-side angle through
+/// compliance or backlash. Draws its noise from one generator, angles first each sample.
+struct SensorChain<'a> {
+    spec: &'a SensorSpec,
+    effects: &'a [EffectSpec],
+    dt: f64,
+    rng: ChaCha8Rng,
+    enc_noise: Normal<f64>,
+    tau_noise: Normal<f64>,
+    q_enc_prev: Option<Vec<f64>>,
+    delay: usize,
+    delivered: std::collections::VecDeque<Vec<f64>>,
+    dead_zone: Option<super::effects::DeadZone>,
+}
+
+impl<'a> SensorChain<'a> {
+    fn new(model: &Model, scenario: &'a Scenario, dt: f64) -> Self {
+        let spec = &scenario.sensors;
+        let delay = super::effects::delay_samples(&scenario.effects);
+        SensorChain {
+            spec,
+            effects: &scenario.effects,
+            dt,
+            rng: ChaCha8Rng::seed_from_u64(scenario.simulation.seed),
+            enc_noise: Normal::new(0.0, spec.encoder_noise).expect("validated"),
+            tau_noise: Normal::new(0.0, spec.torque_noise).expect("validated"),
+            q_enc_prev: None,
+            delay,
+            delivered: std::collections::VecDeque::with_capacity(delay + 1),
+            dead_zone: super::effects::DeadZone::new(model, &scenario.effects),
+        }
+    }
+
+    /// The encoder's angles (noisy, quantized) and the controller's velocity feedback.
+    fn read(&mut self, q: &[f64], qd: &[f64]) -> (Vec<f64>, Vec<f64>) {
+        let step = self.spec.encoder_step;
+        let quantize = |x: f64| {
+            if step > 0.0 {
+                (x / step).round() * step
+            } else {
+                x
+            }
+        };
+        let q_enc: Vec<f64> = q
+            .iter()
+            .map(|&x| quantize(x + self.enc_noise.sample(&mut self.rng)))
+            .collect();
+        let qd_fb = match (self.spec.velocity_feedback, &self.q_enc_prev) {
+            (VelocityFeedback::FiniteDifference, Some(p)) => q_enc
+                .iter()
+                .zip(p)
+                .map(|(a, b)| (a - b) / self.dt)
+                .collect(),
+            _ => qd.to_vec(),
+        };
+        (q_enc, qd_fb)
+    }
+
+    /// The logged angle and torque for the motor torque `tau_mot` delivered now: the torque
+    /// delivered `delay` periods ago through the sensor effects, plus noise.
+    fn log(&mut self, q_enc: Vec<f64>, tau_mot: &[f64]) -> (Vec<f64>, Vec<f64>) {
+        self.delivered.push_back(tau_mot.to_vec());
+        if self.delivered.len() > self.delay + 1 {
+            self.delivered.pop_front();
+        }
+        let lagged = self.delivered.front().expect("just pushed");
+        let logged: Vec<f64> = super::effects::logged_torque(self.effects, lagged)
+            .into_iter()
+            .map(|t| t + self.tau_noise.sample(&mut self.rng))
+            .collect();
+        let offsets = self.dead_zone.as_mut().map(|d| d.step(tau_mot, self.dt));
+        let q_log = super::effects::logged_angle(self.effects, &q_enc, tau_mot, offsets.as_deref());
+        self.q_enc_prev = Some(q_enc);
+        (q_log, logged)
+    }
 }
 
 /// Samples the offline processing ([`process`]) needs at each end before what it derives has
