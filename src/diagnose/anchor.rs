@@ -459,10 +459,7 @@ pub fn select(
         if best.is_empty() {
             break TestStop::NoCandidate;
         }
-        // Best Akaike information first: `Δ` is twice the log-likelihood ratio, so `Δ − 2d`
-        // weighs what a kind explains against its columns (kinds differ in `d`).
-        let z = |t: &Test| t.statistic - 2.0 * t.columns as f64;
-        best.sort_by(|a, b| z(&b.1).total_cmp(&z(&a.1)));
+        best.sort_by(|a, b| akaike(&b.1).total_cmp(&akaike(&a.1)));
         let tests: Vec<Test> = best.iter().map(|(_, t, _)| t.clone()).collect();
         let top = &tests[0];
         if top.statistic < top.threshold {
@@ -472,19 +469,7 @@ pub fn select(
                 threshold: top.threshold,
             };
         }
-        let cut = z(top) * (1.0 - tie);
-        let ties: Vec<usize> = (0..best.len())
-            .filter(|&i| tests[i].statistic >= tests[i].threshold && z(&tests[i]) >= cut)
-            .collect();
-        let fewest = ties
-            .iter()
-            .map(|&i| tests[i].columns)
-            .min()
-            .expect("winner");
-        let simplest: Vec<usize> = ties
-            .into_iter()
-            .filter(|&i| tests[i].columns == fewest)
-            .collect();
+        let simplest = simplest_ties(&tests, tie);
         let ambiguous_with: Vec<Kind> = simplest[1..].iter().map(|&i| tests[i].kind).collect();
         let (vi, t, f) = best.swap_remove(simplest[0]);
         used.push(t.kind);
@@ -503,6 +488,30 @@ pub fn select(
         });
     };
     (steps, stop)
+}
+
+/// A test's Akaike score `Δ − 2d`: `Δ` is twice the log-likelihood ratio, so this weighs what a
+/// kind explains against its columns (kinds differ in `d`).
+fn akaike(t: &Test) -> f64 {
+    t.statistic - 2.0 * t.columns as f64
+}
+
+/// Of `tests` (best Akaike score first, the first passing its threshold), those that pass
+/// theirs within `tie` of the first's score and have the fewest columns among them: the
+/// winner first, then the kinds ambiguous with it.
+fn simplest_ties(tests: &[Test], tie: f64) -> Vec<usize> {
+    let cut = akaike(&tests[0]) * (1.0 - tie);
+    let ties: Vec<usize> = (0..tests.len())
+        .filter(|&i| tests[i].statistic >= tests[i].threshold && akaike(&tests[i]) >= cut)
+        .collect();
+    let fewest = ties
+        .iter()
+        .map(|&i| tests[i].columns)
+        .min()
+        .expect("winner");
+    ties.into_iter()
+        .filter(|&i| tests[i].columns == fewest)
+        .collect()
 }
 
 /// The columns of variant `vi` in the normal equations of `folds`.

@@ -29,47 +29,14 @@ pub fn gamma_test(
     let stride = m.div_ceil(MAX_POINTS).max(1);
     let idx: Vec<usize> = (0..m).step_by(stride).collect();
     let dim = 3 * n;
-    let feature = |k: usize, d: usize| {
-        let s = range.start + k;
-        let j = d % n;
-        match d / n {
-            0 => tr.q_at(s)[j],
-            1 => tr.qd_at(s)[j],
-            _ => tr.qdd_at(s).map_or(0.0, |a| a[j]),
-        }
-    };
-    // Standardize each coordinate.
-    let mut x = vec![0.0; idx.len() * dim];
-    for d in 0..dim {
-        let v: Vec<f64> = idx.iter().map(|&k| feature(k, d)).collect();
-        let mean = v.iter().sum::<f64>() / v.len() as f64;
-        let sd = (v.iter().map(|a| (a - mean).powi(2)).sum::<f64>() / v.len() as f64).sqrt();
-        let sd = if sd > 0.0 { sd } else { 1.0 };
-        for (i, a) in v.iter().enumerate() {
-            x[i * dim + d] = (a - mean) / sd;
-        }
-    }
+    let x = standardized_states(tr, &range, &idx);
     let np = idx.len();
     let mut delta = [0.0; NEIGHBOURS];
     let mut gamma = vec![[0.0; NEIGHBOURS]; n];
     let mut pairs = vec![[0usize; NEIGHBOURS]; n];
     let mut counted = 0usize;
     for i in 0..np {
-        // The NEIGHBOURS nearest, by insertion into a short sorted list.
-        let mut near: Vec<(f64, usize)> = Vec::with_capacity(NEIGHBOURS + 1);
-        for jx in 0..np {
-            if idx[i].abs_diff(idx[jx]) < exclude.max(1) {
-                continue;
-            }
-            let d2: f64 = (0..dim)
-                .map(|d| (x[i * dim + d] - x[jx * dim + d]).powi(2))
-                .sum();
-            if near.len() < NEIGHBOURS || d2 < near[near.len() - 1].0 {
-                let pos = near.partition_point(|a| a.0 < d2);
-                near.insert(pos, (d2, jx));
-                near.truncate(NEIGHBOURS);
-            }
-        }
+        let near = nearest(&x, dim, &idx, i, exclude);
         if near.len() < NEIGHBOURS {
             continue;
         }
@@ -117,4 +84,51 @@ pub fn gamma_test(
             (my - slope * mx).clamp(0.5 * gy[0], gy[0])
         })
         .collect()
+}
+
+/// The states `(q, q̇, q̈)` of samples `range.start + idx[i]`, each coordinate standardized over
+/// them (mean 0, deviation 1), point-major: `x[i · 3n + d]`.
+fn standardized_states(tr: &Trajectory, range: &std::ops::Range<usize>, idx: &[usize]) -> Vec<f64> {
+    let n = tr.dof();
+    let dim = 3 * n;
+    let feature = |k: usize, d: usize| {
+        let s = range.start + k;
+        let j = d % n;
+        match d / n {
+            0 => tr.q_at(s)[j],
+            1 => tr.qd_at(s)[j],
+            _ => tr.qdd_at(s).map_or(0.0, |a| a[j]),
+        }
+    };
+    let mut x = vec![0.0; idx.len() * dim];
+    for d in 0..dim {
+        let v: Vec<f64> = idx.iter().map(|&k| feature(k, d)).collect();
+        let mean = v.iter().sum::<f64>() / v.len() as f64;
+        let sd = (v.iter().map(|a| (a - mean).powi(2)).sum::<f64>() / v.len() as f64).sqrt();
+        let sd = if sd > 0.0 { sd } else { 1.0 };
+        for (i, a) in v.iter().enumerate() {
+            x[i * dim + d] = (a - mean) / sd;
+        }
+    }
+    x
+}
+
+/// The [`NEIGHBOURS`] points nearest point `i` in `x` (squared distance, index), nearest first,
+/// skipping those closer than `exclude` samples in time (by insertion into a short sorted list).
+fn nearest(x: &[f64], dim: usize, idx: &[usize], i: usize, exclude: usize) -> Vec<(f64, usize)> {
+    let mut near: Vec<(f64, usize)> = Vec::with_capacity(NEIGHBOURS + 1);
+    for jx in 0..idx.len() {
+        if idx[i].abs_diff(idx[jx]) < exclude.max(1) {
+            continue;
+        }
+        let d2: f64 = (0..dim)
+            .map(|d| (x[i * dim + d] - x[jx * dim + d]).powi(2))
+            .sum();
+        if near.len() < NEIGHBOURS || d2 < near[near.len() - 1].0 {
+            let pos = near.partition_point(|a| a.0 < d2);
+            near.insert(pos, (d2, jx));
+            near.truncate(NEIGHBOURS);
+        }
+    }
+    near
 }

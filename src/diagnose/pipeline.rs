@@ -48,35 +48,21 @@ pub fn diagnose(
         Some(l) => described::description_steps(l),
         None => explain::from_description(&stage, &chosen, &ladder),
     };
-    let final_variants: Vec<_> = chosen.iter().map(|&v| stage.folds.variants[v]).collect();
-    let (_, final_train_res) = residual_rms(
-        &stage.ctx_train,
-        train,
-        &final_variants,
-        &ladder.final_theta,
-        opts.min_speed,
-    );
-    let structure_left = structure::structure_left(
-        &stage,
-        &final_train_res,
-        &ladder.final_res,
-        opts.structure_threshold,
-    );
+    let structure_left = structure_after(&stage, &chosen, &ladder);
     let train_seconds = train
         .sample_period()
         .map_or(0.0, |dt| dt * train.len() as f64);
-    let verdict = match verdict::verdict(
-        selection.steps.len(),
-        anchored.len(),
-        &how_far,
-        opts.unexplained_ratio,
-        structure_left.remains,
-    ) {
-        Verdict::Unexplained | Verdict::NoEffect if train_seconds < opts.min_decisive_seconds => {
-            Verdict::Undecided
-        }
-        v => v,
-    };
+    let verdict = decisive_verdict(
+        verdict::verdict(
+            selection.steps.len(),
+            anchored.len(),
+            &how_far,
+            opts.unexplained_ratio,
+            structure_left.remains,
+        ),
+        train_seconds,
+        opts,
+    );
     let description_overall = mean_square(&ladder.description_rms).sqrt();
     let summary = summary_text(
         model,
@@ -117,6 +103,40 @@ pub fn diagnose(
         verdict,
         summary,
     })
+}
+
+/// What structure is left after the chosen effects: a smooth function of each joint's speed
+/// and angle fitted on the final training residual, scored on the final validation residual.
+fn structure_after(
+    stage: &Stage,
+    chosen: &[usize],
+    ladder: &gap::Ladder,
+) -> structure::StructureLeft {
+    let final_variants: Vec<_> = chosen.iter().map(|&v| stage.folds.variants[v]).collect();
+    let (_, final_train_res) = residual_rms(
+        &stage.ctx_train,
+        stage.train,
+        &final_variants,
+        &ladder.final_theta,
+        stage.opts.min_speed,
+    );
+    structure::structure_left(
+        stage,
+        &final_train_res,
+        &ladder.final_res,
+        stage.opts.structure_threshold,
+    )
+}
+
+/// A verdict of "nothing" or "unexplained" on less training data than
+/// `opts.min_decisive_seconds` (s) is undecided.
+fn decisive_verdict(v: Verdict, train_seconds: f64, opts: &Options) -> Verdict {
+    match v {
+        Verdict::Unexplained | Verdict::NoEffect if train_seconds < opts.min_decisive_seconds => {
+            Verdict::Undecided
+        }
+        v => v,
+    }
 }
 
 /// Absorbed effects, against the description when its uncertainty is stated, beside what

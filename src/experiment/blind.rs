@@ -455,29 +455,10 @@ pub fn run_case(
             source,
         })?;
     let description = description(i, seed, model, &injected, description_error);
-    // The benchmark's own yardstick (the diagnosis never sees it): how much the effect raises
-    // the nominal model's validation error over the same experiment without it.
     let visible_gap = if injected.is_empty() {
         0.0
     } else {
-        let mut twin = sc.clone();
-        twin.effects.clear();
-        let clean = crate::sim::run(model, &twin, &mut |_| {}).map_err(|source| {
-            BlindError::Simulation {
-                case: i,
-                twin: true,
-                source,
-            }
-        })?;
-        let with = nominal_validation_ms(&description, &rec.processed, opts).map_err(diag_err)?;
-        // Rotor inertia left out changes the description, not the data.
-        let without = if description.rotor_count() < model.rotor_count() {
-            nominal_validation_ms(model, &rec.processed, opts)
-        } else {
-            nominal_validation_ms(&description, &clean.processed, opts)
-        }
-        .map_err(diag_err)?;
-        (with - without).max(0.0).sqrt()
+        visible_gap(i, &sc, model, &description, &rec, opts)?
     };
     // The files a user would give.
     crate::io::create_dir_all(dir).map_err(io_err)?;
@@ -526,6 +507,37 @@ pub fn run_case(
         seconds,
         visible_gap,
     })
+}
+
+/// The benchmark's own yardstick (the diagnosis never sees it): how much the injected effects
+/// of case `i` raise the nominal model's validation error (RMS, N m) over the same experiment
+/// `sc` without them.
+fn visible_gap(
+    i: usize,
+    sc: &Scenario,
+    model: &Model,
+    description: &Model,
+    rec: &crate::trajectory::Recording,
+    opts: &diagnose::Options,
+) -> Result<f64, BlindError> {
+    let diag_err = |source| BlindError::Diagnose { case: i, source };
+    let mut twin = sc.clone();
+    twin.effects.clear();
+    let clean =
+        crate::sim::run(model, &twin, &mut |_| {}).map_err(|source| BlindError::Simulation {
+            case: i,
+            twin: true,
+            source,
+        })?;
+    let with = nominal_validation_ms(description, &rec.processed, opts).map_err(diag_err)?;
+    // Rotor inertia left out changes the description, not the data.
+    let without = if description.rotor_count() < model.rotor_count() {
+        nominal_validation_ms(model, &rec.processed, opts)
+    } else {
+        nominal_validation_ms(description, &clean.processed, opts)
+    }
+    .map_err(diag_err)?;
+    Ok((with - without).max(0.0).sqrt())
 }
 
 /// How a case's diagnosis scores against what was injected.

@@ -370,28 +370,17 @@ pub fn run_seed_validated_on(
 ) -> Result<Vec<Row>, ExperimentError> {
     let grid = spec.grid();
     let max_n = *grid.last().expect("validated grid");
-    let mut sc = scenario.clone();
-    sc.simulation.seed = seed;
-    // The processing's ends are left out of every fit and score: the experiment runs that long
-    // again at each end.
-    let settle = crate::sim::simulate::settle_samples(&sc, sc.simulation.rate);
-    sc.simulation.duration = (max_n + spec.validation + 1 + 2 * settle) as f64 / sc.simulation.rate;
-    let rec = crate::sim::run(model, &sc, &mut |_| {})
-        .map_err(|source| ExperimentError::Sim { seed, source })?;
-    let processed = rec.processed.slice(settle..rec.processed.len() - settle);
+    let processed = simulated_run(model, scenario, spec, seed, max_n)?;
     let data = &processed;
     let (n, p) = (model.dof(), model.layout().len);
     let total = (max_n + spec.validation).min(data.len());
     // Every sample's regressor once (n × p each, column-major).
-    let mut ys: Vec<DMatrix<f64>> = Vec::with_capacity(total);
-    ident::normal::for_each_regressor(model, data, 0..total, &mut |_, y| ys.push(y.clone()));
+    let ys = regressors(model, data, 0..total);
     let (ys_val, val_data) = match validation {
-        Some(v) => {
-            let mut out = Vec::with_capacity(spec.validation.min(v.len()));
-            let m = spec.validation.min(v.len());
-            ident::normal::for_each_regressor(model, v, 0..m, &mut |_, y| out.push(y.clone()));
-            (Some(out), v)
-        }
+        Some(v) => (
+            Some(regressors(model, v, 0..spec.validation.min(v.len()))),
+            v,
+        ),
         None => (None, data),
     };
     let prior = cad_prior(model, spec.prior_error, 1_000_003 ^ seed);
@@ -458,6 +447,37 @@ pub fn run_seed_validated_on(
         }
     }
     Ok(rows)
+}
+
+/// The seed's simulated run, long enough for the largest window `max_n` and the validation
+/// samples, processed, with the processing's unsettled ends cut off.
+fn simulated_run(
+    model: &Model,
+    scenario: &Scenario,
+    spec: &ExperimentSpec,
+    seed: u64,
+    max_n: usize,
+) -> Result<crate::trajectory::Trajectory, ExperimentError> {
+    let mut sc = scenario.clone();
+    sc.simulation.seed = seed;
+    // The processing's ends are left out of every fit and score: the experiment runs that long
+    // again at each end.
+    let settle = crate::sim::simulate::settle_samples(&sc, sc.simulation.rate);
+    sc.simulation.duration = (max_n + spec.validation + 1 + 2 * settle) as f64 / sc.simulation.rate;
+    let rec = crate::sim::run(model, &sc, &mut |_| {})
+        .map_err(|source| ExperimentError::Sim { seed, source })?;
+    Ok(rec.processed.slice(settle..rec.processed.len() - settle))
+}
+
+/// Every sample's regressor over `range` of `tr` (n × p each, column-major).
+fn regressors(
+    model: &Model,
+    tr: &crate::trajectory::Trajectory,
+    range: std::ops::Range<usize>,
+) -> Vec<DMatrix<f64>> {
+    let mut ys = Vec::with_capacity(range.len());
+    ident::normal::for_each_regressor(model, tr, range, &mut |_, y| ys.push(y.clone()));
+    ys
 }
 
 /// Per joint and overall RMS (N m) of `Y_k θ − τ_k` over the samples `range` of `tr` (`ys`

@@ -18,6 +18,15 @@ pub fn plot_vs_ns(
     plot_vs_ns_by(summary, "constraints", value, sets, title, ylabel, path)
 }
 
+/// The least and largest of the finite positive `values` (∞ and 0 when there are none): a log
+/// axis's extent.
+fn positive_extent<'v>(values: impl Iterator<Item = &'v f64>) -> (f64, f64) {
+    values
+        .copied()
+        .filter(|v| v.is_finite() && *v > 0.0)
+        .fold((f64::INFINITY, 0.0), |(lo, hi), v| (lo.min(v), hi.max(v)))
+}
+
 /// [`plot_vs_ns`] with one line per value `series` of column `series_column`.
 pub fn plot_vs_ns_by(
     summary: &DataFrame,
@@ -41,16 +50,8 @@ pub fn plot_vs_ns_by(
     );
     let set_of = super::tables::strings(summary, series_column).map_err(|e| err(e.to_string()))?;
     let finite = |v: &f64| v.is_finite() && *v > 0.0;
-    let xs: Vec<f64> = ns.iter().copied().filter(finite).collect();
-    let ys: Vec<f64> = lo.iter().chain(&hi).copied().filter(finite).collect();
-    let (xmin, xmax) = (
-        xs.iter().cloned().fold(f64::INFINITY, f64::min),
-        xs.iter().cloned().fold(0.0, f64::max),
-    );
-    let (ymin, ymax) = (
-        ys.iter().cloned().fold(f64::INFINITY, f64::min),
-        ys.iter().cloned().fold(0.0, f64::max),
-    );
+    let (xmin, xmax) = positive_extent(ns.iter());
+    let (ymin, ymax) = positive_extent(lo.iter().chain(&hi));
     let mut svg = String::new();
     {
         let width = 860 + LEGEND_WIDTH;

@@ -793,6 +793,54 @@ fn link(name: &str, p: &InertialParams) -> urdf_rs::Link {
     }
 }
 
+/// A rotor's `<mimic>` joint on its body's parent link (`parent_link`), for a body whose own
+/// joint is of type `jt`. The rotor's joint moves as the rotor does (a sliding rotor is
+/// prismatic); a spinning one is `continuous` only on a `continuous` joint (pinocchio's mimic
+/// needs equal configuration sizes: a `continuous` rotor on a `revolute` joint is refused). Its
+/// limits are its joint's scaled by the gear ratio.
+fn rotor_joint(
+    b: &Body,
+    r: &Rotor,
+    jt: &urdf_rs::JointType,
+    parent_link: String,
+) -> urdf_rs::Joint {
+    let finite_or = |v: f64, d: f64| if v.is_finite() { v } else { d };
+    let rotor_type = match (r.joint, jt) {
+        (Joint::Prismatic { .. }, _) => urdf_rs::JointType::Prismatic,
+        (Joint::Revolute { .. }, urdf_rs::JointType::Continuous) => urdf_rs::JointType::Continuous,
+        (Joint::Revolute { .. }, _) => urdf_rs::JointType::Revolute,
+    };
+    let n = r.gear_ratio;
+    let (lo, hi) = (n * b.limits.lower, n * b.limits.upper);
+    urdf_rs::Joint {
+        name: format!("{}_joint", r.name),
+        joint_type: rotor_type,
+        limit: urdf_rs::JointLimit {
+            lower: finite_or(lo.min(hi), 0.0),
+            upper: finite_or(lo.max(hi), 0.0),
+            effort: finite_or(b.limits.effort / n.abs(), 0.0),
+            velocity: finite_or(b.limits.velocity * n.abs(), 0.0),
+            ..Default::default()
+        },
+        origin: pose(&r.x_rot),
+        parent: urdf_rs::LinkName { link: parent_link },
+        child: urdf_rs::LinkName {
+            link: r.name.clone(),
+        },
+        axis: urdf_rs::Axis {
+            xyz: urdf_rs::Vec3(r.joint.axis().into()),
+        },
+        calibration: None,
+        dynamics: None,
+        mimic: Some(urdf_rs::Mimic {
+            joint: b.joint_name.clone(),
+            multiplier: Some(r.gear_ratio),
+            offset: None,
+        }),
+        safety_controller: None,
+    }
+}
+
 /// The model as URDF text: one link per body with its inertial, one joint per joint with its
 /// limits and friction (`<dynamics damping friction>`), and each rotor as a leaf link on the
 /// parent body driven by a `<mimic>` joint with `multiplier = N` (read back by [`from_str`]).
@@ -842,48 +890,7 @@ pub fn to_string(model: &Model) -> String {
         });
         if let Some(r) = &b.rotor {
             links.push(link(&r.name, &r.inertia));
-            // The rotor's joint moves as the rotor does (a sliding rotor is prismatic); a
-            // spinning one is `continuous` only on a `continuous` joint (pinocchio's mimic needs
-            // equal configuration sizes: a `continuous` rotor on a `revolute` joint is refused).
-            // Its limits are its joint's scaled by the gear ratio.
-            let rotor_type = match (r.joint, &jt) {
-                (Joint::Prismatic { .. }, _) => urdf_rs::JointType::Prismatic,
-                (Joint::Revolute { .. }, urdf_rs::JointType::Continuous) => {
-                    urdf_rs::JointType::Continuous
-                }
-                (Joint::Revolute { .. }, _) => urdf_rs::JointType::Revolute,
-            };
-            let n = r.gear_ratio;
-            let (lo, hi) = (n * b.limits.lower, n * b.limits.upper);
-            joints.push(urdf_rs::Joint {
-                name: format!("{}_joint", r.name),
-                joint_type: rotor_type,
-                limit: urdf_rs::JointLimit {
-                    lower: finite_or(lo.min(hi), 0.0),
-                    upper: finite_or(lo.max(hi), 0.0),
-                    effort: finite_or(b.limits.effort / n.abs(), 0.0),
-                    velocity: finite_or(b.limits.velocity * n.abs(), 0.0),
-                    ..Default::default()
-                },
-                origin: pose(&r.x_rot),
-                parent: urdf_rs::LinkName {
-                    link: parent_link(b.parent),
-                },
-                child: urdf_rs::LinkName {
-                    link: r.name.clone(),
-                },
-                axis: urdf_rs::Axis {
-                    xyz: urdf_rs::Vec3(r.joint.axis().into()),
-                },
-                calibration: None,
-                dynamics: None,
-                mimic: Some(urdf_rs::Mimic {
-                    joint: b.joint_name.clone(),
-                    multiplier: Some(r.gear_ratio),
-                    offset: None,
-                }),
-                safety_controller: None,
-            });
+            joints.push(rotor_joint(b, r, &jt, parent_link(b.parent)));
         }
     }
     let robot = urdf_rs::Robot {

@@ -767,27 +767,39 @@ impl EffectSpec {
                 com,
                 radius,
                 body,
-            } => {
-                if let Some(b) = body {
-                    check((1..=n).contains(b), &k("body"), || {
-                        format!("{b} is not a body number 1 to {n}")
-                    })?;
-                }
-                positive(*mass, &k("mass"))?;
-                non_negative(*radius, &k("radius"))?;
-                check(
-                    com.iter()
-                        .all(|c| c.is_finite() && c.abs() <= MAX_PAYLOAD_OFFSET),
-                    &k("com"),
-                    || format!("each coordinate must be finite and within ±{MAX_PAYLOAD_OFFSET} m"),
-                )?;
-                check(*mass <= MAX_PAYLOAD_MASS, &k("mass"), || {
-                    format!("{mass} kg exceeds {MAX_PAYLOAD_MASS} kg")
-                })?;
-            }
+            } => validate_payload(*mass, com, *radius, *body, n, &k)?,
         }
         Ok(())
     }
+}
+
+/// Checks a payload effect's keys (named by `k`): its body among the `n`, a positive mass within
+/// [`MAX_PAYLOAD_MASS`], a non-negative radius, the centre of mass within
+/// [`MAX_PAYLOAD_OFFSET`] (m).
+fn validate_payload(
+    mass: f64,
+    com: &[f64],
+    radius: f64,
+    body: Option<usize>,
+    n: usize,
+    k: &dyn Fn(&str) -> String,
+) -> Result<(), ScenarioError> {
+    if let Some(b) = body {
+        check((1..=n).contains(&b), &k("body"), || {
+            format!("{b} is not a body number 1 to {n}")
+        })?;
+    }
+    positive(mass, &k("mass"))?;
+    non_negative(radius, &k("radius"))?;
+    check(
+        com.iter()
+            .all(|c| c.is_finite() && c.abs() <= MAX_PAYLOAD_OFFSET),
+        &k("com"),
+        || format!("each coordinate must be finite and within ±{MAX_PAYLOAD_OFFSET} m"),
+    )?;
+    check(mass <= MAX_PAYLOAD_MASS, &k("mass"), || {
+        format!("{mass} kg exceeds {MAX_PAYLOAD_MASS} kg")
+    })
 }
 
 /// Reads a scenario file: the scenario, its robot (the ground truth), and the file's text.
