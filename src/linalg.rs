@@ -84,6 +84,74 @@ pub fn least_squares(h: &DMatrix<f64>, g: &DVector<f64>) -> DVector<f64> {
         .into()
 }
 
+/// `argmin θᵀ H θ − 2 gᵀ θ` subject to `θ_i ≥ 0` for `i` in `nonneg` (the others free), for
+/// symmetric positive definite `H`: Lawson and Hanson's active set (the bounded variables start
+/// at zero; the one whose gradient pulls it up most is freed, a step that would cross a bound
+/// stops on it), each subproblem solved by [`least_squares`]. Without bounds, or when the free
+/// solution keeps them, it is [`least_squares`]'s.
+pub fn least_squares_nonneg(h: &DMatrix<f64>, g: &DVector<f64>, nonneg: &[usize]) -> DVector<f64> {
+    let free = least_squares(h, g);
+    if nonneg.iter().all(|&i| free[i] >= 0.0) {
+        return free;
+    }
+    let p = g.len();
+    let mut at_bound: Vec<bool> = (0..p).map(|i| nonneg.contains(&i)).collect();
+    let mut x = solve_off_bounds(h, g, &at_bound);
+    // Each pass frees one variable or fixes one: 3p passes are far beyond what convergence
+    // takes; the last feasible iterate is kept if it is ever reached.
+    for _ in 0..3 * p + 3 {
+        // The gradient of ½θᵀHθ − gᵀθ; a variable at its bound with a negative gradient wants up.
+        let grad = h * &x - g;
+        let scale = g.amax().max(1e-300);
+        let pull = (0..p)
+            .filter(|&i| at_bound[i] && grad[i] < -1e-12 * scale)
+            .min_by(|&a, &b| grad[a].total_cmp(&grad[b]));
+        let Some(i) = pull else {
+            return x;
+        };
+        at_bound[i] = false;
+        loop {
+            let z = solve_off_bounds(h, g, &at_bound);
+            let crossing: Vec<usize> = nonneg
+                .iter()
+                .copied()
+                .filter(|&j| !at_bound[j] && z[j] <= 0.0)
+                .collect();
+            if crossing.is_empty() {
+                x = z;
+                break;
+            }
+            // Step from x towards z until the first bounded variable reaches zero.
+            let alpha = crossing
+                .iter()
+                .map(|&j| x[j] / (x[j] - z[j]).max(1e-300))
+                .fold(1.0_f64, f64::min)
+                .clamp(0.0, 1.0);
+            x += (z - &x) * alpha;
+            for &j in &crossing {
+                if x[j] <= 1e-14 * (1.0 + x.amax()) {
+                    x[j] = 0.0;
+                    at_bound[j] = true;
+                }
+            }
+        }
+    }
+    x
+}
+
+/// [`least_squares`] over the variables not `at_bound`, those held at zero.
+fn solve_off_bounds(h: &DMatrix<f64>, g: &DVector<f64>, at_bound: &[bool]) -> DVector<f64> {
+    let idx: Vec<usize> = (0..g.len()).filter(|&i| !at_bound[i]).collect();
+    let hf = DMatrix::from_fn(idx.len(), idx.len(), |a, b| h[(idx[a], idx[b])]);
+    let gf = DVector::from_fn(idx.len(), |a, _| g[idx[a]]);
+    let y = least_squares(&hf, &gf);
+    let mut x = DVector::zeros(g.len());
+    for (a, &i) in idx.iter().enumerate() {
+        x[i] = y[a];
+    }
+    x
+}
+
 /// The minimum-norm solutions `X` of `H X = G` on the range of symmetric positive semidefinite
 /// `H` (column-scaled eigen-decomposition, directions below [`RANK_TOL`] dropped), for every
 /// column of `G` at once.
@@ -114,6 +182,89 @@ pub fn min_norm_solve(h: &DMatrix<f64>, g: &DMatrix<f64>) -> DMatrix<f64> {
 #[cfg(test)]
 mod rank_tests {
     use super::*;
+
+    /// The bounded solution by brute force: every subset of the bounded variables held at
+    /// zero, the feasible subproblem solution of least cost.
+    fn brute_force(h: &DMatrix<f64>, g: &DVector<f64>, nonneg: &[usize]) -> DVector<f64> {
+        let cost = |x: &DVector<f64>| (x.transpose() * h * x)[(0, 0)] - 2.0 * g.dot(x);
+        let mut best: Option<(f64, DVector<f64>)> = None;
+        for mask in 0..(1usize << nonneg.len()) {
+            let at_bound: Vec<bool> = (0..g.len())
+                .map(|i| {
+                    nonneg
+                        .iter()
+                        .position(|&j| j == i)
+                        .is_some_and(|k| mask >> k & 1 == 1)
+                })
+                .collect();
+            let x = solve_off_bounds(h, g, &at_bound);
+            if nonneg.iter().any(|&i| x[i] < -1e-12) {
+                continue;
+            }
+            let c = cost(&x);
+            if best.as_ref().is_none_or(|(b, _)| c < *b) {
+                best = Some((c, x));
+            }
+        }
+        best.unwrap().1
+    }
+
+    #[test]
+    fn the_bounded_solution_is_the_best_feasible_one() {
+        // Random well- and ill-conditioned problems, bounds on some variables: the active set's
+        // answer equals the brute-force enumeration's, and is feasible.
+        let mut state = 12345u64;
+        let mut next = || {
+            state = state
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
+            ((state >> 11) as f64 / (1u64 << 53) as f64) * 2.0 - 1.0
+        };
+        let mut bound_active = 0;
+        for trial in 0..200 {
+            let p = 2 + trial % 6;
+            let a = DMatrix::from_fn(p + 3, p, |_, _| next());
+            let mut h = a.transpose() * &a;
+            if trial % 3 == 0 {
+                // A nearly collinear pair of columns.
+                for i in 0..p {
+                    h[(i, 1)] = h[(i, 0)] * (1.0 + 1e-4);
+                    h[(1, i)] = h[(i, 1)];
+                }
+                h[(1, 1)] = h[(0, 0)] * (1.0 + 1e-4) * (1.0 + 1e-4) + 1e-6;
+            }
+            let g = DVector::from_fn(p, |_, _| next());
+            let nonneg: Vec<usize> = (0..p).filter(|i| (i + trial) % 2 == 0).collect();
+            let x = least_squares_nonneg(&h, &g, &nonneg);
+            let y = brute_force(&h, &g, &nonneg);
+            assert!(nonneg.iter().all(|&i| x[i] >= 0.0), "trial {trial}: {x}");
+            let cost = |x: &DVector<f64>| (x.transpose() * &h * x)[(0, 0)] - 2.0 * g.dot(x);
+            assert!(
+                cost(&x) <= cost(&y) + 1e-9 * (1.0 + cost(&y).abs()),
+                "trial {trial}: cost {} vs brute force {}",
+                cost(&x),
+                cost(&y)
+            );
+            if nonneg.iter().any(|&i| least_squares(&h, &g)[i] < 0.0) {
+                bound_active += 1;
+            }
+        }
+        // The bounds mattered in a good share of the problems (the check is not vacuous).
+        assert!(bound_active > 50, "{bound_active}");
+    }
+
+    #[test]
+    fn without_active_bounds_it_is_the_free_solution() {
+        let h = DMatrix::from_row_slice(2, 2, &[2.0, 0.5, 0.5, 1.0]);
+        let g = DVector::from_row_slice(&[1.0, 1.0]);
+        assert_eq!(least_squares_nonneg(&h, &g, &[0, 1]), least_squares(&h, &g));
+        // x = [−1/3, 1] free (H x = g for H = [[1, 1], [1, 4]] , g = [2/3, 11/3]); x₀ ≥ 0 gives
+        // x₀ = 0, x₁ = g₁ / H₁₁ = 11/12.
+        let h = DMatrix::from_row_slice(2, 2, &[1.0, 1.0, 1.0, 4.0]);
+        let g = DVector::from_row_slice(&[2.0 / 3.0, 11.0 / 3.0]);
+        let x = least_squares_nonneg(&h, &g, &[0]);
+        assert!(x[0] == 0.0 && (x[1] - 11.0 / 12.0).abs() < 1e-12, "{x}");
+    }
 
     #[test]
     fn rank_and_condition_follow_the_stated_threshold() {

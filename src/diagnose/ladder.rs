@@ -34,7 +34,7 @@ use super::library::{Context, Kind, Variant};
 use super::residual::{finite_mean_square, mask_slow, mean_square, residual_rms};
 use super::select::Folds;
 use super::stage::Stage;
-use crate::linalg::least_squares;
+use crate::linalg::least_squares_nonneg;
 use crate::model::Model;
 use crate::spatial::InertialParams;
 use nalgebra::{DMatrix, DVector};
@@ -279,10 +279,15 @@ impl Problem<'_> {
         let l = self.stage.model.layout();
         let n = self.stage.model.dof();
         let mut cols: Vec<usize> = (0..p0).collect();
+        let mut signed = vec![];
         for e in set {
             if let Explanation::Effect(v) = e {
                 let at = data.offsets[data.index(v)];
-                cols.extend(at..at + v.kind.columns(n));
+                let width = v.kind.columns(n);
+                if v.kind.non_negative() && !v.kind.is_body_change() {
+                    signed.extend(cols.len()..cols.len() + width);
+                }
+                cols.extend(at..at + width);
             }
         }
         let fixed: Vec<usize> = if set.contains(&Explanation::Friction) {
@@ -294,7 +299,7 @@ impl Problem<'_> {
         let ne = &data.train;
         let h = DMatrix::from_fn(m, m, |i, j| self.weight * ne.yty[(cols[i], cols[j])]);
         let g = DVector::from_fn(m, |i, _| self.weight * ne.ytt[cols[i]]);
-        let free = (0..m).filter(|i| !fixed.contains(&cols[*i])).collect();
+        let free: Vec<usize> = (0..m).filter(|i| !fixed.contains(&cols[*i])).collect();
         System {
             cols,
             h,
@@ -304,6 +309,7 @@ impl Problem<'_> {
             stated: &self.stated,
             stated_g: &self.stated_g,
             theta_d: &self.theta_d,
+            nonneg: free_positions(&free, &signed),
             fixed,
             free,
         }
@@ -326,6 +332,18 @@ struct System<'a> {
     fixed: Vec<usize>,
     /// Indices into `cols` that are free.
     free: Vec<usize>,
+    /// Positions in `free` of coefficients with a physical sign (a compliance, a delay, a
+    /// backlash width, …): held at or above zero, as the selection holds them.
+    nonneg: Vec<usize>,
+}
+
+/// The positions in `free` of the `cols` indices `signed`.
+fn free_positions(free: &[usize], signed: &[usize]) -> Vec<usize> {
+    free.iter()
+        .enumerate()
+        .filter(|(_, c)| signed.contains(c))
+        .map(|(i, _)| i)
+        .collect()
 }
 
 impl System<'_> {
@@ -368,7 +386,7 @@ impl System<'_> {
     /// The parameters over `cols` with the stated part of the prior weighted by `lambda`.
     fn solve(&self, lambda: f64) -> DVector<f64> {
         let (hs, gs, d) = self.scaled(lambda);
-        let y = least_squares(&hs, &gs);
+        let y = least_squares_nonneg(&hs, &gs, &self.nonneg);
         let mut w = DVector::zeros(self.cols.len());
         for &f in &self.fixed {
             w[f] = self.theta_d[f];
@@ -502,46 +520,10 @@ pub(crate) fn ladder(stage: &Stage, eps: f64, selected: &[Variant], settings: &S
         if set.len() >= settings.max_steps {
             break Stop::MaxSteps;
         }
-        let mut scored: Vec<(Explanation, f64, f64)> = candidates(&data, selected, &set)
-            .into_iter()
-            .filter_map(|e| {
-                let mut trial = set.clone();
-                trial.push(e);
-                let fit = problem.fit(&data, &trial);
-                // A changed body must still be a body.
-                if !bodies_consistent(&data, &fit, &trial, p0, stage.model) {
-                    return None;
-                }
-                let (r, t) = improvement(&sse, &problem.held_out(&data, &fit));
-                Some((e, r, t))
-            })
-            .collect();
-        scored.sort_by(|a, b| b.1.total_cmp(&a.1));
-        let Some(&(best, r, t)) = scored.first() else {
-            break Stop::NoCandidate;
+        let (best, r, t, ties) = match next_step(&problem, &data, selected, &set, &sse, settings) {
+            Ok(step) => step,
+            Err(stop) => break stop,
         };
-        if r < settings.min_reduction || t < settings.min_t {
-            break Stop::NotSignificant {
-                best: best.name(stage.model, UNREAD),
-                reduction: r,
-                t,
-            };
-        }
-        // Ties: within `tie` of the winner's reduction; the simplest (fewest columns) is kept,
-        // the others of its size reported as ambiguous with it.
-        let tied: Vec<&(Explanation, f64, f64)> = scored
-            .iter()
-            .filter(|(_, ri, ti)| *ri >= r * (1.0 - settings.tie) && *ti >= settings.min_t)
-            .collect();
-        let width = |e: &Explanation| columns(e, data.n);
-        let fewest = tied.iter().map(|(e, _, _)| width(e)).min().unwrap_or(0);
-        let simplest: Vec<&&(Explanation, f64, f64)> =
-            tied.iter().filter(|(e, _, _)| width(e) == fewest).collect();
-        let (best, r, t) = **simplest[0];
-        let ties: Vec<String> = simplest[1..]
-            .iter()
-            .map(|(e, _, _)| e.name(stage.model, UNREAD))
-            .collect();
         set.push(best);
         (data, current) = settle(&problem, stage, &variants, data, &set, settings);
         sse = problem.held_out(&data, &current);
@@ -588,6 +570,62 @@ pub(crate) fn ladder(stage: &Stage, eps: f64, selected: &[Variant], settings: &S
         coefficients,
         coefficient_se,
     }
+}
+
+/// The next step: every candidate fitted with the set so far and scored on the held-out data;
+/// the winner, its reduction and t, and the names of the candidates tied with it, or why the
+/// ladder stops.
+fn next_step(
+    problem: &Problem,
+    data: &Data,
+    selected: &[Variant],
+    set: &[Explanation],
+    sse: &[f64],
+    settings: &Settings,
+) -> Result<(Explanation, f64, f64, Vec<String>), Stop> {
+    let model = problem.stage.model;
+    let p0 = problem.theta_d.len();
+    let mut scored: Vec<(Explanation, f64, f64)> = candidates(data, selected, set)
+        .into_iter()
+        .filter_map(|e| {
+            let mut trial = set.to_vec();
+            trial.push(e);
+            let fit = problem.fit(data, &trial);
+            // A changed body must still be a body.
+            if !bodies_consistent(data, &fit, &trial, p0, model) {
+                return None;
+            }
+            let (r, t) = improvement(sse, &problem.held_out(data, &fit));
+            Some((e, r, t))
+        })
+        .collect();
+    scored.sort_by(|a, b| b.1.total_cmp(&a.1));
+    let Some(&(best, r, t)) = scored.first() else {
+        return Err(Stop::NoCandidate);
+    };
+    if r < settings.min_reduction || t < settings.min_t {
+        return Err(Stop::NotSignificant {
+            best: best.name(model, UNREAD),
+            reduction: r,
+            t,
+        });
+    }
+    // Ties: within `tie` of the winner's reduction; the simplest (fewest columns) is kept, the
+    // others of its size reported as ambiguous with it.
+    let tied: Vec<&(Explanation, f64, f64)> = scored
+        .iter()
+        .filter(|(_, ri, ti)| *ri >= r * (1.0 - settings.tie) && *ti >= settings.min_t)
+        .collect();
+    let width = |e: &Explanation| columns(e, data.n);
+    let fewest = tied.iter().map(|(e, _, _)| width(e)).min().unwrap_or(0);
+    let simplest: Vec<&&(Explanation, f64, f64)> =
+        tied.iter().filter(|(e, _, _)| width(e) == fewest).collect();
+    let (best, r, t) = **simplest[0];
+    let ties = simplest[1..]
+        .iter()
+        .map(|(e, _, _)| e.name(model, UNREAD))
+        .collect();
+    Ok((best, r, t, ties))
 }
 
 /// Per chosen effect, the posterior standard errors of its coefficients (in `set` order,
