@@ -33,12 +33,8 @@ pub fn diagnose(
     let (description_test, description_test_skipped) = run_description_test(&stage, &selection)?;
     let anchored: &[anchor::Step] = description_test.as_ref().map_or(&[], |r| &r.steps);
     let n_cv = selection.chosen.len();
-    let chosen: Vec<usize> = selection
-        .chosen
-        .iter()
-        .copied()
-        .chain(anchored.iter().map(|s| s.variant))
-        .collect();
+    // The effects cross-validation chose, then those the description test found (variants).
+    let chosen: Vec<usize> = [&selection.chosen[..], &variants_of(anchored)].concat();
     let ladder = gap::ladder(&stage, &chosen)?;
     let mut effects = magnitude::cross_validated(&stage, &selection, &ladder.final_theta);
     effects.extend(magnitude::against_description(&stage, anchored));
@@ -103,6 +99,11 @@ pub fn diagnose(
         verdict,
         summary,
     })
+}
+
+/// The variants of the description test's steps.
+fn variants_of(steps: &[anchor::Step]) -> Vec<usize> {
+    steps.iter().map(|s| s.variant).collect()
 }
 
 /// What structure is left after the chosen effects: a smooth function of each joint's speed

@@ -341,6 +341,35 @@ fn best_per_kind(
     best
 }
 
+/// Of the candidates `best` (scored as `scores`, best first), those within `tie` of the
+/// winner's reduction: the one kept (the fewest columns, then the best score), the kinds of
+/// its size ambiguous with it, and the kinds with more columns that also fit.
+fn resolve_ties(
+    folds: &Folds,
+    best: &[(usize, Cv)],
+    scores: &[Score],
+    tie: f64,
+) -> (usize, Vec<Kind>, Vec<Kind>) {
+    let cut = scores[0].reduction * (1.0 - tie);
+    let ties: Vec<usize> = (0..best.len())
+        .filter(|&i| scores[i].reduction >= cut)
+        .collect();
+    let ncols = |i: usize| folds.variants[best[i].0].kind.columns(folds.n);
+    let fewest = ties.iter().map(|&i| ncols(i)).min().expect("winner ties");
+    let simplest: Vec<usize> = ties
+        .iter()
+        .copied()
+        .filter(|&i| ncols(i) == fewest)
+        .collect();
+    let ambiguous_with = simplest[1..].iter().map(|&i| scores[i].kind).collect();
+    let also_fit = ties
+        .iter()
+        .filter(|&&i| ncols(i) > fewest)
+        .map(|&i| scores[i].kind)
+        .collect();
+    (simplest[0], ambiguous_with, also_fit)
+}
+
 /// Forward selection with the stopping rule of the module documentation.
 pub fn forward_select(
     folds: &Folds,
@@ -390,19 +419,7 @@ pub fn forward_select(
                 needed,
             };
         }
-        // Ties: within `tie` of the winner's reduction.
-        let cut = top.reduction * (1.0 - settings.tie);
-        let ties: Vec<usize> = (0..best.len())
-            .filter(|&i| scores[i].reduction >= cut)
-            .collect();
-        let ncols = |i: usize| folds.variants[best[i].0].kind.columns(folds.n);
-        let fewest = ties.iter().map(|&i| ncols(i)).min().expect("winner ties");
-        let simplest: Vec<usize> = ties
-            .iter()
-            .copied()
-            .filter(|&i| ncols(i) == fewest)
-            .collect();
-        let keep = simplest[0];
+        let (keep, ambiguous_with, also_fit) = resolve_ties(folds, &best, &scores, settings.tie);
         let (vi, cv) = best[keep].clone();
         let step = Step {
             kind: folds.variants[vi].kind,
@@ -410,12 +427,8 @@ pub fn forward_select(
             cv_rms_before: current.mse.sqrt(),
             cv_rms_after: cv.mse.sqrt(),
             reduction: 1.0 - cv.mse / current.mse,
-            ambiguous_with: simplest[1..].iter().map(|&i| scores[i].kind).collect(),
-            also_fit: ties
-                .iter()
-                .filter(|&&i| ncols(i) > fewest)
-                .map(|&i| scores[i].kind)
-                .collect(),
+            ambiguous_with,
+            also_fit,
             scores,
         };
         chosen.push(vi);

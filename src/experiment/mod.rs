@@ -406,11 +406,7 @@ pub fn run_seed_validated_on(
             }
             ne.clone().finish()
         } else {
-            let mut w = NormalEquations::new(n, p);
-            for (k, y) in ys.iter().enumerate().skip(start).take(n_s) {
-                w.add(y, data.tau_at(k));
-            }
-            w.finish()
+            window_equations(&ys, data, start..start + n_s, (n, p))
         };
         for &set in &spec.constraints {
             let mut o = Options::new(set);
@@ -447,6 +443,21 @@ pub fn run_seed_validated_on(
         }
     }
     Ok(rows)
+}
+
+/// The normal equations of the samples `window` of `tr` (`ys` its regressors, indexed like it;
+/// `n` joints, `p` parameters).
+fn window_equations(
+    ys: &[DMatrix<f64>],
+    tr: &crate::trajectory::Trajectory,
+    window: std::ops::Range<usize>,
+    (n, p): (usize, usize),
+) -> NormalEquations {
+    let mut w = NormalEquations::new(n, p);
+    for (k, y) in ys.iter().enumerate().skip(window.start).take(window.len()) {
+        w.add(y, tr.tau_at(k));
+    }
+    w.finish()
 }
 
 /// The seed's simulated run, long enough for the largest window `max_n` and the validation

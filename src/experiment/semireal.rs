@@ -1064,6 +1064,27 @@ mod tests {
         log
     }
 
+    /// A base of the logged run `logged` described by `model` itself (no information), with
+    /// the description's RMS `rms` on it.
+    fn exact_base(logged: Logged, model: &Model, rms: f64) -> Base {
+        Base {
+            path: "exact.csv".into(),
+            logged,
+            description: model.clone(),
+            described_by: "exact.csv".into(),
+            information: crate::ident::information::Information {
+                names: vec![],
+                at: nalgebra::DVector::zeros(0),
+                matrix: DMatrix::zeros(0, 0),
+                samples: 0,
+                residual_rms: 0.0,
+                correlation_samples: 1.0,
+            },
+            baseline: None,
+            rms,
+        }
+    }
+
     #[test]
     fn an_offset_shows_in_the_description_s_rms_and_a_gain_is_scaled_up_to_its_target() {
         let model = crate::model::cheetah3::leg();
@@ -1088,22 +1109,7 @@ mod tests {
         let expected = (clean * clean + 0.25).sqrt();
         assert!((shifted - expected).abs() < 0.02, "{shifted} vs {expected}");
         // A 1 % gain on the knee, asked to raise the RMS by 1 % over a 0.5 N m standing offset.
-        let base = Base {
-            path: "exact.csv".into(),
-            logged: inject(&log, &model, &offset),
-            description: model.clone(),
-            described_by: "exact.csv".into(),
-            information: crate::ident::information::Information {
-                names: vec![],
-                at: nalgebra::DVector::zeros(0),
-                matrix: DMatrix::zeros(0, 0),
-                samples: 0,
-                residual_rms: 0.0,
-                correlation_samples: 1.0,
-            },
-            baseline: None,
-            rms: shifted,
-        };
+        let base = exact_base(inject(&log, &model, &offset), &model, shifted);
         let mut gain = vec![1.0; n];
         gain[n - 1] = 1.01;
         let small = Injection {

@@ -501,28 +501,16 @@ fn walk<'r>(
             let x_origin = origin_transform(&jt.origin).compose(&x_p);
             let child_link = &robot.links[link_idx[child]];
             let child_params = link_params(child_link);
-            let axis = Vector3::from(jt.axis.xyz.0);
-            use urdf_rs::JointType as T;
-            let joint = match jt.joint_type {
-                T::Fixed => {
-                    if let Some(b) = pb {
-                        let merged = child_params.transformed(&x_origin.inverse());
-                        bodies[b].inertia = InertialParams(bodies[b].inertia.0 + merged.0);
-                        shapes[b].add(child_link, &x_origin, lookup);
-                    } else {
-                        base.add_shapes(child_link, &x_origin, lookup);
-                    }
-                    attach.insert(child, (pb, x_origin));
-                    continue;
+            let Some(joint) = moving_joint(jt, path)? else {
+                if let Some(b) = pb {
+                    let merged = child_params.transformed(&x_origin.inverse());
+                    bodies[b].inertia = InertialParams(bodies[b].inertia.0 + merged.0);
+                    shapes[b].add(child_link, &x_origin, lookup);
+                } else {
+                    base.add_shapes(child_link, &x_origin, lookup);
                 }
-                T::Revolute | T::Continuous => Joint::Revolute { axis },
-                T::Prismatic => Joint::Prismatic { axis },
-                ref other => {
-                    return Err(bad(format!(
-                        "joint '{}' has type {other:?}: physid models fixed-base robots with one-DoF joints (revolute, continuous, prismatic, fixed)",
-                        jt.name
-                    )))
-                }
+                attach.insert(child, (pb, x_origin));
+                continue;
             };
             if let Some(mimic) = &jt.mimic {
                 if children.get(child).is_some_and(|c| !c.is_empty()) {
@@ -553,6 +541,25 @@ fn walk<'r>(
         base,
         mimics,
     })
+}
+
+/// A URDF joint's motion: `None` for a fixed joint (its child link is merged into the parent
+/// body); an error naming the joint for a type with more than one degree of freedom.
+fn moving_joint(jt: &urdf_rs::Joint, path: &Path) -> Result<Option<Joint>, IoError> {
+    let axis = Vector3::from(jt.axis.xyz.0);
+    use urdf_rs::JointType as T;
+    match jt.joint_type {
+        T::Fixed => Ok(None),
+        T::Revolute | T::Continuous => Ok(Some(Joint::Revolute { axis })),
+        T::Prismatic => Ok(Some(Joint::Prismatic { axis })),
+        ref other => Err(IoError::invalid(
+            path,
+            format!(
+                "joint '{}' has type {other:?}: physid models fixed-base robots with one-DoF joints (revolute, continuous, prismatic, fixed)",
+                jt.name
+            ),
+        )),
+    }
 }
 
 /// After the walk: every joint was reached from the root, and some joint moves.

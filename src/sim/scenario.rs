@@ -595,28 +595,7 @@ impl ExcitationSpec {
                 positive(*base_frequency, "excitation.base_frequency")?;
                 match coefficients {
                     None => per_joint(amplitude, n, "excitation.amplitude")?,
-                    Some(c) => {
-                        for (rows, key) in [
-                            (&c.sin, "excitation.coefficients.sin"),
-                            (&c.cos, "excitation.coefficients.cos"),
-                        ] {
-                            check(rows.len() == n, key, || {
-                                format!("has {} rows, the robot has {n} joints", rows.len())
-                            })?;
-                            for (j, row) in rows.iter().enumerate() {
-                                let key = format!("{key}[{j}]");
-                                check(row.len() == *harmonics, &key, || {
-                                    format!(
-                                        "has {} entries, the excitation has {harmonics} harmonics",
-                                        row.len()
-                                    )
-                                })?;
-                                check(row.iter().all(|x| x.is_finite()), &key, || {
-                                    "contains a non-finite number".into()
-                                })?;
-                            }
-                        }
-                    }
+                    Some(c) => validate_coefficients(c, n, *harmonics)?,
                 }
                 per_joint(offset, n, "excitation.offset")?;
                 per_joint(kp, n, "excitation.kp")?;
@@ -626,6 +605,36 @@ impl ExcitationSpec {
         }
         Ok(())
     }
+}
+
+/// Checks explicit Fourier coefficients: one row per joint (`n`) of `harmonics` finite numbers,
+/// for the sines and the cosines.
+fn validate_coefficients(
+    c: &FourierCoefficients,
+    n: usize,
+    harmonics: usize,
+) -> Result<(), ScenarioError> {
+    for (rows, key) in [
+        (&c.sin, "excitation.coefficients.sin"),
+        (&c.cos, "excitation.coefficients.cos"),
+    ] {
+        check(rows.len() == n, key, || {
+            format!("has {} rows, the robot has {n} joints", rows.len())
+        })?;
+        for (j, row) in rows.iter().enumerate() {
+            let key = format!("{key}[{j}]");
+            check(row.len() == harmonics, &key, || {
+                format!(
+                    "has {} entries, the excitation has {harmonics} harmonics",
+                    row.len()
+                )
+            })?;
+            check(row.iter().all(|x| x.is_finite()), &key, || {
+                "contains a non-finite number".into()
+            })?;
+        }
+    }
+    Ok(())
 }
 
 /// A TOML array of numbers in the scenario snippets physid writes (`[1.000000e0, …]`, six
