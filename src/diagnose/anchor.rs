@@ -34,6 +34,7 @@ use super::library::Kind;
 use super::residual::{finite_mean_square, mask_slow, residual_rms};
 use super::select::Folds;
 use super::stage::Stage;
+use super::stats::Ties;
 use crate::ident::NormalEquations;
 use crate::linalg::{least_squares, min_norm_solve};
 use crate::model::Model;
@@ -497,21 +498,13 @@ fn akaike(t: &Test) -> f64 {
 }
 
 /// Of `tests` (best Akaike score first, the first passing its threshold), those that pass
-/// theirs within `tie` of the first's score and have the fewest columns among them: the
-/// winner first, then the kinds ambiguous with it.
+/// theirs within `tie` of the first's score and have the fewest columns among them ([`Ties`]):
+/// the winner first, then the kinds ambiguous with it.
 fn simplest_ties(tests: &[Test], tie: f64) -> Vec<usize> {
-    let cut = akaike(&tests[0]) * (1.0 - tie);
-    let ties: Vec<usize> = (0..tests.len())
-        .filter(|&i| tests[i].statistic >= tests[i].threshold && akaike(&tests[i]) >= cut)
-        .collect();
-    let fewest = ties
-        .iter()
-        .map(|&i| tests[i].columns)
-        .min()
-        .expect("winner");
-    ties.into_iter()
-        .filter(|&i| tests[i].columns == fewest)
-        .collect()
+    let score: Vec<f64> = tests.iter().map(akaike).collect();
+    let columns: Vec<usize> = tests.iter().map(|t| t.columns).collect();
+    let passes = |i: usize| tests[i].statistic >= tests[i].threshold;
+    Ties::of(&score, &columns, passes, tie).simplest
 }
 
 /// The columns of variant `vi` in the normal equations of `folds`.

@@ -34,6 +34,7 @@ use super::library::{Context, Kind, Variant};
 use super::residual::{finite_mean_square, mask_slow, mean_square, residual_rms};
 use super::select::Folds;
 use super::stage::Stage;
+use super::stats::Ties;
 use crate::linalg::least_squares_nonneg;
 use crate::model::Model;
 use crate::spatial::InertialParams;
@@ -612,18 +613,14 @@ fn next_step(
     }
     // Ties: within `tie` of the winner's reduction; the simplest (fewest columns) is kept, the
     // others of its size reported as ambiguous with it.
-    let tied: Vec<&(Explanation, f64, f64)> = scored
-        .iter()
-        .filter(|(_, ri, ti)| *ri >= r * (1.0 - settings.tie) && *ti >= settings.min_t)
-        .collect();
-    let width = |e: &Explanation| columns(e, data.n);
-    let fewest = tied.iter().map(|(e, _, _)| width(e)).min().unwrap_or(0);
-    let simplest: Vec<&&(Explanation, f64, f64)> =
-        tied.iter().filter(|(e, _, _)| width(e) == fewest).collect();
-    let (best, r, t) = **simplest[0];
+    let reduction: Vec<f64> = scored.iter().map(|s| s.1).collect();
+    let widths: Vec<usize> = scored.iter().map(|s| columns(&s.0, data.n)).collect();
+    let passes = |i: usize| scored[i].2 >= settings.min_t;
+    let simplest = Ties::of(&reduction, &widths, passes, settings.tie).simplest;
+    let (best, r, t) = scored[simplest[0]];
     let ties = simplest[1..]
         .iter()
-        .map(|(e, _, _)| e.name(model, UNREAD))
+        .map(|&i| scored[i].0.name(model, UNREAD))
         .collect();
     Ok((best, r, t, ties))
 }

@@ -15,6 +15,7 @@
 //! together as ambiguous.
 
 use super::library::{slow, Context, Kind, Variant};
+use super::stats::Ties;
 use crate::ident::{identify, IdentError, NormalEquations, Options};
 use crate::model::Model;
 use crate::trajectory::Trajectory;
@@ -342,32 +343,29 @@ fn best_per_kind(
 }
 
 /// Of the candidates `best` (scored as `scores`, best first), those within `tie` of the
-/// winner's reduction: the one kept (the fewest columns, then the best score), the kinds of
-/// its size ambiguous with it, and the kinds with more columns that also fit.
+/// winner's reduction ([`Ties`]): the one kept (the fewest columns, then the best score), the
+/// kinds of its size ambiguous with it, and the kinds with more columns that also fit.
 fn resolve_ties(
     folds: &Folds,
     best: &[(usize, Cv)],
     scores: &[Score],
     tie: f64,
 ) -> (usize, Vec<Kind>, Vec<Kind>) {
-    let cut = scores[0].reduction * (1.0 - tie);
-    let ties: Vec<usize> = (0..best.len())
-        .filter(|&i| scores[i].reduction >= cut)
-        .collect();
-    let ncols = |i: usize| folds.variants[best[i].0].kind.columns(folds.n);
-    let fewest = ties.iter().map(|&i| ncols(i)).min().expect("winner ties");
-    let simplest: Vec<usize> = ties
+    let reduction: Vec<f64> = scores.iter().map(|s| s.reduction).collect();
+    let columns: Vec<usize> = best
         .iter()
-        .copied()
-        .filter(|&i| ncols(i) == fewest)
+        .map(|(vi, _)| folds.variants[*vi].kind.columns(folds.n))
         .collect();
-    let ambiguous_with = simplest[1..].iter().map(|&i| scores[i].kind).collect();
+    let ties = Ties::of(&reduction, &columns, |_| true, tie);
+    let fewest = ties.fewest(&columns);
+    let ambiguous_with = ties.simplest[1..].iter().map(|&i| scores[i].kind).collect();
     let also_fit = ties
+        .within
         .iter()
-        .filter(|&&i| ncols(i) > fewest)
+        .filter(|&&i| columns[i] > fewest)
         .map(|&i| scores[i].kind)
         .collect();
-    (simplest[0], ambiguous_with, also_fit)
+    (ties.simplest[0], ambiguous_with, also_fit)
 }
 
 /// Forward selection with the stopping rule of the module documentation.

@@ -56,6 +56,23 @@ pub(super) struct JointSample {
     effects: Vec<f64>,
 }
 
+impl JointSample {
+    /// Sample `k` of `tr` (q, q̇, q̈ when logged, τ) for the joints `names`, without friction or
+    /// effect torques.
+    fn at(header: Header, names: &[String], tr: &Trajectory, k: usize) -> Self {
+        JointSample {
+            header,
+            name: names.to_vec(),
+            position: tr.q_at(k).to_vec(),
+            velocity: tr.qd_at(k).to_vec(),
+            acceleration: tr.qdd_at(k).map(<[f64]>::to_vec).unwrap_or_default(),
+            effort: tr.tau_at(k).to_vec(),
+            friction: vec![],
+            effects: vec![],
+        }
+    }
+}
+
 /// The longest record an MCAP file of `file_bytes` bytes may hold, checked before anything is
 /// allocated for one: 100 times the file (a compressed chunk's records), at least 64 MiB. A
 /// corrupt length inside a chunk would otherwise make a reader reserve exabytes and abort.
@@ -283,28 +300,12 @@ fn write_samples<W: std::io::Write + std::io::Seek>(
             effort: m.tau_at(k).to_vec(),
         };
         w.write_to_known_channel(&mh(c_meas), &cdr_bytes(&msg))?;
-        let p = &rec.processed;
-        let msg = JointSample {
-            header: header.clone(),
-            name: names.clone(),
-            position: p.q_at(k).to_vec(),
-            velocity: p.qd_at(k).to_vec(),
-            acceleration: p.qdd_at(k).map(<[f64]>::to_vec).unwrap_or_default(),
-            effort: p.tau_at(k).to_vec(),
-            friction: vec![],
-            effects: vec![],
-        };
+        let msg = JointSample::at(header.clone(), &names, &rec.processed, k);
         w.write_to_known_channel(&mh(c_proc), &cdr_bytes(&msg))?;
-        let t = &rec.truth;
         let msg = JointSample {
-            header,
-            name: names.clone(),
-            position: t.q_at(k).to_vec(),
-            velocity: t.qd_at(k).to_vec(),
-            acceleration: t.qdd_at(k).map(<[f64]>::to_vec).unwrap_or_default(),
-            effort: t.tau_at(k).to_vec(),
             friction: row(&rec.friction, k),
             effects: row(&rec.effects, k),
+            ..JointSample::at(header, &names, &rec.truth, k)
         };
         w.write_to_known_channel(&mh(c_true), &cdr_bytes(&msg))?;
     }
@@ -373,14 +374,8 @@ pub fn write_reference(path: &Path, tr: &Trajectory) -> Result<(), IoError> {
         for k in 0..tr.len() {
             let (header, ns) = stamp(tr.t[k]);
             let msg = JointSample {
-                header,
-                name: tr.joint_names.clone(),
-                position: tr.q_at(k).to_vec(),
-                velocity: tr.qd_at(k).to_vec(),
-                acceleration: tr.qdd_at(k).map(<[f64]>::to_vec).unwrap_or_default(),
                 effort: vec![],
-                friction: vec![],
-                effects: vec![],
+                ..JointSample::at(header, &tr.joint_names, tr, k)
             };
             let mh = mcap::records::MessageHeader {
                 channel_id: channel,
