@@ -18,8 +18,23 @@ pub fn physical_torque(
     tau_mot: &[f64],
     vs: f64,
 ) -> Vec<f64> {
+    let mut out = vec![0.0; q.len()];
+    physical_torque_into(effects, model, (q, qd), tau_mot, vs, &mut out);
+    out
+}
+
+/// [`physical_torque`] written into `out` (one entry per joint), without allocating: the
+/// simulator calls it at every stage of every integration step.
+pub fn physical_torque_into(
+    effects: &[EffectSpec],
+    model: &Model,
+    (q, qd): (&[f64], &[f64]),
+    tau_mot: &[f64],
+    vs: f64,
+    out: &mut [f64],
+) {
     let n = q.len();
-    let mut out = vec![0.0; n];
+    out.fill(0.0);
     let sgn = |w: f64| (w / vs).tanh();
     for e in effects {
         match e {
@@ -61,7 +76,6 @@ pub fn physical_torque(
             EffectSpec::Tilt { .. } | EffectSpec::Payload { .. } => {}
         }
     }
-    out
 }
 
 /// The logged torque for a delivered (possibly delayed) torque: gains, then offsets.

@@ -22,11 +22,10 @@ use super::scenario::{
     EffectSpec, Engine, Processing, Scenario, ScenarioError, SensorSpec, SimulationSpec,
     VelocityFeedback,
 };
-use crate::dynamics::{forward_dynamics, Data};
+use crate::dynamics::Data;
 use crate::model::Model;
 use crate::signal::{butterworth_lowpass, differentiate};
 use crate::trajectory::{Recording, Trajectory};
-use nalgebra::DVector;
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
 use rand_distr::{Distribution, Normal};
@@ -302,6 +301,7 @@ fn integrator<'a>(
         Engine::Physid => Box::new(PhysidIntegrator {
             model: real,
             data: Data::new(real),
+            rk4: super::Rk4::new(real.dof()),
             q: q0,
             qd: qd0,
             h,
@@ -378,8 +378,20 @@ impl Loads<'_> {
     }
     /// Net generalized force on the joints for a held motor torque.
     fn net(&self, tau_mot: &[f64], q: &[f64], qd: &[f64]) -> Vec<f64> {
-        let (f, fx) = (self.friction(qd), self.effects(q, qd, tau_mot));
-        (0..q.len()).map(|j| tau_mot[j] + fx[j] - f[j]).collect()
+        let mut out = vec![0.0; q.len()];
+        self.net_into(tau_mot, q, qd, &mut out);
+        out
+    }
+    /// [`Loads::net`] written into `out`, without allocating: `τ_mot + τ_effects − τ_f` (N m).
+    fn net_into(&self, tau_mot: &[f64], q: &[f64], qd: &[f64], out: &mut [f64]) {
+        let vs = self.scenario.simulation.friction_velocity;
+        let effects = &self.scenario.effects;
+        super::effects::physical_torque_into(effects, self.model, (q, qd), tau_mot, vs, out);
+        for (j, b) in self.model.bodies().iter().enumerate() {
+            let w = qd[j];
+            let friction = b.friction.viscous * w + b.friction.coulomb * (w / vs).tanh();
+            out[j] = tau_mot[j] + out[j] - friction;
+        }
     }
 }
 
@@ -391,10 +403,12 @@ trait Integrator {
     fn period(&mut self, tau_mot: &[f64], loads: &Loads) -> Result<Vec<f64>, SimError>;
 }
 
-/// physid's forward dynamics with RK4.
+/// physid's forward dynamics with RK4; the true `q̈` at the start of a period is the first
+/// substep's first slope.
 struct PhysidIntegrator<'a> {
     model: &'a Model,
     data: Data,
+    rk4: super::Rk4,
     q: Vec<f64>,
     qd: Vec<f64>,
     h: f64,
@@ -406,24 +420,24 @@ impl Integrator for PhysidIntegrator<'_> {
         (self.q.clone(), self.qd.clone())
     }
     fn period(&mut self, tau_mot: &[f64], loads: &Loads) -> Result<Vec<f64>, SimError> {
-        let net = loads.net(tau_mot, &self.q, &self.qd);
-        let qdd = forward_dynamics(self.model, &mut self.data, &self.q, &self.qd, &net)
-            .map_err(|e| SimError::Engine(e.to_string()))?
-            .as_slice()
-            .to_vec();
-        let mut tau_fn =
-            |_t: f64, q: &[f64], qd: &[f64]| DVector::from_vec(loads.net(tau_mot, q, qd));
-        for _ in 0..self.substeps {
-            super::rk4_step(
-                self.model,
-                &mut self.data,
-                0.0,
-                &mut self.q,
-                &mut self.qd,
-                self.h,
-                &mut tau_fn,
-            )
-            .map_err(|e| SimError::Engine(e.to_string()))?;
+        let mut force =
+            |_t: f64, q: &[f64], qd: &[f64], u: &mut [f64]| loads.net_into(tau_mot, q, qd, u);
+        let mut qdd = Vec::new();
+        for m in 0..self.substeps {
+            self.rk4
+                .step(
+                    self.model,
+                    &mut self.data,
+                    0.0,
+                    &mut self.q,
+                    &mut self.qd,
+                    self.h,
+                    &mut force,
+                )
+                .map_err(|e| SimError::Engine(e.to_string()))?;
+            if m == 0 {
+                qdd = self.rk4.start_acceleration().to_vec();
+            }
         }
         Ok(qdd)
     }
