@@ -2,11 +2,12 @@
 # Regenerates the committed results (results/NAME/) with the release binary, each by the command
 # its docs give. Usage: bash scripts/regenerate.sh [NAME ...]   (default: all but the blind
 # benchmarks, which take a few minutes each: give `blind`, `blind_seed2` and
-# `blind_real_{seed1,seed2,baseline_seed1,baseline_seed2}` by name).
+# `blind_real_{seed1,seed2,baseline_seed1,baseline_seed2}` by name). PHYSID_BIN=path runs that
+# binary instead of building one (a copy keeps a long regeneration apart from ongoing builds).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 export CARGO_TARGET_DIR="${CARGO_TARGET_DIR:-$HOME/.cache/physid-target}"
-B="$CARGO_TARGET_DIR/release/physid"
+B="${PHYSID_BIN:-$CARGO_TARGET_DIR/release/physid}"
 K=data/kuka_lwr4
 run() {
   case "$1" in
@@ -33,7 +34,7 @@ run() {
   esac
 }
 [ $# -gt 0 ] || set -- sample_size ci_baseline noise excitation excitation_on_shell excitation_kuka kuka_diagnosis
-cargo build --release --quiet --bin physid
+[ -n "${PHYSID_BIN:-}" ] || cargo build --release --quiet --bin physid
 for r in "$@"; do
   start=$(date +%s)
   run "$r" > /dev/null

@@ -755,8 +755,9 @@ fn bodies_consistent(
 }
 
 /// Every explanation not yet chosen that the held-out phase offers: the effects
-/// cross-validation `selected` (their variants; a kind once), a payload or change on each body
-/// not yet freed, and the friction. (Kinds the parameters absorb are the description test's.)
+/// cross-validation `selected` and the kinds offered from the description whatever it
+/// selected (a delay; their variants; a kind once), a payload or change on each body not yet
+/// freed, and the friction. (Kinds the parameters absorb are the description test's.)
 fn candidates(data: &Data, selected: &[Variant], set: &[Explanation]) -> Vec<Explanation> {
     let used_kinds: Vec<Kind> = set
         .iter()
@@ -768,7 +769,9 @@ fn candidates(data: &Data, selected: &[Variant], set: &[Explanation]) -> Vec<Exp
     let mut out: Vec<Explanation> = data
         .variants
         .iter()
-        .filter(|v| v.kind.is_body_change() || selected.contains(v))
+        .filter(|v| {
+            v.kind.is_body_change() || v.kind.offered_from_description() || selected.contains(v)
+        })
         .filter(|v| !used_kinds.contains(&v.kind))
         .map(|v| Explanation::Effect(*v))
         .filter(|e| !set.contains(e))

@@ -138,6 +138,10 @@ pub(super) struct KindSpec {
     pub in_model_span: bool,
     /// The columns are linearized about the nominal model `θ̂₀`.
     pub linearized: bool,
+    /// The ladder from the description offers it even when cross-validation did not select
+    /// it: the re-identified model absorbs its signature (friction and inertial parameters fit
+    /// a delay's `−d τ̇`), while no body's parameters mimic it from the description.
+    pub offered_from_description: bool,
     /// A model with rotors carries this effect among its own parameters (the rotors' inertia).
     pub rotor_parameter: bool,
     /// The columns approximate the effect by more than a linearization (reflected inertia
@@ -167,6 +171,7 @@ const fn row(kind: Kind, name: &'static str, columns: ColumnCount, fill: Fill) -
         magnitude_pairs: false,
         in_model_span: false,
         linearized: false,
+        offered_from_description: false,
         rotor_parameter: false,
         approximate: false,
         needs_rotor: false,
@@ -266,6 +271,12 @@ impl Kind {
     /// Whether the columns are linearized about the nominal model (they need `θ̂₀`).
     pub fn linearized(&self) -> bool {
         self.spec().linearized
+    }
+
+    /// Whether the ladder from the description offers it whatever cross-validation selected
+    /// (see `ladder::candidates`).
+    pub fn offered_from_description(&self) -> bool {
+        self.spec().offered_from_description
     }
 
     /// Whether the columns only approximate the effect (linearized about the nominal model, or

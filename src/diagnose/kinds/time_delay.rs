@@ -13,6 +13,10 @@ pub(super) const SPEC: KindSpec = KindSpec {
     non_negative: true,
     magnitude: ("delay", "s"),
     linearized: true,
+    // On real KUKA logs at 200 Hz a lag of 125 ms doubles the description's error, yet the
+    // re-identified model's friction and parameters take it in (cross-validation then selects
+    // a spring); from the description its one column takes 70 % of the held-out mean square.
+    offered_from_description: true,
     magnitudes: |c, _, _| vec![c[0]],
     replay: |_, c, _, dt| {
         let samples = (c[0] / dt).round();
