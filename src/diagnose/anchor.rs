@@ -36,7 +36,7 @@ use super::select::Folds;
 use super::stage::Stage;
 use super::stats::Ties;
 use crate::ident::NormalEquations;
-use crate::linalg::{least_squares, min_norm_solve};
+use crate::linalg::{least_squares, least_squares_nonneg, min_norm_solve};
 use crate::model::Model;
 use crate::spatial::InertialParams;
 use nalgebra::{DMatrix, DVector};
@@ -216,8 +216,10 @@ pub struct Fit {
 
 impl Anchor<'_> {
     /// `J*` with base columns `base` (model columns first, then chosen effects, all free of
-    /// prior but the model's) and the absorbable part of candidate columns `cand`.
-    pub fn fit(&self, base: &[usize], cand: &[usize]) -> Fit {
+    /// prior but the model's) and the absorbable part of candidate columns `cand`, whose
+    /// coefficients are held at or above zero when `signed` (a kind with a physical sign:
+    /// [`signed`]).
+    pub fn fit(&self, base: &[usize], cand: &[usize], signed: bool) -> Fit {
         let (pb, d) = (base.len(), cand.len());
         let p0 = self.mean.len();
         let a = DMatrix::from_fn(pb, pb, |i, j| self.ne.yty[(base[i], base[j])]);
@@ -260,7 +262,14 @@ impl Anchor<'_> {
             let v = h[(i, i)];
             h[(i, i)] = if v > 0.0 { v * (1.0 + 1e-12) } else { floor };
         }
-        let x = least_squares(&h, &g);
+        // At the bounded minimum `J* = −gᵀx` still holds: a free coordinate has `(Hx)_i = g_i`,
+        // a bound one `x_i = 0`.
+        let bounded: Vec<usize> = if signed {
+            (pb..pb + d).collect()
+        } else {
+            vec![]
+        };
+        let x = least_squares_nonneg(&h, &g, &bounded);
         let j_with = -g.dot(&x);
         // Without the candidate: the model block alone.
         let h0 = h.view((0, 0), (pb, pb)).into_owned();
@@ -425,7 +434,10 @@ pub fn select(
     let cols = |vi: usize| variant_columns(folds, vi);
     // The first step's fits decide which variants are absorbed; they are kept for that step.
     let mut first: Vec<Option<Fit>> = (0..folds.variants.len())
-        .map(|v| (!exclude.contains(&folds.variants[v].kind)).then(|| anchor.fit(&base, &cols(v))))
+        .map(|v| {
+            let kind = folds.variants[v].kind;
+            (!exclude.contains(&kind)).then(|| anchor.fit(&base, &cols(v), signed(kind)))
+        })
         .collect();
     let candidates: Vec<usize> = (0..folds.variants.len())
         .filter(|&v| {
@@ -491,6 +503,13 @@ pub fn select(
     (steps, stop)
 }
 
+/// Whether the test holds a kind's coefficients at or above zero: a physical sign (a rotor
+/// inertia, a compliance `1/k`, a delay, …), as the cross-validated selection and the ladder
+/// hold them; a body's change is signed per parameter, not as a whole.
+pub fn signed(kind: Kind) -> bool {
+    kind.non_negative() && !kind.is_body_change()
+}
+
 /// A test's Akaike score `Δ − 2d`: `Δ` is twice the log-likelihood ratio, so this weighs what a
 /// kind explains against its columns (kinds differ in `d`).
 fn akaike(t: &Test) -> f64 {
@@ -540,7 +559,7 @@ fn best_per_kind(
             let d = cand.len();
             let f = match first[vi].take() {
                 Some(f) if first_step => f,
-                _ => anchor.fit(base, &cand),
+                _ => anchor.fit(base, &cand, signed(kind)),
             };
             let t = Test {
                 kind,
@@ -629,7 +648,8 @@ pub(crate) fn test_description(
                 let d = steps[k].kind.columns(n);
                 let at = vfolds.offsets[nc + k];
                 let cand: Vec<usize> = (at..at + d).collect();
-                held.fit(&base, &cand).statistic >= chi2_upper_quantile(d, CONFIRM_ALPHA)
+                let signed = signed(steps[k].kind);
+                held.fit(&base, &cand, signed).statistic >= chi2_upper_quantile(d, CONFIRM_ALPHA)
             })
             .count();
         if passed < steps.len() {
@@ -728,7 +748,7 @@ mod tests {
             mean: mean.clone(),
             precision: precision.clone(),
         };
-        let f = anchor.fit(&[0, 1, 2, 3], &[p]);
+        let f = anchor.fit(&[0, 1, 2, 3], &[p], false);
         let r = &u - &mean;
         let spr = s.dot(&(&precision * &r));
         let sps = s.dot(&(&precision * &s));
@@ -741,6 +761,32 @@ mod tests {
         assert!((f.beta[0] - spr / sps).abs() < 1e-6);
         assert!((f.se[0] - sps.powf(-0.5)).abs() < 1e-4 * f.se[0]);
         assert!(f.visible[0] < 1e-9);
+        // Signed (a kind with a physical sign): the description on the other side of the data,
+        // `r → −r`, pulls the coefficient below zero; held at zero it explains nothing. On the
+        // side it keeps, signed and free fits are the same.
+        let mirrored = Anchor {
+            mean: &u * 2.0 - &mean,
+            ..anchor
+        };
+        let (free, held) = (
+            mirrored.fit(&[0, 1, 2, 3], &[p], false),
+            mirrored.fit(&[0, 1, 2, 3], &[p], true),
+        );
+        assert!((free.beta[0] + spr / sps).abs() < 1e-6, "{}", free.beta[0]);
+        // (Δ is a difference of two objectives of size ~10⁸ here: 10⁻³ is their round-off.)
+        assert!(
+            (free.statistic - want).abs() < 1e-2 * want,
+            "{} vs {want}",
+            free.statistic
+        );
+        assert_eq!(held.beta[0], 0.0);
+        assert!(held.statistic < 1e-2 * want, "{}", held.statistic);
+        let kept = Anchor {
+            mean: mean.clone(),
+            ..mirrored
+        }
+        .fit(&[0, 1, 2, 3], &[p], true);
+        assert_eq!((kept.beta[0], kept.statistic), (f.beta[0], f.statistic));
     }
 
     /// The perturbation has the deviation the prior states (mass: 10 % at `ε = 0.1`), and the

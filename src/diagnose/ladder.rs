@@ -285,7 +285,7 @@ impl Problem<'_> {
             if let Explanation::Effect(v) = e {
                 let at = data.offsets[data.index(v)];
                 let width = v.kind.columns(n);
-                if v.kind.non_negative() && !v.kind.is_body_change() {
+                if anchor::signed(v.kind) {
                     signed.extend(cols.len()..cols.len() + width);
                 }
                 cols.extend(at..at + width);
@@ -856,7 +856,7 @@ fn absorbed_steps(
         let at = data.offsets[step.variant];
         let cand: Vec<usize> = (at..at + d).collect();
         let threshold = anchor::chi2_upper_quantile(d, anchor::CONFIRM_ALPHA);
-        if held.fit(&base, &cand).statistic < threshold {
+        if held.fit(&base, &cand, anchor::signed(v.kind)).statistic < threshold {
             break;
         }
         let e = Explanation::Effect(v);
