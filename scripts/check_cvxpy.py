@@ -40,7 +40,7 @@ def body_matrices(pi):
     return i6, j, m, hcol
 
 
-def solve(problem, solver):
+def solve(problem, solver, return_theta=False):
     h = np.array(problem["H"])
     h = 0.5 * (h + h.T)
     g = np.array(problem["g"])
@@ -88,6 +88,8 @@ def solve(problem, solver):
     prob = cp.Problem(cp.Minimize(objective), cons)
     opts = {"eps_abs": 1e-10, "eps_rel": 1e-10, "max_iters": 200000} if solver == "SCS" else {}
     prob.solve(solver=solver, **opts)
+    if return_theta:
+        return prob.value, prob.status, theta.value
     return prob.value, prob.status
 
 
