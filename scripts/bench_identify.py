@@ -43,7 +43,6 @@ def peer(spec_path):
     import pinocchio as pin
     import peer_pinocchio_cvxpy as pp
     import xml.etree.ElementTree as ET
-    from physid_common import PIN_FROM_PAPER
 
     with open(spec_path) as f:
         spec = json.load(f)
@@ -61,7 +60,6 @@ def peer(spec_path):
             if fr.name in names:
                 link_of[fr.name] = fr.parentJoint
         rotors = pp.rotors_from_urdf(spec["rotors_urdf"])
-    perm = np.concatenate([10 * i + np.array(PIN_FROM_PAPER) for i in range(n)])
 
     def rows_of(path, limit):
         with open(path) as f:
@@ -74,10 +72,7 @@ def peer(spec_path):
             if spec["rotors_urdf"]:
                 y = pp.regressor_rows(model, pdata, rotors, link_of, q, v, a, 10 * len(rotors))
             else:
-                y = np.zeros((n, 12 * n))
-                y[:, :10 * n] = pin.computeJointTorqueRegressor(model, pdata, q, v, a)[:, perm]
-                y[np.arange(n), 10 * n + np.arange(n)] = v
-                y[np.arange(n), 11 * n + np.arange(n)] = np.sign(v)
+                y = pp.arm_rows(model, pdata, q, v, a)
             ys.append(y)
             taus.append(tau)
         return np.vstack(ys), np.concatenate(taus), len(taus)
@@ -95,17 +90,12 @@ def peer(spec_path):
 
 
 def solve(problem, y, tau, samples):
-    """physid's problem (`--export-problem`: constraint set, ellipsoids) with the normal
-    equations rebuilt from the peer's own regressor and torques, physid's prior recovered from
-    its exported g: the objective, the status and the parameters."""
-    import numpy as np
+    """The peer's solve of physid's problem rebuilt from its own data
+    (`peer_pinocchio_cvxpy.rebuilt_problem`): the objective, the status and the parameters."""
     import check_cvxpy
-    w = problem["w"]
-    h = y.T @ y / samples + w * np.eye(y.shape[1])
-    prior = (np.array(problem["g"]) - y.T @ tau / samples) / w
-    p = dict(problem, H=h.tolist(), g=(y.T @ tau / samples + w * prior).tolist(),
-             c=float(tau @ tau / samples + w * prior @ prior))
-    return check_cvxpy.solve(p, "CLARABEL", return_theta=True)
+    import peer_pinocchio_cvxpy as pp
+    return check_cvxpy.solve(pp.rebuilt_problem(problem, y, tau, samples), "CLARABEL",
+                             return_theta=True)
 
 
 def timed(cmd):

@@ -19,6 +19,7 @@ imports), physid's the whole `identify` command.
 
 usage: python scripts/peer_pinocchio_cvxpy.py [--physid PATH] [--samples N] [--kuka]
 """
+import functools
 import json
 import os
 import sys
@@ -73,9 +74,8 @@ def regressor_rows(model, data, rotors, link_of, q, v, a, n_rot_cols):
     """Full 3 x 66 regressor of one sample, paper order: links, rotors, viscous, Coulomb."""
     n = model.nv
     y_links = pin.computeJointTorqueRegressor(model, data, q, v, a)
-    perm = np.concatenate([10 * i + np.array(PIN_FROM_PAPER) for i in range(n)])
     y = np.zeros((n, 10 * n + n_rot_cols + 2 * n))
-    y[:, :10 * n] = y_links[:, perm]
+    y[:, :10 * n] = y_links[:, paper_order(n)]
     pin.forwardKinematics(model, data, q, v, a)
     g = model.gravity.linear
     for r, (parent_link, placement, axis, gear, driven) in enumerate(rotors):
@@ -117,19 +117,40 @@ def regressor_rows(model, data, rotors, link_of, q, v, a, n_rot_cols):
 joint_axes = []
 
 
-def solve_like_physid(problem, y, tau, samples):
-    """The exported problem with H, g, c rebuilt from the peer's own regressor and torques
-    (physid's prior recovered from its exported g); returns (objective, status, solve time)."""
-    w = 1e-6
+def rebuilt_problem(problem, y, tau, samples):
+    """physid's exported problem (constraint set, ellipsoids, prior weight w) with H, g, c
+    rebuilt from the peer's own regressor and torques, physid's prior recovered from its
+    exported g."""
+    w = problem["w"]
     h_np = y.T @ y / samples + w * np.eye(y.shape[1])
     theta_prior = (np.array(problem["g"]) - y.T @ tau / samples) / w
-    problem_py = dict(problem)
-    problem_py["H"] = h_np.tolist()
-    problem_py["g"] = (y.T @ tau / samples + w * theta_prior).tolist()
-    problem_py["c"] = float(tau @ tau / samples + w * theta_prior @ theta_prior)
+    return dict(problem, H=h_np.tolist(), g=(y.T @ tau / samples + w * theta_prior).tolist(),
+                c=float(tau @ tau / samples + w * theta_prior @ theta_prior))
+
+
+def solve_like_physid(problem, y, tau, samples):
+    """[`rebuilt_problem`] solved by CVXPY + Clarabel: (objective, status, solve time)."""
+    problem_py = rebuilt_problem(problem, y, tau, samples)
     t1 = time.perf_counter()
     value, status = solve(problem_py, "CLARABEL")
     return value, status, time.perf_counter() - t1
+
+
+@functools.lru_cache(maxsize=None)
+def paper_order(n):
+    """Columns of pinocchio's regressor of `n` bodies in the paper's parameter order."""
+    return np.concatenate([10 * i + np.array(PIN_FROM_PAPER) for i in range(n)])
+
+
+def arm_rows(model, data, q, v, a):
+    """One sample's regressor of an arm without rotors, paper order: pinocchio's link columns,
+    then viscous and Coulomb friction."""
+    n = model.nv
+    y = np.zeros((n, 12 * n))
+    y[:, :10 * n] = pin.computeJointTorqueRegressor(model, data, q, v, a)[:, paper_order(n)]
+    y[np.arange(n), 10 * n + np.arange(n)] = v
+    y[np.arange(n), 11 * n + np.arange(n)] = np.sign(v)
+    return y
 
 
 def seconds_since_process_start():
@@ -162,7 +183,6 @@ def kuka(binary):
         model = pin.buildModelFromUrdf(KUKA_URDF)
         pdata = model.createData()
         n = model.nv
-        perm = np.concatenate([10 * i + np.array(PIN_FROM_PAPER) for i in range(n)])
         ys, taus = [], []
         for path in runs:
             with open(path) as f:
@@ -171,11 +191,7 @@ def kuka(binary):
             data_np = np.loadtxt(path, delimiter=",", skiprows=1)
             for s in data_np:
                 q, v, a, tau = s[cols("q")], s[cols("dq")], s[cols("ddq")], s[cols("tau")]
-                y = np.zeros((n, 12 * n))
-                y[:, :10 * n] = pin.computeJointTorqueRegressor(model, pdata, q, v, a)[:, perm]
-                y[np.arange(n), 10 * n + np.arange(n)] = v
-                y[np.arange(n), 11 * n + np.arange(n)] = np.sign(v)
-                ys.append(y)
+                ys.append(arm_rows(model, pdata, q, v, a))
                 taus.append(tau)
         y, tau = np.vstack(ys), np.concatenate(taus)
         samples = len(taus)

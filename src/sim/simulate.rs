@@ -361,14 +361,16 @@ pub(crate) struct Loads<'a> {
 }
 
 impl Loads<'_> {
-    /// `B q̇ + B_c tanh(q̇ / v_s)` (N m).
+    /// `B q̇ + B_c tanh(q̇ / v_s)` of joint `j` at speed `w` (N m).
+    fn joint_friction(&self, j: usize, w: f64) -> f64 {
+        let f = &self.model.bodies()[j].friction;
+        f.viscous * w + f.coulomb * (w / self.scenario.simulation.friction_velocity).tanh()
+    }
+    /// [`Loads::joint_friction`] of every joint (N m).
     fn friction(&self, qd: &[f64]) -> Vec<f64> {
-        let vs = self.scenario.simulation.friction_velocity;
-        self.model
-            .bodies()
-            .iter()
-            .zip(qd)
-            .map(|(b, &w)| b.friction.viscous * w + b.friction.coulomb * (w / vs).tanh())
+        qd.iter()
+            .enumerate()
+            .map(|(j, &w)| self.joint_friction(j, w))
             .collect()
     }
     /// Torque of the injected physical effects (N m).
@@ -387,10 +389,8 @@ impl Loads<'_> {
         let vs = self.scenario.simulation.friction_velocity;
         let effects = &self.scenario.effects;
         super::effects::physical_torque_into(effects, self.model, (q, qd), tau_mot, vs, out);
-        for (j, b) in self.model.bodies().iter().enumerate() {
-            let w = qd[j];
-            let friction = b.friction.viscous * w + b.friction.coulomb * (w / vs).tanh();
-            out[j] = tau_mot[j] + out[j] - friction;
+        for j in 0..qd.len() {
+            out[j] = tau_mot[j] + out[j] - self.joint_friction(j, qd[j]);
         }
     }
 }
