@@ -171,6 +171,8 @@ def main():
             a, b = statistics.median(t_physid), statistics.median(t_peer)
             line = f"{name:<22} {a * 1e3:7.0f}ms {b * 1e3:7.0f}ms {b / a:6.1f}x  {err:.1e}"
             line += " (within 1e-8)" if err <= 1e-8 else " (above 1e-8)"
+            if peer_out["status"] != "optimal":
+                line += f"; peer's solve {peer_out['status']}"
             if peer_out["validation_rms"] is not None:
                 v_ours = ours["validation"]["rms_overall"]
                 line += f"; validation RMS physid {v_ours:.6f}, peer {peer_out['validation_rms']:.6f} N m"

@@ -88,6 +88,10 @@ def solve(problem, solver, return_theta=False):
     prob = cp.Problem(cp.Minimize(objective), cons)
     opts = {"eps_abs": 1e-10, "eps_rel": 1e-10, "max_iters": 200000} if solver == "SCS" else {}
     prob.solve(solver=solver, **opts)
+    if solver == "CLARABEL" and prob.status == cp.OPTIMAL_INACCURATE:
+        # As physid does: Clarabel's equilibration on the already scaled variables can stall
+        # in the directions only the prior weight holds; solved again without it.
+        prob.solve(solver=solver, equilibrate_enable=False)
     if return_theta:
         return prob.value, prob.status, theta.value
     return prob.value, prob.status
