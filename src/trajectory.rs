@@ -19,6 +19,10 @@ pub struct Trajectory {
     pub qdd: Option<Vec<f64>>,
     /// Joint torques (N m).
     pub tau: Vec<f64>,
+    /// The samples that begin a new run (increasing, within `1..len`): runs joined end to end
+    /// ([`Self::concatenate`]) or a log split at a time jump. No signal is differentiated,
+    /// filtered or delayed across them ([`Self::runs`]); empty for one run.
+    pub starts: Vec<usize>,
 }
 
 /// A bad sample, naming its index and field.
@@ -65,6 +69,9 @@ pub enum SampleError {
     /// No samples at all.
     #[error("no samples")]
     Empty,
+    /// Run starts out of order or outside the samples.
+    #[error("{0}")]
+    RunStarts(String),
     /// Inconsistent array lengths.
     #[error("{field} has {got} values, expected {expected}")]
     Length {
@@ -132,6 +139,7 @@ impl Trajectory {
             qd: vec![],
             qdd: with_qdd.then(Vec::new),
             tau: vec![],
+            starts: vec![],
         }
     }
     /// Number of joints.
@@ -176,7 +184,7 @@ impl Trajectory {
     pub fn tau_at(&self, k: usize) -> &[f64] {
         self.row(&self.tau, k)
     }
-    /// Samples `range` as a new trajectory.
+    /// Samples `range` as a new trajectory (with the run starts inside it).
     pub fn slice(&self, range: std::ops::Range<usize>) -> Trajectory {
         let n = self.dof();
         let cut = |v: &Vec<f64>| v[range.start * n..range.end * n].to_vec();
@@ -187,7 +195,27 @@ impl Trajectory {
             qd: cut(&self.qd),
             qdd: self.qdd.as_ref().map(cut),
             tau: cut(&self.tau),
+            starts: self
+                .starts
+                .iter()
+                .filter(|&&s| s > range.start && s < range.end)
+                .map(|s| s - range.start)
+                .collect(),
         }
+    }
+
+    /// The runs: consecutive sample ranges between the run starts ([`Self::starts`]), covering
+    /// every sample; one range for one run, none without samples.
+    pub fn runs(&self) -> Vec<std::ops::Range<usize>> {
+        let m = self.len();
+        let mut bounds = vec![0];
+        bounds.extend(self.starts.iter().copied().filter(|&s| s > 0 && s < m));
+        bounds.push(m);
+        bounds
+            .windows(2)
+            .filter(|w| w[1] > w[0])
+            .map(|w| w[0]..w[1])
+            .collect()
     }
 
     /// Checks lengths, increasing time, and every value finite and within [`max_abs`], naming
@@ -213,6 +241,17 @@ impl Trajectory {
                     });
                 }
             }
+        }
+        if let Some(w) = self.starts.windows(2).find(|w| w[1] <= w[0]) {
+            return Err(SampleError::RunStarts(format!(
+                "run starts {} and {} do not increase",
+                w[0], w[1]
+            )));
+        }
+        if let Some(s) = self.starts.iter().find(|&&s| s == 0 || s >= m) {
+            return Err(SampleError::RunStarts(format!(
+                "a run starts at sample {s}, outside 1..{m}"
+            )));
         }
         for k in 0..m {
             let t = self.t[k];
@@ -279,6 +318,7 @@ impl Trajectory {
             qd: pick(&self.qd),
             qdd: self.qdd.as_ref().map(pick),
             tau: pick(&self.tau),
+            starts: self.starts.clone(),
         })
     }
 
@@ -292,7 +332,8 @@ impl Trajectory {
     /// Joins runs end to end; each run's times are shifted to continue the joined ones by their
     /// mean sample period, or the next run's when the joined ones are a single sample (1 ms
     /// only between two single samples, which no analysis uses: identification and the
-    /// diagnosis need many). `None` for no runs.
+    /// diagnosis need many). Each part's first sample becomes a run start ([`Self::starts`]),
+    /// and its own starts are kept. `None` for no runs.
     pub fn concatenate(parts: Vec<Trajectory>) -> Option<Trajectory> {
         let mut it = parts.into_iter();
         let mut out = it.next()?;
@@ -307,6 +348,10 @@ impl Trajectory {
                 .or_else(|| p.sample_period())
                 .unwrap_or(1e-3);
             let shift = out.t[m - 1] + dt - p.t[0];
+            if !p.is_empty() {
+                out.starts.push(m);
+                out.starts.extend(p.starts.iter().map(|s| s + m));
+            }
             for k in 0..p.len() {
                 out.push(
                     p.t[k] + shift,
@@ -429,6 +474,51 @@ mod tests {
             close(&joined.t, &[0.0, 0.01, 0.02, 0.022]),
             "{:?}",
             joined.t
+        );
+    }
+
+    #[test]
+    fn run_starts_follow_concatenation_slicing_and_splitting() {
+        let joined = Trajectory::concatenate(vec![
+            run(0.0, 3, 1e-2),
+            run(7.0, 2, 1e-2),
+            run(9.0, 4, 1e-2),
+        ])
+        .unwrap();
+        assert_eq!(joined.starts, vec![3, 5]);
+        assert_eq!(joined.runs(), vec![0..3, 3..5, 5..9]);
+        assert_eq!(joined.validate(), Ok(()));
+        // A slice keeps the starts strictly inside it, shifted; a cut at a start drops it.
+        assert_eq!(joined.slice(2..7).starts, vec![1, 3]);
+        assert_eq!(joined.slice(3..9).runs(), vec![0..2, 2..6]);
+        let (train, validate) = joined.holdout_split(0.4);
+        assert_eq!(train.runs(), [0..3, 3..5]);
+        assert_eq!(validate.runs(), std::iter::once(0..4).collect::<Vec<_>>());
+        let (train, validate) = joined.holdout_split(0.6);
+        assert_eq!(
+            (train.runs(), validate.runs()),
+            (vec![0..3, 3..4], vec![0..1, 1..5])
+        );
+        // Joining joined data keeps the inner starts.
+        let twice = Trajectory::concatenate(vec![joined.clone(), joined.clone()]).unwrap();
+        assert_eq!(twice.starts, vec![3, 5, 9, 12, 14]);
+        // Bad starts are named.
+        let mut bad = joined.clone();
+        bad.starts = vec![5, 3];
+        assert!(bad
+            .validate()
+            .unwrap_err()
+            .to_string()
+            .contains("do not increase"));
+        bad.starts = vec![9];
+        assert!(bad
+            .validate()
+            .unwrap_err()
+            .to_string()
+            .contains("outside 1..9"));
+        assert_eq!(
+            run(0.0, 0, 1e-2).runs(),
+            Vec::<std::ops::Range<usize>>::new()
         );
     }
 }

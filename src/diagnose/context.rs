@@ -73,18 +73,21 @@ pub struct Context<'a> {
 
 /// `x` (sample-major, `n` columns) processed like an encoder angle: `F(x)`, `F(D x)`,
 /// `F(D F(D x))` with `F` the zero-phase 2nd-order Butterworth low-pass at `cutoff` and `D` the
-/// central difference; unfiltered differences if the filter cannot be built.
+/// central difference; unfiltered differences if the filter cannot be built. Each run of `tr`
+/// on its own ([`Trajectory::runs`]): nothing is filtered across a seam.
 fn processed_like_encoder(x: &[f64], tr: &Trajectory, cutoff: f64) -> [Vec<f64>; 3] {
-    let (m, n) = (tr.len(), tr.dof());
+    let n = tr.dof();
     let mut out = [vec![0.0; x.len()], vec![0.0; x.len()], vec![0.0; x.len()]];
     let Some(dt) = sample_period(tr) else {
         return out;
     };
-    for j in 0..n {
-        let col: Vec<f64> = (0..m).map(|k| x[k * n + j]).collect();
-        for (o, v) in out.iter_mut().zip(process_column(&col, dt, cutoff)) {
-            for k in 0..m {
-                o[k * n + j] = v[k];
+    for run in tr.runs() {
+        for j in 0..n {
+            let col: Vec<f64> = run.clone().map(|k| x[k * n + j]).collect();
+            for (o, v) in out.iter_mut().zip(process_column(&col, dt, cutoff)) {
+                for (k, vk) in run.clone().zip(v) {
+                    o[k * n + j] = vk;
+                }
             }
         }
     }
@@ -135,31 +138,34 @@ fn without_own(
     cutoff: f64,
     taps: &OwnTaps,
 ) -> [Vec<f64>; 3] {
-    let (m, n) = (tr.len(), tr.dof());
+    let n = tr.dof();
     let Some(dt) = sample_period(tr) else {
         return out;
     };
     let w = OWN_LAGS;
-    // The zero-phase filter's start-up transient at the ends of the data (not of the data's own
+    // The zero-phase filter's start-up transient at the ends of each run (not of the data's own
     // processing, which saw the whole run, but of this one): columns there are left at zero.
     let ends = ((3.0 / cutoff) / dt).ceil() as usize;
-    for o in out.iter_mut() {
-        for k in (0..m).filter(|&k| k < ends || k + ends >= m) {
-            o[k * n..(k + 1) * n].fill(0.0);
+    for run in tr.runs() {
+        let inner = |k: &usize| k - run.start >= ends && k + ends < run.end;
+        for o in out.iter_mut() {
+            for k in run.clone().filter(|k| !inner(k)) {
+                o[k * n..(k + 1) * n].fill(0.0);
+            }
         }
-    }
-    if m < 2 * w + 3 {
-        return out;
-    }
-    for j in 0..n {
-        let at = |k: usize| x[k * n + j];
-        for k in (w + 1..m - w - 1).filter(|&k| k >= ends && k + ends < m) {
-            let (a, b) = (at(k - w - 1), at(k + w + 1));
-            for (t, i) in (k - w..=k + w).rev().enumerate() {
-                let frac = (i - (k - w - 1)) as f64 / (2 * w + 2) as f64;
-                let own = at(i) - (a + (b - a) * frac);
-                for (o, hc) in out.iter_mut().zip(taps) {
-                    o[k * n + j] -= hc[t] * own;
+        if run.len() < 2 * w + 3 {
+            continue;
+        }
+        for j in 0..n {
+            let at = |k: usize| x[k * n + j];
+            for k in (run.start + w + 1..run.end - w - 1).filter(inner) {
+                let (a, b) = (at(k - w - 1), at(k + w + 1));
+                for (t, i) in (k - w..=k + w).rev().enumerate() {
+                    let frac = (i - (k - w - 1)) as f64 / (2 * w + 2) as f64;
+                    let own = at(i) - (a + (b - a) * frac);
+                    for (o, hc) in out.iter_mut().zip(taps) {
+                        o[k * n + j] -= hc[t] * own;
+                    }
                 }
             }
         }
@@ -182,26 +188,36 @@ fn dead_zone_offsets(model: &Model, tau: &[f64], tr: &Trajectory, width: f64) ->
     let effects = [crate::sim::scenario::EffectSpec::Backlash {
         width: vec![width; n],
     }];
-    let Some(mut zone) = crate::sim::effects::DeadZone::new(model, &effects) else {
-        return vec![0.0; tau.len()];
-    };
-    tau.chunks(n)
-        .flat_map(|t| zone.step(t, dt))
-        .map(|s| s / width)
-        .collect()
+    let mut out = Vec::with_capacity(tau.len());
+    for run in tr.runs() {
+        // Each run starts afresh, the motor against the side its first torque pushes it to.
+        let Some(mut zone) = crate::sim::effects::DeadZone::new(model, &effects) else {
+            return vec![0.0; tau.len()];
+        };
+        let run_tau = &tau[run.start * n..run.end * n];
+        out.extend(
+            run_tau
+                .chunks(n)
+                .flat_map(|t| zone.step(t, dt))
+                .map(|s| s / width),
+        );
+    }
+    out
 }
 
-fn derivative(x: &[f64], t: &[f64], n: usize) -> Vec<f64> {
-    let m = t.len();
+/// The time derivative of `x` (sample-major, `n` columns) over `tr`'s time stamps: central
+/// differences, first-order one-sided at each run's ends (never across a seam: a jump between
+/// runs joined end to end is not a rate); zero in a run of one sample.
+fn derivative(x: &[f64], tr: &Trajectory, n: usize) -> Vec<f64> {
+    let t = &tr.t;
     let mut out = vec![0.0; x.len()];
-    if m < 2 {
-        return out;
-    }
-    for k in 0..m {
-        let (a, b) = (k.saturating_sub(1), (k + 1).min(m - 1));
-        let dt = t[b] - t[a];
-        for j in 0..n {
-            out[k * n + j] = (x[b * n + j] - x[a * n + j]) / dt;
+    for run in tr.runs().into_iter().filter(|r| r.len() >= 2) {
+        for k in run.clone() {
+            let (a, b) = (k.saturating_sub(1).max(run.start), (k + 1).min(run.end - 1));
+            let dt = t[b] - t[a];
+            for j in 0..n {
+                out[k * n + j] = (x[b * n + j] - x[a * n + j]) / dt;
+            }
         }
     }
     out
@@ -230,7 +246,7 @@ impl<'a> Context<'a> {
         });
         // Without the Coulomb jumps: a delayed jump only matters within the masked slow rows,
         // and differencing it would put spikes into every fitted row next to a reversal.
-        let pred_d = derivative(&smooth, &tr.t, n);
+        let pred_d = derivative(&smooth, tr, n);
         // The deflection follows the torque actually delivered, jumps of friction at the
         // reversals included: the logged torque, processed like the encoder. Its noise,
         // differentiated twice through the 20 Hz filter, adds ~0.05 N m on the blind scenario;
@@ -352,6 +368,37 @@ mod tests {
             tr.push(k as f64 * 1e-3, &[0.0], &[0.0], Some(&[0.0]), &[*v]);
         }
         tr
+    }
+
+    #[test]
+    fn nothing_is_differentiated_or_filtered_across_a_seam() {
+        // Two runs joined end to end, each a constant torque (0 and 10 N m): within each run
+        // the rate is zero and the low-passed signal the constant, up to the seam itself.
+        let (a, b) = (one_joint(&[0.0; 400]), one_joint(&[10.0; 400]));
+        let joined = Trajectory::concatenate(vec![a, b]).unwrap();
+        let d = derivative(&joined.tau, &joined, 1);
+        assert!(
+            d.iter().all(|v| *v == 0.0),
+            "largest rate {:?}",
+            d.iter().cloned().fold(0.0, f64::max)
+        );
+        let [f, f1, f2] = processed_like_encoder(&joined.tau, &joined, 20.0);
+        for k in 0..800 {
+            let want = if k < 400 { 0.0 } else { 10.0 };
+            assert!((f[k] - want).abs() < 1e-9, "sample {k}: {}", f[k]);
+            assert!(
+                f1[k].abs() < 1e-6 && f2[k].abs() < 1e-3,
+                "sample {k}: {} {}",
+                f1[k],
+                f2[k]
+            );
+        }
+        // Without the seam (one run) the step rings through the filter on both sides.
+        let mut one = joined.clone();
+        one.starts.clear();
+        let [f, _, _] = processed_like_encoder(&one.tau, &one, 20.0);
+        assert!((f[399] - 0.0).abs() > 0.1 && (f[400] - 10.0).abs() > 0.1);
+        assert!(derivative(&one.tau, &one, 1)[400] > 1000.0);
     }
 
     #[test]

@@ -193,6 +193,7 @@ pub fn read_csv(path: &Path, robot: Option<&[String]>) -> Result<Trajectory, IoE
         qd,
         qdd: logged.qdd,
         tau: logged.tau,
+        starts: vec![],
     };
     tr.validate().map_err(|e| bad(e.to_string()))?;
     Ok(tr)
