@@ -343,6 +343,10 @@ pub struct Report {
     pub cutoff: f64,
     /// The motion's band edge (Hz) the cutoff was chosen from (`None` when it was not).
     pub band_edge: Option<f64>,
+    /// This file's own band edge (Hz) when the cutoff was chosen from a band edge shared with
+    /// other files read together (`None` otherwise): a shared edge well above it comes from
+    /// another file, and a short one reads its resolution more than its motion.
+    pub own_band_edge: Option<f64>,
     /// Samples trimmed at each end of a run.
     pub settle_samples: usize,
     /// Joints held at their logged position (asked for, or whose torque is never measured).
@@ -391,13 +395,16 @@ pub fn prepare(logged: &Logged, opts: &Options) -> Result<Prepared, PrepareError
     };
     let bridge = max_bridged(rate, opts.cutoff.unwrap_or(default_cutoff(rate)));
     let split = split_runs(logged, period, bridge)?;
-    let (cutoff, band_edge) = match (opts.cutoff, opts.band_edge) {
-        (Some(c), _) => (c, None),
-        (None, _) if !(derive.qd || derive.qdd) => (default_cutoff(rate), None),
-        (None, Some(edge)) => (motion_cutoff(edge, rate), Some(edge)),
+    let (cutoff, band_edge, own_band_edge) = match (opts.cutoff, opts.band_edge) {
+        (Some(c), _) => (c, None, None),
+        (None, _) if !(derive.qd || derive.qdd) => (default_cutoff(rate), None, None),
+        (None, Some(edge)) => {
+            let own = motion_band_edge(logged, &split.pieces, period);
+            (motion_cutoff(edge, rate), Some(edge), Some(own))
+        }
         (None, None) => {
             let edge = motion_band_edge(logged, &split.pieces, period);
-            (motion_cutoff(edge, rate), Some(edge))
+            (motion_cutoff(edge, rate), Some(edge), None)
         }
     };
     let sos = butterworth_lowpass(2, cutoff, rate)?;
@@ -408,6 +415,7 @@ pub fn prepare(logged: &Logged, opts: &Options) -> Result<Prepared, PrepareError
     };
     let mut report = Report::new(logged, &split, period, cutoff, settle, derive);
     report.band_edge = band_edge;
+    report.own_band_edge = own_band_edge;
     let mut runs = vec![];
     for piece in &split.pieces {
         let clock = Clock::fit(&logged.t, piece, period);
@@ -806,6 +814,7 @@ impl Report {
             derived_qdd: derive.qdd,
             cutoff,
             band_edge: None,
+            own_band_edge: None,
             settle_samples: settle,
             locked: vec![],
             still: vec![],

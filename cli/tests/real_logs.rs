@@ -156,3 +156,74 @@ fn a_locked_joint_is_not_fitted_and_lock_names_are_checked() {
         );
     }
 }
+
+/// Run `r` of the KUKA logs as `t, q, τ` (no velocities or accelerations), its first `seconds`
+/// only when given.
+fn positions_and_torques(dir: &Path, r: usize, seconds: Option<f64>) -> PathBuf {
+    let src = root().join(format!("data/kuka_lwr4/measurements_{r}.csv"));
+    let mut rd = csv::Reader::from_path(&src).unwrap();
+    let header: Vec<String> = rd.headers().unwrap().iter().map(String::from).collect();
+    let keep: Vec<usize> = (0..header.len())
+        .filter(|&i| header[i] == "t" || header[i].starts_with("q") || header[i].starts_with("tau"))
+        .collect();
+    let path = dir.join(format!("run{r}_{}.csv", seconds.map_or(0.0, |s| s)));
+    let mut w = csv::Writer::from_path(&path).unwrap();
+    w.write_record(keep.iter().map(|&i| &header[i])).unwrap();
+    let mut t0 = None;
+    for rec in rd.records() {
+        let rec = rec.unwrap();
+        let t: f64 = rec[0].parse().unwrap();
+        let start = *t0.get_or_insert(t);
+        if seconds.is_some_and(|s| t - start >= s) {
+            break;
+        }
+        w.write_record(keep.iter().map(|&i| &rec[i])).unwrap();
+    }
+    w.flush().unwrap();
+    path
+}
+
+/// The derived signals' cutoff of each file read (Hz), and the stderr.
+fn cutoffs(train: &Path, validate: Option<&Path>) -> (Vec<f64>, String) {
+    let urdf = root().join("data/kuka_lwr4/kuka_lwr4.urdf");
+    let mut args = vec!["identify", "--robot", urdf.to_str().unwrap(), "--json"];
+    args.extend(["--data", train.to_str().unwrap()]);
+    if let Some(v) = validate {
+        args.extend(["--validate-data", v.to_str().unwrap()]);
+    }
+    let (code, out, err) = physid(&args);
+    assert_eq!(code, 0, "{err}");
+    let json: serde_json::Value = serde_json::from_str(&out).unwrap();
+    let files = json["data_pipeline"].as_array().unwrap();
+    let cut = files
+        .iter()
+        .map(|f| f["pipeline"]["cutoff"].as_f64().unwrap())
+        .collect();
+    (cut, err)
+}
+
+#[test]
+fn a_short_file_that_widens_the_shared_cutoff_is_warned_about() {
+    // Read alone, run 3 (t, q, τ) gets a 2 Hz cutoff; the first 3 s of run 2 read beside it
+    // reads its periodogram's resolution (3 Hz) as motion and sets the cutoff of both to
+    // 12 Hz. The long file is warned about with its own cutoff; a long file beside it is not.
+    let dir = tempfile::tempdir().unwrap();
+    let run3 = positions_and_torques(dir.path(), 3, None);
+    let (alone, err) = cutoffs(&run3, None);
+    assert_eq!(alone, [2.0], "{err}");
+    assert!(!err.contains("reads a band edge"), "{err}");
+    let short = positions_and_torques(dir.path(), 2, Some(3.0));
+    let (both, err) = cutoffs(&run3, Some(&short));
+    eprintln!("cutoffs with the short file: {both:?}");
+    assert!(both.iter().all(|c| *c > 6.0), "{both:?}");
+    let warning = format!(
+        "warning: {}: its own motion reads a band edge of",
+        run3.display()
+    );
+    assert!(err.contains(&warning), "{err}");
+    assert!(err.contains("give --cutoff 2.0"), "{err}");
+    let whole = positions_and_torques(dir.path(), 2, None);
+    let (both, err) = cutoffs(&run3, Some(&whole));
+    assert!(both.iter().all(|c| *c < 2.5), "{both:?}");
+    assert!(!err.contains("reads a band edge"), "{err}");
+}

@@ -440,7 +440,28 @@ pub fn file_notices(path: &Path, loaded: &LoadedData) -> Vec<Notice> {
             Notice::note(text)
         });
     }
+    if let Some(w) = shared_cutoff_warning(&loaded.report) {
+        out.push(Notice::warning(format!("{}: {w}", path.display())));
+    }
     out
+}
+
+/// The shared cutoff above this ratio of the file's own cutoff is worth a warning.
+const SHARED_CUTOFF_RATIO: f64 = 1.5;
+
+/// A warning when the cutoff shared with the files read together is well above the one this
+/// file's own motion gives: the shared band edge came from another file, and a short file
+/// reads its resolution more than its motion (the KUKA run 2's first 3 s read 3.0 Hz, the
+/// whole run 0.20 Hz; read together, the cutoff of both went from 2 to 12 Hz).
+fn shared_cutoff_warning(r: &crate::prepare::Report) -> Option<String> {
+    let (shared, own) = (r.band_edge?, r.own_band_edge?);
+    let alone = crate::prepare::motion_cutoff(own, 1.0 / r.period);
+    (r.cutoff > SHARED_CUTOFF_RATIO * alone).then(|| {
+        format!(
+            "its own motion reads a band edge of {own:.3} Hz (alone: a {alone:.3} Hz cutoff), but a file read with it reads {shared:.3} Hz, which sets the cutoff of all to {:.3} Hz: a short file reads its resolution more than its motion (docs/data-pipeline.md); if the files record alike motions, give --cutoff {alone:.1}",
+            r.cutoff
+        )
+    })
 }
 
 /// What the pipeline did to one file, one line per kind of change (nothing for clean data
