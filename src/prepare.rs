@@ -152,7 +152,7 @@ pub struct Options {
     /// Joints held at their logged position (q̇ = q̈ = 0): their torque is not fitted.
     pub lock: Vec<String>,
     /// The motion's band edge (Hz) the cutoff is chosen from when `cutoff` is `None`; `None`:
-    /// this log's own ([`band_edge_of`] over several logs gives one for all).
+    /// this log's own (the highest of [`band_edges`] gives several logs one).
     pub band_edge: Option<f64>,
 }
 
@@ -344,8 +344,9 @@ pub struct Report {
     /// The motion's band edge (Hz) the cutoff was chosen from (`None` when it was not).
     pub band_edge: Option<f64>,
     /// This file's own band edge (Hz) when the cutoff was chosen from a band edge shared with
-    /// other files read together (`None` otherwise): a shared edge well above it comes from
-    /// another file, and a short one reads its resolution more than its motion.
+    /// other files read together (`None` otherwise; set by `io::load_all`): a shared edge well
+    /// above it comes from another file, and a short one reads its resolution more than its
+    /// motion.
     pub own_band_edge: Option<f64>,
     /// Samples trimmed at each end of a run.
     pub settle_samples: usize,
@@ -395,16 +396,13 @@ pub fn prepare(logged: &Logged, opts: &Options) -> Result<Prepared, PrepareError
     };
     let bridge = max_bridged(rate, opts.cutoff.unwrap_or(default_cutoff(rate)));
     let split = split_runs(logged, period, bridge)?;
-    let (cutoff, band_edge, own_band_edge) = match (opts.cutoff, opts.band_edge) {
-        (Some(c), _) => (c, None, None),
-        (None, _) if !(derive.qd || derive.qdd) => (default_cutoff(rate), None, None),
-        (None, Some(edge)) => {
-            let own = motion_band_edge(logged, &split.pieces, period);
-            (motion_cutoff(edge, rate), Some(edge), Some(own))
-        }
+    let (cutoff, band_edge) = match (opts.cutoff, opts.band_edge) {
+        (Some(c), _) => (c, None),
+        (None, _) if !(derive.qd || derive.qdd) => (default_cutoff(rate), None),
+        (None, Some(edge)) => (motion_cutoff(edge, rate), Some(edge)),
         (None, None) => {
             let edge = motion_band_edge(logged, &split.pieces, period);
-            (motion_cutoff(edge, rate), Some(edge), None)
+            (motion_cutoff(edge, rate), Some(edge))
         }
     };
     let sos = butterworth_lowpass(2, cutoff, rate)?;
@@ -415,7 +413,6 @@ pub fn prepare(logged: &Logged, opts: &Options) -> Result<Prepared, PrepareError
     };
     let mut report = Report::new(logged, &split, period, cutoff, settle, derive);
     report.band_edge = band_edge;
-    report.own_band_edge = own_band_edge;
     let mut runs = vec![];
     for piece in &split.pieces {
         let clock = Clock::fit(&logged.t, piece, period);
@@ -840,13 +837,16 @@ pub fn motion_cutoff(edge: f64, rate: f64) -> f64 {
     )
 }
 
-/// The motion's band edge (Hz) over several logs (the highest), so that logs read together
-/// (training and validation runs) are processed with one cutoff; `None` when no log needs a
-/// signal derived (or none can be read).
-pub fn band_edge_of(logs: &[&Logged]) -> Option<f64> {
+/// Each log's own motion band edge (Hz; `None` for a log that needs no signal derived, or
+/// cannot be read); the highest of them gives logs read together (training, validation and
+/// baseline runs) one cutoff, and each file's own is kept in its report
+/// ([`Report::own_band_edge`]).
+pub fn band_edges(logs: &[&Logged]) -> Vec<Option<f64>> {
     logs.iter()
-        .filter(|l| l.qd.is_none() || l.qdd.is_none())
-        .filter_map(|l| {
+        .map(|l| {
+            if l.qd.is_some() && l.qdd.is_some() {
+                return None;
+            }
             let period = median_period(&l.t)?;
             let split = split_runs(
                 l,
@@ -856,7 +856,7 @@ pub fn band_edge_of(logs: &[&Logged]) -> Option<f64> {
             .ok()?;
             Some(motion_band_edge(l, &split.pieces, period))
         })
-        .reduce(f64::max)
+        .collect()
 }
 
 /// The highest frequency (Hz) at which any joint's motion stands [`MOTION_OVER_NOISE`] above

@@ -69,6 +69,17 @@ fn changed_run(dir: &Path, r: usize, injection: &Injection, tag: &str, robot: &P
     path
 }
 
+/// The logged torque lagging the motion by `samples` samples.
+fn lag(samples: usize) -> Injection {
+    Injection {
+        slot: Slot::Effect(physid::diagnose::library::Kind::TimeDelay),
+        spec: Some(EffectSpec::TimeDelay { samples }),
+        magnitudes: vec![],
+        body: None,
+        visible: None,
+    }
+}
+
 fn diagnose(robot: &Path, data: &Path, extra: &[&str]) -> serde_json::Value {
     let mut args = vec!["--description-uncertainty", "0.05"];
     args.extend(extra);
@@ -143,14 +154,7 @@ fn a_lag_of_the_logged_torque_on_the_real_arm_is_named_first_and_timed() {
     let dir = tempfile::tempdir().unwrap();
     let robot = description(dir.path());
     let samples = 20;
-    let lag = Injection {
-        slot: Slot::Effect(physid::diagnose::library::Kind::TimeDelay),
-        spec: Some(EffectSpec::TimeDelay { samples }),
-        magnitudes: vec![],
-        body: None,
-        visible: None,
-    };
-    let lagged = changed_run(dir.path(), 3, &lag, "lag20", &robot);
+    let lagged = changed_run(dir.path(), 3, &lag(samples), "lag20", &robot);
     let d = diagnose(&robot, &lagged, &[]);
     let s = steps(&d);
     eprintln!("lagged: {s:?}");
@@ -188,14 +192,7 @@ fn a_lag_on_a_real_log_with_a_gap_is_found_as_without_one() {
     // nothing).
     let dir = tempfile::tempdir().unwrap();
     let robot = description(dir.path());
-    let lag = Injection {
-        slot: Slot::Effect(physid::diagnose::library::Kind::TimeDelay),
-        spec: Some(EffectSpec::TimeDelay { samples: 20 }),
-        magnitudes: vec![],
-        body: None,
-        visible: None,
-    };
-    let lagged = changed_run(dir.path(), 3, &lag, "lag20", &robot);
+    let lagged = changed_run(dir.path(), 3, &lag(20), "lag20", &robot);
     let text = std::fs::read_to_string(&lagged).unwrap();
     let gapped = dir.path().join("run3_lag20_gap.csv");
     let kept: Vec<&str> = text

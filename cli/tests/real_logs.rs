@@ -158,28 +158,25 @@ fn a_locked_joint_is_not_fitted_and_lock_names_are_checked() {
 }
 
 /// Run `r` of the KUKA logs as `t, q, τ` (no velocities or accelerations), its first `seconds`
-/// only when given.
+/// only when given: the semi-real benchmark's writer (`semireal::logged_csv`).
 fn positions_and_torques(dir: &Path, r: usize, seconds: Option<f64>) -> PathBuf {
-    let src = root().join(format!("data/kuka_lwr4/measurements_{r}.csv"));
-    let mut rd = csv::Reader::from_path(&src).unwrap();
-    let header: Vec<String> = rd.headers().unwrap().iter().map(String::from).collect();
-    let keep: Vec<usize> = (0..header.len())
-        .filter(|&i| header[i] == "t" || header[i].starts_with("q") || header[i].starts_with("tau"))
-        .collect();
-    let path = dir.join(format!("run{r}_{}.csv", seconds.map_or(0.0, |s| s)));
-    let mut w = csv::Writer::from_path(&path).unwrap();
-    w.write_record(keep.iter().map(|&i| &header[i])).unwrap();
-    let mut t0 = None;
-    for rec in rd.records() {
-        let rec = rec.unwrap();
-        let t: f64 = rec[0].parse().unwrap();
-        let start = *t0.get_or_insert(t);
-        if seconds.is_some_and(|s| t - start >= s) {
-            break;
-        }
-        w.write_record(keep.iter().map(|&i| &rec[i])).unwrap();
+    let k = root().join("data/kuka_lwr4");
+    let model = physid::io::load_robot(k.join("kuka_lwr4.urdf").to_str().unwrap()).unwrap();
+    let src = k.join(format!("measurements_{r}.csv"));
+    let (mut logged, _, _) = physid::io::load_logged(&src, &model, &Default::default()).unwrap();
+    if let Some(s) = seconds {
+        let keep = logged
+            .t
+            .iter()
+            .take_while(|t| **t - logged.t[0] < s)
+            .count();
+        let n = logged.dof();
+        logged.t.truncate(keep);
+        logged.q.truncate(keep * n);
+        logged.tau.truncate(keep * n);
     }
-    w.flush().unwrap();
+    let path = dir.join(format!("run{r}_{}.csv", seconds.map_or(0.0, |s| s)));
+    std::fs::write(&path, physid::experiment::semireal::logged_csv(&logged)).unwrap();
     path
 }
 

@@ -579,23 +579,33 @@ pub fn load_all(
         .map(|p| load_logged(p, model, opts))
         .collect::<Result<_, _>>()?;
     let mut popts = opts.prepare.clone();
-    if popts.cutoff.is_none() {
-        let logs: Vec<&crate::prepare::Logged> = read.iter().map(|(l, _, _)| l).collect();
-        popts.band_edge = crate::prepare::band_edge_of(&logs);
-    }
+    let own_edges = match popts.cutoff {
+        None => {
+            let logs: Vec<&crate::prepare::Logged> = read.iter().map(|(l, _, _)| l).collect();
+            crate::prepare::band_edges(&logs)
+        }
+        Some(_) => vec![None; read.len()],
+    };
+    popts.band_edge = own_edges.iter().flatten().copied().reduce(f64::max);
     paths
         .iter()
         .zip(read)
-        .map(|(path, (logged, ignored_joints, skipped_messages))| {
-            let prepared = crate::prepare::prepare(&logged, &popts)
-                .map_err(|e| IoError::invalid(path, e.to_string()))?;
-            Ok(LoadedData {
-                runs: prepared.runs,
-                report: prepared.report,
-                ignored_joints,
-                skipped_messages,
-            })
-        })
+        .zip(own_edges)
+        .map(
+            |((path, (logged, ignored_joints, skipped_messages)), own)| {
+                let mut prepared = crate::prepare::prepare(&logged, &popts)
+                    .map_err(|e| IoError::invalid(path, e.to_string()))?;
+                if prepared.report.band_edge.is_some() {
+                    prepared.report.own_band_edge = own;
+                }
+                Ok(LoadedData {
+                    runs: prepared.runs,
+                    report: prepared.report,
+                    ignored_joints,
+                    skipped_messages,
+                })
+            },
+        )
         .collect()
 }
 
