@@ -51,6 +51,43 @@ fn regressor_times_parameters_equals_rnea_plus_friction() {
 }
 
 #[test]
+fn a_parameter_outside_a_joints_row_columns_leaves_its_torque_untouched() {
+    // The joint-by-joint assembly of YᵀY sums each joint's row over `row_columns` only. Checked
+    // against RNEA itself: changing any parameter outside joint k's columns leaves τ_k the same
+    // bit for bit, and the regressor's entry there is exactly zero.
+    for (mi, m) in models().iter().enumerate() {
+        let pattern = dynamics::row_columns(m);
+        let theta = m.parameters();
+        let mut d = Data::new(m);
+        let mut y = DMatrix::zeros(m.dof(), theta.len());
+        for s in 0..3 {
+            let [q, qd, qdd] = random_state(5000 * mi as u64 + s, m.dof(), 2.0);
+            regressor(m, &mut d, &q, &qd, &qdd, &mut y);
+            let tau = dynamics::rnea_with_friction(m, &mut d, &q, &qd, &qdd);
+            for c in 0..theta.len() {
+                let mut tp = theta.clone();
+                tp[c] *= 1.5;
+                tp[c] += 0.1;
+                let mp = m.with_parameters(&tp).unwrap();
+                let tau_p = dynamics::rnea_with_friction(&mp, &mut Data::new(&mp), &q, &qd, &qdd);
+                for (k, cols) in pattern.iter().enumerate() {
+                    if !cols.contains(&c) {
+                        assert_eq!(tau_p[k], tau[k], "{}: column {c} moved τ_{k}", m.name());
+                        assert_eq!(y[(k, c)], 0.0, "{}: Y[{k}, {c}]", m.name());
+                    }
+                }
+            }
+        }
+    }
+    // On the leg (a chain): the abduction's row touches all six bodies and its own two
+    // friction terms; the knee's only the knee link, its rotor and its friction.
+    let leg = cheetah3::leg();
+    let pattern = dynamics::row_columns(&leg);
+    assert_eq!(pattern[0].len(), 6 * 10 + 2);
+    assert_eq!(pattern[2].len(), 2 * 10 + 2);
+}
+
+#[test]
 fn regressor_columns_are_derivatives_of_rnea_in_the_parameters() {
     // τ is linear in θ, so a central difference is exact up to round-off.
     for m in models().iter().take(4) {

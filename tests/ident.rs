@@ -390,3 +390,51 @@ fn the_parallel_assembly_is_the_same_whatever_the_thread_count_and_matches_one_p
     assert!(one.yty.iter().all(|x| x.is_finite()));
     assert_eq!(one.yty, one.yty.transpose());
 }
+
+#[test]
+fn the_joint_by_joint_assembly_matches_dense_sums_on_trees_with_a_joint_left_out() {
+    // The assembly sums each joint's rows over the columns its subtree can touch; on branched
+    // trees with rotors, with a joint's rows excluded, it must give the dense sums of
+    // `Σ Yᵀ Y`, `Σ Yᵀ τ`, `Σ ‖τ‖²` over the rows kept, up to rounding.
+    for seed in [3, 11] {
+        let m = physid::model::random::random_tree(seed, 7);
+        let tr = exact_data(&m, 700, seed);
+        let excluded = [2];
+        let ne = NormalEquations::from_trajectory_excluding(&m, &tr, 0..tr.len(), &excluded);
+        let (n, p) = (m.dof(), m.layout().len);
+        let mut d = Data::new(&m);
+        let mut y = DMatrix::zeros(n, p);
+        let (mut yty, mut ytt, mut tt) = (DMatrix::<f64>::zeros(p, p), DVector::zeros(p), 0.0);
+        for k in 0..tr.len() {
+            regressor(
+                &m,
+                &mut d,
+                tr.q_at(k),
+                tr.qd_at(k),
+                tr.qdd_at(k).unwrap(),
+                &mut y,
+            );
+            let mut tau = DVector::from_column_slice(tr.tau_at(k));
+            for &j in &excluded {
+                y.row_mut(j).fill(0.0);
+                tau[j] = 0.0;
+            }
+            yty += y.transpose() * &y;
+            ytt += y.transpose() * &tau;
+            tt += tau.norm_squared();
+        }
+        let rel = |a: f64, scale: f64| a / scale;
+        assert!(
+            rel((&ne.yty - &yty).amax(), yty.amax()) <= 1e-12,
+            "seed {seed}"
+        );
+        assert!(
+            rel((&ne.ytt - &ytt).amax(), ytt.amax()) <= 1e-12,
+            "seed {seed}"
+        );
+        assert!(rel((ne.tt - tt).abs(), tt) <= 1e-12, "seed {seed}");
+        assert_eq!(ne.samples, 700);
+        assert_eq!(ne.rows_per_sample(), n - 1);
+        assert_eq!(ne.yty, ne.yty.transpose());
+    }
+}

@@ -110,3 +110,28 @@ pub fn regressor(
         y[(layout.coulomb_col + i) * n + i] = sign(qd[i]);
     }
 }
+
+/// The columns of each joint's row of the regressor that can be nonzero, ascending: row `k`
+/// holds the ten parameters of every body `i` whose support contains `k` (the subtree of `k`),
+/// the rotors on those bodies' joints, and joint `k`'s own friction columns; every other entry
+/// of row `k` is zero at every `(q, q̇, q̈)`. Used to accumulate `YᵀY` joint by joint over only
+/// these columns.
+pub fn row_columns(model: &Model) -> Vec<Vec<usize>> {
+    let n = model.dof();
+    let layout = model.layout();
+    let mut cols = vec![vec![]; n];
+    for i in 0..n {
+        for &k in model.support(i) {
+            cols[k].extend(10 * i..10 * i + 10);
+            if let Some(c) = layout.rotor_col[i] {
+                cols[k].extend(c..c + 10);
+            }
+        }
+    }
+    for (k, row) in cols.iter_mut().enumerate() {
+        row.push(layout.viscous_col + k);
+        row.push(layout.coulomb_col + k);
+        row.sort_unstable();
+    }
+    cols
+}

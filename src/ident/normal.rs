@@ -12,7 +12,7 @@ const BLOCK_SAMPLES: usize = 128;
 
 /// Samples per chunk of a parallel accumulation. Fixed, so that the chunks, the order in which
 /// their sums are added, and so every result, do not depend on the thread count.
-const CHUNK_SAMPLES: usize = 2048;
+const CHUNK_SAMPLES: usize = 1024;
 
 /// Calls `f(k, Y_k)` with the regressor of every sample `k` in `range` of `tr`, which must carry
 /// q̈ (one workspace and one output matrix for the whole range).
@@ -186,9 +186,9 @@ impl NormalEquations {
         let parts: Vec<Self> = chunks
             .into_par_iter()
             .map(|chunk| {
-                let mut ne = empty();
-                for_each_regressor(model, tr, chunk, &mut |k, y| ne.add(y, tr.tau_at(k)));
-                ne.finish()
+                let mut sums = JointSums::new(model, excluded);
+                for_each_regressor(model, tr, chunk, &mut |k, y| sums.add(y, tr.tau_at(k)));
+                sums.finish()
             })
             .collect();
         parts
@@ -204,14 +204,14 @@ impl NormalEquations {
         source: impl FnOnce(&mut SampleSink) -> Result<usize, E>,
     ) -> Result<(Self, usize), E> {
         let (n, p) = (model.dof(), model.layout().len);
-        let mut ne = Self::new(n, p);
+        let mut sums = JointSums::new(model, &[]);
         let mut d = Data::new(model);
         let mut y = DMatrix::zeros(n, p);
         let total = source(&mut |_, s| {
             regressor(model, &mut d, s.q, s.qd, s.qdd, &mut y);
-            ne.add(&y, s.tau);
+            sums.add(&y, s.tau);
         })?;
-        Ok((ne.finish(), total))
+        Ok((sums.finish(), total))
     }
 
     /// Finished normal equations from their sums (e.g. a sub-problem or a sum of blocks).
@@ -253,5 +253,133 @@ impl NormalEquations {
     /// `Σ ‖Y θ − τ‖²` for parameters `theta`.
     pub fn residual_sum_of_squares(&self, theta: &DVector<f64>) -> f64 {
         (theta.dot(&(&self.yty * theta)) - 2.0 * theta.dot(&self.ytt) + self.tt).max(0.0)
+    }
+}
+
+/// One joint's rows of the regressor over the columns they can touch ([`row_columns`]),
+/// buffered transposed (column `s` of `rows` is the `s`-th buffered sample's row), and their
+/// sums over those columns.
+struct JointRows {
+    joint: usize,
+    cols: Vec<usize>,
+    rows: DMatrix<f64>,
+    taus: DVector<f64>,
+    /// `Σ y yᵀ` over `cols` (upper triangle).
+    gram: DMatrix<f64>,
+    /// `Σ y τ` over `cols`.
+    ytt: DVector<f64>,
+}
+
+/// The normal equations of a model's regressor accumulated joint by joint: row `k` of `Y` is
+/// zero outside the columns of `k`'s subtree and friction, so `YᵀY = Σ_k Σ_s y_k yₖᵀ` costs
+/// `Σ_k |C_k|²` per sample instead of `n p²` (on a 3-joint leg with rotors, 5,900 against 13,100).
+struct JointSums {
+    n: usize,
+    p: usize,
+    excluded: Vec<usize>,
+    joints: Vec<JointRows>,
+    filled: usize,
+    samples: usize,
+    tt: f64,
+}
+
+impl JointSums {
+    /// Empty sums for `model`'s regressor, leaving out the rows of `excluded` joints.
+    fn new(model: &Model, excluded: &[usize]) -> Self {
+        let joints = crate::dynamics::row_columns(model)
+            .into_iter()
+            .enumerate()
+            .filter(|(k, _)| !excluded.contains(k))
+            .map(|(joint, cols)| {
+                let c = cols.len();
+                JointRows {
+                    joint,
+                    cols,
+                    rows: DMatrix::zeros(c, BLOCK_SAMPLES),
+                    taus: DVector::zeros(BLOCK_SAMPLES),
+                    gram: DMatrix::zeros(c, c),
+                    ytt: DVector::zeros(c),
+                }
+            })
+            .collect();
+        Self {
+            n: model.dof(),
+            p: model.layout().len,
+            excluded: excluded.to_vec(),
+            joints,
+            filled: 0,
+            samples: 0,
+            tt: 0.0,
+        }
+    }
+
+    /// Adds one sample's regressor `y` (n×p, the model's layout) and torque `tau`.
+    fn add(&mut self, y: &DMatrix<f64>, tau: &[f64]) {
+        let (n, s) = (self.n, self.filled);
+        let y = y.as_slice();
+        for jr in &mut self.joints {
+            let column = &mut jr.rows.as_mut_slice()[s * jr.cols.len()..][..jr.cols.len()];
+            for (out, &c) in column.iter_mut().zip(&jr.cols) {
+                *out = y[c * n + jr.joint];
+            }
+            jr.taus[s] = tau[jr.joint];
+        }
+        self.filled += 1;
+        self.samples += 1;
+        if self.filled == BLOCK_SAMPLES {
+            self.flush();
+        }
+    }
+
+    /// Adds the buffered rows into each joint's sums (`gram` by BLAS `dsyrk`).
+    fn flush(&mut self) {
+        let k = self.filled;
+        if k == 0 {
+            return;
+        }
+        crate::spatial::single_threaded_blas();
+        for jr in &mut self.joints {
+            let c = jr.cols.len();
+            // SAFETY: `rows` is column-major c×BLOCK with k <= BLOCK valid columns; `gram` c×c.
+            unsafe {
+                blas::dsyrk(
+                    b'U',
+                    b'N',
+                    c as i32,
+                    k as i32,
+                    1.0,
+                    jr.rows.as_slice(),
+                    c as i32,
+                    1.0,
+                    jr.gram.as_mut_slice(),
+                    c as i32,
+                );
+            }
+            let rows = jr.rows.columns(0, k);
+            let taus = jr.taus.rows(0, k);
+            jr.ytt.gemv(1.0, &rows, &taus, 1.0);
+            self.tt += taus.norm_squared();
+        }
+        self.filled = 0;
+    }
+
+    /// The finished normal equations: each joint's sums added into `YᵀY` and `Yᵀτ` at its
+    /// columns, joints in order.
+    fn finish(mut self) -> NormalEquations {
+        self.flush();
+        let mut yty = DMatrix::zeros(self.p, self.p);
+        let mut ytt = DVector::zeros(self.p);
+        for jr in &self.joints {
+            for (b, &cb) in jr.cols.iter().enumerate() {
+                ytt[cb] += jr.ytt[b];
+                for (a, &ca) in jr.cols.iter().enumerate().take(b + 1) {
+                    yty[(ca, cb)] += jr.gram[(a, b)];
+                }
+            }
+        }
+        yty.fill_lower_triangle_with_upper_triangle();
+        let mut ne = NormalEquations::from_sums(self.n, yty, ytt, self.tt, self.samples);
+        ne.excluded = self.excluded;
+        ne
     }
 }
