@@ -562,6 +562,27 @@ fn lmi_rows(rows: &mut ConeRows, lmi: Lmi, col: usize, eps: f64, d: &[f64]) {
     );
 }
 
+/// The CoM-in-ellipsoid LMI `C(π) = [[m, dᵀ], [d, m Q_s]] ⪰ 0`, `d = h − m x_s` (paper eq. 22),
+/// as the second-order cone it is equal to: with `Q_s = L Lᵀ`, the Schur complement of `m`
+/// gives `C ⪰ 0 ⇔ ‖L⁻¹ d‖ ≤ m` (and `m = 0` forces `d = 0` in both). Four rows in a
+/// second-order cone instead of a 4×4 PSD block, which the solver handles with no
+/// eigen-decompositions; a flat ellipsoid (no `L⁻¹`) keeps the LMI.
+fn com_rows(rows: &mut ConeRows, e: &crate::spatial::Ellipsoid, col: usize, d: &[f64]) {
+    let Some(l_inv) = e.qs.cholesky().and_then(|c| c.l().try_inverse()) else {
+        return lmi_rows(rows, Lmi::Com(*e), col, 0.0, d);
+    };
+    let (m, h) = (col, [col + 1, col + 2, col + 3]);
+    let l_inv_x = l_inv * e.center;
+    // Row 0: m. Rows 1–3: (L⁻¹ h)_r − m (L⁻¹ x_s)_r. Columns in scaled variables (θ = D x).
+    let mut a = vec![vec![(m, d[m])]];
+    a.extend((0..3).map(|r| {
+        let mut terms = vec![(m, -l_inv_x[r] * d[m])];
+        terms.extend((0..3).map(|c| (h[c], l_inv[(r, c)] * d[h[c]])));
+        terms
+    }));
+    rows.second_order(&[0.0; 4], &a);
+}
+
 /// Builds and solves the cone program in scaled variables.
 fn solve_cone(
     model: &Model,
@@ -618,7 +639,7 @@ fn physical_rows(
             ConstraintSet::Ellipsoid => {
                 let e = ell.ok_or_else(|| IdentError::MissingEllipsoid(name.clone()))?;
                 lmi_rows(rows, Lmi::Pseudo, col, opts.eps, d);
-                lmi_rows(rows, Lmi::Com(e), col, 0.0, d);
+                com_rows(rows, &e, col, d);
                 let form = lmi::trace_jq_form(&e);
                 nonneg.push((0..10).map(|k| (col + k, form[k])).collect());
             }
@@ -765,5 +786,89 @@ fn run_clarabel(
             status: format!("{s:?}"),
             iterations: sol.iterations,
         }),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::spatial::Ellipsoid;
+    use nalgebra::{Rotation3, Vector3};
+    use rand::{Rng, SeedableRng};
+
+    /// `s = b − A x` of the only cone in `rows`.
+    fn slack(rows: ConeRows, x: &[f64]) -> Vec<f64> {
+        let (a, b, _) = rows.into_parts(x.len());
+        let mut s = b;
+        for (j, &xj) in x.iter().enumerate() {
+            for k in a.colptr[j]..a.colptr[j + 1] {
+                s[a.rowval[k]] -= a.nzval[k] * xj;
+            }
+        }
+        s
+    }
+
+    #[test]
+    fn the_com_cone_holds_exactly_where_the_com_lmi_does() {
+        // Random rotated ellipsoids and bodies (mass, CoM inside or outside), in scaled
+        // variables: the second-order cone of `com_rows` and the 4×4 LMI agree on membership,
+        // and the cone's margin has the LMI's sign.
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(5);
+        let (mut inside, mut outside) = (0, 0);
+        for _ in 0..400 {
+            let axes = Vector3::from_fn(|_, _| rng.random_range(0.02..0.4));
+            let rot =
+                Rotation3::from_scaled_axis(Vector3::from_fn(|_, _| rng.random_range(-2.0..2.0)));
+            let center = Vector3::from_fn(|_, _| rng.random_range(-0.3..0.3));
+            let e = Ellipsoid {
+                center,
+                qs: rot.matrix()
+                    * nalgebra::Matrix3::from_diagonal(&axes.component_mul(&axes))
+                    * rot.matrix().transpose(),
+            };
+            let m = rng.random_range(0.0..5.0);
+            let dir = Vector3::from_fn(|_, _| rng.random_range(-1.0..1.0));
+            let com = center + rot.matrix() * axes.component_mul(&dir) * rng.random_range(0.0..1.6);
+            let h = com * m;
+            let d: Vec<f64> = (0..10).map(|_| rng.random_range(0.5..2.0)).collect();
+            let x: Vec<f64> = [m, h.x, h.y, h.z]
+                .iter()
+                .zip(&d)
+                .map(|(t, s)| t / s)
+                .chain([0.0; 6])
+                .collect();
+            let lmi_min = nalgebra::SymmetricEigen::new(e.com_lmi(m, &h))
+                .eigenvalues
+                .min();
+            if lmi_min.abs() < 1e-9 {
+                continue;
+            }
+            let mut rows = ConeRows::default();
+            com_rows(&mut rows, &e, 0, &d);
+            let s = slack(rows, &x);
+            assert_eq!(s.len(), 4);
+            let margin = s[0] - (s[1] * s[1] + s[2] * s[2] + s[3] * s[3]).sqrt();
+            assert_eq!(
+                margin >= 0.0,
+                lmi_min >= 0.0,
+                "margin {margin:e}, λ_min {lmi_min:e}"
+            );
+            if lmi_min >= 0.0 {
+                inside += 1;
+            } else {
+                outside += 1;
+            }
+        }
+        assert!(
+            inside > 100 && outside > 100,
+            "{inside} inside, {outside} outside"
+        );
+        // A flat ellipsoid keeps the 4×4 LMI.
+        let flat = Ellipsoid::axis_aligned(Vector3::zeros(), Vector3::new(0.1, 0.1, 0.0));
+        let mut rows = ConeRows::default();
+        com_rows(&mut rows, &flat, 0, &[1.0; 10]);
+        let (_, b, cones) = rows.into_parts(10);
+        assert_eq!(b.len(), 10);
+        assert!(matches!(cones[0], SupportedConeT::PSDTriangleConeT(4)));
     }
 }

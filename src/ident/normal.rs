@@ -150,6 +150,12 @@ impl NormalEquations {
 
     /// Combines two finished accumulations (for parallel or incremental use).
     pub fn merged(mut self, other: &NormalEquations) -> Self {
+        self.absorb(other);
+        self
+    }
+
+    /// Adds a finished accumulation's sums into these.
+    fn absorb(&mut self, other: &NormalEquations) {
         self.yty += &other.yty;
         self.ytt += &other.ytt;
         self.tt += other.tt;
@@ -157,7 +163,6 @@ impl NormalEquations {
         if self.excluded.is_empty() {
             self.excluded = other.excluded.clone();
         }
-        self
     }
 
     /// Accumulates samples `range` of a trajectory (which must carry q̈) for `model`, in
@@ -204,14 +209,22 @@ impl NormalEquations {
         source: impl FnOnce(&mut SampleSink) -> Result<usize, E>,
     ) -> Result<(Self, usize), E> {
         let (n, p) = (model.dof(), model.layout().len);
-        let mut sums = JointSums::new(model, &[]);
+        // The same chunks, summed in the same order, as `from_trajectory`: a file streamed
+        // gives the sums it gives in memory, bit for bit.
+        let mut sum = Self::new(n, p).finish();
+        let mut chunk = JointSums::new(model, &[]);
         let mut d = Data::new(model);
         let mut y = DMatrix::zeros(n, p);
         let total = source(&mut |_, s| {
             regressor(model, &mut d, s.q, s.qd, s.qdd, &mut y);
-            sums.add(&y, s.tau);
+            chunk.add(&y, s.tau);
+            if chunk.samples == CHUNK_SAMPLES {
+                let full = std::mem::replace(&mut chunk, JointSums::new(model, &[]));
+                sum.absorb(&full.finish());
+            }
         })?;
-        Ok((sums.finish(), total))
+        sum.absorb(&chunk.finish());
+        Ok((sum, total))
     }
 
     /// Finished normal equations from their sums (e.g. a sub-problem or a sum of blocks).
