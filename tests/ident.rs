@@ -438,3 +438,37 @@ fn the_joint_by_joint_assembly_matches_dense_sums_on_trees_with_a_joint_left_out
         assert_eq!(ne.yty, ne.yty.transpose());
     }
 }
+
+#[test]
+fn with_its_constraints_inactive_every_set_reaches_the_least_squares_optimum() {
+    // Clean data of the leg: the least-squares optimum (with the prior's pull) lies strictly
+    // inside every set, so each constrained solve must end at the direct solution's objective,
+    // to the solver's absolute gap tolerance (1e-8 N² m²). That objective (3.5e-7) is tiny beside
+    // Σ τ² / n_s (26); the cone program is solved about the unconstrained minimizer so that the
+    // solver's tolerances apply to the excess over it (semi: 1.4e-9 above). Solved about the
+    // origin instead, semi stopped 2.8e-8 above it, 8 % of the objective.
+    let m = cheetah3::leg();
+    let train = exact_data(&m, 2000, 4);
+    let ne = NormalEquations::from_trajectory(&m, &train, 0..train.len());
+    let prior = perturbed_prior(&m);
+    let direct = ident::identify(&m, &ne, &prior, &Options::new(ConstraintSet::None)).unwrap();
+    let scale = ne.tt / ne.samples as f64;
+    assert!(direct.objective > 0.0 && direct.objective < 1e-4 * scale);
+    for set in [
+        ConstraintSet::Semi,
+        ConstraintSet::Consistent,
+        ConstraintSet::Ellipsoid,
+    ] {
+        let r = ident::identify(&m, &ne, &prior, &Options::new(set)).unwrap();
+        assert_eq!(r.solver.status, SolveStatus::Solved, "{set:?}");
+        let excess = r.objective - direct.objective;
+        eprintln!(
+            "{set:?}: objective {:e}, direct {:e}, Σ τ²/n_s {scale:e}",
+            r.objective, direct.objective
+        );
+        assert!(
+            excess.abs() <= 1e-8,
+            "{set:?}: {excess:e} above the direct optimum"
+        );
+    }
+}
