@@ -348,6 +348,31 @@ fn base_parameters_are_the_identifiable_combinations_with_errors() {
     assert!(idf.standard_errors[col("abad_rotor.m")].is_infinite());
 }
 
+/// `Σ YᵀY`, `Σ Yᵀτ`, `Σ ‖τ‖²` over the samples `range` of `tr`, one dense product per sample,
+/// the rows of `excluded` joints zeroed: the reference the streaming assembly is checked
+/// against.
+fn dense_sums(
+    m: &Model,
+    tr: &Trajectory,
+    range: std::ops::Range<usize>,
+    excluded: &[usize],
+) -> (DMatrix<f64>, DVector<f64>, f64) {
+    let p = m.layout().len;
+    let (mut yty, mut ytt, mut tt) = (DMatrix::<f64>::zeros(p, p), DVector::zeros(p), 0.0);
+    physid::ident::normal::for_each_regressor(m, tr, range, &mut |k, y| {
+        let mut y = y.clone();
+        let mut tau = DVector::from_column_slice(tr.tau_at(k));
+        for &j in excluded {
+            y.row_mut(j).fill(0.0);
+            tau[j] = 0.0;
+        }
+        yty += y.transpose() * &y;
+        ytt += y.transpose() * &tau;
+        tt += tau.norm_squared();
+    });
+    (yty, ytt, tt)
+}
+
 #[test]
 fn the_parallel_assembly_is_the_same_whatever_the_thread_count_and_matches_one_pass() {
     // The normal equations are summed in fixed chunks in parallel: bit for bit the same sums
@@ -367,20 +392,7 @@ fn the_parallel_assembly_is_the_same_whatever_the_thread_count_and_matches_one_p
     assert_eq!(one.ytt, four.ytt);
     assert_eq!((one.tt, one.samples), (four.tt, four.samples));
     assert_eq!(one.samples, 4800);
-    let mut d = Data::new(&m);
-    let mut y = DMatrix::zeros(m.dof(), m.layout().len);
-    let mut yty = DMatrix::<f64>::zeros(y.ncols(), y.ncols());
-    for k in 100..4900 {
-        regressor(
-            &m,
-            &mut d,
-            tr.q_at(k),
-            tr.qd_at(k),
-            tr.qdd_at(k).unwrap(),
-            &mut y,
-        );
-        yty += y.transpose() * &y;
-    }
+    let (yty, _, _) = dense_sums(&m, &tr, 100..4900, &[]);
     let scale = yty.amax();
     assert!(
         (&one.yty - &yty).amax() <= 1e-12 * scale,
@@ -401,28 +413,8 @@ fn the_joint_by_joint_assembly_matches_dense_sums_on_trees_with_a_joint_left_out
         let tr = exact_data(&m, 700, seed);
         let excluded = [2];
         let ne = NormalEquations::from_trajectory_excluding(&m, &tr, 0..tr.len(), &excluded);
-        let (n, p) = (m.dof(), m.layout().len);
-        let mut d = Data::new(&m);
-        let mut y = DMatrix::zeros(n, p);
-        let (mut yty, mut ytt, mut tt) = (DMatrix::<f64>::zeros(p, p), DVector::zeros(p), 0.0);
-        for k in 0..tr.len() {
-            regressor(
-                &m,
-                &mut d,
-                tr.q_at(k),
-                tr.qd_at(k),
-                tr.qdd_at(k).unwrap(),
-                &mut y,
-            );
-            let mut tau = DVector::from_column_slice(tr.tau_at(k));
-            for &j in &excluded {
-                y.row_mut(j).fill(0.0);
-                tau[j] = 0.0;
-            }
-            yty += y.transpose() * &y;
-            ytt += y.transpose() * &tau;
-            tt += tau.norm_squared();
-        }
+        let n = m.dof();
+        let (yty, ytt, tt) = dense_sums(&m, &tr, 0..tr.len(), &excluded);
         let rel = |a: f64, scale: f64| a / scale;
         assert!(
             rel((&ne.yty - &yty).amax(), yty.amax()) <= 1e-12,

@@ -753,12 +753,17 @@ fn shifted_to_unconstrained(
     }
     let x0v = DVector::from_column_slice(&x0);
     let q_shift: Vec<f64> = (ps * &x0v).iter().zip(q).map(|(px, q)| q + px).collect();
-    for (j, &xj) in x0.iter().enumerate() {
+    subtract_a_x(a, &x0, &mut b);
+    (x0, q_shift, b)
+}
+
+/// `b ← b − A x` for a CSC matrix `A` (Clarabel's own product is private to it).
+fn subtract_a_x(a: &CscMatrix<f64>, x: &[f64], b: &mut [f64]) {
+    for (j, &xj) in x.iter().enumerate() {
         for k in a.colptr[j]..a.colptr[j + 1] {
             b[a.rowval[k]] -= a.nzval[k] * xj;
         }
     }
-    (x0, q_shift, b)
 }
 
 /// Solves the scaled cone program `min ½ xᵀ P x + qᵀ x` s.t. `rows` with Clarabel and maps its
@@ -866,13 +871,8 @@ mod tests {
 
     /// `s = b − A x` of the only cone in `rows`.
     fn slack(rows: ConeRows, x: &[f64]) -> Vec<f64> {
-        let (a, b, _) = rows.into_parts(x.len());
-        let mut s = b;
-        for (j, &xj) in x.iter().enumerate() {
-            for k in a.colptr[j]..a.colptr[j + 1] {
-                s[a.rowval[k]] -= a.nzval[k] * xj;
-            }
-        }
+        let (a, mut s, _) = rows.into_parts(x.len());
+        subtract_a_x(&a, x, &mut s);
         s
     }
 

@@ -111,24 +111,7 @@ impl NormalEquations {
             return;
         }
         let m = self.filled * self.n;
-        let p = self.yty.ncols();
-        let lda = self.rows.nrows();
-        crate::spatial::single_threaded_blas();
-        // SAFETY: `rows` is column-major lda×p with m <= lda valid rows; `yty` is p×p.
-        unsafe {
-            blas::dsyrk(
-                b'U',
-                b'T',
-                p as i32,
-                m as i32,
-                1.0,
-                self.rows.as_slice(),
-                lda as i32,
-                1.0,
-                self.yty.as_mut_slice(),
-                p as i32,
-            );
-        }
+        add_gram(Gram::RowsTimesRows, &self.rows, m, &mut self.yty);
         let rows = self.rows.rows(0, m);
         let taus = self.taus.rows(0, m);
         self.ytt.gemv_tr(1.0, &rows, &taus, 1.0);
@@ -139,12 +122,7 @@ impl NormalEquations {
     /// Folds in buffered rows and fills the lower triangle; call before reading the sums.
     pub fn finish(mut self) -> Self {
         self.flush();
-        let p = self.yty.ncols();
-        for j in 0..p {
-            for i in j + 1..p {
-                self.yty[(i, j)] = self.yty[(j, i)];
-            }
-        }
+        self.yty.fill_lower_triangle_with_upper_triangle();
         self
     }
 
@@ -269,6 +247,44 @@ impl NormalEquations {
     }
 }
 
+/// Which products of a buffer of samples [`add_gram`] sums.
+#[derive(Clone, Copy)]
+enum Gram {
+    /// Samples are the buffer's rows: `G += AᵀA` over its first `k` rows.
+    RowsTimesRows,
+    /// Samples are the buffer's columns: `G += A Aᵀ` over its first `k` columns.
+    ColumnsTimesColumns,
+}
+
+/// The upper triangle of `g` (`c × c`) plus the Gram matrix of the first `k` samples of the
+/// buffer `a`, by BLAS `dsyrk` (a symmetric rank-k update: half the work of a general
+/// product), on one BLAS thread.
+fn add_gram(layout: Gram, a: &DMatrix<f64>, k: usize, g: &mut DMatrix<f64>) {
+    let (c, lda) = (g.ncols(), a.nrows());
+    let (trans, samples_fit) = match layout {
+        Gram::RowsTimesRows => (b'T', a.nrows() >= k && a.ncols() == c),
+        Gram::ColumnsTimesColumns => (b'N', a.ncols() >= k && a.nrows() == c),
+    };
+    assert!(samples_fit && g.nrows() == c, "Gram buffer shapes");
+    crate::spatial::single_threaded_blas();
+    // SAFETY: `a` is column-major (`lda` rows) and holds at least `k` samples of `c` entries
+    // (checked above); `g` is c×c.
+    unsafe {
+        blas::dsyrk(
+            b'U',
+            trans,
+            c as i32,
+            k as i32,
+            1.0,
+            a.as_slice(),
+            lda as i32,
+            1.0,
+            g.as_mut_slice(),
+            c as i32,
+        );
+    }
+}
+
 /// One joint's rows of the regressor over the columns they can touch ([`row_columns`]),
 /// buffered transposed (column `s` of `rows` is the `s`-th buffered sample's row), and their
 /// sums over those columns.
@@ -350,24 +366,8 @@ impl JointSums {
         if k == 0 {
             return;
         }
-        crate::spatial::single_threaded_blas();
         for jr in &mut self.joints {
-            let c = jr.cols.len();
-            // SAFETY: `rows` is column-major c×BLOCK with k <= BLOCK valid columns; `gram` c×c.
-            unsafe {
-                blas::dsyrk(
-                    b'U',
-                    b'N',
-                    c as i32,
-                    k as i32,
-                    1.0,
-                    jr.rows.as_slice(),
-                    c as i32,
-                    1.0,
-                    jr.gram.as_mut_slice(),
-                    c as i32,
-                );
-            }
+            add_gram(Gram::ColumnsTimesColumns, &jr.rows, k, &mut jr.gram);
             let rows = jr.rows.columns(0, k);
             let taus = jr.taus.rows(0, k);
             jr.ytt.gemv(1.0, &rows, &taus, 1.0);
