@@ -25,7 +25,7 @@
 //! Floor 2 (architecture.md §6): imports `trajectory` and `signal`.
 
 use crate::signal::{butterworth_lowpass, differentiate, FilterError, Sos};
-use crate::trajectory::{check_value, SampleError, Trajectory};
+use crate::trajectory::{check_value, Margins, SampleError, Trajectory};
 use serde::Serialize;
 
 /// Joint samples as read from a log, before the pipeline: time stamps as written (not yet
@@ -698,6 +698,16 @@ impl Derive {
             let row = |v: &[f64]| v[i * n..(i + 1) * n].to_vec();
             tr.push(times[i], &row(&q), &row(&qd), Some(&row(&qdd)), &row(&tau));
         }
+        // The settling trimmed off was processed with the run: the diagnosis processes the
+        // torque over it as well (`Trajectory::margins`).
+        if let (Some(&first), Some(&last)) = (keep.first(), keep.last()) {
+            if first > 0 || last + 1 < piece.len() {
+                tr.margins = vec![Margins {
+                    before: tau[..first * n].to_vec(),
+                    after: tau[(last + 1) * n..].to_vec(),
+                }];
+            }
+        }
         Run {
             trajectory: tr,
             index: keep.iter().map(|&i| piece[i]).collect(),
@@ -1041,6 +1051,32 @@ mod tests {
         // attenuation of this slow motion.
         assert!(max_qdd_error(&p) < 2e-2, "{}", max_qdd_error(&p));
         assert_eq!(p.runs[0].index[0], r.settle_samples);
+    }
+
+    #[test]
+    fn the_trimmed_ends_torque_is_kept_as_the_run_s_margins() {
+        let times: Vec<f64> = (0..4000).map(|k| k as f64 * 1e-3).collect();
+        let mut l = motion(&times, false);
+        l.tau
+            .iter_mut()
+            .enumerate()
+            .for_each(|(i, v)| *v = i as f64);
+        let p = prepare(&l, &Options::default()).unwrap();
+        let s = p.report.settle_samples;
+        assert!(s > 10, "{s}");
+        let tr = &p.runs[0].trajectory;
+        let count = |r: std::ops::Range<usize>| r.map(|i| i as f64).collect::<Vec<_>>();
+        assert_eq!(tr.margin(0).before, count(0..2 * s));
+        assert_eq!(tr.margin(0).after, count(2 * (4000 - s)..8000));
+        assert_eq!(tr.tau[0], (2 * s) as f64);
+        // With q̇ and q̈ logged nothing is derived or trimmed, and no margin is known.
+        l.qd = Some(vec![0.0; 8000]);
+        l.qdd = Some(vec![0.0; 8000]);
+        let p = prepare(&l, &Options::default()).unwrap();
+        assert_eq!(
+            (p.report.trimmed, p.runs[0].trajectory.margins.len()),
+            (0, 0)
+        );
     }
 
     #[test]

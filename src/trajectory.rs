@@ -23,6 +23,23 @@ pub struct Trajectory {
     /// ([`Self::concatenate`]) or a log split at a time jump. No signal is differentiated,
     /// filtered or delayed across them ([`Self::runs`]); empty for one run.
     pub starts: Vec<usize>,
+    /// Per run ([`Self::runs`], in order), the logged torque the run continues with beyond its
+    /// ends: samples the data's processing saw but this trajectory does not hold (the
+    /// pipeline's trimmed filter settling, the other side of a cut by [`Self::slice`]). Empty
+    /// (or shorter than the runs) where nothing is known.
+    pub margins: Vec<Margins>,
+}
+
+/// The logged torque (N m, sample-major, at the trajectory's sample period) of one run beyond
+/// its ends. A signal processed over the run (the diagnosis filters and differentiates the
+/// torque as the encoder angle was) then continues across its ends as the data's own processing
+/// did, instead of starting afresh at them.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Margins {
+    /// Torques before the run's first sample, ending at the sample just before it.
+    pub before: Vec<f64>,
+    /// Torques after the run's last sample, starting at the sample just after it.
+    pub after: Vec<f64>,
 }
 
 /// A bad sample, naming its index and field.
@@ -72,6 +89,16 @@ pub enum SampleError {
     /// Run starts out of order or outside the samples.
     #[error("{0}")]
     RunStarts(String),
+    /// A margin ([`Margins`]) that is not whole samples.
+    #[error("{field} has {got} values, not whole samples of {n} joints")]
+    Margin {
+        /// `margins.before` or `margins.after`.
+        field: &'static str,
+        /// Its length.
+        got: usize,
+        /// The joints.
+        n: usize,
+    },
     /// Inconsistent array lengths.
     #[error("{field} has {got} values, expected {expected}")]
     Length {
@@ -140,6 +167,7 @@ impl Trajectory {
             qdd: with_qdd.then(Vec::new),
             tau: vec![],
             starts: vec![],
+            margins: vec![],
         }
     }
     /// Number of joints.
@@ -184,10 +212,26 @@ impl Trajectory {
     pub fn tau_at(&self, k: usize) -> &[f64] {
         self.row(&self.tau, k)
     }
-    /// Samples `range` as a new trajectory (with the run starts inside it).
+    /// Samples `range` as a new trajectory (with the run starts inside it). Each run keeps
+    /// the torque of its run beyond the cut as its [`Margins`], after the run's own.
     pub fn slice(&self, range: std::ops::Range<usize>) -> Trajectory {
         let n = self.dof();
         let cut = |v: &Vec<f64>| v[range.start * n..range.end * n].to_vec();
+        let tau = |r: std::ops::Range<usize>| &self.tau[r.start * n..r.end * n];
+        let margins = self
+            .runs()
+            .into_iter()
+            .enumerate()
+            .filter(|(_, r)| r.start < range.end && range.start < r.end)
+            .map(|(i, r)| {
+                let own = self.margin(i);
+                let (a, b) = (r.start.max(range.start), r.end.min(range.end));
+                Margins {
+                    before: [&own.before[..], tau(r.start..a)].concat(),
+                    after: [tau(b..r.end), &own.after[..]].concat(),
+                }
+            })
+            .collect();
         Trajectory {
             joint_names: self.joint_names.clone(),
             t: self.t[range.clone()].to_vec(),
@@ -201,6 +245,22 @@ impl Trajectory {
                 .filter(|&&s| s > range.start && s < range.end)
                 .map(|s| s - range.start)
                 .collect(),
+            margins: Self::known(margins),
+        }
+    }
+
+    /// Run `i`'s [`Margins`] (empty when none are known).
+    pub fn margin(&self, i: usize) -> Margins {
+        self.margins.get(i).cloned().unwrap_or_default()
+    }
+
+    /// `margins`, or none when every one is empty.
+    fn known(margins: Vec<Margins>) -> Vec<Margins> {
+        let empty = |m: &Margins| m.before.is_empty() && m.after.is_empty();
+        if margins.iter().all(empty) {
+            vec![]
+        } else {
+            margins
         }
     }
 
@@ -238,6 +298,24 @@ impl Trajectory {
                         field,
                         got: v.len(),
                         expected: m * n,
+                    });
+                }
+            }
+        }
+        let runs = self.runs().len();
+        if self.margins.len() > runs {
+            return Err(SampleError::RunStarts(format!(
+                "{} margins for {runs} runs",
+                self.margins.len()
+            )));
+        }
+        for m in &self.margins {
+            for (field, v) in [("margins.before", &m.before), ("margins.after", &m.after)] {
+                if v.len() % n.max(1) != 0 {
+                    return Err(SampleError::Margin {
+                        field,
+                        got: v.len(),
+                        n,
                     });
                 }
             }
@@ -306,11 +384,12 @@ impl Trajectory {
             })
             .collect::<Result<_, _>>()?;
         let (n, m) = (self.dof(), self.len());
-        let pick = |v: &Vec<f64>| -> Vec<f64> {
-            (0..m)
-                .flat_map(|k| columns.iter().map(move |&j| v[k * n + j]))
+        let pick_rows = |v: &[f64]| -> Vec<f64> {
+            v.chunks(n.max(1))
+                .flat_map(|row| columns.iter().map(move |&j| row[j]))
                 .collect()
         };
+        let pick = |v: &Vec<f64>| -> Vec<f64> { pick_rows(&v[..m * n]) };
         Ok(Trajectory {
             joint_names: names.to_vec(),
             t: self.t.clone(),
@@ -319,11 +398,20 @@ impl Trajectory {
             qdd: self.qdd.as_ref().map(pick),
             tau: pick(&self.tau),
             starts: self.starts.clone(),
+            margins: self
+                .margins
+                .iter()
+                .map(|m| Margins {
+                    before: pick_rows(&m.before),
+                    after: pick_rows(&m.after),
+                })
+                .collect(),
         })
     }
 
     /// Splits into the first `1 − holdout` of the samples (training) and the last `holdout`
-    /// (validation), `holdout` in (0, 1).
+    /// (validation), `holdout` in (0, 1); the run the cut falls in continues in each part's
+    /// [`Margins`] ([`Self::slice`]).
     pub fn holdout_split(&self, holdout: f64) -> (Trajectory, Trajectory) {
         let cut = ((1.0 - holdout) * self.len() as f64).round() as usize;
         (self.slice(0..cut), self.slice(cut..self.len()))
@@ -334,6 +422,7 @@ impl Trajectory {
     /// only between two single samples, which no analysis uses: identification and the
     /// diagnosis need many). Each part's first sample becomes a run start ([`Self::starts`]),
     /// and its own starts are kept. `None` for no runs.
+    /// Each run keeps its [`Margins`].
     pub fn concatenate(parts: Vec<Trajectory>) -> Option<Trajectory> {
         let mut it = parts.into_iter();
         let mut out = it.next()?;
@@ -342,6 +431,11 @@ impl Trajectory {
             if m == 0 {
                 out = p;
                 continue;
+            }
+            if !p.is_empty() {
+                let both = (0..out.runs().len()).map(|i| out.margin(i));
+                let both = both.chain((0..p.runs().len()).map(|i| p.margin(i)));
+                out.margins = Self::known(both.collect());
             }
             let dt = out
                 .sample_period()
@@ -519,6 +613,67 @@ mod tests {
         assert_eq!(
             run(0.0, 0, 1e-2).runs(),
             Vec::<std::ops::Range<usize>>::new()
+        );
+    }
+
+    /// One joint's run whose torque counts its samples from `first`.
+    fn counted(first: usize, m: usize) -> Trajectory {
+        let mut tr = Trajectory::new(vec!["j".into()], false);
+        for k in 0..m {
+            tr.push(k as f64 * 1e-2, &[0.0], &[0.0], None, &[(first + k) as f64]);
+        }
+        tr
+    }
+
+    #[test]
+    fn a_cut_run_keeps_the_torque_beyond_each_part_as_its_margins() {
+        // Runs of 3, 2 and 5 samples, torques 0..10 in order.
+        let joined =
+            Trajectory::concatenate(vec![counted(0, 3), counted(3, 2), counted(5, 5)]).unwrap();
+        assert_eq!(joined.margins, vec![]);
+        let m = |before: &[f64], after: &[f64]| Margins {
+            before: before.to_vec(),
+            after: after.to_vec(),
+        };
+        // The cut at sample 7 falls in the last run (5..10).
+        let (train, val) = joined.holdout_split(0.3);
+        assert_eq!(
+            train.margins,
+            vec![m(&[], &[]), m(&[], &[]), m(&[], &[7.0, 8.0, 9.0])]
+        );
+        assert_eq!(val.margins, vec![m(&[5.0, 6.0], &[])]);
+        // Cut again, each part keeps the run's own margins at the ends that reach them.
+        let (a, b) = val.holdout_split(0.34);
+        assert_eq!((a.tau.clone(), b.tau.clone()), (vec![7.0, 8.0], vec![9.0]));
+        assert_eq!(a.margins, vec![m(&[5.0, 6.0], &[9.0])]);
+        assert_eq!(b.margins, vec![m(&[5.0, 6.0, 7.0, 8.0], &[])]);
+        // A cut at a run start: a run's true end is no margin.
+        let (a, b) = train.holdout_split(0.3);
+        assert_eq!(a.tau, vec![0.0, 1.0, 2.0, 3.0, 4.0]);
+        assert_eq!(
+            (a.margins.clone(), b.margins.clone()),
+            (vec![], vec![m(&[], &[7.0, 8.0, 9.0])])
+        );
+        // Joined, each run keeps its own.
+        let both = Trajectory::concatenate(vec![val.clone(), train.clone()]).unwrap();
+        assert_eq!(both.margin(0), m(&[5.0, 6.0], &[]));
+        assert_eq!(both.margin(3), m(&[], &[7.0, 8.0, 9.0]));
+        assert_eq!(both.validate(), Ok(()));
+        // Choosing joints chooses the margins' columns; bad margins are named.
+        let mut two = Trajectory::new(vec!["a".into(), "b".into()], false);
+        two.push(0.0, &[0.0, 0.0], &[0.0, 0.0], None, &[1.0, 2.0]);
+        two.margins = vec![m(&[3.0, 4.0, 5.0, 6.0], &[])];
+        let b_only = two.with_joints(&["b".to_string()]).unwrap();
+        assert_eq!(b_only.margins, vec![m(&[4.0, 6.0], &[])]);
+        two.margins[0].after = vec![1.0];
+        assert_eq!(
+            two.validate().unwrap_err().to_string(),
+            "margins.after has 1 values, not whole samples of 2 joints"
+        );
+        two.margins = vec![m(&[], &[]), m(&[], &[])];
+        assert_eq!(
+            two.validate().unwrap_err().to_string(),
+            "2 margins for 1 runs"
         );
     }
 }

@@ -17,6 +17,57 @@ pub(super) fn sample_period(tr: &Trajectory) -> Option<f64> {
     tr.sample_period().filter(|dt| dt.is_finite() && *dt > 0.0)
 }
 
+/// Where the torque is processed like the encoder angle: each run of the trajectory with the
+/// torque it continues with beyond its ends ([`Trajectory::margins`]: the samples the data's
+/// own processing saw, trimmed as filter settling or on the other side of a hold-out cut), so
+/// that the processing matches the data's instead of starting afresh at those ends.
+struct Layout {
+    n: usize,
+    dt: Option<f64>,
+    /// The extended runs, over the extended samples.
+    runs: Vec<std::ops::Range<usize>>,
+    /// The trajectory's own samples of each run, over the extended samples.
+    own: Vec<std::ops::Range<usize>>,
+    /// The torque over the extended samples (sample-major).
+    tau: Vec<f64>,
+}
+
+impl Layout {
+    fn of(tr: &Trajectory) -> Self {
+        let n = tr.dof();
+        let rows = |v: &[f64]| v.len().checked_div(n).unwrap_or(0);
+        let (mut runs, mut own, mut tau) = (vec![], vec![], vec![]);
+        let mut at = 0;
+        for (i, r) in tr.runs().into_iter().enumerate() {
+            let m = tr.margin(i);
+            let a = at + rows(&m.before);
+            let b = a + r.len();
+            tau.extend_from_slice(&m.before);
+            tau.extend_from_slice(&tr.tau[r.start * n..r.end * n]);
+            tau.extend_from_slice(&m.after);
+            runs.push(at..b + rows(&m.after));
+            own.push(a..b);
+            at = b + rows(&m.after);
+        }
+        Layout {
+            n,
+            dt: sample_period(tr),
+            runs,
+            own,
+            tau,
+        }
+    }
+
+    /// The trajectory's own samples of a signal over the extended ones.
+    fn inner(&self, v: Vec<f64>) -> Vec<f64> {
+        let n = self.n;
+        self.own
+            .iter()
+            .flat_map(|r| v[r.start * n..r.end * n].iter().copied())
+            .collect()
+    }
+}
+
 /// The backlash grid: the dead-zone widths (rad) whose motor offsets [`Context`] runs (the
 /// kind table's backlash grid is this).
 pub(super) fn backlash_widths() -> Vec<f64> {
@@ -75,13 +126,13 @@ pub struct Context<'a> {
 /// `F(D F(D x))` with `F` the zero-phase 2nd-order Butterworth low-pass at `cutoff` and `D` the
 /// central difference; unfiltered differences if the filter cannot be built. Each run of `tr`
 /// on its own ([`Trajectory::runs`]): nothing is filtered across a seam.
-fn processed_like_encoder(x: &[f64], tr: &Trajectory, cutoff: f64) -> [Vec<f64>; 3] {
-    let n = tr.dof();
+fn processed_like_encoder(x: &[f64], at: &Layout, cutoff: f64) -> [Vec<f64>; 3] {
+    let n = at.n;
     let mut out = [vec![0.0; x.len()], vec![0.0; x.len()], vec![0.0; x.len()]];
-    let Some(dt) = sample_period(tr) else {
+    let Some(dt) = at.dt else {
         return out;
     };
-    for run in tr.runs() {
+    for run in &at.runs {
         for j in 0..n {
             let col: Vec<f64> = run.clone().map(|k| x[k * n + j]).collect();
             for (o, v) in out.iter_mut().zip(process_column(&col, dt, cutoff)) {
@@ -134,19 +185,19 @@ fn own_taps(dt: Option<f64>, cutoff: f64) -> OwnTaps {
 fn without_own(
     mut out: [Vec<f64>; 3],
     x: &[f64],
-    tr: &Trajectory,
+    at: &Layout,
     cutoff: f64,
     taps: &OwnTaps,
 ) -> [Vec<f64>; 3] {
-    let n = tr.dof();
-    let Some(dt) = sample_period(tr) else {
+    let n = at.n;
+    let Some(dt) = at.dt else {
         return out;
     };
     let w = OWN_LAGS;
     // The zero-phase filter's start-up transient at the ends of each run (not of the data's own
     // processing, which saw the whole run, but of this one): columns there are left at zero.
     let ends = ((3.0 / cutoff) / dt).ceil() as usize;
-    for run in tr.runs() {
+    for run in at.runs.iter().cloned() {
         let inner = |k: &usize| k - run.start >= ends && k + ends < run.end;
         for o in out.iter_mut() {
             for k in run.clone().filter(|k| !inner(k)) {
@@ -174,22 +225,22 @@ fn without_own(
 }
 
 /// [`processed_like_encoder`] of `x` made blind to each sample's own ([`without_own`]).
-fn processed_without_own(x: &[f64], tr: &Trajectory, cutoff: f64, taps: &OwnTaps) -> [Vec<f64>; 3] {
-    without_own(processed_like_encoder(x, tr, cutoff), x, tr, cutoff, taps)
+fn processed_without_own(x: &[f64], at: &Layout, cutoff: f64, taps: &OwnTaps) -> [Vec<f64>; 3] {
+    without_own(processed_like_encoder(x, at, cutoff), x, at, cutoff, taps)
 }
 
 /// The motor's offset in a backlash dead zone of `width` (rad) driven by the torque `tau`
 /// (sample-major), divided by the width: `sim::effects::DeadZone` with the model's rotors.
-fn dead_zone_offsets(model: &Model, tau: &[f64], tr: &Trajectory, width: f64) -> Vec<f64> {
-    let n = tr.dof();
-    let Some(dt) = sample_period(tr) else {
+fn dead_zone_offsets(model: &Model, tau: &[f64], at: &Layout, width: f64) -> Vec<f64> {
+    let n = at.n;
+    let Some(dt) = at.dt else {
         return vec![0.0; tau.len()];
     };
     let effects = [crate::sim::scenario::EffectSpec::Backlash {
         width: vec![width; n],
     }];
     let mut out = Vec::with_capacity(tau.len());
-    for run in tr.runs() {
+    for run in at.runs.iter().cloned() {
         // Each run starts afresh, the motor against the side its first torque pushes it to.
         let Some(mut zone) = crate::sim::effects::DeadZone::new(model, &effects) else {
             return vec![0.0; tau.len()];
@@ -253,7 +304,9 @@ impl<'a> Context<'a> {
         // the prediction's friction jumps fall a few samples off the delivered torque's and its
         // column lost the attribution to delay, cogging and spring.
         let taps = own_taps(sample_period(tr), cutoff);
-        let logged = processed_like_encoder(&tr.tau, tr, cutoff);
+        let at = Layout::of(tr);
+        let inner = |v: [Vec<f64>; 3]| v.map(|s| at.inner(s));
+        let logged = processed_like_encoder(&at.tau, &at, cutoff);
         // The side of the dead zone follows the torque actually delivered: the logged torque,
         // low-passed (one crossing where the noisy torque chatters about zero), drives the
         // motor across the gap as the simulator's dead zone does (`sim::effects::DeadZone`:
@@ -263,12 +316,15 @@ impl<'a> Context<'a> {
             .iter()
             .map(|t| 0.5 * crate::dynamics::sign(*t))
             .collect();
-        let mut slack = vec![(0.0, processed_without_own(&half_sign, tr, cutoff, &taps))];
+        let processed = |x: &[f64]| inner(processed_without_own(x, &at, cutoff, &taps));
+        let mut slack = vec![(0.0, processed(&half_sign))];
         for width in backlash_widths() {
-            let unit = dead_zone_offsets(model, &logged[0], tr, width);
-            slack.push((width, processed_without_own(&unit, tr, cutoff, &taps)));
+            slack.push((
+                width,
+                processed(&dead_zone_offsets(model, &logged[0], &at, width)),
+            ));
         }
-        let defl = without_own(logged, &tr.tau, tr, cutoff, &taps);
+        let defl = inner(without_own(logged, &at.tau, &at, cutoff, &taps));
         let g = model
             .gravity()
             .try_normalize(1e-12)
@@ -382,7 +438,7 @@ mod tests {
             "largest rate {:?}",
             d.iter().cloned().fold(0.0, f64::max)
         );
-        let [f, f1, f2] = processed_like_encoder(&joined.tau, &joined, 20.0);
+        let [f, f1, f2] = processed_like_encoder(&joined.tau, &Layout::of(&joined), 20.0);
         for k in 0..800 {
             let want = if k < 400 { 0.0 } else { 10.0 };
             assert!((f[k] - want).abs() < 1e-9, "sample {k}: {}", f[k]);
@@ -396,7 +452,7 @@ mod tests {
         // Without the seam (one run) the step rings through the filter on both sides.
         let mut one = joined.clone();
         one.starts.clear();
-        let [f, _, _] = processed_like_encoder(&one.tau, &one, 20.0);
+        let [f, _, _] = processed_like_encoder(&one.tau, &Layout::of(&one), 20.0);
         assert!((f[399] - 0.0).abs() > 0.1 && (f[400] - 10.0).abs() > 0.1);
         assert!(derivative(&one.tau, &one, 1)[400] > 1000.0);
     }
@@ -408,9 +464,9 @@ mod tests {
             .map(|k| (2.0 * std::f64::consts::PI * 1.3 * k as f64 * 1e-3).sin())
             .collect();
         let tr = one_joint(&smooth);
-        let full = processed_like_encoder(&smooth, &tr, 20.0);
+        let full = processed_like_encoder(&smooth, &Layout::of(&tr), 20.0);
         let taps = own_taps(Some(1e-3), 20.0);
-        let own = processed_without_own(&smooth, &tr, 20.0, &taps);
+        let own = processed_without_own(&smooth, &Layout::of(&tr), 20.0, &taps);
         // A 1.3 Hz sine is nearly a straight line over seven samples: the same processing
         // (angle, rate, acceleration: amplitudes 1, 8.2, 67) where the ends are not zeroed, but
         // for the acceleration, whose large centre taps see the line's missing curvature: 0.3 %
@@ -432,8 +488,9 @@ mod tests {
         let k = 1500;
         let mut spiked = smooth.clone();
         spiked[k] += 1.0;
-        let own_spiked = processed_without_own(&spiked, &one_joint(&spiked), 20.0, &taps);
-        let full_spiked = processed_like_encoder(&spiked, &one_joint(&spiked), 20.0);
+        let own_spiked =
+            processed_without_own(&spiked, &Layout::of(&one_joint(&spiked)), 20.0, &taps);
+        let full_spiked = processed_like_encoder(&spiked, &Layout::of(&one_joint(&spiked)), 20.0);
         for c in 0..3 {
             assert!((own_spiked[c][k] - own[c][k]).abs() < 1e-9 * (1.0 + own[c][k].abs()));
             // (The rate's response at its own sample is zero: an odd impulse response.)
@@ -445,5 +502,53 @@ mod tests {
                 "channel {c}"
             );
         }
+    }
+
+    /// The leg moving smoothly for `m` samples at 1 kHz, its torque smooth with a fast ripple.
+    fn moving_leg(model: &Model, m: usize) -> Trajectory {
+        let n = model.dof();
+        let mut tr = Trajectory::new(model.joint_names(), true);
+        let w = 2.0 * std::f64::consts::PI * 0.7;
+        for k in 0..m {
+            let t = k as f64 * 1e-3;
+            let phase = |j: usize| w * t + j as f64;
+            let q: Vec<f64> = (0..n).map(|j| 0.3 * phase(j).sin()).collect();
+            let qd: Vec<f64> = (0..n).map(|j| 0.3 * w * phase(j).cos()).collect();
+            let qdd: Vec<f64> = (0..n).map(|j| -0.3 * w * w * phase(j).sin()).collect();
+            let tau: Vec<f64> = (0..n)
+                .map(|j| 5.0 * (1.1 * phase(j)).sin() + 0.2 * (60.0 * t * (j + 1) as f64).sin())
+                .collect();
+            tr.push(t, &q, &qd, Some(&qdd), &tau);
+        }
+        tr
+    }
+
+    #[test]
+    fn a_held_out_part_is_processed_as_the_whole_run_was() {
+        let model = crate::model::cheetah3::leg();
+        let n = model.dof();
+        let theta0 = model.parameters();
+        let tr = moving_leg(&model, 3000);
+        let whole = Context::new(&model, &theta0, &tr, 20.0);
+        let (train, val) = tr.holdout_split(0.3);
+        let largest = |a: &[Vec<f64>; 3], b: &[Vec<f64>; 3], offset: usize| -> f64 {
+            (0..3)
+                .flat_map(|c| a[c].iter().enumerate().map(move |(i, x)| (c, i, x)))
+                .map(|(c, i, x)| (x - b[c][offset * n + i]).abs())
+                .fold(0.0, f64::max)
+        };
+        for (part, offset) in [(&train, 0), (&val, train.len())] {
+            let ctx = Context::new(&model, &theta0, part, 20.0);
+            assert!(largest(&ctx.defl, &whole.defl, offset) < 1e-9);
+            for (s, w) in ctx.slack.iter().zip(&whole.slack) {
+                assert!(largest(&s.1, &w.1, offset) < 1e-9, "width {}", s.0);
+            }
+        }
+        // Cut without its margins, the validation part starts afresh: its first samples are
+        // left at zero and the rest near the cut filtered from an edge.
+        let mut bare = val.clone();
+        bare.margins = Default::default();
+        let ctx = Context::new(&model, &theta0, &bare, 20.0);
+        assert!(largest(&ctx.defl, &whole.defl, train.len()) > 1.0);
     }
 }

@@ -618,10 +618,14 @@ fn next_step(
     let passes = |i: usize| scored[i].2 >= settings.min_t;
     let simplest = Ties::of(&reduction, &widths, passes, settings.tie).simplest;
     let (best, r, t) = scored[simplest[0]];
-    let ties = simplest[1..]
-        .iter()
-        .map(|&i| scored[i].0.name(model, UNREAD))
-        .collect();
+    // Other grid points of the winner's kind are not another explanation.
+    let mut ties: Vec<String> = vec![];
+    for &i in &simplest[1..] {
+        let name = scored[i].0.name(model, UNREAD);
+        if name != best.name(model, UNREAD) && !ties.contains(&name) {
+            ties.push(name);
+        }
+    }
     Ok((best, r, t, ties))
 }
 

@@ -194,6 +194,7 @@ pub fn read_csv(path: &Path, robot: Option<&[String]>) -> Result<Trajectory, IoE
         qdd: logged.qdd,
         tau: logged.tau,
         starts: vec![],
+        margins: Default::default(),
     };
     tr.validate().map_err(|e| bad(e.to_string()))?;
     Ok(tr)

@@ -12,6 +12,8 @@ pub(super) const SPEC: KindSpec = KindSpec {
     non_negative: true,
     magnitude: ("dead-zone width b", "rad"),
     linearized: true,
+    // Offered from the description for the reason compliance is (its file).
+    offered_from_description: true,
     replay: |_, c, _, _| {
         let width = c.iter().map(|b| b.max(0.0)).collect();
         Some(EffectSpec::Backlash { width })
