@@ -255,7 +255,7 @@ fn print_from_description(d: &Diagnosis) {
             for r in l.rungs.iter().skip(1) {
                 row(&r.step, &r.rms, r.overall);
                 if !r.ambiguous_with.is_empty() {
-                    println!("    the data fit as well: {}", r.ambiguous_with.join("; "));
+                    println!("    the data fit as well: {}", r.alternatives().join("; "));
                 }
             }
             for b in &l.bodies {

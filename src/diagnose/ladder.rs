@@ -89,6 +89,27 @@ pub struct Rung {
     pub t: f64,
     /// Other explanations within the tie of this step's reduction.
     pub ambiguous_with: Vec<String>,
+    /// Per entry of `ambiguous_with`, the mass (kg) that body change would add, fitted in this
+    /// step's place (`None` for an effect): where the data cannot tell the bodies apart, the
+    /// payload's mass on the body it is known to sit on.
+    pub ambiguous_mass: Vec<Option<f64>>,
+}
+
+impl Rung {
+    /// The explanations tied with this step, a body change with the mass it would add
+    /// (`payload or change on lwr_6_link (+1.52 kg)`).
+    pub fn alternatives(&self) -> Vec<String> {
+        self.ambiguous_with
+            .iter()
+            .enumerate()
+            .map(
+                |(i, name)| match self.ambiguous_mass.get(i).copied().flatten() {
+                    Some(m) => format!("{name} ({m:+.2} kg)"),
+                    None => name.clone(),
+                },
+            )
+            .collect()
+    }
 }
 
 /// A body's parameters freed by the ladder: the change found, in the body's frame.
@@ -573,9 +594,12 @@ pub(crate) fn ladder(stage: &Stage, eps: f64, selected: &[Variant], settings: &S
     }
 }
 
+/// An explanation tied with a step: its name, and for a body change the mass (kg) it would add
+/// in the step's place.
+type Tie = (String, Option<f64>);
+
 /// The next step: every candidate fitted with the set so far and scored on the held-out data;
-/// the winner, its reduction and t, and the names of the candidates tied with it, or why the
-/// ladder stops.
+/// the winner, its reduction and t, and the candidates tied with it, or why the ladder stops.
 fn next_step(
     problem: &Problem,
     data: &Data,
@@ -583,10 +607,10 @@ fn next_step(
     set: &[Explanation],
     sse: &[f64],
     settings: &Settings,
-) -> Result<(Explanation, f64, f64, Vec<String>), Stop> {
+) -> Result<(Explanation, f64, f64, Vec<Tie>), Stop> {
     let model = problem.stage.model;
     let p0 = problem.theta_d.len();
-    let mut scored: Vec<(Explanation, f64, f64)> = candidates(data, selected, set)
+    let mut scored: Vec<(Explanation, f64, f64, Option<f64>)> = candidates(data, selected, set)
         .into_iter()
         .filter_map(|e| {
             let mut trial = set.to_vec();
@@ -597,11 +621,16 @@ fn next_step(
                 return None;
             }
             let (r, t) = improvement(sse, &problem.held_out(data, &fit));
-            Some((e, r, t))
+            // A body change's columns come last: its ten parameters, the mass first.
+            let mass = match e {
+                Explanation::Effect(v) if v.kind.is_body_change() => Some(fit.w[fit.w.len() - 10]),
+                _ => None,
+            };
+            Some((e, r, t, mass))
         })
         .collect();
     scored.sort_by(|a, b| b.1.total_cmp(&a.1));
-    let Some(&(best, r, t)) = scored.first() else {
+    let Some(&(best, r, t, _)) = scored.first() else {
         return Err(Stop::NoCandidate);
     };
     if r < settings.min_reduction || t < settings.min_t {
@@ -617,13 +646,13 @@ fn next_step(
     let widths: Vec<usize> = scored.iter().map(|s| columns(&s.0, data.n)).collect();
     let passes = |i: usize| scored[i].2 >= settings.min_t;
     let simplest = Ties::of(&reduction, &widths, passes, settings.tie).simplest;
-    let (best, r, t) = scored[simplest[0]];
+    let (best, r, t, _) = scored[simplest[0]];
     // Other grid points of the winner's kind are not another explanation.
-    let mut ties: Vec<String> = vec![];
+    let mut ties: Vec<Tie> = vec![];
     for &i in &simplest[1..] {
         let name = scored[i].0.name(model, UNREAD);
-        if name != best.name(model, UNREAD) && !ties.contains(&name) {
-            ties.push(name);
+        if name != best.name(model, UNREAD) && !ties.iter().any(|x| x.0 == name) {
+            ties.push((name, scored[i].3));
         }
     }
     Ok((best, r, t, ties))
@@ -887,7 +916,7 @@ fn rung(
     step: &str,
     e: Option<Explanation>,
     (reduction, t): (f64, f64),
-    ambiguous_with: Vec<String>,
+    ties: Vec<Tie>,
 ) -> Rung {
     let p0 = stage.model.layout().len;
     let (theta, coefs) = model_of(data, fit, set, p0);
@@ -938,7 +967,8 @@ fn rung(
         rms,
         reduction,
         t,
-        ambiguous_with,
+        ambiguous_with: ties.iter().map(|x| x.0.clone()).collect(),
+        ambiguous_mass: ties.iter().map(|x| x.1).collect(),
     }
 }
 
@@ -977,6 +1007,7 @@ fn fixed_rung(step: &str, rms: Vec<f64>) -> Rung {
         reduction: 0.0,
         t: 0.0,
         ambiguous_with: vec![],
+        ambiguous_mass: vec![],
     }
 }
 

@@ -605,7 +605,8 @@ pub struct RealCase {
     pub top1: Option<bool>,
     /// A payload or body change was claimed on a clean run.
     pub payload_claimed: bool,
-    /// Payload cases: the payload's mass found (kg) on the injected body.
+    /// Payload cases: the payload's mass found (kg) on the injected body (chosen by a step, or
+    /// tied with the first step: the mass it would carry in its place).
     pub payload_mass: Option<f64>,
     /// Relative magnitude error `‖m̂ − m‖/‖m‖` of the injected kind, when attributed.
     pub magnitude_error: Option<f64>,
@@ -726,10 +727,23 @@ fn score_case(
                 r.kind == Some(k) || r.ambiguous_with.iter().any(|s| s == k.name())
             })),
         };
-    let payload_mass = body_name
-        .as_deref()
-        .and_then(|b| bodies.iter().find(|c| c.body == b))
-        .map(|c| c.mass);
+    // The mass the injected body carries: its change where a step chose it, else the mass it
+    // would carry in the first step's place where the step's ambiguity group holds it.
+    let tied_mass = |b: &str| {
+        let r = first?;
+        let i = r
+            .ambiguous_with
+            .iter()
+            .position(|s| s.ends_with(&format!(" on {b}")))?;
+        r.ambiguous_mass.get(i).copied().flatten()
+    };
+    let payload_mass = body_name.as_deref().and_then(|b| {
+        bodies
+            .iter()
+            .find(|c| c.body == b)
+            .map(|c| c.mass)
+            .or_else(|| tied_mass(b))
+    });
     let magnitude_error = match inj.slot {
         Slot::Payload => payload_mass.map(|m| (m - inj.magnitudes[0]).abs() / inj.magnitudes[0]),
         Slot::Effect(k) => magnitude_error(d, k, &inj.magnitudes),
