@@ -152,7 +152,9 @@ fn calibrated_model(model: &Model, cal: &Calibration) -> Result<Model, DiagnoseE
 }
 
 /// `tr` with the calibrated effects' torque taken out of its logged torque (their columns
-/// about the calibration's nominal model, times their coefficients).
+/// about the calibration's nominal model, times their coefficients). Each run's margins
+/// (`Trajectory::margins`, torque without its motion) lose the effects' torque at the run's
+/// first and last sample, so that the torque stays continuous across the run's ends.
 fn without_effects(
     model: &Model,
     cal: &Calibration,
@@ -173,5 +175,74 @@ fn without_effects(
             out.tau[k * n + j] -= e[j];
         }
     });
+    let removed = |k: usize, j: usize| tr.tau[k * n + j] - out.tau[k * n + j];
+    for (i, run) in tr.runs().into_iter().enumerate() {
+        let Some(m) = out.margins.get_mut(i) else {
+            break;
+        };
+        for (v, j) in m.before.iter_mut().zip((0..n).cycle()) {
+            *v -= removed(run.start, j);
+        }
+        for (v, j) in m.after.iter_mut().zip((0..n).cycle()) {
+            *v -= removed(run.end - 1, j);
+        }
+    }
     out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::diagnose::library::Kind;
+
+    #[test]
+    fn a_standing_offset_comes_out_of_the_margins_as_out_of_the_samples() {
+        // The leg moving smoothly, its torque the model's plus a standing offset.
+        let model = crate::model::cheetah3::leg();
+        let n = model.dof();
+        let offset = [0.5, -0.3, 0.2];
+        let mut data = crate::dynamics::Data::new(&model);
+        let mut tr = Trajectory::new(model.joint_names(), true);
+        let w = 2.0 * std::f64::consts::PI * 0.7;
+        for k in 0..2000 {
+            let t = k as f64 * 1e-3;
+            let s = |j: usize| w * t + j as f64;
+            let q: Vec<f64> = (0..n).map(|j| 0.3 * s(j).sin()).collect();
+            let qd: Vec<f64> = (0..n).map(|j| 0.3 * w * s(j).cos()).collect();
+            let qdd: Vec<f64> = (0..n).map(|j| -0.3 * w * w * s(j).sin()).collect();
+            let tau = crate::dynamics::rnea_with_friction(&model, &mut data, &q, &qd, &qdd);
+            let tau: Vec<f64> = (0..n).map(|j| tau[j] + offset[j]).collect();
+            tr.push(t, &q, &qd, Some(&qdd), &tau);
+        }
+        let options = calibrate::Options {
+            ident: crate::ident::Options::new(crate::ident::ConstraintSet::None),
+            terms: vec![Variant {
+                kind: Kind::TorqueOffset,
+                param: 0.0,
+            }],
+            processing_cutoff: 20.0,
+            excluded: vec![],
+        };
+        let run = Run {
+            trajectory: &tr,
+            range: 0..tr.len(),
+        };
+        let cal = calibrate::calibrate(&model, &[run], &options).unwrap();
+        // The offset the calibration kept in its column (the inertial parameters take part of
+        // the first two joints' on this short motion): taken out of every sample alike.
+        let p0 = model.layout().len;
+        let c: Vec<f64> = cal.identified.theta.rows(p0, n).iter().copied().collect();
+        assert!((c[2] - offset[2]).abs() < 0.01, "{c:?}");
+        // The validation part: its margin before is the training part's torque.
+        let (_, val) = tr.holdout_split(0.3);
+        let out = without_effects(&model, &cal, &val, &options);
+        let (before, stripped) = (&val.margin(0).before, &out.margin(0).before);
+        assert_eq!(before.len(), (tr.len() - val.len()) * n);
+        for (k, (a, b)) in val.tau.iter().zip(&out.tau).enumerate() {
+            assert!((a - b - c[k % n]).abs() < 1e-9, "sample {k}: {a} {b}");
+        }
+        for (k, (a, b)) in before.iter().zip(stripped).enumerate() {
+            assert!((a - b - c[k % n]).abs() < 1e-9, "margin {k}: {a} {b}");
+        }
+    }
 }
