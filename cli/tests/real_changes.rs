@@ -69,15 +69,37 @@ fn changed_run(dir: &Path, r: usize, injection: &Injection, tag: &str, robot: &P
     path
 }
 
-/// The logged torque lagging the motion by `samples` samples.
-fn lag(samples: usize) -> Injection {
+/// A library effect of `kind` as `spec` gives it.
+fn effect(kind: physid::diagnose::library::Kind, spec: EffectSpec) -> Injection {
     Injection {
-        slot: Slot::Effect(physid::diagnose::library::Kind::TimeDelay),
-        spec: Some(EffectSpec::TimeDelay { samples }),
+        slot: Slot::Effect(kind),
+        spec: Some(spec),
         magnitudes: vec![],
         body: None,
         visible: None,
     }
+}
+
+/// The logged torque lagging the motion by `samples` samples.
+fn lag(samples: usize) -> Injection {
+    effect(
+        physid::diagnose::library::Kind::TimeDelay,
+        EffectSpec::TimeDelay { samples },
+    )
+}
+
+/// `path`'s rows but for samples `cut` (the header is row 0), as a log with a gap.
+fn with_gap(path: &Path, cut: std::ops::Range<usize>) -> PathBuf {
+    let text = std::fs::read_to_string(path).unwrap();
+    let kept: Vec<&str> = text
+        .lines()
+        .enumerate()
+        .filter(|(i, _)| !cut.contains(i))
+        .map(|(_, l)| l)
+        .collect();
+    let out = path.with_extension("gap.csv");
+    std::fs::write(&out, kept.join("\n") + "\n").unwrap();
+    out
 }
 
 fn diagnose(robot: &Path, data: &Path, extra: &[&str]) -> serde_json::Value {
@@ -210,15 +232,7 @@ fn a_lag_on_a_real_log_with_a_gap_is_found_as_without_one() {
     let dir = tempfile::tempdir().unwrap();
     let robot = description(dir.path());
     let lagged = changed_run(dir.path(), 3, &lag(20), "lag20", &robot);
-    let text = std::fs::read_to_string(&lagged).unwrap();
-    let gapped = dir.path().join("run3_lag20_gap.csv");
-    let kept: Vec<&str> = text
-        .lines()
-        .enumerate()
-        .filter(|(i, _)| !(2001..2251).contains(i))
-        .map(|(_, l)| l)
-        .collect();
-    std::fs::write(&gapped, kept.join("\n") + "\n").unwrap();
+    let gapped = with_gap(&lagged, 2001..2251);
     let (d, err) = diagnose_stating(&robot, &gapped, &["--description-uncertainty", "0.05"]);
     assert!(err.contains("split into 2 runs"), "{err}");
     let s = steps(&d);
@@ -229,31 +243,6 @@ fn a_lag_on_a_real_log_with_a_gap_is_found_as_without_one() {
         (delay - 0.1).abs() <= 0.25 * 0.1,
         "delay {delay} s, lag 0.1 s"
     );
-}
-
-/// A motor-side encoder effect on every joint of the arm.
-fn encoder(kind: physid::diagnose::library::Kind, spec: EffectSpec) -> Injection {
-    Injection {
-        slot: Slot::Effect(kind),
-        spec: Some(spec),
-        magnitudes: vec![],
-        body: None,
-        visible: None,
-    }
-}
-
-/// `path`'s rows but for samples `cut` (the header is row 0), as a log with a gap.
-fn with_gap(path: &Path, cut: std::ops::Range<usize>) -> PathBuf {
-    let text = std::fs::read_to_string(path).unwrap();
-    let kept: Vec<&str> = text
-        .lines()
-        .enumerate()
-        .filter(|(i, _)| !cut.contains(i))
-        .map(|(_, l)| l)
-        .collect();
-    let out = path.with_extension("gap.csv");
-    std::fs::write(&out, kept.join("\n") + "\n").unwrap();
-    out
 }
 
 #[test]
@@ -269,16 +258,18 @@ fn a_compliant_transmission_and_backlash_on_the_real_arm_are_named_first() {
     let dir = tempfile::tempdir().unwrap();
     let robot = description(dir.path());
     let n = 7;
-    let compliant = encoder(
-        Kind::Compliance,
-        EffectSpec::Compliance {
-            stiffness: vec![400.0; n],
-        },
-    );
-    let path = changed_run(dir.path(), 3, &compliant, "k400", &robot);
-    let s = steps(&diagnose(&robot, &path, &[]));
-    eprintln!("compliant: {s:?}");
-    assert_eq!(s[0], "+ compliance", "{s:?}");
+    // Run 3 with `injection`, its ladder's first step `want`; the file written.
+    let named_first = |injection: Injection, tag: &str, want: &str| -> PathBuf {
+        let path = changed_run(dir.path(), 3, &injection, tag, &robot);
+        let s = steps(&diagnose(&robot, &path, &[]));
+        eprintln!("{tag}: {s:?}");
+        assert_eq!(s[0], want, "{s:?}");
+        path
+    };
+    let compliant = EffectSpec::Compliance {
+        stiffness: vec![400.0; n],
+    };
+    let path = named_first(effect(Kind::Compliance, compliant), "k400", "+ compliance");
     // The same with 250 samples missing: two runs, each processed with its own trimmed ends.
     let (d, err) = diagnose_stating(
         &robot,
@@ -289,16 +280,10 @@ fn a_compliant_transmission_and_backlash_on_the_real_arm_are_named_first() {
     let s = steps(&d);
     eprintln!("compliant, with a gap: {s:?}");
     assert_eq!(s[0], "+ compliance", "{s:?}");
-    let backlash = encoder(
-        Kind::Backlash,
-        EffectSpec::Backlash {
-            width: vec![0.05; n],
-        },
-    );
-    let path = changed_run(dir.path(), 3, &backlash, "b005", &robot);
-    let s = steps(&diagnose(&robot, &path, &[]));
-    eprintln!("backlash: {s:?}");
-    assert_eq!(s[0], "+ backlash", "{s:?}");
+    let backlash = EffectSpec::Backlash {
+        width: vec![0.05; n],
+    };
+    named_first(effect(Kind::Backlash, backlash), "b005", "+ backlash");
     // Untouched, neither is claimed.
     let control = steps(&diagnose(&robot, &run(dir.path(), 3, 0.0, &robot), &[]));
     eprintln!("control: {control:?}");

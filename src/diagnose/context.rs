@@ -303,8 +303,8 @@ impl<'a> Context<'a> {
         // differentiated twice through the 20 Hz filter, adds ~0.05 N m on the blind scenario;
         // the prediction's friction jumps fall a few samples off the delivered torque's and its
         // column lost the attribution to delay, cogging and spring.
-        let taps = own_taps(sample_period(tr), cutoff);
         let at = Layout::of(tr);
+        let taps = own_taps(at.dt, cutoff);
         let inner = |v: [Vec<f64>; 3]| v.map(|s| at.inner(s));
         let logged = processed_like_encoder(&at.tau, &at, cutoff);
         // The side of the dead zone follows the torque actually delivered: the logged torque,

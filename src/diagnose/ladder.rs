@@ -648,10 +648,11 @@ fn next_step(
     let simplest = Ties::of(&reduction, &widths, passes, settings.tie).simplest;
     let (best, r, t, _) = scored[simplest[0]];
     // Other grid points of the winner's kind are not another explanation.
+    let own = best.name(model, UNREAD);
     let mut ties: Vec<Tie> = vec![];
     for &i in &simplest[1..] {
         let name = scored[i].0.name(model, UNREAD);
-        if name != best.name(model, UNREAD) && !ties.iter().any(|x| x.0 == name) {
+        if name != own && !ties.iter().any(|x| x.0 == name) {
             ties.push((name, scored[i].3));
         }
     }
