@@ -35,6 +35,7 @@ pub mod api;
 pub mod conic;
 pub mod diagnose;
 pub mod dynamics;
+pub mod effect;
 pub mod experiment;
 pub mod ident;
 pub mod io;

@@ -179,6 +179,21 @@ pub fn min_norm_solve(h: &DMatrix<f64>, g: &DMatrix<f64>) -> DMatrix<f64> {
     x
 }
 
+/// The median of `v` (values ordered by `f64::total_cmp`, a NaN above every number); 0 for no
+/// values.
+pub fn median(v: &[f64]) -> f64 {
+    let mut s = v.to_vec();
+    s.sort_by(f64::total_cmp);
+    let m = s.len();
+    if m == 0 {
+        0.0
+    } else if m % 2 == 1 {
+        s[m / 2]
+    } else {
+        0.5 * (s[m / 2 - 1] + s[m / 2])
+    }
+}
+
 #[cfg(test)]
 mod rank_tests {
     use super::*;

@@ -4,6 +4,10 @@
 mod common;
 
 use physid::diagnose::{breakdown, residuals};
+use physid::effect::{
+    Backlash, Cogging, Compliance, Payload, QuadraticDamping, Spring, Stribeck, Tilt, TimeDelay,
+    TorqueGain, TorqueOffset,
+};
 use physid::ident::{self, ConstraintSet, NormalEquations, Options};
 use physid::sim::scenario::EffectSpec;
 
@@ -40,10 +44,10 @@ fn regime<'a>(
 #[test]
 fn a_low_speed_effect_shows_up_at_low_speed() {
     let clean = run(vec![]);
-    let stribeck = run(vec![EffectSpec::Stribeck {
+    let stribeck = run(vec![EffectSpec::Stribeck(Stribeck {
         static_extra: vec![4.0, 4.0, 2.0],
         velocity: vec![0.3, 0.3, 0.3],
-    }]);
+    })]);
     for joint in ["abad_joint", "hip_joint"] {
         let (low, high) = (
             regime(&stribeck, joint, "|qd| low"),
@@ -136,9 +140,9 @@ fn an_effect_outside_the_library_leaves_structure_and_is_not_called_explained() 
     // of it, and the generic function of speed and angle still predicts the held-out residual.
     for seed in [5, 6] {
         let d = diagnosed(
-            vec![EffectSpec::QuadraticDamping {
+            vec![EffectSpec::QuadraticDamping(QuadraticDamping {
                 coefficient: vec![1.5, 1.0, 1.2],
-            }],
+            })],
             seed,
         );
         eprintln!("{}", d.summary);
@@ -161,11 +165,11 @@ fn an_effect_outside_the_library_leaves_structure_and_is_not_called_explained() 
 fn cogging_is_found_at_its_harmonic_with_its_amplitude() {
     let amp = [0.5, 0.6, 0.4];
     let d = diagnosed(
-        vec![EffectSpec::Cogging {
+        vec![EffectSpec::Cogging(Cogging {
             amplitude: amp.to_vec(),
             harmonic: vec![3.0; 3],
             phase: vec![0.3, 1.0, 2.0],
-        }],
+        })],
         5,
     );
     eprintln!("{}", d.summary);
@@ -192,9 +196,9 @@ fn offset_and_forward_friction_are_ambiguous_when_the_joints_never_rest() {
         // Negative offsets: δ max(0, s) = δ/2 + (δ/2) s with δ = 2 o < 0 then only raises
         // the Coulomb coefficients, so the constrained fits (B_c >= 0) cannot tell them apart.
         // (A positive offset above B_c would be told apart by that very bound.)
-        vec![EffectSpec::TorqueOffset {
+        vec![EffectSpec::TorqueOffset(TorqueOffset {
             offset: vec![-2.0, -2.5, -2.0],
-        }],
+        })],
         6,
     );
     eprintln!("{}", d.summary);
@@ -211,7 +215,7 @@ fn offset_and_forward_friction_are_ambiguous_when_the_joints_never_rest() {
 
 #[test]
 fn a_time_delay_is_measured_in_seconds() {
-    let d = diagnosed(vec![EffectSpec::TimeDelay { samples: 20 }], 7);
+    let d = diagnosed(vec![EffectSpec::TimeDelay(TimeDelay { samples: 20 })], 7);
     eprintln!("{}", d.summary);
     let e = &d.effects[0];
     assert_eq!(e.kind, Kind::TimeDelay);
@@ -285,10 +289,10 @@ fn several_training_runs_are_cross_validated_one_run_out() {
     let path = common::root().join("scenarios/blind.toml");
     let (mut sc, m, _) = physid::sim::scenario::load(&path).unwrap();
     sc.simulation.duration = 6.0;
-    sc.effects = vec![EffectSpec::Spring {
+    sc.effects = vec![EffectSpec::Spring(Spring {
         stiffness: vec![6.0, 6.0, 6.0],
         rest: vec![0.0, -0.5, 1.2],
-    }];
+    })];
     let runs: Vec<_> = [11, 12, 13]
         .iter()
         .map(|&seed| {
@@ -347,7 +351,7 @@ fn diagnosed_against_description(
 #[test]
 fn a_gain_error_absorbed_by_identification_is_revealed_by_the_description() {
     let gain = vec![1.0, 1.25, 1.0];
-    let effects = || vec![EffectSpec::TorqueGain { gain: gain.clone() }];
+    let effects = || vec![EffectSpec::TorqueGain(TorqueGain { gain: gain.clone() })];
     // Without the description test there is nothing to find: identification absorbs the gain.
     let blind = diagnosed_against_description(effects(), 5, None);
     assert!(blind.effects.is_empty(), "{:?}", blind.effects);
@@ -399,7 +403,8 @@ fn a_gain_error_absorbed_by_identification_is_revealed_by_the_description() {
 #[test]
 fn a_tilted_base_is_revealed_by_the_description_and_clean_data_claim_nothing() {
     let (roll, pitch) = (0.2, -0.15);
-    let d = diagnosed_against_description(vec![EffectSpec::Tilt { roll, pitch }], 6, Some(0.1));
+    let d =
+        diagnosed_against_description(vec![EffectSpec::Tilt(Tilt { roll, pitch })], 6, Some(0.1));
     eprintln!("{}", d.summary);
     let e = &d.effects[0];
     assert_eq!(e.kind, Kind::Tilt, "{}", d.summary);
@@ -428,12 +433,12 @@ fn a_payload_on_the_last_body_is_revealed_by_the_description() {
     let tip = m.bodies()[2].bounding.as_ref().unwrap().center * 2.0;
     let com = tip * 0.8;
     let d = diagnosed_against_description(
-        vec![EffectSpec::Payload {
+        vec![EffectSpec::Payload(Payload {
             mass: 0.6,
             com: [com.x, com.y, com.z],
             radius: 0.03,
             body: None,
-        }],
+        })],
         9,
         Some(0.1),
     );
@@ -461,7 +466,7 @@ fn a_requested_description_test_that_cannot_run_says_why() {
     // A visible effect whose columns are linearized (a 25-sample delay): cross-validation
     // selects it, so the test against the description (asked for with a stated uncertainty)
     // does not run beside it, and the diagnosis says why, in its fields and its report.
-    let effects = vec![EffectSpec::TimeDelay { samples: 25 }];
+    let effects = vec![EffectSpec::TimeDelay(TimeDelay { samples: 25 })];
     let d = diagnosed_against_description(effects, 5, Some(0.1));
     eprintln!("{}", d.summary);
     assert_eq!(d.effects[0].kind, Kind::TimeDelay, "{}", d.summary);
@@ -487,12 +492,12 @@ fn joined_runs_of_one_motion_keep_their_difference_out_of_the_noise_floor() {
     let path = common::root().join("scenarios/blind.toml");
     let (mut sc, m, _) = physid::sim::scenario::load(&path).unwrap();
     sc.simulation.duration = 8.0;
-    let payload = EffectSpec::Payload {
+    let payload = EffectSpec::Payload(Payload {
         mass: 2.0,
         com: [0.0, 0.0, -0.2],
         radius: 0.03,
         body: None,
-    };
+    });
     let mut run = |seed: u64, effects: Vec<EffectSpec>| {
         sc.simulation.seed = seed;
         sc.effects = effects;
@@ -567,9 +572,9 @@ fn compliance_read_on_the_motor_side_is_attributed() {
     // factor 2.5 on every joint (1.7, 1.2, 0.84 ·10⁻³ for 2 ·10⁻³: the column's own noise
     // attenuates it).
     let d = diagnosed(
-        vec![EffectSpec::Compliance {
+        vec![EffectSpec::Compliance(Compliance {
             stiffness: vec![500.0; 3],
-        }],
+        })],
         7,
     );
     eprintln!("{}", d.summary);
@@ -593,9 +598,9 @@ fn backlash_read_on_the_motor_side_is_attributed() {
     let width = [0.02, 0.03, 0.02];
     for seed in [8, 9] {
         let d = diagnosed(
-            vec![EffectSpec::Backlash {
+            vec![EffectSpec::Backlash(Backlash {
                 width: width.to_vec(),
-            }],
+            })],
             seed,
         );
         eprintln!("{}", d.summary);
@@ -618,17 +623,17 @@ fn a_payload_beside_a_visible_effect_is_still_tested_against_the_description() {
     let m = physid::model::cheetah3::leg();
     let com = m.bodies()[2].bounding.as_ref().unwrap().center * 1.6;
     let effects = vec![
-        EffectSpec::Cogging {
+        EffectSpec::Cogging(Cogging {
             amplitude: vec![0.0, 1.5, 0.0],
             harmonic: vec![3.0; 3],
             phase: vec![0.3, 1.0, 2.0],
-        },
-        EffectSpec::Payload {
+        }),
+        EffectSpec::Payload(Payload {
             mass: 0.6,
             com: [com.x, com.y, com.z],
             radius: 0.03,
             body: None,
-        },
+        }),
     ];
     let d = diagnosed_against_description(effects, 5, Some(0.1));
     eprintln!("{}", d.summary);

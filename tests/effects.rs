@@ -5,6 +5,10 @@
 mod common;
 
 use physid::dynamics::{rnea, Data};
+use physid::effect::{
+    AsymmetricCoulomb, Cogging, Compliance, LoadDependentFriction, Payload, QuadraticDamping,
+    Spring, Stribeck, Tilt, TimeDelay, TorqueGain, TorqueOffset,
+};
 use physid::model::Model;
 use physid::sim::scenario::{EffectSpec, Scenario};
 use physid::trajectory::Recording;
@@ -67,45 +71,45 @@ fn acting_effects_have_their_equations_and_keep_the_dynamics_consistent() {
     let v = 0.01; // friction_velocity of the scenario
     let cases: Vec<(EffectSpec, Expected)> = vec![
         (
-            EffectSpec::Spring {
+            EffectSpec::Spring(Spring {
                 stiffness: vec![2.0, 3.0, 1.0],
                 rest: vec![0.1, -0.7, 1.2],
-            },
+            }),
             Box::new(|j, q, _, _| -[2.0, 3.0, 1.0][j] * (q - [0.1, -0.7, 1.2][j])),
         ),
         (
-            EffectSpec::Stribeck {
+            EffectSpec::Stribeck(Stribeck {
                 static_extra: vec![1.0, 0.8, 0.5],
                 velocity: vec![0.1, 0.1, 0.05],
-            },
+            }),
             Box::new(move |j, _, w, _| {
                 -[1.0, 0.8, 0.5][j] * (-(w / [0.1, 0.1, 0.05][j]).powi(2)).exp() * (w / v).tanh()
             }),
         ),
         (
-            EffectSpec::AsymmetricCoulomb {
+            EffectSpec::AsymmetricCoulomb(AsymmetricCoulomb {
                 delta: vec![0.6, 0.4, 0.3],
-            },
+            }),
             Box::new(move |j, _, w, _| -[0.6, 0.4, 0.3][j] * (w / v).tanh().max(0.0)),
         ),
         (
-            EffectSpec::QuadraticDamping {
+            EffectSpec::QuadraticDamping(QuadraticDamping {
                 coefficient: vec![0.2, 0.1, 0.05],
-            },
+            }),
             Box::new(|j, _, w, _| -[0.2, 0.1, 0.05][j] * w * w.abs()),
         ),
         (
-            EffectSpec::LoadDependentFriction {
+            EffectSpec::LoadDependentFriction(LoadDependentFriction {
                 coefficient: vec![0.05, 0.04, 0.03],
-            },
+            }),
             Box::new(move |j, _, w, t| -[0.05, 0.04, 0.03][j] * t.abs() * (w / v).tanh()),
         ),
         (
-            EffectSpec::Cogging {
+            EffectSpec::Cogging(Cogging {
                 amplitude: vec![0.3, 0.2, 0.1],
                 harmonic: vec![6.0, 6.0, 12.0],
                 phase: vec![],
-            },
+            }),
             Box::new(|j, q, _, _| -[0.3, 0.2, 0.1][j] * ([6.0, 6.0, 12.0][j] * 10.6 * q).sin()),
         ),
     ];
@@ -125,13 +129,13 @@ fn acting_effects_have_their_equations_and_keep_the_dynamics_consistent() {
 fn sensor_effects_change_only_the_log() {
     let (base, _, _) = with(vec![]);
     let (rec, _, _) = with(vec![
-        EffectSpec::TorqueGain {
+        EffectSpec::TorqueGain(TorqueGain {
             gain: vec![1.1, 0.9, 1.05],
-        },
-        EffectSpec::TorqueOffset {
+        }),
+        EffectSpec::TorqueOffset(TorqueOffset {
             offset: vec![0.5, -0.3, 0.2],
-        },
-        EffectSpec::TimeDelay { samples: 3 },
+        }),
+        EffectSpec::TimeDelay(TimeDelay { samples: 3 }),
     ]);
     assert_eq!(rec.truth, base.truth, "sensor effects must not act");
     let n = rec.truth.len();
@@ -150,16 +154,16 @@ fn sensor_effects_change_only_the_log() {
 #[test]
 fn tilt_and_payload_change_the_robot_not_the_model() {
     for effect in [
-        EffectSpec::Tilt {
+        EffectSpec::Tilt(Tilt {
             roll: 0.05,
             pitch: -0.08,
-        },
-        EffectSpec::Payload {
+        }),
+        EffectSpec::Payload(Payload {
             mass: 0.5,
             com: [0.0, 0.0, -0.345],
             radius: 0.03,
             body: None,
-        },
+        }),
     ] {
         let (rec, nominal, sc) = with(vec![effect.clone()]);
         let real = physid::sim::effects::true_robot(&nominal, &sc.effects);
@@ -172,24 +176,24 @@ fn tilt_and_payload_change_the_robot_not_the_model() {
 #[test]
 fn bad_effects_are_rejected_with_the_key() {
     let (mut sc, m) = clean();
-    sc.effects = vec![EffectSpec::TorqueGain {
+    sc.effects = vec![EffectSpec::TorqueGain(TorqueGain {
         gain: vec![1.0, -1.0, 1.0],
-    }];
+    })];
     assert!(sc
         .validate(3)
         .unwrap_err()
         .to_string()
         .contains("effects[0].gain"));
-    sc.effects = vec![EffectSpec::Stribeck {
+    sc.effects = vec![EffectSpec::Stribeck(Stribeck {
         static_extra: vec![1.0; 2],
         velocity: vec![0.1; 3],
-    }];
+    })];
     assert!(sc
         .validate(3)
         .unwrap_err()
         .to_string()
         .contains("effects[0].static_extra"));
-    sc.effects = vec![EffectSpec::TimeDelay { samples: 0 }];
+    sc.effects = vec![EffectSpec::TimeDelay(TimeDelay { samples: 0 })];
     assert!(sc
         .validate(m.dof())
         .unwrap_err()
@@ -201,9 +205,9 @@ fn bad_effects_are_rejected_with_the_key() {
 fn compliance_shifts_only_the_logged_angle_by_the_deflection() {
     let (base, _, _) = with(vec![]);
     let k = [400.0, 300.0, f64::INFINITY];
-    let (rec, _, _) = with(vec![EffectSpec::Compliance {
+    let (rec, _, _) = with(vec![EffectSpec::Compliance(Compliance {
         stiffness: k.to_vec(),
-    }]);
+    })]);
     assert_eq!(rec.truth, base.truth, "a sensor effect must not act");
     let mut peak = 0.0f64;
     for s in 0..rec.truth.len() {

@@ -9,7 +9,7 @@ use std::path::{Path, PathBuf};
 
 /// The floor of each top-level module of the library (the binary, crate `physid-cli` in cli/,
 /// is the floor above them all and reaches the library through `physid::` only).
-const FLOORS: [(&str, u8); 15] = [
+const FLOORS: [(&str, u8); 16] = [
     ("conic", 0),
     ("spatial", 1),
     ("options", 1),
@@ -20,11 +20,12 @@ const FLOORS: [(&str, u8); 15] = [
     ("prepare", 2),
     ("io", 3),
     ("dynamics", 3),
-    ("sim", 4),
-    ("ident", 4),
-    ("diagnose", 5),
-    ("experiment", 6),
-    ("api", 7),
+    ("effect", 4),
+    ("sim", 5),
+    ("ident", 5),
+    ("diagnose", 6),
+    ("experiment", 7),
+    ("api", 8),
 ];
 
 fn floor(module: &str) -> Option<u8> {
@@ -416,38 +417,62 @@ fn the_entry_modules_stay_short() {
     }
 }
 
+/// The files of `src/effect/` that are not a kind's: the table, the checks and trait of the
+/// simulator's form, the per-data state, the columns over a data set, the dead zone's dynamics.
+const EFFECT_SHARED: [&str; 5] = ["mod", "physics", "context", "library", "dead_zone"];
+
+/// Lines of library code outside the kinds' own files that name a particular kind, as
+/// `Kind::X` (the diagnosis's table) or `EffectSpec::X` (the simulator's form).
+fn kind_branches(rel: &Path, text: &str) -> Vec<String> {
+    let mut out = vec![];
+    for (i, line) in text.lines().enumerate() {
+        let named = |prefix: &str| {
+            line.match_indices(prefix).any(|(at, _)| {
+                let before = &line[..at];
+                let after = &line[at + prefix.len()..];
+                !before.ends_with("Shape")
+                    && !after.starts_with("ALL")
+                    && after.starts_with(|c: char| c.is_ascii_uppercase() || c == '*')
+            })
+        };
+        if named("Kind::") || named("EffectSpec::") {
+            out.push(format!("{}:{}: {}", rel.display(), i + 1, line.trim()));
+        }
+    }
+    out
+}
+
 #[test]
-fn effect_kinds_are_matched_only_in_their_table() {
-    // A new effect kind is one file of the diagnosis's table (src/diagnose/kinds/): no other
-    // library file names a particular kind (tests and the CLI's flag names aside).
+fn effect_kinds_are_matched_only_in_their_files() {
+    // A new effect kind is one file of `src/effect/` (its row of the table and its simulator
+    // form): no other library file names a particular kind, neither its `Kind` nor its
+    // `EffectSpec` variant (tests and the CLI's flag names aside). The table's `mod.rs` lists
+    // them, and the semi-real benchmark's order of injected kinds is kept there.
     let src = common::root().join("src");
     let mut files = vec![];
     rust_files(&src, &mut files);
     let mut branching = vec![];
     for file in &files {
         let rel = file.strip_prefix(&src).unwrap();
-        if rel.starts_with("diagnose/kinds") {
+        let stem = rel.file_stem().unwrap().to_str().unwrap();
+        let kind_file = rel.starts_with("effect") && !EFFECT_SHARED.contains(&stem);
+        if kind_file || rel == Path::new("effect/mod.rs") {
             continue;
         }
         let text = code(&std::fs::read_to_string(file).unwrap());
-        for (i, line) in text.lines().enumerate() {
-            let named = line.match_indices("Kind::").any(|(at, _)| {
-                let before = &line[..at];
-                let after = &line[at + 6..];
-                !before.ends_with("Shape")
-                    && !after.starts_with("ALL")
-                    && after.starts_with(|c: char| c.is_ascii_uppercase() || c == '*')
-            });
-            if named {
-                branching.push(format!("{}:{}: {}", rel.display(), i + 1, line.trim()));
-            }
-        }
+        branching.extend(kind_branches(rel, &text));
     }
     assert!(
         branching.is_empty(),
-        "kind-specific branches outside the table:\n{}",
+        "kind-specific branches outside the kinds' files:\n{}",
         branching.join("\n")
     );
+    // The check sees both spellings.
+    let seen = kind_branches(
+        Path::new("x.rs"),
+        "let a = Kind::Spring;\nlet b = EffectSpec::Tilt(t);\nlet c = Kind::ALL;\n",
+    );
+    assert_eq!(seen.len(), 2, "{seen:?}");
 }
 
 #[test]
@@ -576,19 +601,31 @@ fn the_model_is_immutable_its_fields_private() {
 
 #[test]
 fn every_effect_kind_has_its_own_file_and_one_line_in_the_table() {
-    // The kinds are the variants of `Kind`; each has `src/diagnose/kinds/<snake_case>.rs`
-    // holding its row (`SPEC`, naming that variant) and the table lists each file's row once.
-    let dir = common::root().join("src/diagnose/kinds");
+    // The kinds are the variants of `Kind`; each has `src/effect/<snake_case>.rs` holding its
+    // row (`SPEC`, naming that variant), and the table lists each file's row once. Each
+    // variant of the simulator's `EffectSpec` has its struct and `impl Physics` in its file of
+    // the same name; every file of the folder is a kind's or one of the shared ones.
+    let dir = common::root().join("src/effect");
     let table = std::fs::read_to_string(dir.join("mod.rs")).unwrap();
-    let body = &table[table.find("pub enum Kind {").unwrap()..];
-    let body = &body[..body.find("\n}").unwrap()];
-    let variants: Vec<&str> = body
-        .lines()
-        .map(str::trim)
-        .filter(|l| l.ends_with(',') && !l.starts_with("//"))
-        .map(|l| l.trim_end_matches(','))
-        .collect();
-    assert!(variants.len() >= 13, "{variants:?}");
+    let variants_of = |enum_head: &str| -> Vec<String> {
+        let body = &table[table.find(enum_head).unwrap()..];
+        let body = &body[..body.find("\n}").unwrap()];
+        body.lines()
+            .map(str::trim)
+            .filter(|l| l.ends_with(',') && !l.starts_with("//"))
+            .map(|l| {
+                l.trim_end_matches(',')
+                    .split('(')
+                    .next()
+                    .unwrap()
+                    .to_string()
+            })
+            .collect()
+    };
+    let kinds = variants_of("pub enum Kind {");
+    let specs = variants_of("pub enum EffectSpec {");
+    assert!(kinds.len() >= 13, "{kinds:?}");
+    assert!(specs.len() >= 13, "{specs:?}");
     let snake = |v: &str| {
         let mut out = String::new();
         for (i, c) in v.chars().enumerate() {
@@ -599,13 +636,12 @@ fn every_effect_kind_has_its_own_file_and_one_line_in_the_table() {
         }
         out
     };
-    let files: Vec<String> = child_files(&dir).into_iter().map(|(n, _)| n).collect();
+    let read = |name: &str| std::fs::read_to_string(dir.join(format!("{name}.rs")));
     let mut missing = vec![];
-    for v in &variants {
+    for v in &kinds {
         let name = snake(v);
-        let path = dir.join(format!("{name}.rs"));
-        let Ok(text) = std::fs::read_to_string(&path) else {
-            missing.push(format!("{v}: no file {}", path.display()));
+        let Ok(text) = read(&name) else {
+            missing.push(format!("{v}: no file src/effect/{name}.rs"));
             continue;
         };
         if !(text.contains("pub(super) const SPEC: KindSpec")
@@ -618,10 +654,29 @@ fn every_effect_kind_has_its_own_file_and_one_line_in_the_table() {
             missing.push(format!("{v}: not once in KIND_TABLE"));
         }
     }
-    assert_eq!(
-        files.len(),
-        variants.len(),
-        "files {files:?} for kinds {variants:?}"
-    );
+    for v in &specs {
+        let name = snake(v);
+        let holds = read(&name).is_ok_and(|text| {
+            text.contains(&format!("pub struct {v} {{"))
+                && text.contains(&format!("impl Physics for {v} {{"))
+        });
+        if !holds {
+            missing.push(format!(
+                "EffectSpec::{v}: src/effect/{name}.rs holds no struct {v} with its Physics"
+            ));
+        }
+        if !table.contains(&format!("EffectSpec::{v}(e) => e,")) {
+            missing.push(format!("EffectSpec::{v}: no arm in EffectSpec::physics"));
+        }
+    }
+    for (file, _) in child_files(&dir) {
+        let owned = EFFECT_SHARED.contains(&file.as_str())
+            || kinds.iter().chain(&specs).any(|v| snake(v) == file);
+        if !owned {
+            missing.push(format!(
+                "src/effect/{file}.rs is neither a kind's nor a shared file"
+            ));
+        }
+    }
     assert!(missing.is_empty(), "{}", missing.join("\n"));
 }

@@ -3,6 +3,7 @@
 
 mod common;
 
+use physid::effect::TorqueOffset;
 use physid::sim::scenario::EffectSpec;
 use pulldown_cmark::{Event, Options, Parser, Tag, TagEnd};
 
@@ -48,9 +49,9 @@ fn the_diagnosis_report_parses_with_its_columns() {
     let path = common::root().join("scenarios/blind.toml");
     let (mut sc, m, _) = physid::sim::scenario::load(&path).unwrap();
     sc.simulation.duration = 12.0;
-    sc.effects = vec![EffectSpec::TorqueOffset {
+    sc.effects = vec![EffectSpec::TorqueOffset(TorqueOffset {
         offset: vec![0.0, 1.5, 0.0],
-    }];
+    })];
     let rec = physid::sim::run(&m, &sc, &mut |_| {}).unwrap();
     let d = &rec.processed;
     let diag = physid::diagnose::diagnose(

@@ -6,6 +6,7 @@
 mod common;
 
 use common::root;
+use physid::effect::{Payload, TimeDelay};
 use physid::io;
 use physid::sim::scenario::{self, EffectSpec};
 use std::path::{Path, PathBuf};
@@ -42,7 +43,7 @@ fn scenario_values_that_hung_or_panicked_are_refused_by_key() {
     // Before: capacity overflow panic (2^63 − 1) or a 2.4 TB allocation (1e11).
     for samples in [usize::MAX / 2, 100_000_000_000] {
         let mut sc = base.clone();
-        sc.effects = vec![EffectSpec::TimeDelay { samples }];
+        sc.effects = vec![EffectSpec::TimeDelay(TimeDelay { samples })];
         let e = sc.validate(n).unwrap_err();
         assert_eq!(e.key, "effects[0].samples", "{e}");
     }
@@ -52,12 +53,12 @@ fn scenario_values_that_hung_or_panicked_are_refused_by_key() {
     assert_eq!(sc.validate(n).unwrap_err().key, "simulation.substeps");
     // Before: a panic on an `expect` in the payload's inertia.
     let mut sc = base.clone();
-    sc.effects = vec![EffectSpec::Payload {
+    sc.effects = vec![EffectSpec::Payload(Payload {
         mass: 1.0,
         com: [0.0, 1e200, 0.0],
         radius: 0.03,
         body: None,
-    }];
+    })];
     assert_eq!(sc.validate(n).unwrap_err().key, "effects[0].com");
     assert!(base.validate(n).is_ok());
 }

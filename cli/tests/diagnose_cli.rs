@@ -3,6 +3,7 @@
 #[path = "../../tests/common/mod.rs"]
 mod common;
 
+use physid::effect::Spring;
 use physid::sim::scenario::EffectSpec;
 
 #[test]
@@ -11,10 +12,10 @@ fn the_cli_diagnoses_a_file_and_names_bad_input() {
     let sc = common::root().join("scenarios/blind.toml");
     let (mut s, m, _) = physid::sim::scenario::load(&sc).unwrap();
     s.simulation.duration = 8.0;
-    s.effects = vec![EffectSpec::Spring {
+    s.effects = vec![EffectSpec::Spring(Spring {
         stiffness: vec![6.0, 6.0, 6.0],
         rest: vec![0.0, -0.5, 1.2],
-    }];
+    })];
     let rec = physid::sim::run(&m, &s, &mut |_| {}).unwrap();
     let csv = dir.path().join("run.csv");
     physid::io::samples::write_csv(&csv, &rec.processed).unwrap();

@@ -6,6 +6,7 @@
 mod common;
 
 use common::{physid, root};
+use physid::effect::{Backlash, Compliance, Payload, TimeDelay};
 use physid::experiment::semireal::{self, Injection, Slot};
 use physid::sim::scenario::EffectSpec;
 use std::path::{Path, PathBuf};
@@ -45,12 +46,12 @@ fn run(dir: &Path, r: usize, mass: f64, robot: &Path) -> PathBuf {
         } else {
             Slot::Clean
         },
-        spec: (mass > 0.0).then_some(EffectSpec::Payload {
+        spec: (mass > 0.0).then_some(EffectSpec::Payload(Payload {
             mass,
             com: [0.0, 0.0, 0.06],
             radius: 0.04,
             body: Some(n),
-        }),
+        })),
         magnitudes: vec![mass],
         body: Some(n - 1),
         visible: None,
@@ -84,7 +85,7 @@ fn effect(kind: physid::diagnose::library::Kind, spec: EffectSpec) -> Injection 
 fn lag(samples: usize) -> Injection {
     effect(
         physid::diagnose::library::Kind::TimeDelay,
-        EffectSpec::TimeDelay { samples },
+        EffectSpec::TimeDelay(TimeDelay { samples }),
     )
 }
 
@@ -266,9 +267,9 @@ fn a_compliant_transmission_and_backlash_on_the_real_arm_are_named_first() {
         assert_eq!(s[0], want, "{s:?}");
         path
     };
-    let compliant = EffectSpec::Compliance {
+    let compliant = EffectSpec::Compliance(Compliance {
         stiffness: vec![400.0; n],
-    };
+    });
     let path = named_first(effect(Kind::Compliance, compliant), "k400", "+ compliance");
     // The same with 250 samples missing: two runs, each processed with its own trimmed ends.
     let (d, err) = diagnose_stating(
@@ -280,9 +281,9 @@ fn a_compliant_transmission_and_backlash_on_the_real_arm_are_named_first() {
     let s = steps(&d);
     eprintln!("compliant, with a gap: {s:?}");
     assert_eq!(s[0], "+ compliance", "{s:?}");
-    let backlash = EffectSpec::Backlash {
+    let backlash = EffectSpec::Backlash(Backlash {
         width: vec![0.05; n],
-    };
+    });
     named_first(effect(Kind::Backlash, backlash), "b005", "+ backlash");
     // Untouched, neither is claimed.
     let control = steps(&diagnose(&robot, &run(dir.path(), 3, 0.0, &robot), &[]));

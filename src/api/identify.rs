@@ -8,7 +8,7 @@ use super::data::{
 };
 use super::ApiError;
 use crate::diagnose::calibrate::{parse_term, Calibration, Options as CalOptions, Run, TermFit};
-use crate::diagnose::library::Variant;
+use crate::effect::library::Variant;
 use crate::ident::information::{Information, InformationError, ResidualStats};
 use crate::ident::{self, analysis, ConstraintSet, NormalEquations, Options};
 use crate::model::Model;

@@ -30,11 +30,11 @@
 //! against noise, not against a description whose errors exceed `ε` or happen to look like an
 //! effect: that is what stating `ε` risks.
 
-use super::library::Kind;
 use super::residual::{finite_mean_square, mask_slow, residual_rms};
 use super::select::Folds;
 use super::stage::Stage;
 use super::stats::Ties;
+use crate::effect::library::Kind;
 use crate::ident::NormalEquations;
 use crate::linalg::{least_squares, least_squares_nonneg, min_norm_solve};
 use crate::model::Model;
@@ -678,7 +678,7 @@ pub fn information(
 ) -> Result<crate::ident::information::Information, super::options::DiagnoseError> {
     let fit = super::stage::fit_nominal(model, data, opts)?;
     let mut ne = crate::ident::NormalEquations::new(model.dof(), model.layout().len);
-    let ctx = super::library::Context::new(model, &fit.theta, data, opts.processing_cutoff);
+    let ctx = crate::effect::library::Context::new(model, &fit.theta, data, opts.processing_cutoff);
     ctx.for_each_row(
         data,
         0..data.len(),

@@ -12,9 +12,9 @@
 
 use super::calibrate::{self, Calibration, Run};
 use super::diagnosis::Diagnosis;
-use super::library::{Context, Variant};
 use super::options::{DiagnoseError, Options};
 use super::pipeline::diagnose_runs;
+use crate::effect::library::{Context, Variant};
 use crate::model::Model;
 use crate::trajectory::Trajectory;
 

@@ -9,7 +9,7 @@
 //! as the diagnosis does. Every run keeps its own samples: nothing is differentiated or filtered
 //! across the seam between two runs.
 
-use super::library::{self, Context, Kind, Variant};
+use crate::effect::library::{self, Context, Kind, Variant};
 use crate::ident::{self, IdentError, Identified, NormalEquations};
 use crate::model::Model;
 use crate::trajectory::Trajectory;
@@ -379,27 +379,6 @@ pub fn scenario_snippet(model: &Model, terms: &[TermFit], dt: f64) -> String {
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    #[test]
-    fn tilt_angles_invert_the_simulators_tilt() {
-        let model = crate::model::cheetah3::leg();
-        for (roll, pitch) in [(0.01, -0.02), (-0.003, 0.0), (0.05, 0.04)] {
-            let spec = crate::sim::scenario::EffectSpec::Tilt { roll, pitch };
-            let tilted = crate::sim::effects::true_robot(&model, &[spec]).gravity();
-            // The library's coefficients: Δg along u₁ = x and u₂ = −y.
-            let dg = tilted - model.gravity();
-            let Some(crate::sim::scenario::EffectSpec::Tilt { roll: r, pitch: p }) =
-                Kind::Tilt.replay(&model, &[dg.x, -dg.y], 0.0, 1e-3)
-            else {
-                panic!("no tilt replayed")
-            };
-            assert!((r - roll).abs() < 1e-12, "{r} {roll}");
-            assert!(
-                (p - pitch).abs() < 1e-4 * pitch.abs().max(1e-3),
-                "{p} {pitch}"
-            );
-        }
-    }
 
     #[test]
     fn terms_parse_with_aliases_and_values() {

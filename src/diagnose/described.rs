@@ -4,10 +4,10 @@
 
 use super::diagnosis::{DescriptionStep, EffectEstimate};
 use super::ladder::{self, Explanation, Ladder};
-use super::library::Variant;
 use super::magnitude;
 use super::select::Selection;
 use super::stage::Stage;
+use crate::effect::library::Variant;
 
 /// The ladder from the description when its uncertainty is stated, its first explanation added
 /// to `effects` when cross-validation and the description test did not name it (a payload on

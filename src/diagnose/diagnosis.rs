@@ -3,9 +3,9 @@
 
 use super::anchor;
 use super::breakdown::Breakdown;
-use super::library::Kind;
 use super::select;
 use super::spectrum;
+use crate::effect::library::Kind;
 use crate::ident::ConstraintSet;
 use serde::Serialize;
 

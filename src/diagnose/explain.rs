@@ -12,9 +12,9 @@
 
 use super::diagnosis::DescriptionStep;
 use super::gap::Ladder;
-use super::library::Variant;
 use super::residual::{mean_square, residual_rms};
 use super::stage::Stage;
+use crate::effect::library::Variant;
 use crate::linalg::least_squares;
 use nalgebra::{DMatrix, DVector};
 

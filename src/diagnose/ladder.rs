@@ -30,11 +30,11 @@
 //! reported as a payload; otherwise as a change of the body.
 
 use super::anchor;
-use super::library::{Context, Kind, Variant};
 use super::residual::{finite_mean_square, mask_slow, mean_square, residual_rms};
 use super::select::Folds;
 use super::stage::Stage;
 use super::stats::Ties;
+use crate::effect::library::{Context, Kind, Variant};
 use crate::linalg::least_squares_nonneg;
 use crate::model::Model;
 use crate::spatial::InertialParams;
@@ -485,7 +485,7 @@ fn offered(stage: &Stage) -> Vec<Variant> {
         .filter(|v| !(v.kind.is_body_change() || (rotors && v.kind.is_rotor_parameter())))
         .collect();
     let bodies: Vec<Kind> = Kind::body_change().into_iter().collect();
-    out.extend(super::library::variants(&bodies, n));
+    out.extend(crate::effect::library::variants(&bodies, n));
     out
 }
 

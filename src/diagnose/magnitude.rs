@@ -5,10 +5,10 @@
 
 use super::anchor;
 use super::diagnosis::{EffectEstimate, Evidence, Magnitude};
-use super::kinds::separate_by;
-use super::library::{Kind, Variant};
 use super::select::Selection;
 use super::stage::Stage;
+use crate::effect::library::{Kind, Variant};
+use crate::effect::separate_by;
 use nalgebra::{DMatrix, DVector};
 
 /// The physical magnitudes of `kind` from its coefficients `c` for `n` joints under gravity of

@@ -22,14 +22,11 @@ pub mod anchor;
 pub mod baseline;
 pub mod breakdown;
 pub mod calibrate;
-pub mod context;
 mod described;
 mod diagnosis;
 mod explain;
 mod gap;
-mod kinds;
 pub mod ladder;
-pub mod library;
 pub mod magnitude;
 pub mod noise;
 mod options;
@@ -43,18 +40,20 @@ mod stats;
 mod structure;
 mod verdict;
 
+pub use crate::effect::separate_by;
+/// The effect library the diagnosis reads (its floor is `crate::effect`).
+pub use crate::effect::{context, library};
 pub use crate::ident::analysis::residuals;
 pub use breakdown::{breakdown, Breakdown, Regime};
 pub use diagnosis::{
     DescriptionStep, Diagnosis, EffectEstimate, Evidence, JointGap, Magnitude, Verdict,
 };
-pub use kinds::separate_by;
 pub use magnitude::magnitudes_of;
 pub use options::{DiagnoseError, Options};
 pub use pipeline::{diagnose, diagnose_runs};
 pub(crate) use residual::{finite_mean_square, mask_slow, residual_rms};
 pub use stage::{fit_nominal, MIN_SAMPLES};
-pub(crate) use stats::{median, relative_to_median};
+pub(crate) use stats::median;
 pub use structure::StructureLeft;
 
 /// Smallest identifiable fraction of a magnitude worth reporting as a number (its column's part

@@ -1,7 +1,7 @@
 //! The diagnosis's options (each checked by [`Options::validate`]) and its errors.
 
-use super::library::Kind;
 use super::select;
+use crate::effect::library::Kind;
 use crate::ident::{ConstraintSet, IdentError};
 
 /// Diagnosis options.

@@ -4,12 +4,13 @@
 
 use super::breakdown::{self, breakdown};
 use super::diagnosis::{DescriptionStep, Diagnosis, EffectEstimate, Verdict};
-use super::kinds::Kind;
 use super::options::{DiagnoseError, Options};
 use super::residual::{mean_square, residual_rms};
 use super::stage::{check_data, fit_nominal, Stage};
 use super::structure::{self, StructureLeft};
-use super::{anchor, described, explain, gap, library, magnitude, select, verdict};
+use super::{anchor, described, explain, gap, magnitude, select, verdict};
+use crate::effect::library;
+use crate::effect::Kind;
 use crate::model::Model;
 use crate::trajectory::Trajectory;
 

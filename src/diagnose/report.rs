@@ -188,7 +188,7 @@ fn which_section(d: &Diagnosis) -> String {
         if !st.ambiguous_with.is_empty() {
             s += &format!(
                 "**Ambiguous** with {}: the data fit them equally well.\n\n",
-                super::library::names(&st.ambiguous_with, true)
+                crate::effect::library::names(&st.ambiguous_with, true)
             );
         }
         s +=
@@ -236,7 +236,7 @@ fn description_section(d: &Diagnosis) -> String {
                 } else {
                     format!(
                         "; **ambiguous** with {}",
-                        super::library::names(&st.ambiguous_with, true)
+                        crate::effect::library::names(&st.ambiguous_with, true)
                     )
                 }
             );

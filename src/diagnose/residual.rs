@@ -2,7 +2,7 @@
 //! to them: joint-samples slower than the speed threshold are left out (NaN) of every fit and
 //! error.
 
-use super::library::{self, Context};
+use crate::effect::library::{self, Context};
 use crate::trajectory::Trajectory;
 use nalgebra::DVector;
 

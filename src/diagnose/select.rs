@@ -14,8 +14,8 @@
 //! data as well: the one with fewest columns is kept (Occam), and equally simple ones are reported
 //! together as ambiguous.
 
-use super::library::{slow, Context, Kind, Variant};
 use super::stats::Ties;
+use crate::effect::library::{slow, Context, Kind, Variant};
 use crate::ident::{identify, IdentError, NormalEquations, Options};
 use crate::model::Model;
 use crate::trajectory::Trajectory;

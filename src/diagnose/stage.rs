@@ -2,10 +2,10 @@
 //! effect columns over both data sets; the nominal fit itself ([`fit_nominal`]) and the checks
 //! of the data it starts from.
 
-use super::context::Context;
-use super::library;
 use super::options::{DiagnoseError, Options};
 use super::select;
+use crate::effect::context::Context;
+use crate::effect::library;
 use crate::ident::{self, NormalEquations};
 use crate::model::Model;
 use crate::trajectory::Trajectory;
@@ -60,7 +60,7 @@ pub(super) fn check_data(
                 min: MIN_SAMPLES,
             });
         }
-        if super::context::sample_period(tr).is_none() {
+        if crate::effect::context::sample_period(tr).is_none() {
             return Err(DiagnoseError::NoSamplePeriod {
                 which,
                 span: tr.t[tr.len() - 1] - tr.t[0],

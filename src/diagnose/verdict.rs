@@ -3,8 +3,8 @@
 use super::anchor;
 use super::diagnosis::{EffectEstimate, Verdict};
 use super::gap::HowFar;
-use super::library::{self, Kind};
 use super::structure::StructureLeft;
+use crate::effect::library::{self, Kind};
 
 /// The verdict from what was selected and whether the final residual stays above the noise
 /// floor by more than `unexplained_ratio` (in mean square) or still has structure a generic

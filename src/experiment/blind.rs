@@ -11,8 +11,8 @@
 //! inertial-parameter errors drawn from the description prior ([`diagnose::anchor`]), and, for
 //! `rotor_inertia`, its rotors frozen into the links they sit on.
 
-use crate::diagnose::library::Kind;
 use crate::diagnose::{self, Diagnosis, Verdict};
+use crate::effect::library::Kind;
 use crate::experiment::tables;
 use crate::model::Model;
 use crate::sim::scenario::{EffectSpec, Scenario};
@@ -142,16 +142,14 @@ pub struct CaseResult {
 }
 
 /// Draws one effect of `kind` (its row of the effect table, `Kind::draw`, gives the ranges) or,
-/// for `None`, one outside the library: quadratic damping 0.5–1.5 N m s²/rad² per joint.
+/// for `None`, one outside the library ([`crate::effect::QuadraticDamping::draw`]).
 pub fn draw(kind: Option<Kind>, model: &Model, rng: &mut ChaCha8Rng, rate: f64) -> Injected {
     let Some(kind) = kind else {
-        let c: Vec<f64> = (0..model.dof())
-            .map(|_| 0.5 + rng.random::<f64>())
-            .collect();
+        let (spec, magnitudes) = crate::effect::QuadraticDamping::draw(model, rng);
         return Injected {
             kind: None,
-            magnitudes: c.clone(),
-            spec: Some(EffectSpec::QuadraticDamping { coefficient: c }),
+            magnitudes,
+            spec: Some(spec),
             change: None,
         };
     };
@@ -338,7 +336,7 @@ fn nominal_validation_ms(
 ) -> Result<f64, diagnose::DiagnoseError> {
     let (train, val) = tr.holdout_split(HOLDOUT);
     let fit = diagnose::fit_nominal(model, &train, opts)?;
-    let ctx = diagnose::library::Context::new(model, &fit.theta, &val, opts.processing_cutoff);
+    let ctx = crate::effect::library::Context::new(model, &fit.theta, &val, opts.processing_cutoff);
     let (_, res) = diagnose::residual_rms(&ctx, &val, &[], &fit.theta, opts.min_speed);
     // Pooled over every joint-sample at or above the speed threshold.
     Ok(diagnose::finite_mean_square(&diagnose::mask_slow(

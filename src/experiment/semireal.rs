@@ -23,14 +23,13 @@
 //! Case `i` takes base run `i mod runs` and slot `i mod 11` ([`slots`]), drawn from
 //! `ChaCha8(seed, stream i)`.
 
-use crate::diagnose::library::Kind;
 use crate::diagnose::{self, Diagnosis, Verdict};
+use crate::effect::library::Kind;
 use crate::experiment::tables;
 use crate::model::Model;
 use crate::prepare::Logged;
 use crate::sim::effects;
 use crate::sim::scenario::EffectSpec;
-use nalgebra::Vector3;
 use polars::prelude::*;
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
@@ -312,40 +311,12 @@ pub fn draw(i: usize, seed: u64, description: &Model, rate: f64) -> Injection {
     }
 }
 
-/// A payload of 0.5–3 kg on a random body after the first (the first's mass acts on no
-/// joint of an arm whose first axis is vertical), a 4 cm sphere centred at a random point of
-/// the body's bounding ellipsoid (within 10 cm of its frame without one).
+/// A payload on a random body ([`crate::effect::payload_on_any_body`]).
 fn draw_payload(slot: Slot, model: &Model, rng: &mut ChaCha8Rng) -> Injection {
-    let n = model.dof();
-    let body = rng.random_range(1.min(n - 1)..n);
-    let mass = 0.5 + 2.5 * rng.random::<f64>();
-    let unit = loop {
-        let u = Vector3::new(
-            2.0 * rng.random::<f64>() - 1.0,
-            2.0 * rng.random::<f64>() - 1.0,
-            2.0 * rng.random::<f64>() - 1.0,
-        );
-        if u.norm() <= 1.0 {
-            break u;
-        }
-    };
-    let com = match &model.bodies()[body].bounding {
-        Some(e) => {
-            let l =
-                e.qs.cholesky()
-                    .map_or(nalgebra::Matrix3::zeros(), |c| c.l());
-            e.center + l * unit
-        }
-        None => unit * 0.1,
-    };
+    let (spec, body, mass) = crate::effect::payload_on_any_body(model, rng);
     Injection {
         slot,
-        spec: Some(EffectSpec::Payload {
-            mass,
-            com: [com.x, com.y, com.z],
-            radius: 0.04,
-            body: Some(body + 1),
-        }),
+        spec: Some(spec),
         magnitudes: vec![mass],
         body: Some(body),
         visible: None,
@@ -360,11 +331,7 @@ fn draw_payload(slot: Slot, model: &Model, rng: &mut ChaCha8Rng) -> Injection {
 /// any diagnosis can name. Payloads and friction changes keep their physical draws.
 pub const VISIBLE: (f64, f64) = (1.5, 2.5);
 
-/// The largest error of a torque constant [`make_visible`] scales a gain to: a drawn 15–30 %
-/// scaled by [`MAX_SCALE`] would reach 120 %, a torque read with its sign reversed (a gain of
-/// −0.2), which no robot logs; a gain that stays below the visible growth at this bound is left
-/// there and scored among the cases that are not visible.
-pub const MAX_GAIN_ERROR: f64 = 0.5;
+pub use crate::effect::MAX_GAIN_ERROR;
 
 /// The largest factor [`make_visible`] scales a drawn effect by.
 pub const MAX_SCALE: f64 = 4.0;
@@ -401,43 +368,13 @@ pub fn description_rms(logged: &Logged, description: &Model) -> Option<f64> {
     (count > 0 && sum.is_finite()).then(|| (sum / count as f64).sqrt())
 }
 
-/// A library effect scaled by `s` about "no effect" (gains about 1, at most
-/// [`MAX_GAIN_ERROR`] off; stiffness as 1/k, a delay in whole samples, at least one), with its
-/// magnitudes; `None` for what is not scaled.
+/// A library effect scaled by `s` about "no effect" (its row's scaling, `Kind::scaled`), with
+/// its magnitudes; `None` for what is not scaled.
 fn scaled(inj: &Injection, s: f64, rate: f64) -> Option<(EffectSpec, Vec<f64>)> {
-    let times = |v: &[f64]| v.iter().map(|x| x * s).collect::<Vec<f64>>();
-    let spec = match inj.spec.as_ref()? {
-        EffectSpec::TorqueGain { gain } => {
-            let gain: Vec<f64> = gain
-                .iter()
-                .map(|g| 1.0 + ((g - 1.0) * s).clamp(-MAX_GAIN_ERROR, MAX_GAIN_ERROR))
-                .collect();
-            let relative = crate::diagnose::relative_to_median(&gain);
-            return Some((EffectSpec::TorqueGain { gain }, relative));
-        }
-        EffectSpec::TorqueOffset { offset } => EffectSpec::TorqueOffset {
-            offset: times(offset),
-        },
-        EffectSpec::Tilt { roll, pitch } => EffectSpec::Tilt {
-            roll: roll * s,
-            pitch: pitch * s,
-        },
-        EffectSpec::Compliance { stiffness } => EffectSpec::Compliance {
-            stiffness: stiffness.iter().map(|k| k / s).collect(),
-        },
-        EffectSpec::Backlash { width } => EffectSpec::Backlash {
-            width: times(width),
-        },
-        EffectSpec::TimeDelay { samples } => {
-            let samples = ((*samples as f64 * s).round() as usize).max(1);
-            return Some((
-                EffectSpec::TimeDelay { samples },
-                vec![samples as f64 / rate],
-            ));
-        }
-        _ => return None,
-    };
-    Some((spec, times(&inj.magnitudes)))
+    match inj.slot {
+        Slot::Effect(k) => k.scaled(inj.spec.as_ref()?, s, rate, &inj.magnitudes),
+        _ => None,
+    }
 }
 
 /// `inj` scaled up (never down, at most [`MAX_SCALE`]) until the description's torque RMS
@@ -492,17 +429,13 @@ pub fn make_visible(inj: &Injection, base: &Base, rate: f64) -> (Injection, f64)
 /// dynamics.
 pub fn inject(logged: &Logged, description: &Model, inj: &Injection) -> Logged {
     let n = logged.dof();
-    let (qd, qdd) = (
-        logged.qd.as_deref().unwrap_or(&[]),
-        logged.qdd.as_deref().unwrap_or(&[]),
-    );
+    let qd = logged.qd.as_deref().unwrap_or(&[]);
     let mut out = Logged {
         qd: None,
         qdd: None,
         ..logged.clone()
     };
     let rows = logged.len();
-    let at = |v: &[f64], k: usize| v[k * n..(k + 1) * n].to_vec();
     match (&inj.slot, &inj.spec) {
         (Slot::Clean, _) => {}
         (Slot::Friction, _) => {
@@ -515,52 +448,63 @@ pub fn inject(logged: &Logged, description: &Model, inj: &Injection) -> Logged {
                 }
             }
         }
-        (_, Some(spec @ (EffectSpec::Payload { .. } | EffectSpec::Tilt { .. }))) => {
-            let truth = effects::true_robot(description, std::slice::from_ref(spec));
-            let mut d0 = crate::dynamics::Data::new(description);
-            let mut d1 = crate::dynamics::Data::new(&truth);
-            for k in 0..rows {
-                let (q, w, a) = (at(&logged.q, k), at(qd, k), at(qdd, k));
-                let t0 = crate::dynamics::rnea(description, &mut d0, &q, &w, &a).clone();
-                let t1 = crate::dynamics::rnea(&truth, &mut d1, &q, &w, &a);
-                for j in 0..n {
-                    out.tau[k * n + j] += t1[j] - t0[j];
-                }
-            }
-        }
-        (_, Some(EffectSpec::TimeDelay { samples })) => {
-            let s = (*samples).min(rows.saturating_sub(1));
-            // The torque at sample k is the one of sample k − s: the first s samples go.
-            let tau: Vec<f64> = logged.tau[..(rows - s) * n].to_vec();
-            out.t = logged.t[s..].to_vec();
-            out.q = logged.q[s * n..].to_vec();
-            out.tau = tau;
-        }
-        (_, Some(spec @ (EffectSpec::Compliance { .. } | EffectSpec::Backlash { .. }))) => {
-            let specs = std::slice::from_ref(spec);
-            let mut zone = effects::DeadZone::new(description, specs);
-            for k in 0..rows {
-                let tau = at(&logged.tau, k);
-                let dt = if k + 1 < rows {
-                    logged.t[k + 1] - logged.t[k]
-                } else {
-                    0.0
-                };
-                let offsets = zone.as_mut().map(|z| z.step(&tau, dt));
-                let q = effects::logged_angle(specs, &at(&logged.q, k), &tau, offsets.as_deref());
-                out.q[k * n..(k + 1) * n].copy_from_slice(&q);
-            }
-        }
-        (_, Some(spec)) => {
-            let specs = std::slice::from_ref(spec);
-            for k in 0..rows {
-                let tau = effects::logged_torque(specs, &at(&logged.tau, k));
-                out.tau[k * n..(k + 1) * n].copy_from_slice(&tau);
-            }
-        }
+        (_, Some(spec)) => inject_effect(logged, description, spec, &mut out),
         (_, None) => {}
     }
     out
+}
+
+/// `spec` injected into `out` (a copy of `logged` without q̇, q̈) the way the simulator makes
+/// it (`crate::effect::Physics`): a changed robot's extra torque from the logged motion (the
+/// inverse dynamics of the truth less the description's), a delay in whole samples, the
+/// encoder's angle (a compliance or a dead zone driven by the logged torque), the logged
+/// torque (gains, offsets). A stage the effect does not act through leaves the log as it is.
+fn inject_effect(logged: &Logged, description: &Model, spec: &EffectSpec, out: &mut Logged) {
+    let n = logged.dof();
+    let rows = logged.len();
+    let at = |v: &[f64], k: usize| v[k * n..(k + 1) * n].to_vec();
+    let physics = spec.physics();
+    if let Some(truth) = physics.on_robot(description) {
+        let (qd, qdd) = (
+            logged.qd.as_deref().unwrap_or(&[]),
+            logged.qdd.as_deref().unwrap_or(&[]),
+        );
+        let mut d0 = crate::dynamics::Data::new(description);
+        let mut d1 = crate::dynamics::Data::new(&truth);
+        for k in 0..rows {
+            let (q, w, a) = (at(&logged.q, k), at(qd, k), at(qdd, k));
+            let t0 = crate::dynamics::rnea(description, &mut d0, &q, &w, &a).clone();
+            let t1 = crate::dynamics::rnea(&truth, &mut d1, &q, &w, &a);
+            for j in 0..n {
+                out.tau[k * n + j] += t1[j] - t0[j];
+            }
+        }
+        return;
+    }
+    let delay = physics.delay_samples();
+    if delay > 0 {
+        let s = delay.min(rows.saturating_sub(1));
+        // The torque at sample k is the one of sample k − s: the first s samples go.
+        out.tau = logged.tau[..(rows - s) * n].to_vec();
+        out.t = logged.t[s..].to_vec();
+        out.q = logged.q[s * n..].to_vec();
+        return;
+    }
+    let specs = std::slice::from_ref(spec);
+    let mut zone = effects::DeadZone::new(description, specs);
+    for k in 0..rows {
+        let tau = at(&logged.tau, k);
+        let dt = if k + 1 < rows {
+            logged.t[k + 1] - logged.t[k]
+        } else {
+            0.0
+        };
+        let offsets = zone.as_mut().map(|z| z.step(&tau, dt));
+        let q = effects::logged_angle(specs, &at(&logged.q, k), &tau, offsets.as_deref());
+        out.q[k * n..(k + 1) * n].copy_from_slice(&q);
+        let tau = effects::logged_torque(specs, &tau);
+        out.tau[k * n..(k + 1) * n].copy_from_slice(&tau);
+    }
 }
 
 /// A CSV of `t`, `q1..qn`, `tau1..taun` (the physid format without q̇, q̈).
@@ -935,8 +879,9 @@ pub fn write(
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::effect::{Compliance, Payload, TimeDelay, TorqueGain, TorqueOffset};
     use crate::spatial::InertialParams;
-    use nalgebra::{DMatrix, Matrix3};
+    use nalgebra::{DMatrix, Matrix3, Vector3};
 
     /// A short logged run of the Cheetah leg: sinusoids with their exact derivatives.
     fn logged(model: &Model) -> Logged {
@@ -971,12 +916,12 @@ mod tests {
         let (mass, com, radius) = (1.3, [0.02, -0.01, -0.15], 0.04);
         let inj = Injection {
             slot: Slot::Payload,
-            spec: Some(EffectSpec::Payload {
+            spec: Some(EffectSpec::Payload(Payload {
                 mass,
                 com,
                 radius,
                 body: Some(n),
-            }),
+            })),
             magnitudes: vec![mass],
             body: Some(n - 1),
             visible: None,
@@ -1018,7 +963,7 @@ mod tests {
             &model,
             &Injection {
                 slot: Slot::Effect(Kind::TimeDelay),
-                spec: Some(EffectSpec::TimeDelay { samples: 3 }),
+                spec: Some(EffectSpec::TimeDelay(TimeDelay { samples: 3 })),
                 magnitudes: vec![3.0],
                 body: None,
                 visible: None,
@@ -1034,7 +979,7 @@ mod tests {
             &model,
             &Injection {
                 slot: Slot::Effect(Kind::Compliance),
-                spec: Some(EffectSpec::Compliance { stiffness: k }),
+                spec: Some(EffectSpec::Compliance(Compliance { stiffness: k })),
                 magnitudes: vec![],
                 body: None,
                 visible: None,
@@ -1107,9 +1052,9 @@ mod tests {
         let clean = description_rms(&log, &model).unwrap();
         let offset = Injection {
             slot: Slot::Effect(Kind::TorqueOffset),
-            spec: Some(EffectSpec::TorqueOffset {
+            spec: Some(EffectSpec::TorqueOffset(TorqueOffset {
                 offset: vec![0.5; n],
-            }),
+            })),
             magnitudes: vec![0.5; n],
             body: None,
             visible: None,
@@ -1128,14 +1073,14 @@ mod tests {
         gain[n - 1] = 1.01;
         let small = Injection {
             slot: Slot::Effect(Kind::TorqueGain),
-            spec: Some(EffectSpec::TorqueGain { gain }),
+            spec: Some(EffectSpec::TorqueGain(TorqueGain { gain })),
             magnitudes: vec![0.0, 0.0, 0.01],
             body: None,
             visible: Some(1.01),
         };
         let (scaled, growth) = make_visible(&small, &base, 1000.0);
         assert!((growth - 1.01).abs() < 0.002, "{growth}");
-        let Some(EffectSpec::TorqueGain { gain }) = &scaled.spec else {
+        let Some(EffectSpec::TorqueGain(TorqueGain { gain })) = &scaled.spec else {
             panic!("{:?}", scaled.spec)
         };
         let s = (gain[n - 1] - 1.0) / 0.01;
@@ -1157,13 +1102,13 @@ mod tests {
         let mut gain = vec![1.0; n];
         gain[n - 1] = 0.7;
         let large = Injection {
-            spec: Some(EffectSpec::TorqueGain { gain }),
+            spec: Some(EffectSpec::TorqueGain(TorqueGain { gain })),
             magnitudes: vec![0.0, 0.0, -0.3],
             visible: Some(10.0),
             ..small.clone()
         };
         let (bounded, growth) = make_visible(&large, &base, 1000.0);
-        let Some(EffectSpec::TorqueGain { gain }) = &bounded.spec else {
+        let Some(EffectSpec::TorqueGain(TorqueGain { gain })) = &bounded.spec else {
             panic!("{:?}", bounded.spec)
         };
         assert!(

@@ -12,7 +12,7 @@
 
 pub use super::context::Context;
 use super::context::{Sample, Scratch};
-pub use super::kinds::Kind;
+pub use super::Kind;
 use crate::dynamics::{regressor, Data};
 use crate::trajectory::Trajectory;
 use nalgebra::DMatrix;

@@ -2,10 +2,12 @@
 //!
 //! One row of the effect table (`super::KIND_TABLE`); equations and units in docs/diagnose.md.
 
+use super::physics::{self, Physics, ScenarioError, State};
+use super::EffectSpec;
 use super::{per_joint, row, uniform, Blind, ColumnCount::PerJoint, Kind, KindSpec};
 use crate::model::Model;
-use crate::sim::scenario::EffectSpec;
 use rand_chacha::ChaCha8Rng;
+use serde::{Deserialize, Serialize};
 
 /// The kind's row: name, columns, magnitudes, replay and the blind benchmark's draw.
 pub(super) const SPEC: KindSpec = KindSpec {
@@ -28,10 +30,10 @@ fn replay_spring(m: &Model, c: &[f64], _: f64, _: f64) -> Option<EffectSpec> {
     let rest = (0..n)
         .map(|j| if c[j] != 0.0 { -c[n + j] / c[j] } else { 0.0 })
         .collect();
-    Some(EffectSpec::Spring {
+    Some(EffectSpec::Spring(Spring {
         stiffness: c[..n].to_vec(),
         rest,
-    })
+    }))
 }
 
 /// A spring per joint: stiffness 3–10 N m/rad about a rest angle within ±0.3 rad of
@@ -51,9 +53,41 @@ fn draw_spring(model: &Model, rng: &mut ChaCha8Rng, _: f64) -> (Option<EffectSpe
             mid + uniform(rng, -0.3, 0.3)
         })
         .collect();
-    let spec = EffectSpec::Spring {
+    let spec = EffectSpec::Spring(Spring {
         stiffness: k.clone(),
         rest,
-    };
+    });
     (Some(spec), k)
+}
+
+/// Acting `τ = −k (q − q_0)` (N m/rad, rad): a cable or hose.
+#[derive(Clone, Debug, Deserialize, Serialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct Spring {
+    /// Stiffness per joint (N m/rad).
+    pub stiffness: Vec<f64>,
+    /// Rest position per joint (rad).
+    pub rest: Vec<f64>,
+}
+
+impl Physics for Spring {
+    fn toml_body(&self) -> String {
+        let l = physics::toml_list;
+        format!(
+            "stiffness = {}\nrest = {}",
+            l(&self.stiffness),
+            l(&self.rest)
+        )
+    }
+
+    fn validate(&self, n: usize, key: &dyn Fn(&str) -> String) -> Result<(), ScenarioError> {
+        physics::per_joint(&self.stiffness, n, &key("stiffness"))?;
+        physics::per_joint(&self.rest, n, &key("rest"))
+    }
+
+    fn act(&self, x: &State, out: &mut [f64]) {
+        for (j, o) in out.iter_mut().enumerate() {
+            *o -= self.stiffness[j] * (x.q[j] - self.rest[j]);
+        }
+    }
 }

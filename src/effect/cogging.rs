@@ -2,11 +2,13 @@
 //!
 //! One row of the effect table (`super::KIND_TABLE`); equations and units in docs/diagnose.md.
 
+use super::physics::{self, Physics, ScenarioError, State};
+use super::EffectSpec;
 use super::{per_joint, row, Blind, ColumnCount::PerJoint, Grid, Kind, KindSpec};
 use crate::model::Model;
-use crate::sim::scenario::EffectSpec;
 use rand::Rng;
 use rand_chacha::ChaCha8Rng;
+use serde::{Deserialize, Serialize};
 
 /// The kind's row: name, columns, magnitudes, replay and the blind benchmark's draw.
 pub(super) const SPEC: KindSpec = KindSpec {
@@ -33,11 +35,11 @@ pub(super) const SPEC: KindSpec = KindSpec {
 /// Cogging's amplitude and phase from its sine and cosine coefficients.
 fn replay_cogging(m: &Model, c: &[f64], h: f64, _: f64) -> Option<EffectSpec> {
     let n = m.dof();
-    Some(EffectSpec::Cogging {
+    Some(EffectSpec::Cogging(Cogging {
         amplitude: (0..n).map(|j| c[j].hypot(c[n + j])).collect(),
         harmonic: vec![h; n],
         phase: (0..n).map(|j| c[n + j].atan2(c[j])).collect(),
-    })
+    }))
 }
 
 /// Cogging of amplitude 0.2–0.8 N m at one harmonic 1–8 of N q, random phases.
@@ -46,10 +48,56 @@ fn draw_cogging(model: &Model, rng: &mut ChaCha8Rng, _: f64) -> (Option<EffectSp
     let a = per_joint(rng, n, 0.2, 0.8);
     let h = rng.random_range(1..=8u32) as f64;
     let phase = per_joint(rng, n, 0.0, std::f64::consts::TAU);
-    let spec = EffectSpec::Cogging {
+    let spec = EffectSpec::Cogging(Cogging {
         amplitude: a.clone(),
         harmonic: vec![h; n],
         phase,
-    };
+    });
     (Some(spec), a)
+}
+
+/// Cogging / torque ripple at a harmonic of the rotor angle: acting `−A sin(h N q + φ)`,
+/// `N` the joint's gear ratio (1 without a rotor).
+#[derive(Clone, Debug, Deserialize, Serialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct Cogging {
+    /// Amplitude per joint (N m).
+    pub amplitude: Vec<f64>,
+    /// Harmonic per joint (cycles per rotor revolution).
+    pub harmonic: Vec<f64>,
+    /// Phase per joint (rad); default 0.
+    #[serde(default)]
+    pub phase: Vec<f64>,
+}
+
+impl Physics for Cogging {
+    fn toml_body(&self) -> String {
+        let l = physics::toml_list;
+        format!(
+            "amplitude = {}\nharmonic = {}\nphase = {}",
+            l(&self.amplitude),
+            l(&self.harmonic),
+            l(&self.phase)
+        )
+    }
+
+    fn validate(&self, n: usize, key: &dyn Fn(&str) -> String) -> Result<(), ScenarioError> {
+        physics::per_joint(&self.amplitude, n, &key("amplitude"))?;
+        physics::per_joint(&self.harmonic, n, &key("harmonic"))?;
+        if !self.phase.is_empty() {
+            physics::per_joint(&self.phase, n, &key("phase"))?;
+        }
+        Ok(())
+    }
+
+    fn act(&self, x: &State, out: &mut [f64]) {
+        for (j, o) in out.iter_mut().enumerate() {
+            let gear = x.model.bodies()[j]
+                .rotor
+                .as_ref()
+                .map_or(1.0, |r| r.gear_ratio);
+            let ph = self.phase.get(j).copied().unwrap_or(0.0);
+            *o -= self.amplitude[j] * (self.harmonic[j] * gear * x.q[j] + ph).sin();
+        }
+    }
 }

@@ -3,21 +3,36 @@
 //!
 //! One row of the effect table (`super::KIND_TABLE`); equations and units in docs/diagnose.md.
 
-use super::{row, uniform, Blind, ColumnCount::Fixed, Kind, KindSpec};
-use crate::diagnose::context::{Context, Sample, Scratch};
+use super::context::{Context, Sample, Scratch};
+use super::physics::{self, Physics, ScenarioError};
+use super::EffectSpec;
+use super::{row, times, uniform, Blind, ColumnCount::Fixed, Kind, KindSpec};
 use crate::dynamics::{regressor, Data};
 use crate::model::Model;
-use crate::sim::scenario::EffectSpec;
+use crate::spatial::rot_axis_angle;
 use nalgebra::{DMatrix, Vector3};
 use rand_chacha::ChaCha8Rng;
+use serde::{Deserialize, Serialize};
 
 /// The kind's row: name, columns, magnitudes, replay and the blind benchmark's draw.
 pub(super) const SPEC: KindSpec = KindSpec {
     magnitude: ("tilt angle", "rad"),
     linearized: true,
     magnitudes: |c, _, g| vec![(c[0].hypot(c[1]) / g).atan()],
-    replay: |m, c, _, _| tilt_angles(m, c).map(|(roll, pitch)| EffectSpec::Tilt { roll, pitch }),
+    replay: |m, c, _, _| {
+        tilt_angles(m, c).map(|(roll, pitch)| EffectSpec::Tilt(Tilt { roll, pitch }))
+    },
     blind: Blind::Single,
+    scale: Some(|spec, s, _, m| match spec {
+        EffectSpec::Tilt(t) => Some((
+            EffectSpec::Tilt(Tilt {
+                roll: t.roll * s,
+                pitch: t.pitch * s,
+            }),
+            times(m, s),
+        )),
+        _ => None,
+    }),
     draw: draw_tilt,
     ..row(Kind::Tilt, "tilt", Fixed(2), fill_tilt)
 };
@@ -68,9 +83,67 @@ fn tilt_angles(model: &Model, c: &[f64]) -> Option<(f64, f64)> {
 fn draw_tilt(_: &Model, rng: &mut ChaCha8Rng, _: f64) -> (Option<EffectSpec>, Vec<f64>) {
     let angle = uniform(rng, 0.2, 0.35);
     let dir = uniform(rng, 0.0, std::f64::consts::TAU);
-    let spec = EffectSpec::Tilt {
+    let spec = EffectSpec::Tilt(Tilt {
         roll: angle * dir.cos(),
         pitch: angle * dir.sin(),
-    };
+    });
     (Some(spec), vec![angle])
+}
+
+/// The base is tilted: the true gravity is the model's rotated by roll (about x) and pitch
+/// (about y) (rad).
+#[derive(Clone, Debug, Deserialize, Serialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct Tilt {
+    /// Roll (rad).
+    pub roll: f64,
+    /// Pitch (rad).
+    pub pitch: f64,
+}
+
+impl Physics for Tilt {
+    fn toml_body(&self) -> String {
+        format!("roll = {:.6e}\npitch = {:.6e}", self.roll, self.pitch)
+    }
+
+    fn validate(&self, _: usize, key: &dyn Fn(&str) -> String) -> Result<(), ScenarioError> {
+        let (roll, pitch) = (self.roll, self.pitch);
+        physics::check(
+            roll.is_finite() && pitch.is_finite() && roll.abs() < 1.0 && pitch.abs() < 1.0,
+            &key("roll"),
+            || "roll and pitch must be finite and below 1 rad".into(),
+        )
+    }
+
+    fn on_robot(&self, model: &Model) -> Option<Model> {
+        let r =
+            rot_axis_angle(&Vector3::y(), self.pitch) * rot_axis_angle(&Vector3::x(), self.roll);
+        Some(model.clone().with_gravity(r.transpose() * model.gravity()))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn tilt_angles_invert_the_simulators_tilt() {
+        let model = crate::model::cheetah3::leg();
+        for (roll, pitch) in [(0.01, -0.02), (-0.003, 0.0), (0.05, 0.04)] {
+            let spec = EffectSpec::Tilt(Tilt { roll, pitch });
+            let tilted = spec.physics().on_robot(&model).expect("tilted").gravity();
+            // The library's coefficients: Δg along u₁ = x and u₂ = −y.
+            let dg = tilted - model.gravity();
+            let Some(EffectSpec::Tilt(Tilt { roll: r, pitch: p })) =
+                Kind::Tilt.replay(&model, &[dg.x, -dg.y], 0.0, 1e-3)
+            else {
+                panic!("no tilt replayed")
+            };
+            assert!((r - roll).abs() < 1e-12, "{r} {roll}");
+            assert!(
+                (p - pitch).abs() < 1e-4 * pitch.abs().max(1e-3),
+                "{p} {pitch}"
+            );
+        }
+    }
 }

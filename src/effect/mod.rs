@@ -1,12 +1,16 @@
-//! The effect kinds of the library, one file each (`kinds/<name>.rs`, its `SPEC` one entry of
-//! [`KIND_TABLE`]): its name, its regressor columns, its magnitudes, its scenario form (to replay
-//! a calibrated robot in the simulator) and the blind benchmark's draw. A new kind is one file
-//! here, one line in the table and one `Kind` variant, plus, if the simulator does not yet make
-//! it, one `sim::scenario::EffectSpec` variant with its physics (the simulator's floor does not
-//! know the diagnosis). Equations and units in `docs/diagnose.md`.
+//! The effect library: every effect the rigid-body model leaves out, one file per kind
+//! (`effect/<name>.rs`). A kind's file holds all physid knows about it: its row of
+//! [`KIND_TABLE`] (name, regressor columns, magnitudes, search grid, replay as a scenario
+//! effect, the blind benchmark's draw and, for the semi-real benchmark, its scaling), and its
+//! simulator form (the scenario's `[[effects]]` struct, its checks and TOML, and its physics
+//! behind [`Physics`]: an acting torque, the logged torque or angle, a delay, the robot itself).
+//! A new kind is one file here plus its line in the table, its `Kind` variant and, if the
+//! simulator makes it, its [`EffectSpec`] variant (`spec.rs`). The per-data state the columns
+//! read is [`context`], the columns over a data set [`library`]. Both the simulator (`sim`) and
+//! the diagnosis (`diagnose`) stand on this floor. Equations and units in `docs/diagnose.md`.
 //!
-//! Sign convention: a coefficient is the physical magnitude of the injected effect
-//! (`crate::sim::effects`), e.g. the columns of an acting friction are `−∂τ_effect/∂c` because the
+//! Sign convention: a coefficient is the physical magnitude of the injected effect (each
+//! kind's [`Physics`]), e.g. the columns of an acting friction are `−∂τ_effect/∂c` because the
 //! motor torque must overcome it.
 
 mod asymmetric_coulomb;
@@ -15,6 +19,7 @@ mod cogging;
 mod compliance;
 mod load_dependent_friction;
 mod payload;
+mod quadratic_damping;
 mod rotor_inertia;
 mod spring;
 mod stribeck;
@@ -23,13 +28,101 @@ mod time_delay;
 mod torque_gain;
 mod torque_offset;
 
-use super::context::{backlash_widths, Context, Sample, Scratch};
+pub mod context;
+mod dead_zone;
+pub mod library;
+pub mod physics;
+
+pub use asymmetric_coulomb::AsymmetricCoulomb;
+pub use backlash::Backlash;
+pub use cogging::Cogging;
+pub use compliance::Compliance;
+pub use dead_zone::DeadZone;
+pub use load_dependent_friction::LoadDependentFriction;
+pub use payload::{payload_on_any_body, Payload, MAX_PAYLOAD_MASS, MAX_PAYLOAD_OFFSET};
+pub use physics::{toml_list, Physics, ScenarioError, State};
+pub use quadratic_damping::QuadraticDamping;
+pub use spring::Spring;
+pub use stribeck::Stribeck;
+pub use tilt::Tilt;
+pub use time_delay::{TimeDelay, MAX_DELAY_SAMPLES};
+pub use torque_gain::{relative_to_median, TorqueGain, MAX_GAIN_ERROR};
+pub use torque_offset::TorqueOffset;
+
 use crate::model::Model;
-use crate::sim::scenario::EffectSpec;
+use context::{backlash_widths, Context, Sample, Scratch};
 use nalgebra::DMatrix;
 use rand::Rng;
 use rand_chacha::ChaCha8Rng;
-use serde::Serialize;
+use serde::{Deserialize, Serialize};
+
+/// An effect the rigid-body model leaves out, injected into the simulation (equations and units
+/// in `docs/scenario-format.md` and each kind's file). Per-joint lists have one entry per
+/// joint. Unknown kinds and keys are rejected.
+#[derive(Clone, Debug, Deserialize, Serialize, PartialEq)]
+#[serde(tag = "kind", rename_all = "snake_case")]
+pub enum EffectSpec {
+    /// Logged torque `+= offset` (N m): a sensor effect, it does not act.
+    TorqueOffset(TorqueOffset),
+    /// Logged torque `×= gain` (a torque-constant error): a sensor effect.
+    TorqueGain(TorqueGain),
+    /// The logged torque lags the kinematics by whole control periods: a sensor effect.
+    TimeDelay(TimeDelay),
+    /// Acting `τ = −k (q − q_0)` (N m/rad, rad): a cable or hose.
+    Spring(Spring),
+    /// Stribeck friction: extra resistance `F_s exp(−(q̇/v_st)²) tanh(q̇/v_s)` at low speed.
+    Stribeck(Stribeck),
+    /// Direction-dependent Coulomb friction: extra `δ max(0, tanh(q̇/v_s))`.
+    AsymmetricCoulomb(AsymmetricCoulomb),
+    /// Load-dependent friction: extra `μ |τ_mot| tanh(q̇/v_s)` (gear mesh losses).
+    LoadDependentFriction(LoadDependentFriction),
+    /// Cogging / torque ripple at a harmonic of the rotor angle: acting `−A sin(h N q + φ)`.
+    Cogging(Cogging),
+    /// A compliant transmission read on the motor side: the encoder reads `q + τ_mot / k`.
+    Compliance(Compliance),
+    /// Backlash read on the motor side: the encoder reads `q + s`, `|s| ≤ b/2`.
+    Backlash(Backlash),
+    /// Quadratic (fluid) damping `−c q̇ |q̇|`: not in the diagnosis's library.
+    QuadraticDamping(QuadraticDamping),
+    /// The base is tilted: gravity rotated by roll and pitch.
+    Tilt(Tilt),
+    /// An unmodelled payload: a solid sphere on one body.
+    Payload(Payload),
+}
+
+impl EffectSpec {
+    /// The effect's physics and scenario form.
+    pub fn physics(&self) -> &dyn Physics {
+        match self {
+            EffectSpec::TorqueOffset(e) => e,
+            EffectSpec::TorqueGain(e) => e,
+            EffectSpec::TimeDelay(e) => e,
+            EffectSpec::Spring(e) => e,
+            EffectSpec::Stribeck(e) => e,
+            EffectSpec::AsymmetricCoulomb(e) => e,
+            EffectSpec::LoadDependentFriction(e) => e,
+            EffectSpec::Cogging(e) => e,
+            EffectSpec::Compliance(e) => e,
+            EffectSpec::Backlash(e) => e,
+            EffectSpec::QuadraticDamping(e) => e,
+            EffectSpec::Tilt(e) => e,
+            EffectSpec::Payload(e) => e,
+        }
+    }
+
+    /// The effect's keys as the lines of a scenario's `[[effects]]` table, without its
+    /// `kind = …` line (numbers as [`toml_list`] writes them).
+    pub fn toml_body(&self) -> String {
+        self.physics().toml_body()
+    }
+
+    /// Checks effect `i` of a scenario against the robot's `n` joints (its keys are named
+    /// `effects[i].…`).
+    pub fn validate(&self, i: usize, n: usize) -> Result<(), ScenarioError> {
+        self.physics()
+            .validate(n, &|f: &str| format!("effects[{i}].{f}"))
+    }
+}
 
 /// An effect kind the diagnosis can offer.
 #[derive(
@@ -63,7 +156,7 @@ pub enum Kind {
     Compliance,
     /// Backlash read by a motor-side encoder: `q_logged = q + s`, `s ∈ [−b/2, b/2]` the motor's
     /// offset in a dead zone of width `b` (rad per joint) that it crosses driven by its own
-    /// torque (`sim::effects::DeadZone`).
+    /// torque (`effect::DeadZone`).
     Backlash,
     /// An unmodelled payload on one body (searched over the bodies): ten inertial parameters
     /// `π_p` added to it (that body's own regressor columns; reported as its mass, kg), so also
@@ -120,6 +213,9 @@ type Replay = fn(&Model, &[f64], f64, f64) -> Option<EffectSpec>;
 /// The blind benchmark's draw: `(model, rng, rate)` → the effect (`None` when it is a change of
 /// the description instead) and its true magnitudes.
 type Draw = fn(&Model, &mut ChaCha8Rng, f64) -> (Option<EffectSpec>, Vec<f64>);
+/// The semi-real benchmark's scaling of a drawn effect about "no effect": `(spec, s, rate,
+/// magnitudes)` → the effect `s` times as strong and its magnitudes (`None`: not this kind).
+type Scale = fn(&EffectSpec, f64, f64, &[f64]) -> Option<(EffectSpec, Vec<f64>)>;
 
 /// Everything physid knows about one kind: one row of [`KIND_TABLE`].
 pub(super) struct KindSpec {
@@ -159,6 +255,14 @@ pub(super) struct KindSpec {
     pub description: Option<fn(&Model) -> Model>,
     pub blind: Blind,
     pub draw: Draw,
+    /// How the semi-real benchmark scales it to be visible on a real log (`None`: not
+    /// injected there).
+    pub scale: Option<Scale>,
+}
+
+/// `v` times `s`, element by element.
+fn times(v: &[f64], s: f64) -> Vec<f64> {
+    v.iter().map(|x| x * s).collect()
 }
 
 const fn row(kind: Kind, name: &'static str, columns: ColumnCount, fill: Fill) -> KindSpec {
@@ -182,6 +286,7 @@ const fn row(kind: Kind, name: &'static str, columns: ColumnCount, fill: Fill) -
         description: None,
         blind: Blind::No,
         draw: |_, _, _| (None, vec![]),
+        scale: None,
     }
 }
 
@@ -396,6 +501,19 @@ impl Kind {
         ]
     }
 
+    /// `spec` (an effect of this kind) `s` times as strong about "no effect", with its
+    /// magnitudes scaled alike, for the semi-real benchmark (sample rate `rate`, Hz); `None`
+    /// if the kind is not injected there or `spec` is not of this kind.
+    pub fn scaled(
+        &self,
+        spec: &EffectSpec,
+        s: f64,
+        rate: f64,
+        magnitudes: &[f64],
+    ) -> Option<(EffectSpec, Vec<f64>)> {
+        (self.spec().scale?)(spec, s, rate, magnitudes)
+    }
+
     /// The kinds the blind benchmark draws in single-effect cases, in report order.
     pub fn blind_singles() -> Vec<Kind> {
         KIND_TABLE
@@ -606,5 +724,26 @@ mod tests {
                 }
             }
         }
+    }
+
+    #[test]
+    fn a_scenario_effect_with_an_unknown_key_or_kind_is_rejected_by_name() {
+        // Each kind's struct rejects keys it does not have (the enum only reads the tag).
+        let err = |text: &str| toml::from_str::<EffectSpec>(text).unwrap_err().to_string();
+        let e = err("kind = \"backlash\"\nwidth = [0.01]\nbogus = 1\n");
+        assert!(
+            e.contains("unknown field `bogus`") && e.contains("width"),
+            "{e}"
+        );
+        let e = err(
+            "kind = \"payload\"\nmass = 1.0\ncom = [0, 0, 0]\nradius = 0.1\nbody = 1\nspin = 2\n",
+        );
+        assert!(e.contains("unknown field `spin`"), "{e}");
+        let e = err("kind = \"friction_drift\"\ncoefficient = [1.0]\n");
+        assert!(e.contains("friction_drift"), "{e}");
+        // And a value out of range names its key with the effect's index.
+        let spec: EffectSpec = toml::from_str("kind = \"time_delay\"\nsamples = 0\n").unwrap();
+        let e = spec.validate(3, 2).unwrap_err();
+        assert_eq!(e.key, "effects[3].samples");
     }
 }

@@ -13,7 +13,7 @@ use nalgebra::{DMatrix, DVector, Vector3};
 /// time stamps that do not advance): then nothing is differentiated or filtered, and the
 /// columns made of processed signals (compliance, backlash) are zero, never computed at a
 /// made-up rate. The diagnosis refuses such data up front (`stage::check_data`).
-pub(super) fn sample_period(tr: &Trajectory) -> Option<f64> {
+pub(crate) fn sample_period(tr: &Trajectory) -> Option<f64> {
     tr.sample_period().filter(|dt| dt.is_finite() && *dt > 0.0)
 }
 
@@ -70,13 +70,13 @@ impl Layout {
 
 /// The backlash grid: the dead-zone widths (rad) whose motor offsets [`Context`] runs (the
 /// kind table's backlash grid is this).
-pub(super) fn backlash_widths() -> Vec<f64> {
+pub(crate) fn backlash_widths() -> Vec<f64> {
     (0..3).map(|i| 0.01 * 2f64.powi(i)).collect()
 }
 
 /// One sample as a kind's columns see it: index `k` of `n` joints, the processed state, and the
 /// variant's grid value.
-pub(super) struct Sample<'s> {
+pub(crate) struct Sample<'s> {
     pub k: usize,
     pub n: usize,
     /// Joint angles (rad), velocities (rad/s), accelerations (rad/s²).
@@ -88,7 +88,7 @@ pub(super) struct Sample<'s> {
 }
 
 /// Workspaces the columns reuse from sample to sample.
-pub(super) struct Scratch {
+pub(crate) struct Scratch {
     pub data: Data,
     /// A regressor (`n × p₀`).
     pub yg: DMatrix<f64>,
@@ -101,25 +101,25 @@ pub(super) struct Scratch {
 /// What the columns of one data set need besides the samples: the nominal prediction `Y θ̂₀`
 /// and its time derivatives, computed once over the whole trajectory.
 pub struct Context<'a> {
-    pub(super) model: &'a Model,
-    pub(super) theta0: DVector<f64>,
+    pub(crate) model: &'a Model,
+    pub(crate) theta0: DVector<f64>,
     /// `θ̂₀` without Coulomb friction (smooth in time), for the linearized kinematic effects.
-    pub(super) theta_smooth: DVector<f64>,
+    pub(crate) theta_smooth: DVector<f64>,
     /// `Y_k θ̂₀`, sample-major.
-    pub(super) pred: Vec<f64>,
+    pub(crate) pred: Vec<f64>,
     /// The first derivative (N m/s, central differences) of the prediction without Coulomb
     /// friction.
-    pub(super) pred_d: Vec<f64>,
+    pub(crate) pred_d: Vec<f64>,
     /// The logged torque processed like the encoder signal (filtered; filtered derivative;
     /// filtered derivative of that), for the deflection of a compliant transmission.
-    pub(super) defl: [Vec<f64>; 3],
+    pub(crate) defl: [Vec<f64>; 3],
     /// The offset of a motor-side encoder across a backlash dead zone of unit width, processed
     /// like the encoder signal, per width of the backlash grid (`(0, ½ sign)` for the tangent
     /// first): see [`Context::slack`].
-    pub(super) slack: Vec<(f64, [Vec<f64>; 3])>,
+    pub(crate) slack: Vec<(f64, [Vec<f64>; 3])>,
     /// Two unit vectors perpendicular to gravity (the tilt directions).
-    pub(super) perp: [Vector3<f64>; 2],
-    pub(super) gear: Vec<f64>,
+    pub(crate) perp: [Vector3<f64>; 2],
+    pub(crate) gear: Vec<f64>,
 }
 
 /// `x` (sample-major, `n` columns) processed like an encoder angle: `F(x)`, `F(D x)`,
@@ -230,21 +230,16 @@ fn processed_without_own(x: &[f64], at: &Layout, cutoff: f64, taps: &OwnTaps) ->
 }
 
 /// The motor's offset in a backlash dead zone of `width` (rad) driven by the torque `tau`
-/// (sample-major), divided by the width: `sim::effects::DeadZone` with the model's rotors.
+/// (sample-major), divided by the width: `effect::DeadZone` with the model's rotors.
 fn dead_zone_offsets(model: &Model, tau: &[f64], at: &Layout, width: f64) -> Vec<f64> {
     let n = at.n;
     let Some(dt) = at.dt else {
         return vec![0.0; tau.len()];
     };
-    let effects = [crate::sim::scenario::EffectSpec::Backlash {
-        width: vec![width; n],
-    }];
     let mut out = Vec::with_capacity(tau.len());
     for run in at.runs.iter().cloned() {
         // Each run starts afresh, the motor against the side its first torque pushes it to.
-        let Some(mut zone) = crate::sim::effects::DeadZone::new(model, &effects) else {
-            return vec![0.0; tau.len()];
-        };
+        let mut zone = super::dead_zone::DeadZone::of_widths(model, vec![width; n]);
         let run_tau = &tau[run.start * n..run.end * n];
         out.extend(
             run_tau
@@ -291,10 +286,14 @@ impl<'a> Context<'a> {
         }
         let mut pred = Vec::with_capacity(tr.len() * n);
         let mut smooth = Vec::with_capacity(tr.len() * n);
-        crate::ident::normal::for_each_regressor(model, tr, 0..tr.len(), &mut |_, y| {
-            pred.extend((y * &theta0).iter());
-            smooth.extend((y * &theta_smooth).iter());
-        });
+        let mut data = Data::new(model);
+        let mut y = DMatrix::zeros(n, l.len);
+        for k in 0..tr.len() {
+            let qdd = tr.qdd_at(k).expect("the diagnosis's data carry q̈");
+            regressor(model, &mut data, tr.q_at(k), tr.qd_at(k), qdd, &mut y);
+            pred.extend((&y * &theta0).iter());
+            smooth.extend((&y * &theta_smooth).iter());
+        }
         // Without the Coulomb jumps: a delayed jump only matters within the masked slow rows,
         // and differencing it would put spikes into every fitted row next to a reversal.
         let pred_d = derivative(&smooth, tr, n);
@@ -309,7 +308,7 @@ impl<'a> Context<'a> {
         let logged = processed_like_encoder(&at.tau, &at, cutoff);
         // The side of the dead zone follows the torque actually delivered: the logged torque,
         // low-passed (one crossing where the noisy torque chatters about zero), drives the
-        // motor across the gap as the simulator's dead zone does (`sim::effects::DeadZone`:
+        // motor across the gap as the simulator's dead zone does (`effect::DeadZone`:
         // the description's rotor inertia, a crossing of tens of ms), at each width of the
         // grid; the tangent takes half its sign (an instant crossing).
         let half_sign: Vec<f64> = logged[0]
@@ -361,7 +360,7 @@ impl<'a> Context<'a> {
 
     /// The processed unit-width dead-zone offset for backlash at grid width `width` (the
     /// nearest computed; 0: half the torque's sign, for the tangent).
-    pub(super) fn slack(&self, width: f64) -> &[Vec<f64>; 3] {
+    pub(crate) fn slack(&self, width: f64) -> &[Vec<f64>; 3] {
         let nearest = self
             .slack
             .iter()
@@ -377,7 +376,7 @@ impl<'a> Context<'a> {
     /// `(ID(x − secant · shift_j e_j) − ID(x)) / secant` of the whole prediction, Coulomb
     /// friction included: where the shift reverses the velocity (a link at rest while the
     /// encoder moves with the torque) the friction term changes sign, which no tangent sees.
-    pub(super) fn encoder_shift_columns(
+    pub(crate) fn encoder_shift_columns(
         &self,
         shift: &[Vec<f64>; 3],
         secant: f64,
