@@ -300,14 +300,14 @@ fn several_training_runs_are_cross_validated_one_run_out() {
             physid::sim::run(&m, &sc, &mut |_| {}).unwrap().processed
         })
         .collect();
-    let lens = vec![runs[0].len(), runs[1].len()];
-    let train = physid::trajectory::Trajectory::concatenate(vec![runs[0].clone(), runs[1].clone()])
-        .expect("two runs");
-    let opts = DiagOptions {
-        train_runs: lens,
-        ..Default::default()
-    };
-    let d = diagnose(&m, &train, &runs[2], &opts).unwrap();
+    let d = physid::diagnose::diagnose_runs(
+        &m,
+        vec![runs[0].clone(), runs[1].clone()],
+        vec![runs[2].clone()],
+        0.3,
+        &DiagOptions::default(),
+    )
+    .unwrap();
     assert!(d.selection.by_run);
     assert_eq!(d.selection.blocks, 2);
     // The spring carries over from run to run (both held-out runs improve).
@@ -506,12 +506,14 @@ fn joined_runs_of_one_motion_keep_their_difference_out_of_the_noise_floor() {
     let unloaded = run(21, vec![]);
     let loaded = run(21, vec![payload.clone()]);
     let validate = run(22, vec![payload]);
-    let opts = DiagOptions {
-        train_runs: vec![unloaded.len(), loaded.len()],
-        ..Default::default()
-    };
-    let train = physid::trajectory::Trajectory::concatenate(vec![unloaded, loaded]).unwrap();
-    let d = diagnose(&m, &train, &validate, &opts).unwrap();
+    let d = physid::diagnose::diagnose_runs(
+        &m,
+        vec![unloaded, loaded],
+        vec![validate],
+        0.3,
+        &DiagOptions::default(),
+    )
+    .unwrap();
     eprintln!("floor {:.3}; {}", d.noise_floor, d.summary);
     assert!(
         d.noise_floor > 0.2 && d.noise_floor < 0.45,

@@ -169,7 +169,7 @@ fn noise_floor(stage: &Stage, chosen: &[usize], ladder: &Ladder) -> Vec<f64> {
     // Without `train_runs`, training and validation data are the two parts of one recording
     // (a hold-out split): one segment.
     let mut bounds = vec![0];
-    let runs = &stage.opts.train_runs;
+    let runs = stage.train_runs;
     if !runs.is_empty() && runs.iter().sum::<usize>() == train.len() {
         bounds.extend(runs.iter().scan(0, |acc, r| {
             *acc += r;

@@ -16,9 +16,6 @@ pub struct Options {
     /// Joint-samples slower than this (rad/s) are left out of every fit and error (the
     /// model's `sign(q̇)` Coulomb friction does not describe friction near zero speed).
     pub min_speed: f64,
-    /// Lengths of the runs joined in the training data (empty: one run). With two or more,
-    /// the cross-validation leaves one run out at a time.
-    pub train_runs: Vec<usize>,
     /// Low-pass cutoff (Hz) of the data's processing, for the compliance columns.
     pub processing_cutoff: f64,
     /// The ladder from the description's settings.
@@ -58,7 +55,6 @@ impl Default for Options {
             min_speed: 0.05,
             processing_cutoff: 20.0,
             ladder: Default::default(),
-            train_runs: vec![],
             unexplained_ratio: 1.45,
             structure_threshold: 0.002,
             description_uncertainty: None,

@@ -25,10 +25,28 @@ pub fn diagnose(
     validate: &Trajectory,
     opts: &Options,
 ) -> Result<Diagnosis, DiagnoseError> {
+    diagnose_recordings(model, (train, &[]), validate, opts)
+}
+
+/// [`diagnose`] of training data joined from recordings of `train_runs` samples each (empty:
+/// one recording): the selection leaves one recording out at a time, the noise floor's
+/// neighbours stay within one.
+fn diagnose_recordings(
+    model: &Model,
+    (train, train_runs): (&Trajectory, &[usize]),
+    validate: &Trajectory,
+    opts: &Options,
+) -> Result<Diagnosis, DiagnoseError> {
     opts.validate()?;
     check_data(model, train, validate)?;
     let nominal = fit_nominal(model, train, opts)?;
-    let stage = Stage::new(model, train, validate, opts, nominal.theta.clone());
+    let stage = Stage::new(
+        model,
+        (train, train_runs),
+        validate,
+        opts,
+        nominal.theta.clone(),
+    );
     let selection =
         select::forward_select(&stage.folds, model, &stage.ident_opts, &opts.selection)?;
     let (description_test, description_test_skipped) = run_description_test(&stage, &selection)?;
@@ -216,18 +234,14 @@ pub fn diagnose_runs(
 ) -> Result<Diagnosis, DiagnoseError> {
     let lens: Vec<usize> = train_runs.iter().map(|r| r.len()).collect();
     let all = Trajectory::concatenate(train_runs).ok_or(DiagnoseError::NoData)?;
-    let mut opts = opts.clone();
-    let (train, val) = match Trajectory::concatenate(validate_runs) {
+    match Trajectory::concatenate(validate_runs) {
         None => {
             if !(holdout > 0.0 && holdout < 1.0) {
                 return Err(DiagnoseError::Holdout(holdout));
             }
-            all.holdout_split(holdout)
+            let (train, val) = all.holdout_split(holdout);
+            diagnose(model, &train, &val, opts)
         }
-        Some(val) => {
-            opts.train_runs = lens;
-            (all, val)
-        }
-    };
-    diagnose(model, &train, &val, &opts)
+        Some(val) => diagnose_recordings(model, (&all, &lens), &val, opts),
+    }
 }

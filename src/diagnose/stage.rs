@@ -77,6 +77,9 @@ pub(super) fn check_data(
 pub(crate) struct Stage<'a> {
     pub model: &'a Model,
     pub train: &'a Trajectory,
+    /// Lengths of the recordings joined in `train` (empty: one recording). With two or more,
+    /// the cross-validation leaves one recording out at a time.
+    pub train_runs: &'a [usize],
     pub validate: &'a Trajectory,
     pub opts: &'a Options,
     /// Identification options of every fit (the nominal model's constraint set).
@@ -93,7 +96,7 @@ pub(crate) struct Stage<'a> {
 impl<'a> Stage<'a> {
     pub(super) fn new(
         model: &'a Model,
-        train: &'a Trajectory,
+        (train, train_runs): (&'a Trajectory, &'a [usize]),
         validate: &'a Trajectory,
         opts: &'a Options,
         theta0: DVector<f64>,
@@ -107,13 +110,14 @@ impl<'a> Stage<'a> {
             0..train.len(),
             offered_variants(opts, model),
             opts.selection.folds.max(2),
-            &opts.train_runs,
+            train_runs,
             opts.min_speed,
         );
         let all = folds.sum_except(usize::MAX);
         Self {
             model,
             train,
+            train_runs,
             validate,
             opts,
             ident_opts: ident::Options::new(opts.constraints),
