@@ -67,17 +67,8 @@ fn diagnose_recordings(
     let train_seconds = train
         .sample_period()
         .map_or(0.0, |dt| dt * train.len() as f64);
-    let verdict = decisive_verdict(
-        verdict::verdict(
-            selection.steps.len(),
-            anchored.len(),
-            &how_far,
-            opts.unexplained_ratio,
-            structure_left.remains,
-        ),
-        train_seconds,
-        opts,
-    );
+    let steps = (selection.steps.len(), anchored.len());
+    let verdict = verdict_of(steps, &how_far, &structure_left, train_seconds, opts);
     let description_overall = mean_square(&ladder.description_rms).sqrt();
     let summary = summary_text(
         model,
@@ -118,6 +109,25 @@ fn diagnose_recordings(
         verdict,
         summary,
     })
+}
+
+/// The verdict of the steps of cross-validation and of the description test given how far
+/// they closed the gap and the structure left, held back on too little data.
+fn verdict_of(
+    (selected, anchored): (usize, usize),
+    how_far: &gap::HowFar,
+    structure_left: &StructureLeft,
+    train_seconds: f64,
+    opts: &Options,
+) -> Verdict {
+    let v = verdict::verdict(
+        selected,
+        anchored,
+        how_far,
+        opts.unexplained_ratio,
+        structure_left.remains,
+    );
+    decisive_verdict(v, train_seconds, opts)
 }
 
 /// The variants of the description test's steps.
