@@ -152,7 +152,12 @@ fn flange_payload(d: &serde_json::Value) -> Option<f64> {
 fn a_payload_on_the_real_arm_is_named_first_and_weighed_and_the_control_claims_none() {
     let dir = tempfile::tempdir().unwrap();
     let robot = description(dir.path());
-    let loaded = diagnose(&robot, &run(dir.path(), 3, 2.0, &robot), &[]);
+    let report = dir.path().join("loaded_report");
+    let loaded = diagnose(
+        &robot,
+        &run(dir.path(), 3, 2.0, &robot),
+        &["--report", report.to_str().unwrap()],
+    );
     let control = diagnose(&robot, &run(dir.path(), 3, 0.0, &robot), &[]);
     let (sl, sc) = (steps(&loaded), steps(&control));
     eprintln!("loaded: {sl:?}\ncontrol: {sc:?}");
@@ -177,6 +182,21 @@ fn a_payload_on_the_real_arm_is_named_first_and_weighed_and_the_control_claims_n
             assert!((m - 2.0).abs() <= 0.15 * 2.0, "{name}: {m} kg");
         }
     }
+    // The Markdown report says it too: the ambiguity group with its masses, the payload weighed.
+    let md = std::fs::read_to_string(report.join("report.md")).unwrap();
+    for (name, m) in tied.iter().zip(masses) {
+        let alternative = format!(
+            "`{} ({:+.2} kg)`",
+            name.as_str().unwrap(),
+            m.as_f64().unwrap()
+        );
+        assert!(md.contains(&alternative), "{alternative} not in the report");
+    }
+    let on = loaded["ladder"]["bodies"][0]["body"].as_str().unwrap();
+    assert!(
+        md.contains(&format!("on `{on}`: +")),
+        "no weighed body in the report"
+    );
     let claimed = control["ladder"]["bodies"]
         .as_array()
         .unwrap()

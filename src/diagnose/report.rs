@@ -317,6 +317,41 @@ The sim-to-real gap itself: validation RMS per joint (N m; joint-samples slower 
         }
         s += &format!(" {:.3} |\n", st.overall);
     }
+    if let Some(l) = &d.ladder {
+        s += &ladder_notes(l);
+    }
+    s
+}
+
+/// What the ladder's table cannot show: the explanations the held-out data fit as well as a
+/// step's (its ambiguity group, a body with the mass it would add in the step's place), and
+/// each body a step freed, weighed (mass ± standard error, centre of mass in its frame).
+fn ladder_notes(l: &super::ladder::Ladder) -> String {
+    let mut s = String::new();
+    for r in l.rungs.iter().filter(|r| !r.ambiguous_with.is_empty()) {
+        let alternatives: Vec<String> = r
+            .alternatives()
+            .iter()
+            .map(|a| format!("`{}`", md_cell(a)))
+            .collect();
+        s += &format!(
+            "\n**Ambiguous**: the data fit {} as well as `{}`.\n",
+            alternatives.join(", "),
+            md_cell(&r.step)
+        );
+    }
+    for b in &l.bodies {
+        let com = b.com.map_or(String::new(), |c| {
+            format!(", centre of mass ({:.3}, {:.3}, {:.3}) m", c[0], c[1], c[2])
+        });
+        s += &format!(
+            "\n{} on `{}`: {:+.3} ± {:.3} kg{com}.\n",
+            if b.payload { "Payload" } else { "Change" },
+            md_cell(&b.body),
+            b.mass,
+            b.mass_se
+        );
+    }
     s
 }
 
