@@ -387,7 +387,7 @@ fn no_library_function_is_longer_than_85_lines() {
 
 #[test]
 fn the_scan_sees_a_violation_when_there_is_one() {
-    // The checker itself: a floor-3 file naming a floor-4 module is caught, comments are not.
+    // The checker itself: a floor-3 file naming a floor-5 module is caught, comments are not.
     let code = code("use crate::sim::simulate;\n// crate::experiment in a comment\nfn f() {}\n");
     assert_eq!(imports(&code), vec!["sim".to_string()]);
     assert!(floor("sim").unwrap() > floor("io").unwrap());

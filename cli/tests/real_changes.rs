@@ -499,3 +499,64 @@ fn csv_field(row: &str, i: usize) -> String {
     fields.push(cur);
     fields[i].clone()
 }
+
+#[test]
+fn a_kept_semi_real_case_in_the_what_changed_mode_is_the_command_s_case() {
+    // The "what changed" mode diagnoses a case as `physid diagnose --baseline-data` does: the
+    // baseline the run its description was identified on, the effect columns at the data
+    // pipeline's cutoff. Case 9 of seed 1 (backlash on run 1, the description from run 2) was
+    // read as a change of lwr_2_link while its torque was processed at 20 Hz against q̇, q̈
+    // derived at 2 Hz; the command named backlash first.
+    let k = root().join("data/kuka_lwr4");
+    let runs: Vec<String> = (1..=3)
+        .map(|r| {
+            k.join(format!("measurements_{r}.csv"))
+                .to_string_lossy()
+                .into_owned()
+        })
+        .collect();
+    let dir = tempfile::tempdir().unwrap();
+    let (keep, out) = (dir.path().join("keep"), dir.path().join("out"));
+    let urdf = k.join("kuka_lwr4.urdf");
+    let (code, _, err) = physid(&[
+        "blind",
+        "--real",
+        &runs.join(","),
+        "--real-robot",
+        urdf.to_str().unwrap(),
+        "--real-baseline",
+        "--cases",
+        "55",
+        "--seed",
+        "1",
+        "--only",
+        "9",
+        "--keep-cases",
+        keep.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert_eq!(code, 0, "{err}");
+    let table = std::fs::read_to_string(out.join("cases.csv")).unwrap();
+    let row = table.lines().nth(1).unwrap();
+    assert!(row.starts_with("9,") && row.contains(",backlash,"), "{row}");
+    let baseline = k.join(csv_field(row, 2));
+    let case = keep.join("case9");
+    let d = diagnose(
+        &case.join("robot.urdf"),
+        &case.join("data.csv"),
+        &["--baseline-data", baseline.to_str().unwrap()],
+    );
+    let s = steps(&d);
+    let found = csv_field(row, 5);
+    eprintln!("command: {s:?}; benchmark: {found}");
+    let first = found
+        .split(", ")
+        .next()
+        .unwrap()
+        .split(" | ")
+        .next()
+        .unwrap();
+    assert_eq!(s[0], first, "{s:?} vs {found}");
+    assert_eq!(s[0], "+ backlash");
+}

@@ -595,12 +595,18 @@ pub fn run_case(
         context: format!("case {i}"),
         source,
     };
+    // As `physid diagnose` on the case's files: the effect columns processed at the data
+    // pipeline's cutoff (in both modes: until 2026-11-27 the "what changed" mode processed the
+    // logged torque of the compliance and backlash columns at the default 20 Hz while the
+    // pipeline derived q̇, q̈ at the KUKA's 2 Hz, and named backlash first on none of its cases).
     let d = if let Some(b) = &base.baseline {
-        b.diagnose_change(&given, runs, vec![], HOLDOUT, opts)
+        let opts = diagnose::Options {
+            processing_cutoff: cutoff,
+            ..opts.clone()
+        };
+        b.diagnose_change(&given, runs, vec![], HOLDOUT, &opts)
             .map_err(diag_err)?
     } else {
-        // As `physid diagnose` on the case's files: the effect columns processed at the data
-        // pipeline's cutoff.
         let opts = diagnose::Options {
             description_information: Some(information),
             processing_cutoff: cutoff,
