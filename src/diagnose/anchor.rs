@@ -215,20 +215,10 @@ pub struct Fit {
 }
 
 impl Anchor<'_> {
-    /// `J*` with base columns `base` (model columns first, then chosen effects, all free of
-    /// prior but the model's) and the absorbable part of candidate columns `cand`, whose
-    /// coefficients are held at or above zero when `signed` (a kind with a physical sign:
-    /// [`signed`]).
-    pub fn fit(&self, base: &[usize], cand: &[usize], signed: bool) -> Fit {
-        let (pb, d) = (base.len(), cand.len());
-        let p0 = self.mean.len();
-        let a = DMatrix::from_fn(pb, pb, |i, j| self.ne.yty[(base[i], base[j])]);
-        let b = DVector::from_fn(pb, |i, _| self.ne.ytt[base[i]]);
-        let abe = DMatrix::from_fn(pb, d, |i, j| self.ne.yty[(base[i], cand[j])]);
-        // S = A⁺ A_YE, the minimum-norm solution: no component along parameter combinations
-        // the data never excite (there any choice is equivalent in exact arithmetic, and a
-        // near-singular Cholesky would fill them with round-off).
-        let s = min_norm_solve(&a, &abe);
+    /// The prior's precision and mean on the columns `base` (zero on columns past the model's
+    /// own parameters: effect coefficients have no prior).
+    fn prior_on(&self, base: &[usize]) -> (DMatrix<f64>, DVector<f64>) {
+        let (pb, p0) = (base.len(), self.mean.len());
         let pmat = DMatrix::from_fn(pb, pb, |i, j| {
             if base[i] < p0 && base[j] < p0 {
                 self.precision[(base[i], base[j])]
@@ -243,6 +233,23 @@ impl Anchor<'_> {
                 0.0
             }
         });
+        (pmat, mean)
+    }
+
+    /// `J*` with base columns `base` (model columns first, then chosen effects, all free of
+    /// prior but the model's) and the absorbable part of candidate columns `cand`, whose
+    /// coefficients are held at or above zero when `signed` (a kind with a physical sign:
+    /// [`signed`]).
+    pub fn fit(&self, base: &[usize], cand: &[usize], signed: bool) -> Fit {
+        let (pb, d) = (base.len(), cand.len());
+        let a = DMatrix::from_fn(pb, pb, |i, j| self.ne.yty[(base[i], base[j])]);
+        let b = DVector::from_fn(pb, |i, _| self.ne.ytt[base[i]]);
+        let abe = DMatrix::from_fn(pb, d, |i, j| self.ne.yty[(base[i], cand[j])]);
+        // S = A⁺ A_YE, the minimum-norm solution: no component along parameter combinations
+        // the data never excite (there any choice is equivalent in exact arithmetic, and a
+        // near-singular Cholesky would fill them with round-off).
+        let s = min_norm_solve(&a, &abe);
+        let (pmat, mean) = self.prior_on(base);
         let pm = &pmat * &mean;
         let ps = &pmat * &s;
         // Variables x = [u; β]; J = xᵀHx − 2 gᵀx + const.

@@ -434,8 +434,6 @@ pub fn run_case(
     opts: &diagnose::Options,
     dir: &Path,
 ) -> Result<CaseResult, BlindError> {
-    let io_err = |source| BlindError::Io { case: i, source };
-    let diag_err = |source| BlindError::Diagnose { case: i, source };
     let (category, injected) = injections(i, seed, model, base.simulation.rate);
     let mut sc = base.clone();
     sc.simulation.seed = seed.wrapping_mul(1_000_003).wrapping_add(i as u64);
@@ -458,21 +456,7 @@ pub fn run_case(
     } else {
         visible_gap(i, &sc, model, &description, &rec, opts)?
     };
-    // The files a user would give.
-    crate::io::create_dir_all(dir).map_err(io_err)?;
-    let robot = dir.join("robot.urdf");
-    let data = dir.join("data.csv");
-    crate::io::write_atomic(&robot, crate::io::urdf::to_string(&description).as_bytes())
-        .map_err(io_err)?;
-    crate::io::samples::write_csv(&data, &rec.processed).map_err(io_err)?;
-    drop(rec);
-    let start = std::time::Instant::now();
-    let given = crate::io::load_robot(&robot.to_string_lossy()).map_err(io_err)?;
-    let given_data = crate::io::load_trajectory(&data, &given)
-        .map_err(io_err)?
-        .trajectories();
-    let d = diagnose::diagnose_runs(&given, given_data, vec![], HOLDOUT, opts).map_err(diag_err)?;
-    let seconds = start.elapsed().as_secs_f64();
+    let (d, seconds) = diagnose_files(i, &description, rec, opts, dir)?;
     let found: Vec<String> = d
         .effects
         .iter()
@@ -505,6 +489,34 @@ pub fn run_case(
         seconds,
         visible_gap,
     })
+}
+
+/// Case `i` diagnosed as a user would: `description` and the recording `rec` written to `dir`
+/// as `robot.urdf` and `data.csv`, read back and diagnosed; the diagnosis and its wall time
+/// (s, reading included).
+fn diagnose_files(
+    i: usize,
+    description: &Model,
+    rec: crate::trajectory::Recording,
+    opts: &diagnose::Options,
+    dir: &Path,
+) -> Result<(diagnose::Diagnosis, f64), BlindError> {
+    let io_err = |source| BlindError::Io { case: i, source };
+    crate::io::create_dir_all(dir).map_err(io_err)?;
+    let robot = dir.join("robot.urdf");
+    let data = dir.join("data.csv");
+    crate::io::write_atomic(&robot, crate::io::urdf::to_string(description).as_bytes())
+        .map_err(io_err)?;
+    crate::io::samples::write_csv(&data, &rec.processed).map_err(io_err)?;
+    drop(rec);
+    let start = std::time::Instant::now();
+    let given = crate::io::load_robot(&robot.to_string_lossy()).map_err(io_err)?;
+    let given_data = crate::io::load_trajectory(&data, &given)
+        .map_err(io_err)?
+        .trajectories();
+    let d = diagnose::diagnose_runs(&given, given_data, vec![], HOLDOUT, opts)
+        .map_err(|source| BlindError::Diagnose { case: i, source })?;
+    Ok((d, start.elapsed().as_secs_f64()))
 }
 
 /// The benchmark's own yardstick (the diagnosis never sees it): how much the injected effects

@@ -409,16 +409,7 @@ pub fn run_seed_validated_on(
             window_equations(&ys, data, start..start + n_s, (n, p))
         };
         for &set in &spec.constraints {
-            let mut o = Options::new(set);
-            o.prior_weight = spec.prior_weight;
-            let r = ident::identify(model, &snapshot, &prior, &o).map_err(|source| {
-                ExperimentError::Ident {
-                    seed,
-                    n_s,
-                    set: set.name(),
-                    source,
-                }
-            })?;
+            let r = identify_with(model, &snapshot, &prior, (spec, set), (seed, n_s))?;
             // Validation: the samples after the window, or the separate validation run.
             let (vys, vtr, vrange) = match &ys_val {
                 Some(yv) => (yv.as_slice(), val_data, 0..yv.len()),
@@ -443,6 +434,25 @@ pub fn run_seed_validated_on(
         }
     }
     Ok(rows)
+}
+
+/// Identification of `snapshot` under constraint set `set` with the experiment's prior weight;
+/// an error names the seed, training size and set.
+fn identify_with(
+    model: &Model,
+    snapshot: &NormalEquations,
+    prior: &DVector<f64>,
+    (spec, set): (&ExperimentSpec, ConstraintSet),
+    (seed, n_s): (u64, usize),
+) -> Result<ident::Identified, ExperimentError> {
+    let mut o = Options::new(set);
+    o.prior_weight = spec.prior_weight;
+    ident::identify(model, snapshot, prior, &o).map_err(|source| ExperimentError::Ident {
+        seed,
+        n_s,
+        set: set.name(),
+        source,
+    })
 }
 
 /// The normal equations of the samples `window` of `tr` (`ys` its regressors, indexed like it;

@@ -27,6 +27,15 @@ fn positive_extent<'v>(values: impl Iterator<Item = &'v f64>) -> (f64, f64) {
         .fold((f64::INFINITY, 0.0), |(lo, hi), v| (lo.min(v), hi.max(v)))
 }
 
+/// The outline of the band between `lo` and `hi` over the points `idx` of `x`: along `lo`
+/// forward, back along `hi`.
+fn band(idx: &[usize], x: &[f64], (lo, hi): (&[f64], &[f64])) -> Vec<(f64, f64)> {
+    idx.iter()
+        .map(|&i| (x[i], lo[i]))
+        .chain(idx.iter().rev().map(|&i| (x[i], hi[i])))
+        .collect()
+}
+
 /// [`plot_vs_ns`] with one line per value `series` of column `series_column`.
 pub fn plot_vs_ns_by(
     summary: &DataFrame,
@@ -84,15 +93,12 @@ pub fn plot_vs_ns_by(
         let mut entries = vec![];
         for (k, set) in sets.iter().enumerate() {
             // Loosest to tightest: red, green, purple, blue (then orange, cyan).
-            let color = colour([1, 2, 3, 0, 4, 5][k % 6]).to_rgba();
+            let named = colour([1, 2, 3, 0, 4, 5][k % 6]);
+            let color = named.to_rgba();
             let idx: Vec<usize> = (0..ns.len())
                 .filter(|&i| set_of[i] == *set && finite(&lo[i]) && finite(&hi[i]))
                 .collect();
-            let band: Vec<(f64, f64)> = idx
-                .iter()
-                .map(|&i| (ns[i], lo[i]))
-                .chain(idx.iter().rev().map(|&i| (ns[i], hi[i])))
-                .collect();
+            let band = band(&idx, &ns, (&lo, &hi));
             chart
                 .draw_series(std::iter::once(Polygon::new(band, color.mix(0.18))))
                 .map_err(|e| draw(e.to_string()))?;
@@ -102,11 +108,7 @@ pub fn plot_vs_ns_by(
                     color.stroke_width(2),
                 ))
                 .map_err(|e| draw(e.to_string()))?;
-            entries.push((
-                set.to_string(),
-                colour([1, 2, 3, 0, 4, 5][k % 6]),
-                Mark::Line,
-            ));
+            entries.push((set.to_string(), named, Mark::Line));
         }
         legend_outside(&legend_area, &entries).map_err(draw)?;
         root.present().map_err(|e| draw(e.to_string()))?;

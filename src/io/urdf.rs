@@ -125,6 +125,18 @@ fn root_element(xml: &str) -> Option<&str> {
     }
 }
 
+/// The warning that meshes of the links' (`shapes`) or the base's geometry were not found.
+fn lost_meshes(shapes: &[Shapes], base: &Shapes) -> Option<String> {
+    let lost: Vec<&String> = shapes.iter().chain([base]).flat_map(|s| &s.lost).collect();
+    (!lost.is_empty()).then(|| {
+        format!(
+            "{} meshes of the geometry were not found, and exports (MJCF) will lack them: {} (give --package-dir)",
+            lost.len(),
+            lost.iter().take(4).map(|s| s.as_str()).collect::<Vec<_>>().join("; ")
+        )
+    })
+}
+
 /// Parses URDF text; `path` names it in errors and locates its meshes. Each body's bounding
 /// ellipsoid is the minimum-volume ellipsoid of its geometry (its link's and those fixed to it,
 /// [`super::geometry`]) unless the sidecar gives one. Returns the model and warnings
@@ -174,14 +186,7 @@ pub fn from_str(
             b.limits.jerk = jerk.unwrap_or(b.limits.jerk);
         }
     }
-    let lost: Vec<&String> = shapes.iter().chain([&base]).flat_map(|s| &s.lost).collect();
-    if !lost.is_empty() {
-        warnings.push(format!(
-            "{} meshes of the geometry were not found, and exports (MJCF) will lack them: {} (give --package-dir)",
-            lost.len(),
-            lost.iter().take(4).map(|s| s.as_str()).collect::<Vec<_>>().join("; ")
-        ));
-    }
+    warnings.extend(lost_meshes(&shapes, &base));
     for (b, s) in bodies.iter_mut().zip(&shapes) {
         b.shapes = s.shapes.clone();
         b.bounding = s.bound(&b.name, &lookup).unwrap_or_else(|w| {

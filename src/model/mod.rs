@@ -699,10 +699,14 @@ fn check_body(
     if let Some(r) = &mut b.rotor {
         check_rotor(r, names)?;
     }
-    let l = &b.limits;
+    check_limits(&jn, &b.limits)
+}
+
+/// Checks the limits of joint `jn`: an ordered position range, positive rates and effort.
+fn check_limits(jn: &str, l: &JointLimits) -> Result<(), ModelError> {
     if l.lower.is_nan() || l.upper.is_nan() || l.lower > l.upper {
         return Err(ModelError::BadValue {
-            element: jn.clone(),
+            element: jn.to_string(),
             field: "limits",
             reason: format!("lower {} must not exceed upper {}", l.lower, l.upper),
         });
@@ -716,7 +720,7 @@ fn check_body(
         // Positive, or infinite where unknown; a zero or negative limit stops the joint.
         if v.is_nan() || v <= 0.0 {
             return Err(ModelError::BadValue {
-                element: jn.clone(),
+                element: jn.to_string(),
                 field,
                 reason: format!("{v} must be > 0 (or left out when unknown)"),
             });

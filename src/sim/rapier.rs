@@ -104,12 +104,7 @@ impl RapierSim {
                 .build();
             let h = bodies.insert(body);
             let parent = b.parent.map_or(base, |p| rb[p]);
-            let (r_tree, p_tree) = b.x_tree.to_pose();
-            let bm = x_onto(&axis);
-            let joint = GenericJointBuilder::new(JointAxesMask::LOCKED_REVOLUTE_AXES)
-                .local_frame1(Pose::from_parts(vec3(&p_tree), rot3(&(r_tree * bm))))
-                .local_frame2(Pose::from_parts(Vector::ZERO, rot3(&bm)))
-                .build();
+            let joint = revolute(b.x_tree.to_pose(), &axis);
             let jh = multibody_joints
                 .insert(parent, h, joint, true)
                 .ok_or_else(|| RapierError::Unsupported(format!("rapier refused joint {i}")))?;
@@ -118,18 +113,13 @@ impl RapierSim {
                     .additional_mass_properties(mass_properties(&r.inertia))
                     .build();
                 let hr = bodies.insert(body);
-                let (r_rot, p_rot) = r.x_rot.to_pose();
                 let crate::model::Joint::Revolute { axis } = r.joint else {
                     return Err(RapierError::Unsupported(format!(
                         "rotor '{}' slides (a prismatic mimic); the rapier engine models spinning rotors only",
                         r.name
                     )));
                 };
-                let br = x_onto(&axis);
-                let joint = GenericJointBuilder::new(JointAxesMask::LOCKED_REVOLUTE_AXES)
-                    .local_frame1(Pose::from_parts(vec3(&p_rot), rot3(&(r_rot * br))))
-                    .local_frame2(Pose::from_parts(Vector::ZERO, rot3(&br)))
-                    .build();
+                let joint = revolute(r.x_rot.to_pose(), &axis);
                 let jr = multibody_joints
                     .insert(parent, hr, joint, true)
                     .ok_or_else(|| {
@@ -290,4 +280,17 @@ impl RapierSim {
         }
         (q, qd)
     }
+}
+/// A revolute joint about `axis` (its own frame) placed by `(rotation, position)` in the
+/// parent's frame: rapier turns about the x axis of its joint frames, so both are rotated by
+/// the rotation taking x onto the axis.
+fn revolute(
+    (rotation, position): (Matrix3<f64>, Vector3<f64>),
+    axis: &Vector3<f64>,
+) -> GenericJoint {
+    let onto = x_onto(axis);
+    GenericJointBuilder::new(JointAxesMask::LOCKED_REVOLUTE_AXES)
+        .local_frame1(Pose::from_parts(vec3(&position), rot3(&(rotation * onto))))
+        .local_frame2(Pose::from_parts(Vector::ZERO, rot3(&onto)))
+        .build()
 }
