@@ -34,7 +34,7 @@ use super::residual::{finite_mean_square, mask_slow, residual_rms};
 use super::select::Folds;
 use super::stage::Stage;
 use super::stats::Ties;
-use crate::effect::library::Kind;
+use crate::effect::library::{Kind, Variant};
 use crate::ident::NormalEquations;
 use crate::linalg::{least_squares, least_squares_nonneg, min_norm_solve};
 use crate::model::Model;
@@ -424,6 +424,32 @@ impl Serialize for TestStop {
     }
 }
 
+/// The first step's fit of every variant not of an `exclude`d kind on `base`, and the
+/// variants the model absorbs (every column's visible fraction at most [`ABSORBED`]): the
+/// candidates of the test. The fits are kept for the first step.
+fn absorbed(
+    anchor: &Anchor,
+    folds: &Folds,
+    base: &[usize],
+    exclude: &[Kind],
+) -> (Vec<Option<Fit>>, Vec<usize>) {
+    let first: Vec<Option<Fit>> = (0..folds.variants.len())
+        .map(|v| {
+            let kind = folds.variants[v].kind;
+            (!exclude.contains(&kind))
+                .then(|| anchor.fit(base, &variant_columns(folds, v), signed(kind)))
+        })
+        .collect();
+    let candidates: Vec<usize> = (0..folds.variants.len())
+        .filter(|&v| {
+            first[v]
+                .as_ref()
+                .is_some_and(|f| f.visible.iter().all(|x| *x <= ABSORBED))
+        })
+        .collect();
+    (first, candidates)
+}
+
 /// Forward selection by the description test over the variants of `folds` that are absorbed
 /// (every column at most [`ABSORBED`] visible against the model and `chosen`) and not of a kind
 /// in `exclude`, after the effects `chosen` (free columns), adding at most `max` kinds. Of the
@@ -439,20 +465,7 @@ pub fn select(
 ) -> (Vec<Step>, TestStop) {
     let mut base = folds.columns(chosen);
     let cols = |vi: usize| variant_columns(folds, vi);
-    // The first step's fits decide which variants are absorbed; they are kept for that step.
-    let mut first: Vec<Option<Fit>> = (0..folds.variants.len())
-        .map(|v| {
-            let kind = folds.variants[v].kind;
-            (!exclude.contains(&kind)).then(|| anchor.fit(&base, &cols(v), signed(kind)))
-        })
-        .collect();
-    let candidates: Vec<usize> = (0..folds.variants.len())
-        .filter(|&v| {
-            first[v]
-                .as_ref()
-                .is_some_and(|f| f.visible.iter().all(|x| *x <= ABSORBED))
-        })
-        .collect();
+    let (mut first, candidates) = absorbed(anchor, folds, &base, exclude);
     let per_test = ALPHA / candidates.len().max(1) as f64;
     // A kind already chosen is not offered again (at another grid value, it would fit what
     // the chosen variant's grid point misses).
@@ -588,6 +601,41 @@ fn best_per_kind(
     best
 }
 
+/// How many of the description test's `steps`, in order, pass again on the held-out data
+/// alone (the test is in-sample): each against the chosen effects (`chosen_variants`) and the
+/// steps before it, at [`CONFIRM_ALPHA`].
+fn passed_held_out(
+    stage: &Stage,
+    anchor: Anchor,
+    chosen_variants: &[Variant],
+    steps: &[Step],
+) -> usize {
+    let (validate, n, ms) = (stage.validate, stage.model.dof(), stage.opts.min_speed);
+    // Held-out variants: the chosen effects first, then the steps.
+    let nc = chosen_variants.len();
+    let vs: Vec<_> = chosen_variants
+        .iter()
+        .copied()
+        .chain(steps.iter().map(|st| stage.folds.variants[st.variant]))
+        .collect();
+    let vfolds = Folds::build(&stage.ctx_val, validate, 0..validate.len(), vs, 2, &[], ms);
+    let vall = vfolds.sum_except(usize::MAX);
+    let held = Anchor {
+        ne: &vall,
+        ..anchor
+    };
+    (0..steps.len())
+        .take_while(|&k| {
+            let base = vfolds.columns(&(0..nc + k).collect::<Vec<_>>());
+            let d = steps[k].kind.columns(n);
+            let at = vfolds.offsets[nc + k];
+            let cand: Vec<usize> = (at..at + d).collect();
+            let signed = signed(steps[k].kind);
+            held.fit(&base, &cand, signed).statistic >= chi2_upper_quantile(d, CONFIRM_ALPHA)
+        })
+        .count()
+}
+
 /// The test against the description (docs/diagnose.md, "Absorbed effects"): candidates that
 /// identification absorbs are tested in-sample against the description's prior of relative
 /// uncertainty `eps`, beside the effects `chosen` by cross-validation (free columns, variants of
@@ -598,7 +646,7 @@ pub(crate) fn test_description(
     eps: f64,
     chosen: &[usize],
 ) -> Result<Report, crate::ident::IdentError> {
-    let (model, train, validate, opts) = (stage.model, stage.train, stage.validate, stage.opts);
+    let (model, train, opts) = (stage.model, stage.train, stage.opts);
     let n = model.dof();
     let ms = opts.min_speed;
     // The data term's noise: the residual of the model with the chosen effects.
@@ -636,29 +684,7 @@ pub(crate) fn test_description(
     );
     // The test is in-sample: each step must pass again on the held-out data alone.
     if !steps.is_empty() {
-        // Held-out variants: the chosen effects first, then the steps.
-        let nc = chosen.len();
-        let vs: Vec<_> = chosen_variants
-            .iter()
-            .copied()
-            .chain(steps.iter().map(|st| stage.folds.variants[st.variant]))
-            .collect();
-        let vfolds = Folds::build(&stage.ctx_val, validate, 0..validate.len(), vs, 2, &[], ms);
-        let vall = vfolds.sum_except(usize::MAX);
-        let held = Anchor {
-            ne: &vall,
-            ..anchor
-        };
-        let passed = (0..steps.len())
-            .take_while(|&k| {
-                let base = vfolds.columns(&(0..nc + k).collect::<Vec<_>>());
-                let d = steps[k].kind.columns(n);
-                let at = vfolds.offsets[nc + k];
-                let cand: Vec<usize> = (at..at + d).collect();
-                let signed = signed(steps[k].kind);
-                held.fit(&base, &cand, signed).statistic >= chi2_upper_quantile(d, CONFIRM_ALPHA)
-            })
-            .count();
+        let passed = passed_held_out(stage, anchor, &chosen_variants, &steps);
         if passed < steps.len() {
             stop = TestStop::NotConfirmed(steps[passed].kind);
             steps.truncate(passed);

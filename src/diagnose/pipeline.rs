@@ -33,20 +33,15 @@ pub fn diagnose(
 /// neighbours stay within one.
 fn diagnose_recordings(
     model: &Model,
-    (train, train_runs): (&Trajectory, &[usize]),
+    recorded: (&Trajectory, &[usize]),
     validate: &Trajectory,
     opts: &Options,
 ) -> Result<Diagnosis, DiagnoseError> {
+    let train = recorded.0;
     opts.validate()?;
     check_data(model, train, validate)?;
     let nominal = fit_nominal(model, train, opts)?;
-    let stage = Stage::new(
-        model,
-        (train, train_runs),
-        validate,
-        opts,
-        nominal.theta.clone(),
-    );
+    let stage = Stage::new(model, recorded, validate, opts, nominal.theta.clone());
     let selection =
         select::forward_select(&stage.folds, model, &stage.ident_opts, &opts.selection)?;
     let (description_test, description_test_skipped) = run_description_test(&stage, &selection)?;

@@ -453,9 +453,9 @@ pub fn plots(d: &Diagnosis) -> Result<Vec<(String, String)>, ReportError> {
     draw(d, Path::new(""))
 }
 
-/// [`plots`], errors naming the plot's file in `dir`.
-fn draw(d: &Diagnosis, dir: &Path) -> Result<Vec<(String, String)>, ReportError> {
-    // Where: RMS per regime kind (rows) and joint (series), regimes in the breakdown's order.
+/// The residual's RMS per regime kind (the breakdown's order) and joint: the kinds, and per
+/// joint its RMS in each.
+fn regime_series(d: &Diagnosis) -> (Vec<String>, Vec<(String, Vec<f64>)>) {
     let mut regimes: Vec<String> = vec![];
     for r in &d.breakdown.regimes {
         let short = r.regime.split(" (").next().unwrap_or(&r.regime).to_string();
@@ -480,18 +480,12 @@ fn draw(d: &Diagnosis, dir: &Path) -> Result<Vec<(String, String)>, ReportError>
             (j.clone(), v)
         })
         .collect();
-    let short: Vec<String> = regimes
-        .iter()
-        .map(|r| r.replace("velocity", "vel.").replace("quartile", "q."))
-        .collect();
-    let where_svg = bars(
-        &dir.join("where.svg"),
-        "nominal validation residual by motion regime",
-        "RMS (N m)",
-        &short,
-        &series,
-    )?;
-    let spectrum_svg = spectrum_plot(&dir.join("spectrum.svg"), d)?;
+    (regimes, series)
+}
+
+/// The validation RMS per joint along the diagnosis: the description, re-identified, after
+/// each effect, the confirmed effects' refit, the noise floor.
+fn how_far_series(d: &Diagnosis) -> Vec<(String, Vec<f64>)> {
     let mut steps = vec![
         (
             "description as given".to_string(),
@@ -515,6 +509,26 @@ fn draw(d: &Diagnosis, dir: &Path) -> Result<Vec<(String, String)>, ReportError>
         "noise floor".into(),
         d.gap.iter().map(|g| g.noise_floor).collect(),
     ));
+    steps
+}
+
+/// [`plots`], errors naming the plot's file in `dir`.
+fn draw(d: &Diagnosis, dir: &Path) -> Result<Vec<(String, String)>, ReportError> {
+    // Where: RMS per regime kind (rows) and joint (series), regimes in the breakdown's order.
+    let (regimes, series) = regime_series(d);
+    let short: Vec<String> = regimes
+        .iter()
+        .map(|r| r.replace("velocity", "vel.").replace("quartile", "q."))
+        .collect();
+    let where_svg = bars(
+        &dir.join("where.svg"),
+        "nominal validation residual by motion regime",
+        "RMS (N m)",
+        &short,
+        &series,
+    )?;
+    let spectrum_svg = spectrum_plot(&dir.join("spectrum.svg"), d)?;
+    let steps = how_far_series(d);
     let how_far_svg = bars(
         &dir.join("how_far.svg"),
         "validation RMS per joint: the description, re-identified, after each effect",

@@ -257,27 +257,17 @@ fn samples(dir: &Path, metric: &str) -> Result<Vec<Sample>, CompareError> {
         path: path.clone(),
         message: format!("column '{c}': {e}"),
     };
-    let seed = column("seed")?
-        .cast(&DataType::Int64)
-        .map_err(|e| invalid("seed", e))?;
-    let n_s = column("n_s")?
-        .cast(&DataType::UInt64)
-        .map_err(|e| invalid("n_s", e))?;
-    let set = column("constraints")?
-        .cast(&DataType::String)
-        .map_err(|e| invalid("constraints", e))?;
-    let value = column(metric)?
-        .cast(&DataType::Float64)
-        .map_err(|e| invalid(metric, e))?;
+    let cast = |c: &str, t: &DataType| -> Result<Column, CompareError> {
+        Ok(column(c)?.cast(t).map_err(|e| invalid(c, e))?)
+    };
+    let seed = cast("seed", &DataType::Int64)?;
+    let n_s = cast("n_s", &DataType::UInt64)?;
+    let set = cast("constraints", &DataType::String)?;
+    let value = cast(metric, &DataType::Float64)?;
     let grid: Vec<(String, Column)> = names
         .iter()
         .take_while(|n| *n != "seed")
-        .map(|n| {
-            column(n)?
-                .cast(&DataType::String)
-                .map(|c| (n.clone(), c))
-                .map_err(|e| invalid(n, e).into())
-        })
+        .map(|n| Ok((n.clone(), cast(n, &DataType::String)?)))
         .collect::<Result<_, CompareError>>()?;
     let (seed, n_s, set, value) = (
         seed.i64().map_err(|e| invalid("seed", e))?,

@@ -635,6 +635,37 @@ fn described_information(
 /// The fraction of each case's data held out for validation.
 const HOLDOUT: f64 = 0.3;
 
+/// Whether the ladder's `first` step names the injected change (`None` for a clean case): a
+/// payload as a body change on its body (`body`) or with it in the step's ambiguity group, a
+/// friction change as friction re-identified, a library effect as its kind or tied with it.
+fn first_step_names(
+    inj: &Injection,
+    body: Option<&str>,
+    first: Option<&diagnose::ladder::Rung>,
+) -> Option<bool> {
+    let names_body = |r: &diagnose::ladder::Rung, b: &str| {
+        let on = |s: &str| s.ends_with(&format!(" on {b}")) || s.ends_with(&format!(" of {b}"));
+        on(&r.step) || r.ambiguous_with.iter().any(|s| on(s) || s.ends_with(b))
+    };
+    match inj.slot {
+        Slot::Clean => None,
+        Slot::Payload => {
+            let b = body.expect("a payload has a body");
+            Some(
+                first.is_some_and(|r| {
+                    r.kind.is_some_and(|k| k.is_body_change()) && names_body(r, b)
+                }),
+            )
+        }
+        Slot::Friction => Some(first.is_some_and(|r| r.step == "friction re-identified")),
+        Slot::Effect(k) => {
+            Some(first.is_some_and(|r| {
+                r.kind == Some(k) || r.ambiguous_with.iter().any(|s| s == k.name())
+            }))
+        }
+    }
+}
+
 /// A case's marks.
 fn score_case(
     i: usize,
@@ -659,24 +690,7 @@ fn score_case(
     let bodies = ladder.map_or(&[][..], |l| &l.bodies[..]);
     let body_name = inj.body.map(|b| model.bodies()[b].name.clone());
     let first = steps.first();
-    let names_body = |r: &diagnose::ladder::Rung, b: &str| {
-        let on = |s: &str| s.ends_with(&format!(" on {b}")) || s.ends_with(&format!(" of {b}"));
-        on(&r.step) || r.ambiguous_with.iter().any(|s| on(s) || s.ends_with(b))
-    };
-    let top1 =
-        match inj.slot {
-            Slot::Clean => None,
-            Slot::Payload => {
-                let b = body_name.as_deref().expect("a payload has a body");
-                Some(first.is_some_and(|r| {
-                    r.kind.is_some_and(|k| k.is_body_change()) && names_body(r, b)
-                }))
-            }
-            Slot::Friction => Some(first.is_some_and(|r| r.step == "friction re-identified")),
-            Slot::Effect(k) => Some(first.is_some_and(|r| {
-                r.kind == Some(k) || r.ambiguous_with.iter().any(|s| s == k.name())
-            })),
-        };
+    let top1 = first_step_names(inj, body_name.as_deref(), first.copied());
     // The mass the injected body carries: its change where a step chose it, else the mass it
     // would carry in the first step's place where the step's ambiguity group holds it.
     let tied_mass = |b: &str| {

@@ -107,43 +107,11 @@ impl Columns {
             .collect();
         let col = |name: &str| header.iter().position(|h| h == name);
         let t = col("t").ok_or_else(|| bad("missing column t".into()))?;
-        let named: Vec<String> = header
-            .iter()
-            .filter_map(|h| h.strip_prefix("q_").map(str::to_string))
-            .collect();
-        let (keys, names, ignored) = if col("q1").is_none() && !named.is_empty() {
-            let names = robot.map_or_else(|| named.clone(), <[String]>::to_vec);
-            if let Some(missing) = names.iter().find(|j| !named.contains(j)) {
-                return Err(bad(format!(
-                    "no column q_{missing} for the robot's joint '{missing}' (the file names {})",
-                    named.join(", ")
-                )));
-            }
-            let ignored = named.into_iter().filter(|j| !names.contains(j)).collect();
-            let keys: Vec<String> = names.iter().map(|j| format!("_{j}")).collect();
-            (keys, names, ignored)
-        } else {
-            let n = (1..)
-                .take_while(|j| col(&format!("q{j}")).is_some())
-                .count();
-            if n == 0 {
-                return Err(bad(
-                    "no q1 or q_<joint> column: expected a header `t, q1..qn, dq1..dqn, [ddq1..ddqn,] tau1..taun` or columns named q_<joint>, dq_<joint>, …"
-                        .into(),
-                ));
-            }
-            if let Some(r) = robot.filter(|r| r.len() != n) {
-                return Err(bad(format!(
-                    "the file has {n} joints (q columns), the robot has {}",
-                    r.len()
-                )));
-            }
-            let names = robot.map_or_else(
-                || (1..=n).map(|j| format!("joint{j}")).collect(),
-                <[String]>::to_vec,
-            );
-            ((1..=n).map(|j| j.to_string()).collect(), names, vec![])
-        };
+        let JointKeys {
+            keys,
+            names,
+            ignored,
+        } = joint_keys(&header, robot, path)?;
         let need = |g: &str| -> Result<Vec<usize>, IoError> {
             keys.iter()
                 .map(|k| {
@@ -171,6 +139,71 @@ impl Columns {
             header,
             names,
             ignored,
+        })
+    }
+}
+
+/// The joints of a CSV header.
+struct JointKeys {
+    /// Column suffixes: `_<joint>` for named columns `q_<joint>`, else `1..n` for `q1..qn`.
+    keys: Vec<String>,
+    /// The joints' names (the robot's when given).
+    names: Vec<String>,
+    /// Named joints the robot does not have.
+    ignored: Vec<String>,
+}
+
+/// The joints of a CSV header, checked against the robot's when given.
+fn joint_keys(
+    header: &[String],
+    robot: Option<&[String]>,
+    path: &Path,
+) -> Result<JointKeys, IoError> {
+    let bad = |m: String| IoError::invalid(path, m);
+    let col = |name: &str| header.iter().position(|h| h == name);
+    let named: Vec<String> = header
+        .iter()
+        .filter_map(|h| h.strip_prefix("q_").map(str::to_string))
+        .collect();
+    if col("q1").is_none() && !named.is_empty() {
+        let names = robot.map_or_else(|| named.clone(), <[String]>::to_vec);
+        if let Some(missing) = names.iter().find(|j| !named.contains(j)) {
+            return Err(bad(format!(
+                "no column q_{missing} for the robot's joint '{missing}' (the file names {})",
+                named.join(", ")
+            )));
+        }
+        let ignored = named.into_iter().filter(|j| !names.contains(j)).collect();
+        let keys: Vec<String> = names.iter().map(|j| format!("_{j}")).collect();
+        Ok(JointKeys {
+            keys,
+            names,
+            ignored,
+        })
+    } else {
+        let n = (1..)
+            .take_while(|j| col(&format!("q{j}")).is_some())
+            .count();
+        if n == 0 {
+            return Err(bad(
+                "no q1 or q_<joint> column: expected a header `t, q1..qn, dq1..dqn, [ddq1..ddqn,] tau1..taun` or columns named q_<joint>, dq_<joint>, …"
+                    .into(),
+            ));
+        }
+        if let Some(r) = robot.filter(|r| r.len() != n) {
+            return Err(bad(format!(
+                "the file has {n} joints (q columns), the robot has {}",
+                r.len()
+            )));
+        }
+        let names = robot.map_or_else(
+            || (1..=n).map(|j| format!("joint{j}")).collect(),
+            <[String]>::to_vec,
+        );
+        Ok(JointKeys {
+            keys: (1..=n).map(|j| j.to_string()).collect(),
+            names,
+            ignored: vec![],
         })
     }
 }
