@@ -278,6 +278,29 @@ impl Trajectory {
             .collect()
     }
 
+    /// At most one margin per run, each whole samples of `n` joints.
+    fn validate_margins(&self) -> Result<(), SampleError> {
+        let (runs, n) = (self.runs().len(), self.dof());
+        if self.margins.len() > runs {
+            return Err(SampleError::RunStarts(format!(
+                "{} margins for {runs} runs",
+                self.margins.len()
+            )));
+        }
+        for m in &self.margins {
+            for (field, v) in [("margins.before", &m.before), ("margins.after", &m.after)] {
+                if v.len() % n.max(1) != 0 {
+                    return Err(SampleError::Margin {
+                        field,
+                        got: v.len(),
+                        n,
+                    });
+                }
+            }
+        }
+        Ok(())
+    }
+
     /// Checks lengths, increasing time, and every value finite and within [`max_abs`], naming
     /// the first bad sample.
     pub fn validate(&self) -> Result<(), SampleError> {
@@ -302,24 +325,7 @@ impl Trajectory {
                 }
             }
         }
-        let runs = self.runs().len();
-        if self.margins.len() > runs {
-            return Err(SampleError::RunStarts(format!(
-                "{} margins for {runs} runs",
-                self.margins.len()
-            )));
-        }
-        for m in &self.margins {
-            for (field, v) in [("margins.before", &m.before), ("margins.after", &m.after)] {
-                if v.len() % n.max(1) != 0 {
-                    return Err(SampleError::Margin {
-                        field,
-                        got: v.len(),
-                        n,
-                    });
-                }
-            }
-        }
+        self.validate_margins()?;
         if let Some(w) = self.starts.windows(2).find(|w| w[1] <= w[0]) {
             return Err(SampleError::RunStarts(format!(
                 "run starts {} and {} do not increase",

@@ -99,10 +99,8 @@ pub fn breakdown(tr: &Trajectory, range: std::ops::Range<usize>, res: &[f64]) ->
         }
         let mut s = q.clone();
         s.sort_by(f64::total_cmp);
-        let qs: Vec<f64> = (1..4).map(|i| s[(m - 1) * i / 4]).collect();
         for b in 0..4 {
-            let lo = if b == 0 { f64::NEG_INFINITY } else { qs[b - 1] };
-            let hi = if b == 3 { f64::INFINITY } else { qs[b] };
+            let (lo, hi) = quartile(&s, b);
             add(
                 format!(
                     "q quartile {} ({:.3}..{:.3} rad)",
@@ -120,6 +118,15 @@ pub fn breakdown(tr: &Trajectory, range: std::ops::Range<usize>, res: &[f64]) ->
         overall,
         regimes,
     }
+}
+
+/// The bounds of quartile `b` (0 to 3) of `sorted` values, the cuts at the sorted values a
+/// quarter, half and three quarters in: open below the first quartile, above the last.
+fn quartile(sorted: &[f64], b: usize) -> (f64, f64) {
+    let cut = |i: usize| sorted[(sorted.len() - 1) * i / 4];
+    let lo = if b == 0 { f64::NEG_INFINITY } else { cut(b) };
+    let hi = if b == 3 { f64::INFINITY } else { cut(b + 1) };
+    (lo, hi)
 }
 
 /// Spectra of a residual per joint with the coherence signals of `tr`.

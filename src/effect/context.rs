@@ -269,6 +269,26 @@ fn derivative(x: &[f64], tr: &Trajectory, n: usize) -> Vec<f64> {
     out
 }
 
+/// The torque `Y θ` two parameter vectors predict at every sample of `tr` (sample-major).
+fn predictions(
+    model: &Model,
+    tr: &Trajectory,
+    (theta_a, theta_b): (&DVector<f64>, &DVector<f64>),
+) -> (Vec<f64>, Vec<f64>) {
+    let n = model.dof();
+    let mut a = Vec::with_capacity(tr.len() * n);
+    let mut b = Vec::with_capacity(tr.len() * n);
+    let mut data = Data::new(model);
+    let mut y = DMatrix::zeros(n, model.layout().len);
+    for k in 0..tr.len() {
+        let qdd = tr.qdd_at(k).expect("the diagnosis's data carry q̈");
+        regressor(model, &mut data, tr.q_at(k), tr.qd_at(k), qdd, &mut y);
+        a.extend((&y * theta_a).iter());
+        b.extend((&y * theta_b).iter());
+    }
+    (a, b)
+}
+
 impl<'a> Context<'a> {
     /// The context of trajectory `tr` (with q̈) for nominal parameters `theta0` (the model's
     /// layout, no extra columns).
@@ -284,16 +304,7 @@ impl<'a> Context<'a> {
         for j in 0..n {
             theta_smooth[l.coulomb_col + j] = 0.0;
         }
-        let mut pred = Vec::with_capacity(tr.len() * n);
-        let mut smooth = Vec::with_capacity(tr.len() * n);
-        let mut data = Data::new(model);
-        let mut y = DMatrix::zeros(n, l.len);
-        for k in 0..tr.len() {
-            let qdd = tr.qdd_at(k).expect("the diagnosis's data carry q̈");
-            regressor(model, &mut data, tr.q_at(k), tr.qd_at(k), qdd, &mut y);
-            pred.extend((&y * &theta0).iter());
-            smooth.extend((&y * &theta_smooth).iter());
-        }
+        let (pred, smooth) = predictions(model, tr, (&theta0, &theta_smooth));
         // Without the Coulomb jumps: a delayed jump only matters within the masked slow rows,
         // and differencing it would put spikes into every fitted row next to a reversal.
         let pred_d = derivative(&smooth, tr, n);

@@ -46,10 +46,7 @@ pub fn plot_vs_ns_by(
     ylabel: &str,
     path: &Path,
 ) -> Result<(), crate::io::IoError> {
-    let err = |m: String| crate::io::IoError::Invalid {
-        path: path.to_path_buf(),
-        message: m,
-    };
+    let err = |m: String| crate::io::IoError::invalid(path, m);
     let get = |name: &str| super::tables::floats(summary, name).map_err(|e| err(e.to_string()));
     let ns = get("n_s")?;
     let (lo, med, hi) = (

@@ -401,6 +401,35 @@ pub fn constraints_hold(model: &Model, theta: &DVector<f64>, set: ConstraintSet)
     })
 }
 
+/// The problem's shapes agree (the normal equations cover the model's parameters, the prior
+/// has one value per column), the options are valid, and there are samples enough (more rows
+/// than parameters unless a prior weighs in).
+fn check_problem(
+    model: &Model,
+    ne: &NormalEquations,
+    prior: &DVector<f64>,
+    opts: &Options,
+) -> Result<(), IdentError> {
+    let p = ne.yty.nrows();
+    if p < model.layout().len || prior.len() != p {
+        return Err(IdentError::Shape {
+            columns: p,
+            prior: prior.len(),
+            params: model.layout().len,
+        });
+    }
+    opts.validate()?;
+    let ns = ne.samples;
+    if ns == 0 || (opts.prior_weight == 0.0 && ns * model.dof() < p) {
+        return Err(IdentError::TooFewSamples {
+            samples: ns,
+            rows: ns * model.dof(),
+            params: p,
+        });
+    }
+    Ok(())
+}
+
 /// Identifies `model`'s parameters from normal equations `ne` under `opts`, with prior `prior`
 /// (usually `model.parameters()`).
 ///
@@ -413,24 +442,8 @@ pub fn identify(
     prior: &DVector<f64>,
     opts: &Options,
 ) -> Result<Identified, IdentError> {
-    let p = ne.yty.nrows();
-    if p < model.layout().len || prior.len() != p {
-        return Err(IdentError::Shape {
-            columns: p,
-            prior: prior.len(),
-            params: model.layout().len,
-        });
-    }
-    opts.validate()?;
-    let ns = ne.samples;
-    let w = opts.prior_weight;
-    if ns == 0 || (w == 0.0 && ns * model.dof() < p) {
-        return Err(IdentError::TooFewSamples {
-            samples: ns,
-            rows: ns * model.dof(),
-            params: p,
-        });
-    }
+    check_problem(model, ne, prior, opts)?;
+    let (p, w) = (ne.yty.nrows(), opts.prior_weight);
     let logdet = opts.regularizer == Regularizer::LogDet;
     let Objective { h, g, c: constant } = objective(model, ne, prior, opts);
     // Never hand the solver non-finite data (Clarabel panics on them).

@@ -90,6 +90,17 @@ struct Columns {
 }
 
 impl Columns {
+    /// The columns of each group of a streamed sample (q, q̇, q̈, τ): a file without q̇ or q̈
+    /// cannot be streamed (they are derived over each run).
+    fn sample_groups(&self, path: &Path) -> Result<[Vec<usize>; 4], IoError> {
+        let bad = |m: &str| IoError::invalid(path, m);
+        let ddq = (self.ddq.clone())
+            .ok_or_else(|| bad("no ddq columns: streaming needs accelerations"))?;
+        let dq =
+            (self.dq.clone()).ok_or_else(|| bad("no dq columns: streaming needs velocities"))?;
+        Ok([self.q.clone(), dq, ddq, self.tau.clone()])
+    }
+
     /// Reads the header. Columns are numbered (`q1, q2, …`: the joint count is the number of
     /// `q` columns, taken in the robot's order) or named by joint (`q_<joint>`, `dq_<joint>`,
     /// `ddq_<joint>`, `tau_<joint>`: matched to `robot`'s joints by name, in any order).
@@ -326,14 +337,7 @@ pub fn stream_csv(
     let n = robot.len();
     let header = &c.header;
     let t_col = c.t;
-    let ddq = c
-        .ddq
-        .clone()
-        .ok_or_else(|| bad("no ddq columns: streaming needs accelerations".into()))?;
-    let dq =
-        c.dq.clone()
-            .ok_or_else(|| bad("no dq columns: streaming needs velocities".into()))?;
-    let cols = [c.q.clone(), dq, ddq, c.tau.clone()];
+    let cols = c.sample_groups(path)?;
     let mut vals = vec![0.0; 4 * n];
     let mut prev = f64::NEG_INFINITY;
     let mut rec = csv::StringRecord::new();

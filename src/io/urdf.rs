@@ -125,6 +125,29 @@ fn root_element(xml: &str) -> Option<&str> {
     }
 }
 
+/// The model of `bodies` with the sidecar's gravity and rotor model and the base's shapes,
+/// checked physically (its bodies' inertias consistent).
+fn physical_model(
+    name: String,
+    bodies: Vec<Body>,
+    (extras, base_shapes): (&RobotExtras, Vec<crate::model::Shape>),
+    path: &Path,
+) -> Result<Model, IoError> {
+    let model_err = |source| IoError::Model {
+        path: path.to_path_buf(),
+        source,
+    };
+    let gravity = extras
+        .gravity
+        .map_or(Vector3::new(0.0, 0.0, -STANDARD_GRAVITY), Vector3::from);
+    let model = Model::new(name, bodies, gravity)
+        .map_err(model_err)?
+        .with_rotor_model(extras.rotor_model.unwrap_or_default())
+        .with_base_shapes(base_shapes);
+    model.check_physical_with(false).map_err(model_err)?;
+    Ok(model)
+}
+
 /// The warning that meshes of the links' (`shapes`) or the base's geometry were not found.
 fn lost_meshes(shapes: &[Shapes], base: &Shapes) -> Option<String> {
     let lost: Vec<&String> = shapes.iter().chain([base]).flat_map(|s| &s.lost).collect();
@@ -198,22 +221,7 @@ pub fn from_str(
     // The sidecar's ellipsoids come last: they override the geometry's.
     extras.apply(&mut bodies, &body_parent_link_x, path)?;
     check_subtree_masses(&bodies, path)?;
-    let gravity = extras
-        .gravity
-        .map_or(Vector3::new(0.0, 0.0, -STANDARD_GRAVITY), Vector3::from);
-    let model = Model::new(robot.name.clone(), bodies, gravity)
-        .map_err(|source| IoError::Model {
-            path: path.to_path_buf(),
-            source,
-        })?
-        .with_rotor_model(extras.rotor_model.unwrap_or_default())
-        .with_base_shapes(base.shapes);
-    model
-        .check_physical_with(false)
-        .map_err(|source| IoError::Model {
-            path: path.to_path_buf(),
-            source,
-        })?;
+    let model = physical_model(robot.name.clone(), bodies, (extras, base.shapes), path)?;
     check_bounds(&model, extras, path, &mut warnings)?;
     Ok((model, warnings))
 }
