@@ -528,16 +528,8 @@ pub(crate) fn ladder(stage: &Stage, eps: f64, selected: &[Variant], settings: &S
     // The columns about the description within its uncertainty, not the raw description.
     let (mut data, mut current) = settle(&problem, stage, &variants, data, &set, settings);
     let mut sse = problem.held_out(&data, &current);
-    rungs.push(rung(
-        stage,
-        &data,
-        &current,
-        &set,
-        "description within its uncertainty",
-        None,
-        (0.0, 0.0),
-        vec![],
-    ));
+    let within = Added::fixed("description within its uncertainty");
+    rungs.push(rung(stage, at(&data, &current, &set), within));
     let stop = loop {
         if set.len() >= settings.max_steps {
             break Stop::MaxSteps;
@@ -553,30 +545,22 @@ pub(crate) fn ladder(stage: &Stage, eps: f64, selected: &[Variant], settings: &S
             Explanation::Friction => best.name(stage.model, PAYLOAD),
             _ => format!("+ {}", best.name(stage.model, PAYLOAD)),
         };
-        rungs.push(rung(
-            stage,
-            &data,
-            &current,
-            &set,
-            &name,
-            Some(best),
-            (r, t),
+        let added = Added {
+            step: name,
+            e: Some(best),
+            score: (r, t),
             ties,
-        ));
+        };
+        rungs.push(rung(stage, at(&data, &current, &set), added));
     };
     let absorbed = absorbed_steps(&problem, stage, &data, &mut set, settings);
     current = problem.fit(&data, &set);
     for (name, e) in absorbed {
-        rungs.push(rung(
-            stage,
-            &data,
-            &current,
-            &set,
-            &name,
-            Some(e),
-            (0.0, 0.0),
-            vec![],
-        ));
+        let added = Added {
+            e: Some(e),
+            ..Added::fixed(&name)
+        };
+        rungs.push(rung(stage, at(&data, &current, &set), added));
     }
     rungs.push(reidentified_rung(stage));
     let (_, coefficients) = model_of(&data, &current, &set, p0);
@@ -907,18 +891,47 @@ fn absorbed_steps(
     out
 }
 
-/// The held-out rung of a fit.
-#[allow(clippy::too_many_arguments)]
-fn rung(
-    stage: &Stage,
-    data: &Data,
-    fit: &Fit,
-    set: &[Explanation],
-    step: &str,
+/// What a rung is scored at: the ladder's data, its fit and the explanations freed in it.
+struct At<'a> {
+    data: &'a Data,
+    fit: &'a Fit,
+    set: &'a [Explanation],
+}
+
+fn at<'a>(data: &'a Data, fit: &'a Fit, set: &'a [Explanation]) -> At<'a> {
+    At { data, fit, set }
+}
+
+/// The step a rung adds: its name, the explanation (none on the fixed rungs), its held-out
+/// reduction of the mean square and t statistic, and the explanations tied with it.
+struct Added {
+    step: String,
     e: Option<Explanation>,
-    (reduction, t): (f64, f64),
+    score: (f64, f64),
     ties: Vec<Tie>,
-) -> Rung {
+}
+
+impl Added {
+    /// A rung that adds no scored step.
+    fn fixed(step: &str) -> Self {
+        Added {
+            step: step.into(),
+            e: None,
+            score: (0.0, 0.0),
+            ties: vec![],
+        }
+    }
+}
+
+/// The held-out rung of a fit.
+fn rung(stage: &Stage, at: At, added: Added) -> Rung {
+    let At { data, fit, set } = at;
+    let Added {
+        step,
+        e,
+        score: (reduction, t),
+        ties,
+    } = added;
     let p0 = stage.model.layout().len;
     let (theta, coefs) = model_of(data, fit, set, p0);
     let variants: Vec<Variant> = set
@@ -961,7 +974,7 @@ fn rung(
         _ => (None, 0.0),
     };
     Rung {
-        step: step.into(),
+        step,
         kind,
         param,
         overall: mean_square(&rms).sqrt(),
