@@ -427,12 +427,7 @@ impl Serialize for TestStop {
 /// The first step's fit of every variant not of an `exclude`d kind on `base`, and the
 /// variants the model absorbs (every column's visible fraction at most [`ABSORBED`]): the
 /// candidates of the test. The fits are kept for the first step.
-fn absorbed(
-    anchor: &Anchor,
-    folds: &Folds,
-    base: &[usize],
-    exclude: &[Kind],
-) -> (Vec<Option<Fit>>, Vec<usize>) {
+fn absorbed(anchor: &Anchor, folds: &Folds, base: &[usize], exclude: &[Kind]) -> Candidates {
     let first: Vec<Option<Fit>> = (0..folds.variants.len())
         .map(|v| {
             let kind = folds.variants[v].kind;
@@ -447,7 +442,16 @@ fn absorbed(
                 .is_some_and(|f| f.visible.iter().all(|x| *x <= ABSORBED))
         })
         .collect();
-    (first, candidates)
+    Candidates {
+        variants: candidates,
+        first,
+    }
+}
+
+/// The description test's candidate variants, and each variant's fit on the first step.
+struct Candidates {
+    variants: Vec<usize>,
+    first: Vec<Option<Fit>>,
 }
 
 /// Forward selection by the description test over the variants of `folds` that are absorbed
@@ -465,8 +469,8 @@ pub fn select(
 ) -> (Vec<Step>, TestStop) {
     let mut base = folds.columns(chosen);
     let cols = |vi: usize| variant_columns(folds, vi);
-    let (mut first, candidates) = absorbed(anchor, folds, &base, exclude);
-    let per_test = ALPHA / candidates.len().max(1) as f64;
+    let mut candidates = absorbed(anchor, folds, &base, exclude);
+    let per_test = ALPHA / candidates.variants.len().max(1) as f64;
     // A kind already chosen is not offered again (at another grid value, it would fit what
     // the chosen variant's grid point misses).
     let mut used: Vec<Kind> = exclude
@@ -482,8 +486,7 @@ pub fn select(
         let mut best = best_per_kind(
             anchor,
             folds,
-            &candidates,
-            &mut first,
+            &mut candidates,
             &base,
             &used,
             per_test,
@@ -554,12 +557,10 @@ fn variant_columns(folds: &Folds, vi: usize) -> Vec<usize> {
 
 /// Per kind not `used`, its candidate variant of the largest statistic against `base`: the
 /// variant, its test and its fit (on the first step, the fits that chose the candidates).
-#[allow(clippy::too_many_arguments)]
 fn best_per_kind(
     anchor: &Anchor,
     folds: &Folds,
-    candidates: &[usize],
-    first: &mut [Option<Fit>],
+    candidates: &mut Candidates,
     base: &[usize],
     used: &[Kind],
     per_test: f64,
@@ -572,12 +573,13 @@ fn best_per_kind(
         }
         let mut top: Option<(usize, Test, Fit)> = None;
         for &vi in candidates
+            .variants
             .iter()
             .filter(|&&v| folds.variants[v].kind == kind)
         {
             let cand = variant_columns(folds, vi);
             let d = cand.len();
-            let f = match first[vi].take() {
+            let f = match candidates.first[vi].take() {
                 Some(f) if first_step => f,
                 _ => anchor.fit(base, &cand, signed(kind)),
             };

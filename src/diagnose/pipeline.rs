@@ -200,7 +200,6 @@ fn run_description_test(
 }
 
 /// The diagnosis's one-paragraph summary.
-#[allow(clippy::too_many_arguments)]
 fn summary_text(
     model: &Model,
     (description_overall, train_seconds, min_decisive): (f64, f64, f64),

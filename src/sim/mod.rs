@@ -120,7 +120,6 @@ impl Rk4 {
 ///
 /// `tau(t, q, q̇)` is the generalized force applied at the joints (N m), friction included by
 /// the caller. The local error is `O(dt⁵)`; see the energy-conservation test for its size.
-#[allow(clippy::too_many_arguments)]
 pub fn rk4_step(
     model: &Model,
     data: &mut Data,
