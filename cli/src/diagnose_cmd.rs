@@ -259,16 +259,8 @@ fn print_from_description(d: &Diagnosis) {
                 }
             }
             for b in &l.bodies {
-                let com = b.com.map_or(String::new(), |c| {
-                    format!(", centre of mass ({:.3}, {:.3}, {:.3}) m", c[0], c[1], c[2])
-                });
-                println!(
-                    "  {} on {}: {:+.3} ± {:.3} kg{com}",
-                    if b.payload { "payload" } else { "change" },
-                    b.body,
-                    b.mass,
-                    b.mass_se
-                );
+                let what = if b.payload { "payload" } else { "change" };
+                println!("  {what} on {}: {}", b.body, b.weighed());
             }
         }
         None => {

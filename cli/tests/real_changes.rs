@@ -405,14 +405,10 @@ fn the_description_s_own_information_from_its_sidecar_alone_weighs_the_payload()
     assert!(d["ladder"].is_null(), "{}", d["ladder"]);
 }
 
-#[test]
-fn a_kept_semi_real_case_re_diagnosed_from_its_files_is_the_benchmark_s_case() {
-    // The case's description carries its information in the sidecar beside its URDF, which
-    // the command reads back, and the benchmark diagnoses the case as the command does (the
-    // effect columns at the pipeline's cutoff, over the samples the pipeline's processing
-    // saw): cases 13 (2.9 kg on lwr_4_link) and 43 (a compliance; until 2026-11-27 read as a
-    // payload on lwr_4_link, its columns zeroed over a quarter of the data) of seed 1
-    // re-diagnosed from their files name what the benchmark named first.
+/// The semi-real benchmark on the three KUKA runs, seed 1, with `extra` flags (which cases,
+/// which mode), its cases kept: the temporary directory (kept alive by the caller), the kept
+/// cases' folder and the case table.
+fn kept_semi_real_cases(extra: &[&str]) -> (tempfile::TempDir, PathBuf, String) {
     let k = root().join("data/kuka_lwr4");
     let runs: Vec<String> = (1..=3)
         .map(|r| {
@@ -424,27 +420,50 @@ fn a_kept_semi_real_case_re_diagnosed_from_its_files_is_the_benchmark_s_case() {
     let dir = tempfile::tempdir().unwrap();
     let (keep, out) = (dir.path().join("keep"), dir.path().join("out"));
     let urdf = k.join("kuka_lwr4.urdf");
-    let (code, _, err) = physid(&[
+    let runs = runs.join(",");
+    let mut args = vec![
         "blind",
         "--real",
-        &runs.join(","),
+        &runs,
         "--real-robot",
         urdf.to_str().unwrap(),
         "--cases",
         "55",
         "--seed",
         "1",
-        "--description-uncertainty",
-        "0.05",
-        "--only",
-        "13,43",
         "--keep-cases",
         keep.to_str().unwrap(),
         "--out",
         out.to_str().unwrap(),
-    ]);
+    ];
+    args.extend(extra);
+    let (code, _, err) = physid(&args);
     assert_eq!(code, 0, "{err}");
     let table = std::fs::read_to_string(out.join("cases.csv")).unwrap();
+    (dir, keep, table)
+}
+
+/// The first explanation of the first step in a case table's `found` field.
+fn first_found(found: &str) -> &str {
+    found
+        .split(", ")
+        .next()
+        .unwrap()
+        .split(" | ")
+        .next()
+        .unwrap()
+}
+
+#[test]
+fn a_kept_semi_real_case_re_diagnosed_from_its_files_is_the_benchmark_s_case() {
+    // The case's description carries its information in the sidecar beside its URDF, which
+    // the command reads back, and the benchmark diagnoses the case as the command does (the
+    // effect columns at the pipeline's cutoff, over the samples the pipeline's processing
+    // saw): cases 13 (2.9 kg on lwr_4_link) and 43 (a compliance; until 2026-11-27 read as a
+    // payload on lwr_4_link, its columns zeroed over a quarter of the data) of seed 1
+    // re-diagnosed from their files name what the benchmark named first.
+    let (_dir, keep, table) =
+        kept_semi_real_cases(&["--description-uncertainty", "0.05", "--only", "13,43"]);
     let rows: Vec<&str> = table.lines().skip(1).collect();
     assert!(
         rows[0].starts_with("13,") && rows[0].contains(",payload,lwr_4_link,"),
@@ -468,14 +487,7 @@ fn a_kept_semi_real_case_re_diagnosed_from_its_files_is_the_benchmark_s_case() {
         assert!(err.contains("information matrix"), "{err}");
         let s = steps(&d);
         let found = csv_field(row, 5);
-        let first = found
-            .split(", ")
-            .next()
-            .unwrap()
-            .split(" | ")
-            .next()
-            .unwrap();
-        assert_eq!(s[0], first, "{s:?} vs {found}");
+        assert_eq!(s[0], first_found(&found), "{s:?} vs {found}");
         let injected = csv_field(row, 3);
         let named = if injected == "payload" {
             "+ payload on lwr_4_link"
@@ -507,40 +519,10 @@ fn a_kept_semi_real_case_in_the_what_changed_mode_is_the_command_s_case() {
     // pipeline's cutoff. Case 9 of seed 1 (backlash on run 1, the description from run 2) was
     // read as a change of lwr_2_link while its torque was processed at 20 Hz against q̇, q̈
     // derived at 2 Hz; the command named backlash first.
-    let k = root().join("data/kuka_lwr4");
-    let runs: Vec<String> = (1..=3)
-        .map(|r| {
-            k.join(format!("measurements_{r}.csv"))
-                .to_string_lossy()
-                .into_owned()
-        })
-        .collect();
-    let dir = tempfile::tempdir().unwrap();
-    let (keep, out) = (dir.path().join("keep"), dir.path().join("out"));
-    let urdf = k.join("kuka_lwr4.urdf");
-    let (code, _, err) = physid(&[
-        "blind",
-        "--real",
-        &runs.join(","),
-        "--real-robot",
-        urdf.to_str().unwrap(),
-        "--real-baseline",
-        "--cases",
-        "55",
-        "--seed",
-        "1",
-        "--only",
-        "9",
-        "--keep-cases",
-        keep.to_str().unwrap(),
-        "--out",
-        out.to_str().unwrap(),
-    ]);
-    assert_eq!(code, 0, "{err}");
-    let table = std::fs::read_to_string(out.join("cases.csv")).unwrap();
+    let (_dir, keep, table) = kept_semi_real_cases(&["--real-baseline", "--only", "9"]);
     let row = table.lines().nth(1).unwrap();
     assert!(row.starts_with("9,") && row.contains(",backlash,"), "{row}");
-    let baseline = k.join(csv_field(row, 2));
+    let baseline = root().join("data/kuka_lwr4").join(csv_field(row, 2));
     let case = keep.join("case9");
     let d = diagnose(
         &case.join("robot.urdf"),
@@ -550,13 +532,6 @@ fn a_kept_semi_real_case_in_the_what_changed_mode_is_the_command_s_case() {
     let s = steps(&d);
     let found = csv_field(row, 5);
     eprintln!("command: {s:?}; benchmark: {found}");
-    let first = found
-        .split(", ")
-        .next()
-        .unwrap()
-        .split(" | ")
-        .next()
-        .unwrap();
-    assert_eq!(s[0], first, "{s:?} vs {found}");
+    assert_eq!(s[0], first_found(&found), "{s:?} vs {found}");
     assert_eq!(s[0], "+ backlash");
 }

@@ -130,6 +130,17 @@ pub struct BodyChange {
     pub pi: [f64; 10],
 }
 
+impl BodyChange {
+    /// Its mass and centre of mass as the reports print them:
+    /// `+2.000 ± 0.010 kg, centre of mass (0.001, 0.002, 0.030) m`.
+    pub fn weighed(&self) -> String {
+        let com = self.com.map_or(String::new(), |c| {
+            format!(", centre of mass ({:.3}, {:.3}, {:.3}) m", c[0], c[1], c[2])
+        });
+        format!("{:+.3} ± {:.3} kg{com}", self.mass, self.mass_se)
+    }
+}
+
 /// Why the ladder stopped.
 #[derive(Clone, Debug, PartialEq, Serialize, schemars::JsonSchema)]
 #[serde(rename_all = "snake_case")]

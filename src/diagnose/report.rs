@@ -341,16 +341,8 @@ fn ladder_notes(l: &super::ladder::Ladder) -> String {
         );
     }
     for b in &l.bodies {
-        let com = b.com.map_or(String::new(), |c| {
-            format!(", centre of mass ({:.3}, {:.3}, {:.3}) m", c[0], c[1], c[2])
-        });
-        s += &format!(
-            "\n{} on `{}`: {:+.3} ± {:.3} kg{com}.\n",
-            if b.payload { "Payload" } else { "Change" },
-            md_cell(&b.body),
-            b.mass,
-            b.mass_se
-        );
+        let what = if b.payload { "Payload" } else { "Change" };
+        s += &format!("\n{what} on `{}`: {}.\n", md_cell(&b.body), b.weighed());
     }
     s
 }

@@ -23,7 +23,7 @@ mod rnea;
 pub use crba::crba;
 pub use energy::{kinetic_energy, potential_energy};
 pub use fd::{forward_dynamics, FdError};
-pub use regressor::{inertia_bilinear, regressor, row_columns};
+pub use regressor::{for_each_regressor, inertia_bilinear, regressor, row_columns};
 pub use rnea::{friction_torque, rnea, rnea_with_friction, sign};
 
 use crate::model::{Model, Rotor, RotorModel};

@@ -14,7 +14,31 @@
 use super::{check_len, forward_pass, sign, Data};
 use crate::model::{Model, RotorModel};
 use crate::spatial::Motion;
+use crate::trajectory::Trajectory;
 use nalgebra::DMatrix;
+
+/// Calls `f(k, Y_k)` with the regressor of every sample `k` in `range` of `tr`, which must carry
+/// q̈ (one workspace and one output matrix for the whole range).
+pub fn for_each_regressor(
+    model: &Model,
+    tr: &Trajectory,
+    range: std::ops::Range<usize>,
+    f: &mut dyn FnMut(usize, &DMatrix<f64>),
+) {
+    let mut d = Data::new(model);
+    let mut y = DMatrix::zeros(model.dof(), model.layout().len);
+    for k in range {
+        regressor(
+            model,
+            &mut d,
+            tr.q_at(k),
+            tr.qd_at(k),
+            tr.qdd_at(k).expect("q̈ present"),
+            &mut y,
+        );
+        f(k, &y);
+    }
+}
 
 /// `K(u, w)`: the ten coefficients with `uᵀ I(π) w = K(u, w) · π` for the paper's `π` order.
 ///

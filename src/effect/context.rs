@@ -278,14 +278,10 @@ fn predictions(
     let n = model.dof();
     let mut a = Vec::with_capacity(tr.len() * n);
     let mut b = Vec::with_capacity(tr.len() * n);
-    let mut data = Data::new(model);
-    let mut y = DMatrix::zeros(n, model.layout().len);
-    for k in 0..tr.len() {
-        let qdd = tr.qdd_at(k).expect("the diagnosis's data carry q̈");
-        regressor(model, &mut data, tr.q_at(k), tr.qd_at(k), qdd, &mut y);
-        a.extend((&y * theta_a).iter());
-        b.extend((&y * theta_b).iter());
-    }
+    crate::dynamics::for_each_regressor(model, tr, 0..tr.len(), &mut |_, y| {
+        a.extend((y * theta_a).iter());
+        b.extend((y * theta_b).iter());
+    });
     (a, b)
 }
 

@@ -599,18 +599,17 @@ pub fn run_case(
     // pipeline's cutoff (in both modes: until 2026-11-27 the "what changed" mode processed the
     // logged torque of the compliance and backlash columns at the default 20 Hz while the
     // pipeline derived q̇, q̈ at the KUKA's 2 Hz, and named backlash first on none of its cases).
+    let opts = diagnose::Options {
+        processing_cutoff: cutoff,
+        ..opts.clone()
+    };
     let d = if let Some(b) = &base.baseline {
-        let opts = diagnose::Options {
-            processing_cutoff: cutoff,
-            ..opts.clone()
-        };
         b.diagnose_change(&given, runs, vec![], HOLDOUT, &opts)
             .map_err(diag_err)?
     } else {
         let opts = diagnose::Options {
             description_information: Some(information),
-            processing_cutoff: cutoff,
-            ..opts.clone()
+            ..opts
         };
         diagnose::diagnose_runs(&given, runs, vec![], HOLDOUT, &opts).map_err(diag_err)?
     };

@@ -14,28 +14,7 @@ const BLOCK_SAMPLES: usize = 128;
 /// their sums are added, and so every result, do not depend on the thread count.
 const CHUNK_SAMPLES: usize = 1024;
 
-/// Calls `f(k, Y_k)` with the regressor of every sample `k` in `range` of `tr`, which must carry
-/// q̈ (one workspace and one output matrix for the whole range).
-pub fn for_each_regressor(
-    model: &Model,
-    tr: &Trajectory,
-    range: std::ops::Range<usize>,
-    f: &mut dyn FnMut(usize, &DMatrix<f64>),
-) {
-    let mut d = Data::new(model);
-    let mut y = DMatrix::zeros(model.dof(), model.layout().len);
-    for k in range {
-        regressor(
-            model,
-            &mut d,
-            tr.q_at(k),
-            tr.qd_at(k),
-            tr.qdd_at(k).expect("q̈ present"),
-            &mut y,
-        );
-        f(k, &y);
-    }
-}
+pub use crate::dynamics::for_each_regressor;
 
 /// The normal equations of `min Σ_k ‖Y_k θ − τ_k‖²` over the samples added so far.
 #[derive(Clone, Debug)]
