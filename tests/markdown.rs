@@ -85,6 +85,31 @@ fn the_diagnosis_report_parses_with_its_columns() {
         where_table.iter().any(|r| r[1].starts_with("|qd| low")),
         "{where_table:?}"
     );
+    // The HTML page and the terminal text render the same sections: the page every table of
+    // the Markdown, the terminal each section's title and the summary last, without the
+    // candidates' scores.
+    let html = physid::diagnose::report::html(&diag, &[]);
+    assert_eq!(html.matches("<table>").count(), t.len());
+    assert!(
+        html.contains("<td>|qd| low"),
+        "a regime cell lost its pipes"
+    );
+    let text = physid::diagnose::report::text(&diag);
+    for title in ["Where", "Which", "From the description", "How far"] {
+        let caps = title.to_uppercase();
+        assert!(text.lines().any(|l| l == caps), "{caps} missing:\n{text}");
+        assert!(
+            html.contains(&format!("<summary>{title}</summary>")),
+            "{title}"
+        );
+        assert!(md.contains(&format!("\n## {title}\n")), "{title}");
+    }
+    assert_eq!(text.lines().last(), Some(diag.summary.as_str()));
+    // The files carry every regime (four angle quartiles per joint), the terminal each joint's
+    // worst three.
+    let quartiles = |s: &str| s.lines().filter(|l| l.contains("q quartile")).count();
+    assert_eq!(quartiles(&md), 4 * diag.joints.len());
+    assert!(quartiles(&text) <= 3 * diag.joints.len(), "{text}");
 }
 
 #[test]

@@ -129,6 +129,8 @@ class Diagnosis:
         """pandas DataFrame: per joint the validation RMS of the description, the nominal
         model, after each effect, and the noise floor (N m)."""
     def to_dict(self) -> dict[str, Any]: ...
+    def text(self) -> str:
+        """The report as `physid diagnose` prints it (the Markdown's sections, condensed)."""
     def markdown(self) -> str: ...
     def html(self) -> str:
         """The self-contained HTML report, plots inline."""

@@ -851,6 +851,12 @@ impl Diagnosis {
         to_python(py, "diagnose", &self.diagnosis)
     }
 
+    /// The report as `physid diagnose` prints it on a terminal (the same sections as the
+    /// Markdown, condensed, the summary last).
+    fn text(&self) -> String {
+        physid::diagnose::report::text(&self.diagnosis)
+    }
+
     /// The Markdown report (`report.md`).
     fn markdown(&self) -> String {
         physid::diagnose::report::markdown(&self.diagnosis)

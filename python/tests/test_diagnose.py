@@ -48,6 +48,7 @@ def test_report_files_equal_the_clis(run3, tmp_path):
             a, b = without_timings(json.loads(a)), without_timings(json.loads(b))
         assert a == b, name
     assert run3.markdown() == (py_dir / "report.md").read_text()
+    assert run3.text() == out.stdout and "\nHOW FAR\n" in out.stdout
     html = run3._repr_html_()
     assert html == (py_dir / "report.html").read_text() and html.count("<svg") >= 2
 

@@ -1,9 +1,13 @@
-//! Reports: a diagnosis as Markdown, JSON and SVG plots (residual by regime, residual spectrum
+//! Reports: a diagnosis as one section model (rendered to text, Markdown and HTML), JSON and SVG plots (residual by regime, residual spectrum
 //! before and after, validation RMS per joint before and after each effect).
 
+use super::breakdown::Regime;
 use super::diagnosis::Diagnosis;
+use super::diagnosis::Evidence;
+use crate::effect::library::Kind;
+use crate::io::document::{escape_html, Block, Document, Section, Table, Text};
 use crate::io::plot::{colour, legend_outside, tick, Mark, LEGEND_WIDTH};
-use crate::io::{md_cell, IoError};
+use crate::io::IoError;
 use plotters::prelude::*;
 use std::path::{Path, PathBuf};
 
@@ -111,63 +115,165 @@ fn spectrum_plot(path: &Path, d: &Diagnosis) -> Result<Option<String>, ReportErr
     Ok(Some(svg))
 }
 
-/// The Markdown report.
-pub fn markdown(d: &Diagnosis) -> String {
-    let mut s = format!(
-        "# Diagnosis of {}\n\n**{}**\n\n{} joints; {} training and {} validation samples; nominal model: constraint set `{}` (constraints hold: {}).\n\n",
-        d.robot,
-        d.summary,
-        d.joints.len(),
-        d.samples[0],
-        d.samples[1],
-        d.constraints.name(),
-        d.nominal_constraints_hold
-    );
-    s += &where_section(d);
-    s += &which_section(d);
-    s += &description_section(d);
-    s += &effects_section(d);
-    s += &from_description_section(d);
-    s += "\n";
-    s += &how_far_section(d);
-    s
+/// The report as one section model ([`Document`]): the files render all of it (Markdown, HTML),
+/// the terminal its condensed view ([`text`]).
+pub fn document(d: &Diagnosis) -> Document {
+    let mut which = which_section(d);
+    description_blocks(d, &mut which);
+    effect_blocks(d, &mut which);
+    Document {
+        title: format!("Diagnosis of {}", d.robot),
+        summary: d.summary.clone(),
+        preface: Text::plain(format!(
+            "{} joints; {} training and {} validation samples; nominal model: constraint set ",
+            d.joints.len(),
+            d.samples[0],
+            d.samples[1],
+        ))
+        .code(d.constraints.name())
+        .and(format!(
+            " (constraints hold: {}).",
+            d.nominal_constraints_hold
+        )),
+        sections: vec![
+            where_section(d),
+            which,
+            from_description_section(d),
+            how_far_section(d),
+        ],
+    }
 }
 
-/// The Markdown "Where" section: residual per joint and regime, spectrum peaks.
-fn where_section(d: &Diagnosis) -> String {
-    let mut s = String::new();
-    s += "## Where\n\nValidation residual of the nominal model per joint and regime, over all samples (RMS in N m, share of the joint's residual energy; *How far* leaves out joint-samples slower than the speed threshold, so its RMS differs). Plot: `where.svg`; spectrum: `spectrum.svg`.\n\n| joint | regime | samples | RMS | share |\n|---|---|---|---|---|\n";
-    for r in &d.breakdown.regimes {
-        s += &format!(
-            "| {} | {} | {} | {:.3} | {:.2} |\n",
-            md_cell(&r.joint),
-            md_cell(&r.regime),
-            r.samples,
-            r.rms,
-            r.share
-        );
+/// The Markdown report.
+pub fn markdown(d: &Diagnosis) -> String {
+    document(d).markdown()
+}
+
+/// The diagnosis as text for a terminal: where, which, from the description, how far, and the
+/// summary last.
+pub fn text(d: &Diagnosis) -> String {
+    document(d).text()
+}
+
+/// `text` followed by the names of `kinds` in code type, separated by commas.
+fn with_codes<'a>(text: Text, kinds: impl IntoIterator<Item = &'a str>) -> Text {
+    let mut t = text;
+    for (i, k) in kinds.into_iter().enumerate() {
+        if i > 0 {
+            t = t.and(", ");
+        }
+        t = t.code(k);
     }
-    s += "\n| joint | PSD peak (Hz) | peak coherence with q, qd, qdd, sin(N q) |\n|---|---|---|\n";
+    t
+}
+
+/// The kinds' names.
+fn kind_names(kinds: &[Kind]) -> impl Iterator<Item = &'static str> + '_ {
+    kinds.iter().map(|k| k.name())
+}
+
+/// The "Where" section: the nominal model's validation residual per joint and regime, and its
+/// spectrum's peaks (the terminal sees each joint's RMS and worst three regimes).
+fn where_section(d: &Diagnosis) -> Section {
+    let mut s = Section::new("Where");
+    s.detail(Block::Paragraph(
+        Text::plain("Validation residual of the nominal model per joint and regime, over all samples (RMS in N m, share of the joint's residual energy; ")
+            .emphasis("How far")
+            .and(" leaves out joint-samples slower than the speed threshold, so its RMS differs). Plot: ")
+            .code("where.svg")
+            .and("; spectrum: ")
+            .code("spectrum.svg")
+            .and("."),
+    ));
+    s.terminal(Block::Paragraph(Text::plain(
+        "Validation residual of the nominal model over all samples (How far below leaves out slow joint-samples): RMS (N m), residual spectrum peak, peak coherence with each signal; then each joint's worst regimes.",
+    )));
+    s.terminal(Block::Table(joint_residuals(d)));
+    s.terminal(Block::Table(regimes(d, Some(3))));
+    s.detail(Block::Table(regimes(d, None)));
+    let mut peaks = Table::new([
+        "joint",
+        "PSD peak (Hz)",
+        "peak coherence with q, qd, qdd, sin(N q)",
+    ]);
     for sp in &d.spectra {
-        s += &format!(
-            "| {} | {:.2} | {} |\n",
-            md_cell(&sp.joint),
-            sp.peak_frequency,
+        peaks.row([
+            sp.joint.clone(),
+            format!("{:.2}", sp.peak_frequency),
             sp.peak_coherence
                 .iter()
                 .map(|(c, f)| format!("{c:.2} @ {f:.1} Hz"))
                 .collect::<Vec<_>>()
-                .join(", ")
-        );
+                .join(", "),
+        ]);
     }
+    s.detail(Block::Table(peaks));
     s
 }
 
-/// The "Which" section: the cross-validated selection, step by step.
-fn which_section(d: &Diagnosis) -> String {
-    let mut s = String::new();
-    s += &format!(
-        "\n## Which\n\nCross-validated forward selection over {} {} (nominal CV RMS {:.3} N m).\n\n",
+/// Per joint: the residual's RMS over all samples, its spectrum's peak and its peak coherence
+/// with each signal.
+fn joint_residuals(d: &Diagnosis) -> Table {
+    let mut t = Table::new(["joint", "RMS (N m)", "peak (Hz)", "peak coherence"]);
+    for (j, name) in d.joints.iter().enumerate() {
+        let sp = &d.spectra[j];
+        let coherence = sp
+            .signals
+            .iter()
+            .zip(&sp.peak_coherence)
+            .map(|(s, (c, f))| format!("{s} {c:.2} @ {f:.1} Hz"))
+            .collect::<Vec<_>>()
+            .join(", ");
+        t.row([
+            name.clone(),
+            format!("{:.3}", d.breakdown.rms[j]),
+            format!("{:.2}", sp.peak_frequency),
+            coherence,
+        ]);
+    }
+    t
+}
+
+/// The residual per joint and regime: every row in the breakdown's order, or (with `worst`)
+/// each joint's `worst` regimes by RMS.
+fn regimes(d: &Diagnosis, worst: Option<usize>) -> Table {
+    let mut t = Table::new(["joint", "regime", "samples", "RMS", "share"]);
+    let rows: Vec<&Regime> = match worst {
+        None => d.breakdown.regimes.iter().collect(),
+        Some(n) => d
+            .joints
+            .iter()
+            .flat_map(|joint| {
+                let mut rows: Vec<&Regime> = d
+                    .breakdown
+                    .regimes
+                    .iter()
+                    .filter(|r| &r.joint == joint && r.samples > 0)
+                    .collect();
+                rows.sort_by(|a, b| b.rms.total_cmp(&a.rms));
+                rows.truncate(n);
+                rows
+            })
+            .collect(),
+    };
+    for r in rows {
+        t.row([
+            r.joint.clone(),
+            r.regime.clone(),
+            r.samples.to_string(),
+            format!("{:.3}", r.rms),
+            format!("{:.2}", r.share),
+        ]);
+    }
+    t
+}
+
+/// The "Which" section: the cross-validated selection, step by step (each candidate's score
+/// in the files).
+fn which_section(d: &Diagnosis) -> Section {
+    let mut s = Section::new("Which");
+    s.push(Block::Paragraph(Text::plain(format!(
+        "Cross-validated forward selection over {} {} (nominal CV RMS {:.3} N m).",
         d.selection.blocks,
         if d.selection.by_run {
             "training runs, leaving one run out"
@@ -175,150 +281,173 @@ fn which_section(d: &Diagnosis) -> String {
             "contiguous blocks of the training data"
         },
         d.selection.nominal_cv_rms
-    );
+    ))));
     for (i, st) in d.selection.steps.iter().enumerate() {
-        s += &format!(
-            "### Step {}: `{}` (CV RMS {:.3} → {:.3} N m, −{:.1} % mean square)\n\n",
-            i + 1,
-            st.kind.name(),
-            st.cv_rms_before,
-            st.cv_rms_after,
-            100.0 * st.reduction
-        );
+        s.push(Block::Heading(
+            Text::plain(format!("Step {}: ", i + 1))
+                .code(st.kind.name())
+                .and(format!(
+                    " (CV RMS {:.3} → {:.3} N m, −{:.1} % mean square)",
+                    st.cv_rms_before,
+                    st.cv_rms_after,
+                    100.0 * st.reduction
+                )),
+        ));
         if !st.ambiguous_with.is_empty() {
-            s += &format!(
-                "**Ambiguous** with {}: the data fit them equally well.\n\n",
-                crate::effect::library::names(&st.ambiguous_with, true)
+            let t = with_codes(
+                Text::default().strong("Ambiguous").and(" with "),
+                kind_names(&st.ambiguous_with),
             );
+            s.push(Block::Paragraph(t.and(": the data fit them equally well.")));
         }
-        s +=
-            "| kind | grid value | CV RMS | reduction | blocks improved |\n|---|---|---|---|---|\n";
+        if !st.also_fit.is_empty() {
+            let t = with_codes(
+                Text::plain("Also fit (with more terms): "),
+                kind_names(&st.also_fit),
+            );
+            s.terminal(Block::Paragraph(t.and(".")));
+        }
+        let mut scores = Table::new([
+            "kind",
+            "grid value",
+            "CV RMS",
+            "reduction",
+            "blocks improved",
+        ]);
         for sc in &st.scores {
-            s += &format!(
-                "| {} | {} | {:.4} | {:.1} % | {} |\n",
-                sc.kind.name(),
-                sc.param,
-                sc.cv_rms,
-                100.0 * sc.reduction,
-                sc.blocks_improved
-            );
+            scores.row([
+                sc.kind.name().to_string(),
+                sc.param.to_string(),
+                format!("{:.4}", sc.cv_rms),
+                format!("{:.1} %", 100.0 * sc.reduction),
+                sc.blocks_improved.to_string(),
+            ]);
         }
-        s += "\n";
+        s.detail(Block::Table(scores));
     }
-    s += &format!("Stopped: {}.\n\n", d.selection.stop);
+    s.push(Block::Paragraph(Text::plain(format!(
+        "Stopped: {}.",
+        d.selection.stop
+    ))));
     s
 }
 
-/// The test against the description, when it ran (or why it did not).
-fn description_section(d: &Diagnosis) -> String {
-    let mut s = String::new();
+/// The test against the description, when it ran (each candidate's statistic in the files),
+/// or why it did not.
+fn description_blocks(d: &Diagnosis, s: &mut Section) {
+    let title = "Absorbed effects: the test against the description";
     if let Some(why) = &d.description_test_skipped {
-        s += &format!(
-            "### Absorbed effects: the test against the description\n\nThe test was {why}.\n\n"
-        );
+        s.push(Block::Heading(title.into()));
+        s.push(Block::Paragraph(format!("The test was {why}.").into()));
     }
-    if let Some(t) = &d.description_test {
-        s += &format!(
-            "### Absorbed effects: the test against the description (stated uncertainty {:.0} %)\n\nResidual mean square {:.4} N² m², correlation time {:.1} samples.\n\n",
-            100.0 * t.uncertainty,
-            t.residual_ms,
-            t.correlation_samples
-        );
-        for (i, st) in t.steps.iter().enumerate() {
-            s += &format!(
-                "Step {}: `{}` (Δ = {:.1} > χ² threshold {:.1}){}\n\n| kind | Δ | threshold | columns | visible |\n|---|---|---|---|---|\n",
-                i + 1,
-                st.kind.name(),
-                st.statistic,
-                st.threshold,
-                if st.ambiguous_with.is_empty() {
-                    String::new()
-                } else {
-                    format!(
-                        "; **ambiguous** with {}",
-                        crate::effect::library::names(&st.ambiguous_with, true)
-                    )
-                }
+    let Some(t) = &d.description_test else {
+        return;
+    };
+    s.push(Block::Heading(
+        format!(
+            "{title} (stated uncertainty {:.0} %)",
+            100.0 * t.uncertainty
+        )
+        .into(),
+    ));
+    s.push(Block::Paragraph(
+        format!(
+            "Residual mean square {:.4} N² m², correlation time {:.1} samples.",
+            t.residual_ms, t.correlation_samples
+        )
+        .into(),
+    ));
+    for (i, st) in t.steps.iter().enumerate() {
+        let mut line = Text::plain(format!("Step {}: ", i + 1))
+            .code(st.kind.name())
+            .and(format!(
+                " (Δ = {:.1} > χ² threshold {:.1})",
+                st.statistic, st.threshold
+            ));
+        if !st.ambiguous_with.is_empty() {
+            line = with_codes(
+                line.and("; ").strong("ambiguous").and(" with "),
+                kind_names(&st.ambiguous_with),
             );
-            for x in &st.tests {
-                s += &format!(
-                    "| {} | {:.1} | {:.1} | {} | {:.3} |\n",
-                    x.kind.name(),
-                    x.statistic,
-                    x.threshold,
-                    x.columns,
-                    x.visible
-                );
-            }
-            s += "\n";
         }
-        s += &format!("Stopped: {}.\n\n", t.stop);
+        s.push(Block::Paragraph(line));
+        let mut tests = Table::new(["kind", "Δ", "threshold", "columns", "visible"]);
+        for x in &st.tests {
+            tests.row([
+                x.kind.name().to_string(),
+                format!("{:.1}", x.statistic),
+                format!("{:.1}", x.threshold),
+                x.columns.to_string(),
+                format!("{:.3}", x.visible),
+            ]);
+        }
+        s.detail(Block::Table(tests));
     }
-    s
+    s.push(Block::Paragraph(format!("Stopped: {}.", t.stop).into()));
 }
 
-/// Each selected effect with its magnitudes.
-fn effects_section(d: &Diagnosis) -> String {
-    let mut s = String::new();
+/// Each effect found, with its magnitudes.
+fn effect_blocks(d: &Diagnosis, s: &mut Section) {
     for e in &d.effects {
-        s += &format!(
-            "### `{}`{}: {}\n\n| joint | value | std. error | unit | identifiable |\n|---|---|---|---|---|\n",
-            e.kind.name(),
-            if e.param != 0.0 {
-                format!(" at {}", e.param)
-            } else {
-                String::new()
-            },
-            match e.evidence {
-                super::diagnosis::Evidence::CrossValidation => e.magnitude_name.clone(),
-                super::diagnosis::Evidence::Description =>
-                    format!("{} (found against the description)", e.magnitude_name),
+        let found = match e.evidence {
+            Evidence::CrossValidation => e.magnitude_name.clone(),
+            Evidence::Description => {
+                format!("{} (found against the description)", e.magnitude_name)
             }
-        );
+        };
+        let at = if e.param != 0.0 {
+            format!(" at {}", e.param)
+        } else {
+            String::new()
+        };
+        s.push(Block::Heading(
+            Text::default()
+                .code(e.kind.name())
+                .and(format!("{at}: {found}")),
+        ));
+        let mut t = Table::new(["joint", "value", "std. error", "unit", "identifiable"]);
         for m in &e.magnitudes {
-            s += &format!(
-                "| {} | {:.4e} | {:.1e} | {} | {:.2} |\n",
-                md_cell(&m.joint),
-                m.value,
-                m.se,
-                m.unit,
-                m.identifiable
-            );
+            t.row([
+                m.joint.clone(),
+                format!("{:.4e}", m.value),
+                format!("{:.1e}", m.se),
+                m.unit.clone(),
+                format!("{:.2}", m.identifiable),
+            ]);
         }
+        s.push(Block::Table(t));
         if let Some(sep) = &e.separate_by {
-            s += &format!("\nTo separate them: {sep}.\n");
+            s.push(Block::Paragraph(format!("To separate them: {sep}.").into()));
         }
-        s += "\n";
     }
-    s
 }
 
-/// The "From the description" section: the description's gap explained step by step.
-fn from_description_section(d: &Diagnosis) -> String {
-    let mut s = String::from("## From the description
-
-The sim-to-real gap itself: validation RMS per joint (N m; joint-samples slower than the speed threshold left out) of the description as given, then with each explanation freed while the description's inertial parameters stay pinned (the one that lowers the training residual most first), then with the inertial parameters re-identified too.
-
-| step |");
-    for j in &d.joints {
-        s += &format!(" {} |", md_cell(j));
-    }
-    s += " all |\n|---|";
-    s += &"---|".repeat(d.joints.len() + 1);
-    s += "\n| description as given |";
-    for g in &d.gap {
-        s += &format!(" {:.3} |", g.description);
-    }
-    s += &format!(" {:.3} |\n", d.description_overall);
+/// The "From the description" section: the description's gap explained step by step, with
+/// the ladder's ambiguity groups and weighed bodies.
+fn from_description_section(d: &Diagnosis) -> Section {
+    let mut s = Section::new("From the description");
+    s.push(Block::Paragraph("The sim-to-real gap itself: validation RMS per joint (N m; joint-samples slower than the speed threshold left out) of the description as given, then with each explanation freed while the description's inertial parameters stay pinned (the one that lowers the training residual most first), then with the inertial parameters re-identified too.".into()));
+    let header = std::iter::once("step".to_string())
+        .chain(d.joints.iter().cloned())
+        .chain(std::iter::once("all".to_string()));
+    let mut t = Table::new(header);
+    let row = |step: &str, rms: &mut dyn Iterator<Item = f64>, all: f64| {
+        std::iter::once(step.to_string())
+            .chain(rms.map(|r| format!("{r:.3}")))
+            .chain(std::iter::once(format!("{all:.3}")))
+            .collect::<Vec<_>>()
+    };
+    t.row(row(
+        "description as given",
+        &mut d.gap.iter().map(|g| g.description),
+        d.description_overall,
+    ));
     for st in &d.explained_from_description {
-        s += &format!("| {} |", st.step);
-        for r in &st.rms {
-            s += &format!(" {r:.3} |");
-        }
-        s += &format!(" {:.3} |\n", st.overall);
+        t.row(row(&st.step, &mut st.rms.iter().copied(), st.overall));
     }
+    s.push(Block::Table(t));
     if let Some(l) = &d.ladder {
-        s += &ladder_notes(l);
+        ladder_notes(l, &mut s);
     }
     s
 }
@@ -326,97 +455,107 @@ The sim-to-real gap itself: validation RMS per joint (N m; joint-samples slower 
 /// What the ladder's table cannot show: the explanations the held-out data fit as well as a
 /// step's (its ambiguity group, a body with the mass it would add in the step's place), and
 /// each body a step freed, weighed (mass ± standard error, centre of mass in its frame).
-fn ladder_notes(l: &super::ladder::Ladder) -> String {
-    let mut s = String::new();
+fn ladder_notes(l: &super::ladder::Ladder, s: &mut Section) {
     for r in l.rungs.iter().filter(|r| !r.ambiguous_with.is_empty()) {
-        let alternatives: Vec<String> = r
-            .alternatives()
-            .iter()
-            .map(|a| format!("`{}`", md_cell(a)))
-            .collect();
-        s += &format!(
-            "\n**Ambiguous**: the data fit {} as well as `{}`.\n",
-            alternatives.join(", "),
-            md_cell(&r.step)
+        let alternatives = r.alternatives();
+        let t = with_codes(
+            Text::default().strong("Ambiguous").and(": the data fit "),
+            alternatives.iter().map(String::as_str),
         );
+        s.push(Block::Paragraph(
+            t.and(" as well as ").code(&r.step).and("."),
+        ));
     }
     for b in &l.bodies {
         let what = if b.payload { "Payload" } else { "Change" };
-        s += &format!("\n{what} on `{}`: {}.\n", md_cell(&b.body), b.weighed());
+        s.push(Block::Paragraph(
+            Text::plain(format!("{what} on "))
+                .code(&b.body)
+                .and(format!(": {}.", b.weighed())),
+        ));
+    }
+}
+
+/// The "How far" section: validation RMS along the selection, the structure left, the
+/// confirmed-only refit.
+fn how_far_section(d: &Diagnosis) -> Section {
+    let mut s = Section::new("How far");
+    s.push(Block::Paragraph(Text::plain("Validation RMS per joint (N m; joint-samples slower than the speed threshold left out): the description as given (the sim-to-real gap), the description re-identified on the training data (nominal), then after each effect (cumulative); plot ").code("how_far.svg").and(".")));
+    s.push(Block::Table(how_far_table(d)));
+    s.push(Block::Paragraph(structure_left(d)));
+    if let Some((rms, o)) = &d.confirmed_only {
+        let unconfirmed = d
+            .effects
+            .iter()
+            .zip(&d.confirmed)
+            .filter(|(_, c)| !**c)
+            .map(|(e, _)| e.kind.name());
+        let per_joint: Vec<String> = d
+            .joints
+            .iter()
+            .zip(rms)
+            .map(|(j, r)| format!("{j} {r:.3}"))
+            .collect();
+        let t = with_codes(
+            Text::plain("Not confirmed on the validation data: "),
+            unconfirmed,
+        );
+        s.push(Block::Paragraph(t.and(format!(
+            ". Refitted with the confirmed effects only, the validation RMS is {o:.3} N m ({}).",
+            per_joint.join(", ")
+        ))));
     }
     s
 }
 
-/// The "How far" section: validation RMS along the selection, the confirmed-only refit.
-fn how_far_section(d: &Diagnosis) -> String {
-    let mut s = String::new();
-    s += "## How far\n\nValidation RMS per joint (N m; joint-samples slower than the speed threshold left out): the description as given (the sim-to-real gap), the description re-identified on the training data (nominal), then after each effect (cumulative); plot `how_far.svg`.\n\n| joint | description | nominal |";
-    for e in &d.effects {
-        s += &format!(" + {} |", e.kind.name());
-    }
-    s += " noise floor | gap closed |\n|---|---|---|";
-    s += &"---|".repeat(d.effects.len() + 2);
-    s += "\n";
+/// Per joint: the description, nominal, after each effect, noise floor, gap closed; then all.
+fn how_far_table(d: &Diagnosis) -> Table {
+    let header = ["joint", "description", "nominal"]
+        .into_iter()
+        .map(String::from)
+        .chain(d.effects.iter().map(|e| format!("+ {}", e.kind.name())))
+        .chain(["noise floor".to_string(), "gap closed".to_string()]);
+    let mut t = Table::new(header);
+    let f3 = |v: &f64| format!("{v:.3}");
     for g in &d.gap {
-        s += &format!(
-            "| {} | {:.3} | {:.3} |",
-            md_cell(&g.joint),
-            g.description,
-            g.nominal
-        );
-        for a in &g.after {
-            s += &format!(" {a:.3} |");
-        }
-        s += &format!(" {:.3} | {:.0} % |\n", g.noise_floor, 100.0 * g.gap_closed);
+        let cells = [g.joint.clone(), f3(&g.description), f3(&g.nominal)]
+            .into_iter()
+            .chain(g.after.iter().map(f3))
+            .chain([f3(&g.noise_floor), format!("{:.0} %", 100.0 * g.gap_closed)]);
+        t.row(cells);
     }
-    s += &format!(
-        "| all | {:.3} | {} | {:.3} | {:.0} % |\n",
-        d.description_overall,
-        d.overall
-            .iter()
-            .map(|v| format!("{v:.3}"))
-            .collect::<Vec<_>>()
-            .join(" | "),
-        d.noise_floor,
-        100.0 * d.gap_closed
-    );
+    let all = ["all".to_string(), f3(&d.description_overall)]
+        .into_iter()
+        .chain(d.overall.iter().map(f3))
+        .chain([f3(&d.noise_floor), format!("{:.0} %", 100.0 * d.gap_closed)]);
+    t.row(all);
+    t
+}
+
+/// The structure left after the final model, in a sentence.
+fn structure_left(d: &Diagnosis) -> Text {
     let st = &d.structure_left;
-    s += &format!(
-        "\nStructure left: a smooth function of each joint's own speed and angle (piecewise linear), fitted on the training residual of the final model, changes its validation mean square by {:+.1} % ({}; t = {:.1} over 10 contiguous validation blocks); {} (counts when at least −{:.1} % with t ≥ 2).\n",
+    let per_joint: Vec<String> = d
+        .joints
+        .iter()
+        .zip(&st.per_joint)
+        .map(|(j, r)| format!("{j} {:+.1} %", -100.0 * r))
+        .collect();
+    let t = Text::plain(format!(
+        "Structure left: a smooth function of each joint's own speed and angle (piecewise linear), fitted on the training residual of the final model, changes its validation mean square by {:+.1} % ({}; t = {:.1} over 10 contiguous validation blocks); ",
         -100.0 * st.reduction,
-        d.joints
-            .iter()
-            .zip(&st.per_joint)
-            .map(|(j, r)| format!("{} {:+.1} %", md_cell(j), -100.0 * r))
-            .collect::<Vec<_>>()
-            .join(", "),
+        per_joint.join(", "),
         st.t,
-        if st.remains {
-            "**an effect outside the library remains**"
-        } else {
-            "no structure left"
-        },
+    ));
+    let t = if st.remains {
+        t.strong("an effect outside the library remains")
+    } else {
+        t.and("no structure left")
+    };
+    t.and(format!(
+        " (counts when at least −{:.1} % with t ≥ 2).",
         100.0 * st.threshold
-    );
-    if let Some((rms, o)) = &d.confirmed_only {
-        s += &format!(
-            "\nNot confirmed on the validation data: {}. Refitted with the confirmed effects only, the validation RMS is {o:.3} N m ({}).\n",
-            d.effects
-                .iter()
-                .zip(&d.confirmed)
-                .filter(|(_, c)| !**c)
-                .map(|(e, _)| format!("`{}`", e.kind.name()))
-                .collect::<Vec<_>>()
-                .join(", "),
-            d.joints
-                .iter()
-                .zip(rms)
-                .map(|(j, r)| format!("{j} {r:.3}"))
-                .collect::<Vec<_>>()
-                .join(", ")
-        );
-    }
-    s
+    ))
 }
 
 /// Writes `report.json`, `report.md`, `where.svg`, `spectrum.svg`, `how_far.svg` and
@@ -540,23 +679,12 @@ fn draw(d: &Diagnosis, dir: &Path) -> Result<Vec<(String, String)>, ReportError>
     Ok(plots)
 }
 
-/// Text escaped for HTML.
-fn escape_html(s: &str) -> String {
-    s.replace('&', "&amp;")
-        .replace('<', "&lt;")
-        .replace('>', "&gt;")
-        .replace('"', "&quot;")
-}
-
 /// A self-contained HTML report, in the order a reader wants it: the verdict and summary, the
-/// `plots` (file name, SVG text) inline, then each section of the Markdown report (CommonMark
-/// with tables) folded under its title. No script, no external resource.
+/// `plots` (file name, SVG text) inline, then each section of the report folded under its
+/// title. No script, no external resource.
 pub fn html(d: &Diagnosis, plots: &[(String, String)]) -> String {
     let verdict = crate::io::serde_name(&d.verdict);
-    // The Markdown without its title and summary paragraph, which the page puts first.
-    let md = markdown(d);
-    let rest = md.splitn(3, "\n\n").nth(2).unwrap_or("");
-    let body = folded_sections(rest);
+    let doc = document(d);
     let figures: String = plots
         .iter()
         .map(|(name, svg)| {
@@ -567,40 +695,11 @@ pub fn html(d: &Diagnosis, plots: &[(String, String)]) -> String {
         })
         .collect();
     format!(
-        "<!DOCTYPE html>\n<html lang=\"en\">\n<head>\n<meta charset=\"utf-8\">\n<title>Diagnosis of {robot}</title>\n<style>\nbody {{ font-family: sans-serif; max-width: 1150px; margin: 2em auto; padding: 0 1em; color: #222; }}\ntable {{ border-collapse: collapse; font-size: 13px; margin: 0.5em 0 1.5em; }}\nth, td {{ border: 1px solid #ccc; padding: 2px 6px; }}\nth {{ background: #f2f2f2; }}\n.verdict {{ font-size: 1.1em; background: #f6f8fa; border-left: 5px solid #3465a4; padding: 0.6em 1em; }}\nfigure {{ margin: 1em 0; }} svg {{ max-width: 100%; height: auto; }} figcaption {{ color: #555; font-size: 12px; }}\ndetails {{ margin: 0.4em 0; }} summary {{ cursor: pointer; font-weight: bold; font-size: 1.05em; }}\n</style>\n</head>\n<body>\n<h1>Diagnosis of {robot}</h1>\n<p class=\"verdict\">Verdict: <b>{verdict}</b>. {summary}</p>\n<h2>Plots</h2>\n{figures}<h2>Tables</h2>\n{body}</body>\n</html>\n",
-        robot = escape_html(&d.robot),
+        "<!DOCTYPE html>\n<html lang=\"en\">\n<head>\n<meta charset=\"utf-8\">\n<title>{title}</title>\n<style>\nbody {{ font-family: sans-serif; max-width: 1150px; margin: 2em auto; padding: 0 1em; color: #222; }}\ntable {{ border-collapse: collapse; font-size: 13px; margin: 0.5em 0 1.5em; }}\nth, td {{ border: 1px solid #ccc; padding: 2px 6px; }}\nth {{ background: #f2f2f2; }}\n.verdict {{ font-size: 1.1em; background: #f6f8fa; border-left: 5px solid #3465a4; padding: 0.6em 1em; }}\nfigure {{ margin: 1em 0; }} svg {{ max-width: 100%; height: auto; }} figcaption {{ color: #555; font-size: 12px; }}\ndetails {{ margin: 0.4em 0; }} summary {{ cursor: pointer; font-weight: bold; font-size: 1.05em; }}\n</style>\n</head>\n<body>\n<h1>{title}</h1>\n<p class=\"verdict\">Verdict: <b>{verdict}</b>. {summary}</p>\n<p>{preface}</p>\n<h2>Plots</h2>\n{figures}<h2>Tables</h2>\n{body}</body>\n</html>\n",
+        title = escape_html(&doc.title),
         verdict = escape_html(&verdict),
         summary = escape_html(&d.summary),
+        preface = doc.preface.to_html(),
+        body = doc.html_sections(),
     )
-}
-
-/// Markdown text with `## ` sections, rendered to HTML with each section folded
-/// (`<details>`) under its title.
-fn folded_sections(md: &str) -> String {
-    let render = |text: &str| {
-        let mut out = String::new();
-        pulldown_cmark::html::push_html(
-            &mut out,
-            pulldown_cmark::Parser::new_ext(text, pulldown_cmark::Options::ENABLE_TABLES),
-        );
-        out
-    };
-    let mut html = String::new();
-    for (k, section) in md.split("\n## ").enumerate() {
-        let section = if k == 0 {
-            section.strip_prefix("## ").unwrap_or(section)
-        } else {
-            section
-        };
-        if section.trim().is_empty() {
-            continue;
-        }
-        let (title, content) = section.split_once('\n').unwrap_or((section, ""));
-        html += &format!(
-            "<details>\n<summary>{}</summary>\n{}</details>\n",
-            escape_html(title.trim()),
-            render(content)
-        );
-    }
-    html
 }

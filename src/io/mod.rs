@@ -3,6 +3,7 @@
 //! every file is written atomically (temporary file, then rename).
 
 pub mod cache;
+pub mod document;
 pub mod geometry;
 pub mod mcap_log;
 pub mod mcap_stream;
