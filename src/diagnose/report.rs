@@ -305,7 +305,7 @@ fn which_section(d: &Diagnosis) -> Section {
                 Text::plain("Also fit (with more terms): "),
                 kind_names(&st.also_fit),
             );
-            s.terminal(Block::Paragraph(t.and(".")));
+            s.push(Block::Paragraph(t.and(".")));
         }
         let mut scores = Table::new([
             "kind",
@@ -416,6 +416,18 @@ fn effect_blocks(d: &Diagnosis, s: &mut Section) {
             ]);
         }
         s.push(Block::Table(t));
+        let hidden = e
+            .magnitudes
+            .iter()
+            .filter(|m| m.identifiable < super::IDENTIFIABLE);
+        let hidden: Vec<&str> = hidden.map(|m| m.joint.as_str()).collect();
+        if !hidden.is_empty() {
+            s.push(Block::Paragraph(Text::plain(format!(
+                "Not identifiable (identifiable below {}: absorbed by the inertial parameters): {}.",
+                super::IDENTIFIABLE,
+                hidden.join(", ")
+            ))));
+        }
         if let Some(sep) = &e.separate_by {
             s.push(Block::Paragraph(format!("To separate them: {sep}.").into()));
         }
