@@ -599,33 +599,46 @@ fn the_model_is_immutable_its_fields_private() {
     assert!(public.is_empty(), "public fields of Model: {public:?}");
 }
 
+/// The entries of the `effect_kinds!` list in `src/effect/mod.rs`: per entry its module, its
+/// `Kind` variant and its `EffectSpec` variant (each when given).
+fn effect_entries(table: &str) -> Vec<(String, Option<String>, Option<String>)> {
+    let head = "\neffect_kinds! {\n";
+    let list = &table[table.find(head).expect("the effect_kinds! list") + head.len() - 1..];
+    let list = &list[..list.find("\n}").unwrap()];
+    let mut entries = vec![];
+    let mut keyword = None;
+    for line in list.lines().map(str::trim) {
+        if let Some(module) = line.strip_suffix(" {") {
+            entries.push((module.to_string(), None, None));
+        } else if line == "kind" || line == "effect" {
+            keyword = Some(line.to_string());
+        } else if let Some(name) = line.strip_suffix(',') {
+            let entry = entries.last_mut().expect("an entry");
+            let slot = match keyword.take().as_deref() {
+                Some("kind") => &mut entry.1,
+                Some("effect") => &mut entry.2,
+                _ => panic!("{name}: neither a kind nor an effect"),
+            };
+            *slot = Some(name.to_string());
+        }
+    }
+    entries
+}
+
 #[test]
-fn every_effect_kind_has_its_own_file_and_one_line_in_the_table() {
-    // The kinds are the variants of `Kind`; each has `src/effect/<snake_case>.rs` holding its
-    // row (`SPEC`, naming that variant), and the table lists each file's row once. Each
-    // variant of the simulator's `EffectSpec` has its struct and `impl Physics` in its file of
-    // the same name; every file of the folder is a kind's or one of the shared ones.
+fn every_effect_kind_has_its_own_file_and_one_entry_in_the_list() {
+    // The kinds are the entries of `effect_kinds!` (the macro makes `Kind`, `KIND_TABLE`,
+    // `EffectSpec` and its `physics()` arms from them, and checks at compile time that each
+    // table row is its own kind's); each entry's module is `src/effect/<module>.rs`, named
+    // after its variants, holding the kind's row (`SPEC`, naming that variant) and, for the
+    // simulator's form, its struct and `impl Physics`; every file of the folder is an entry's
+    // or one of the shared ones.
     let dir = common::root().join("src/effect");
     let table = std::fs::read_to_string(dir.join("mod.rs")).unwrap();
-    let variants_of = |enum_head: &str| -> Vec<String> {
-        let body = &table[table.find(enum_head).unwrap()..];
-        let body = &body[..body.find("\n}").unwrap()];
-        body.lines()
-            .map(str::trim)
-            .filter(|l| l.ends_with(',') && !l.starts_with("//"))
-            .map(|l| {
-                l.trim_end_matches(',')
-                    .split('(')
-                    .next()
-                    .unwrap()
-                    .to_string()
-            })
-            .collect()
-    };
-    let kinds = variants_of("pub enum Kind {");
-    let specs = variants_of("pub enum EffectSpec {");
-    assert!(kinds.len() >= 13, "{kinds:?}");
-    assert!(specs.len() >= 13, "{specs:?}");
+    let entries = effect_entries(&table);
+    let kinds = entries.iter().filter(|e| e.1.is_some()).count();
+    let specs = entries.iter().filter(|e| e.2.is_some()).count();
+    assert!(kinds >= 13 && specs >= 13, "{entries:?}");
     let snake = |v: &str| {
         let mut out = String::new();
         for (i, c) in v.chars().enumerate() {
@@ -636,47 +649,50 @@ fn every_effect_kind_has_its_own_file_and_one_line_in_the_table() {
         }
         out
     };
-    let read = |name: &str| std::fs::read_to_string(dir.join(format!("{name}.rs")));
     let mut missing = vec![];
-    for v in &kinds {
-        let name = snake(v);
-        let Ok(text) = read(&name) else {
-            missing.push(format!("{v}: no file src/effect/{name}.rs"));
+    for (module, kind, spec) in &entries {
+        let Ok(text) = std::fs::read_to_string(dir.join(format!("{module}.rs"))) else {
+            missing.push(format!("{module}: no file src/effect/{module}.rs"));
             continue;
         };
-        if !(text.contains("pub(super) const SPEC: KindSpec")
-            && text.contains(&format!("Kind::{v},")))
-        {
-            missing.push(format!("{v}: {name}.rs holds no SPEC row of Kind::{v}"));
+        for name in kind.iter().chain(spec) {
+            if snake(name) != *module {
+                missing.push(format!("{name}: in the entry of {module}"));
+            }
         }
-        let line = format!("    {name}::SPEC,\n");
-        if table.matches(&line).count() != 1 {
-            missing.push(format!("{v}: not once in KIND_TABLE"));
+        if let Some(v) = kind {
+            if !(text.contains("pub(super) const SPEC: KindSpec")
+                && text.contains(&format!("Kind::{v},")))
+            {
+                missing.push(format!("{v}: {module}.rs holds no SPEC row of Kind::{v}"));
+            }
         }
-    }
-    for v in &specs {
-        let name = snake(v);
-        let holds = read(&name).is_ok_and(|text| {
-            text.contains(&format!("pub struct {v} {{"))
-                && text.contains(&format!("impl Physics for {v} {{"))
-        });
-        if !holds {
-            missing.push(format!(
-                "EffectSpec::{v}: src/effect/{name}.rs holds no struct {v} with its Physics"
-            ));
-        }
-        if !table.contains(&format!("EffectSpec::{v}(e) => e,")) {
-            missing.push(format!("EffectSpec::{v}: no arm in EffectSpec::physics"));
+        if let Some(v) = spec {
+            if !(text.contains(&format!("pub struct {v} {{"))
+                && text.contains(&format!("impl Physics for {v} {{")))
+            {
+                missing.push(format!(
+                    "{v}: {module}.rs holds no struct {v} with its Physics"
+                ));
+            }
         }
     }
     for (file, _) in child_files(&dir) {
-        let owned = EFFECT_SHARED.contains(&file.as_str())
-            || kinds.iter().chain(&specs).any(|v| snake(v) == file);
+        let owned = EFFECT_SHARED.contains(&file.as_str()) || entries.iter().any(|e| e.0 == file);
         if !owned {
             missing.push(format!(
-                "src/effect/{file}.rs is neither a kind's nor a shared file"
+                "src/effect/{file}.rs is neither an entry's nor a shared file"
             ));
         }
     }
     assert!(missing.is_empty(), "{}", missing.join("\n"));
+    // The list's reader sees both kinds of entry.
+    let sample = "x\neffect_kinds! {\n    a_b {\n        kind\n            /// d\n            AB,\n    }\n    c {\n        effect\n            C,\n    }\n}\n";
+    assert_eq!(
+        effect_entries(sample),
+        vec![
+            ("a_b".to_string(), Some("AB".to_string()), None),
+            ("c".to_string(), None, Some("C".to_string()))
+        ]
+    );
 }

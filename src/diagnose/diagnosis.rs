@@ -28,6 +28,18 @@ pub struct Magnitude {
     pub identifiable: f64,
 }
 
+/// Smallest identifiable fraction of a magnitude worth reporting as a number (its column's part
+/// outside the rigid-body regressor's span carries at least 3 % of its RMS).
+pub const IDENTIFIABLE: f64 = 1e-3;
+
+impl Magnitude {
+    /// Whether the value means something: its identifiable fraction is at least
+    /// [`IDENTIFIABLE`].
+    pub fn is_identifiable(&self) -> bool {
+        self.identifiable >= IDENTIFIABLE
+    }
+}
+
 /// What an effect was found by.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, schemars::JsonSchema)]
 #[serde(rename_all = "snake_case")]

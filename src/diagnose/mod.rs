@@ -47,6 +47,7 @@ pub use crate::ident::analysis::residuals;
 pub use breakdown::{breakdown, Breakdown, Regime};
 pub use diagnosis::{
     DescriptionStep, Diagnosis, EffectEstimate, Evidence, JointGap, Magnitude, Verdict,
+    IDENTIFIABLE,
 };
 pub use magnitude::magnitudes_of;
 pub use options::{DiagnoseError, Options};
@@ -55,7 +56,3 @@ pub(crate) use residual::{finite_mean_square, mask_slow, residual_rms};
 pub use stage::{fit_nominal, MIN_SAMPLES};
 pub(crate) use stats::median;
 pub use structure::StructureLeft;
-
-/// Smallest identifiable fraction of a magnitude worth reporting as a number (its column's part
-/// outside the rigid-body regressor's span carries at least 3 % of its RMS).
-pub const IDENTIFIABLE: f64 = 1e-3;

@@ -416,15 +416,12 @@ fn effect_blocks(d: &Diagnosis, s: &mut Section) {
             ]);
         }
         s.push(Block::Table(t));
-        let hidden = e
-            .magnitudes
-            .iter()
-            .filter(|m| m.identifiable < super::IDENTIFIABLE);
+        let hidden = e.magnitudes.iter().filter(|m| !m.is_identifiable());
         let hidden: Vec<&str> = hidden.map(|m| m.joint.as_str()).collect();
         if !hidden.is_empty() {
             s.push(Block::Paragraph(Text::plain(format!(
                 "Not identifiable (identifiable below {}: absorbed by the inertial parameters): {}.",
-                super::IDENTIFIABLE,
+                super::diagnosis::IDENTIFIABLE,
                 hidden.join(", ")
             ))));
         }

@@ -4,50 +4,198 @@
 //! effect, the blind benchmark's draw and, for the semi-real benchmark, its scaling), and its
 //! simulator form (the scenario's `[[effects]]` struct, its checks and TOML, and its physics
 //! behind [`Physics`]: an acting torque, the logged torque or angle, a delay, the robot itself).
-//! A new kind is one file here plus its line in the table, its `Kind` variant and, if the
-//! simulator makes it, its [`EffectSpec`] variant (`spec.rs`). The per-data state the columns
-//! read is [`context`], the columns over a data set [`library`]. Both the simulator (`sim`) and
-//! the diagnosis (`diagnose`) stand on this floor. Equations and units in `docs/diagnose.md`.
+//! A new kind is one file here plus its entry in the `effect_kinds!` list below (its `Kind`
+//! variant, table row and, if the simulator makes it, [`EffectSpec`] variant, all from it).
+//! The per-data state the columns read is [`context`], the columns over a data set
+//! [`library`]. Both the simulator (`sim`) and the diagnosis (`diagnose`) stand on this floor.
+//! Equations and units in `docs/diagnose.md`.
 //!
 //! Sign convention: a coefficient is the physical magnitude of the injected effect (each
 //! kind's [`Physics`]), e.g. the columns of an acting friction are `−∂τ_effect/∂c` because the
 //! motor torque must overcome it.
 
-mod asymmetric_coulomb;
-mod backlash;
-mod cogging;
-mod compliance;
-mod load_dependent_friction;
-mod payload;
-mod quadratic_damping;
-mod rotor_inertia;
-mod spring;
-mod stribeck;
-mod tilt;
-mod time_delay;
-mod torque_gain;
-mod torque_offset;
+/// The kinds, one entry each in report order (the order of [`Kind`] and [`KIND_TABLE`]): the
+/// kind's file (`mod`), its [`Kind`] variant and table row (`kind`, when the diagnosis offers
+/// it) and its [`EffectSpec`] variant with the struct of that name re-exported (`effect`, when
+/// the simulator makes it). The table is checked at compile time to list each file's own row.
+macro_rules! effect_kinds {
+    ($(
+        $module:ident {
+            $( kind $(#[$kind_doc:meta])* $kind:ident, )?
+            $( effect $(#[$effect_doc:meta])* $effect:ident, )?
+        }
+    )*) => {
+        $( mod $module; )*
+        $( $( pub use $module::$effect; )? )*
+
+        /// An effect the rigid-body model leaves out, injected into the simulation (equations
+        /// and units in `docs/scenario-format.md` and each kind's file). Per-joint lists have
+        /// one entry per joint. Unknown kinds and keys are rejected.
+        #[derive(Clone, Debug, Deserialize, Serialize, PartialEq)]
+        #[serde(tag = "kind", rename_all = "snake_case")]
+        pub enum EffectSpec {
+            $( $( $(#[$effect_doc])* $effect($effect), )? )*
+        }
+
+        impl EffectSpec {
+            /// The effect's physics and scenario form.
+            pub fn physics(&self) -> &dyn Physics {
+                match self {
+                    $( $( EffectSpec::$effect(e) => e, )? )*
+                }
+            }
+        }
+
+        /// An effect kind the diagnosis can offer.
+        #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
+        #[derive(Serialize, schemars::JsonSchema)]
+        #[serde(rename_all = "snake_case")]
+        pub enum Kind {
+            $( $( $(#[$kind_doc])* $kind, )? )*
+        }
+
+        /// One row per kind, in report order ([`Kind::ALL`], whose length is this table's).
+        pub(super) const KIND_TABLE: &[KindSpec] = &[
+            $( $( own_row($module::SPEC, Kind::$kind), )? )*
+        ];
+    };
+}
+
+/// `spec`, checked (at compile time, in [`KIND_TABLE`]) to be the row of `kind`.
+const fn own_row(spec: KindSpec, kind: Kind) -> KindSpec {
+    assert!(
+        spec.kind as u8 == kind as u8,
+        "a kind file's SPEC names another kind"
+    );
+    spec
+}
+
+effect_kinds! {
+    torque_offset {
+        kind
+            /// Logged `τ += o` (N m per joint).
+            TorqueOffset,
+        effect
+            /// Logged torque `+= offset` (N m): a sensor effect, it does not act.
+            TorqueOffset,
+    }
+    torque_gain {
+        kind
+            /// Logged `τ ×= 1 + δ` (per joint; a common δ is a scale of all inertial parameters).
+            TorqueGain,
+        effect
+            /// Logged torque `×= gain` (a torque-constant error): a sensor effect.
+            TorqueGain,
+    }
+    time_delay {
+        kind
+            /// Logged torque lags the kinematics by `d` (s, one for all joints).
+            TimeDelay,
+        effect
+            /// The logged torque lags the kinematics by whole control periods: a sensor effect.
+            TimeDelay,
+    }
+    spring {
+        kind
+            /// `τ_acting = −k (q − q₀)` (N m/rad, rad per joint).
+            Spring,
+        effect
+            /// Acting `τ = −k (q − q_0)` (N m/rad, rad): a cable or hose.
+            Spring,
+    }
+    stribeck {
+        kind
+            /// `τ_acting = −F_s exp(−(q̇/v)²) sign(q̇)` (N m per joint; `v` searched).
+            Stribeck,
+        effect
+            /// Stribeck friction: extra resistance `F_s exp(−(q̇/v_st)²) tanh(q̇/v_s)` at low speed.
+            Stribeck,
+    }
+    asymmetric_coulomb {
+        kind
+            /// `τ_acting = −δ max(0, sign(q̇))` (N m per joint).
+            AsymmetricCoulomb,
+        effect
+            /// Direction-dependent Coulomb friction: extra `δ max(0, tanh(q̇/v_s))`.
+            AsymmetricCoulomb,
+    }
+    load_dependent_friction {
+        kind
+            /// `τ_acting = −μ |τ| sign(q̇)` (per joint; `|τ|` from the nominal prediction).
+            LoadDependentFriction,
+        effect
+            /// Load-dependent friction: extra `μ |τ_mot| tanh(q̇/v_s)` (gear mesh losses).
+            LoadDependentFriction,
+    }
+    cogging {
+        kind
+            /// `τ_acting = −A sin(h N q + φ)` (N m per joint; harmonic `h` searched).
+            Cogging,
+        effect
+            /// Cogging / torque ripple at a harmonic of the rotor angle: acting `−A sin(h N q + φ)`.
+            Cogging,
+    }
+    rotor_inertia {
+        kind
+            /// Reflected rotor inertia `I_a q̈` left out of the model (kg m² per joint).
+            RotorInertia,
+    }
+    tilt {
+        kind
+            /// Gravity misaligned by a small base tilt (m/s² of the gravity vector's perpendicular
+            /// components; reported as an angle).
+            Tilt,
+        effect
+            /// The base is tilted: gravity rotated by roll and pitch.
+            Tilt,
+    }
+    compliance {
+        kind
+            /// Compliant transmission seen by a motor-side encoder: `q_logged = q + κ τ`
+            /// (κ = 1/k, rad/(N m) per joint).
+            Compliance,
+        effect
+            /// A compliant transmission read on the motor side: the encoder reads `q + τ_mot / k`.
+            Compliance,
+    }
+    backlash {
+        kind
+            /// Backlash read by a motor-side encoder: `q_logged = q + s`, `s ∈ [−b/2, b/2]` the motor's
+            /// offset in a dead zone of width `b` (rad per joint) that it crosses driven by its own
+            /// torque (`effect::DeadZone`).
+            Backlash,
+        effect
+            /// Backlash read on the motor side: the encoder reads `q + s`, `|s| ≤ b/2`.
+            Backlash,
+    }
+    quadratic_damping {
+        effect
+            /// Quadratic (fluid) damping `−c q̇ |q̇|`: not in the diagnosis's library.
+            QuadraticDamping,
+    }
+    payload {
+        kind
+            /// An unmodelled payload on one body (searched over the bodies): ten inertial parameters
+            /// `π_p` added to it (that body's own regressor columns; reported as its mass, kg), so also
+            /// any change of one body's parameters. Its columns lie in the model's span, so only the
+            /// test against the description can find it.
+            Payload,
+        effect
+            /// An unmodelled payload: a solid sphere on one body.
+            Payload,
+    }
+}
 
 pub mod context;
 mod dead_zone;
 pub mod library;
 pub mod physics;
 
-pub use asymmetric_coulomb::AsymmetricCoulomb;
-pub use backlash::Backlash;
-pub use cogging::Cogging;
-pub use compliance::Compliance;
 pub use dead_zone::DeadZone;
-pub use load_dependent_friction::LoadDependentFriction;
-pub use payload::{payload_on_any_body, Payload, MAX_PAYLOAD_MASS, MAX_PAYLOAD_OFFSET};
+pub use payload::{payload_on_any_body, MAX_PAYLOAD_MASS, MAX_PAYLOAD_OFFSET};
 pub use physics::{toml_list, Physics, ScenarioError, State};
-pub use quadratic_damping::QuadraticDamping;
-pub use spring::Spring;
-pub use stribeck::Stribeck;
-pub use tilt::Tilt;
-pub use time_delay::{TimeDelay, MAX_DELAY_SAMPLES};
-pub use torque_gain::{relative_to_median, TorqueGain, MAX_GAIN_ERROR};
-pub use torque_offset::TorqueOffset;
+pub use time_delay::MAX_DELAY_SAMPLES;
+pub use torque_gain::{relative_to_median, MAX_GAIN_ERROR};
 
 use crate::model::Model;
 use context::{backlash_widths, Context, Sample, Scratch};
@@ -56,60 +204,7 @@ use rand::Rng;
 use rand_chacha::ChaCha8Rng;
 use serde::{Deserialize, Serialize};
 
-/// An effect the rigid-body model leaves out, injected into the simulation (equations and units
-/// in `docs/scenario-format.md` and each kind's file). Per-joint lists have one entry per
-/// joint. Unknown kinds and keys are rejected.
-#[derive(Clone, Debug, Deserialize, Serialize, PartialEq)]
-#[serde(tag = "kind", rename_all = "snake_case")]
-pub enum EffectSpec {
-    /// Logged torque `+= offset` (N m): a sensor effect, it does not act.
-    TorqueOffset(TorqueOffset),
-    /// Logged torque `×= gain` (a torque-constant error): a sensor effect.
-    TorqueGain(TorqueGain),
-    /// The logged torque lags the kinematics by whole control periods: a sensor effect.
-    TimeDelay(TimeDelay),
-    /// Acting `τ = −k (q − q_0)` (N m/rad, rad): a cable or hose.
-    Spring(Spring),
-    /// Stribeck friction: extra resistance `F_s exp(−(q̇/v_st)²) tanh(q̇/v_s)` at low speed.
-    Stribeck(Stribeck),
-    /// Direction-dependent Coulomb friction: extra `δ max(0, tanh(q̇/v_s))`.
-    AsymmetricCoulomb(AsymmetricCoulomb),
-    /// Load-dependent friction: extra `μ |τ_mot| tanh(q̇/v_s)` (gear mesh losses).
-    LoadDependentFriction(LoadDependentFriction),
-    /// Cogging / torque ripple at a harmonic of the rotor angle: acting `−A sin(h N q + φ)`.
-    Cogging(Cogging),
-    /// A compliant transmission read on the motor side: the encoder reads `q + τ_mot / k`.
-    Compliance(Compliance),
-    /// Backlash read on the motor side: the encoder reads `q + s`, `|s| ≤ b/2`.
-    Backlash(Backlash),
-    /// Quadratic (fluid) damping `−c q̇ |q̇|`: not in the diagnosis's library.
-    QuadraticDamping(QuadraticDamping),
-    /// The base is tilted: gravity rotated by roll and pitch.
-    Tilt(Tilt),
-    /// An unmodelled payload: a solid sphere on one body.
-    Payload(Payload),
-}
-
 impl EffectSpec {
-    /// The effect's physics and scenario form.
-    pub fn physics(&self) -> &dyn Physics {
-        match self {
-            EffectSpec::TorqueOffset(e) => e,
-            EffectSpec::TorqueGain(e) => e,
-            EffectSpec::TimeDelay(e) => e,
-            EffectSpec::Spring(e) => e,
-            EffectSpec::Stribeck(e) => e,
-            EffectSpec::AsymmetricCoulomb(e) => e,
-            EffectSpec::LoadDependentFriction(e) => e,
-            EffectSpec::Cogging(e) => e,
-            EffectSpec::Compliance(e) => e,
-            EffectSpec::Backlash(e) => e,
-            EffectSpec::QuadraticDamping(e) => e,
-            EffectSpec::Tilt(e) => e,
-            EffectSpec::Payload(e) => e,
-        }
-    }
-
     /// The effect's keys as the lines of a scenario's `[[effects]]` table, without its
     /// `kind = …` line (numbers as [`toml_list`] writes them).
     pub fn toml_body(&self) -> String {
@@ -122,47 +217,6 @@ impl EffectSpec {
         self.physics()
             .validate(n, &|f: &str| format!("effects[{i}].{f}"))
     }
-}
-
-/// An effect kind the diagnosis can offer.
-#[derive(
-    Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize, schemars::JsonSchema, PartialOrd, Ord,
-)]
-#[serde(rename_all = "snake_case")]
-pub enum Kind {
-    /// Logged `τ += o` (N m per joint).
-    TorqueOffset,
-    /// Logged `τ ×= 1 + δ` (per joint; a common δ is a scale of all inertial parameters).
-    TorqueGain,
-    /// Logged torque lags the kinematics by `d` (s, one for all joints).
-    TimeDelay,
-    /// `τ_acting = −k (q − q₀)` (N m/rad, rad per joint).
-    Spring,
-    /// `τ_acting = −F_s exp(−(q̇/v)²) sign(q̇)` (N m per joint; `v` searched).
-    Stribeck,
-    /// `τ_acting = −δ max(0, sign(q̇))` (N m per joint).
-    AsymmetricCoulomb,
-    /// `τ_acting = −μ |τ| sign(q̇)` (per joint; `|τ|` from the nominal prediction).
-    LoadDependentFriction,
-    /// `τ_acting = −A sin(h N q + φ)` (N m per joint; harmonic `h` searched).
-    Cogging,
-    /// Reflected rotor inertia `I_a q̈` left out of the model (kg m² per joint).
-    RotorInertia,
-    /// Gravity misaligned by a small base tilt (m/s² of the gravity vector's perpendicular
-    /// components; reported as an angle).
-    Tilt,
-    /// Compliant transmission seen by a motor-side encoder: `q_logged = q + κ τ`
-    /// (κ = 1/k, rad/(N m) per joint).
-    Compliance,
-    /// Backlash read by a motor-side encoder: `q_logged = q + s`, `s ∈ [−b/2, b/2]` the motor's
-    /// offset in a dead zone of width `b` (rad per joint) that it crosses driven by its own
-    /// torque (`effect::DeadZone`).
-    Backlash,
-    /// An unmodelled payload on one body (searched over the bodies): ten inertial parameters
-    /// `π_p` added to it (that body's own regressor columns; reported as its mass, kg), so also
-    /// any change of one body's parameters. Its columns lie in the model's span, so only the
-    /// test against the description can find it.
-    Payload,
 }
 
 /// How many columns a kind adds for `n` joints.
@@ -289,23 +343,6 @@ const fn row(kind: Kind, name: &'static str, columns: ColumnCount, fill: Fill) -
         scale: None,
     }
 }
-
-/// One row per kind, in report order ([`Kind::ALL`], whose length is this table's).
-pub(super) const KIND_TABLE: &[KindSpec] = &[
-    torque_offset::SPEC,
-    torque_gain::SPEC,
-    time_delay::SPEC,
-    spring::SPEC,
-    stribeck::SPEC,
-    asymmetric_coulomb::SPEC,
-    load_dependent_friction::SPEC,
-    cogging::SPEC,
-    rotor_inertia::SPEC,
-    tilt::SPEC,
-    compliance::SPEC,
-    backlash::SPEC,
-    payload::SPEC,
-];
 
 impl Kind {
     /// Every kind, in report order.
