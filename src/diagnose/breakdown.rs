@@ -48,60 +48,111 @@ pub fn breakdown(tr: &Trajectory, range: std::ops::Range<usize>, res: &[f64]) ->
     let n = tr.dof();
     let m = range.len();
     assert_eq!(res.len(), m * n, "one residual per joint and sample");
-    let col = |f: &dyn Fn(usize) -> f64| (0..m).map(f).collect::<Vec<f64>>();
     let mut regimes = vec![];
     let mut rms = vec![];
     for j in 0..n {
-        let r = col(&|k| res[k * n + j]);
-        let energy: f64 = r.iter().map(|x| x * x).sum();
-        rms.push((energy / m.max(1) as f64).sqrt());
+        let r: Vec<f64> = (0..m).map(|k| res[k * n + j]).collect();
+        let mut sink = Regimes::new(&tr.joint_names[j], &r);
+        rms.push((sink.energy / m.max(1) as f64).sqrt());
+        let col = |f: &dyn Fn(usize) -> f64| (0..m).map(f).collect::<Vec<f64>>();
         let qd = col(&|k| tr.qd_at(range.start + k)[j]);
         let qdd = col(&|k| tr.qdd_at(range.start + k).map_or(0.0, |a| a[j]));
         let tau = col(&|k| tr.tau_at(range.start + k)[j]);
         let q = col(&|k| tr.q_at(range.start + k)[j]);
-        let mut add = |name: String, member: &dyn Fn(usize) -> bool| {
-            let idx: Vec<usize> = (0..m).filter(|&k| member(k)).collect();
-            let e: f64 = idx.iter().map(|&k| r[k] * r[k]).sum();
-            regimes.push(Regime {
-                joint: tr.joint_names[j].clone(),
-                regime: name,
-                samples: idx.len(),
-                rms: if idx.is_empty() {
-                    0.0
-                } else {
-                    (e / idx.len() as f64).sqrt()
-                },
-                share: if energy > 0.0 { e / energy } else { 0.0 },
-            });
-        };
-        let peak = qd.iter().fold(0.0f64, |a, v| a.max(v.abs()));
-        let slow = 0.05 * peak;
-        add(
-            format!("near-zero velocity (|qd| < {slow:.3} rad/s)"),
-            &|k| qd[k].abs() < slow,
-        );
-        let flips: Vec<bool> = (0..m).map(|k| k > 0 && qd[k] * qd[k - 1] < 0.0).collect();
-        add("velocity reversal (±10 samples)".into(), &|k| {
-            flips[k.saturating_sub(10)..(k + 11).min(m)]
-                .iter()
-                .any(|f| *f)
-        });
+        sink.slow_and_reversing(&qd);
         for (name, v, unit) in [
             ("|qd|", &qd, "rad/s"),
             ("|qdd|", &qdd, "rad/s^2"),
             ("|tau|", &tau, "N m"),
         ] {
-            let a: Vec<f64> = v.iter().map(|x| x.abs()).collect();
-            let (t1, t2) = terciles(&a);
-            add(format!("{name} low (<= {t1:.3} {unit})"), &|k| a[k] <= t1);
-            add(format!("{name} mid"), &|k| a[k] > t1 && a[k] <= t2);
-            add(format!("{name} high (> {t2:.3} {unit})"), &|k| a[k] > t2);
+            sink.terciles(name, v, unit);
         }
-        let mut s = q.clone();
+        sink.quartiles(&q);
+        regimes.extend(sink.out);
+    }
+    let overall = (res.iter().map(|x| x * x).sum::<f64>() / res.len().max(1) as f64).sqrt();
+    Breakdown {
+        rms,
+        overall,
+        regimes,
+    }
+}
+
+/// One joint's residual `r` (N m per sample) split by regime.
+struct Regimes<'a> {
+    joint: &'a str,
+    r: &'a [f64],
+    /// `Σ r²`.
+    energy: f64,
+    out: Vec<Regime>,
+}
+
+impl<'a> Regimes<'a> {
+    fn new(joint: &'a str, r: &'a [f64]) -> Self {
+        let energy = r.iter().map(|x| x * x).sum();
+        Regimes {
+            joint,
+            r,
+            energy,
+            out: vec![],
+        }
+    }
+
+    /// The regime `name` of the samples `k` that are `member(k)`.
+    fn add(&mut self, name: String, member: &dyn Fn(usize) -> bool) {
+        let idx: Vec<usize> = (0..self.r.len()).filter(|&k| member(k)).collect();
+        let e: f64 = idx.iter().map(|&k| self.r[k] * self.r[k]).sum();
+        self.out.push(Regime {
+            joint: self.joint.to_string(),
+            regime: name,
+            samples: idx.len(),
+            rms: if idx.is_empty() {
+                0.0
+            } else {
+                (e / idx.len() as f64).sqrt()
+            },
+            share: if self.energy > 0.0 {
+                e / self.energy
+            } else {
+                0.0
+            },
+        });
+    }
+
+    /// Near-zero velocity (under 5 % of the peak `|q̇|`) and ±10 samples about a reversal.
+    fn slow_and_reversing(&mut self, qd: &[f64]) {
+        let m = qd.len();
+        let peak = qd.iter().fold(0.0f64, |a, v| a.max(v.abs()));
+        let slow = 0.05 * peak;
+        self.add(
+            format!("near-zero velocity (|qd| < {slow:.3} rad/s)"),
+            &|k| qd[k].abs() < slow,
+        );
+        let flips: Vec<bool> = (0..m).map(|k| k > 0 && qd[k] * qd[k - 1] < 0.0).collect();
+        self.add("velocity reversal (±10 samples)".into(), &|k| {
+            flips[k.saturating_sub(10)..(k + 11).min(m)]
+                .iter()
+                .any(|f| *f)
+        });
+    }
+
+    /// Low, mid and high thirds of `|v|` (`name`, in `unit`).
+    fn terciles(&mut self, name: &str, v: &[f64], unit: &str) {
+        let a: Vec<f64> = v.iter().map(|x| x.abs()).collect();
+        let (t1, t2) = terciles(&a);
+        self.add(format!("{name} low (<= {t1:.3} {unit})"), &|k| a[k] <= t1);
+        self.add(format!("{name} mid"), &|k| a[k] > t1 && a[k] <= t2);
+        self.add(format!("{name} high (> {t2:.3} {unit})"), &|k| a[k] > t2);
+    }
+
+    /// The four quartiles of the angle `q` (rad).
+    fn quartiles(&mut self, q: &[f64]) {
+        let m = q.len();
+        let mut s = q.to_vec();
         s.sort_by(f64::total_cmp);
         for b in 0..4 {
             let (lo, hi) = quartile(&s, b);
-            add(
+            self.add(
                 format!(
                     "q quartile {} ({:.3}..{:.3} rad)",
                     b + 1,
@@ -111,12 +162,6 @@ pub fn breakdown(tr: &Trajectory, range: std::ops::Range<usize>, res: &[f64]) ->
                 &|k| q[k] > lo && q[k] <= hi,
             );
         }
-    }
-    let overall = (res.iter().map(|x| x * x).sum::<f64>() / res.len().max(1) as f64).sqrt();
-    Breakdown {
-        rms,
-        overall,
-        regimes,
     }
 }
 

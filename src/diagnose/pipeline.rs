@@ -42,42 +42,27 @@ fn diagnose_recordings(
     check_data(model, train, validate)?;
     let nominal = fit_nominal(model, train, opts)?;
     let stage = Stage::new(model, recorded, validate, opts, nominal.theta.clone());
-    let selection =
-        select::forward_select(&stage.folds, model, &stage.ident_opts, &opts.selection)?;
-    let (description_test, description_test_skipped) = run_description_test(&stage, &selection)?;
-    let anchored: &[anchor::Step] = description_test.as_ref().map_or(&[], |r| &r.steps);
-    let n_cv = selection.chosen.len();
-    // The effects cross-validation chose, then those the description test found (variants).
-    let chosen: Vec<usize> = [&selection.chosen[..], &variants_of(anchored)].concat();
-    let ladder = gap::ladder(&stage, &chosen)?;
-    let mut effects = magnitude::cross_validated(&stage, &selection, &ladder.final_theta);
-    effects.extend(magnitude::against_description(&stage, anchored));
-    let from_description = described::from_description(&stage, &selection, &mut effects);
-    let how_far = gap::how_far(&stage, &chosen, n_cv, &ladder)?;
-    let explained_from_description = match &from_description {
-        Some(l) => described::description_steps(l),
-        None => explain::from_description(&stage, &chosen, &ladder),
-    };
-    let structure_left = structure_after(&stage, &chosen, &ladder);
+    let found = find(&stage)?;
     let train_seconds = train
         .sample_period()
         .map_or(0.0, |dt| dt * train.len() as f64);
-    let steps = (selection.steps.len(), anchored.len());
-    let verdict = verdict_of(steps, &how_far, &structure_left, train_seconds, opts);
-    let description_overall = mean_square(&ladder.description_rms).sqrt();
-    let summary = summary_text(
-        model,
-        (
-            description_overall,
-            train_seconds,
-            opts.min_decisive_seconds,
-        ),
-        &how_far,
-        verdict,
-        (&effects, n_cv),
-        description_test.as_ref(),
-        (&structure_left, &explained_from_description),
+    let anchored = found.description_test.as_ref().map_or(0, |r| r.steps.len());
+    let steps = (found.selection.steps.len(), anchored);
+    let verdict = verdict_of(
+        steps,
+        &found.how_far,
+        &found.structure_left,
+        train_seconds,
+        opts,
     );
+    let description_overall = mean_square(&found.ladder.description_rms).sqrt();
+    let at = (
+        description_overall,
+        train_seconds,
+        opts.min_decisive_seconds,
+    );
+    let summary = summary_text(model, at, &found, verdict);
+    let (how_far, ladder) = (found.how_far, found.ladder);
     Ok(Diagnosis {
         confirmed: how_far.confirmed,
         confirmed_only: how_far.confirmed_only,
@@ -89,20 +74,71 @@ fn diagnose_recordings(
         breakdown: breakdown(validate, 0..validate.len(), &ladder.nominal_res),
         spectra: breakdown::spectra(model, validate, &ladder.nominal_res),
         spectra_after: breakdown::spectra(model, validate, &ladder.final_res),
-        selection,
-        description_test,
-        description_test_skipped,
-        ladder: from_description,
-        effects,
+        selection: found.selection,
+        description_test: found.description_test,
+        description_test_skipped: found.description_test_skipped,
+        ladder: found.from_description,
+        effects: found.effects,
         gap: how_far.gap,
         description_overall,
-        explained_from_description,
+        explained_from_description: found.explained_from_description,
         overall: how_far.overall,
         noise_floor: how_far.floor_ms.sqrt(),
         gap_closed: how_far.gap_closed,
-        structure_left,
+        structure_left: found.structure_left,
         verdict,
         summary,
+    })
+}
+
+/// What the steps find on a stage, before the verdict.
+struct Found {
+    selection: select::Selection,
+    description_test: Option<anchor::Report>,
+    description_test_skipped: Option<String>,
+    ladder: gap::Ladder,
+    effects: Vec<EffectEstimate>,
+    from_description: Option<super::ladder::Ladder>,
+    how_far: gap::HowFar,
+    explained_from_description: Vec<DescriptionStep>,
+    structure_left: StructureLeft,
+}
+
+/// Which effects (cross-validation, then the description test), how far each takes the
+/// validation residual, their magnitudes, the ladder from the description and the structure
+/// left.
+fn find(stage: &Stage) -> Result<Found, DiagnoseError> {
+    let selection = select::forward_select(
+        &stage.folds,
+        stage.model,
+        &stage.ident_opts,
+        &stage.opts.selection,
+    )?;
+    let (description_test, description_test_skipped) = run_description_test(stage, &selection)?;
+    let anchored: &[anchor::Step] = description_test.as_ref().map_or(&[], |r| &r.steps);
+    let n_cv = selection.chosen.len();
+    // The effects cross-validation chose, then those the description test found (variants).
+    let chosen: Vec<usize> = [&selection.chosen[..], &variants_of(anchored)].concat();
+    let ladder = gap::ladder(stage, &chosen)?;
+    let mut effects = magnitude::cross_validated(stage, &selection, &ladder.final_theta);
+    effects.extend(magnitude::against_description(stage, anchored));
+    let from_description = described::from_description(stage, &selection, &mut effects);
+    let how_far = gap::how_far(stage, &chosen, n_cv, &ladder)?;
+    let explained_from_description = match &from_description {
+        Some(l) => described::description_steps(l),
+        None => explain::from_description(stage, &chosen, &ladder),
+    };
+    let structure_left = structure_after(stage, &chosen, &ladder);
+    Ok(Found {
+        selection,
+        description_test,
+        description_test_skipped,
+        ladder,
+        effects,
+        from_description,
+        how_far,
+        explained_from_description,
+        structure_left,
     })
 }
 
@@ -172,10 +208,6 @@ fn run_description_test(
     stage: &Stage,
     selection: &select::Selection,
 ) -> Result<(Option<anchor::Report>, Option<String>), DiagnoseError> {
-    // Absorbed effects, against the description when its uncertainty is stated, beside what
-    // cross-validation chose, unless a chosen effect's columns only approximate it (a delay to
-    // first order, a rotor without its gyroscopic terms): what they miss biases θ in ways the
-    // prior test would misread as an absorbed effect.
     let linearized: Vec<Kind> = selection
         .chosen
         .iter()
@@ -199,24 +231,30 @@ fn run_description_test(
     Ok((description_test, description_test_skipped))
 }
 
-/// The diagnosis's one-paragraph summary.
+/// The diagnosis's one-paragraph summary of what was `found` and its `verdict`, given the
+/// description's overall validation RMS (N m), the training data's length (s) and the shortest
+/// on which a verdict of "nothing" or "unexplained" is decisive (s).
 fn summary_text(
     model: &Model,
     (description_overall, train_seconds, min_decisive): (f64, f64, f64),
-    how_far: &gap::HowFar,
+    found: &Found,
     verdict: Verdict,
-    (effects, n_cv): (&[EffectEstimate], usize),
-    description_test: Option<&anchor::Report>,
-    (structure_left, explained): (&StructureLeft, &[DescriptionStep]),
 ) -> String {
+    let n_cv = found.selection.chosen.len();
     let mut summary = format!(
         "the description as given predicts the validation data with {:.3} N m RMS (re-identified: {:.3} N m); {}",
         description_overall,
-        how_far.overall[0],
-        verdict::summary(verdict, effects, n_cv, how_far, description_test)
+        found.how_far.overall[0],
+        verdict::summary(
+            verdict,
+            &found.effects,
+            n_cv,
+            &found.how_far,
+            found.description_test.as_ref()
+        )
     );
-    summary += &verdict::structure_summary(structure_left, &model.joint_names());
-    summary += &explain::summary(explained, description_overall);
+    summary += &verdict::structure_summary(&found.structure_left, &model.joint_names());
+    summary += &explain::summary(&found.explained_from_description, description_overall);
     if verdict == Verdict::Undecided {
         summary += &format!(
             " (only {train_seconds:.1} s of training data, below the {} s on which a verdict of \"unexplained\" or \"no effect\" can be trusted: record longer runs)",

@@ -368,6 +368,39 @@ fn resolve_ties(
     (ties.simplest[0], ambiguous_with, also_fit)
 }
 
+/// Each candidate `(variant, cross-validation)` scored against the `current` model.
+fn scored(folds: &Folds, best: &[(usize, Cv)], current: &Cv) -> Vec<Score> {
+    let k = folds.blocks.len();
+    best.iter()
+        .map(|(vi, cv)| Score {
+            kind: folds.variants[*vi].kind,
+            param: folds.variants[*vi].param,
+            cv_rms: cv.mse.sqrt(),
+            reduction: 1.0 - cv.mse / current.mse,
+            blocks_improved: (0..k)
+                .filter(|&f| cv.block_sse[f] < current.block_sse[f])
+                .count(),
+        })
+        .collect()
+}
+
+/// Why the best candidate `top` over `k` blocks is not taken, if it is not: it lowers the
+/// mean square by less than the settings' minimum, or fewer blocks improve than all but one
+/// (with fewer than four blocks, all of them).
+fn not_significant(top: &Score, k: usize, settings: &Settings) -> Option<SelectionStop> {
+    let needed = if k >= 4 { k - 1 } else { k };
+    (top.reduction < settings.min_reduction || top.blocks_improved < needed).then_some({
+        SelectionStop::NotSignificant {
+            kind: top.kind,
+            reduction: top.reduction,
+            improved: top.blocks_improved,
+            blocks: k,
+            min_reduction: settings.min_reduction,
+            needed,
+        }
+    })
+}
+
 /// Forward selection with the stopping rule of the module documentation.
 pub fn forward_select(
     folds: &Folds,
@@ -394,28 +427,9 @@ pub fn forward_select(
             break SelectionStop::NoCandidate;
         }
         best.sort_by(|a, b| a.1.mse.total_cmp(&b.1.mse));
-        let score = |(vi, cv): &(usize, Cv)| Score {
-            kind: folds.variants[*vi].kind,
-            param: folds.variants[*vi].param,
-            cv_rms: cv.mse.sqrt(),
-            reduction: 1.0 - cv.mse / current.mse,
-            blocks_improved: (0..k)
-                .filter(|&f| cv.block_sse[f] < current.block_sse[f])
-                .count(),
-        };
-        let scores: Vec<Score> = best.iter().map(score).collect();
-        let top = &scores[0];
-        // All but one block must improve; with fewer than four blocks, all of them.
-        let needed = if k >= 4 { k - 1 } else { k };
-        if top.reduction < settings.min_reduction || top.blocks_improved < needed {
-            break SelectionStop::NotSignificant {
-                kind: top.kind,
-                reduction: top.reduction,
-                improved: top.blocks_improved,
-                blocks: k,
-                min_reduction: settings.min_reduction,
-                needed,
-            };
+        let scores = scored(folds, &best, &current);
+        if let Some(stop) = not_significant(&scores[0], k, settings) {
+            break stop;
         }
         let (keep, ambiguous_with, also_fit) = resolve_ties(folds, &best, &scores, settings.tie);
         let (vi, cv) = best[keep].clone();

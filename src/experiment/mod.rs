@@ -391,14 +391,7 @@ pub fn run_seed_validated_on(
     let mut window_rng = rand_chacha::ChaCha8Rng::seed_from_u64(seed ^ 0x77_1d0e);
     for &n_s in &grid {
         // Training samples start..start + n_s, validation on the next `validation` samples.
-        let start = match spec.windows {
-            Windows::First => 0,
-            // The simulation covers max_n + validation samples, so the room is never negative.
-            Windows::Random => rand::Rng::random_range(
-                &mut window_rng,
-                0..=total.saturating_sub(n_s + spec.validation),
-            ),
-        };
+        let start = window_start(spec, &mut window_rng, n_s, total);
         let snapshot = if start == 0 {
             while added < n_s.min(total) {
                 ne.add(&ys[added], data.tau_at(added));
@@ -434,6 +427,23 @@ pub fn run_seed_validated_on(
         }
     }
     Ok(rows)
+}
+
+/// The first training sample of the window of `n_s` samples among `total`: the first sample,
+/// or (random windows) a draw that leaves room for the validation samples after it.
+fn window_start(
+    spec: &ExperimentSpec,
+    rng: &mut rand_chacha::ChaCha8Rng,
+    n_s: usize,
+    total: usize,
+) -> usize {
+    match spec.windows {
+        Windows::First => 0,
+        // The simulation covers max_n + validation samples, so the room is never negative.
+        Windows::Random => {
+            rand::Rng::random_range(rng, 0..=total.saturating_sub(n_s + spec.validation))
+        }
+    }
 }
 
 /// Identification of `snapshot` under constraint set `set` with the experiment's prior weight;

@@ -36,6 +36,28 @@ fn band(idx: &[usize], x: &[f64], (lo, hi): (&[f64], &[f64])) -> Vec<(f64, f64)>
         .collect()
 }
 
+/// `n_s`, the lower quartile, median and upper quartile of a value, and each row's series.
+type BandColumns = (Vec<f64>, [Vec<f64>; 3], Vec<String>);
+
+/// The columns a plot against `n_s` reads from `summary`: `n_s`, the `value`'s lower quartile,
+/// median and upper quartile, and the series each row belongs to; errors name the plot's `path`.
+fn band_columns(
+    summary: &DataFrame,
+    series_column: &str,
+    value: &str,
+    path: &Path,
+) -> Result<BandColumns, crate::io::IoError> {
+    let err = |e: polars::error::PolarsError| crate::io::IoError::invalid(path, e.to_string());
+    let get = |name: &str| super::tables::floats(summary, name).map_err(err);
+    let quartiles = [
+        get(&format!("{value}_q25"))?,
+        get(&format!("{value}_median"))?,
+        get(&format!("{value}_q75"))?,
+    ];
+    let series = super::tables::strings(summary, series_column).map_err(err)?;
+    Ok((get("n_s")?, quartiles, series))
+}
+
 /// [`plot_vs_ns`] with one line per value `series` of column `series_column`.
 pub fn plot_vs_ns_by(
     summary: &DataFrame,
@@ -47,14 +69,7 @@ pub fn plot_vs_ns_by(
     path: &Path,
 ) -> Result<(), crate::io::IoError> {
     let err = |m: String| crate::io::IoError::invalid(path, m);
-    let get = |name: &str| super::tables::floats(summary, name).map_err(|e| err(e.to_string()));
-    let ns = get("n_s")?;
-    let (lo, med, hi) = (
-        get(&format!("{value}_q25"))?,
-        get(&format!("{value}_median"))?,
-        get(&format!("{value}_q75"))?,
-    );
-    let set_of = super::tables::strings(summary, series_column).map_err(|e| err(e.to_string()))?;
+    let (ns, [lo, med, hi], set_of) = band_columns(summary, series_column, value, path)?;
     let finite = |v: &f64| v.is_finite() && *v > 0.0;
     let (xmin, xmax) = positive_extent(ns.iter());
     let (ymin, ymax) = positive_extent(lo.iter().chain(&hi));

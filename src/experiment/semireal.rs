@@ -1063,8 +1063,9 @@ mod tests {
         }
     }
 
-    #[test]
-    fn an_offset_shows_in_the_description_s_rms_and_a_gain_is_scaled_up_to_its_target() {
+    /// The leg's exact log, a 0.5 N m offset on every joint, and the description's RMS on the
+    /// log without and with it.
+    fn offset_case() -> (Logged, Injection, f64, f64) {
         let model = crate::model::cheetah3::leg();
         let n = model.dof();
         let log = exact(&model);
@@ -1079,13 +1080,25 @@ mod tests {
             visible: None,
         };
         let shifted = description_rms(&inject(&log, &model, &offset), &model).unwrap();
+        (log, offset, clean, shifted)
+    }
+
+    #[test]
+    fn an_offset_shows_in_the_description_s_rms() {
+        let (log, _, clean, shifted) = offset_case();
         // The pipeline's derived q̈ (filtered, ends trimmed) costs under 3 % of the torque on
-        // this 4 s run (1.8 % measured); the offset adds
-        // its 0.5 N m in quadrature.
+        // this 4 s run (1.8 % measured); the offset adds its 0.5 N m in quadrature.
         let tau_rms = (log.tau.iter().map(|t| t * t).sum::<f64>() / log.tau.len() as f64).sqrt();
         assert!(clean < 0.03 * tau_rms, "{clean} vs {tau_rms}");
         let expected = (clean * clean + 0.25).sqrt();
         assert!((shifted - expected).abs() < 0.02, "{shifted} vs {expected}");
+    }
+
+    #[test]
+    fn a_gain_is_scaled_up_to_its_target_and_no_further_than_a_physical_gain() {
+        let model = crate::model::cheetah3::leg();
+        let n = model.dof();
+        let (log, offset, _, shifted) = offset_case();
         // A 1 % gain on the knee, asked to raise the RMS by 1 % over a 0.5 N m standing offset.
         let base = exact_base(inject(&log, &model, &offset), &model, shifted);
         let mut gain = vec![1.0; n];

@@ -40,6 +40,34 @@ pub fn mcap_streamable(path: &Path) -> Result<bool, IoError> {
     Ok(with_acceleration)
 }
 
+/// `log_time` (ns) in seconds after `first` (ns), negative when before.
+fn seconds_after(first: u64, log_time: u64) -> f64 {
+    if log_time >= first {
+        (log_time - first) as f64 / 1e9
+    } else {
+        -((first - log_time) as f64 / 1e9)
+    }
+}
+
+/// Checks that a joint-state message carries accelerations and one value per name in each
+/// array.
+fn check_arrays(s: &JointSample) -> Result<(), String> {
+    if s.acceleration.is_empty() {
+        return Err("no accelerations: streaming needs them".into());
+    }
+    let names = s.name.len();
+    let lengths = [
+        s.position.len(),
+        s.velocity.len(),
+        s.acceleration.len(),
+        s.effort.len(),
+    ];
+    if lengths != [names; 4] {
+        return Err(format!("arrays of other lengths than its {names} names"));
+    }
+    Ok(())
+}
+
 /// Streams the processed samples of the MCAP file `path` (`/physid/processed`, q, q̇, q̈, τ in
 /// rad, rad/s, rad/s², N m; time in s from the first message's log time) sample by sample
 /// without loading it, checking each (finite values, increasing time, the robot's joints
@@ -58,21 +86,8 @@ pub fn stream_mcap(
     let (mut k, mut t0, mut prev) = (0usize, None::<u64>, f64::NEG_INFINITY);
     walk(path, &mut |log_time, s| {
         let at = |e: String| format!("{TOPIC_PROCESSED} message {k}: {e}");
-        if s.acceleration.is_empty() {
-            return Err(at("no accelerations: streaming needs them".into()));
-        }
+        check_arrays(s).map_err(at)?;
         let names = s.name.len();
-        if [
-            s.position.len(),
-            s.velocity.len(),
-            s.acceleration.len(),
-            s.effort.len(),
-        ] != [names; 4]
-        {
-            return Err(at(format!(
-                "arrays of other lengths than its {names} names"
-            )));
-        }
         let ix = match &index {
             Some(ix) => ix,
             None => index.insert(robot_order(&s.name, robot).map_err(at)?),
@@ -81,12 +96,7 @@ pub fn stream_mcap(
             return Err(at("names fewer joints than the first message".into()));
         }
         // As the whole-file reader counts: integer nanoseconds from the first message first.
-        let first = *t0.get_or_insert(log_time);
-        let t = if log_time >= first {
-            (log_time - first) as f64 / 1e9
-        } else {
-            -((first - log_time) as f64 / 1e9)
-        };
+        let t = seconds_after(*t0.get_or_insert(log_time), log_time);
         check_value(k, t, "t", "t", t).map_err(|e| at(e.to_string()))?;
         if t <= prev {
             return Err(at(format!(

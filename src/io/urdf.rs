@@ -494,12 +494,15 @@ fn walk<'r>(
     // for the base, link_X_body).
     let mut attach: HashMap<&str, (Option<usize>, Transform)> = HashMap::new();
     attach.insert(root, (None, Transform::identity()));
-    let mut bodies: Vec<Body> = vec![];
-    let mut body_parent_link_x: Vec<Transform> = vec![]; // parent link frame from parent body frame
-    let mut shapes: Vec<Shapes> = vec![];
-    let mut base = Shapes::default();
-    base.add_shapes(&robot.links[link_idx[root]], &Transform::identity(), lookup);
-    let mut mimics = vec![];
+    let mut w = Walk {
+        bodies: vec![],
+        body_parent_link_x: vec![],
+        shapes: vec![],
+        base: Shapes::default(),
+        mimics: vec![],
+    };
+    w.base
+        .add_shapes(&robot.links[link_idx[root]], &Transform::identity(), lookup);
     let mut done = vec![false; robot.joints.len()];
     let mut progress = true;
     while progress {
@@ -515,13 +518,7 @@ fn walk<'r>(
             let child_link = &robot.links[link_idx[child]];
             let child_params = link_params(child_link);
             let Some(joint) = moving_joint(jt, path)? else {
-                if let Some(b) = pb {
-                    let merged = child_params.transformed(&x_origin.inverse());
-                    bodies[b].inertia = InertialParams(bodies[b].inertia.0 + merged.0);
-                    shapes[b].add(child_link, &x_origin, lookup);
-                } else {
-                    base.add_shapes(child_link, &x_origin, lookup);
-                }
+                w.merge_fixed(pb, child_link, &x_origin, child_params, lookup);
                 attach.insert(child, (pb, x_origin));
                 continue;
             };
@@ -534,26 +531,43 @@ fn walk<'r>(
                 }
                 let mut rotor_shapes = Shapes::default();
                 rotor_shapes.add(child_link, &Transform::identity(), lookup);
-                mimics.push((jt, mimic, pb, x_origin, child_params, rotor_shapes));
+                w.mimics
+                    .push((jt, mimic, pb, x_origin, child_params, rotor_shapes));
                 attach.insert(child, (pb, x_origin));
                 continue;
             }
-            bodies.push(moving_body(jt, pb, joint, x_origin, child_params));
-            body_parent_link_x.push(x_p);
+            w.bodies
+                .push(moving_body(jt, pb, joint, x_origin, child_params));
+            w.body_parent_link_x.push(x_p);
             let mut own = Shapes::default();
             own.add(child_link, &Transform::identity(), lookup);
-            shapes.push(own);
-            attach.insert(child, (Some(bodies.len() - 1), Transform::identity()));
+            w.shapes.push(own);
+            attach.insert(child, (Some(w.bodies.len() - 1), Transform::identity()));
         }
     }
-    check_walked(robot, &attach, &done, bodies.len(), root, path)?;
-    Ok(Walk {
-        bodies,
-        body_parent_link_x,
-        shapes,
-        base,
-        mimics,
-    })
+    check_walked(robot, &attach, &done, w.bodies.len(), root, path)?;
+    Ok(w)
+}
+
+impl Walk<'_> {
+    /// Merges a link fixed to body `pb` (or to the base, `None`) at `x_origin` (its frame from
+    /// the body's): its inertial parameters `params` (about its own frame) and its shapes.
+    fn merge_fixed(
+        &mut self,
+        pb: Option<usize>,
+        link: &urdf_rs::Link,
+        x_origin: &Transform,
+        params: InertialParams,
+        lookup: &Lookup,
+    ) {
+        if let Some(b) = pb {
+            let merged = params.transformed(&x_origin.inverse());
+            self.bodies[b].inertia = InertialParams(self.bodies[b].inertia.0 + merged.0);
+            self.shapes[b].add(link, x_origin, lookup);
+        } else {
+            self.base.add_shapes(link, x_origin, lookup);
+        }
+    }
 }
 
 /// A URDF joint's motion: `None` for a fixed joint (its child link is merged into the parent

@@ -160,6 +160,22 @@ impl FourierSeries {
         self.sin[j].iter_mut().for_each(|c| *c *= s);
         self.cos[j].iter_mut().for_each(|c| *c *= s);
     }
+
+    /// Scales each joint so that `max |q_d − offset|` over one period (2,000 points) is its
+    /// `amplitude` (rad); a joint that does not move stays still.
+    pub fn scale_to(&mut self, amplitude: &[f64]) {
+        let period = self.period();
+        let mut peak = vec![0.0f64; self.offset.len()];
+        for k in 0..2000 {
+            let [q, _, _] = self.at(period * k as f64 / 2000.0);
+            for (j, p) in peak.iter_mut().enumerate() {
+                *p = p.max((q[j] - self.offset[j]).abs());
+            }
+        }
+        for (j, p) in peak.iter().enumerate() {
+            self.scale_joint(j, if *p > 0.0 { amplitude[j] / p } else { 0.0 });
+        }
+    }
 }
 
 /// A Fourier series tracked by joint PD or computed torque.
@@ -386,6 +402,33 @@ pub fn solve_ik(
     q
 }
 
+/// A Fourier series of `harmonics` per joint of `n` about `offset` (rad) with random
+/// coefficients decaying as 1/l (seeded by `seed`), not yet scaled.
+fn random_series(
+    n: usize,
+    harmonics: usize,
+    base_frequency: f64,
+    offset: &[f64],
+    seed: u64,
+) -> FourierSeries {
+    let mut rng = ChaCha8Rng::seed_from_u64(seed ^ 0x5eed_f00d);
+    let mut a = vec![vec![0.0; harmonics]; n];
+    let mut b = vec![vec![0.0; harmonics]; n];
+    for j in 0..n {
+        for l in 0..harmonics {
+            a[j][l] = rng.random_range(-1.0..1.0) / (l + 1) as f64;
+            b[j][l] = rng.random_range(-1.0..1.0) / (l + 1) as f64;
+        }
+    }
+    FourierSeries {
+        base_frequency,
+        offset: offset.to_vec(),
+        sin: a,
+        cos: b,
+        window: None,
+    }
+}
+
 /// The Fourier tracking controller of `spec` (given coefficients, or a random draw from `seed`
 /// scaled to the amplitudes), its motion coming to rest at `duration` when it has a ramp.
 fn fourier(model: &Model, spec: &ExcitationSpec, seed: u64, duration: f64) -> Fourier {
@@ -424,36 +467,8 @@ fn fourier(model: &Model, spec: &ExcitationSpec, seed: u64, duration: f64) -> Fo
             }),
         });
     }
-    // Random coefficients (decaying as 1/l), scaled so that max |q_d − offset|
-    // equals the amplitude over one period.
-    let mut rng = ChaCha8Rng::seed_from_u64(seed ^ 0x5eed_f00d);
-    let n = model.dof();
-    let mut a = vec![vec![0.0; *harmonics]; n];
-    let mut b = vec![vec![0.0; *harmonics]; n];
-    for j in 0..n {
-        for l in 0..*harmonics {
-            a[j][l] = rng.random_range(-1.0..1.0) / (l + 1) as f64;
-            b[j][l] = rng.random_range(-1.0..1.0) / (l + 1) as f64;
-        }
-    }
-    let mut series = FourierSeries {
-        base_frequency: *base_frequency,
-        offset: offset.clone(),
-        sin: a,
-        cos: b,
-        window: None,
-    };
-    let period = series.period();
-    let mut peak = vec![0.0f64; n];
-    for k in 0..2000 {
-        let [q, _, _] = series.at(period * k as f64 / 2000.0);
-        for j in 0..n {
-            peak[j] = peak[j].max((q[j] - offset[j]).abs());
-        }
-    }
-    for (j, p) in peak.iter().enumerate() {
-        series.scale_joint(j, if *p > 0.0 { amplitude[j] / p } else { 0.0 });
-    }
+    let mut series = random_series(model.dof(), *harmonics, *base_frequency, offset, seed);
+    series.scale_to(amplitude);
     series.window = ramp.map(|ramp| RestWindow {
         ramp,
         end: duration,

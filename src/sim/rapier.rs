@@ -109,22 +109,7 @@ impl RapierSim {
                 .insert(parent, h, joint, true)
                 .ok_or_else(|| RapierError::Unsupported(format!("rapier refused joint {i}")))?;
             if let Some(r) = &b.rotor {
-                let body = RigidBodyBuilder::dynamic()
-                    .additional_mass_properties(mass_properties(&r.inertia))
-                    .build();
-                let hr = bodies.insert(body);
-                let crate::model::Joint::Revolute { axis } = r.joint else {
-                    return Err(RapierError::Unsupported(format!(
-                        "rotor '{}' slides (a prismatic mimic); the rapier engine models spinning rotors only",
-                        r.name
-                    )));
-                };
-                let joint = revolute(r.x_rot.to_pose(), &axis);
-                let jr = multibody_joints
-                    .insert(parent, hr, joint, true)
-                    .ok_or_else(|| {
-                        RapierError::Unsupported(format!("rapier refused rotor '{}'", r.name))
-                    })?;
+                let jr = Self::add_rotor(&mut bodies, &mut multibody_joints, parent, r)?;
                 rotors.push((i, jr, r.gear_ratio));
             }
             rb.push(h);
@@ -263,6 +248,30 @@ impl RapierSim {
             &(),
             &(),
         );
+    }
+
+    /// Inserts rotor `r` as a body of its own, hinged on `parent` (the body carrying it): its
+    /// multibody joint's handle.
+    fn add_rotor(
+        bodies: &mut RigidBodySet,
+        joints: &mut MultibodyJointSet,
+        parent: RigidBodyHandle,
+        r: &crate::model::Rotor,
+    ) -> Result<MultibodyJointHandle, RapierError> {
+        let body = RigidBodyBuilder::dynamic()
+            .additional_mass_properties(mass_properties(&r.inertia))
+            .build();
+        let hr = bodies.insert(body);
+        let crate::model::Joint::Revolute { axis } = r.joint else {
+            return Err(RapierError::Unsupported(format!(
+            "rotor '{}' slides (a prismatic mimic); the rapier engine models spinning rotors only",
+            r.name
+        )));
+        };
+        let joint = revolute(r.x_rot.to_pose(), &axis);
+        joints
+            .insert(parent, hr, joint, true)
+            .ok_or_else(|| RapierError::Unsupported(format!("rapier refused rotor '{}'", r.name)))
     }
 
     /// Joint positions (rad) and velocities (rad/s).

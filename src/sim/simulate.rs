@@ -104,11 +104,7 @@ pub fn simulate(
     let real = &real;
     let mut engine = integrator(real, s, q0, qd0, h)?;
     let mut sensors = SensorChain::new(model, scenario, dt);
-    let se = &scenario.sensors;
-    let motor = match (se.motor_kt, se.motor_resistance, se.supply_voltage) {
-        (Some(kt), Some(r), Some(v)) => Some((kt, r, v)),
-        _ => None,
-    };
+    let motor = motor_of(&scenario.sensors);
     let names: Vec<String> = model.joint_names();
     let mut truth = Trajectory::new(names.clone(), true);
     let mut measured = Trajectory::new(names.clone(), true);
@@ -154,6 +150,15 @@ pub fn simulate(
         measured,
         processed,
     })
+}
+
+/// The motor's torque constant (N m/A), winding resistance (Ω) and supply voltage (V), when
+/// the scenario gives all three (the actuators then saturate at the back-EMF limit).
+fn motor_of(se: &super::scenario::SensorSpec) -> Option<(f64, f64, f64)> {
+    match (se.motor_kt, se.motor_resistance, se.supply_voltage) {
+        (Some(kt), Some(r), Some(v)) => Some((kt, r, v)),
+        _ => None,
+    }
 }
 
 /// What the robot's sensors and its log make of the true state and torque: encoder noise and
