@@ -727,6 +727,20 @@ fn check_equations(m: &Model, o: &IdentifyOptions, d: &Opened) -> Result<(), Api
     Ok(())
 }
 
+/// Each file read whole with its pipeline's report (a streamed file has none).
+fn data_reports(files: &[&Path], data: &[Data]) -> Vec<DataJson> {
+    files
+        .iter()
+        .zip(data)
+        .filter_map(|(f, data)| {
+            data.report().map(|r| DataJson {
+                file: f.to_path_buf(),
+                pipeline: r.clone(),
+            })
+        })
+        .collect()
+}
+
 /// The fit scored on the training and validation spans, with its identifiability, what the
 /// data pipeline did and warnings where the data cannot support the answer.
 fn score(
@@ -762,19 +776,13 @@ fn score(
     let validation = validation_rms.map(|rms| split(&d.validation, rms));
     let mut notices = d.notices.clone();
     notices.extend(weak_data_warnings(o, &d, &identifiability));
-    let dt = d.data[0].report().map_or(1e-3, |r| r.period);
-    let snippet = (!fit.terms.is_empty())
-        .then(|| crate::diagnose::calibrate::scenario_snippet(m, &fit.terms, dt));
-    let data = files
-        .iter()
-        .zip(&d.data)
-        .filter_map(|(f, data)| {
-            data.report().map(|r| DataJson {
-                file: f.to_path_buf(),
-                pipeline: r.clone(),
-            })
-        })
-        .collect();
+    // Effect terms are fitted on data read whole (never streamed), whose report holds the
+    // sample period the snippet's delays are counted in.
+    let snippet = d.data[0]
+        .report()
+        .filter(|_| !fit.terms.is_empty())
+        .map(|r| crate::diagnose::calibrate::scenario_snippet(m, &fit.terms, r.period));
+    let data = data_reports(&files, &d.data);
     Ok(Identification {
         truth_errors: (o.data.len() == 1)
             .then(|| truth_errors(&o.data[0], m, &fit.identified.theta))

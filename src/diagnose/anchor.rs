@@ -236,6 +236,21 @@ impl Anchor<'_> {
         (pmat, mean)
     }
 
+    /// Per candidate column `c`: the fraction of `‖y_c‖²` outside the span of the base
+    /// columns (`abe = A_YE`, `s = A⁺ A_YE`), in [0, 1].
+    fn visible(&self, cand: &[usize], abe: &DMatrix<f64>, s: &DMatrix<f64>) -> Vec<f64> {
+        (0..cand.len())
+            .map(|c| {
+                let zz = self.ne.yty[(cand[c], cand[c])];
+                if zz > 0.0 {
+                    ((zz - abe.column(c).dot(&s.column(c))) / zz).clamp(0.0, 1.0)
+                } else {
+                    0.0
+                }
+            })
+            .collect()
+    }
+
     /// `J*` with base columns `base` (model columns first, then chosen effects, all free of
     /// prior but the model's) and the absorbable part of candidate columns `cand`, whose
     /// coefficients are held at or above zero when `signed` (a kind with a physical sign:
@@ -291,18 +306,8 @@ impl Anchor<'_> {
         let se = (0..d)
             .map(|c| inv[(pb + c, pb + c)].max(0.0).sqrt())
             .collect();
-        let visible = (0..d)
-            .map(|c| {
-                let zz = self.ne.yty[(cand[c], cand[c])];
-                if zz > 0.0 {
-                    ((zz - abe.column(c).dot(&s.column(c))) / zz).clamp(0.0, 1.0)
-                } else {
-                    0.0
-                }
-            })
-            .collect();
         Fit {
-            visible,
+            visible: self.visible(cand, &abe, &s),
             statistic: (j_without - j_with).max(0.0),
             beta: x.rows(pb, d).iter().copied().collect(),
             se,
@@ -454,6 +459,16 @@ struct Candidates {
     first: Vec<Option<Fit>>,
 }
 
+/// Why the best candidate `top` is not taken, if it is not: its statistic is under its
+/// threshold.
+fn below_threshold(top: &Test) -> Option<TestStop> {
+    (top.statistic < top.threshold).then_some(TestStop::BelowThreshold {
+        kind: top.kind,
+        statistic: top.statistic,
+        threshold: top.threshold,
+    })
+}
+
 /// Forward selection by the description test over the variants of `folds` that are absorbed
 /// (every column at most [`ABSORBED`] visible against the model and `chosen`) and not of a kind
 /// in `exclude`, after the effects `chosen` (free columns), adding at most `max` kinds. Of the
@@ -497,13 +512,8 @@ pub fn select(
         }
         best.sort_by(|a, b| akaike(&b.1).total_cmp(&akaike(&a.1)));
         let tests: Vec<Test> = best.iter().map(|(_, t, _)| t.clone()).collect();
-        let top = &tests[0];
-        if top.statistic < top.threshold {
-            break TestStop::BelowThreshold {
-                kind: top.kind,
-                statistic: top.statistic,
-                threshold: top.threshold,
-            };
+        if let Some(stop) = below_threshold(&tests[0]) {
+            break stop;
         }
         let simplest = simplest_ties(&tests, tie);
         let ambiguous_with: Vec<Kind> = simplest[1..].iter().map(|&i| tests[i].kind).collect();

@@ -77,6 +77,20 @@ pub(crate) fn joint_label(stage: &Stage, single: bool, i: usize, variant: Varian
     }
 }
 
+/// The columns (from `offset`, the kind's first) that magnitude `i` of `n` joints depends on:
+/// all of the kind's when it has a `single` magnitude; otherwise cogging's both, a spring's
+/// stiffness only its q column (the constant is its rest position).
+fn value_columns(kind: Kind, (single, i, n): (bool, usize, usize), offset: usize) -> Vec<usize> {
+    if single {
+        (0..kind.columns(n)).map(|c| offset + c).collect()
+    } else {
+        kind.magnitude_columns(i, n)
+            .into_iter()
+            .map(|c| offset + c)
+            .collect()
+    }
+}
+
 /// The estimates of the effects cross-validation selected, from the final parameters
 /// `final_theta` (effect coefficients after the model's), with block-jackknife errors from the
 /// selection's per-fold fits.
@@ -112,17 +126,7 @@ pub(crate) fn cross_validated(
             .iter()
             .enumerate()
             .map(|(i, &value)| {
-                let cols: Vec<usize> = if single {
-                    (0..columns).map(|c| folds.offsets[vi] + c).collect()
-                } else {
-                    // Cogging's magnitude needs both of its columns; a spring's stiffness only
-                    // its q column (the constant is its rest position).
-                    v.kind
-                        .magnitude_columns(i, n)
-                        .into_iter()
-                        .map(|c| folds.offsets[vi] + c)
-                        .collect()
-                };
+                let cols = value_columns(v.kind, (single, i, n), folds.offsets[vi]);
                 Magnitude {
                     joint: joint_label(stage, single, i, v),
                     value,

@@ -58,32 +58,37 @@ pub fn gamma_test(
     }
     let c = counted as f64;
     let dx: Vec<f64> = delta.iter().map(|d| d / c).collect();
-    let mx = dx.iter().sum::<f64>() / NEIGHBOURS as f64;
-    let sxx: f64 = dx.iter().map(|d| (d - mx).powi(2)).sum();
     gamma
         .iter()
         .zip(&pairs)
-        .map(|(g, p)| {
-            if p.contains(&0) {
-                return f64::NAN;
-            }
-            let gy: Vec<f64> = g.iter().zip(p).map(|(v, &c)| v / c as f64).collect();
-            let my = gy.iter().sum::<f64>() / NEIGHBOURS as f64;
-            let slope = if sxx > 0.0 {
-                dx.iter()
-                    .zip(&gy)
-                    .map(|(a, b)| (a - mx) * (b - my))
-                    .sum::<f64>()
-                    / sxx
-            } else {
-                0.0
-            };
-            // The intercept, kept within [γ(1)/2, γ(1)]: the nearest neighbours' half squared
-            // difference bounds it from above, and an intercept far below it means the line is
-            // dominated by a steep state dependence (then γ(1)/2 is the safer estimate).
-            (my - slope * mx).clamp(0.5 * gy[0], gy[0])
-        })
+        .map(|(g, p)| intercept(&dx, g, p))
         .collect()
+}
+
+/// The gamma test's intercept for one joint: the line through its mean half squared
+/// differences `g / p` (sums over `p` pairs) against the mean squared distances `dx` of the
+/// 1st to k-th neighbours, at distance zero; NaN when a rank has no pair.
+fn intercept(dx: &[f64], g: &[f64; NEIGHBOURS], p: &[usize; NEIGHBOURS]) -> f64 {
+    if p.contains(&0) {
+        return f64::NAN;
+    }
+    let mx = dx.iter().sum::<f64>() / NEIGHBOURS as f64;
+    let sxx: f64 = dx.iter().map(|d| (d - mx).powi(2)).sum();
+    let gy: Vec<f64> = g.iter().zip(p).map(|(v, &c)| v / c as f64).collect();
+    let my = gy.iter().sum::<f64>() / NEIGHBOURS as f64;
+    let slope = if sxx > 0.0 {
+        dx.iter()
+            .zip(&gy)
+            .map(|(a, b)| (a - mx) * (b - my))
+            .sum::<f64>()
+            / sxx
+    } else {
+        0.0
+    };
+    // The intercept, kept within [γ(1)/2, γ(1)]: the nearest neighbours' half squared
+    // difference bounds it from above, and an intercept far below it means the line is
+    // dominated by a steep state dependence (then γ(1)/2 is the safer estimate).
+    (my - slope * mx).clamp(0.5 * gy[0], gy[0])
 }
 
 /// The states `(q, q̇, q̈)` of samples `range.start + idx[i]`, each coordinate standardized over

@@ -46,9 +46,9 @@ fn bars(
     crate::io::plot::grouped_bars(title, ylabel, labels, series).map_err(plot_err(path))
 }
 
-/// Residual PSD per joint, before (solid) and after (thin) the selected effects, log-log,
-/// written to `path`; returns the SVG (`None`, and no file, without a positive spectrum).
-fn spectrum_plot(path: &Path, d: &Diagnosis) -> Result<Option<String>, ReportError> {
+/// The extent of the positive points of every spectrum, before and after: the lowest and
+/// highest frequency (Hz) and PSD (N² m²/Hz); `None` without a positive point.
+fn spectrum_extent(d: &Diagnosis) -> Option<[f64; 4]> {
     let pos = |v: f64| v.is_finite() && v > 0.0;
     let all: Vec<(f64, f64)> = d
         .spectra
@@ -58,12 +58,23 @@ fn spectrum_plot(path: &Path, d: &Diagnosis) -> Result<Option<String>, ReportErr
         .filter(|(f, p)| pos(*f) && pos(*p))
         .collect();
     if all.is_empty() {
-        return Ok(None);
+        return None;
     }
-    let fmin = all.iter().map(|a| a.0).fold(f64::INFINITY, f64::min);
-    let fmax = all.iter().map(|a| a.0).fold(0.0, f64::max);
-    let pmin = all.iter().map(|a| a.1).fold(f64::INFINITY, f64::min);
-    let pmax = all.iter().map(|a| a.1).fold(0.0, f64::max);
+    Some([
+        all.iter().map(|a| a.0).fold(f64::INFINITY, f64::min),
+        all.iter().map(|a| a.0).fold(0.0, f64::max),
+        all.iter().map(|a| a.1).fold(f64::INFINITY, f64::min),
+        all.iter().map(|a| a.1).fold(0.0, f64::max),
+    ])
+}
+
+/// Residual PSD per joint, before (solid) and after (thin) the selected effects, log-log,
+/// written to `path`; returns the SVG (`None`, and no file, without a positive spectrum).
+fn spectrum_plot(path: &Path, d: &Diagnosis) -> Result<Option<String>, ReportError> {
+    let pos = |v: f64| v.is_finite() && v > 0.0;
+    let Some([fmin, fmax, pmin, pmax]) = spectrum_extent(d) else {
+        return Ok(None);
+    };
     let mut svg = String::new();
     {
         let root = SVGBackend::with_string(&mut svg, (900 + LEGEND_WIDTH, 540)).into_drawing_area();

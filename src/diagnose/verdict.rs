@@ -55,6 +55,38 @@ fn name_of(e: &EffectEstimate) -> String {
     }
 }
 
+/// What the summary adds after the verdict: the effects found against the description (those
+/// after the first `n_cv`), and the effects the validation data did not confirm.
+fn addenda(
+    effects: &[EffectEstimate],
+    n_cv: usize,
+    how_far: &HowFar,
+    description_test: Option<&anchor::Report>,
+) -> String {
+    let mut summary = String::new();
+    if let Some(rep) = description_test.filter(|r| !r.steps.is_empty()) {
+        let absorbed: Vec<String> = effects[n_cv..].iter().map(name_of).collect();
+        summary += &format!(
+            "; absorbed by identification but revealed by the description (stated uncertainty {:.0} %): {}",
+            100.0 * rep.uncertainty,
+            absorbed.join(" + ")
+        );
+    }
+    if let Some((_, o)) = &how_far.confirmed_only {
+        let unconfirmed: Vec<&str> = effects
+            .iter()
+            .zip(&how_far.confirmed)
+            .filter(|(_, c)| !**c)
+            .map(|(e, _)| e.kind.name())
+            .collect();
+        summary += &format!(
+            "; NOT confirmed on the validation data (its error rose when added): {}; with the confirmed effects only the validation RMS is {o:.3} N m",
+            unconfirmed.join(", ")
+        );
+    }
+    summary
+}
+
 /// The summary sentence: the verdict with its numbers, what the description test revealed, and
 /// which effects the held-out data did not confirm. The first `n_cv` of `effects` come from
 /// cross-validation.
@@ -102,25 +134,6 @@ pub(crate) fn summary(
             overall[0],
         ),
     };
-    if let Some(rep) = description_test.filter(|r| !r.steps.is_empty()) {
-        let absorbed: Vec<String> = effects[n_cv..].iter().map(name_of).collect();
-        summary += &format!(
-            "; absorbed by identification but revealed by the description (stated uncertainty {:.0} %): {}",
-            100.0 * rep.uncertainty,
-            absorbed.join(" + ")
-        );
-    }
-    if let Some((_, o)) = &how_far.confirmed_only {
-        let unconfirmed: Vec<&str> = effects
-            .iter()
-            .zip(&how_far.confirmed)
-            .filter(|(_, c)| !**c)
-            .map(|(e, _)| e.kind.name())
-            .collect();
-        summary += &format!(
-            "; NOT confirmed on the validation data (its error rose when added): {}; with the confirmed effects only the validation RMS is {o:.3} N m",
-            unconfirmed.join(", ")
-        );
-    }
+    summary += &addenda(effects, n_cv, how_far, description_test);
     summary
 }

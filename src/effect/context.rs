@@ -331,17 +331,6 @@ impl<'a> Context<'a> {
             ));
         }
         let defl = inner(without_own(logged, &at.tau, &at, cutoff, &taps));
-        let g = model
-            .gravity()
-            .try_normalize(1e-12)
-            .unwrap_or(-Vector3::z());
-        let a = if g.x.abs() < 0.9 {
-            Vector3::x()
-        } else {
-            Vector3::y()
-        };
-        let u1 = (a - g * g.dot(&a)).normalize();
-        let u2 = g.cross(&u1);
         let gear = model
             .bodies()
             .iter()
@@ -355,7 +344,7 @@ impl<'a> Context<'a> {
             pred_d,
             defl,
             slack,
-            perp: [u1, u2],
+            perp: perpendiculars(&model.gravity()),
             gear,
         }
     }
@@ -418,6 +407,19 @@ impl<'a> Context<'a> {
         }
         out
     }
+}
+
+/// Two unit vectors perpendicular to gravity `g` and to each other (the directions a small
+/// tilt moves it in); about −z when `g` is zero.
+fn perpendiculars(g: &Vector3<f64>) -> [Vector3<f64>; 2] {
+    let g = g.try_normalize(1e-12).unwrap_or(-Vector3::z());
+    let a = if g.x.abs() < 0.9 {
+        Vector3::x()
+    } else {
+        Vector3::y()
+    };
+    let u1 = (a - g * g.dot(&a)).normalize();
+    [u1, g.cross(&u1)]
 }
 
 #[cfg(test)]

@@ -236,6 +236,16 @@ fn rows_table(dir: &Path) -> Result<(PathBuf, DataFrame), CompareError> {
     Ok((csv, df))
 }
 
+/// Row `i`'s grid point: `key=value` for each grid column (as text).
+fn point_of(grid: &[(String, Column)], i: usize) -> Vec<String> {
+    grid.iter()
+        .map(|(k, col)| {
+            let v = col.str().ok().and_then(|c| c.get(i)).unwrap_or("");
+            format!("{k}={v}")
+        })
+        .collect()
+}
+
 /// The samples of `metric` in the rows table of `dir`.
 fn samples(dir: &Path, metric: &str) -> Result<Vec<Sample>, CompareError> {
     let (path, df) = rows_table(dir)?;
@@ -282,16 +292,9 @@ fn samples(dir: &Path, metric: &str) -> Result<Vec<Sample>, CompareError> {
         else {
             continue;
         };
-        let point = grid
-            .iter()
-            .map(|(k, col)| {
-                let v = col.str().ok().and_then(|c| c.get(i)).unwrap_or("");
-                format!("{k}={v}")
-            })
-            .collect();
         out.push(Sample {
             group: Group {
-                point,
+                point: point_of(&grid, i),
                 n_s: n,
                 set: c.to_string(),
             },

@@ -376,13 +376,8 @@ pub fn run_seed_validated_on(
     let total = (max_n + spec.validation).min(data.len());
     // Every sample's regressor once (n × p each, column-major).
     let ys = regressors(model, data, 0..total);
-    let (ys_val, val_data) = match validation {
-        Some(v) => (
-            Some(regressors(model, v, 0..spec.validation.min(v.len()))),
-            v,
-        ),
-        None => (None, data),
-    };
+    let ys_val = validation.map(|v| regressors(model, v, 0..spec.validation.min(v.len())));
+    let val_data = validation.unwrap_or(data);
     let prior = cad_prior(model, spec.prior_error, 1_000_003 ^ seed);
     let truth = model.parameters();
     let mut ne = NormalEquations::new(n, p);

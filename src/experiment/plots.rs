@@ -58,6 +58,40 @@ fn band_columns(
     Ok((get("n_s")?, quartiles, series))
 }
 
+/// A chart with both axes logarithmic, drawn as SVG.
+type LogLogChart<'a, 'b> =
+    ChartContext<'a, SVGBackend<'b>, Cartesian2d<LogCoord<f64>, LogCoord<f64>>>;
+
+/// A log-log chart against `n_s` on `area`: the x axis from 0.9 `xmin` to 1.1 `xmax`, the
+/// y axis over the whole decades around `ymin..ymax` (every axis then carries a labelled tick
+/// at each end), the mesh drawn.
+fn log_log_chart<'a, 'b>(
+    area: &'a DrawingArea<SVGBackend<'b>, plotters::coord::Shift>,
+    title: &str,
+    ylabel: &str,
+    [(xmin, xmax), (ymin, ymax)]: [(f64, f64); 2],
+) -> Result<LogLogChart<'a, 'b>, String> {
+    let decades = 0.99 * 10f64.powf(ymin.log10().floor())..1.01 * 10f64.powf(ymax.log10().ceil());
+    let mut chart = ChartBuilder::on(area)
+        .caption(title, ("sans-serif", 20))
+        .margin(15)
+        .x_label_area_size(45)
+        .y_label_area_size(75)
+        .build_cartesian_2d((xmin * 0.9..xmax * 1.1).log_scale(), decades.log_scale())
+        .map_err(|e| e.to_string())?;
+    chart
+        .configure_mesh()
+        .x_desc("training samples n_s (count)")
+        .y_desc(ylabel)
+        .x_labels(12)
+        .y_labels(12)
+        .x_label_formatter(&|v| tick(*v))
+        .y_label_formatter(&|v| tick(*v))
+        .draw()
+        .map_err(|e| e.to_string())?;
+    Ok(chart)
+}
+
 /// [`plot_vs_ns`] with one line per value `series` of column `series_column`.
 pub fn plot_vs_ns_by(
     summary: &DataFrame,
@@ -80,28 +114,8 @@ pub fn plot_vs_ns_by(
         let draw = |e: String| err(format!("plot: {e}"));
         root.fill(&WHITE).map_err(|e| draw(e.to_string()))?;
         let (plot_area, legend_area) = root.split_horizontally(860);
-        let mut chart = ChartBuilder::on(&plot_area)
-            .caption(title, ("sans-serif", 20))
-            .margin(15)
-            .x_label_area_size(45)
-            .y_label_area_size(75)
-            .build_cartesian_2d(
-                (xmin * 0.9..xmax * 1.1).log_scale(),
-                // Whole decades, so that every axis carries a labelled tick at each end.
-                (0.99 * 10f64.powf(ymin.log10().floor())..1.01 * 10f64.powf(ymax.log10().ceil()))
-                    .log_scale(),
-            )
-            .map_err(|e| draw(e.to_string()))?;
-        chart
-            .configure_mesh()
-            .x_desc("training samples n_s (count)")
-            .y_desc(ylabel)
-            .x_labels(12)
-            .y_labels(12)
-            .x_label_formatter(&|v| tick(*v))
-            .y_label_formatter(&|v| tick(*v))
-            .draw()
-            .map_err(|e| draw(e.to_string()))?;
+        let extent = [(xmin, xmax), (ymin, ymax)];
+        let mut chart = log_log_chart(&plot_area, title, ylabel, extent).map_err(draw)?;
         let mut entries = vec![];
         for (k, set) in sets.iter().enumerate() {
             // Loosest to tightest: red, green, purple, blue (then orange, cyan).

@@ -30,10 +30,9 @@ pub fn long_table_with_bodies(
     Ok(df)
 }
 
-/// The long table.
-pub fn long_table(rows: &[Row], joints: &[String]) -> PolarsResult<DataFrame> {
-    let f = |name: &str, v: Vec<f64>| Series::new(name.into(), v).into_column();
-    let mut cols = vec![
+/// The columns that say which cell a row is: its seed, training size and constraint set.
+fn key_columns(rows: &[Row]) -> Vec<Column> {
+    vec![
         Series::new(
             "seed".into(),
             rows.iter().map(|r| r.seed).collect::<Vec<u64>>(),
@@ -51,7 +50,13 @@ pub fn long_table(rows: &[Row], joints: &[String]) -> PolarsResult<DataFrame> {
                 .collect::<Vec<&str>>(),
         )
         .into_column(),
-    ];
+    ]
+}
+
+/// The long table.
+pub fn long_table(rows: &[Row], joints: &[String]) -> PolarsResult<DataFrame> {
+    let f = |name: &str, v: Vec<f64>| Series::new(name.into(), v).into_column();
+    let mut cols = key_columns(rows);
     for (j, name) in joints.iter().enumerate() {
         cols.push(f(
             &format!("val_rms_{name}"),

@@ -272,6 +272,28 @@ pub(crate) fn into_frame(pieces: &[Piece], rot: &Matrix3<f64>, pos: &Vector3<f64
     pieces.iter().map(|p| p.moved(rot, pos)).collect()
 }
 
+/// A URDF geometry as a shape (m), a mesh by the file it resolves to (`None` when it does not).
+fn shape_kind(g: &urdf_rs::Geometry, lookup: &Lookup) -> Option<crate::model::ShapeKind> {
+    use crate::model::ShapeKind;
+    use urdf_rs::Geometry as G;
+    Some(match g {
+        G::Box { size } => ShapeKind::Box { size: size.0 },
+        G::Cylinder { radius, length } => ShapeKind::Cylinder {
+            radius: *radius,
+            length: *length,
+        },
+        G::Capsule { radius, length } => ShapeKind::Capsule {
+            radius: *radius,
+            length: *length,
+        },
+        G::Sphere { radius } => ShapeKind::Sphere { radius: *radius },
+        G::Mesh { filename, scale } => ShapeKind::Mesh {
+            path: resolve(filename, lookup).ok()?,
+            scale: scale.map_or([1.0; 3], |s| s.0),
+        },
+    })
+}
+
 /// A link's shapes for export, each placed in the link frame: its collision shapes, or its
 /// visual ones when a collision mesh cannot be found (as [`link_pieces`] does); and the mesh
 /// files of the chosen geometry that cannot be found (left out of every export).
@@ -279,7 +301,7 @@ pub(crate) fn link_shapes_and_missing(
     link: &urdf_rs::Link,
     lookup: &Lookup,
 ) -> (Vec<crate::model::Shape>, Vec<String>) {
-    use crate::model::{Shape, ShapeKind};
+    use crate::model::Shape;
     use urdf_rs::Geometry as G;
     let collision: Vec<_> = link
         .collision
@@ -316,22 +338,7 @@ pub(crate) fn link_shapes_and_missing(
     let shapes = chosen
         .into_iter()
         .filter_map(|(origin, g)| {
-            let kind = match g {
-                G::Box { size } => ShapeKind::Box { size: size.0 },
-                G::Cylinder { radius, length } => ShapeKind::Cylinder {
-                    radius: *radius,
-                    length: *length,
-                },
-                G::Capsule { radius, length } => ShapeKind::Capsule {
-                    radius: *radius,
-                    length: *length,
-                },
-                G::Sphere { radius } => ShapeKind::Sphere { radius: *radius },
-                G::Mesh { filename, scale } => ShapeKind::Mesh {
-                    path: resolve(filename, lookup).ok()?,
-                    scale: scale.map_or([1.0; 3], |s| s.0),
-                },
-            };
+            let kind = shape_kind(g, lookup)?;
             let pose = crate::spatial::Transform::from_pose(
                 &rpy_to_matrix(&Vector3::from(origin.rpy.0)),
                 &Vector3::from(origin.xyz.0),

@@ -72,6 +72,19 @@ pub fn tick(v: f64) -> String {
     }
 }
 
+/// The top of a bar plot's value axis (the largest finite value, at least 10⁻⁹) and the room
+/// below it (pixels) for the longest of `labels`, written downwards.
+fn bar_extent(labels: &[String], series: &[(String, Vec<f64>)]) -> (f64, u32) {
+    let ymax = series
+        .iter()
+        .flat_map(|(_, v)| v.iter().copied())
+        .filter(|v| v.is_finite())
+        .fold(0.0f64, f64::max)
+        .max(1e-9);
+    let longest = labels.iter().map(|l| l.chars().count()).max().unwrap_or(0);
+    (ymax, (12 + 7 * longest).clamp(40, 220) as u32)
+}
+
 /// Grouped bars: one group per label (written below the axis), one bar per series, from zero;
 /// the legend in a column beside the chart.
 pub fn grouped_bars(
@@ -81,17 +94,9 @@ pub fn grouped_bars(
     series: &[(String, Vec<f64>)],
 ) -> Result<String, String> {
     let err = |e: &dyn std::fmt::Display| e.to_string();
-    let ymax = series
-        .iter()
-        .flat_map(|(_, v)| v.iter().copied())
-        .filter(|v| v.is_finite())
-        .fold(0.0f64, f64::max)
-        .max(1e-9);
+    let (ymax, label_area) = bar_extent(labels, series);
     let groups = labels.len();
     let per = series.len().max(1);
-    // Room below the axis for the longest label, written downwards.
-    let longest = labels.iter().map(|l| l.chars().count()).max().unwrap_or(0);
-    let label_area = (12 + 7 * longest).clamp(40, 220) as u32;
     let mut svg = String::new();
     {
         let width = (140 + 60 * groups * per).clamp(640, 1400) as u32 + LEGEND_WIDTH;

@@ -315,6 +315,18 @@ pub fn read_csv_logged(
     Ok((out, c.ignored))
 }
 
+/// Checks sample `k`'s time `t` (s, column `name`): finite, and after the previous `prev`.
+fn check_time(k: usize, t: f64, prev: f64, name: &str) -> Result<(), String> {
+    crate::trajectory::check_value(k, t, "t", name, t)
+        .map_err(|e| format!("line {}: {e}", k + 2))?;
+    if t <= prev {
+        return Err(format!(
+            "sample {k}: time {t} s does not increase (previous {prev} s)"
+        ));
+    }
+    Ok(())
+}
+
 /// Streams a CSV with `ddq` columns sample by sample without loading it, checking each sample
 /// (finite values, increasing time) as it goes; `f(k, sample)` sees samples `range` only, the
 /// joints in `robot`'s order.
@@ -365,13 +377,7 @@ pub fn stream_csv(
             Ok(v)
         };
         let t = get(t_col)?;
-        crate::trajectory::check_value(k, t, "t", &header[t_col], t)
-            .map_err(|e| bad(format!("line {}: {e}", k + 2)))?;
-        if t <= prev {
-            return Err(bad(format!(
-                "sample {k}: time {t} s does not increase (previous {prev} s)"
-            )));
-        }
+        check_time(k, t, prev, &header[t_col]).map_err(bad)?;
         prev = t;
         if range.contains(&k) {
             for (g, cs) in cols.iter().enumerate() {

@@ -409,6 +409,13 @@ struct Shapes {
 }
 
 impl Shapes {
+    /// A link's own geometry, in its frame.
+    fn of_link(link: &urdf_rs::Link, lookup: &Lookup) -> Self {
+        let mut own = Shapes::default();
+        own.add(link, &Transform::identity(), lookup);
+        own
+    }
+
     /// Adds a link's geometry, placed in the body frame by `x_link` (link from body). A link
     /// with mass but no usable geometry makes the body's bound unknown.
     fn add(&mut self, link: &urdf_rs::Link, x_link: &Transform, lookup: &Lookup) {
@@ -529,8 +536,7 @@ fn walk<'r>(
                         jt.name, mimic.joint
                     )));
                 }
-                let mut rotor_shapes = Shapes::default();
-                rotor_shapes.add(child_link, &Transform::identity(), lookup);
+                let rotor_shapes = Shapes::of_link(child_link, lookup);
                 w.mimics
                     .push((jt, mimic, pb, x_origin, child_params, rotor_shapes));
                 attach.insert(child, (pb, x_origin));
@@ -539,9 +545,7 @@ fn walk<'r>(
             w.bodies
                 .push(moving_body(jt, pb, joint, x_origin, child_params));
             w.body_parent_link_x.push(x_p);
-            let mut own = Shapes::default();
-            own.add(child_link, &Transform::identity(), lookup);
-            w.shapes.push(own);
+            w.shapes.push(Shapes::of_link(child_link, lookup));
             attach.insert(child, (Some(w.bodies.len() - 1), Transform::identity()));
         }
     }

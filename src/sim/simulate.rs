@@ -139,14 +139,27 @@ pub fn simulate(
         }
     }
     progress(1.0);
-    // The online velocity's difference as the logged acceleration.
-    let mqdd = column_map(&measured.qd, n, |x| differentiate(x, dt));
-    measured.qdd = Some(mqdd);
+    let logs = (friction_log, effects_log);
+    recording(truth, logs, measured, scenario, dt)
+}
+
+/// The recording of a run: the truth, the friction and effect torques per sample (N m,
+/// sample-major), what was logged (its acceleration the online velocity's difference) and that
+/// log processed as the scenario says.
+fn recording(
+    truth: Trajectory,
+    (friction, effects): (Vec<f64>, Vec<f64>),
+    mut measured: Trajectory,
+    scenario: &Scenario,
+    dt: f64,
+) -> Result<Recording, SimError> {
+    let n = measured.dof();
+    measured.qdd = Some(column_map(&measured.qd, n, |x| differentiate(x, dt)));
     let processed = process(&measured, scenario, dt)?;
     Ok(Recording {
         truth,
-        friction: friction_log,
-        effects: effects_log,
+        friction,
+        effects,
         measured,
         processed,
     })
