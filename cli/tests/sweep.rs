@@ -261,7 +261,7 @@ fn a_blind_case_can_be_kept_and_rediagnosed_by_hand() {
         "0.1",
     ]);
     assert_eq!(code, 0, "{text}");
-    assert!(text.contains("step 1: torque_offset"), "{text}");
+    assert!(text.contains("Step 1: torque_offset (CV RMS"), "{text}");
     // A case beyond --cases is named.
     let (code, log) = physid(&["blind", "--cases", "21", "--only", "21"]);
     assert!(
