@@ -264,3 +264,75 @@ coulomb = 1.5
     assert_eq!(m.bodies()[2].friction.coulomb, 1.5);
     assert_eq!(m.layout().len, 80 + 14);
 }
+
+#[test]
+fn a_csv_is_read_by_the_columns_used_and_the_first_bad_file_is_named() {
+    // The reader decodes only the columns it uses, each trimmed of spaces (as the header's
+    // names are); an unused column may hold anything, a used one that is not a number is named
+    // with its line and column; files read side by side name the first bad one in their order.
+    let dir = tempfile::tempdir().unwrap();
+    let model = physid::model::cheetah3::leg();
+    let names = model.joint_names();
+    let header = |extra: &str| {
+        let mut h = vec![" t ".to_string()];
+        for g in ["q", "tau"] {
+            h.extend(names.iter().map(|n| format!("{g}_{n}")));
+        }
+        h.push(extra.to_string());
+        h.join(",")
+    };
+    let row = |k: usize, unused: &[u8]| {
+        let mut line = format!(" {} ", k as f64 * 1e-3).into_bytes();
+        for j in 0..6 {
+            line.extend(format!(", {:.3} ", 0.1 * (k + j) as f64).bytes());
+        }
+        line.push(b',');
+        line.extend(unused);
+        line.push(b'\n');
+        line
+    };
+    let write = |name: &str, rows: &dyn Fn(usize) -> Vec<u8>| {
+        let mut bytes = format!("{}\n", header("note")).into_bytes();
+        for k in 0..200 {
+            bytes.extend(rows(k));
+        }
+        let path = dir.path().join(name);
+        std::fs::write(&path, bytes).unwrap();
+        path
+    };
+    let good = write("good.csv", &|k| row(k, b"\xff\xfe not text"));
+    let (logged, _) = io::samples::read_csv_logged(&good, Some(&names)).unwrap();
+    assert_eq!(logged.t.len(), 200);
+    assert!((logged.t[3] - 3e-3).abs() < 1e-15 && (logged.q[3 * 3 + 1] - 0.4).abs() < 1e-12);
+    let bad_q = write("bad_q.csv", &|k| {
+        if k == 7 {
+            // The hip's angle is a byte that is not text.
+            b" 0.007 , 1.0 , \xff , 1, 1, 1, 1, x\n".to_vec()
+        } else {
+            row(k, b"x")
+        }
+    });
+    let err = io::samples::read_csv_logged(&bad_q, Some(&names))
+        .unwrap_err()
+        .to_string();
+    assert!(
+        err.contains("bad_q.csv") && err.contains("line 9, column 'q_hip_joint'"),
+        "{err}"
+    );
+    let bad_t = write("bad_t.csv", &|k| {
+        if k == 3 {
+            b"oops,1,1,1,1,1,1,x\n".to_vec()
+        } else {
+            row(k, b"x")
+        }
+    });
+    let paths = [good.as_path(), bad_t.as_path(), bad_q.as_path()];
+    let err = io::load_all(&paths, &model, &Default::default())
+        .err()
+        .unwrap()
+        .to_string();
+    assert!(
+        err.contains("bad_t.csv") && err.contains("'oops' is not a number"),
+        "{err}"
+    );
+}

@@ -575,10 +575,15 @@ pub fn load_all(
     model: &Model,
     opts: &DataOptions,
 ) -> Result<Vec<LoadedData>, IoError> {
-    let read: Vec<_> = paths
-        .iter()
-        .map(|p| load_logged(p, model, opts))
-        .collect::<Result<_, _>>()?;
+    // Files read side by side; the first error in the files' order is the one reported.
+    let read: Vec<_> = {
+        use rayon::prelude::*;
+        let each: Vec<_> = paths
+            .par_iter()
+            .map(|p| load_logged(p, model, opts))
+            .collect();
+        each.into_iter().collect::<Result<_, _>>()?
+    };
     let mut popts = opts.prepare.clone();
     let own_edges = match popts.cutoff {
         None => {

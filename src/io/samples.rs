@@ -244,6 +244,24 @@ pub fn read_csv(path: &Path, robot: Option<&[String]>) -> Result<Trajectory, IoE
     Ok(tr)
 }
 
+/// A CSV reader of `file` whose header names are trimmed of spaces; a record's fields are
+/// read as bytes and only the columns used are decoded ([`number`]).
+fn reader(file: std::fs::File) -> csv::Reader<std::io::BufReader<std::fs::File>> {
+    csv::ReaderBuilder::new()
+        .trim(csv::Trim::Headers)
+        .from_reader(std::io::BufReader::with_capacity(1 << 16, file))
+}
+
+/// Field `col` of `rec` as a number, its text trimmed of spaces; the text when it is not one
+/// (a field that is not UTF-8 shown with replacement characters).
+fn number(rec: &csv::ByteRecord, col: usize) -> Result<f64, String> {
+    let bytes = rec.get(col).unwrap_or(b"");
+    match std::str::from_utf8(bytes).map(str::trim) {
+        Ok(text) => text.parse().map_err(|_| text.to_string()),
+        Err(_) => Err(String::from_utf8_lossy(bytes).trim().to_string()),
+    }
+}
+
 /// Reads a CSV as logged (velocity and acceleration columns optional, time stamps as written),
 /// its joints in `robot`'s order when given, and the joints named in the file that the robot
 /// lacks. Each value is checked (finite, within range), naming the line and column; the time
@@ -258,9 +276,7 @@ pub fn read_csv_logged(
         source,
     })?;
     let bad = |m: String| IoError::invalid(path, m);
-    let mut r = csv::ReaderBuilder::new()
-        .trim(csv::Trim::All)
-        .from_reader(std::io::BufReader::with_capacity(1 << 16, file));
+    let mut r = reader(file);
     let c = Columns::parse(&mut r, path, robot)?;
     let mut out = Logged {
         joint_names: c.names.clone(),
@@ -270,16 +286,15 @@ pub fn read_csv_logged(
         qdd: c.ddq.is_some().then(Vec::new),
         tau: vec![],
     };
-    let mut rec = csv::StringRecord::new();
+    let mut rec = csv::ByteRecord::new();
     let mut k = 0usize;
     while r
-        .read_record(&mut rec)
+        .read_byte_record(&mut rec)
         .map_err(|e| bad(format!("line {}: {e}", k + 2)))?
     {
         let line = k + 2;
         let value = |col: usize, group: &str, t: Option<f64>| -> Result<f64, IoError> {
-            let s = rec.get(col).unwrap_or("");
-            let v: f64 = s.parse().map_err(|_| {
+            let v = number(&rec, col).map_err(|s| {
                 bad(format!(
                     "line {line}, column '{}': '{s}' is not a number",
                     c.header[col]
@@ -342,9 +357,7 @@ pub fn stream_csv(
         source,
     })?;
     let bad = |m: String| IoError::invalid(path, m);
-    let mut r = csv::ReaderBuilder::new()
-        .trim(csv::Trim::All)
-        .from_reader(std::io::BufReader::new(file));
+    let mut r = reader(file);
     let c = Columns::parse(&mut r, path, Some(robot))?;
     let n = robot.len();
     let header = &c.header;
@@ -352,15 +365,14 @@ pub fn stream_csv(
     let cols = c.sample_groups(path)?;
     let mut vals = vec![0.0; 4 * n];
     let mut prev = f64::NEG_INFINITY;
-    let mut rec = csv::StringRecord::new();
+    let mut rec = csv::ByteRecord::new();
     let mut k = 0usize;
     while r
-        .read_record(&mut rec)
+        .read_byte_record(&mut rec)
         .map_err(|e| bad(format!("line {}: {e}", k + 2)))?
     {
         let get = |c: usize| -> Result<f64, IoError> {
-            let s = rec.get(c).unwrap_or("");
-            let v: f64 = s.parse().map_err(|_| {
+            let v = number(&rec, c).map_err(|s| {
                 bad(format!(
                     "line {}, column '{}': '{s}' is not a number",
                     k + 2,
@@ -401,9 +413,7 @@ pub fn csv_streamable(path: &Path) -> Result<bool, IoError> {
         path: path.to_path_buf(),
         source,
     })?;
-    let mut r = csv::ReaderBuilder::new()
-        .trim(csv::Trim::All)
-        .from_reader(std::io::BufReader::new(file));
+    let mut r = reader(file);
     let c = Columns::parse(&mut r, path, None)?;
     Ok(c.dq.is_some() && c.ddq.is_some())
 }
