@@ -9,21 +9,35 @@ use crate::trajectory::{SampleSink, Trajectory};
 use nalgebra::{DMatrix, DVector, SymmetricEigen};
 use serde::Serialize;
 
-/// The residual `τ − Y θ` (N m) of samples `range`, sample-major.
+/// The residual `τ − Y θ` (N m) of samples `range`, sample-major; computed in chunks of
+/// [`RESIDUAL_CHUNK`] samples side by side (each sample's residual alone, so the same numbers on
+/// any thread count).
 pub fn residuals(
     model: &Model,
     theta: &DVector<f64>,
     tr: &Trajectory,
     range: std::ops::Range<usize>,
 ) -> Vec<f64> {
+    use rayon::prelude::*;
     let n = model.dof();
-    let mut out = Vec::with_capacity(range.len() * n);
-    super::normal::for_each_regressor(model, tr, range, &mut |k, y| {
-        let pred = y * theta;
-        out.extend((0..n).map(|j| tr.tau_at(k)[j] - pred[j]));
-    });
-    out
+    let starts: Vec<usize> = range.clone().step_by(RESIDUAL_CHUNK).collect();
+    let chunks: Vec<Vec<f64>> = starts
+        .par_iter()
+        .map(|&start| {
+            let chunk = start..(start + RESIDUAL_CHUNK).min(range.end);
+            let mut out = Vec::with_capacity(chunk.len() * n);
+            super::normal::for_each_regressor(model, tr, chunk, &mut |k, y| {
+                let pred = y * theta;
+                out.extend((0..n).map(|j| tr.tau_at(k)[j] - pred[j]));
+            });
+            out
+        })
+        .collect();
+    chunks.concat()
 }
+
+/// Samples per chunk of [`residuals`].
+pub const RESIDUAL_CHUNK: usize = 1024;
 
 /// Per-joint RMS of `Y θ − τ` over samples `range` (N m), and the overall RMS.
 pub fn rms_error(
