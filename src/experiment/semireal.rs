@@ -197,7 +197,9 @@ pub fn bases(robot: &Model, paths: &[PathBuf], opts: &RealOptions) -> Result<Vec
     let mut out = vec![];
     for (k, path) in paths.iter().enumerate() {
         let other = &paths[(k + 1) % paths.len()];
-        let runs = crate::io::load_trajectory(other, robot)?.trajectories();
+        let loaded = crate::io::load_trajectory(other, robot)?;
+        let cutoff = loaded.report.cutoff;
+        let runs = loaded.trajectories();
         let data = crate::trajectory::Trajectory::concatenate(runs.clone())
             .ok_or(RealError::TooFewRuns(0))?;
         // The nominal fit and its information on the other run (`at`: the fitted parameters).
@@ -214,12 +216,12 @@ pub fn bases(robot: &Model, paths: &[PathBuf], opts: &RealOptions) -> Result<Vec
         let (logged, _, _) =
             crate::io::load_logged(path, robot, &crate::io::DataOptions::default())?;
         let baseline = if opts.baseline {
-            let b = diagnose::baseline::Baseline::calibrate(&description, runs, HOLDOUT, &dopts)
-                .map_err(|source| RealError::Diagnose {
-                    context: format!("the baseline {}", other.display()),
-                    source,
-                })?;
-            Some(b)
+            Some(calibrated_baseline(
+                &description,
+                runs,
+                (other, cutoff),
+                &dopts,
+            )?)
         } else {
             None
         };
@@ -616,6 +618,28 @@ pub fn run_case(
     Ok(RealCase {
         growth,
         ..score_case(i, base, &inj, &given, &d, start.elapsed().as_secs_f64())
+    })
+}
+
+/// The baseline calibrated on `runs` of the recording `other`, its effect columns at that
+/// recording's data pipeline `cutoff` (Hz), as `physid diagnose --baseline-data` processes
+/// them (until 2026-11-27 at the default 20 Hz, while the pipeline derived q̇, q̈ at the
+/// KUKA's 2 Hz).
+fn calibrated_baseline(
+    description: &Model,
+    runs: Vec<crate::trajectory::Trajectory>,
+    (other, cutoff): (&Path, f64),
+    dopts: &diagnose::Options,
+) -> Result<diagnose::baseline::Baseline, RealError> {
+    let opts = diagnose::Options {
+        processing_cutoff: cutoff,
+        ..dopts.clone()
+    };
+    diagnose::baseline::Baseline::calibrate(description, runs, HOLDOUT, &opts).map_err(|source| {
+        RealError::Diagnose {
+            context: format!("the baseline {}", other.display()),
+            source,
+        }
     })
 }
 
