@@ -380,6 +380,28 @@ pub fn settle_samples(sos: &Sos, cascaded: bool) -> usize {
     }
 }
 
+/// The filter's cutoff (Hz) and the motion's band edge it came from (Hz, when it did): the
+/// cutoff asked for; the default when nothing is derived; else from the band edge given (one
+/// over several files) or measured on this log's `split` pieces.
+fn cutoff_of(
+    logged: &Logged,
+    opts: &Options,
+    derive: &Derive,
+    split: &Split,
+    period: f64,
+) -> (f64, Option<f64>) {
+    let rate = 1.0 / period;
+    match (opts.cutoff, opts.band_edge) {
+        (Some(c), _) => (c, None),
+        (None, _) if !(derive.qd || derive.qdd) => (default_cutoff(rate), None),
+        (None, Some(edge)) => (motion_cutoff(edge, rate), Some(edge)),
+        (None, None) => {
+            let edge = motion_band_edge(logged, &split.pieces, period);
+            (motion_cutoff(edge, rate), Some(edge))
+        }
+    }
+}
+
 /// Runs the pipeline (module docs) on `logged`, which [`Logged::validate`] has passed.
 pub fn prepare(logged: &Logged, opts: &Options) -> Result<Prepared, PrepareError> {
     logged.validate()?;
@@ -396,15 +418,7 @@ pub fn prepare(logged: &Logged, opts: &Options) -> Result<Prepared, PrepareError
     };
     let bridge = max_bridged(rate, opts.cutoff.unwrap_or(default_cutoff(rate)));
     let split = split_runs(logged, period, bridge)?;
-    let (cutoff, band_edge) = match (opts.cutoff, opts.band_edge) {
-        (Some(c), _) => (c, None),
-        (None, _) if !(derive.qd || derive.qdd) => (default_cutoff(rate), None),
-        (None, Some(edge)) => (motion_cutoff(edge, rate), Some(edge)),
-        (None, None) => {
-            let edge = motion_band_edge(logged, &split.pieces, period);
-            (motion_cutoff(edge, rate), Some(edge))
-        }
-    };
+    let (cutoff, band_edge) = cutoff_of(logged, opts, &derive, &split, period);
     let sos = butterworth_lowpass(2, cutoff, rate)?;
     let settle = if derive.qd || derive.qdd {
         settle_samples(&sos, derive.qd && derive.qdd)

@@ -342,23 +342,11 @@ pub fn excite(
     } else {
         None
     };
-    let mut written = None;
-    if check.as_ref().is_none_or(|c| c.within) {
-        if let Some(out) = &opts.out {
-            crate::io::write_atomic(out, scenario.as_bytes())?;
-            written = Some(out.clone());
-        }
-        // Sampled once for both files.
-        if opts.csv.is_some() || opts.mcap.is_some() {
-            let reference = reference_trajectory(&base.model, &d.series, opts.duration, opts.rate);
-            if let Some(p) = &opts.csv {
-                crate::io::samples::write_reference_csv(p, &reference)?;
-            }
-            if let Some(p) = &opts.mcap {
-                crate::io::mcap_log::write_reference(p, &reference)?;
-            }
-        }
-    }
+    let written = if check.as_ref().is_none_or(|c| c.within) {
+        write_design(opts, &base.model, &d, &scenario)?
+    } else {
+        None
+    };
     Ok(Excitation {
         model: base.model,
         design: d,
@@ -367,6 +355,31 @@ pub fn excite(
         check,
         written,
     })
+}
+
+/// Writes the designed `scenario` (`--out`) and its reference trajectory (`--csv`, `--mcap`,
+/// sampled once for both); the scenario's path when written.
+fn write_design(
+    opts: &ExciteOptions,
+    model: &Model,
+    d: &design::Design,
+    scenario: &str,
+) -> Result<Option<PathBuf>, ApiError> {
+    let mut written = None;
+    if let Some(out) = &opts.out {
+        crate::io::write_atomic(out, scenario.as_bytes())?;
+        written = Some(out.clone());
+    }
+    if opts.csv.is_some() || opts.mcap.is_some() {
+        let reference = reference_trajectory(model, &d.series, opts.duration, opts.rate);
+        if let Some(p) = &opts.csv {
+            crate::io::samples::write_reference_csv(p, &reference)?;
+        }
+        if let Some(p) = &opts.mcap {
+            crate::io::mcap_log::write_reference(p, &reference)?;
+        }
+    }
+    Ok(written)
 }
 
 /// The designed reference trajectory (t, q, q̇, q̈ per joint, named by joint; zero torque)

@@ -727,6 +727,24 @@ fn check_equations(m: &Model, o: &IdentifyOptions, d: &Opened) -> Result<(), Api
     Ok(())
 }
 
+/// The samples `spans` of `data` (read from `files`) and their torque error `rms`, as the
+/// report states a split.
+fn split_of(files: &[&Path], data: &[Data], spans: &[Span], rms: Rms) -> Split {
+    Split {
+        range: spans.first().map(|s| [s.range.start, s.range.end]),
+        runs: spans
+            .iter()
+            .map(|s| RunRange {
+                file: files[s.file].to_path_buf(),
+                range: [s.range.start, s.range.end],
+                samples_used: data[s.file].used(&s.range),
+            })
+            .collect(),
+        rms: rms.per_joint,
+        rms_overall: rms.overall,
+    }
+}
+
 /// Each file read whole with its pipeline's report (a streamed file has none).
 fn data_reports(files: &[&Path], data: &[Data]) -> Vec<DataJson> {
     files
@@ -759,19 +777,7 @@ fn score(
     };
     let identifiability = analysis::identifiability(m, &fit.normal_equations, &fit.model_theta(m));
     let files = o.files();
-    let split = |spans: &[Span], rms: Rms| Split {
-        range: spans.first().map(|s| [s.range.start, s.range.end]),
-        runs: spans
-            .iter()
-            .map(|s| RunRange {
-                file: files[s.file].to_path_buf(),
-                range: [s.range.start, s.range.end],
-                samples_used: d.data[s.file].used(&s.range),
-            })
-            .collect(),
-        rms: rms.per_joint,
-        rms_overall: rms.overall,
-    };
+    let split = |spans: &[Span], rms: Rms| split_of(&files, &d.data, spans, rms);
     let train = split(&d.train, train_rms);
     let validation = validation_rms.map(|rms| split(&d.validation, rms));
     let mut notices = d.notices.clone();

@@ -184,16 +184,10 @@ mod tests {
         );
     }
 
-    #[test]
-    fn a_malformed_table_is_refused_naming_the_file_and_the_field() {
-        let (model, info) = leg_table();
-        let text = info.sidecar_table();
-        let first_row = text
-            .lines()
-            .find(|l| l.starts_with("  ["))
-            .unwrap()
-            .to_string();
-        let cases: Vec<(String, &str)> = vec![
+    /// Each malformed version of a sidecar's information `text` (its matrix's first row
+    /// `first_row`) with what the error must say.
+    fn malformed_tables(text: &str, first_row: &str) -> Vec<(String, &'static str)> {
+        vec![
             (
                 text.replace("samples = 1234\n", ""),
                 "missing field `samples`",
@@ -242,7 +236,19 @@ mod tests {
                 text.replace("[information]", "[information]\n[information]"),
                 "leg.physid.toml",
             ),
-        ];
+        ]
+    }
+
+    #[test]
+    fn a_malformed_table_is_refused_naming_the_file_and_the_field() {
+        let (model, info) = leg_table();
+        let text = info.sidecar_table();
+        let first_row = text
+            .lines()
+            .find(|l| l.starts_with("  ["))
+            .unwrap()
+            .to_string();
+        let cases = malformed_tables(&text, &first_row);
         for (bad, expected) in cases {
             let err = read(&bad, &model).expect_err(expected);
             assert!(err.contains("leg.physid.toml"), "{err}");

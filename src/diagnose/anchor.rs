@@ -483,7 +483,6 @@ pub fn select(
     tie: f64,
 ) -> (Vec<Step>, TestStop) {
     let mut base = folds.columns(chosen);
-    let cols = |vi: usize| variant_columns(folds, vi);
     let mut candidates = absorbed(anchor, folds, &base, exclude);
     let per_test = ALPHA / candidates.variants.len().max(1) as f64;
     // A kind already chosen is not offered again (at another grid value, it would fit what
@@ -520,7 +519,7 @@ pub fn select(
         let (vi, t, f) = best.swap_remove(simplest[0]);
         used.push(t.kind);
         used.extend(&ambiguous_with);
-        base.extend(cols(vi));
+        base.extend(variant_columns(folds, vi));
         steps.push(Step {
             beta: f.beta,
             se: f.se,
@@ -767,8 +766,9 @@ mod tests {
     /// With data that pin the parameters exactly and a column that is wholly absorbable
     /// (`E = Y s`), the statistic is the generalized-least-squares one of the parameter error
     /// `r = u − θ_d` along `s`: `Δ = (sᵀP r)² / (sᵀP s)`.
-    #[test]
-    fn the_statistic_is_the_prior_weighted_projection_on_the_absorbed_direction() {
+    /// Four model columns `Y` and a candidate column `Y s` lying in their span, the torque
+    /// `Y u`: the normal equations, `s` and `u`.
+    fn absorbed_candidate() -> (NormalEquations, DVector<f64>, DVector<f64>) {
         let p = 4;
         let y = DMatrix::from_fn(40, p, |i, j| ((i * 7 + j * 3) % 11) as f64 - 5.0 + j as f64);
         let s = DVector::from_vec(vec![1.0, -0.5, 0.25, 2.0]);
@@ -785,6 +785,13 @@ mod tests {
             tau.norm_squared(),
             40,
         );
+        (ne, s, u)
+    }
+
+    #[test]
+    fn the_statistic_is_the_prior_weighted_projection_on_the_absorbed_direction() {
+        let p = 4;
+        let (ne, s, u) = absorbed_candidate();
         let mean = DVector::from_vec(vec![1.0, 0.0, -0.5, 1.0]);
         let precision = DMatrix::from_diagonal(&DVector::from_vec(vec![4.0, 1.0, 9.0, 0.5]));
         let anchor = Anchor {

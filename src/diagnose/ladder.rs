@@ -965,8 +965,6 @@ fn rung(stage: &Stage, at: At, added: Added) -> Rung {
         }
     }
     // At the fit's own linearization point: the same columns the held-out score saw.
-    let mut full_theta = data.theta_lin.clone();
-    full_theta.copy_from(&theta);
     let ctx = Context::new(
         stage.model,
         &data.theta_lin,

@@ -318,29 +318,34 @@ fn which_section(d: &Diagnosis) -> Section {
             );
             s.push(Block::Paragraph(t.and(".")));
         }
-        let mut scores = Table::new([
-            "kind",
-            "grid value",
-            "CV RMS",
-            "reduction",
-            "blocks improved",
-        ]);
-        for sc in &st.scores {
-            scores.row([
-                sc.kind.name().to_string(),
-                sc.param.to_string(),
-                format!("{:.4}", sc.cv_rms),
-                format!("{:.1} %", 100.0 * sc.reduction),
-                sc.blocks_improved.to_string(),
-            ]);
-        }
-        s.detail(Block::Table(scores));
+        s.detail(Block::Table(scores_table(&st.scores)));
     }
     s.push(Block::Paragraph(Text::plain(format!(
         "Stopped: {}.",
         d.selection.stop
     ))));
     s
+}
+
+/// Every candidate's score at one step of the selection.
+fn scores_table(scores: &[super::select::Score]) -> Table {
+    let mut t = Table::new([
+        "kind",
+        "grid value",
+        "CV RMS",
+        "reduction",
+        "blocks improved",
+    ]);
+    for sc in scores {
+        t.row([
+            sc.kind.name().to_string(),
+            sc.param.to_string(),
+            format!("{:.4}", sc.cv_rms),
+            format!("{:.1} %", 100.0 * sc.reduction),
+            sc.blocks_improved.to_string(),
+        ]);
+    }
+    t
 }
 
 /// The test against the description, when it ran (each candidate's statistic in the files),

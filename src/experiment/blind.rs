@@ -99,6 +99,17 @@ pub struct Injected {
     pub change: Option<Change>,
 }
 
+impl Injected {
+    /// Its name in the case table: the change's, the kind's, or the out-of-library effect's.
+    pub fn name(&self) -> String {
+        match (&self.change, self.kind) {
+            (Some(c), _) => c.name().into(),
+            (None, Some(k)) => k.name().into(),
+            (None, None) => "quadratic_damping (not in library)".into(),
+        }
+    }
+}
+
 /// One scored case.
 #[derive(Clone, Debug, Serialize)]
 pub struct CaseResult {
@@ -467,14 +478,7 @@ pub fn run_case(
     Ok(CaseResult {
         case: i,
         category,
-        injected: injected
-            .iter()
-            .map(|x| match (&x.change, x.kind) {
-                (Some(c), _) => c.name().into(),
-                (None, Some(k)) => k.name().into(),
-                (None, None) => "quadratic_damping (not in library)".into(),
-            })
-            .collect(),
+        injected: injected.iter().map(Injected::name).collect(),
         changed_found: marks.changed_found,
         found,
         verdict: d.verdict,

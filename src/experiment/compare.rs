@@ -254,21 +254,17 @@ fn samples(dir: &Path, metric: &str) -> Result<Vec<Sample>, CompareError> {
         .iter()
         .map(|s| s.to_string())
         .collect();
-    let column = |c: &str| -> Result<Column, CompareError> {
-        df.column(c)
-            .cloned()
-            .map_err(|_| CompareError::MissingColumn {
-                path: path.clone(),
-                column: c.into(),
-                columns: names.join(", "),
-            })
-    };
     let invalid = |c: &str, e: PolarsError| IoError::Invalid {
         path: path.clone(),
         message: format!("column '{c}': {e}"),
     };
     let cast = |c: &str, t: &DataType| -> Result<Column, CompareError> {
-        Ok(column(c)?.cast(t).map_err(|e| invalid(c, e))?)
+        let column = df.column(c).map_err(|_| CompareError::MissingColumn {
+            path: path.clone(),
+            column: c.into(),
+            columns: names.join(", "),
+        })?;
+        Ok(column.cast(t).map_err(|e| invalid(c, e))?)
     };
     let seed = cast("seed", &DataType::Int64)?;
     let n_s = cast("n_s", &DataType::UInt64)?;

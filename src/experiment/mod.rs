@@ -396,17 +396,14 @@ pub fn run_seed_validated_on(
         } else {
             window_equations(&ys, data, start..start + n_s, (n, p))
         };
+        // Validation: the samples after the window, or the separate validation run.
+        let after = start + n_s..(start + n_s + spec.validation).min(total);
+        let (vys, vtr, vrange) = match &ys_val {
+            Some(yv) => (yv.as_slice(), val_data, 0..yv.len()),
+            None => (ys.as_slice(), data, after),
+        };
         for &set in &spec.constraints {
             let r = identify_with(model, &snapshot, &prior, (spec, set), (seed, n_s))?;
-            // Validation: the samples after the window, or the separate validation run.
-            let (vys, vtr, vrange) = match &ys_val {
-                Some(yv) => (yv.as_slice(), val_data, 0..yv.len()),
-                None => (
-                    ys.as_slice(),
-                    data,
-                    start + n_s..(start + n_s + spec.validation).min(total),
-                ),
-            };
             let (val_rms, val_rms_overall) = torque_rms(vys, vtr, &r.theta, vrange.clone());
             let (_, train_rms_overall) = torque_rms(&ys, data, &r.theta, start..start + n_s);
             rows.push(Row {
@@ -416,7 +413,7 @@ pub fn run_seed_validated_on(
                 val_rms,
                 val_rms_overall,
                 train_rms_overall,
-                val_truth_rms: model_rms(vys, &(&r.theta - &truth), vrange),
+                val_truth_rms: model_rms(vys, &(&r.theta - &truth), vrange.clone()),
                 ..errors_of(model, &r)
             });
         }

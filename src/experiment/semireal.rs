@@ -185,6 +185,28 @@ pub enum RealError {
 
 crate::options::option_error!(RealError);
 
+/// The nominal fit of `robot` on the `runs` of the recording `other` with its information
+/// (`at`: the fitted parameters), and the description it makes.
+fn described(
+    robot: &Model,
+    runs: &[crate::trajectory::Trajectory],
+    other: &Path,
+    dopts: &diagnose::Options,
+) -> Result<(crate::ident::information::Information, Model), RealError> {
+    let data = crate::trajectory::Trajectory::concatenate(runs.to_vec())
+        .ok_or(RealError::TooFewRuns(0))?;
+    let information = diagnose::anchor::information(robot, &data, dopts).map_err(|source| {
+        RealError::Diagnose {
+            context: format!("the description from {}", other.display()),
+            source,
+        }
+    })?;
+    let description = robot
+        .with_parameters(&information.at)
+        .map_err(|e| RealError::Io(crate::io::IoError::invalid(other, e.to_string())))?;
+    Ok((information, description))
+}
+
 /// The bases of `paths` on `robot`: each run's description identified on the next run
 /// (cyclically) by the diagnosis's nominal fit.
 pub fn bases(robot: &Model, paths: &[PathBuf], opts: &RealOptions) -> Result<Vec<Base>, RealError> {
@@ -200,19 +222,7 @@ pub fn bases(robot: &Model, paths: &[PathBuf], opts: &RealOptions) -> Result<Vec
         let loaded = crate::io::load_trajectory(other, robot)?;
         let cutoff = loaded.report.cutoff;
         let runs = loaded.trajectories();
-        let data = crate::trajectory::Trajectory::concatenate(runs.clone())
-            .ok_or(RealError::TooFewRuns(0))?;
-        // The nominal fit and its information on the other run (`at`: the fitted parameters).
-        let information =
-            diagnose::anchor::information(robot, &data, &dopts).map_err(|source| {
-                RealError::Diagnose {
-                    context: format!("the description from {}", other.display()),
-                    source,
-                }
-            })?;
-        let description = robot
-            .with_parameters(&information.at)
-            .map_err(|e| RealError::Io(crate::io::IoError::invalid(other, e.to_string())))?;
+        let (information, description) = described(robot, &runs, other, &dopts)?;
         let (logged, _, _) =
             crate::io::load_logged(path, robot, &crate::io::DataOptions::default())?;
         let baseline = if opts.baseline {
@@ -689,6 +699,29 @@ fn first_step_names(
     }
 }
 
+/// The mass body `b` carries in the diagnosis: its change where a step chose it (`bodies`),
+/// else the mass it would carry in the `first` step's place where the step's ambiguity group
+/// holds it.
+fn carried_mass(
+    b: &str,
+    bodies: &[diagnose::ladder::BodyChange],
+    first: Option<&diagnose::ladder::Rung>,
+) -> Option<f64> {
+    let tied_mass = || {
+        let r = first?;
+        let i = r
+            .ambiguous_with
+            .iter()
+            .position(|s| s.ends_with(&format!(" on {b}")))?;
+        r.ambiguous_mass.get(i).copied().flatten()
+    };
+    bodies
+        .iter()
+        .find(|c| c.body == b)
+        .map(|c| c.mass)
+        .or_else(tied_mass)
+}
+
 /// A case's marks.
 fn score_case(
     i: usize,
@@ -714,23 +747,9 @@ fn score_case(
     let body_name = inj.body.map(|b| model.bodies()[b].name.clone());
     let first = steps.first();
     let top1 = first_step_names(inj, body_name.as_deref(), first.copied());
-    // The mass the injected body carries: its change where a step chose it, else the mass it
-    // would carry in the first step's place where the step's ambiguity group holds it.
-    let tied_mass = |b: &str| {
-        let r = first?;
-        let i = r
-            .ambiguous_with
-            .iter()
-            .position(|s| s.ends_with(&format!(" on {b}")))?;
-        r.ambiguous_mass.get(i).copied().flatten()
-    };
-    let payload_mass = body_name.as_deref().and_then(|b| {
-        bodies
-            .iter()
-            .find(|c| c.body == b)
-            .map(|c| c.mass)
-            .or_else(|| tied_mass(b))
-    });
+    let payload_mass = body_name
+        .as_deref()
+        .and_then(|b| carried_mass(b, bodies, first.copied()));
     let magnitude_error = match inj.slot {
         Slot::Payload => payload_mass.map(|m| (m - inj.magnitudes[0]).abs() / inj.magnitudes[0]),
         Slot::Effect(k) => magnitude_error(d, k, &inj.magnitudes),

@@ -944,7 +944,10 @@ mod tests {
             inside > 100 && outside > 100,
             "{inside} inside, {outside} outside"
         );
-        // A flat ellipsoid keeps the 4×4 LMI.
+    }
+
+    #[test]
+    fn a_flat_ellipsoid_keeps_the_com_lmi() {
         let flat = Ellipsoid::axis_aligned(Vector3::zeros(), Vector3::new(0.1, 0.1, 0.0));
         let mut rows = ConeRows::default();
         com_rows(&mut rows, &flat, 0, &[1.0; 10]);

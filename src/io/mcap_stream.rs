@@ -155,10 +155,9 @@ fn walk(
     let mut file = std::fs::File::open(path).map_err(fs_error)?;
     let size = file.metadata().map_err(fs_error)?.len();
     let bad = |m: String| IoError::invalid(path, m);
-    let limit = record_length_limit(size);
-    let mut reader = LinearReader::new_with_options(
-        LinearReaderOptions::default().with_record_length_limit(limit),
-    );
+    let options =
+        LinearReaderOptions::default().with_record_length_limit(record_length_limit(size));
+    let mut reader = LinearReader::new_with_options(options);
     let mut schemas: HashMap<u16, bool> = HashMap::new();
     let mut processed: HashMap<u16, bool> = HashMap::new();
     let mut i = 0usize;

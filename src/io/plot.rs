@@ -85,6 +85,15 @@ fn bar_extent(labels: &[String], series: &[(String, Vec<f64>)]) -> (f64, u32) {
     (ymax, (12 + 7 * longest).clamp(40, 220) as u32)
 }
 
+/// The legend of grouped bars: each series' name in its colour.
+fn bar_entries(series: &[(String, Vec<f64>)]) -> Vec<(String, RGBColor, Mark)> {
+    series
+        .iter()
+        .enumerate()
+        .map(|(s, (name, _))| (name.clone(), colour(s), Mark::Bar))
+        .collect()
+}
+
 /// Grouped bars: one group per label (written below the axis), one bar per series, from zero;
 /// the legend in a column beside the chart.
 pub fn grouped_bars(
@@ -139,12 +148,7 @@ pub fn grouped_bars(
                 .draw(&Text::new(l.clone(), (px - 6, py + 8), style.clone()))
                 .map_err(|e| err(&e))?;
         }
-        let entries: Vec<(String, RGBColor, Mark)> = series
-            .iter()
-            .enumerate()
-            .map(|(s, (name, _))| (name.clone(), colour(s), Mark::Bar))
-            .collect();
-        legend_outside(&legend_area, &entries)?;
+        legend_outside(&legend_area, &bar_entries(series))?;
         root.present().map_err(|e| err(&e))?;
     }
     Ok(svg)

@@ -302,27 +302,35 @@ impl RobotExtras {
             };
         }
         for e in &self.ellipsoid {
-            let name = e.body.as_deref().ok_or_else(|| {
-                IoError::invalid(path, "robot.ellipsoid: each entry needs `body`")
-            })?;
-            let ell = e
-                .ellipsoid(&format!("ellipsoid of '{name}'"))
-                .map_err(|m| IoError::invalid(path, m))?;
-            if let Some(b) = bodies.iter_mut().find(|b| b.name == name) {
-                b.bounding = Some(ell);
-            } else if let Some(r) = bodies
-                .iter_mut()
-                .filter_map(|b| b.rotor.as_mut())
-                .find(|r| r.name == name)
-            {
-                r.bounding = Some(ell);
-            } else {
-                return Err(IoError::invalid(
-                    path,
-                    format!("robot.ellipsoid names '{name}', which is neither a body nor a rotor"),
-                ));
-            }
+            place_ellipsoid(e, bodies, path)?;
         }
         Ok(())
     }
+}
+
+/// Puts sidecar ellipsoid `e` on the body or rotor it names; an error naming `path` when it
+/// names neither or its values are not an ellipsoid.
+fn place_ellipsoid(e: &EllipsoidSpec, bodies: &mut [Body], path: &Path) -> Result<(), IoError> {
+    let name = e
+        .body
+        .as_deref()
+        .ok_or_else(|| IoError::invalid(path, "robot.ellipsoid: each entry needs `body`"))?;
+    let ell = e
+        .ellipsoid(&format!("ellipsoid of '{name}'"))
+        .map_err(|m| IoError::invalid(path, m))?;
+    if let Some(b) = bodies.iter_mut().find(|b| b.name == name) {
+        b.bounding = Some(ell);
+    } else if let Some(r) = bodies
+        .iter_mut()
+        .filter_map(|b| b.rotor.as_mut())
+        .find(|r| r.name == name)
+    {
+        r.bounding = Some(ell);
+    } else {
+        return Err(IoError::invalid(
+            path,
+            format!("robot.ellipsoid names '{name}', which is neither a body nor a rotor"),
+        ));
+    }
+    Ok(())
 }

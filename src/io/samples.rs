@@ -244,12 +244,16 @@ pub fn read_csv(path: &Path, robot: Option<&[String]>) -> Result<Trajectory, IoE
     Ok(tr)
 }
 
-/// A CSV reader of `file` whose header names are trimmed of spaces; a record's fields are
-/// read as bytes and only the columns used are decoded ([`number`]).
-fn reader(file: std::fs::File) -> csv::Reader<std::io::BufReader<std::fs::File>> {
-    csv::ReaderBuilder::new()
+/// A CSV reader of the file at `path` whose header names are trimmed of spaces; a record's
+/// fields are read as bytes and only the columns used are decoded ([`number`]).
+fn reader(path: &Path) -> Result<csv::Reader<std::io::BufReader<std::fs::File>>, IoError> {
+    let file = std::fs::File::open(path).map_err(|source| IoError::Fs {
+        path: path.to_path_buf(),
+        source,
+    })?;
+    Ok(csv::ReaderBuilder::new()
         .trim(csv::Trim::Headers)
-        .from_reader(std::io::BufReader::with_capacity(1 << 16, file))
+        .from_reader(std::io::BufReader::with_capacity(1 << 16, file)))
 }
 
 /// Field `col` of `rec` as a number, its text trimmed of spaces; the text when it is not one
@@ -271,12 +275,8 @@ pub fn read_csv_logged(
     path: &Path,
     robot: Option<&[String]>,
 ) -> Result<(Logged, Vec<String>), IoError> {
-    let file = std::fs::File::open(path).map_err(|source| IoError::Fs {
-        path: path.to_path_buf(),
-        source,
-    })?;
     let bad = |m: String| IoError::invalid(path, m);
-    let mut r = reader(file);
+    let mut r = reader(path)?;
     let c = Columns::parse(&mut r, path, robot)?;
     let mut out = Logged {
         joint_names: c.names.clone(),
@@ -352,12 +352,8 @@ pub fn stream_csv(
     range: std::ops::Range<usize>,
     f: &mut SampleSink,
 ) -> Result<usize, IoError> {
-    let file = std::fs::File::open(path).map_err(|source| IoError::Fs {
-        path: path.to_path_buf(),
-        source,
-    })?;
     let bad = |m: String| IoError::invalid(path, m);
-    let mut r = reader(file);
+    let mut r = reader(path)?;
     let c = Columns::parse(&mut r, path, Some(robot))?;
     let n = robot.len();
     let header = &c.header;
@@ -409,11 +405,7 @@ pub fn stream_csv(
 
 /// Whether a CSV's header has `dq` and `ddq` columns (so it can be streamed: nothing to derive).
 pub fn csv_streamable(path: &Path) -> Result<bool, IoError> {
-    let file = std::fs::File::open(path).map_err(|source| IoError::Fs {
-        path: path.to_path_buf(),
-        source,
-    })?;
-    let mut r = reader(file);
+    let mut r = reader(path)?;
     let c = Columns::parse(&mut r, path, None)?;
     Ok(c.dq.is_some() && c.ddq.is_some())
 }

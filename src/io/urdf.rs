@@ -175,7 +175,7 @@ pub fn from_str(
             message: format!("not a URDF: the document's root element is <{root}>, not <robot>"),
         });
     }
-    let warnings = duplicate_elements(xml);
+    let mut warnings = duplicate_elements(xml);
     // The attributes urdf-rs does not read, from one parse of the text.
     let doc = roxmltree::Document::parse(xml).ok();
     let rates = doc
@@ -201,7 +201,6 @@ pub fn from_str(
         base,
         mimics,
     } = walk(&robot, &link_idx, &children, root, &lookup)?;
-    let mut warnings = warnings;
     warnings.extend(doc.as_ref().map_or(vec![], empty_ranges));
     for b in &mut bodies {
         if let Some(&(acceleration, jerk)) = rates.get(&b.joint_name) {
@@ -501,15 +500,7 @@ fn walk<'r>(
     // for the base, link_X_body).
     let mut attach: HashMap<&str, (Option<usize>, Transform)> = HashMap::new();
     attach.insert(root, (None, Transform::identity()));
-    let mut w = Walk {
-        bodies: vec![],
-        body_parent_link_x: vec![],
-        shapes: vec![],
-        base: Shapes::default(),
-        mimics: vec![],
-    };
-    w.base
-        .add_shapes(&robot.links[link_idx[root]], &Transform::identity(), lookup);
+    let mut w = Walk::rooted(&robot.links[link_idx[root]], lookup);
     let mut done = vec![false; robot.joints.len()];
     let mut progress = true;
     while progress {
@@ -554,6 +545,19 @@ fn walk<'r>(
 }
 
 impl Walk<'_> {
+    /// No body yet; the static base's geometry that of the `root` link.
+    fn rooted(root: &urdf_rs::Link, lookup: &Lookup) -> Self {
+        let mut base = Shapes::default();
+        base.add_shapes(root, &Transform::identity(), lookup);
+        Walk {
+            bodies: vec![],
+            body_parent_link_x: vec![],
+            shapes: vec![],
+            base,
+            mimics: vec![],
+        }
+    }
+
     /// Merges a link fixed to body `pb` (or to the base, `None`) at `x_origin` (its frame from
     /// the body's): its inertial parameters `params` (about its own frame) and its shapes.
     fn merge_fixed(

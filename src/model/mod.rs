@@ -533,52 +533,8 @@ impl Model {
     /// `bounds` is true (a description whose nominal inertia escapes the ellipsoid of its own
     /// geometry is still a valid model; the loader warns instead).
     pub fn check_physical_with(&self, bounds: bool) -> Result<(), ModelError> {
-        let check = |element: String,
-                     p: &InertialParams,
-                     e: Option<&Ellipsoid>|
-         -> Result<(), ModelError> {
-            if p.mass() < 0.0 {
-                return Err(ModelError::Inconsistent {
-                    element,
-                    reason: format!("negative mass {} kg", p.mass()),
-                });
-            }
-            if p.mass() == 0.0 {
-                if p.0.iter().any(|&x| x != 0.0) {
-                    return Err(ModelError::Inconsistent {
-                        element,
-                        reason: "zero mass with non-zero first or second moments".into(),
-                    });
-                }
-                return Ok(());
-            }
-            let r = p.consistency(e.filter(|_| bounds));
-            let tol = 1e-12 * p.pseudo_inertia().norm();
-            if r.min_eig_pseudo < -tol {
-                let why = if r.min_eig_spatial < 0.0 {
-                    "the 6x6 spatial inertia I(pi) is not positive semidefinite"
-                } else {
-                    "the pseudo-inertia J(pi) is not positive semidefinite (principal moments violate the triangle inequality)"
-                };
-                return Err(ModelError::Inconsistent {
-                    element,
-                    reason: format!(
-                        "{why}; min eig J = {:.3e}, min eig I = {:.3e}",
-                        r.min_eig_pseudo, r.min_eig_spatial
-                    ),
-                });
-            }
-            if let Some(t) = r.trace_jq_per_mass {
-                if t < 0.0 {
-                    return Err(ModelError::Inconsistent {
-                        element,
-                        reason: format!(
-                            "mass lies outside its bounding ellipsoid: tr(JQ)/m = {t:.4}"
-                        ),
-                    });
-                }
-            }
-            Ok(())
+        let check = |element: String, p: &InertialParams, e: Option<&Ellipsoid>| {
+            check_physical_element(element, p, e.filter(|_| bounds))
         };
         for b in &self.bodies {
             check(
@@ -796,4 +752,53 @@ fn support_of(bodies: &[Body]) -> Vec<Vec<usize>> {
             s
         })
         .collect()
+}
+/// Checks one element's inertial parameters `p` (named `element` in the error): a mass not
+/// negative, zero mass only with zero moments, `J(π) ⪰ 0` (to a tolerance of 10⁻¹² ‖J‖), and
+/// the mass inside the bounding ellipsoid `e` when given (`tr(JQ) ≥ 0`).
+fn check_physical_element(
+    element: String,
+    p: &InertialParams,
+    e: Option<&Ellipsoid>,
+) -> Result<(), ModelError> {
+    if p.mass() < 0.0 {
+        return Err(ModelError::Inconsistent {
+            element,
+            reason: format!("negative mass {} kg", p.mass()),
+        });
+    }
+    if p.mass() == 0.0 {
+        if p.0.iter().any(|&x| x != 0.0) {
+            return Err(ModelError::Inconsistent {
+                element,
+                reason: "zero mass with non-zero first or second moments".into(),
+            });
+        }
+        return Ok(());
+    }
+    let r = p.consistency(e);
+    let tol = 1e-12 * p.pseudo_inertia().norm();
+    if r.min_eig_pseudo < -tol {
+        let why = if r.min_eig_spatial < 0.0 {
+            "the 6x6 spatial inertia I(pi) is not positive semidefinite"
+        } else {
+            "the pseudo-inertia J(pi) is not positive semidefinite (principal moments violate the triangle inequality)"
+        };
+        return Err(ModelError::Inconsistent {
+            element,
+            reason: format!(
+                "{why}; min eig J = {:.3e}, min eig I = {:.3e}",
+                r.min_eig_pseudo, r.min_eig_spatial
+            ),
+        });
+    }
+    if let Some(t) = r.trace_jq_per_mass {
+        if t < 0.0 {
+            return Err(ModelError::Inconsistent {
+                element,
+                reason: format!("mass lies outside its bounding ellipsoid: tr(JQ)/m = {t:.4}"),
+            });
+        }
+    }
+    Ok(())
 }

@@ -46,6 +46,26 @@ pub fn random_body(rng: &mut ChaCha8Rng, center: &Vector3<f64>, reach: f64) -> I
     InertialParams::from_parts(m, &h, &ibar)
 }
 
+/// A random rotor for body `i`: a gear ratio of either sign and magnitude 2–15, mostly
+/// spinning, sometimes sliding (a mimic finger).
+fn random_rotor(rng: &mut ChaCha8Rng, i: usize) -> Rotor {
+    let n_abs = rng.random_range(2.0..15.0);
+    let axis = unit(rng);
+    let joint = if rng.random_bool(0.8) {
+        Joint::Revolute { axis }
+    } else {
+        Joint::Prismatic { axis }
+    };
+    Rotor {
+        name: format!("rotor{i}"),
+        x_rot: pose(rng, 0.1),
+        joint,
+        gear_ratio: if rng.random_bool(0.5) { n_abs } else { -n_abs },
+        inertia: random_body(rng, &Vector3::zeros(), 0.05),
+        bounding: None,
+    }
+}
+
 /// A random tree of `n` bodies: random parents, revolute (mostly) and prismatic joints with
 /// random axes, random joint placements, rotors on about half of the joints with gear ratios of
 /// either sign, and random friction.
@@ -64,24 +84,7 @@ pub fn random_tree(seed: u64, n: usize) -> Model {
             } else {
                 Joint::Prismatic { axis }
             };
-            let rotor = rng.random_bool(0.6).then(|| {
-                let n_abs = rng.random_range(2.0..15.0);
-                let axis = unit(&mut rng);
-                // Mostly spinning motors; sometimes a sliding rotor (a mimic finger).
-                let joint = if rng.random_bool(0.8) {
-                    Joint::Revolute { axis }
-                } else {
-                    Joint::Prismatic { axis }
-                };
-                Rotor {
-                    name: format!("rotor{i}"),
-                    x_rot: pose(&mut rng, 0.1),
-                    joint,
-                    gear_ratio: if rng.random_bool(0.5) { n_abs } else { -n_abs },
-                    inertia: random_body(&mut rng, &Vector3::zeros(), 0.05),
-                    bounding: None,
-                }
-            });
+            let rotor = rng.random_bool(0.6).then(|| random_rotor(&mut rng, i));
             let com = Vector3::new(
                 rng.random_range(-0.2..0.2),
                 rng.random_range(-0.2..0.2),

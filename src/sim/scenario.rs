@@ -426,16 +426,7 @@ impl ExcitationSpec {
                 ramp,
                 ..
             } => {
-                if let Some(r) = ramp {
-                    let d = duration;
-                    check(
-                        r.is_finite() && *r > 0.0 && 2.0 * r <= d,
-                        "excitation.ramp",
-                        || {
-                            format!("{r} must be positive and at most half the simulation's duration ({d} s)")
-                        },
-                    )?;
-                }
+                check_ramp(*ramp, duration)?;
                 check((1..=50).contains(harmonics), "excitation.harmonics", || {
                     format!("{harmonics} must be 1 to 50")
                 })?;
@@ -452,6 +443,23 @@ impl ExcitationSpec {
         }
         Ok(())
     }
+}
+
+/// Checks a Fourier excitation's ramp (s), if any: positive and at most half the simulation's
+/// `duration` (s).
+fn check_ramp(ramp: Option<f64>, duration: f64) -> Result<(), ScenarioError> {
+    let Some(r) = ramp else {
+        return Ok(());
+    };
+    check(
+        r.is_finite() && r > 0.0 && 2.0 * r <= duration,
+        "excitation.ramp",
+        || {
+            format!(
+                "{r} must be positive and at most half the simulation's duration ({duration} s)"
+            )
+        },
+    )
 }
 
 /// Checks explicit Fourier coefficients: one row per joint (`n`) of `harmonics` finite numbers,
