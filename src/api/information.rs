@@ -197,11 +197,11 @@ mod tests {
                 "unknown field `weight`",
             ),
             (
-                text.replacen(&first_row, "", 1),
+                text.replacen(first_row, "", 1),
                 "matrix has 65 rows for 66 parameters",
             ),
             (
-                text.replacen(&first_row, &first_row.replacen("1e3, ", "", 1), 1),
+                text.replacen(first_row, &first_row.replacen("1e3, ", "", 1), 1),
                 "matrix row 0 has 65 entries, expected 66",
             ),
             (
@@ -209,15 +209,15 @@ mod tests {
                 "at has 67 values for 66 parameters",
             ),
             (
-                text.replacen(&first_row, &first_row.replacen("1e3", "nan", 1), 1),
+                text.replacen(first_row, &first_row.replacen("1e3", "nan", 1), 1),
                 "matrix[0][0] is not finite",
             ),
             (
-                text.replacen(&first_row, &first_row.replacen("1e3", "-1e3", 1), 1),
+                text.replacen(first_row, &first_row.replacen("1e3", "-1e3", 1), 1),
                 "matrix[0][0] = -1000 is negative",
             ),
             (
-                text.replacen(&first_row, &first_row.replacen("5e-4", "6e-4", 1), 1),
+                text.replacen(first_row, &first_row.replacen("5e-4", "6e-4", 1), 1),
                 "matrix is not symmetric: [1][0]",
             ),
             (
