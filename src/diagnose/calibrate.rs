@@ -333,7 +333,7 @@ pub fn parse_term(s: &str) -> Result<Variant, String> {
         .ok_or_else(|| {
             format!(
                 "unknown term '{s}' (one of {}, or offset, direction)",
-                library::names(&Kind::ALL, false)
+                library::names(&Kind::ALL)
             )
         })?;
     match (kind.gridded(), value) {

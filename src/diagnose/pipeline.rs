@@ -225,7 +225,7 @@ fn run_description_test(
     .then(|| {
         format!(
             "not run: cross-validation selected {}, whose columns only approximate it (linearized about the nominal model, or a rotor without its gyroscopic terms); what they miss would bias the parameters the test compares",
-            library::names(&linearized, false)
+            library::names(&linearized)
         )
     });
     Ok((description_test, description_test_skipped))

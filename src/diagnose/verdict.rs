@@ -51,7 +51,7 @@ fn name_of(e: &EffectEstimate) -> String {
         e.kind.name().to_string()
     } else {
         let group: Vec<Kind> = e.group().collect();
-        format!("one of {{{}}} (ambiguous)", library::names(&group, false))
+        format!("one of {{{}}} (ambiguous)", library::names(&group))
     }
 }
 

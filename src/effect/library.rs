@@ -109,17 +109,7 @@ impl Context<'_> {
     }
 }
 
-/// The names of `kinds` joined by ", " (in Markdown code spans with `code`).
-pub fn names(kinds: &[Kind], code: bool) -> String {
-    kinds
-        .iter()
-        .map(|k| {
-            if code {
-                format!("`{}`", k.name())
-            } else {
-                k.name().to_string()
-            }
-        })
-        .collect::<Vec<_>>()
-        .join(", ")
+/// The names of `kinds` joined by ", ".
+pub fn names(kinds: &[Kind]) -> String {
+    kinds.iter().map(Kind::name).collect::<Vec<_>>().join(", ")
 }

@@ -29,28 +29,30 @@ impl Text {
         Text(vec![Span::Plain(s.into())])
     }
 
-    /// This text, then `s` as it is.
-    pub fn and(mut self, s: impl Into<String>) -> Self {
-        self.0.push(Span::Plain(s.into()));
+    /// This text, then `span`.
+    fn then(mut self, span: Span) -> Self {
+        self.0.push(span);
         self
+    }
+
+    /// This text, then `s` as it is.
+    pub fn and(self, s: impl Into<String>) -> Self {
+        self.then(Span::Plain(s.into()))
     }
 
     /// This text, then `s` in code type.
-    pub fn code(mut self, s: impl Into<String>) -> Self {
-        self.0.push(Span::Code(s.into()));
-        self
+    pub fn code(self, s: impl Into<String>) -> Self {
+        self.then(Span::Code(s.into()))
     }
 
     /// This text, then `s` in italics.
-    pub fn emphasis(mut self, s: impl Into<String>) -> Self {
-        self.0.push(Span::Emphasis(s.into()));
-        self
+    pub fn emphasis(self, s: impl Into<String>) -> Self {
+        self.then(Span::Emphasis(s.into()))
     }
 
     /// This text, then `s` strongly emphasised.
-    pub fn strong(mut self, s: impl Into<String>) -> Self {
-        self.0.push(Span::Strong(s.into()));
-        self
+    pub fn strong(self, s: impl Into<String>) -> Self {
+        self.then(Span::Strong(s.into()))
     }
 
     /// The text without marks.
