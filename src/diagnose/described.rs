@@ -13,11 +13,13 @@ use crate::effect::library::Variant;
 /// to `effects` when cross-validation and the description test did not name it (a payload on
 /// any body, an absorbed tilt or gain beside a linearized effect); its later steps stay in the
 /// ladder (on perturbed simulated descriptions they are mostly the description's own errors).
+/// Returns the ladder and every explanation it chose as an effect estimate, anchored at the
+/// description ([`estimates`]).
 pub(crate) fn from_description(
     stage: &Stage,
     selection: &Selection,
     effects: &mut Vec<EffectEstimate>,
-) -> Option<Ladder> {
+) -> Option<(Ladder, Vec<EffectEstimate>)> {
     let selected: Vec<Variant> = selection
         .chosen
         .iter()
@@ -25,12 +27,13 @@ pub(crate) fn from_description(
         .collect();
     let eps = stage.opts.description_uncertainty?;
     let l = ladder::ladder(stage, eps, &selected, &stage.opts.ladder);
-    if let Some(e) = estimates(&l, stage).into_iter().next() {
+    let described = estimates(&l, stage);
+    if let Some(e) = described.first() {
         if !effects.iter().any(|x| x.group().any(|k| k == e.kind)) {
-            effects.push(e);
+            effects.push(e.clone());
         }
     }
-    Some(l)
+    Some((l, described))
 }
 
 /// The explanations as the diagnosis's effect estimates (described by the description

@@ -162,6 +162,12 @@ pub struct Diagnosis {
     /// (effects, a payload or change on any body, friction) competing from the description as
     /// given, scored on the held-out data.
     pub ladder: Option<super::ladder::Ladder>,
+    /// Each effect the ladder chose (a payload or body change included), its magnitudes
+    /// estimated from the description (its inertial parameters within their uncertainty): what
+    /// the effect is relative to the user's model. `effects` holds the cross-validated
+    /// estimates, relative to the re-identified model, which may have absorbed part of it.
+    /// Empty without a stated uncertainty.
+    pub described_effects: Vec<EffectEstimate>,
     /// The selected effects and their magnitudes.
     pub effects: Vec<EffectEstimate>,
     /// How far: per joint.

@@ -313,12 +313,16 @@ impl Problem<'_> {
         let n = self.stage.model.dof();
         let mut cols: Vec<usize> = (0..p0).collect();
         let mut signed = vec![];
+        let mut effect_terms = vec![];
         for e in set {
             if let Explanation::Effect(v) = e {
                 let at = data.offsets[data.index(v)];
                 let width = v.kind.columns(n);
                 if anchor::signed(v.kind) {
                     signed.extend(cols.len()..cols.len() + width);
+                }
+                if !v.kind.is_body_change() {
+                    effect_terms.extend(cols.len()..cols.len() + width);
                 }
                 cols.extend(at..at + width);
             }
@@ -332,7 +336,10 @@ impl Problem<'_> {
         let ne = &data.train;
         let h = DMatrix::from_fn(m, m, |i, j| self.weight * ne.yty[(cols[i], cols[j])]);
         let g = DVector::from_fn(m, |i, _| self.weight * ne.ytt[cols[i]]);
-        let free: Vec<usize> = (0..m).filter(|i| !fixed.contains(&cols[*i])).collect();
+        let aliased = aliased(&h, effect_terms);
+        let free: Vec<usize> = (0..m)
+            .filter(|i| !fixed.contains(&cols[*i]) && !aliased.contains(i))
+            .collect();
         System {
             cols,
             h,
@@ -347,6 +354,36 @@ impl Problem<'_> {
             free,
         }
     }
+}
+
+/// A column whose residual curvature, after the columns tested before it (their Gram matrix
+/// `h`), is below this fraction of its own lies in their span.
+const ALIASED: f64 = 1e-9;
+
+/// Of the effect columns at `positions` (in the order chosen), those the earlier ones already
+/// span: an effect whose term another chosen effect holds (a spring's constant after an
+/// offset). They are held at zero, so the explanation chosen first carries the value: the
+/// split between aliased columns is not determined by any data, and would be reported with an
+/// unbounded error. A body change's ten columns are not among them: their structural null
+/// space stays with the ridge's smallest change, whose physical consistency the ladder tests.
+fn aliased(h: &DMatrix<f64>, positions: impl IntoIterator<Item = usize>) -> Vec<usize> {
+    let mut kept: Vec<usize> = vec![];
+    let mut out = vec![];
+    for c in positions {
+        let own = h[(c, c)];
+        let hk = DMatrix::from_fn(kept.len(), kept.len(), |i, j| h[(kept[i], kept[j])]);
+        let b = DVector::from_fn(kept.len(), |i, _| h[(kept[i], c)]);
+        let explained = match hk.cholesky() {
+            Some(ch) => b.dot(&ch.solve(&b)),
+            None => 0.0,
+        };
+        if own > 0.0 && own - explained <= ALIASED * own {
+            out.push(c);
+        } else if own > 0.0 {
+            kept.push(c);
+        }
+    }
+    out
 }
 
 /// One fit's normal equations: the data's `w ZᵀZ`, `w Zᵀτ` over `cols`, the prior added with
@@ -1073,4 +1110,42 @@ fn body_changes(stage: &Stage, fit: &Fit, set: &[Explanation]) -> Vec<BodyChange
         c += d;
     }
     out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The Gram matrix `ZᵀZ` of the columns of `z`.
+    fn gram(z: &DMatrix<f64>) -> DMatrix<f64> {
+        z.transpose() * z
+    }
+
+    #[test]
+    fn columns_the_earlier_ones_span_are_aliased_in_order() {
+        let k = 50;
+        let q = |i: usize| (0.3 * i as f64).sin();
+        // A model column, an offset (constant), a spring (angle, constant), a duplicate of the
+        // angle plus twice the constant, and a column of its own.
+        let z = DMatrix::from_fn(k, 6, |i, c| match c {
+            0 => q(i).powi(2),
+            1 => 1.0,
+            2 => q(i),
+            3 => 1.0,
+            4 => q(i) + 2.0,
+            _ => (1.1 * i as f64).cos(),
+        });
+        let h = gram(&z);
+        // The model column (0) is not tested: the effect range starts at 1.
+        assert_eq!(aliased(&h, 1..6), vec![3, 4]);
+        // The spring first: the offset after it adds nothing.
+        let swapped = DMatrix::from_fn(k, 3, |i, c| [q(i), 1.0, 1.0][c]);
+        assert_eq!(aliased(&gram(&swapped), 0..3), vec![2]);
+        // Nearly but not exactly collinear columns are kept.
+        let near = DMatrix::from_fn(k, 2, |i, c| [1.0, 1.0 + 1e-3 * q(i)][c]);
+        assert!(aliased(&gram(&near), 0..2).is_empty());
+        // A column nothing sees (zero) is neither kept nor aliased.
+        let zero = DMatrix::from_fn(k, 2, |i, c| [0.0, q(i)][c]);
+        assert!(aliased(&gram(&zero), 0..2).is_empty());
+    }
 }

@@ -78,6 +78,7 @@ fn diagnose_recordings(
         description_test: found.description_test,
         description_test_skipped: found.description_test_skipped,
         ladder: found.from_description,
+        described_effects: found.described_effects,
         effects: found.effects,
         gap: how_far.gap,
         description_overall,
@@ -99,6 +100,7 @@ struct Found {
     ladder: gap::Ladder,
     effects: Vec<EffectEstimate>,
     from_description: Option<super::ladder::Ladder>,
+    described_effects: Vec<EffectEstimate>,
     how_far: gap::HowFar,
     explained_from_description: Vec<DescriptionStep>,
     structure_left: StructureLeft,
@@ -122,7 +124,11 @@ fn find(stage: &Stage) -> Result<Found, DiagnoseError> {
     let ladder = gap::ladder(stage, &chosen)?;
     let mut effects = magnitude::cross_validated(stage, &selection, &ladder.final_theta);
     effects.extend(magnitude::against_description(stage, anchored));
-    let from_description = described::from_description(stage, &selection, &mut effects);
+    let (from_description, described_effects) =
+        match described::from_description(stage, &selection, &mut effects) {
+            Some((l, described)) => (Some(l), described),
+            None => (None, vec![]),
+        };
     let how_far = gap::how_far(stage, &chosen, n_cv, &ladder)?;
     let explained_from_description = match &from_description {
         Some(l) => described::description_steps(l),
@@ -136,6 +142,7 @@ fn find(stage: &Stage) -> Result<Found, DiagnoseError> {
         ladder,
         effects,
         from_description,
+        described_effects,
         how_far,
         explained_from_description,
         structure_left,

@@ -3,7 +3,7 @@
 
 use super::breakdown::Regime;
 use super::diagnosis::Diagnosis;
-use super::diagnosis::Evidence;
+use super::diagnosis::{EffectEstimate, Evidence};
 use crate::effect::library::Kind;
 use crate::io::document::{escape_html, Block, Document, Section, Table, Text};
 use crate::io::plot::{colour, legend_outside, tick, Mark, LEGEND_WIDTH};
@@ -421,17 +421,7 @@ fn effect_blocks(d: &Diagnosis, s: &mut Section) {
                 .code(e.kind.name())
                 .and(format!("{at}: {found}")),
         ));
-        let mut t = Table::new(["joint", "value", "std. error", "unit", "identifiable"]);
-        for m in &e.magnitudes {
-            t.row([
-                m.joint.clone(),
-                format!("{:.4e}", m.value),
-                format!("{:.1e}", m.se),
-                m.unit.clone(),
-                format!("{:.2}", m.identifiable),
-            ]);
-        }
-        s.push(Block::Table(t));
+        s.push(Block::Table(magnitude_table(e, true)));
         let hidden = e.magnitudes.iter().filter(|m| !m.is_identifiable());
         let hidden: Vec<&str> = hidden.map(|m| m.joint.as_str()).collect();
         if !hidden.is_empty() {
@@ -443,6 +433,58 @@ fn effect_blocks(d: &Diagnosis, s: &mut Section) {
         }
         if let Some(sep) = &e.separate_by {
             s.push(Block::Paragraph(format!("To separate them: {sep}.").into()));
+        }
+    }
+}
+
+/// An effect's magnitudes: joint, value, standard error, unit (and the identifiable fraction).
+fn magnitude_table(e: &EffectEstimate, identifiable: bool) -> Table {
+    let mut header = vec!["joint", "value", "std. error", "unit"];
+    if identifiable {
+        header.push("identifiable");
+    }
+    let mut t = Table::new(header);
+    for m in &e.magnitudes {
+        let mut row = vec![
+            m.joint.clone(),
+            format!("{:.4e}", m.value),
+            format!("{:.1e}", m.se),
+            m.unit.clone(),
+        ];
+        if identifiable {
+            row.push(format!("{:.2}", m.identifiable));
+        }
+        t.row(row);
+    }
+    t
+}
+
+/// The ladder's effects (payloads are weighed in its notes) with their magnitudes from the
+/// description, and the joints whose value is within two standard errors of zero.
+fn described_effect_blocks(d: &Diagnosis, s: &mut Section) {
+    for e in d
+        .described_effects
+        .iter()
+        .filter(|e| !e.kind.is_body_change())
+    {
+        let at = if e.param != 0.0 {
+            format!(" at {}", e.param)
+        } else {
+            String::new()
+        };
+        s.push(Block::Heading(Text::default().code(e.kind.name()).and(
+            format!("{at} from the description: {}", e.magnitude_name),
+        )));
+        s.push(Block::Table(magnitude_table(e, false)));
+        let near_zero: Vec<&str> = (e.magnitudes.iter())
+            .filter(|m| m.value.abs() < 2.0 * m.se || m.se == 0.0 && m.value == 0.0)
+            .map(|m| m.joint.as_str())
+            .collect();
+        if !near_zero.is_empty() {
+            s.push(Block::Paragraph(Text::plain(format!(
+                "Within two standard errors of zero (not determined by these data, or absent): {}.",
+                near_zero.join(", ")
+            ))));
         }
     }
 }
@@ -474,6 +516,7 @@ fn from_description_section(d: &Diagnosis) -> Section {
     if let Some(l) = &d.ladder {
         ladder_notes(l, &mut s);
     }
+    described_effect_blocks(d, &mut s);
     s
 }
 

@@ -564,8 +564,12 @@ pub struct RealCase {
     /// Payload cases: the payload's mass found (kg) on the injected body (chosen by a step, or
     /// tied with the first step: the mass it would carry in its place).
     pub payload_mass: Option<f64>,
-    /// Relative magnitude error `‖m̂ − m‖/‖m‖` of the injected kind, when attributed.
+    /// Relative magnitude error `‖m̂ − m‖/‖m‖` of the injected kind, when attributed (the
+    /// ladder's estimate where it chose the kind; a payload: its mass).
     pub magnitude_error: Option<f64>,
+    /// The same, each joint weighted by its estimate's information `1/se²`: the error over
+    /// what the data determine.
+    pub magnitude_error_weighted: Option<f64>,
     /// The description's and the final validation RMS (N m).
     pub rms: [f64; 2],
     /// Wall time of the diagnosis (s).
@@ -750,10 +754,14 @@ fn score_case(
     let payload_mass = body_name
         .as_deref()
         .and_then(|b| carried_mass(b, bodies, first.copied()));
-    let magnitude_error = match inj.slot {
-        Slot::Payload => payload_mass.map(|m| (m - inj.magnitudes[0]).abs() / inj.magnitudes[0]),
-        Slot::Effect(k) => magnitude_error(d, k, &inj.magnitudes),
-        _ => None,
+    let mass_error = payload_mass.map(|m| (m - inj.magnitudes[0]).abs() / inj.magnitudes[0]);
+    let (magnitude_error, magnitude_error_weighted) = match inj.slot {
+        Slot::Payload => (mass_error, mass_error),
+        Slot::Effect(k) => (
+            magnitude_error(d, k, &inj.magnitudes),
+            weighted_magnitude_error(d, k, &inj.magnitudes),
+        ),
+        _ => (None, None),
     };
     RealCase {
         case: i,
@@ -767,6 +775,7 @@ fn score_case(
         payload_claimed: bodies.iter().any(|b| b.payload),
         payload_mass,
         magnitude_error,
+        magnitude_error_weighted,
         rms: [d.overall[0], d.overall[d.overall.len() - 1]],
         seconds,
         growth: f64::NAN,
@@ -778,14 +787,49 @@ fn file_name(p: &Path) -> String {
         .map_or_else(|| p.display().to_string(), |f| f.to_string_lossy().into())
 }
 
-/// Relative error over the joints whose estimate is identifiable.
+/// The estimate of `kind` the case is scored on: the ladder's (anchored at the description, as
+/// the case's steps are) where the ladder chose the kind, else the cross-validated one.
+fn estimate_of(d: &Diagnosis, kind: Kind) -> Option<&diagnose::EffectEstimate> {
+    (d.described_effects.iter())
+        .chain(&d.effects)
+        .find(|e| e.kind == kind)
+}
+
+/// Relative error `‖m̂ − m‖/‖m‖` of the estimate of `kind` over the joints whose estimate is
+/// identifiable.
 fn magnitude_error(d: &Diagnosis, kind: Kind, truth: &[f64]) -> Option<f64> {
-    let e = d.effects.iter().find(|e| e.kind == kind)?;
+    let e = estimate_of(d, kind)?;
+    relative_error(e, truth, |_| 1.0)
+}
+
+/// The same error with each joint weighted by its estimate's information `1/se²` (joints
+/// without a finite positive standard error left out): what the data determine. A joint the
+/// data do not see (a compliance on a wrist joint whose torque is a tenth of a newton metre)
+/// has an estimate whose standard error exceeds it a hundredfold, and would decide the
+/// unweighted error alone.
+fn weighted_magnitude_error(d: &Diagnosis, kind: Kind, truth: &[f64]) -> Option<f64> {
+    let e = estimate_of(d, kind)?;
+    relative_error(e, truth, |m| {
+        if m.se.is_finite() && m.se > 0.0 {
+            1.0 / (m.se * m.se)
+        } else {
+            0.0
+        }
+    })
+}
+
+/// `sqrt(Σ w (m̂ − m)² / Σ w m²)` over the identifiable joints, `w` per magnitude.
+fn relative_error(
+    e: &diagnose::EffectEstimate,
+    truth: &[f64],
+    weight: impl Fn(&diagnose::Magnitude) -> f64,
+) -> Option<f64> {
     let (mut num, mut den) = (0.0, 0.0);
     for (m, t) in e.magnitudes.iter().zip(truth) {
-        if m.identifiable >= diagnose::IDENTIFIABLE {
-            num += (m.value - t).powi(2);
-            den += t * t;
+        if m.is_identifiable() {
+            let w = weight(m);
+            num += w * (m.value - t).powi(2);
+            den += w * t * t;
         }
     }
     (den > 0.0).then(|| (num / den).sqrt())
@@ -826,6 +870,8 @@ pub struct RealScores {
     pub top1_visible: f64,
     /// Median relative magnitude error over them, where attributed.
     pub median_magnitude_error: f64,
+    /// Median of the information-weighted error ([`RealCase::magnitude_error_weighted`]).
+    pub median_magnitude_error_weighted: f64,
 }
 
 /// Scores of a set of cases.
@@ -868,6 +914,12 @@ pub fn score(results: &[RealCase]) -> RealScores {
                 .filter_map(|r| r.magnitude_error)
                 .collect::<Vec<_>>(),
         ),
+        median_magnitude_error_weighted: super::median(
+            &results
+                .iter()
+                .filter_map(|r| r.magnitude_error_weighted)
+                .collect::<Vec<_>>(),
+        ),
     }
 }
 
@@ -886,6 +938,7 @@ pub fn case_table(results: &[RealCase]) -> PolarsResult<DataFrame> {
         "payload_claimed" => results.iter().map(|r| r.payload_claimed).collect::<Vec<_>>(),
         "payload_mass" => results.iter().map(|r| r.payload_mass).collect::<Vec<_>>(),
         "magnitude_error" => results.iter().map(|r| r.magnitude_error).collect::<Vec<_>>(),
+        "magnitude_error_weighted" => results.iter().map(|r| r.magnitude_error_weighted).collect::<Vec<_>>(),
         "rms_description" => results.iter().map(|r| r.rms[0]).collect::<Vec<_>>(),
         "rms_final" => results.iter().map(|r| r.rms[1]).collect::<Vec<_>>(),
         "growth" => results.iter().map(|r| r.growth).collect::<Vec<_>>(),
@@ -919,6 +972,9 @@ pub fn write(
             col("magnitude_error")
                 .median()
                 .alias("median_magnitude_error"),
+            col("magnitude_error_weighted")
+                .median()
+                .alias("median_magnitude_error_weighted"),
         ])
         .sort(["injected"], Default::default())
         .collect()?;
@@ -928,6 +984,8 @@ pub fn write(
         tables::markdown(&per_kind),
         tables::markdown(&df)
     )
+    // Twice: adjacent empty cells share their bars.
+    .replace("| null |", "|  |")
     .replace("| null |", "|  |");
     crate::io::write_atomic(&dir.join("README.md"), md.as_bytes())?;
     crate::io::write_atomic(
