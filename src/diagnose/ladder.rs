@@ -630,25 +630,27 @@ pub(crate) fn ladder(stage: &Stage, eps: f64, selected: &[Variant], settings: &S
 /// in the step's place.
 type Tie = (String, Option<f64>);
 
-/// The next step: every candidate fitted with the set so far and scored on the held-out data;
-/// the winner, its reduction and t, and the candidates tied with it, or why the ladder stops.
-fn next_step(
+/// A scored candidate: the explanation, its reduction of the held-out error, its block t, and
+/// for a body change the mass (kg) it adds.
+type Scored = (Explanation, f64, f64, Option<f64>);
+
+/// Every candidate fitted with the set so far and scored on the held-out data against `sse`
+/// (a changed body must still be a body).
+fn scored_candidates(
     problem: &Problem,
     data: &Data,
     selected: &[Variant],
     set: &[Explanation],
     sse: &[f64],
-    settings: &Settings,
-) -> Result<(Explanation, f64, f64, Vec<Tie>), Stop> {
+) -> Vec<Scored> {
     let model = problem.stage.model;
     let p0 = problem.theta_d.len();
-    let mut scored: Vec<(Explanation, f64, f64, Option<f64>)> = candidates(data, selected, set)
+    candidates(data, selected, set)
         .into_iter()
         .filter_map(|e| {
             let mut trial = set.to_vec();
             trial.push(e);
             let fit = problem.fit(data, &trial);
-            // A changed body must still be a body.
             if !bodies_consistent(data, &fit, &trial, p0, model) {
                 return None;
             }
@@ -660,7 +662,21 @@ fn next_step(
             };
             Some((e, r, t, mass))
         })
-        .collect();
+        .collect()
+}
+
+/// The next step: every candidate fitted with the set so far and scored on the held-out data;
+/// the winner, its reduction and t, and the candidates tied with it, or why the ladder stops.
+fn next_step(
+    problem: &Problem,
+    data: &Data,
+    selected: &[Variant],
+    set: &[Explanation],
+    sse: &[f64],
+    settings: &Settings,
+) -> Result<(Explanation, f64, f64, Vec<Tie>), Stop> {
+    let model = problem.stage.model;
+    let mut scored = scored_candidates(problem, data, selected, set, sse);
     scored.sort_by(|a, b| b.1.total_cmp(&a.1));
     let Some(&(best, r, t, _)) = scored.first() else {
         return Err(Stop::NoCandidate);
@@ -672,12 +688,17 @@ fn next_step(
             t,
         });
     }
-    // Ties: within `tie` of the winner's reduction; the simplest (fewest columns) is kept, the
-    // others of its size reported as ambiguous with it.
+    // Ties: within `tie` of the winner's reduction, leaving at most `LEFT_TIE` times what it
+    // leaves; the simplest (fewest columns) is kept, the others of its size reported as
+    // ambiguous with it. What is left matters once the winner explains most of the gap: on a
+    // payload "what changed" case the payload took 99.0 % of the held-out error, a torque gain
+    // 92.0 % (eight times the payload's remainder), and the gain, tied by reduction alone, was
+    // kept for its fewer columns.
     let reduction: Vec<f64> = scored.iter().map(|s| s.1).collect();
+    let t_stats: Vec<f64> = scored.iter().map(|s| s.2).collect();
     let widths: Vec<usize> = scored.iter().map(|s| columns(&s.0, data.n)).collect();
-    let passes = |i: usize| scored[i].2 >= settings.min_t;
-    let simplest = Ties::of(&reduction, &widths, passes, settings.tie).simplest;
+    let eligible = tie_eligible(&reduction, &t_stats, settings);
+    let simplest = Ties::of(&reduction, &widths, |i| eligible[i], settings.tie).simplest;
     let (best, r, t, _) = scored[simplest[0]];
     // Other grid points of the winner's kind are not another explanation.
     let own = best.name(model, UNREAD);
@@ -689,6 +710,22 @@ fn next_step(
         }
     }
     Ok((best, r, t, ties))
+}
+
+/// A candidate that leaves more than this many times the held-out error the best leaves does
+/// not fit the data as well, whatever its reduction.
+const LEFT_TIE: f64 = 2.0;
+
+/// Which candidates (sorted by `reduction`, best first, with their block `t`) may tie with the
+/// best: significant themselves, and leaving at most [`LEFT_TIE`] times the held-out error the
+/// best leaves (the reduction's own cut is [`Ties::of`]'s).
+fn tie_eligible(reduction: &[f64], t: &[f64], settings: &Settings) -> Vec<bool> {
+    let left_cut = (1.0 - reduction[0]) * LEFT_TIE;
+    reduction
+        .iter()
+        .zip(t)
+        .map(|(r, t)| *t >= settings.min_t && 1.0 - r <= left_cut)
+        .collect()
 }
 
 /// Per chosen effect, the posterior standard errors of its coefficients (in `set` order,
@@ -1119,6 +1156,26 @@ mod tests {
     /// The Gram matrix `ZᵀZ` of the columns of `z`.
     fn gram(z: &DMatrix<f64>) -> DMatrix<f64> {
         z.transpose() * z
+    }
+
+    #[test]
+    fn a_candidate_that_leaves_far_more_than_the_best_does_not_tie_with_it() {
+        let settings = Settings::default();
+        assert_eq!((settings.tie, settings.min_t, LEFT_TIE), (0.1, 3.0, 2.0));
+        // The payload case: 99.0 % against a gain's 92.0 % is no tie (the gain leaves eight
+        // times more), 98.1 % is (1.9 times); one below min_t never ties.
+        let near_all = tie_eligible(
+            &[0.990, 0.981, 0.920, 0.985],
+            &[21.0, 9.0, 10.7, 2.0],
+            &settings,
+        );
+        assert_eq!(near_all, vec![true, true, false, false]);
+        // Small reductions: what is left differs little, the reduction's own cut decides.
+        let small = [0.30, 0.28, 0.25];
+        let eligible = tie_eligible(&small, &[5.0; 3], &settings);
+        assert_eq!(eligible, vec![true; 3]);
+        let t = Ties::of(&small, &[7, 1, 1], |i| eligible[i], settings.tie);
+        assert_eq!(t.within, vec![0, 1]);
     }
 
     #[test]

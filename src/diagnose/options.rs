@@ -205,7 +205,8 @@ pub struct LadderSettings {
     pub min_t: f64,
     /// Smallest relative reduction of the held-out mean square a step must bring.
     pub min_reduction: f64,
-    /// Candidates within this fraction of the winner's reduction are ambiguous with it.
+    /// Candidates within this fraction of the winner's reduction (and leaving at most twice the
+    /// held-out error it leaves) are ambiguous with it.
     pub tie: f64,
     /// At most this many steps.
     pub max_steps: usize,
