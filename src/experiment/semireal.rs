@@ -809,13 +809,16 @@ fn magnitude_error(d: &Diagnosis, kind: Kind, truth: &[f64]) -> Option<f64> {
 /// unweighted error alone.
 fn weighted_magnitude_error(d: &Diagnosis, kind: Kind, truth: &[f64]) -> Option<f64> {
     let e = estimate_of(d, kind)?;
-    relative_error(e, truth, |m| {
-        if m.se.is_finite() && m.se > 0.0 {
-            1.0 / (m.se * m.se)
-        } else {
-            0.0
-        }
-    })
+    relative_error(e, truth, information)
+}
+
+/// A magnitude's information `1/se²` (0 without a finite positive standard error).
+fn information(m: &diagnose::Magnitude) -> f64 {
+    if m.se.is_finite() && m.se > 0.0 {
+        1.0 / (m.se * m.se)
+    } else {
+        0.0
+    }
 }
 
 /// `sqrt(Σ w (m̂ − m)² / Σ w m²)` over the identifiable joints, `w` per magnitude.
@@ -1250,5 +1253,44 @@ mod tests {
         );
         assert_eq!(bounded.magnitudes, vec![0.0, 0.0, -MAX_GAIN_ERROR]);
         assert!(growth > 1.0 && growth < 10.0, "{growth}");
+    }
+
+    #[test]
+    fn the_weighted_magnitude_error_is_decided_by_the_joints_the_data_determine() {
+        use crate::diagnose::{EffectEstimate, Evidence, Magnitude};
+        let magnitude = |value: f64, se: f64| Magnitude {
+            joint: "j".into(),
+            value,
+            se,
+            unit: "rad/(N m)".into(),
+            identifiable: 1.0,
+        };
+        // A compliance seen on the loaded joint (12 % low, tight), not on the wrist (0.32 ±
+        // 0.52 against 0.0017), and a joint without a standard error.
+        let e = EffectEstimate {
+            kind: Kind::Compliance,
+            evidence: Evidence::Description,
+            param: 0.0,
+            magnitude_name: "compliance 1/k".into(),
+            magnitudes: vec![
+                magnitude(2.09e-3, 0.16e-3),
+                magnitude(0.32, 0.52),
+                magnitude(5e-3, 0.0),
+            ],
+            ambiguous_with: vec![],
+            separate_by: None,
+        };
+        let truth = [2.38e-3, 1.7e-3, 1e-3];
+        let plain = relative_error(&e, &truth, |_| 1.0).unwrap();
+        assert!(plain > 100.0, "{plain}");
+        let weighted = relative_error(&e, &truth, information).unwrap();
+        // The loaded joint's 12 % and the wrist's error in units of its own standard error.
+        let loaded = ((2.09e-3 - 2.38e-3) / 0.16e-3_f64).powi(2);
+        let wrist = ((0.32 - 1.7e-3) / 0.52_f64).powi(2);
+        let den = (2.38e-3 / 0.16e-3_f64).powi(2) + (1.7e-3 / 0.52_f64).powi(2);
+        assert!((weighted - ((loaded + wrist) / den).sqrt()).abs() < 1e-12);
+        assert!(weighted > 0.05 && weighted < 0.2, "{weighted}");
+        // Nothing the data determine: no error at all.
+        assert_eq!(relative_error(&e, &[0.0; 3], information), None);
     }
 }
