@@ -778,7 +778,8 @@ pub fn write_blind(
         tables::markdown(&per_kind),
         tables::markdown(&df)
     );
-    md = md.replace("| null |", "|  |");
+    // Twice: adjacent empty cells share their bars.
+    md = md.replace("| null |", "|  |").replace("| null |", "|  |");
     crate::io::write_atomic(&dir.join("README.md"), md.as_bytes())?;
     crate::io::write_atomic(
         &dir.join("scores.json"),
