@@ -411,11 +411,7 @@ fn effect_blocks(d: &Diagnosis, s: &mut Section) {
                 format!("{} (found against the description)", e.magnitude_name)
             }
         };
-        let at = if e.param != 0.0 {
-            format!(" at {}", e.param)
-        } else {
-            String::new()
-        };
+        let at = grid_point(e);
         s.push(Block::Heading(
             Text::default()
                 .code(e.kind.name())
@@ -434,6 +430,16 @@ fn effect_blocks(d: &Diagnosis, s: &mut Section) {
         if let Some(sep) = &e.separate_by {
             s.push(Block::Paragraph(format!("To separate them: {sep}.").into()));
         }
+    }
+}
+
+/// ` at <param>` for an effect with a grid value (a Stribeck velocity, a cogging harmonic),
+/// else nothing.
+fn grid_point(e: &EffectEstimate) -> String {
+    if e.param != 0.0 {
+        format!(" at {}", e.param)
+    } else {
+        String::new()
     }
 }
 
@@ -467,11 +473,7 @@ fn described_effect_blocks(d: &Diagnosis, s: &mut Section) {
         .iter()
         .filter(|e| !e.kind.is_body_change())
     {
-        let at = if e.param != 0.0 {
-            format!(" at {}", e.param)
-        } else {
-            String::new()
-        };
+        let at = grid_point(e);
         s.push(Block::Heading(Text::default().code(e.kind.name()).and(
             format!("{at} from the description: {}", e.magnitude_name),
         )));

@@ -767,7 +767,7 @@ pub fn write_blind(
         ])
         .sort(["injected"], Default::default())
         .collect()?;
-    let mut md = format!(
+    let md = format!(
         "# Blind benchmark\n\n`physid blind --cases {} --seed {seed} --description-error {} --description-uncertainty {}` on `{}` ({:.0} s wall).\n\nEach case's description carries inertial-parameter errors of relative size `--description-error`; the diagnosis is told `--description-uncertainty` (0: no test against the description).\n\n## Scores\n\n```json\n{}\n```\n\n## Single effects by kind\n\n{}\n## Cases\n\n{}",
         scores.cases,
         description[0],
@@ -778,8 +778,6 @@ pub fn write_blind(
         tables::markdown(&per_kind),
         tables::markdown(&df)
     );
-    // Twice: adjacent empty cells share their bars.
-    md = md.replace("| null |", "|  |").replace("| null |", "|  |");
     crate::io::write_atomic(&dir.join("README.md"), md.as_bytes())?;
     crate::io::write_atomic(
         &dir.join("scores.json"),

@@ -986,10 +986,7 @@ pub fn write(
         serde_json::to_string_pretty(scores)?,
         tables::markdown(&per_kind),
         tables::markdown(&df)
-    )
-    // Twice: adjacent empty cells share their bars.
-    .replace("| null |", "|  |")
-    .replace("| null |", "|  |");
+    );
     crate::io::write_atomic(&dir.join("README.md"), md.as_bytes())?;
     crate::io::write_atomic(
         &dir.join("scores.json"),

@@ -378,7 +378,8 @@ pub fn pivot_with_iqr(summary: &DataFrame, value: &str, sets: &[&str]) -> Polars
     DataFrame::new_infer_height(cols)
 }
 
-/// A Markdown table of a data frame (numbers to 3 significant decimals).
+/// A Markdown table of a data frame (numbers to 3 significant decimals, missing values as
+/// empty cells).
 pub fn markdown(df: &DataFrame) -> String {
     let mut s = String::new();
     let names: Vec<String> = df
@@ -399,6 +400,7 @@ pub fn markdown(df: &DataFrame) -> String {
             .map(|c| match c.get(i) {
                 Ok(AnyValue::Float64(x)) => format!("{x:.3}"),
                 Ok(AnyValue::String(x)) => crate::io::md_cell(x),
+                Ok(AnyValue::Null) => String::new(),
                 Ok(v) => format!("{v}"),
                 Err(_) => String::new(),
             })
@@ -406,4 +408,24 @@ pub fn markdown(df: &DataFrame) -> String {
         s += &format!("| {} |\n", cells.join(" | "));
     }
     s
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn markdown_writes_numbers_to_three_decimals_and_missing_values_as_empty_cells() {
+        let df = df!(
+            "case" => [0u64, 1],
+            "kind" => [Some("gain"), None],
+            "error" => [None, Some(0.12345)],
+            "top1" => [Some(true), None],
+        )
+        .unwrap();
+        assert_eq!(
+            markdown(&df),
+            "| case | kind | error | top1 |\n|---|---|---|---|\n| 0 | gain |  | true |\n| 1 |  | 0.123 |  |\n"
+        );
+    }
 }
