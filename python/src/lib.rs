@@ -833,9 +833,9 @@ impl Diagnosis {
             g.iter().map(|g| g.description).collect::<Vec<_>>(),
         )?;
         cols.set_item("nominal", g.iter().map(|g| g.nominal).collect::<Vec<_>>())?;
-        for (i, name) in self.effects().iter().enumerate() {
+        for (i, e) in self.diagnosis.how_far_effects().iter().enumerate() {
             cols.set_item(
-                format!("+ {name}"),
+                format!("+ {}", e.kind.name()),
                 g.iter().map(|g| g.after[i]).collect::<Vec<_>>(),
             )?;
         }

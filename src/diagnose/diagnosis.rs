@@ -199,3 +199,14 @@ pub struct Diagnosis {
     /// The verdict in words.
     pub summary: String,
 }
+
+impl Diagnosis {
+    /// The effects the "how far" steps add, in order (`gap[j].after[i]` and `overall[i + 1]`
+    /// are after the `i`-th): the cross-validated ones and the description test's. The
+    /// ladder's first explanation, appended to `effects` when neither named it, has no step
+    /// there (its own rung is in `explained_from_description`).
+    pub fn how_far_effects(&self) -> &[EffectEstimate] {
+        let steps = self.overall.len().saturating_sub(1);
+        &self.effects[..steps.min(self.effects.len())]
+    }
+}

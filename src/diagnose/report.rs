@@ -583,7 +583,11 @@ fn how_far_table(d: &Diagnosis) -> Table {
     let header = ["joint", "description", "nominal"]
         .into_iter()
         .map(String::from)
-        .chain(d.effects.iter().map(|e| format!("+ {}", e.kind.name())))
+        .chain(
+            d.how_far_effects()
+                .iter()
+                .map(|e| format!("+ {}", e.kind.name())),
+        )
         .chain(["noise floor".to_string(), "gap closed".to_string()]);
     let mut t = Table::new(header);
     let f3 = |v: &f64| format!("{v:.3}");
@@ -697,7 +701,7 @@ fn how_far_series(d: &Diagnosis) -> Vec<(String, Vec<f64>)> {
             d.gap.iter().map(|g| g.nominal).collect(),
         ),
     ];
-    for (i, e) in d.effects.iter().enumerate() {
+    for (i, e) in d.how_far_effects().iter().enumerate() {
         steps.push((
             format!("+ {}", e.kind.name()),
             d.gap.iter().map(|g| g.after[i]).collect(),
