@@ -486,9 +486,9 @@ fn a_kept_semi_real_case_re_diagnosed_from_its_files_is_the_benchmark_s_case() {
         );
         assert!(err.contains("information matrix"), "{err}");
         let s = steps(&d);
-        let found = csv_field(row, 5);
+        let found = field(&table, row, "found");
         assert_eq!(s[0], first_found(&found), "{s:?} vs {found}");
-        let injected = csv_field(row, 3);
+        let injected = field(&table, row, "injected");
         let named = if injected == "payload" {
             "+ payload on lwr_4_link"
         } else {
@@ -496,6 +496,16 @@ fn a_kept_semi_real_case_re_diagnosed_from_its_files_is_the_benchmark_s_case() {
         };
         assert_eq!(s[0], named, "{injected}");
     }
+}
+
+/// The field of a case table's `row` in the column the table's header names `name`.
+fn field(table: &str, row: &str, name: &str) -> String {
+    let header = table.lines().next().unwrap();
+    let i = header
+        .split(',')
+        .position(|c| c == name)
+        .unwrap_or_else(|| panic!("no column {name} in {header}"));
+    csv_field(row, i)
 }
 
 /// Field `i` of a CSV row (quotes around fields that hold commas).
@@ -522,7 +532,9 @@ fn a_kept_semi_real_case_in_the_what_changed_mode_is_the_command_s_case() {
     let (_dir, keep, table) = kept_semi_real_cases(&["--real-baseline", "--only", "9"]);
     let row = table.lines().nth(1).unwrap();
     assert!(row.starts_with("9,") && row.contains(",backlash,"), "{row}");
-    let baseline = root().join("data/kuka_lwr4").join(csv_field(row, 2));
+    let baseline = root()
+        .join("data/kuka_lwr4")
+        .join(field(&table, row, "described_by"));
     let case = keep.join("case9");
     let d = diagnose(
         &case.join("robot.urdf"),
@@ -530,7 +542,7 @@ fn a_kept_semi_real_case_in_the_what_changed_mode_is_the_command_s_case() {
         &["--baseline-data", baseline.to_str().unwrap()],
     );
     let s = steps(&d);
-    let found = csv_field(row, 5);
+    let found = field(&table, row, "found");
     eprintln!("command: {s:?}; benchmark: {found}");
     assert_eq!(s[0], first_found(&found), "{s:?} vs {found}");
     assert_eq!(s[0], "+ backlash");
@@ -548,7 +560,7 @@ fn in_the_what_changed_mode_a_payload_is_not_passed_over_for_a_gain_that_explain
         row.starts_with("25,") && row.contains(",payload,lwr_7_link,"),
         "{row}"
     );
-    let found = csv_field(row, 5);
+    let found = field(&table, row, "found");
     assert_eq!(first_found(&found), "+ payload on lwr_7_link", "{found}");
     assert!(!found.contains("torque_gain"), "{found}");
 }
@@ -603,4 +615,70 @@ fn a_torque_offset_on_the_real_arm_is_weighed_from_the_description_with_bounded_
         md.contains("`torque_offset` from the description: offset"),
         "{md}"
     );
+}
+
+#[test]
+fn in_the_what_changed_mode_a_mass_later_steps_trade_off_with_is_stated_as_weighed_at_its_step() {
+    // Case 2 of seed 1: 2.8 kg on lwr_5_link of run 3, the baseline run 1. The payload is named
+    // first and weighed within 15 % at its step; a torque gain freed after it trades off with
+    // its mass (the fit with every explanation free put 8.2 kg on the body, 1.7 kg standard
+    // error, and until 2026-11-27 that was the mass stated). The benchmark's table and the
+    // command's report state the mass of the payload's step and say the later fit moved it.
+    let (_dir, keep, table) = kept_semi_real_cases(&["--real-baseline", "--only", "2"]);
+    let row = table.lines().nth(1).unwrap();
+    assert!(row.starts_with("2,"), "{row}");
+    assert_eq!(field(&table, row, "injected_body"), "lwr_5_link");
+    let found = field(&table, row, "found");
+    assert_eq!(first_found(&found), "+ payload on lwr_5_link", "{found}");
+    let number = |name: &str| field(&table, row, name).parse::<f64>().unwrap();
+    let (truth, stated, last) = (
+        number("injected_mass"),
+        number("payload_mass"),
+        number("payload_mass_last"),
+    );
+    eprintln!("true {truth} kg; stated {stated}, with later steps free {last}");
+    assert!(
+        (stated - truth).abs() <= 0.15 * truth,
+        "{stated} vs {truth}"
+    );
+    let baseline = root()
+        .join("data/kuka_lwr4")
+        .join(field(&table, row, "described_by"));
+    let case = keep.join("case2");
+    let report = case.join("report");
+    let (d, _) = diagnose_stating(
+        &case.join("robot.urdf"),
+        &case.join("data.csv"),
+        &[
+            "--description-uncertainty",
+            "0.05",
+            "--baseline-data",
+            baseline.to_str().unwrap(),
+            "--report",
+            report.to_str().unwrap(),
+        ],
+    );
+    let body = &d["ladder"]["bodies"][0];
+    assert_eq!(body["body"], "lwr_5_link", "{body}");
+    assert_eq!(body["payload"], true, "{body}");
+    let number = |v: &serde_json::Value| v.as_f64().unwrap();
+    let (mass, se) = (number(&body["mass"]), number(&body["mass_se"]));
+    let (last, last_se) = (
+        number(&body["last"]["mass"]),
+        number(&body["last"]["mass_se"]),
+    );
+    eprintln!("command: {mass} ± {se} kg; with later steps free {last} ± {last_se}");
+    assert!((mass - truth).abs() <= 0.15 * truth, "{mass} vs {truth}");
+    if body["moved"] == true {
+        assert!((last - mass).abs() > 2.0 * se.max(last_se), "{body}");
+        let text = std::fs::read_to_string(report.join("report.md")).unwrap();
+        let said = format!("{mass:+.3} ± {se:.3} kg");
+        assert!(text.contains(&said), "{said} not in the report");
+        assert!(
+            text.contains("later steps trade off with its mass"),
+            "{text}"
+        );
+    } else {
+        assert_eq!(last, mass);
+    }
 }

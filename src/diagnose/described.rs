@@ -37,15 +37,23 @@ pub(crate) fn from_description(
 }
 
 /// The explanations as the diagnosis's effect estimates (described by the description
-/// test's evidence: they depart from the description), friction left out.
+/// test's evidence: they depart from the description), friction left out; a body change's
+/// mass as the ladder states it ([`ladder::BodyChange::stated`]).
 pub(crate) fn estimates(ladder: &Ladder, stage: &Stage) -> Vec<EffectEstimate> {
     let effects = ladder.chosen.iter().filter_map(|e| match e {
         Explanation::Effect(v) => Some(*v),
         Explanation::Friction => None,
     });
+    let mut bodies = ladder.bodies.iter();
     effects
         .zip(ladder.coefficients.iter().zip(&ladder.coefficient_se))
-        .map(|(v, (c, se))| magnitude::described_estimate(stage, v, c, se, vec![]))
+        .map(|(v, (c, se))| {
+            let (mut c, mut se) = (c.clone(), se.clone());
+            if let Some(b) = v.kind.is_body_change().then(|| bodies.next()).flatten() {
+                (c[0], se[0]) = (b.mass, b.mass_se);
+            }
+            magnitude::described_estimate(stage, v, &c, &se, vec![])
+        })
         .collect()
 }
 

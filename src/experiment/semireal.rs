@@ -552,6 +552,8 @@ pub struct RealCase {
     pub injected: String,
     /// The payload's body, when one was injected.
     pub injected_body: Option<String>,
+    /// The payload's mass (kg), when one was injected.
+    pub injected_mass: Option<f64>,
     /// The ladder's steps from the description, in order (ambiguous ones joined by `|`).
     pub found: Vec<String>,
     /// The verdict.
@@ -561,9 +563,13 @@ pub struct RealCase {
     pub top1: Option<bool>,
     /// A payload or body change was claimed on a clean run.
     pub payload_claimed: bool,
-    /// Payload cases: the payload's mass found (kg) on the injected body (chosen by a step, or
-    /// tied with the first step: the mass it would carry in its place).
+    /// Payload cases: the payload's mass found (kg) on the injected body (chosen by a step:
+    /// the mass the diagnosis states, [`diagnose::ladder::BodyChange::stated`]; or tied with
+    /// the first step: the mass it would carry in its place).
     pub payload_mass: Option<f64>,
+    /// Where a step chose the injected body: its mass with every explanation free (the final
+    /// fit), which later steps that trade off with it move.
+    pub payload_mass_last: Option<f64>,
     /// Relative magnitude error `‖m̂ − m‖/‖m‖` of the injected kind, when attributed (the
     /// ladder's estimate where it chose the kind; a payload: its mass).
     pub magnitude_error: Option<f64>,
@@ -755,6 +761,10 @@ fn score_case(
         .as_deref()
         .and_then(|b| carried_mass(b, bodies, first.copied()));
     let mass_error = payload_mass.map(|m| (m - inj.magnitudes[0]).abs() / inj.magnitudes[0]);
+    let payload_mass_last = body_name
+        .as_deref()
+        .and_then(|b| bodies.iter().find(|c| c.body == b))
+        .map(|c| c.last.mass);
     let (magnitude_error, magnitude_error_weighted) = match inj.slot {
         Slot::Payload => (mass_error, mass_error),
         Slot::Effect(k) => (
@@ -769,11 +779,13 @@ fn score_case(
         described_by: file_name(&base.described_by),
         injected: inj.slot.name().into(),
         injected_body: body_name,
+        injected_mass: (inj.slot == Slot::Payload).then(|| inj.magnitudes[0]),
         found,
         verdict: d.verdict,
         top1,
         payload_claimed: bodies.iter().any(|b| b.payload),
         payload_mass,
+        payload_mass_last,
         magnitude_error,
         magnitude_error_weighted,
         rms: [d.overall[0], d.overall[d.overall.len() - 1]],
@@ -935,11 +947,13 @@ pub fn case_table(results: &[RealCase]) -> PolarsResult<DataFrame> {
         "described_by" => s(&|r| r.described_by.clone()),
         "injected" => s(&|r| r.injected.clone()),
         "injected_body" => results.iter().map(|r| r.injected_body.clone()).collect::<Vec<_>>(),
+        "injected_mass" => results.iter().map(|r| r.injected_mass).collect::<Vec<_>>(),
         "found" => s(&|r| r.found.join(", ")),
         "verdict" => s(&|r| crate::io::serde_name(&r.verdict)),
         "top1" => results.iter().map(|r| r.top1).collect::<Vec<_>>(),
         "payload_claimed" => results.iter().map(|r| r.payload_claimed).collect::<Vec<_>>(),
         "payload_mass" => results.iter().map(|r| r.payload_mass).collect::<Vec<_>>(),
+        "payload_mass_last" => results.iter().map(|r| r.payload_mass_last).collect::<Vec<_>>(),
         "magnitude_error" => results.iter().map(|r| r.magnitude_error).collect::<Vec<_>>(),
         "magnitude_error_weighted" => results.iter().map(|r| r.magnitude_error_weighted).collect::<Vec<_>>(),
         "rms_description" => results.iter().map(|r| r.rms[0]).collect::<Vec<_>>(),
