@@ -38,7 +38,8 @@ pub(crate) fn from_description(
 
 /// The explanations as the diagnosis's effect estimates (described by the description
 /// test's evidence: they depart from the description), friction left out; a body change's
-/// mass as the ladder states it ([`ladder::BodyChange::stated`]).
+/// mass as the ladder states it ([`ladder::BodyChange::stated`]; identifiable 0 when the data
+/// do not see it).
 pub(crate) fn estimates(ladder: &Ladder, stage: &Stage) -> Vec<EffectEstimate> {
     let effects = ladder.chosen.iter().filter_map(|e| match e {
         Explanation::Effect(v) => Some(*v),
@@ -49,10 +50,17 @@ pub(crate) fn estimates(ladder: &Ladder, stage: &Stage) -> Vec<EffectEstimate> {
         .zip(ladder.coefficients.iter().zip(&ladder.coefficient_se))
         .map(|(v, (c, se))| {
             let (mut c, mut se) = (c.clone(), se.clone());
+            let mut unseen = false;
             if let Some(b) = v.kind.is_body_change().then(|| bodies.next()).flatten() {
-                (c[0], se[0]) = (b.mass, b.mass_se);
+                c[0] = b.mass;
+                se[0] = b.mass_se.unwrap_or(se[0]);
+                unseen = b.mass_se.is_none();
             }
-            magnitude::described_estimate(stage, v, &c, &se, vec![])
+            let mut estimate = magnitude::described_estimate(stage, v, &c, &se, vec![]);
+            if unseen {
+                estimate.magnitudes[0].identifiable = 0.0;
+            }
+            estimate
         })
         .collect()
 }

@@ -99,8 +99,9 @@ pub struct Rung {
     /// Other explanations within the tie of this step's reduction.
     pub ambiguous_with: Vec<String>,
     /// Per entry of `ambiguous_with`, the mass (kg) that body change would add, fitted in this
-    /// step's place (`None` for an effect): where the data cannot tell the bodies apart, the
-    /// payload's mass on the body it is known to sit on.
+    /// step's place (`None` for an effect, or a body whose mass the data do not see): where
+    /// the data cannot tell the bodies apart, the payload's mass on the body it is known to
+    /// sit on.
     pub ambiguous_mass: Vec<Option<f64>>,
 }
 
@@ -132,8 +133,9 @@ pub struct BodyChange {
     /// Mass change (kg) as the diagnosis states it: from the fit with every explanation free,
     /// unless later steps moved it (`moved`), then as weighed at the body's own step.
     pub mass: f64,
-    /// Standard error of the mass change (kg).
-    pub mass_se: f64,
+    /// Standard error of the mass change (kg); `None` when the data do not see the mass
+    /// ([`Weighing::mass_se`]).
+    pub mass_se: Option<f64>,
     /// Centre of mass of the change (m, body frame), when its mass is positive.
     pub com: Option<[f64; 3]>,
     /// Whether steps taken after the body's moved its mass by more than [`MOVED`] standard
@@ -154,8 +156,10 @@ pub struct BodyChange {
 pub struct Weighing {
     /// Mass change (kg).
     pub mass: f64,
-    /// Its standard error (kg).
-    pub mass_se: f64,
+    /// Its standard error (kg); `None` when no joint torque feels the mass (the body's frame
+    /// origin lies on every joint axis before it, as `lwr_2_link`'s on the KUKA): only its first
+    /// and second moments are seen, and the mass is the ridge's zero.
+    pub mass_se: Option<f64>,
     /// Centre of mass of the change (m, body frame), when its mass is positive.
     pub com: Option<[f64; 3]>,
 }
@@ -163,16 +167,24 @@ pub struct Weighing {
 impl Weighing {
     /// `+2.000 ± 0.010 kg, centre of mass (0.001, 0.002, 0.030) m`.
     fn text(&self) -> String {
+        let Some(se) = self.mass_se else {
+            return "mass not seen by these data (no joint torque changes with mass at the \
+                    body's frame origin, which lies on every joint axis before it)"
+                .into();
+        };
         let com = self.com.map_or(String::new(), |c| {
             format!(", centre of mass ({:.3}, {:.3}, {:.3}) m", c[0], c[1], c[2])
         });
-        format!("{:+.3} ± {:.3} kg{com}", self.mass, self.mass_se)
+        format!("{:+.3} ± {se:.3} kg{com}", self.mass)
     }
 
     /// Whether `self` (a later fit) moved the mass from `entered` by more than [`MOVED`]
-    /// standard errors (the larger of the two).
+    /// standard errors (the larger of the two); never for a mass the data do not see.
     fn moved_from(&self, entered: &Weighing) -> bool {
-        (self.mass - entered.mass).abs() > MOVED * self.mass_se.max(entered.mass_se)
+        match (self.mass_se, entered.mass_se) {
+            (Some(a), Some(b)) => (self.mass - entered.mass).abs() > MOVED * a.max(b),
+            _ => false,
+        }
     }
 }
 
@@ -346,6 +358,10 @@ struct Fit {
     w: DVector<f64>,
     /// The posterior covariance's diagonal over `cols` (for standard errors).
     var: Vec<f64>,
+    /// Over `cols`: an explanation's column the data do not see at all (zero on every sample:
+    /// the mass of a body whose frame origin lies on every joint axis before it), whose value
+    /// and variance only the ridge sets.
+    unseen: Vec<bool>,
 }
 
 impl Problem<'_> {
@@ -561,10 +577,15 @@ impl System<'_> {
         for (i, &f) in self.free.iter().enumerate() {
             var[f] = d[i] * d[i] * inv[(i, i)];
         }
+        let p0 = self.prior.nrows();
+        let unseen = (0..self.cols.len())
+            .map(|f| f >= p0 && self.h[(f, f)] <= 0.0)
+            .collect();
         Fit {
             cols: self.cols,
             w,
             var,
+            unseen,
         }
     }
 }
@@ -738,9 +759,13 @@ fn scored_candidates(
                 return None;
             }
             let (r, t) = improvement(sse, &problem.held_out(data, &fit));
-            // A body change's columns come last: its ten parameters, the mass first.
+            // A body change's columns come last: its ten parameters, the mass first (none
+            // where the data do not see it).
+            let at = fit.w.len() - 10;
             let mass = match e {
-                Explanation::Effect(v) if v.kind.is_body_change() => Some(fit.w[fit.w.len() - 10]),
+                Explanation::Effect(v) if v.kind.is_body_change() && !fit.unseen[at] => {
+                    Some(fit.w[at])
+                }
                 _ => None,
             };
             Some((e, r, t, mass))
@@ -1215,10 +1240,11 @@ fn body_mass(
 fn weighing(fit: &Fit, c: usize) -> Weighing {
     let mass = fit.w[c];
     let h = nalgebra::Vector3::new(fit.w[c + 1], fit.w[c + 2], fit.w[c + 3]);
+    let seen = !fit.unseen[c];
     Weighing {
         mass,
-        mass_se: fit.var[c].max(0.0).sqrt(),
-        com: (mass > 0.0).then(|| (h / mass).into()),
+        mass_se: seen.then(|| fit.var[c].max(0.0).sqrt()),
+        com: (seen && mass > 0.0).then(|| (h / mass).into()),
     }
 }
 
@@ -1254,7 +1280,7 @@ fn body_changes(
                     None => x.norm() <= 1.0,
                 }
             });
-            change.payload = change.mass > 3.0 * change.mass_se && com_ok;
+            change.payload = change.mass_se.is_some_and(|se| change.mass > 3.0 * se) && com_ok;
             out.push(change);
         }
         c += d;
@@ -1323,7 +1349,7 @@ mod tests {
     fn a_mass_later_steps_moved_is_stated_as_weighed_at_its_step() {
         let weighing = |mass: f64, mass_se: f64| Weighing {
             mass,
-            mass_se,
+            mass_se: Some(mass_se),
             com: Some([0.0, 0.0, 0.05]),
         };
         let change = |entered, last| BodyChange::new("lwr_5_link".into(), entered, last, [0.0; 10]);
@@ -1352,5 +1378,19 @@ mod tests {
         assert!(!change(weighing(2.5, 0.125), weighing(3.0, 0.25)).moved);
         assert!(change(weighing(2.5, 0.125), weighing(3.0625, 0.25)).moved);
         assert!(!change(weighing(2.5, 0.375), weighing(3.0625, 0.125)).moved);
+        // A mass the data do not see (lwr_2_link on the KUKA: its frame origin on both joint
+        // axes before it) has no standard error, never moves and is not a payload's weight.
+        let unseen = Weighing {
+            mass: 0.0,
+            mass_se: None,
+            com: None,
+        };
+        let blind = change(unseen, unseen);
+        assert!(!blind.moved && blind.mass_se.is_none());
+        assert!(
+            blind.weighed().starts_with("mass not seen by these data"),
+            "{}",
+            blind.weighed()
+        );
     }
 }
