@@ -443,6 +443,22 @@ fn kept_semi_real_cases(extra: &[&str]) -> (tempfile::TempDir, PathBuf, String) 
     (dir, keep, table)
 }
 
+/// A kept semi-real case diagnosed again from its files (with the benchmark's description
+/// uncertainty and `extra` flags), its report written beside them: the JSON and `report.md`.
+fn rediagnosed(case: &Path, extra: &[&str]) -> (serde_json::Value, String) {
+    let report = case.join("report");
+    let mut args = vec![
+        "--description-uncertainty",
+        "0.05",
+        "--report",
+        report.to_str().unwrap(),
+    ];
+    args.extend(extra);
+    let (d, _) = diagnose_stating(&case.join("robot.urdf"), &case.join("data.csv"), &args);
+    let text = std::fs::read_to_string(report.join("report.md")).unwrap();
+    (d, text)
+}
+
 /// The first explanation of the first step in a case table's `found` field.
 fn first_found(found: &str) -> &str {
     found
@@ -644,19 +660,9 @@ fn in_the_what_changed_mode_a_mass_later_steps_trade_off_with_is_stated_as_weigh
     let baseline = root()
         .join("data/kuka_lwr4")
         .join(field(&table, row, "described_by"));
-    let case = keep.join("case2");
-    let report = case.join("report");
-    let (d, _) = diagnose_stating(
-        &case.join("robot.urdf"),
-        &case.join("data.csv"),
-        &[
-            "--description-uncertainty",
-            "0.05",
-            "--baseline-data",
-            baseline.to_str().unwrap(),
-            "--report",
-            report.to_str().unwrap(),
-        ],
+    let (d, text) = rediagnosed(
+        &keep.join("case2"),
+        &["--baseline-data", baseline.to_str().unwrap()],
     );
     let body = &d["ladder"]["bodies"][0];
     assert_eq!(body["body"], "lwr_5_link", "{body}");
@@ -671,7 +677,6 @@ fn in_the_what_changed_mode_a_mass_later_steps_trade_off_with_is_stated_as_weigh
     assert!((mass - truth).abs() <= 0.15 * truth, "{mass} vs {truth}");
     if body["moved"] == true {
         assert!((last - mass).abs() > 2.0 * se.max(last_se), "{body}");
-        let text = std::fs::read_to_string(report.join("report.md")).unwrap();
         let said = format!("{mass:+.3} ± {se:.3} kg");
         assert!(text.contains(&said), "{said} not in the report");
         assert!(
@@ -700,18 +705,7 @@ fn a_body_whose_mass_no_joint_torque_feels_is_not_weighed() {
         field(&table, row, "found").contains("+ change of lwr_2_link"),
         "{row}"
     );
-    let case = keep.join("case10");
-    let report = case.join("report");
-    let (d, _) = diagnose_stating(
-        &case.join("robot.urdf"),
-        &case.join("data.csv"),
-        &[
-            "--description-uncertainty",
-            "0.05",
-            "--report",
-            report.to_str().unwrap(),
-        ],
-    );
+    let (d, text) = rediagnosed(&keep.join("case10"), &[]);
     let bodies = d["ladder"]["bodies"].as_array().unwrap();
     let unseen = bodies
         .iter()
@@ -725,7 +719,6 @@ fn a_body_whose_mass_no_joint_torque_feels_is_not_weighed() {
     for b in bodies.iter().filter(|b| b["body"] != "lwr_2_link") {
         assert!(b["mass_se"].as_f64().is_some_and(|s| s > 0.0), "{b}");
     }
-    let text = std::fs::read_to_string(report.join("report.md")).unwrap();
     assert!(
         text.contains("Change on `lwr_2_link`: mass not seen by these data"),
         "{}",
