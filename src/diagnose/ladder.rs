@@ -651,21 +651,44 @@ fn model_of(
 ) -> (DVector<f64>, Vec<Vec<f64>>) {
     let mut theta = fit.w.rows(0, p0).into_owned();
     let mut coefs = vec![];
+    for (_, v, cols) in effect_columns(set, data.n, p0) {
+        let x: Vec<f64> = fit.w.as_slice()[cols].to_vec();
+        if let Some(b) = v.kind.body(v.param, data.n) {
+            for (k, xk) in x.iter().enumerate() {
+                theta[10 * b + k] += xk;
+            }
+        }
+        coefs.push(x);
+    }
+    (theta, coefs)
+}
+
+/// The chosen effects of `set` (friction skipped), each with its columns in a fit over the
+/// model's `p0` columns followed by the effects' in `set` order.
+fn effect_columns(
+    set: &[Explanation],
+    n: usize,
+    p0: usize,
+) -> Vec<(Explanation, Variant, std::ops::Range<usize>)> {
     let mut c = p0;
+    let mut out = vec![];
     for e in set {
         if let Explanation::Effect(v) = e {
-            let d = v.kind.columns(data.n);
-            let x: Vec<f64> = fit.w.rows(c, d).iter().copied().collect();
-            if let Some(b) = v.kind.body(v.param, data.n) {
-                for (k, xk) in x.iter().enumerate() {
-                    theta[10 * b + k] += xk;
-                }
-            }
-            coefs.push(x);
+            let d = v.kind.columns(n);
+            out.push((*e, *v, c..c + d));
             c += d;
         }
     }
-    (theta, coefs)
+    out
+}
+
+/// Whether a centre of mass `x` (m, body frame) lies on or near body `b`: within its bounding
+/// ellipsoid doubled about its centre, or within a metre of the frame without one.
+fn on_body(model: &Model, b: usize, x: &nalgebra::Vector3<f64>) -> bool {
+    match &model.bodies()[b].bounding {
+        Some(e) => e.scaled(2.0).contains(x),
+        None => x.norm() <= 1.0,
+    }
 }
 
 /// The diagnosis's ladder from the description (module docs), with relative uncertainty `eps`
@@ -761,10 +784,10 @@ fn scored_candidates(
             let (r, t) = improvement(sse, &problem.held_out(data, &fit));
             // A body change's columns come last: its ten parameters, the mass first (none
             // where the data do not see it).
-            let at = fit.w.len() - 10;
             let mass = match e {
-                Explanation::Effect(v) if v.kind.is_body_change() && !fit.unseen[at] => {
-                    Some(fit.w[at])
+                Explanation::Effect(v) if v.kind.is_body_change() => {
+                    let w = weighing(&fit, fit.w.len() - 10);
+                    w.mass_se.map(|_| w.mass)
                 }
                 _ => None,
             };
@@ -839,16 +862,10 @@ fn tie_eligible(reduction: &[f64], t: &[f64], settings: &Settings) -> Vec<bool> 
 /// Per chosen effect, the posterior standard errors of its coefficients (in `set` order,
 /// friction skipped), from the fit's covariance and the data weight's scale.
 fn standard_errors(data: &Data, fit: &Fit, set: &[Explanation], p0: usize) -> Vec<Vec<f64>> {
-    let mut c = p0;
-    let mut out = vec![];
-    for e in set {
-        if let Explanation::Effect(v) = e {
-            let d = v.kind.columns(data.n);
-            out.push((c..c + d).map(|i| fit.var[i].max(0.0).sqrt()).collect());
-            c += d;
-        }
-    }
-    out
+    effect_columns(set, data.n, p0)
+        .into_iter()
+        .map(|(_, _, cols)| cols.map(|i| fit.var[i].max(0.0).sqrt()).collect())
+        .collect()
 }
 
 /// A body's rung named for what its change reads as: a payload, or a change of the body.
@@ -944,23 +961,16 @@ fn bodies_consistent(
     model: &Model,
 ) -> bool {
     let (theta, _) = model_of(data, fit, set, p0);
-    let mut c = p0;
     let mut ok = true;
-    for e in set {
-        let Explanation::Effect(v) = e else { continue };
-        let d = v.kind.columns(data.n);
+    for (_, v, cols) in effect_columns(set, data.n, p0) {
         if let Some(b) = v.kind.body(v.param, data.n) {
+            let c = cols.start;
             let total = theta[10 * b];
             let dm = fit.w[c];
             let com = (dm > 0.0)
                 .then(|| nalgebra::Vector3::new(fit.w[c + 1], fit.w[c + 2], fit.w[c + 3]) / dm);
-            let inside = com.is_none_or(|x| match &model.bodies()[b].bounding {
-                Some(e) => e.scaled(2.0).contains(&x),
-                None => x.norm() <= 1.0,
-            });
-            ok &= total > 0.0 && inside;
+            ok &= total > 0.0 && com.is_none_or(|x| on_body(model, b, &x));
         }
-        c += d;
     }
     ok
 }
@@ -1225,15 +1235,8 @@ fn body_mass(
     e: Explanation,
     p0: usize,
 ) -> Option<Weighing> {
-    let mut c = p0;
-    for x in set {
-        let Explanation::Effect(v) = x else { continue };
-        if *x == e {
-            return v.kind.is_body_change().then(|| weighing(fit, c));
-        }
-        c += v.kind.columns(n);
-    }
-    None
+    let (_, v, cols) = effect_columns(set, n, p0).into_iter().find(|x| x.0 == e)?;
+    v.kind.is_body_change().then(|| weighing(fit, cols.start))
 }
 
 /// The body change whose ten columns start at `c` in `fit`, weighed.
@@ -1258,32 +1261,22 @@ fn body_changes(
 ) -> Vec<BodyChange> {
     let n = stage.model.dof();
     let p0 = stage.model.layout().len;
-    let mut c = p0;
     let mut out = vec![];
-    for e in set {
-        let Explanation::Effect(v) = e else { continue };
-        let d = v.kind.columns(n);
-        if v.kind.is_body_change() {
-            let b = v.kind.body(v.param, n).expect("a payload has a body");
-            let x: Vec<f64> = fit.w.rows(c, d).iter().copied().collect();
-            let last = weighing(fit, c);
-            let entered = entered.iter().find(|x| x.0 == *e).map_or(last, |x| x.1);
-            let pi = x.try_into().unwrap_or([0.0; 10]);
-            let mut change =
-                BodyChange::new(stage.model.bodies()[b].name.clone(), entered, last, pi);
-            // Its second moments are seldom determined by the data (a payload's inertia about
-            // the joint axes trades with its neighbours'): judged by its mass and centre only.
-            let com_ok = change.com.is_some_and(|x| {
-                let x = nalgebra::Vector3::from(x);
-                match &stage.model.bodies()[b].bounding {
-                    Some(e) => e.scaled(2.0).contains(&x),
-                    None => x.norm() <= 1.0,
-                }
-            });
-            change.payload = change.mass_se.is_some_and(|se| change.mass > 3.0 * se) && com_ok;
-            out.push(change);
-        }
-        c += d;
+    for (e, v, cols) in effect_columns(set, n, p0) {
+        let Some(b) = v.kind.body(v.param, n).filter(|_| v.kind.is_body_change()) else {
+            continue;
+        };
+        let last = weighing(fit, cols.start);
+        let entered = entered.iter().find(|x| x.0 == e).map_or(last, |x| x.1);
+        let pi = fit.w.as_slice()[cols].try_into().unwrap_or([0.0; 10]);
+        let mut change = BodyChange::new(stage.model.bodies()[b].name.clone(), entered, last, pi);
+        // Its second moments are seldom determined by the data (a payload's inertia about the
+        // joint axes trades with its neighbours'): judged by its mass and centre only.
+        let com_ok = change
+            .com
+            .is_some_and(|x| on_body(stage.model, b, &nalgebra::Vector3::from(x)));
+        change.payload = change.mass_se.is_some_and(|se| change.mass > 3.0 * se) && com_ok;
+        out.push(change);
     }
     out
 }
