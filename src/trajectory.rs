@@ -182,6 +182,17 @@ impl Trajectory {
     pub fn is_empty(&self) -> bool {
         self.t.is_empty()
     }
+    /// Reserves room for `additional` more samples, so that pushing them does not reallocate.
+    pub fn reserve(&mut self, additional: usize) {
+        let values = additional * self.dof();
+        self.t.reserve(additional);
+        for v in [&mut self.q, &mut self.qd, &mut self.tau] {
+            v.reserve(values);
+        }
+        if let Some(v) = self.qdd.as_mut() {
+            v.reserve(values);
+        }
+    }
     /// Appends one sample.
     pub fn push(&mut self, t: f64, q: &[f64], qd: &[f64], qdd: Option<&[f64]>, tau: &[f64]) {
         self.t.push(t);

@@ -179,6 +179,25 @@ fn a_simulation_through_the_library_reports_and_logs_what_it_ran() {
     // The log carries the ground truth the identification scores against.
     let truth = identify::ground_truth(&out, &run.model).unwrap();
     assert_eq!(truth, run.model.parameters());
+    // Writing the logs beside the report gives the same files and the same report.
+    let (beside, table) = (dir.path().join("beside.mcap"), dir.path().join("beside.csv"));
+    let together = run.write_with_report(&beside, Some(&table)).unwrap();
+    assert_eq!(std::fs::read(&beside).unwrap(), std::fs::read(&out).unwrap());
+    let alone = dir.path().join("alone.csv");
+    run.write_csv(&alone).unwrap();
+    assert_eq!(std::fs::read(&table).unwrap(), std::fs::read(&alone).unwrap());
+    assert_eq!(
+        serde_json::to_value(&together.excitation).unwrap(),
+        serde_json::to_value(&report.excitation).unwrap()
+    );
+    assert_eq!(
+        together.physid_inverse_dynamics_residual.rms,
+        report.physid_inverse_dynamics_residual.rms
+    );
+    // An output it cannot write is an error naming the file (the log's thread reports it).
+    let nowhere = dir.path().join("no/such/dir/leg.mcap");
+    let err = run.write_with_report(&nowhere, None).unwrap_err().to_string();
+    assert!(err.contains("no/such/dir"), "{err}");
     // A bad override is an error naming the scenario, not a panic.
     let bad = SimulateOptions {
         duration: Some(-1.0),

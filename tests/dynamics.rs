@@ -154,6 +154,22 @@ fn mass_matrix_is_symmetric_positive_definite_and_matches_rnea_columns() {
 }
 
 #[test]
+fn rnea_on_the_transforms_of_the_kinematics_is_rnea() {
+    for m in models() {
+        let mut d = Data::new(&m);
+        for seed in 0..3 {
+            let [q, qd, qdd] = random_state(10 + seed, m.dof(), 2.0);
+            let full = rnea(&m, &mut d, &q, &qd, &qdd).clone();
+            let mut e = Data::new(&m);
+            dynamics::kinematics::update_world(&m, &mut e, &q);
+            let reused = dynamics::rnea_from_transforms(&m, &mut e, &qd, &qdd);
+            // The same operations on the same numbers: equal bit for bit.
+            assert_eq!(reused, &full);
+        }
+    }
+}
+
+#[test]
 fn forward_dynamics_inverts_rnea() {
     for (mi, m) in models().iter().enumerate() {
         let mut d = Data::new(m);

@@ -64,11 +64,7 @@ pub fn run(a: Args) -> anyhow::Result<()> {
     let run = simulate(path, &opts, &mut |f| bar.set_position((f * 1000.0) as u64));
     bar.finish_and_clear();
     let run = run?;
-    run.write_mcap(out)?;
-    if let Some(c) = csv {
-        run.write_csv(c)?;
-    }
-    let report = run.report(out);
+    let report = run.write_with_report(out, csv)?;
     if json {
         println!(
             "{}",

@@ -128,10 +128,31 @@ impl Simulation {
         Ok(samples::write_csv(out, &self.recording.processed)?)
     }
 
+    /// Writes the MCAP log at `out` and, if asked, the CSV at `csv`, and returns the run's
+    /// [`report`](Self::report): the same files and numbers as the three calls one after the
+    /// other, in less wall time (the log is written on a thread of its own while the rest runs).
+    pub fn write_with_report(
+        &self,
+        out: &Path,
+        csv: Option<&Path>,
+    ) -> Result<SimulateJson, ApiError> {
+        std::thread::scope(|scope| {
+            let log = scope.spawn(|| self.write_mcap(out));
+            let table = csv.map(|c| self.write_csv(c)).transpose();
+            let report = self.report(out);
+            log.join()
+                .unwrap_or_else(|p| std::panic::resume_unwind(p))?;
+            table?;
+            Ok(report)
+        })
+    }
+
     /// The report of the run, its log written at `out`.
     pub fn report(&self, out: &Path) -> SimulateJson {
-        let excitation = crate::sim::report::excitation(&self.model, &self.recording.truth, 10);
-        let (rms, max) = crate::sim::report::engine_consistency(&self.model, &self.recording);
+        let (excitation, (rms, max)) = rayon::join(
+            || crate::sim::report::excitation(&self.model, &self.recording.truth, 10),
+            || crate::sim::report::engine_consistency(&self.model, &self.recording),
+        );
         let simulated = self.scenario.simulation.duration;
         SimulateJson {
             scenario: self.path.clone(),

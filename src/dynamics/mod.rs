@@ -24,7 +24,7 @@ pub use crba::crba;
 pub use energy::{kinetic_energy, potential_energy};
 pub use fd::{forward_dynamics, FdError};
 pub use regressor::{for_each_regressor, inertia_bilinear, regressor, row_columns};
-pub use rnea::{friction_torque, rnea, rnea_with_friction, sign};
+pub use rnea::{friction_torque, rnea, rnea_from_transforms, rnea_with_friction, sign};
 
 use crate::model::{Model, Rotor, RotorModel};
 use crate::spatial::{Force, Motion, RigidInertia, Transform};
@@ -167,6 +167,18 @@ pub fn forward_pass(
     gravity: bool,
 ) {
     update_transforms(model, data, q);
+    forward_pass_from_transforms(model, data, qd, qdd, gravity);
+}
+
+/// [`forward_pass`] on the transforms already in `data` (from [`update_transforms`] at the
+/// configuration wanted): fills `v`, `a`, `v_rot`, `a_rot`.
+pub(crate) fn forward_pass_from_transforms(
+    model: &Model,
+    data: &mut Data,
+    qd: &[f64],
+    qdd: &[f64],
+    gravity: bool,
+) {
     let a0 = if gravity {
         base_acceleration(model)
     } else {

@@ -1,6 +1,6 @@
 //! Recursive Newton–Euler inverse dynamics with geared rotors (RBDA Table 5.1; architecture.md §2).
 
-use super::{armature, check_len, forward_pass, Data};
+use super::{armature, check_len, forward_pass_from_transforms, update_transforms, Data};
 use crate::model::{Model, RotorModel};
 use nalgebra::DVector;
 
@@ -18,9 +18,22 @@ pub fn rnea<'a>(
     qdd: &[f64],
 ) -> &'a DVector<f64> {
     check_len(model, "q", q);
+    update_transforms(model, data, q);
+    rnea_from_transforms(model, data, qd, qdd)
+}
+
+/// [`rnea`] on the joint transforms already in `data` (from [`update_transforms`], or
+/// [`crate::dynamics::kinematics::update_world`], at the configuration wanted): the same
+/// numbers without computing the transforms again. Returns `&data.tau`.
+pub fn rnea_from_transforms<'a>(
+    model: &Model,
+    data: &'a mut Data,
+    qd: &[f64],
+    qdd: &[f64],
+) -> &'a DVector<f64> {
     check_len(model, "qd", qd);
     check_len(model, "qdd", qdd);
-    forward_pass(model, data, q, qd, qdd, true);
+    forward_pass_from_transforms(model, data, qd, qdd, true);
     let full = model.rotor_model() == RotorModel::Full;
     for i in 0..model.dof() {
         let (ii, v) = (&data.inertia[i], data.v[i]);

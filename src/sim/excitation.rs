@@ -3,7 +3,7 @@
 //! with PD or computed-torque tracking, and none (passive).
 
 use super::scenario::{ExcitationSpec, ScenarioError};
-use crate::dynamics::{kinematics, rnea, Data};
+use crate::dynamics::{kinematics, rnea, rnea_from_transforms, Data};
 use crate::model::Model;
 use nalgebra::{DVector, Vector3};
 use rand::{Rng, SeedableRng};
@@ -345,8 +345,10 @@ impl Controller {
                     + s.kd.component_mul(&(vd - Vector3::new(v[0], v[1], v[2])));
                 let mut tau = jac.transpose() * f - qdv * s.joint_damping;
                 if s.gravity_compensation {
-                    let zero = vec![0.0; n];
-                    tau += rnea(model, data, q, &zero, &zero);
+                    // g(q): the transforms are update_world's, at the same q.
+                    let zero = std::mem::take(&mut data.zero);
+                    tau += rnea_from_transforms(model, data, &zero, &zero);
+                    data.zero = zero;
                 }
                 tau
             }

@@ -108,6 +108,10 @@ pub fn simulate(
     let names: Vec<String> = model.joint_names();
     let mut truth = Trajectory::new(names.clone(), true);
     let mut measured = Trajectory::new(names.clone(), true);
+    truth.reserve(samples);
+    measured.reserve(samples);
+    // The log's acceleration is derived after the run (`recording`).
+    let no_qdd = vec![0.0; n];
     let (mut friction_log, mut effects_log) = (
         Vec::with_capacity(samples * n),
         Vec::with_capacity(samples * n),
@@ -118,20 +122,20 @@ pub fn simulate(
         let t = k as f64 / s.rate;
         let (q, qd) = engine.state();
         // 1. Sensors.
-        let (q_enc, qd_fb) = sensors.read(&q, &qd);
+        let (q_enc, qd_fb) = sensors.read(q, qd);
         // 2. Controller and actuators.
         let cmd = controller.torque(model, &mut cdata, t, &q_enc, &qd_fb);
-        let tau_mot = actuate(model, cmd.as_slice(), &qd, motor);
-        // 3. Integrate the period with τ_mot held; the truth at t_k.
-        let (q, qd) = engine.state();
-        let f = loads.friction(&qd);
-        let fx = loads.effects(&q, &qd, &tau_mot);
+        let tau_mot = actuate(model, cmd.as_slice(), qd, motor);
+        // 3. The truth at t_k, then the period integrated with τ_mot held.
+        let f = loads.friction(qd);
+        let fx = loads.effects(q, qd, &tau_mot);
+        truth.push(t, q, qd, None, &tau_mot);
         let qdd = engine.period(&tau_mot, &loads)?;
-        truth.push(t, &q, &qd, Some(&qdd), &tau_mot);
+        truth.qdd.as_mut().expect("with q̈").extend_from_slice(qdd);
         friction_log.extend_from_slice(&f);
         effects_log.extend_from_slice(&fx);
         let (q_log, logged) = sensors.log(q_enc, &tau_mot);
-        measured.push(t, &q_log, &qd_fb, Some(&vec![0.0; n]), &logged);
+        measured.push(t, &q_log, &qd_fb, Some(&no_qdd), &logged);
         check_state(model, engine.as_ref(), t + dt, s.max_speed)?;
         if k * 100 / samples > last_report {
             last_report = k * 100 / samples;
@@ -320,17 +324,25 @@ fn integrator<'a>(
             model: real,
             data: Data::new(real),
             rk4: super::Rk4::new(real.dof()),
+            qdd: vec![0.0; q0.len()],
             q: q0,
             qd: qd0,
             h,
             substeps: s.substeps,
         }),
-        Engine::Rapier => Box::new(RapierIntegrator {
-            sim: super::rapier::RapierSim::new(real, &q0, &qd0, h)
-                .map_err(|e| SimError::Engine(e.to_string()))?,
-            substeps: s.substeps,
-            h,
-        }),
+        Engine::Rapier => {
+            let sim = super::rapier::RapierSim::new(real, &q0, &qd0, h)
+                .map_err(|e| SimError::Engine(e.to_string()))?;
+            let (q, qd) = sim.state();
+            Box::new(RapierIntegrator {
+                sim,
+                qdd: vec![0.0; q.len()],
+                q,
+                qd,
+                substeps: s.substeps,
+                h,
+            })
+        }
     })
 }
 
@@ -416,9 +428,9 @@ impl Loads<'_> {
 /// An engine that advances the robot one control period at a time.
 trait Integrator {
     /// Current `(q, q̇)`.
-    fn state(&self) -> (Vec<f64>, Vec<f64>);
+    fn state(&self) -> (&[f64], &[f64]);
     /// Integrates one control period with `tau_mot` held; returns the true `q̈` at its start.
-    fn period(&mut self, tau_mot: &[f64], loads: &Loads) -> Result<Vec<f64>, SimError>;
+    fn period(&mut self, tau_mot: &[f64], loads: &Loads) -> Result<&[f64], SimError>;
 }
 
 /// physid's forward dynamics with RK4; the true `q̈` at the start of a period is the first
@@ -429,18 +441,19 @@ struct PhysidIntegrator<'a> {
     rk4: super::Rk4,
     q: Vec<f64>,
     qd: Vec<f64>,
+    /// The true `q̈` at the start of the last period.
+    qdd: Vec<f64>,
     h: f64,
     substeps: usize,
 }
 
 impl Integrator for PhysidIntegrator<'_> {
-    fn state(&self) -> (Vec<f64>, Vec<f64>) {
-        (self.q.clone(), self.qd.clone())
+    fn state(&self) -> (&[f64], &[f64]) {
+        (&self.q, &self.qd)
     }
-    fn period(&mut self, tau_mot: &[f64], loads: &Loads) -> Result<Vec<f64>, SimError> {
+    fn period(&mut self, tau_mot: &[f64], loads: &Loads) -> Result<&[f64], SimError> {
         let mut force =
             |_t: f64, q: &[f64], qd: &[f64], u: &mut [f64]| loads.net_into(tau_mot, q, qd, u);
-        let mut qdd = Vec::new();
         for m in 0..self.substeps {
             self.rk4
                 .step(
@@ -454,10 +467,10 @@ impl Integrator for PhysidIntegrator<'_> {
                 )
                 .map_err(|e| SimError::Engine(e.to_string()))?;
             if m == 0 {
-                qdd = self.rk4.start_acceleration().to_vec();
+                self.qdd.copy_from_slice(self.rk4.start_acceleration());
             }
         }
-        Ok(qdd)
+        Ok(&self.qdd)
     }
 }
 
@@ -465,34 +478,32 @@ impl Integrator for PhysidIntegrator<'_> {
 /// velocity change of its first step over the step, constraint impulses (the gears) included.
 struct RapierIntegrator {
     sim: super::rapier::RapierSim,
+    /// The state read from `sim` after the last period (rad, rad/s).
+    q: Vec<f64>,
+    qd: Vec<f64>,
+    /// The true `q̈` at the start of the last period.
+    qdd: Vec<f64>,
     substeps: usize,
     h: f64,
 }
 
 impl Integrator for RapierIntegrator {
-    fn state(&self) -> (Vec<f64>, Vec<f64>) {
-        self.sim.state()
+    fn state(&self) -> (&[f64], &[f64]) {
+        (&self.q, &self.qd)
     }
-    fn period(&mut self, tau_mot: &[f64], loads: &Loads) -> Result<Vec<f64>, SimError> {
-        let (q0, qd0) = self.sim.state();
-        let mut qdd = vec![];
+    fn period(&mut self, tau_mot: &[f64], loads: &Loads) -> Result<&[f64], SimError> {
         for m in 0..self.substeps {
-            let (q, qd) = if m == 0 {
-                (q0.clone(), qd0.clone())
-            } else {
-                self.sim.state()
-            };
-            self.sim.step_with_torque(&loads.net(tau_mot, &q, &qd));
+            self.sim
+                .step_with_torque(&loads.net(tau_mot, &self.q, &self.qd));
+            let (q, qd) = self.sim.state();
             if m == 0 {
-                let (_, qd1) = self.sim.state();
-                qdd = qd1
-                    .iter()
-                    .zip(&qd0)
-                    .map(|(a, b)| (a - b) / self.h)
-                    .collect();
+                for ((a, v1), v0) in self.qdd.iter_mut().zip(&qd).zip(&self.qd) {
+                    *a = (v1 - v0) / self.h;
+                }
             }
+            (self.q, self.qd) = (q, qd);
         }
-        Ok(qdd)
+        Ok(&self.qdd)
     }
 }
 
