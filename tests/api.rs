@@ -180,12 +180,21 @@ fn a_simulation_through_the_library_reports_and_logs_what_it_ran() {
     let truth = identify::ground_truth(&out, &run.model).unwrap();
     assert_eq!(truth, run.model.parameters());
     // Writing the logs beside the report gives the same files and the same report.
-    let (beside, table) = (dir.path().join("beside.mcap"), dir.path().join("beside.csv"));
+    let (beside, table) = (
+        dir.path().join("beside.mcap"),
+        dir.path().join("beside.csv"),
+    );
     let together = run.write_with_report(&beside, Some(&table)).unwrap();
-    assert_eq!(std::fs::read(&beside).unwrap(), std::fs::read(&out).unwrap());
+    assert_eq!(
+        std::fs::read(&beside).unwrap(),
+        std::fs::read(&out).unwrap()
+    );
     let alone = dir.path().join("alone.csv");
     run.write_csv(&alone).unwrap();
-    assert_eq!(std::fs::read(&table).unwrap(), std::fs::read(&alone).unwrap());
+    assert_eq!(
+        std::fs::read(&table).unwrap(),
+        std::fs::read(&alone).unwrap()
+    );
     assert_eq!(
         serde_json::to_value(&together.excitation).unwrap(),
         serde_json::to_value(&report.excitation).unwrap()
@@ -196,7 +205,10 @@ fn a_simulation_through_the_library_reports_and_logs_what_it_ran() {
     );
     // An output it cannot write is an error naming the file (the log's thread reports it).
     let nowhere = dir.path().join("no/such/dir/leg.mcap");
-    let err = run.write_with_report(&nowhere, None).unwrap_err().to_string();
+    let err = run
+        .write_with_report(&nowhere, None)
+        .unwrap_err()
+        .to_string();
     assert!(err.contains("no/such/dir"), "{err}");
     // A bad override is an error naming the scenario, not a panic.
     let bad = SimulateOptions {

@@ -117,6 +117,8 @@ fn main() -> ExitCode {
     unsafe {
         libc::signal(libc::SIGPIPE, libc::SIG_DFL);
     }
+    // No OpenBLAS worker spins against rayon's threads (physid calls BLAS on one thread).
+    physid::spatial::single_threaded_blas();
     let args = Cli::parse();
     match run(args) {
         Ok(()) => ExitCode::SUCCESS,

@@ -31,14 +31,41 @@ pub fn skew(x: &Vector3<f64>) -> Matrix3<f64> {
     Matrix3::new(0.0, -x.z, x.y, x.z, 0.0, -x.x, -x.y, x.x, 0.0)
 }
 
-/// Clarabel's PSD cones call OpenBLAS, which starts as many threads as cores by default and
-/// spins them on every small product. One thread keeps results independent of the machine's
-/// thread count, and the parallelism belongs to the experiment level (rayon).
-pub(crate) fn single_threaded_blas() {
+/// Clarabel's PSD cones and physid's normal equations call OpenBLAS, which starts a worker
+/// thread per core when it is loaded and spins each on every small product (and for about
+/// 0.1 s after it starts or last worked). One thread keeps results independent of the
+/// machine's thread count, and the parallelism belongs to the experiment level (rayon). So
+/// this sets OpenBLAS to one thread and stops the workers it has already started (through
+/// `blas_thread_shutdown_`, found at run time: a build of OpenBLAS without it, such as its
+/// OpenMP one, keeps its idle workers). Called before physid's first BLAS call, and by the
+/// `physid` binary and the Python module as they start, so that no worker spins against
+/// rayon's threads. Idempotent.
+pub fn single_threaded_blas() {
     static ONCE: std::sync::Once = std::sync::Once::new();
     extern "C" {
         fn openblas_set_num_threads(n: std::ffi::c_int);
     }
-    // SAFETY: a plain setter of OpenBLAS, linked through clarabel's `sdp-openblas`.
-    ONCE.call_once(|| unsafe { openblas_set_num_threads(1) });
+    ONCE.call_once(|| {
+        // SAFETY: a plain setter of OpenBLAS, linked through clarabel's `sdp-openblas`.
+        unsafe { openblas_set_num_threads(1) };
+        stop_blas_workers();
+    });
+}
+
+/// Joins OpenBLAS's worker threads, if this OpenBLAS can (see [`single_threaded_blas`]).
+fn stop_blas_workers() {
+    #[cfg(unix)]
+    {
+        let name = c"blas_thread_shutdown_";
+        // SAFETY: dlsym with RTLD_DEFAULT and a NUL-terminated name only looks a symbol up.
+        let symbol = unsafe { libc::dlsym(libc::RTLD_DEFAULT, name.as_ptr()) };
+        if !symbol.is_null() {
+            // SAFETY: OpenBLAS's own `int blas_thread_shutdown_(void)` (used by its fork
+            // handler): it asks each worker to exit and joins them, under OpenBLAS's lock;
+            // with one thread set, later calls run on the caller's thread.
+            let shutdown: extern "C" fn() -> std::ffi::c_int =
+                unsafe { std::mem::transmute(symbol) };
+            shutdown();
+        }
+    }
 }
