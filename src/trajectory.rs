@@ -182,15 +182,17 @@ impl Trajectory {
     pub fn is_empty(&self) -> bool {
         self.t.is_empty()
     }
-    /// Reserves room for `additional` more samples, so that pushing them does not reallocate.
-    pub fn reserve(&mut self, additional: usize) {
-        let values = additional * self.dof();
-        self.t.reserve(additional);
-        for v in [&mut self.q, &mut self.qd, &mut self.tau] {
-            v.reserve(values);
-        }
-        if let Some(v) = self.qdd.as_mut() {
-            v.reserve(values);
+    /// An empty trajectory for `joint_names` with room for `samples` samples (pushing them
+    /// does not reallocate).
+    pub fn with_capacity(joint_names: Vec<String>, with_qdd: bool, samples: usize) -> Self {
+        let values = samples * joint_names.len();
+        Self {
+            t: Vec::with_capacity(samples),
+            q: Vec::with_capacity(values),
+            qd: Vec::with_capacity(values),
+            qdd: with_qdd.then(|| Vec::with_capacity(values)),
+            tau: Vec::with_capacity(values),
+            ..Self::new(joint_names, with_qdd)
         }
     }
     /// Appends one sample.

@@ -106,16 +106,12 @@ pub fn simulate(
     let mut sensors = SensorChain::new(model, scenario, dt);
     let motor = motor_of(&scenario.sensors);
     let names: Vec<String> = model.joint_names();
-    let mut truth = Trajectory::new(names.clone(), true);
-    let mut measured = Trajectory::new(names.clone(), true);
-    truth.reserve(samples);
-    measured.reserve(samples);
+    let mut truth = Trajectory::with_capacity(names.clone(), true, samples);
+    let mut measured = Trajectory::with_capacity(names, true, samples);
     // The log's acceleration is derived after the run (`recording`).
     let no_qdd = vec![0.0; n];
-    let (mut friction_log, mut effects_log) = (
-        Vec::with_capacity(samples * n),
-        Vec::with_capacity(samples * n),
-    );
+    let mut friction_log: Vec<f64> = Vec::with_capacity(samples * n);
+    let mut effects_log: Vec<f64> = Vec::with_capacity(samples * n);
     let loads = Loads { model, scenario };
     let mut last_report = 0usize;
     for k in 0..samples {

@@ -54,11 +54,18 @@ pub fn single_threaded_blas() {
 
 /// Joins OpenBLAS's worker threads, if this OpenBLAS can (see [`single_threaded_blas`]).
 fn stop_blas_workers() {
-    #[cfg(unix)]
+    #[cfg(target_os = "linux")]
     {
-        let name = c"blas_thread_shutdown_";
+        extern "C" {
+            fn dlsym(
+                handle: *mut std::ffi::c_void,
+                symbol: *const std::ffi::c_char,
+            ) -> *mut std::ffi::c_void;
+        }
+        // RTLD_DEFAULT on Linux: search the process's global symbols.
+        let rtld_default = std::ptr::null_mut();
         // SAFETY: dlsym with RTLD_DEFAULT and a NUL-terminated name only looks a symbol up.
-        let symbol = unsafe { libc::dlsym(libc::RTLD_DEFAULT, name.as_ptr()) };
+        let symbol = unsafe { dlsym(rtld_default, c"blas_thread_shutdown_".as_ptr()) };
         if !symbol.is_null() {
             // SAFETY: OpenBLAS's own `int blas_thread_shutdown_(void)` (used by its fork
             // handler): it asks each worker to exit and joins them, under OpenBLAS's lock;
