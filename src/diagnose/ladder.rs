@@ -103,6 +103,32 @@ pub struct Rung {
     /// the data cannot tell the bodies apart, the payload's mass on the body it is known to
     /// sit on.
     pub ambiguous_mass: Vec<Option<f64>>,
+    /// Explanations with more columns within the tie of this step, set aside for the
+    /// simpler one (best first): the data fit them about as well, some better.
+    pub also_fit: Vec<AlsoFit>,
+}
+
+/// An explanation with more columns than a step's, tied with it and set aside for the simpler
+/// one.
+#[derive(Clone, Debug, Serialize, schemars::JsonSchema)]
+pub struct AlsoFit {
+    /// Its name, as a step would be named (`payload or change on lwr_5_link`, `spring`, …).
+    pub name: String,
+    /// Its relative reduction of the held-out mean square in the step's place (the step's own
+    /// is the rung's `reduction`).
+    pub reduction: f64,
+    /// For a body change, the mass (kg) it would add in the step's place (`None` otherwise, or
+    /// where the data do not see the body's mass).
+    pub mass: Option<f64>,
+}
+
+impl AlsoFit {
+    /// What follows its name: `(+1.38 kg, 97.4 %)`, the mass a body change would add and its
+    /// reduction of the held-out mean square.
+    pub fn detail(&self) -> String {
+        let mass = self.mass.map_or(String::new(), |m| format!("{m:+.2} kg, "));
+        format!("({mass}{:.1} %)", 100.0 * self.reduction)
+    }
 }
 
 impl Rung {
@@ -710,22 +736,18 @@ pub(crate) fn ladder(stage: &Stage, eps: f64, selected: &[Variant], settings: &S
         if set.len() >= settings.max_steps {
             break Stop::MaxSteps;
         }
-        let (best, r, t, ties) = match next_step(&problem, &data, selected, &set, &sse, settings) {
+        let step = match next_step(&problem, &data, selected, &set, &sse, settings) {
             Ok(step) => step,
             Err(stop) => break stop,
         };
+        let best = step.e;
         set.push(best);
         (data, current) = settle(&problem, stage, &variants, data, &set, settings);
         sse = problem.held_out(&data, &current);
         if let Some(m) = body_mass(data.n, &current, &set, best, p0) {
             entered.push((best, m));
         }
-        let added = Added {
-            step: best.step_name(stage.model),
-            e: Some(best),
-            score: (r, t),
-            ties,
-        };
+        let added = Added::taken(step, stage.model);
         rungs.push(rung(stage, at(&data, &current, &set), added));
     };
     let absorbed = absorbed_steps(&problem, stage, &data, &mut set, settings);
@@ -796,8 +818,18 @@ fn scored_candidates(
         .collect()
 }
 
+/// A step the ladder takes: the explanation kept, its reduction of the held-out mean square
+/// and block t, the explanations of its size tied with it, and those with more columns.
+struct NextStep {
+    e: Explanation,
+    reduction: f64,
+    t: f64,
+    ties: Vec<Tie>,
+    also_fit: Vec<AlsoFit>,
+}
+
 /// The next step: every candidate fitted with the set so far and scored on the held-out data;
-/// the winner, its reduction and t, and the candidates tied with it, or why the ladder stops.
+/// the winner and the candidates tied with it, or why the ladder stops.
 fn next_step(
     problem: &Problem,
     data: &Data,
@@ -805,7 +837,7 @@ fn next_step(
     set: &[Explanation],
     sse: &[f64],
     settings: &Settings,
-) -> Result<(Explanation, f64, f64, Vec<Tie>), Stop> {
+) -> Result<NextStep, Stop> {
     let model = problem.stage.model;
     let mut scored = scored_candidates(problem, data, selected, set, sse);
     scored.sort_by(|a, b| b.1.total_cmp(&a.1));
@@ -829,18 +861,50 @@ fn next_step(
     let t_stats: Vec<f64> = scored.iter().map(|s| s.2).collect();
     let widths: Vec<usize> = scored.iter().map(|s| columns(&s.0, data.n)).collect();
     let eligible = tie_eligible(&reduction, &t_stats, settings);
-    let simplest = Ties::of(&reduction, &widths, |i| eligible[i], settings.tie).simplest;
-    let (best, r, t, _) = scored[simplest[0]];
-    // Other grid points of the winner's kind are not another explanation.
-    let own = best.name(model, UNREAD);
+    let tied = Ties::of(&reduction, &widths, |i| eligible[i], settings.tie);
+    let (best, r, t, _) = scored[tied.simplest[0]];
+    let (ties, also_fit) = tied_with(&scored, &tied, &widths, model);
+    Ok(NextStep {
+        e: best,
+        reduction: r,
+        t,
+        ties,
+        also_fit,
+    })
+}
+
+/// Of the `tied` candidates (`scored` best first, `widths` their columns), the winner's
+/// ambiguity group (the others of its size) and those with more columns, each named once
+/// (other grid points of the winner's kind are not another explanation; of another kind's,
+/// the best is named).
+fn tied_with(
+    scored: &[Scored],
+    tied: &Ties,
+    widths: &[usize],
+    model: &Model,
+) -> (Vec<Tie>, Vec<AlsoFit>) {
+    let own = scored[tied.simplest[0]].0.name(model, UNREAD);
+    let name = |i: usize| scored[i].0.name(model, UNREAD);
     let mut ties: Vec<Tie> = vec![];
-    for &i in &simplest[1..] {
-        let name = scored[i].0.name(model, UNREAD);
+    for (i, name) in tied.simplest[1..].iter().map(|&i| (i, name(i))) {
         if name != own && !ties.iter().any(|x| x.0 == name) {
             ties.push((name, scored[i].3));
         }
     }
-    Ok((best, r, t, ties))
+    let fewest = tied.fewest(widths);
+    let mut also_fit: Vec<AlsoFit> = vec![];
+    for &i in tied.within.iter().filter(|&&i| widths[i] > fewest) {
+        let name = name(i);
+        if name != own && !also_fit.iter().any(|x| x.name == name) {
+            let (reduction, mass) = (scored[i].1, scored[i].3);
+            also_fit.push(AlsoFit {
+                name,
+                reduction,
+                mass,
+            });
+        }
+    }
+    (ties, also_fit)
 }
 
 /// A candidate that leaves more than this many times the held-out error the best leaves does
@@ -1112,9 +1176,21 @@ struct Added {
     e: Option<Explanation>,
     score: (f64, f64),
     ties: Vec<Tie>,
+    also_fit: Vec<AlsoFit>,
 }
 
 impl Added {
+    /// The rung of a step the ladder took.
+    fn taken(step: NextStep, model: &Model) -> Self {
+        Added {
+            step: step.e.step_name(model),
+            e: Some(step.e),
+            score: (step.reduction, step.t),
+            ties: step.ties,
+            also_fit: step.also_fit,
+        }
+    }
+
     /// A rung that adds no scored step.
     fn fixed(step: &str) -> Self {
         Added {
@@ -1122,19 +1198,43 @@ impl Added {
             e: None,
             score: (0.0, 0.0),
             ties: vec![],
+            also_fit: vec![],
         }
     }
 }
 
 /// The held-out rung of a fit.
 fn rung(stage: &Stage, at: At, added: Added) -> Rung {
-    let At { data, fit, set } = at;
     let Added {
         step,
         e,
         score: (reduction, t),
         ties,
+        also_fit,
     } = added;
+    let rms = held_out_rms(stage, at);
+    let (kind, param) = match e {
+        Some(Explanation::Effect(v)) => (Some(v.kind), v.param),
+        _ => (None, 0.0),
+    };
+    Rung {
+        step,
+        kind,
+        param,
+        overall: mean_square(&rms).sqrt(),
+        rms,
+        reduction,
+        t,
+        ambiguous_with: ties.iter().map(|x| x.0.clone()).collect(),
+        ambiguous_mass: ties.iter().map(|x| x.1).collect(),
+        also_fit,
+    }
+}
+
+/// Held-out RMS per joint (N m) of a fit: its model with its effects, at the fit's own
+/// linearization point.
+fn held_out_rms(stage: &Stage, at: At) -> Vec<f64> {
+    let At { data, fit, set } = at;
     let p0 = stage.model.layout().len;
     let (theta, coefs) = model_of(data, fit, set, p0);
     let variants: Vec<Variant> = set
@@ -1170,21 +1270,7 @@ fn rung(stage: &Stage, at: At, added: Added) -> Rung {
         &DVector::from_vec(full),
         stage.opts.min_speed,
     );
-    let (kind, param) = match e {
-        Some(Explanation::Effect(v)) => (Some(v.kind), v.param),
-        _ => (None, 0.0),
-    };
-    Rung {
-        step,
-        kind,
-        param,
-        overall: mean_square(&rms).sqrt(),
-        rms,
-        reduction,
-        t,
-        ambiguous_with: ties.iter().map(|x| x.0.clone()).collect(),
-        ambiguous_mass: ties.iter().map(|x| x.1).collect(),
-    }
+    rms
 }
 
 /// The description as given, scored on the held-out data.
@@ -1223,6 +1309,7 @@ fn fixed_rung(step: &str, rms: Vec<f64>) -> Rung {
         t: 0.0,
         ambiguous_with: vec![],
         ambiguous_mass: vec![],
+        also_fit: vec![],
     }
 }
 

@@ -536,6 +536,21 @@ fn ladder_notes(l: &super::ladder::Ladder, s: &mut Section) {
             t.and(" as well as ").code(&r.step).and("."),
         ));
     }
+    for r in l.rungs.iter().filter(|r| !r.also_fit.is_empty()) {
+        let mut t = Text::default()
+            .strong("Also fit")
+            .and(" (more terms; set aside for ")
+            .code(&r.step)
+            .and(format!(
+                ", which takes {:.1} % of the held-out mean square): ",
+                100.0 * r.reduction
+            ));
+        for (i, a) in r.also_fit.iter().enumerate() {
+            t = if i > 0 { t.and(", ") } else { t };
+            t = t.code(&a.name).and(format!(" {}", a.detail()));
+        }
+        s.push(Block::Paragraph(t.and(".")));
+    }
     for b in &l.bodies {
         let what = if b.payload { "Payload" } else { "Change" };
         s.push(Block::Paragraph(
