@@ -464,6 +464,23 @@ fn rediagnosed(case: &Path, extra: &[&str]) -> (serde_json::Value, String) {
     (d, text)
 }
 
+/// A kept "what changed" case (its `row` of the case `table`) diagnosed again from its files
+/// with its baseline run, the KUKA run its description was identified on.
+fn rediagnosed_in_what_changed_mode(
+    keep: &Path,
+    table: &str,
+    row: &str,
+) -> (serde_json::Value, String) {
+    let case = format!("case{}", csv_field(row, 0));
+    let baseline = root()
+        .join("data/kuka_lwr4")
+        .join(field(table, row, "described_by"));
+    rediagnosed(
+        &keep.join(case),
+        &["--baseline-data", baseline.to_str().unwrap()],
+    )
+}
+
 /// The first explanation of the first step in a case table's `found` field.
 fn first_found(found: &str) -> &str {
     found
@@ -662,13 +679,7 @@ fn in_the_what_changed_mode_a_mass_later_steps_trade_off_with_is_stated_as_weigh
         (stated - truth).abs() <= 0.15 * truth,
         "{stated} vs {truth}"
     );
-    let baseline = root()
-        .join("data/kuka_lwr4")
-        .join(field(&table, row, "described_by"));
-    let (d, text) = rediagnosed(
-        &keep.join("case2"),
-        &["--baseline-data", baseline.to_str().unwrap()],
-    );
+    let (d, text) = rediagnosed_in_what_changed_mode(&keep, &table, row);
     let body = &d["ladder"]["bodies"][0];
     assert_eq!(body["body"], "lwr_5_link", "{body}");
     assert_eq!(body["payload"], true, "{body}");
@@ -746,13 +757,7 @@ fn in_the_what_changed_mode_a_payload_that_fits_better_than_a_simpler_step_is_sa
     assert!(row.starts_with("13,"), "{row}");
     assert_eq!(field(&table, row, "injected_body"), "lwr_5_link");
     let truth: f64 = field(&table, row, "injected_mass").parse().unwrap();
-    let baseline = root()
-        .join("data/kuka_lwr4")
-        .join(field(&table, row, "described_by"));
-    let (d, text) = rediagnosed(
-        &keep.join("case13"),
-        &["--baseline-data", baseline.to_str().unwrap()],
-    );
+    let (d, text) = rediagnosed_in_what_changed_mode(&keep, &table, row);
     let first = &d["ladder"]["rungs"][2];
     let on_body = |name: &str| name.ends_with("on lwr_5_link");
     let named = first["step"].as_str().is_some_and(on_body)
