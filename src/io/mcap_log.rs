@@ -56,19 +56,44 @@ pub(super) struct JointSample {
     effects: Vec<f64>,
 }
 
-impl JointSample {
+/// A `sensor_msgs/msg/JointState` to write, borrowing its arrays: the same CDR as
+/// [`JointState`] (serde writes a slice as the sequence a `Vec` is), without copying a sample.
+#[derive(Serialize)]
+struct JointStateView<'a> {
+    header: &'a Header,
+    name: &'a [String],
+    position: &'a [f64],
+    velocity: &'a [f64],
+    effort: &'a [f64],
+}
+
+/// A `physid_msgs/msg/JointSample` to write, borrowing its arrays (the same CDR as
+/// [`JointSample`]).
+#[derive(Serialize)]
+struct JointSampleView<'a> {
+    header: &'a Header,
+    name: &'a [String],
+    position: &'a [f64],
+    velocity: &'a [f64],
+    acceleration: &'a [f64],
+    effort: &'a [f64],
+    friction: &'a [f64],
+    effects: &'a [f64],
+}
+
+impl<'a> JointSampleView<'a> {
     /// Sample `k` of `tr` (q, q̇, q̈ when logged, τ) for the joints `names`, without friction or
     /// effect torques.
-    fn at(header: Header, names: &[String], tr: &Trajectory, k: usize) -> Self {
-        JointSample {
+    fn at(header: &'a Header, names: &'a [String], tr: &'a Trajectory, k: usize) -> Self {
+        JointSampleView {
             header,
-            name: names.to_vec(),
-            position: tr.q_at(k).to_vec(),
-            velocity: tr.qd_at(k).to_vec(),
-            acceleration: tr.qdd_at(k).map(<[f64]>::to_vec).unwrap_or_default(),
-            effort: tr.tau_at(k).to_vec(),
-            friction: vec![],
-            effects: vec![],
+            name: names,
+            position: tr.q_at(k),
+            velocity: tr.qd_at(k),
+            acceleration: tr.qdd_at(k).unwrap_or_default(),
+            effort: tr.tau_at(k),
+            friction: &[],
+            effects: &[],
         }
     }
 }
@@ -208,8 +233,13 @@ fn stamp(t: f64) -> (Header, u64) {
     )
 }
 
-fn cdr_bytes<T: Serialize>(m: &T) -> Vec<u8> {
-    cdr::serialize::<_, _, cdr::CdrLe>(m, cdr::Infinite).expect("CDR of plain structs cannot fail")
+/// `m` as little-endian CDR with its encapsulation header, written into `buf` (emptied first)
+/// so that one buffer serves every message.
+fn cdr_into<'b, T: Serialize>(buf: &'b mut Vec<u8>, m: &T) -> &'b [u8] {
+    buf.clear();
+    cdr::serialize_into::<_, _, _, cdr::CdrLe>(&mut *buf, m, cdr::Infinite)
+        .expect("CDR of plain structs into memory cannot fail");
+    buf
 }
 
 /// What to put into a log beside the recording.
@@ -280,9 +310,9 @@ fn write_samples<W: std::io::Write + std::io::Seek>(
     channels: [u16; 3],
 ) -> Result<(), mcap::McapError> {
     let [c_meas, c_proc, c_true] = channels;
-    let names = rec.truth.joint_names.clone();
+    let names = &rec.truth.joint_names;
     let n = names.len();
-    let row = |v: &[f64], k: usize| v[k * n..(k + 1) * n].to_vec();
+    let mut buf = Vec::new();
     for k in 0..rec.truth.len() {
         let (header, ns) = stamp(rec.truth.t[k]);
         let mh = |channel_id| mcap::records::MessageHeader {
@@ -292,22 +322,22 @@ fn write_samples<W: std::io::Write + std::io::Seek>(
             publish_time: ns,
         };
         let m = &rec.measured;
-        let msg = JointState {
-            header: header.clone(),
-            name: names.clone(),
-            position: m.q_at(k).to_vec(),
-            velocity: m.qd_at(k).to_vec(),
-            effort: m.tau_at(k).to_vec(),
+        let msg = JointStateView {
+            header: &header,
+            name: names,
+            position: m.q_at(k),
+            velocity: m.qd_at(k),
+            effort: m.tau_at(k),
         };
-        w.write_to_known_channel(&mh(c_meas), &cdr_bytes(&msg))?;
-        let msg = JointSample::at(header.clone(), &names, &rec.processed, k);
-        w.write_to_known_channel(&mh(c_proc), &cdr_bytes(&msg))?;
-        let msg = JointSample {
-            friction: row(&rec.friction, k),
-            effects: row(&rec.effects, k),
-            ..JointSample::at(header, &names, &rec.truth, k)
+        w.write_to_known_channel(&mh(c_meas), cdr_into(&mut buf, &msg))?;
+        let msg = JointSampleView::at(&header, names, &rec.processed, k);
+        w.write_to_known_channel(&mh(c_proc), cdr_into(&mut buf, &msg))?;
+        let msg = JointSampleView {
+            friction: &rec.friction[k * n..(k + 1) * n],
+            effects: &rec.effects[k * n..(k + 1) * n],
+            ..JointSampleView::at(&header, names, &rec.truth, k)
         };
-        w.write_to_known_channel(&mh(c_true), &cdr_bytes(&msg))?;
+        w.write_to_known_channel(&mh(c_true), cdr_into(&mut buf, &msg))?;
     }
     Ok(())
 }
@@ -371,11 +401,12 @@ pub fn write_reference(path: &Path, tr: &Trajectory) -> Result<(), IoError> {
         let channel = w
             .add_channel(schema, TOPIC_REFERENCE, "cdr", &BTreeMap::new())
             .map_err(mcap_err)?;
+        let mut buf = Vec::new();
         for k in 0..tr.len() {
             let (header, ns) = stamp(tr.t[k]);
-            let msg = JointSample {
-                effort: vec![],
-                ..JointSample::at(header, &tr.joint_names, tr, k)
+            let msg = JointSampleView {
+                effort: &[],
+                ..JointSampleView::at(&header, &tr.joint_names, tr, k)
             };
             let mh = mcap::records::MessageHeader {
                 channel_id: channel,
@@ -383,7 +414,7 @@ pub fn write_reference(path: &Path, tr: &Trajectory) -> Result<(), IoError> {
                 log_time: ns,
                 publish_time: ns,
             };
-            w.write_to_known_channel(&mh, &cdr_bytes(&msg))
+            w.write_to_known_channel(&mh, cdr_into(&mut buf, &msg))
                 .map_err(mcap_err)?;
         }
         w.finish().map_err(mcap_err)?;
@@ -825,6 +856,65 @@ mod tests {
             position: vec![0.5; names.len()],
             velocity: vec![-1.0; names.len()],
             effort: vec![2.0; names.len()],
+        }
+    }
+
+    #[test]
+    fn the_borrowed_views_encode_as_the_owned_messages_do() {
+        // What the readers decode (the owned messages, through `cdr::serialize`) against what
+        // the writers encode (the views, through one reused buffer): the same bytes, with and
+        // without accelerations, friction and effects, for names of every length.
+        let names: Vec<String> = ["a", "knee_joint", "hip"].map(String::from).to_vec();
+        let mut tr = Trajectory::new(names.clone(), true);
+        tr.push(
+            0.5,
+            &[1.0, -2.0, 3.5],
+            &[0.1, 0.2, 0.3],
+            Some(&[9.0, 8.0, 7.0]),
+            &[4.0, 5.0, 6.0],
+        );
+        let header = state(&[]).header;
+        let owned = |friction: Vec<f64>, acceleration: Vec<f64>| JointSample {
+            header: header.clone(),
+            name: names.clone(),
+            position: tr.q_at(0).to_vec(),
+            velocity: tr.qd_at(0).to_vec(),
+            acceleration,
+            effort: tr.tau_at(0).to_vec(),
+            effects: friction.iter().map(|f| -f).collect(),
+            friction,
+        };
+        let encode =
+            |m: &JointSample| cdr::serialize::<_, _, cdr::CdrLe>(m, cdr::Infinite).unwrap();
+        let mut buf = vec![0xff; 7];
+        let view = JointSampleView::at(&header, &names, &tr, 0);
+        assert_eq!(
+            cdr_into(&mut buf, &view),
+            encode(&owned(vec![], vec![9.0, 8.0, 7.0]))
+        );
+        let friction = [0.25, -0.5, 1.0];
+        let effects = friction.map(|f| -f);
+        let view = JointSampleView {
+            friction: &friction,
+            effects: &effects,
+            acceleration: &[],
+            ..view
+        };
+        assert_eq!(
+            cdr_into(&mut buf, &view),
+            encode(&owned(friction.to_vec(), vec![]))
+        );
+        for n in [&[][..], &["a"], &["hip", "knee_joint", "x"]] {
+            let s = state(n);
+            let view = JointStateView {
+                header: &s.header,
+                name: &s.name,
+                position: &s.position,
+                velocity: &s.velocity,
+                effort: &s.effort,
+            };
+            let want = cdr::serialize::<_, _, cdr::CdrLe>(&s, cdr::Infinite).unwrap();
+            assert_eq!(cdr_into(&mut buf, &view), want);
         }
     }
 
