@@ -1,5 +1,5 @@
 //! OpenBLAS's worker threads, started when it is loaded, are stopped by
-//! `physid::spatial::single_threaded_blas` (they would spin against rayon's threads), and BLAS
+//! `physid::spatial::single_threaded_blas_without_workers` (they would spin against rayon's threads), and BLAS
 //! still works on the caller's thread afterwards. One test in its own process: nothing else may
 //! have called BLAS first.
 
@@ -18,7 +18,7 @@ fn stopping_openblas_workers_leaves_one_thread_that_still_computes() {
     // SAFETY: a plain getter of OpenBLAS.
     let started = unsafe { openblas_get_num_threads() } as usize;
     let before = threads();
-    physid::spatial::single_threaded_blas();
+    physid::spatial::single_threaded_blas_without_workers();
     // SAFETY: as above.
     assert_eq!(unsafe { openblas_get_num_threads() }, 1);
     // OpenBLAS runs `started` threads including the caller's: the others are gone.
@@ -29,7 +29,7 @@ fn stopping_openblas_workers_leaves_one_thread_that_still_computes() {
     );
     // Calling again changes nothing; BLAS (through an identification's normal equations and
     // the solver's PSD cones) still gives the answer.
-    physid::spatial::single_threaded_blas();
+    physid::spatial::single_threaded_blas_without_workers();
     assert_eq!(threads(), before - (started - 1));
     // The minimum-volume ellipsoid of a box (Clarabel's PSD cone, through LAPACK and BLAS) has
     // semi-axes √3 times the box's half sizes.

@@ -118,7 +118,7 @@ fn main() -> ExitCode {
         libc::signal(libc::SIGPIPE, libc::SIG_DFL);
     }
     // No OpenBLAS worker spins against rayon's threads (physid calls BLAS on one thread).
-    physid::spatial::single_threaded_blas();
+    physid::spatial::single_threaded_blas_without_workers();
     let args = Cli::parse();
     match run(args) {
         Ok(()) => ExitCode::SUCCESS,

@@ -1792,8 +1792,6 @@ fn _physid(m: &Bound<'_, PyModule>) -> PyResult<()> {
     let _ = rayon::ThreadPoolBuilder::new()
         .thread_name(|i| format!("physid-rayon-{i}"))
         .build_global();
-    // OpenBLAS's idle workers, started when it was loaded, would spin against rayon's threads.
-    physid::spatial::single_threaded_blas();
     m.add_class::<Robot>()?;
     m.add_class::<Identification>()?;
     m.add_class::<Diagnosis>()?;

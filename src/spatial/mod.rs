@@ -31,28 +31,35 @@ pub fn skew(x: &Vector3<f64>) -> Matrix3<f64> {
     Matrix3::new(0.0, -x.z, x.y, x.z, 0.0, -x.x, -x.y, x.x, 0.0)
 }
 
-/// Clarabel's PSD cones and physid's normal equations call OpenBLAS, which starts a worker
-/// thread per core when it is loaded and spins each on every small product (and for about
-/// 0.1 s after it starts or last worked). One thread keeps results independent of the
-/// machine's thread count, and the parallelism belongs to the experiment level (rayon). So
-/// this sets OpenBLAS to one thread and stops the workers it has already started (through
-/// `blas_thread_shutdown_`, found at run time: a build of OpenBLAS without it, such as its
-/// OpenMP one, keeps its idle workers). Called before physid's first BLAS call, and by the
-/// `physid` binary and the Python module as they start, so that no worker spins against
-/// rayon's threads. Idempotent.
+/// Clarabel's PSD cones and physid's normal equations call OpenBLAS, which would spread each
+/// small product over a thread per core. One thread keeps results independent of the
+/// machine's thread count, and the parallelism belongs to the experiment level (rayon): this
+/// sets OpenBLAS to one thread, before physid's first BLAS call. Idempotent.
 pub fn single_threaded_blas() {
     static ONCE: std::sync::Once = std::sync::Once::new();
     extern "C" {
         fn openblas_set_num_threads(n: std::ffi::c_int);
     }
-    ONCE.call_once(|| {
-        // SAFETY: a plain setter of OpenBLAS, linked through clarabel's `sdp-openblas`.
-        unsafe { openblas_set_num_threads(1) };
-        stop_blas_workers();
-    });
+    // SAFETY: a plain setter of OpenBLAS, linked through clarabel's `sdp-openblas`.
+    ONCE.call_once(|| unsafe { openblas_set_num_threads(1) });
 }
 
-/// Joins OpenBLAS's worker threads, if this OpenBLAS can (see [`single_threaded_blas`]).
+/// [`single_threaded_blas`], and the worker threads OpenBLAS started when it was loaded (one
+/// per core, before `main`, each spinning about 0.1 s on `sched_yield`, the length of a short
+/// command, against rayon's threads) joined through its `blas_thread_shutdown_`, found at run
+/// time: a build of OpenBLAS without it, such as its OpenMP one, keeps its idle workers.
+///
+/// For a process that owns its OpenBLAS, called before anything else runs (the `physid`
+/// binary does, as it starts): the workers must not be at work for another caller, so a
+/// library, or the Python module, whose host may share the same OpenBLAS, does not call it.
+pub fn single_threaded_blas_without_workers() {
+    static ONCE: std::sync::Once = std::sync::Once::new();
+    single_threaded_blas();
+    ONCE.call_once(stop_blas_workers);
+}
+
+/// Joins OpenBLAS's worker threads, if this OpenBLAS can
+/// (see [`single_threaded_blas_without_workers`]).
 fn stop_blas_workers() {
     #[cfg(target_os = "linux")]
     {
