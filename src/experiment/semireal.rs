@@ -556,6 +556,9 @@ pub struct RealCase {
     pub injected_mass: Option<f64>,
     /// The ladder's steps from the description, in order (ambiguous ones joined by `|`).
     pub found: Vec<String>,
+    /// What the first step was preferred to: the tied explanations with more columns
+    /// ([`diagnose::ladder::Rung::also_fit`]), best first. Not scored.
+    pub first_also_fit: Vec<String>,
     /// The verdict.
     pub verdict: Verdict,
     /// The first step names the injected change (a payload: on its body, or a body the step
@@ -744,15 +747,7 @@ fn score_case(
     let ladder = d.ladder.as_ref();
     let steps: Vec<&diagnose::ladder::Rung> =
         ladder.map_or(vec![], |l| l.rungs[2..l.rungs.len() - 1].iter().collect());
-    let found: Vec<String> = steps
-        .iter()
-        .map(|r| {
-            std::iter::once(r.step.clone())
-                .chain(r.ambiguous_with.iter().cloned())
-                .collect::<Vec<_>>()
-                .join(" | ")
-        })
-        .collect();
+    let found = found_steps(&steps);
     let bodies = ladder.map_or(&[][..], |l| &l.bodies[..]);
     let body_name = inj.body.map(|b| model.bodies()[b].name.clone());
     let first = steps.first();
@@ -781,6 +776,9 @@ fn score_case(
         injected_body: body_name,
         injected_mass: (inj.slot == Slot::Payload).then(|| inj.magnitudes[0]),
         found,
+        first_also_fit: first.map_or(vec![], |r| {
+            r.also_fit.iter().map(|a| a.name.clone()).collect()
+        }),
         verdict: d.verdict,
         top1,
         payload_claimed: bodies.iter().any(|b| b.payload),
@@ -792,6 +790,19 @@ fn score_case(
         seconds,
         growth: f64::NAN,
     }
+}
+
+/// Each step's name with its ambiguity group, joined by `|`.
+fn found_steps(steps: &[&diagnose::ladder::Rung]) -> Vec<String> {
+    steps
+        .iter()
+        .map(|r| {
+            std::iter::once(r.step.clone())
+                .chain(r.ambiguous_with.iter().cloned())
+                .collect::<Vec<_>>()
+                .join(" | ")
+        })
+        .collect()
 }
 
 fn file_name(p: &Path) -> String {
@@ -959,6 +970,7 @@ pub fn case_table(results: &[RealCase]) -> PolarsResult<DataFrame> {
         "rms_description" => results.iter().map(|r| r.rms[0]).collect::<Vec<_>>(),
         "rms_final" => results.iter().map(|r| r.rms[1]).collect::<Vec<_>>(),
         "growth" => results.iter().map(|r| r.growth).collect::<Vec<_>>(),
+        "first_also_fit" => s(&|r| r.first_also_fit.join(" | ")),
     )
 }
 
