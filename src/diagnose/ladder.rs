@@ -891,9 +891,8 @@ fn tied_with(
             ties.push((name, scored[i].3));
         }
     }
-    let fewest = tied.fewest(widths);
     let mut also_fit: Vec<AlsoFit> = vec![];
-    for &i in tied.within.iter().filter(|&&i| widths[i] > fewest) {
+    for i in tied.wider(widths) {
         let name = name(i);
         if name != own && !also_fit.iter().any(|x| x.name == name) {
             let (reduction, mass) = (scored[i].1, scored[i].3);

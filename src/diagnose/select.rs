@@ -357,14 +357,8 @@ fn resolve_ties(
         .map(|(vi, _)| folds.variants[*vi].kind.columns(folds.n))
         .collect();
     let ties = Ties::of(&reduction, &columns, |_| true, tie);
-    let fewest = ties.fewest(&columns);
     let ambiguous_with = ties.simplest[1..].iter().map(|&i| scores[i].kind).collect();
-    let also_fit = ties
-        .within
-        .iter()
-        .filter(|&&i| columns[i] > fewest)
-        .map(|&i| scores[i].kind)
-        .collect();
+    let also_fit = ties.wider(&columns).map(|i| scores[i].kind).collect();
     (ties.simplest[0], ambiguous_with, also_fit)
 }
 

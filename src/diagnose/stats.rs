@@ -36,6 +36,15 @@ impl Ties {
     pub(crate) fn fewest(&self, columns: &[usize]) -> usize {
         columns[self.simplest[0]]
     }
+
+    /// The tied with more columns than the simplest (set aside for it), in candidate order.
+    pub(crate) fn wider<'a>(&'a self, columns: &'a [usize]) -> impl Iterator<Item = usize> + 'a {
+        let fewest = self.fewest(columns);
+        self.within
+            .iter()
+            .copied()
+            .filter(move |&i| columns[i] > fewest)
+    }
 }
 
 #[cfg(test)]
@@ -51,6 +60,7 @@ mod tests {
         assert_eq!(t.within, vec![0, 1, 4]);
         assert_eq!(t.simplest, vec![1, 4]);
         assert_eq!(t.fewest(&columns), 1);
+        assert_eq!(t.wider(&columns).collect::<Vec<_>>(), vec![0]);
         // No tie: the winner alone.
         let t = Ties::of(&score, &columns, |_| true, 0.0);
         assert_eq!((t.within, t.simplest), (vec![0], vec![0]));

@@ -712,12 +712,12 @@ fn first_step_names(
     }
 }
 
-/// The mass body `b` carries in the diagnosis: its change where a step chose it (`bodies`),
+/// The mass body `b` carries in the diagnosis: its change where a step chose it (`chosen`),
 /// else the mass it would carry in the `first` step's place where the step's ambiguity group
 /// holds it.
 fn carried_mass(
     b: &str,
-    bodies: &[diagnose::ladder::BodyChange],
+    chosen: Option<&diagnose::ladder::BodyChange>,
     first: Option<&diagnose::ladder::Rung>,
 ) -> Option<f64> {
     let tied_mass = || {
@@ -728,11 +728,7 @@ fn carried_mass(
             .position(|s| s.ends_with(&format!(" on {b}")))?;
         r.ambiguous_mass.get(i).copied().flatten()
     };
-    bodies
-        .iter()
-        .find(|c| c.body == b)
-        .map(|c| c.mass)
-        .or_else(tied_mass)
+    chosen.map(|c| c.mass).or_else(tied_mass)
 }
 
 /// A case's marks.
@@ -752,14 +748,15 @@ fn score_case(
     let body_name = inj.body.map(|b| model.bodies()[b].name.clone());
     let first = steps.first();
     let top1 = first_step_names(inj, body_name.as_deref(), first.copied());
+    // The injected body's change, where a step chose it.
+    let chosen = body_name
+        .as_deref()
+        .and_then(|b| bodies.iter().find(|c| c.body == b));
     let payload_mass = body_name
         .as_deref()
-        .and_then(|b| carried_mass(b, bodies, first.copied()));
+        .and_then(|b| carried_mass(b, chosen, first.copied()));
     let mass_error = payload_mass.map(|m| (m - inj.magnitudes[0]).abs() / inj.magnitudes[0]);
-    let payload_mass_last = body_name
-        .as_deref()
-        .and_then(|b| bodies.iter().find(|c| c.body == b))
-        .map(|c| c.last.mass);
+    let payload_mass_last = chosen.map(|c| c.last.mass);
     let (magnitude_error, magnitude_error_weighted) = match inj.slot {
         Slot::Payload => (mass_error, mass_error),
         Slot::Effect(k) => (
