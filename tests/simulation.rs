@@ -235,6 +235,32 @@ fn bad_scenarios_are_rejected_with_file_line_key_and_reason() {
         good.replace("[simulation]", "[simulation"),
     );
     assert!(e.contains("malformed.toml") && e.contains("line"), "{e}");
+    // The integrator: a method physid does not have, a number, and one for the rapier engine
+    // (which integrates with its own, so the key would be silently ignored).
+    let with =
+        |value: &str| good.replace("seed = 1\n", &format!("seed = 1\nintegrator = {value}\n"));
+    let e = err("euler.toml", with("\"euler\""));
+    assert!(
+        e.contains("euler.toml")
+            && e.contains("euler")
+            && e.contains("ralston3")
+            && e.contains("line"),
+        "{e}"
+    );
+    let e = err("number.toml", with("3"));
+    assert!(e.contains("number.toml") && e.contains("integrator"), "{e}");
+    let e = err(
+        "rapier.toml",
+        with("\"ralston3\"").replace("[simulation]", "[simulation]\nengine = \"rapier\""),
+    );
+    assert!(
+        e.contains("rapier.toml") && e.contains("simulation.integrator") && e.contains("rapier"),
+        "{e}"
+    );
+    // Both methods by name are accepted.
+    for method in ["\"rk4\"", "\"ralston3\""] {
+        from_text(dir.path(), "ok.toml", &with(method)).expect(method);
+    }
 }
 
 #[test]
@@ -261,14 +287,15 @@ fn a_diverging_run_names_time_and_joint_and_writes_nothing() {
 }
 
 /// The integration error budget: on every committed scenario that simulates the leg or the
-/// KUKA arm, the true joint torque at the scenario's own RK4 substeps, and at one substep per
-/// control period, stays within a tenth of the scenario's torque noise of a 16-substep
-/// reference over the first 3 s (sensor noise, quantization and the finite-difference
-/// feedback off, so that only the integration differs). One substep is within the budget on
-/// all of them (the shell experiment, the largest, at 7.3e-3 against 3e-2 N m over 10 s,
-/// `cargo run --release --example substeps`).
+/// KUKA arm, the true joint torque at the scenario's own RK4 substeps, and at one step per
+/// control period of RK4 and of Ralston's third-order method, stays within a tenth of the
+/// scenario's torque noise of a 16-substep RK4 reference over the first 3 s (sensor noise,
+/// quantization and the finite-difference feedback off, so that only the integration differs).
+/// One step is within the budget on all of them (the shell experiment, the largest, over 10 s:
+/// RK4 7.3e-3, Ralston 6.6e-3 against 3e-2 N m, `cargo run --release --example substeps`).
 #[test]
 fn every_committed_scenario_integrates_within_a_tenth_of_its_torque_noise() {
+    use physid::sim::Method;
     for name in [
         "cheetah3_shell.toml",
         "sample_size.toml",
@@ -286,20 +313,22 @@ fn every_committed_scenario_integrates_within_a_tenth_of_its_torque_noise() {
         sc.sensors.velocity_feedback = physid::sim::scenario::VelocityFeedback::True;
         sc.simulation.duration = 3.0;
         let own = sc.simulation.substeps;
-        let mut tau_at = |substeps: usize| {
+        let mut tau_at = |substeps: usize, method: Method| {
             sc.simulation.substeps = substeps;
+            sc.simulation.integrator = Some(method);
             run(&sc, &m).truth.tau
         };
-        let reference = tau_at(16);
-        for substeps in [own, 1] {
-            let error = tau_at(substeps)
+        let reference = tau_at(16, Method::Rk4);
+        for (substeps, method) in [(own, Method::Rk4), (1, Method::Rk4), (1, Method::Ralston3)] {
+            let error = tau_at(substeps, method)
                 .iter()
                 .zip(&reference)
                 .map(|(a, b)| (a - b).abs())
                 .fold(0.0, f64::max);
             assert!(
                 error > 0.0 && error < budget,
-                "{name}, {substeps} substeps: torque error {error:.2e} N m, budget {budget:.1e}"
+                "{name}, {substeps} {} steps: torque error {error:.2e} N m, budget {budget:.1e}",
+                method.name()
             );
         }
     }

@@ -73,7 +73,11 @@ pub fn run(a: Args) -> anyhow::Result<()> {
         return Ok(());
     }
     let (rec, ex, wall) = (&run.recording, &report.excitation, report.wall_seconds);
-    let (sim_s, engine_name) = (report.simulated_seconds, &report.engine);
+    let sim_s = report.simulated_seconds;
+    let engine_name = match &report.integrator {
+        Some(method) => format!("{} ({method} x{})", report.engine, report.substeps),
+        None => format!("{} (x{})", report.engine, report.substeps),
+    };
     let (cons_rms, cons_max) = (
         &report.physid_inverse_dynamics_residual.rms,
         &report.physid_inverse_dynamics_residual.max,

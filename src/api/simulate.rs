@@ -18,6 +18,10 @@ pub struct SimulateJson {
     pub out: PathBuf,
     /// The engine that integrated it (`physid` or `rapier`).
     pub engine: String,
+    /// The physid engine's Runge–Kutta method (`rk4`, `ralston3`); none for rapier.
+    pub integrator: Option<String>,
+    /// Integration steps per control period.
+    pub substeps: usize,
     /// Samples logged.
     pub samples: usize,
     /// s.
@@ -153,11 +157,14 @@ impl Simulation {
             || crate::sim::report::excitation(&self.model, &self.recording.truth, 10),
             || crate::sim::report::engine_consistency(&self.model, &self.recording),
         );
-        let simulated = self.scenario.simulation.duration;
+        let sim = &self.scenario.simulation;
+        let simulated = sim.duration;
         SimulateJson {
             scenario: self.path.clone(),
             out: out.to_path_buf(),
             engine: self.engine_name(),
+            integrator: (sim.engine == Engine::Physid).then(|| sim.method().name().to_string()),
+            substeps: sim.substeps,
             samples: self.recording.truth.len(),
             simulated_seconds: simulated,
             wall_seconds: self.wall_seconds,

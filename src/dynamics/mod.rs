@@ -16,6 +16,7 @@
 mod crba;
 mod energy;
 mod fd;
+mod gravity;
 pub mod kinematics;
 mod regressor;
 mod rnea;
@@ -23,6 +24,7 @@ mod rnea;
 pub use crba::crba;
 pub use energy::{kinetic_energy, potential_energy};
 pub use fd::{forward_dynamics, FdError};
+pub use gravity::gravity_from_transforms;
 pub use regressor::{for_each_regressor, inertia_bilinear, regressor, row_columns};
 pub use rnea::{friction_torque, rnea, rnea_from_transforms, rnea_with_friction, sign};
 
@@ -137,11 +139,10 @@ pub fn update_transforms(model: &Model, data: &mut Data, q: &[f64]) {
     let full = model.rotor_model() == RotorModel::Full;
     for (i, b) in model.bodies().iter().enumerate() {
         data.s[i] = b.joint.motion_subspace();
-        data.x_up[i] = b.joint.transform(q[i]).compose(&b.x_tree);
+        data.x_up[i] = b.joint.transform_after(q[i], &b.x_tree);
         if let Some(r) = &b.rotor {
             if full {
-                let own = r.joint.transform(r.gear_ratio * q[i]);
-                data.x_rot[i] = own.compose(&r.x_rot);
+                data.x_rot[i] = r.joint.transform_after(r.gear_ratio * q[i], &r.x_rot);
                 data.s_rot[i] = r.motion_subspace();
             } else {
                 data.x_rot[i] = r.x_rot;

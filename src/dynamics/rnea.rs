@@ -34,6 +34,16 @@ pub fn rnea_from_transforms<'a>(
     check_len(model, "qd", qd);
     check_len(model, "qdd", qdd);
     forward_pass_from_transforms(model, data, qd, qdd, true);
+    backward_pass(model, data, qdd)
+}
+
+/// The RNEA's backward pass on the velocities and accelerations in `data` (bodies and rotors):
+/// the joint torques into `data.tau`, `q̈` for the reflected rotors' armature.
+pub(crate) fn backward_pass<'a>(
+    model: &Model,
+    data: &'a mut Data,
+    qdd: &[f64],
+) -> &'a DVector<f64> {
     let full = model.rotor_model() == RotorModel::Full;
     for i in 0..model.dof() {
         let (ii, v) = (&data.inertia[i], data.v[i]);

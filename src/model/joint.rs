@@ -63,4 +63,43 @@ impl Joint {
             Joint::Prismatic { axis } => Transform::translation(&(axis * q)),
         }
     }
+
+    /// `X_J(q) X_T`: the tree transform `x_tree` followed by the joint's. A revolute joint
+    /// only rotates, so the translation is `x_tree`'s as it is (what [`Transform::compose`]
+    /// gives, without adding `E_Tᵀ 0`).
+    #[inline]
+    pub fn transform_after(&self, q: f64, x_tree: &Transform) -> Transform {
+        match *self {
+            Joint::Revolute { axis } => Transform {
+                e: rot_axis_angle(&axis, -q) * x_tree.e,
+                r: x_tree.r,
+            },
+            Joint::Prismatic { .. } => self.transform(q).compose(x_tree),
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::spatial::rpy_to_matrix;
+
+    /// `transform_after` is `transform(q).compose(x_tree)`, entry for entry, for both joint
+    /// kinds on a tree transform that rotates and translates.
+    #[test]
+    fn transform_after_is_the_joint_transform_composed_with_the_tree_transform() {
+        let x_tree = Transform {
+            e: rpy_to_matrix(&Vector3::new(0.3, -1.1, 2.0)),
+            r: Vector3::new(0.12, -0.4, 0.05),
+        };
+        let axis = Vector3::new(0.2, -0.5, 0.8).normalize();
+        for joint in [Joint::Revolute { axis }, Joint::Prismatic { axis }] {
+            for q in [-2.7, -0.3, 0.0, 0.9, 3.1] {
+                let composed = joint.transform(q).compose(&x_tree);
+                let after = joint.transform_after(q, &x_tree);
+                assert_eq!(after.e, composed.e, "{joint:?} at {q}");
+                assert_eq!(after.r, composed.r, "{joint:?} at {q}");
+            }
+        }
+    }
 }

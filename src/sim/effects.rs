@@ -50,10 +50,16 @@ pub fn physical_torque_into(
 /// (gains, offsets) in the scenario's order.
 pub fn logged_torque(effects: &[EffectSpec], tau: &[f64]) -> Vec<f64> {
     let mut out = tau.to_vec();
-    for e in effects {
-        e.physics().log_torque(&mut out);
-    }
+    logged_torque_into(effects, tau, &mut out);
     out
+}
+
+/// [`logged_torque`] written into `out` (one entry per joint), without allocating.
+pub fn logged_torque_into(effects: &[EffectSpec], tau: &[f64], out: &mut [f64]) {
+    out.copy_from_slice(tau);
+    for e in effects {
+        e.physics().log_torque(out);
+    }
 }
 
 /// The logged encoder angle for link angle `q` under delivered torque `tau_mot`: `q + τ/k`
@@ -66,13 +72,24 @@ pub fn logged_angle(
     dead_zone: Option<&[f64]>,
 ) -> Vec<f64> {
     let mut out = q.to_vec();
+    logged_angle_into(effects, (q, tau_mot), dead_zone, &mut out);
+    out
+}
+
+/// [`logged_angle`] written into `out` (one entry per joint), without allocating.
+pub fn logged_angle_into(
+    effects: &[EffectSpec],
+    (q, tau_mot): (&[f64], &[f64]),
+    dead_zone: Option<&[f64]>,
+    out: &mut [f64],
+) {
+    out.copy_from_slice(q);
     for e in effects {
-        e.physics().log_angle(&mut out, tau_mot);
+        e.physics().log_angle(out, tau_mot);
     }
     if let Some(offset) = dead_zone {
         out.iter_mut().zip(offset).for_each(|(o, s)| *o += s);
     }
-    out
 }
 
 /// The delay of the logged torque in samples (0 without a `time_delay` effect).

@@ -3,7 +3,7 @@
 //! with PD or computed-torque tracking, and none (passive).
 
 use super::scenario::{ExcitationSpec, ScenarioError};
-use crate::dynamics::{kinematics, rnea, rnea_from_transforms, Data};
+use crate::dynamics::{gravity_from_transforms, kinematics, rnea, Data};
 use crate::model::Model;
 use nalgebra::{DVector, Vector3};
 use rand::{Rng, SeedableRng};
@@ -33,6 +33,48 @@ pub struct Shell {
 }
 
 impl Shell {
+    /// The Cartesian PD force at the point mapped to the joints, `Jᵀ f − d q̇`, plus `g(q)` if
+    /// compensated (N m), at time `t` from the measured `q`, `q̇`; allocates nothing.
+    /// `J`'s column `k` (joints in the point's support) is `S_k`'s world motion at the point.
+    fn torque_into(
+        &self,
+        model: &Model,
+        data: &mut Data,
+        t: f64,
+        q: &[f64],
+        qd: &[f64],
+        tau: &mut [f64],
+    ) {
+        kinematics::update_world(model, data, q);
+        let p = kinematics::point_position(data, self.body, &self.offset);
+        let column = |data: &Data, k: usize| {
+            let s0 = data.x_world[k].inv_apply_motion(&data.s[k]);
+            s0.lin + s0.ang.cross(&p)
+        };
+        let support = model.support(self.body);
+        // v = J q̇, summed column by column in joint order.
+        let mut v = Vector3::zeros();
+        for k in (0..qd.len()).filter(|k| support.contains(k)) {
+            v += column(data, k) * qd[k];
+        }
+        let (pd, vd) = self.target(t);
+        let f = self.kp.component_mul(&(pd - p)) + self.kd.component_mul(&(vd - v));
+        for (k, tau_k) in tau.iter_mut().enumerate() {
+            let jtf = if support.contains(&k) {
+                let c = column(data, k);
+                c.x * f.x + c.y * f.y + c.z * f.z
+            } else {
+                0.0
+            };
+            *tau_k = jtf - qd[k] * self.joint_damping;
+        }
+        if self.gravity_compensation {
+            // g(q): the transforms are update_world's, at the same q.
+            let g = gravity_from_transforms(model, data);
+            tau.iter_mut().zip(g.iter()).for_each(|(t, g)| *t += g);
+        }
+    }
+
     /// Target position and velocity (m, m/s; base frame) at time `t` (s).
     pub fn target(&self, t: f64) -> (Vector3<f64>, Vector3<f64>) {
         let phi = self.a_phi / self.w_phi * (1.0 - (self.w_phi * t).cos());
@@ -332,26 +374,25 @@ impl Controller {
         q: &[f64],
         qd: &[f64],
     ) -> DVector<f64> {
+        let mut tau = DVector::zeros(model.dof());
+        self.torque_into(model, data, t, q, qd, tau.as_mut_slice());
+        tau
+    }
+
+    /// [`Controller::torque`] written into `tau` (one entry per joint); the shell controller
+    /// allocates nothing (the simulator calls it every period).
+    pub fn torque_into(
+        &self,
+        model: &Model,
+        data: &mut Data,
+        t: f64,
+        q: &[f64],
+        qd: &[f64],
+        tau: &mut [f64],
+    ) {
         let n = model.dof();
         match self {
-            Controller::Shell(s) => {
-                kinematics::update_world(model, data, q);
-                let p = kinematics::point_position(data, s.body, &s.offset);
-                let jac = kinematics::point_jacobian(model, data, s.body, &s.offset);
-                let qdv = DVector::from_column_slice(qd);
-                let v = &jac * &qdv;
-                let (pd, vd) = s.target(t);
-                let f = s.kp.component_mul(&(pd - p))
-                    + s.kd.component_mul(&(vd - Vector3::new(v[0], v[1], v[2])));
-                let mut tau = jac.transpose() * f - qdv * s.joint_damping;
-                if s.gravity_compensation {
-                    // g(q): the transforms are update_world's, at the same q.
-                    let zero = std::mem::take(&mut data.zero);
-                    tau += rnea_from_transforms(model, data, &zero, &zero);
-                    data.zero = zero;
-                }
-                tau
-            }
+            Controller::Shell(s) => s.torque_into(model, data, t, q, qd, tau),
             Controller::Fourier(f) => {
                 let [qd_d, qdd_d_vel, qdd_d] = f.series.at(t);
                 let e: Vec<f64> = (0..n).map(|j| qd_d[j] - q[j]).collect();
@@ -360,17 +401,20 @@ impl Controller {
                     let a: Vec<f64> = (0..n)
                         .map(|j| qdd_d[j] + f.kp[j] * e[j] + f.kd[j] * ed[j])
                         .collect();
-                    let tau = rnea(model, data, q, qd, &a).clone();
-                    if f.friction_feedforward {
-                        tau + crate::dynamics::friction_torque(model, &qdd_d_vel)
+                    let id = rnea(model, data, q, qd, &a).clone();
+                    let out = if f.friction_feedforward {
+                        id + crate::dynamics::friction_torque(model, &qdd_d_vel)
                     } else {
-                        tau
-                    }
+                        id
+                    };
+                    tau.copy_from_slice(out.as_slice());
                 } else {
-                    DVector::from_iterator(n, (0..n).map(|j| f.kp[j] * e[j] + f.kd[j] * ed[j]))
+                    for j in 0..n {
+                        tau[j] = f.kp[j] * e[j] + f.kd[j] * ed[j];
+                    }
                 }
             }
-            Controller::Passive => DVector::zeros(n),
+            Controller::Passive => tau.fill(0.0),
         }
     }
 }

@@ -18,12 +18,16 @@ pub struct SimulationSpec {
     /// Control and logging rate (Hz).
     #[serde(default = "default_rate")]
     pub rate: f64,
-    /// RK4 steps per control period (the torque is held over the period).
+    /// Integration steps per control period (the torque is held over the period).
     #[serde(default = "default_substeps")]
     pub substeps: usize,
     /// `"physid"` or `"rapier"`.
     #[serde(default)]
     pub engine: Engine,
+    /// The physid engine's Runge–Kutta method, `"rk4"` (the default) or `"ralston3"`; not
+    /// for the rapier engine, which integrates with its own.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub integrator: Option<super::Method>,
     /// Seed of every random draw (noise, Fourier coefficients).
     #[serde(default)]
     pub seed: u64,
@@ -56,7 +60,7 @@ fn default_divergence() -> f64 {
 #[derive(Clone, Copy, Debug, Default, Deserialize, Serialize, PartialEq, Eq)]
 #[serde(rename_all = "lowercase")]
 pub enum Engine {
-    /// physid's own forward dynamics with RK4.
+    /// physid's own forward dynamics with Runge–Kutta (`integrator`).
     #[default]
     Physid,
     /// rapier3d's multibody solver (an independent engine).
@@ -318,6 +322,11 @@ impl Scenario {
 }
 
 impl SimulationSpec {
+    /// The physid engine's Runge–Kutta method (RK4 unless the scenario names one).
+    pub fn method(&self) -> super::Method {
+        self.integrator.unwrap_or_default()
+    }
+
     fn validate(&self, n: usize) -> Result<(), ScenarioError> {
         let s = self;
         positive(s.duration, "simulation.duration")?;
@@ -326,6 +335,11 @@ impl SimulationSpec {
             (1..=MAX_SUBSTEPS).contains(&s.substeps),
             "simulation.substeps",
             || format!("{} must be 1 to {MAX_SUBSTEPS}", s.substeps),
+        )?;
+        check(
+            s.engine == Engine::Physid || s.integrator.is_none(),
+            "simulation.integrator",
+            || "is the physid engine's; the rapier engine integrates with its own".into(),
         )?;
         positive(s.friction_velocity, "simulation.friction_velocity")?;
         positive(s.max_speed, "simulation.max_speed")?;

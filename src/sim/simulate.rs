@@ -6,8 +6,8 @@
 //!    the backward difference of `q_enc` (or the truth);
 //! 2. the controller computes `τ_cmd` from the measured state; the actuators deliver
 //!    `τ_mot = clip(τ_cmd)` (effort, and the back-EMF limit when motor constants are given);
-//! 3. `τ_mot` is held while RK4 integrates `H q̈ = τ_mot + τ_effects(q) − τ_f(q̇) − C q̇ − g`
-//!    over `substeps` steps, with friction `τ_f = B q̇ + B_c tanh(q̇ / v_s)`: Coulomb friction
+//! 3. `τ_mot` is held while Runge–Kutta (RK4, or Ralston's third order) integrates
+//!    `H q̈ = τ_mot + τ_effects(q) − τ_f(q̇) − C q̇ − g` over `substeps` steps, with friction `τ_f = B q̇ + B_c tanh(q̇ / v_s)`: Coulomb friction
 //!    regularized over `v_s` (default 0.01 rad/s), a smooth, documented stand-in for stiction
 //!    that the regressor's `sign(q̇)` matches away from zero velocity;
 //! 4. the log records the commanded (delivered) torque plus torque-sensing noise and sensor
@@ -105,33 +105,27 @@ pub fn simulate(
     let mut engine = integrator(real, s, q0, qd0, h)?;
     let mut sensors = SensorChain::new(model, scenario, dt);
     let motor = motor_of(&scenario.sensors);
-    let names: Vec<String> = model.joint_names();
-    let mut truth = Trajectory::with_capacity(names.clone(), true, samples);
-    let mut measured = Trajectory::with_capacity(names, true, samples);
-    // The log's acceleration is derived after the run (`recording`).
-    let no_qdd = vec![0.0; n];
-    let mut friction_log: Vec<f64> = Vec::with_capacity(samples * n);
-    let mut effects_log: Vec<f64> = Vec::with_capacity(samples * n);
+    let mut logs = Logs::new(model, samples);
     let loads = Loads { model, scenario };
+    // Each period's command, delivered torque and effect torques (N m), reused.
+    let (mut cmd, mut tau_mot, mut fx) = (vec![0.0; n], vec![0.0; n], vec![0.0; n]);
     let mut last_report = 0usize;
     for k in 0..samples {
         let t = k as f64 / s.rate;
         let (q, qd) = engine.state();
         // 1. Sensors.
-        let (q_enc, qd_fb) = sensors.read(q, qd);
+        sensors.read(q, qd);
         // 2. Controller and actuators.
-        let cmd = controller.torque(model, &mut cdata, t, &q_enc, &qd_fb);
-        let tau_mot = actuate(model, cmd.as_slice(), qd, motor);
+        let (q_enc, qd_fb) = (&sensors.q_enc, &sensors.qd_fb);
+        controller.torque_into(model, &mut cdata, t, q_enc, qd_fb, &mut cmd);
+        actuate_into(model, &cmd, qd, motor, &mut tau_mot);
         // 3. The truth at t_k, then the period integrated with τ_mot held.
-        let f = loads.friction(qd);
-        let fx = loads.effects(q, qd, &tau_mot);
-        truth.push(t, q, qd, None, &tau_mot);
+        loads.effects_into(q, qd, &tau_mot, &mut fx);
+        logs.truth(t, (q, qd), &tau_mot, &loads, &fx);
         let qdd = engine.period(&tau_mot, &loads)?;
-        truth.qdd.as_mut().expect("with q̈").extend_from_slice(qdd);
-        friction_log.extend_from_slice(&f);
-        effects_log.extend_from_slice(&fx);
-        let (q_log, logged) = sensors.log(q_enc, &tau_mot);
-        measured.push(t, &q_log, &qd_fb, Some(&no_qdd), &logged);
+        logs.true_acceleration(qdd);
+        sensors.log(&tau_mot);
+        logs.measured(t, &sensors);
         check_state(model, engine.as_ref(), t + dt, s.max_speed)?;
         if k * 100 / samples > last_report {
             last_report = k * 100 / samples;
@@ -139,8 +133,69 @@ pub fn simulate(
         }
     }
     progress(1.0);
-    let logs = (friction_log, effects_log);
-    recording(truth, logs, measured, scenario, dt)
+    let Logs {
+        truth,
+        measured,
+        friction,
+        effects,
+        ..
+    } = logs;
+    recording(truth, (friction, effects), measured, scenario, dt)
+}
+
+/// What a run keeps per sample (sample-major): the truth, the friction and effect torques
+/// acting on the robot (N m), and the log.
+struct Logs {
+    truth: Trajectory,
+    measured: Trajectory,
+    friction: Vec<f64>,
+    effects: Vec<f64>,
+    /// The log's acceleration, derived after the run ([`recording`]).
+    no_qdd: Vec<f64>,
+}
+
+impl Logs {
+    /// Empty logs with room for `samples` samples of `model`'s joints.
+    fn new(model: &Model, samples: usize) -> Self {
+        let (names, n) = (model.joint_names(), model.dof());
+        Logs {
+            truth: Trajectory::with_capacity(names.clone(), true, samples),
+            measured: Trajectory::with_capacity(names, true, samples),
+            friction: Vec::with_capacity(samples * n),
+            effects: Vec::with_capacity(samples * n),
+            no_qdd: vec![0.0; n],
+        }
+    }
+
+    /// The true state, delivered torque, friction and effect torques `fx` at `t`.
+    fn truth(
+        &mut self,
+        t: f64,
+        (q, qd): (&[f64], &[f64]),
+        tau_mot: &[f64],
+        loads: &Loads,
+        fx: &[f64],
+    ) {
+        let friction = (0..qd.len()).map(|j| loads.joint_friction(j, qd[j]));
+        self.friction.extend(friction);
+        self.effects.extend_from_slice(fx);
+        self.truth.push(t, q, qd, None, tau_mot);
+    }
+
+    /// The true acceleration at the start of the period just integrated.
+    fn true_acceleration(&mut self, qdd: &[f64]) {
+        self.truth
+            .qdd
+            .as_mut()
+            .expect("with q̈")
+            .extend_from_slice(qdd);
+    }
+
+    /// What the robot logged at `t` ([`SensorChain::log`]).
+    fn measured(&mut self, t: f64, sensors: &SensorChain) {
+        let (q, qd, tau) = (&sensors.q_log, &sensors.qd_fb, &sensors.logged);
+        self.measured.push(t, q, qd, Some(&self.no_qdd), tau);
+    }
 }
 
 /// The recording of a run: the truth, the friction and effect torques per sample (N m,
@@ -185,7 +240,15 @@ struct SensorChain<'a> {
     rng: ChaCha8Rng,
     enc_noise: Normal<f64>,
     tau_noise: Normal<f64>,
-    q_enc_prev: Option<Vec<f64>>,
+    /// The encoder's angles and the velocity feedback read last (rad, rad/s).
+    q_enc: Vec<f64>,
+    qd_fb: Vec<f64>,
+    /// The angles read the period before, once there is one.
+    q_enc_prev: Vec<f64>,
+    has_prev: bool,
+    /// The angle and torque logged last (rad, N m).
+    q_log: Vec<f64>,
+    logged: Vec<f64>,
     delay: usize,
     delivered: std::collections::VecDeque<Vec<f64>>,
     dead_zone: Option<super::effects::DeadZone>,
@@ -194,6 +257,7 @@ struct SensorChain<'a> {
 impl<'a> SensorChain<'a> {
     fn new(model: &Model, scenario: &'a Scenario, dt: f64) -> Self {
         let spec = &scenario.sensors;
+        let n = model.dof();
         let delay = super::effects::delay_samples(&scenario.effects);
         SensorChain {
             spec,
@@ -202,15 +266,21 @@ impl<'a> SensorChain<'a> {
             rng: ChaCha8Rng::seed_from_u64(scenario.simulation.seed),
             enc_noise: Normal::new(0.0, spec.encoder_noise).expect("validated"),
             tau_noise: Normal::new(0.0, spec.torque_noise).expect("validated"),
-            q_enc_prev: None,
+            q_enc: vec![0.0; n],
+            qd_fb: vec![0.0; n],
+            q_enc_prev: vec![0.0; n],
+            has_prev: false,
+            q_log: vec![0.0; n],
+            logged: vec![0.0; n],
             delay,
             delivered: std::collections::VecDeque::with_capacity(delay + 1),
             dead_zone: super::effects::DeadZone::new(model, &scenario.effects),
         }
     }
 
-    /// The encoder's angles (noisy, quantized) and the controller's velocity feedback.
-    fn read(&mut self, q: &[f64], qd: &[f64]) -> (Vec<f64>, Vec<f64>) {
+    /// The encoder's angles (noisy, quantized) and the controller's velocity feedback, into
+    /// `self.q_enc` and `self.qd_fb`.
+    fn read(&mut self, q: &[f64], qd: &[f64]) {
         let step = self.spec.encoder_step;
         let quantize = |x: f64| {
             if step > 0.0 {
@@ -219,37 +289,44 @@ impl<'a> SensorChain<'a> {
                 x
             }
         };
-        let q_enc: Vec<f64> = q
-            .iter()
-            .map(|&x| quantize(x + self.enc_noise.sample(&mut self.rng)))
-            .collect();
-        let qd_fb = match (self.spec.velocity_feedback, &self.q_enc_prev) {
-            (VelocityFeedback::FiniteDifference, Some(p)) => q_enc
-                .iter()
-                .zip(p)
-                .map(|(a, b)| (a - b) / self.dt)
-                .collect(),
-            _ => qd.to_vec(),
-        };
-        (q_enc, qd_fb)
+        for (e, &x) in self.q_enc.iter_mut().zip(q) {
+            *e = quantize(x + self.enc_noise.sample(&mut self.rng));
+        }
+        match (self.spec.velocity_feedback, self.has_prev) {
+            (VelocityFeedback::FiniteDifference, true) => {
+                for ((v, a), b) in self.qd_fb.iter_mut().zip(&self.q_enc).zip(&self.q_enc_prev) {
+                    *v = (a - b) / self.dt;
+                }
+            }
+            _ => self.qd_fb.copy_from_slice(qd),
+        }
     }
 
-    /// The logged angle and torque for the motor torque `tau_mot` delivered now: the torque
-    /// delivered `delay` periods ago through the sensor effects, plus noise.
-    fn log(&mut self, q_enc: Vec<f64>, tau_mot: &[f64]) -> (Vec<f64>, Vec<f64>) {
-        self.delivered.push_back(tau_mot.to_vec());
-        if self.delivered.len() > self.delay + 1 {
-            self.delivered.pop_front();
-        }
+    /// The logged angle and torque (into `self.q_log`, `self.logged`) for the motor torque
+    /// `tau_mot` delivered now: the torque delivered `delay` periods ago through the sensor
+    /// effects, plus noise; the angle read last ([`SensorChain::read`]) through them.
+    fn log(&mut self, tau_mot: &[f64]) {
+        // A ring of `delay + 1` torques: the oldest's buffer takes the newest.
+        let mut slot = match self.delivered.len() > self.delay {
+            true => self.delivered.pop_front().expect("non-empty"),
+            false => vec![0.0; tau_mot.len()],
+        };
+        slot.copy_from_slice(tau_mot);
+        self.delivered.push_back(slot);
         let lagged = self.delivered.front().expect("just pushed");
-        let logged: Vec<f64> = super::effects::logged_torque(self.effects, lagged)
-            .into_iter()
-            .map(|t| t + self.tau_noise.sample(&mut self.rng))
-            .collect();
+        super::effects::logged_torque_into(self.effects, lagged, &mut self.logged);
+        for t in self.logged.iter_mut() {
+            *t += self.tau_noise.sample(&mut self.rng);
+        }
         let offsets = self.dead_zone.as_mut().map(|d| d.step(tau_mot, self.dt));
-        let q_log = super::effects::logged_angle(self.effects, &q_enc, tau_mot, offsets.as_deref());
-        self.q_enc_prev = Some(q_enc);
-        (q_log, logged)
+        super::effects::logged_angle_into(
+            self.effects,
+            (&self.q_enc, tau_mot),
+            offsets.as_deref(),
+            &mut self.q_log,
+        );
+        self.q_enc_prev.copy_from_slice(&self.q_enc);
+        self.has_prev = true;
     }
 }
 
@@ -319,7 +396,7 @@ fn integrator<'a>(
         Engine::Physid => Box::new(PhysidIntegrator {
             model: real,
             data: Data::new(real),
-            rk4: super::Rk4::new(real.dof()),
+            stepper: super::RungeKutta::with_method(real.dof(), s.method()),
             qdd: vec![0.0; q0.len()],
             q: q0,
             qd: qd0,
@@ -344,17 +421,21 @@ fn integrator<'a>(
 
 /// The torque the actuators deliver for the command `cmd` (N m at the joint): clipped to the
 /// effort limit and, with motor constants `(k_t, R, V)`, to the back-EMF limit at speed `q̇`.
-fn actuate(model: &Model, cmd: &[f64], qd: &[f64], motor: Option<(f64, f64, f64)>) -> Vec<f64> {
-    (0..model.dof())
-        .map(|j| {
-            let b = &model.bodies()[j];
-            let mut lim = b.limits.effort;
-            if let (Some((kt, r, v)), Some(rot)) = (motor, &b.rotor) {
-                lim = lim.min(back_emf_limit(cmd[j], qd[j], rot.gear_ratio, kt, r, v));
-            }
-            cmd[j].clamp(-lim, lim)
-        })
-        .collect()
+fn actuate_into(
+    model: &Model,
+    cmd: &[f64],
+    qd: &[f64],
+    motor: Option<(f64, f64, f64)>,
+    tau_mot: &mut [f64],
+) {
+    for (j, out) in tau_mot.iter_mut().enumerate() {
+        let b = &model.bodies()[j];
+        let mut lim = b.limits.effort;
+        if let (Some((kt, r, v)), Some(rot)) = (motor, &b.rotor) {
+            lim = lim.min(back_emf_limit(cmd[j], qd[j], rot.gear_ratio, kt, r, v));
+        }
+        *out = cmd[j].clamp(-lim, lim);
+    }
 }
 
 /// The engine's state at time `t` is finite and below `max_speed`, or the simulation diverged.
@@ -392,17 +473,11 @@ impl Loads<'_> {
         let f = &self.model.bodies()[j].friction;
         f.viscous * w + f.coulomb * (w / self.scenario.simulation.friction_velocity).tanh()
     }
-    /// [`Loads::joint_friction`] of every joint (N m).
-    fn friction(&self, qd: &[f64]) -> Vec<f64> {
-        qd.iter()
-            .enumerate()
-            .map(|(j, &w)| self.joint_friction(j, w))
-            .collect()
-    }
-    /// Torque of the injected physical effects (N m).
-    fn effects(&self, q: &[f64], qd: &[f64], tau_mot: &[f64]) -> Vec<f64> {
+    /// Torque of the injected physical effects (N m), into `out`.
+    fn effects_into(&self, q: &[f64], qd: &[f64], tau_mot: &[f64], out: &mut [f64]) {
         let vs = self.scenario.simulation.friction_velocity;
-        super::effects::physical_torque(&self.scenario.effects, self.model, q, qd, tau_mot, vs)
+        let effects = &self.scenario.effects;
+        super::effects::physical_torque_into(effects, self.model, (q, qd), tau_mot, vs, out);
     }
     /// Net generalized force on the joints for a held motor torque.
     fn net(&self, tau_mot: &[f64], q: &[f64], qd: &[f64]) -> Vec<f64> {
@@ -429,12 +504,12 @@ trait Integrator {
     fn period(&mut self, tau_mot: &[f64], loads: &Loads) -> Result<&[f64], SimError>;
 }
 
-/// physid's forward dynamics with RK4; the true `q̈` at the start of a period is the first
-/// substep's first slope.
+/// physid's forward dynamics with an explicit Runge–Kutta method (the scenario's
+/// `integrator`); the true `q̈` at the start of a period is the first substep's first slope.
 struct PhysidIntegrator<'a> {
     model: &'a Model,
     data: Data,
-    rk4: super::Rk4,
+    stepper: super::RungeKutta,
     q: Vec<f64>,
     qd: Vec<f64>,
     /// The true `q̈` at the start of the last period.
@@ -451,7 +526,7 @@ impl Integrator for PhysidIntegrator<'_> {
         let mut force =
             |_t: f64, q: &[f64], qd: &[f64], u: &mut [f64]| loads.net_into(tau_mot, q, qd, u);
         for m in 0..self.substeps {
-            self.rk4
+            self.stepper
                 .step(
                     self.model,
                     &mut self.data,
@@ -463,7 +538,7 @@ impl Integrator for PhysidIntegrator<'_> {
                 )
                 .map_err(|e| SimError::Engine(e.to_string()))?;
             if m == 0 {
-                self.qdd.copy_from_slice(self.rk4.start_acceleration());
+                self.qdd.copy_from_slice(self.stepper.start_acceleration());
             }
         }
         Ok(&self.qdd)
@@ -524,9 +599,20 @@ pub fn process(
 ) -> Result<Trajectory, SimError> {
     let n = measured.dof();
     let p = &scenario.processing;
-    let mut out = measured.clone();
+    // The times, names and torque as logged; q, q̇, q̈ (and τ if filtered) replaced below.
+    let mut out = Trajectory {
+        joint_names: measured.joint_names.clone(),
+        t: measured.t.clone(),
+        q: vec![],
+        qd: vec![],
+        qdd: None,
+        tau: measured.tau.clone(),
+        starts: measured.starts.clone(),
+        margins: measured.margins.clone(),
+    };
     match p.method {
         Processing::FiniteDifference => {
+            out.q = measured.q.clone();
             out.qd = column_map(&measured.q, n, |x| differentiate(x, dt));
             out.qdd = Some(column_map(&out.qd, n, |x| differentiate(x, dt)));
         }

@@ -55,13 +55,16 @@ impl RigidInertia {
     /// The same inertia in the parent frame A, given `x = B_X_A` and `self` in B coordinates:
     /// `Xᵀ I X` (RBDA eq. 2.66). With `y = Eᵀ h`: `h_A = y + m r` and
     /// `Ī_A = Eᵀ Ī E − S(y) S(r) − S(r) S(y) − m S(r) S(r)`; valid for any mass, including zero.
+    /// `S(r) S(y) = (S(y) S(r))ᵀ` (both skew), taken as the transpose: the same products summed
+    /// in the same order, so the same numbers.
     pub fn expressed_in_parent(&self, x: &Transform) -> RigidInertia {
         let y = x.e.tr_mul(&self.h);
         let (sy, sr) = (skew(&y), skew(&x.r));
+        let sy_sr = sy * sr;
         RigidInertia {
             m: self.m,
             h: y + x.r * self.m,
-            ibar: x.e.tr_mul(&self.ibar) * x.e - sy * sr - sr * sy - sr * sr * self.m,
+            ibar: x.e.tr_mul(&self.ibar) * x.e - sy_sr - sy_sr.transpose() - sr * sr * self.m,
         }
     }
 
@@ -324,6 +327,24 @@ impl InertialParams {
 mod tests {
     use super::*;
     use crate::spatial::rot_axis_angle;
+
+    /// `S(r) S(y)` is `(S(y) S(r))ᵀ` entry for entry (the transform of an inertia takes it so):
+    /// on vectors of mixed signs and magnitudes, including zeros.
+    #[test]
+    fn the_product_of_two_skew_matrices_reversed_is_its_transpose_exactly() {
+        let vs = [
+            Vector3::new(0.3, -1.7e-3, 2.2),
+            Vector3::new(-0.0, 5.5, -0.125),
+            Vector3::new(1e-9, -3.3e4, 0.0),
+            Vector3::new(-0.7, 0.11, -0.013),
+        ];
+        for y in &vs {
+            for r in &vs {
+                let (sy, sr) = (skew(y), skew(r));
+                assert_eq!(sr * sy, (sy * sr).transpose(), "{y} {r}");
+            }
+        }
+    }
 
     /// Point masses: the exact parameters of a known density.
     fn point_masses(pts: &[(f64, Vector3<f64>)]) -> InertialParams {
