@@ -30,9 +30,16 @@ pub fn point_jacobian(model: &Model, data: &Data, body: usize, p: &Vector3<f64>)
     let pw = point_position(data, body, p);
     let mut jac = DMatrix::zeros(3, n);
     for &k in model.support(body) {
-        let s0 = data.x_world[k].inv_apply_motion(&data.s[k]);
-        let col = s0.lin + s0.ang.cross(&pw);
+        let col = point_jacobian_column(data, k, &pw);
         jac.fixed_view_mut::<3, 1>(0, k).copy_from(&col);
     }
     jac
+}
+
+/// Column `k` of [`point_jacobian`] (joint `k` in the point's support): the world-frame motion
+/// of `S_k` evaluated at the point's world position `pw` (m), `ω × pw + v₀`. Call
+/// [`update_world`] first.
+pub fn point_jacobian_column(data: &Data, k: usize, pw: &Vector3<f64>) -> Vector3<f64> {
+    let s0 = data.x_world[k].inv_apply_motion(&data.s[k]);
+    s0.lin + s0.ang.cross(pw)
 }

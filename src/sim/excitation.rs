@@ -47,10 +47,7 @@ impl Shell {
     ) {
         kinematics::update_world(model, data, q);
         let p = kinematics::point_position(data, self.body, &self.offset);
-        let column = |data: &Data, k: usize| {
-            let s0 = data.x_world[k].inv_apply_motion(&data.s[k]);
-            s0.lin + s0.ang.cross(&p)
-        };
+        let column = |data: &Data, k: usize| kinematics::point_jacobian_column(data, k, &p);
         let support = model.support(self.body);
         // v = J q̇, summed column by column in joint order.
         let mut v = Vector3::zeros();
