@@ -7,7 +7,8 @@
 //! 2. the controller computes `τ_cmd` from the measured state; the actuators deliver
 //!    `τ_mot = clip(τ_cmd)` (effort, and the back-EMF limit when motor constants are given);
 //! 3. `τ_mot` is held while Runge–Kutta (RK4, or Ralston's third order) integrates
-//!    `H q̈ = τ_mot + τ_effects(q) − τ_f(q̇) − C q̇ − g` over `substeps` steps, with friction `τ_f = B q̇ + B_c tanh(q̇ / v_s)`: Coulomb friction
+//!    `H q̈ = τ_mot + τ_effects(q) − τ_f(q̇) − C q̇ − g` over `substeps` steps, with friction
+//!    `τ_f = B q̇ + B_c tanh(q̇ / v_s)`: Coulomb friction
 //!    regularized over `v_s` (default 0.01 rad/s), a smooth, documented stand-in for stiction
 //!    that the regressor's `sign(q̇)` matches away from zero velocity;
 //! 4. the log records the commanded (delivered) torque plus torque-sensing noise and sensor
