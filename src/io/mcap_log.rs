@@ -98,37 +98,6 @@ impl<'a> JointSampleView<'a> {
     }
 }
 
-/// The longest record an MCAP file of `file_bytes` bytes may hold, checked before anything is
-/// allocated for one: 100 times the file (a compressed chunk's records), at least 64 MiB. A
-/// corrupt length inside a chunk would otherwise make a reader reserve exabytes and abort.
-pub(super) fn record_length_limit(file_bytes: u64) -> usize {
-    usize::try_from(file_bytes)
-        .unwrap_or(usize::MAX)
-        .saturating_mul(100)
-        .max(64 << 20)
-}
-
-/// Walks every record of an MCAP file, chunks decompressed, with each record's length bounded
-/// ([`record_length_limit`]) before anything is allocated for it. The stream that reads the
-/// messages afterwards meets the same, checked records.
-fn prevalidate(bytes: &[u8]) -> Result<(), mcap::McapError> {
-    use mcap::sans_io::{LinearReadEvent, LinearReader, LinearReaderOptions};
-    let limit = record_length_limit(bytes.len() as u64);
-    let mut reader = LinearReader::new_with_options(
-        LinearReaderOptions::default().with_record_length_limit(limit),
-    );
-    let mut pos = 0;
-    while let Some(event) = reader.next_event() {
-        if let LinearReadEvent::ReadRequest(wanted) = event? {
-            let n = wanted.min(bytes.len() - pos).min(1 << 20);
-            reader.insert(n).copy_from_slice(&bytes[pos..pos + n]);
-            reader.notify_read(n);
-            pos += n;
-        }
-    }
-    Ok(())
-}
-
 /// Checks every length of a CDR-encoded `JointState`-like message (header, names, then
 /// `float_sequences` sequences of `float64`) against the bytes that remain, before the decoder
 /// allocates anything: a corrupt length would otherwise make it reserve up to 4 GB for one
@@ -548,34 +517,20 @@ impl<'a> Reader<'a> {
         }
     }
 
+    /// Reads the messages of the MCAP file `path` in blocks ([`super::mcap_walk::each_message`]:
+    /// the file is never held whole) and its metadata through its summary.
     pub(crate) fn mcap_file(&mut self, path: &Path) -> Result<(), IoError> {
-        let bytes = std::fs::read(path).map_err(|source| IoError::Fs {
-            path: path.to_path_buf(),
-            source,
+        use super::mcap_walk::{each_message, Flow, Walked};
+        each_message(path, &mut |m| {
+            let at = m.sequence as u64;
+            self.message(m.topic, m.schema, m.data, m.log_time, at)
+                .map(|_| Flow::Go)
+        })
+        .map_err(|e| match e {
+            Walked::Io(e) => e,
+            Walked::Message(m) => IoError::invalid(path, m),
         })?;
-        let bad = |m: String| IoError::invalid(path, m);
-        prevalidate(&bytes).map_err(|e| bad(format!("not a readable MCAP file: {e}")))?;
-        let stream =
-            mcap::MessageStream::new(&bytes).map_err(|e| bad(format!("not an MCAP file: {e}")))?;
-        for (i, m) in stream.enumerate() {
-            let m = m.map_err(|e| bad(format!("record {i}: {e}")))?;
-            let kind = m.channel.schema.as_ref().map_or("", |s| s.name.as_str());
-            self.message(
-                &m.channel.topic,
-                kind,
-                &m.data,
-                m.log_time,
-                m.sequence as u64,
-            )
-            .map_err(bad)?;
-        }
-        if let Ok(Some(summary)) = mcap::Summary::read(&bytes) {
-            for idx in &summary.metadata_indexes {
-                let md = mcap::read::metadata(&bytes, idx)
-                    .map_err(|e| bad(format!("metadata '{}': {e}", idx.name)))?;
-                self.metadata.insert(md.name, md.metadata);
-            }
-        }
+        self.metadata.extend(super::mcap_walk::all_metadata(path)?);
         Ok(())
     }
 

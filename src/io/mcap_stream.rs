@@ -1,33 +1,21 @@
 //! An MCAP log's processed samples streamed from disk, in memory that does not grow with the
 //! file: the counterpart of [`super::samples::stream_csv`] for `physid simulate`'s logs and any
-//! MCAP carrying `/physid/processed` (`physid_msgs/msg/JointSample` with accelerations).
+//! MCAP carrying `/physid/processed` (`physid_msgs/msg/JointSample` with accelerations). The
+//! same block-wise walk ([`super::mcap_walk::each_message`]) feeds the reader of whole logs
+//! ([`super::mcap_log::read`], rosbag2's MCAP storage), which so never holds the file itself.
 //!
 //! The file is read in blocks of at most 1 MiB through the `mcap` crate's sans-io reader (chunks
 //! decompressed one at a time, every record's length bounded before anything is allocated for
-//! it: [`super::mcap_log::record_length_limit`]), and each processed message is decoded,
+//! it: [`super::mcap_walk::record_length_limit`]), and each processed message is decoded,
 //! checked (finite values, increasing time) and handed on; nothing else is kept but the schema
 //! and channel tables.
 
-use super::mcap_log::{
-    check_cdr_lengths, record_length_limit, JointSample, JOINT_SAMPLE_TYPE, TOPIC_PROCESSED,
-};
+use super::mcap_log::{check_cdr_lengths, JointSample, JOINT_SAMPLE_TYPE, TOPIC_PROCESSED};
+use super::mcap_walk::{each_message, Flow, Summary, Walked};
 use super::IoError;
 use crate::trajectory::{check_value, SampleRef, SampleSink, SAMPLE_GROUPS};
-use mcap::records::Record;
-use mcap::sans_io::{LinearReadEvent, LinearReader, LinearReaderOptions};
-use std::collections::HashMap;
-use std::io::Read;
 use std::ops::Range;
 use std::path::Path;
-
-/// Bytes read from the file at a time.
-const BLOCK: usize = 1 << 20;
-
-/// What the walk does after a processed message.
-enum Flow {
-    Go,
-    Stop,
-}
 
 /// Whether `path` carries processed samples with accelerations (so it can be streamed:
 /// nothing to derive). Reads up to the first processed message.
@@ -148,61 +136,20 @@ fn walk(
     path: &Path,
     each: &mut dyn FnMut(u64, &JointSample) -> Result<Flow, String>,
 ) -> Result<(), IoError> {
-    let fs_error = |source| IoError::Fs {
-        path: path.to_path_buf(),
-        source,
-    };
-    let mut file = std::fs::File::open(path).map_err(fs_error)?;
-    let size = file.metadata().map_err(fs_error)?.len();
     let bad = |m: String| IoError::invalid(path, m);
-    let options =
-        LinearReaderOptions::default().with_record_length_limit(record_length_limit(size));
-    let mut reader = LinearReader::new_with_options(options);
-    let mut schemas: HashMap<u16, bool> = HashMap::new();
-    let mut processed: HashMap<u16, bool> = HashMap::new();
-    let mut i = 0usize;
-    while let Some(event) = reader.next_event() {
-        let event = event.map_err(|e| bad(format!("not a readable MCAP file: {e}")))?;
-        let (opcode, data) = match event {
-            LinearReadEvent::ReadRequest(wanted) => {
-                let buf = reader.insert(wanted.min(BLOCK));
-                let got = file.read(buf).map_err(fs_error)?;
-                reader.notify_read(got);
-                continue;
-            }
-            LinearReadEvent::Record { opcode, data } => (opcode, data),
-        };
-        let record =
-            mcap::parse_record(opcode, data).map_err(|e| bad(format!("record {i}: {e}")))?;
-        i += 1;
-        match record {
-            Record::Schema { header, .. } => {
-                schemas.insert(header.id, header.name == JOINT_SAMPLE_TYPE);
-            }
-            Record::Channel(c) => {
-                let sample = schemas.get(&c.schema_id).copied().unwrap_or(false);
-                processed.insert(c.id, sample && c.topic == TOPIC_PROCESSED);
-            }
-            Record::Message { header, data } => {
-                if !processed.get(&header.channel_id).copied().unwrap_or(false) {
-                    continue;
-                }
-                let at = |e: String| {
-                    bad(format!(
-                        "{TOPIC_PROCESSED} message {}: {e}",
-                        header.sequence
-                    ))
-                };
-                check_cdr_lengths(&data, 6).map_err(at)?;
-                let s: JointSample = cdr::deserialize(&data).map_err(|e| at(e.to_string()))?;
-                if let Flow::Stop = each(header.log_time, &s).map_err(&bad)? {
-                    return Ok(());
-                }
-            }
-            _ => {}
+    each_message(path, &mut |m| {
+        if m.topic != TOPIC_PROCESSED || m.schema != JOINT_SAMPLE_TYPE {
+            return Ok(Flow::Go);
         }
-    }
-    Ok(())
+        let at = |e: String| format!("{TOPIC_PROCESSED} message {}: {e}", m.sequence);
+        check_cdr_lengths(m.data, 6).map_err(at)?;
+        let s: JointSample = cdr::deserialize(m.data).map_err(|e| at(e.to_string()))?;
+        each(m.log_time, &s)
+    })
+    .map_err(|e| match e {
+        Walked::Io(e) => e,
+        Walked::Message(m) => bad(m),
+    })
 }
 
 /// The metadata record `name` of the MCAP file `path` (its key-value map), found through the
@@ -213,56 +160,12 @@ pub fn metadata(
     path: &Path,
     name: &str,
 ) -> Result<Option<std::collections::BTreeMap<String, String>>, IoError> {
-    use mcap::sans_io::{SummaryReadEvent, SummaryReader, SummaryReaderOptions};
-    use std::io::Seek;
-    let fs_error = |source| IoError::Fs {
-        path: path.to_path_buf(),
-        source,
-    };
-    let bad = |m: String| IoError::invalid(path, m);
-    let mut file = std::fs::File::open(path).map_err(fs_error)?;
-    let size = file.metadata().map_err(fs_error)?.len();
-    // The summary's records are not compressed: none is longer than the file.
-    let limit = usize::try_from(size).unwrap_or(usize::MAX).max(1 << 20);
-    let mut reader = SummaryReader::new_with_options(
-        SummaryReaderOptions::default()
-            .with_file_size(size)
-            .with_record_length_limit(limit),
-    );
-    while let Some(event) = reader.next_event() {
-        match event.map_err(|e| bad(format!("not a readable MCAP file: {e}")))? {
-            SummaryReadEvent::ReadRequest(wanted) => {
-                let got = file.read(reader.insert(wanted)).map_err(fs_error)?;
-                reader.notify_read(got);
-            }
-            SummaryReadEvent::SeekRequest(to) => {
-                reader.notify_seeked(file.seek(to).map_err(fs_error)?);
-            }
-        }
-    }
-    let Some(summary) = reader.finish() else {
+    let Some(mut summary) = Summary::open(path)? else {
         return Ok(None);
     };
-    let Some(index) = summary.metadata_indexes.iter().find(|i| i.name == name) else {
+    let Some(index) = summary.indexes.iter().position(|i| i.name == name) else {
         return Ok(None);
     };
-    let length = usize::try_from(index.length)
-        .ok()
-        .filter(|&l| (9..=limit).contains(&l) && index.offset.saturating_add(index.length) <= size)
-        .ok_or_else(|| {
-            bad(format!(
-                "metadata '{name}': its index points outside the file"
-            ))
-        })?;
-    let mut record = vec![0; length];
-    file.seek(std::io::SeekFrom::Start(index.offset))
-        .and_then(|_| file.read_exact(&mut record))
-        .map_err(fs_error)?;
-    match mcap::parse_record(record[0], &record[9..]) {
-        Ok(Record::Metadata(m)) => Ok(Some(m.metadata)),
-        Ok(_) => Err(bad(format!(
-            "metadata '{name}': its index points at another record"
-        ))),
-        Err(e) => Err(bad(format!("metadata '{name}': {e}"))),
-    }
+    let index = summary.indexes.swap_remove(index);
+    summary.record(&index).map(Some)
 }

@@ -7,6 +7,7 @@ pub mod document;
 pub mod geometry;
 pub mod mcap_log;
 pub mod mcap_stream;
+mod mcap_walk;
 pub mod mjcf;
 pub mod plot;
 pub mod robot_spec;
