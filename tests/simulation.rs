@@ -186,6 +186,24 @@ fn mcap_and_csv_round_trip_the_samples() {
         serde_json::from_str(&log.metadata["ground_truth_parameters"]["values"]).unwrap();
     assert_eq!(values, theta.as_slice());
     assert_eq!(log.identification_input(), rec.processed.clone().into());
+    // Reading fewer of physid's own topics keeps the rest as read with all of them.
+    for (keep, processed, truth) in [
+        (mcap_log::PhysidSamples::Processed, true, false),
+        (mcap_log::PhysidSamples::None, false, false),
+    ] {
+        let opts = mcap_log::ReadOptions {
+            physid_samples: keep,
+            ..Default::default()
+        };
+        let part = mcap_log::read_with(&p, &opts).unwrap();
+        assert_eq!(part.measured, log.measured, "{keep:?}");
+        assert_eq!(part.metadata, log.metadata, "{keep:?}");
+        assert_eq!(part.processed.is_some(), processed, "{keep:?}");
+        assert_eq!(part.truth.is_some(), truth, "{keep:?}");
+        if processed {
+            assert_eq!(part.processed, log.processed);
+        }
+    }
     // CSV: the processed samples, exactly.
     let c = dir.path().join("log.csv");
     samples::write_csv(&c, &rec.processed).unwrap();

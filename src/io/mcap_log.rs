@@ -423,6 +423,33 @@ pub struct ReadOptions {
     /// The robot's joints, if known: `JointState` messages naming none of them (another
     /// publisher on the same topic, e.g. a gripper) are skipped and counted.
     pub joints: Option<Vec<String>>,
+    /// Which of physid's own sample topics to decode and keep (a log of `physid simulate`).
+    pub physid_samples: PhysidSamples,
+}
+
+/// Which of physid's own sample topics a read keeps: those it does not are not decoded (their
+/// log times still set the log clock's origin, as when they are read), so their memory is
+/// never spent.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum PhysidSamples {
+    /// `/physid/processed` and `/physid/ground_truth`.
+    #[default]
+    All,
+    /// `/physid/processed` only (what identification reads when no topic is given).
+    Processed,
+    /// Neither: the joint-state topic alone.
+    None,
+}
+
+impl PhysidSamples {
+    /// Whether samples of `topic` (one of physid's) are kept.
+    fn keeps(self, topic: &str) -> bool {
+        match self {
+            PhysidSamples::All => true,
+            PhysidSamples::Processed => topic == TOPIC_PROCESSED,
+            PhysidSamples::None => false,
+        }
+    }
 }
 
 impl Default for ReadOptions {
@@ -431,6 +458,7 @@ impl Default for ReadOptions {
             topic: TOPIC_MEASURED.to_string(),
             stamp: Stamp::Log,
             joints: None,
+            physid_samples: PhysidSamples::All,
         }
     }
 }
@@ -554,7 +582,11 @@ impl<'a> Reader<'a> {
                 self.joint_state(data, log_time).map_err(at)?;
             }
         } else if (topic == TOPIC_PROCESSED || topic == TOPIC_TRUTH) && kind == JOINT_SAMPLE_TYPE {
-            self.joint_sample(topic, data, log_time).map_err(at)?;
+            if self.opts.physid_samples.keeps(topic) {
+                self.joint_sample(topic, data, log_time).map_err(at)?;
+            } else {
+                self.seconds(Stamp::Log, log_time).map_err(at)?;
+            }
         }
         Ok(())
     }

@@ -655,6 +655,11 @@ pub fn load_logged(
                 .unwrap_or_else(|| mcap_log::TOPIC_MEASURED.into()),
             stamp: opts.stamp,
             joints: Some(names.clone()),
+            // The ground truth is not read here; the processed samples only without a topic.
+            physid_samples: match opts.topic {
+                None => mcap_log::PhysidSamples::Processed,
+                Some(_) => mcap_log::PhysidSamples::None,
+            },
         };
         let log = read_joint_log(path, &ropts)?;
         let logged = match (&opts.topic, log.processed) {
