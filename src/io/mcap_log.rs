@@ -548,16 +548,13 @@ impl<'a> Reader<'a> {
     /// Reads the messages of the MCAP file `path` in blocks ([`super::mcap_walk::each_message`]:
     /// the file is never held whole) and its metadata through its summary.
     pub(crate) fn mcap_file(&mut self, path: &Path) -> Result<(), IoError> {
-        use super::mcap_walk::{each_message, Flow, Walked};
+        use super::mcap_walk::{each_message, Flow};
         each_message(path, &mut |m| {
-            let at = m.sequence as u64;
-            self.message(m.topic, m.schema, m.data, m.log_time, at)
+            let sequence = u64::from(m.sequence);
+            self.message(m.topic, m.schema, m.data, m.log_time, sequence)
                 .map(|_| Flow::Go)
         })
-        .map_err(|e| match e {
-            Walked::Io(e) => e,
-            Walked::Message(m) => IoError::invalid(path, m),
-        })?;
+        .map_err(|e| e.into_io(path))?;
         self.metadata.extend(super::mcap_walk::all_metadata(path)?);
         Ok(())
     }

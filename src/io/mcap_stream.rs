@@ -11,7 +11,7 @@
 //! and channel tables.
 
 use super::mcap_log::{check_cdr_lengths, JointSample, JOINT_SAMPLE_TYPE, TOPIC_PROCESSED};
-use super::mcap_walk::{each_message, Flow, Summary, Walked};
+use super::mcap_walk::{each_message, Flow, Summary};
 use super::IoError;
 use crate::trajectory::{check_value, SampleRef, SampleSink, SAMPLE_GROUPS};
 use std::ops::Range;
@@ -136,7 +136,6 @@ fn walk(
     path: &Path,
     each: &mut dyn FnMut(u64, &JointSample) -> Result<Flow, String>,
 ) -> Result<(), IoError> {
-    let bad = |m: String| IoError::invalid(path, m);
     each_message(path, &mut |m| {
         if m.topic != TOPIC_PROCESSED || m.schema != JOINT_SAMPLE_TYPE {
             return Ok(Flow::Go);
@@ -146,10 +145,7 @@ fn walk(
         let s: JointSample = cdr::deserialize(m.data).map_err(|e| at(e.to_string()))?;
         each(m.log_time, &s)
     })
-    .map_err(|e| match e {
-        Walked::Io(e) => e,
-        Walked::Message(m) => bad(m),
-    })
+    .map_err(|e| e.into_io(path))
 }
 
 /// The metadata record `name` of the MCAP file `path` (its key-value map), found through the

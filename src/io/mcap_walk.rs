@@ -46,6 +46,16 @@ pub(crate) enum Walked {
     Message(String),
 }
 
+impl Walked {
+    /// The error of reading `path`: the file's own, or what was said of a message, naming it.
+    pub(crate) fn into_io(self, path: &Path) -> IoError {
+        match self {
+            Walked::Io(e) => e,
+            Walked::Message(m) => IoError::invalid(path, m),
+        }
+    }
+}
+
 /// Reads every record of `path` in blocks of at most [`BLOCK`] bytes, chunks decompressed one
 /// at a time and every record's length bounded before anything is allocated for it, passing
 /// each message in file order to `each` until it says stop: memory independent of the file's

@@ -5,7 +5,7 @@
 use super::scenario::{ExcitationSpec, ScenarioError};
 use crate::dynamics::{gravity_from_transforms, kinematics, rnea, Data};
 use crate::model::Model;
-use nalgebra::{DVector, Vector3};
+use nalgebra::Vector3;
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 
@@ -362,22 +362,9 @@ impl Controller {
         }
     }
 
-    /// Joint torque command (N m) at time `t` from the measured `q`, `q̇`.
-    pub fn torque(
-        &self,
-        model: &Model,
-        data: &mut Data,
-        t: f64,
-        q: &[f64],
-        qd: &[f64],
-    ) -> DVector<f64> {
-        let mut tau = DVector::zeros(model.dof());
-        self.torque_into(model, data, t, q, qd, tau.as_mut_slice());
-        tau
-    }
-
-    /// [`Controller::torque`] written into `tau` (one entry per joint); the shell controller
-    /// allocates nothing (the simulator calls it every period).
+    /// Joint torque command (N m) at time `t` from the measured `q`, `q̇`, written into `tau`
+    /// (one entry per joint); the shell controller allocates nothing (the simulator calls it
+    /// every period).
     pub fn torque_into(
         &self,
         model: &Model,

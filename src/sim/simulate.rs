@@ -488,9 +488,7 @@ impl Loads<'_> {
     }
     /// [`Loads::net`] written into `out`, without allocating: `τ_mot + τ_effects − τ_f` (N m).
     fn net_into(&self, tau_mot: &[f64], q: &[f64], qd: &[f64], out: &mut [f64]) {
-        let vs = self.scenario.simulation.friction_velocity;
-        let effects = &self.scenario.effects;
-        super::effects::physical_torque_into(effects, self.model, (q, qd), tau_mot, vs, out);
+        self.effects_into(q, qd, tau_mot, out);
         for j in 0..qd.len() {
             out[j] = tau_mot[j] + out[j] - self.joint_friction(j, qd[j]);
         }
