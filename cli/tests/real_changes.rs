@@ -700,7 +700,9 @@ fn in_the_what_changed_mode_a_mass_later_steps_trade_off_with_is_stated_as_weigh
             "{text}"
         );
     } else {
-        assert_eq!(last, mass);
+        // Not moved: the final fit within two standard errors of the step's weighing, which
+        // is the mass stated.
+        assert!((last - mass).abs() <= 2.0 * se.max(last_se), "{body}");
     }
 }
 
@@ -787,5 +789,91 @@ fn in_the_what_changed_mode_a_payload_that_fits_better_than_a_simpler_step_is_sa
     assert!(
         text.contains("**Also fit**") && text.contains("`payload or change on lwr_5_link` (+"),
         "{text}"
+    );
+}
+
+#[test]
+fn a_torque_constant_off_on_one_real_joint_is_weighed_against_the_description() {
+    // Case 5 of seed 2: the logged torque of lwr_1_joint (the shoulder) scaled by 0.75 on run 3,
+    // the description from run 1. The ladder names the gain first. Its column is the
+    // prediction of a model without the gain, so each joint's coefficient is its gain error;
+    // until 2026-11-27 it was read as the re-identified model's (`β/(1 − β)`, relative to the
+    // median joint) and the shoulder came out at −0.06 ± 0.20, the fit with four later steps
+    // free (the joints the real robot's own standing gap reads as gains pulled the median).
+    let (_dir, keep, table) = kept_semi_real_cases_of("2", &["--only", "5"]);
+    let row = table.lines().nth(1).unwrap();
+    assert!(
+        row.starts_with("5,") && row.contains(",torque_gain,"),
+        "{row}"
+    );
+    let found = field(&table, row, "found");
+    assert_eq!(first_found(&found), "+ torque_gain", "{found}");
+    // The truth the case was scored against, kept beside its files.
+    let injected: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(keep.join("case5/injected.json")).unwrap())
+            .unwrap();
+    assert_eq!(injected["schema"], "physid.injection/1");
+    let gain = injected["injection"]["spec"]["gain"].as_array().unwrap();
+    let truth = gain[1].as_f64().unwrap() - 1.0;
+    assert!((truth + 0.248).abs() < 1e-3, "{injected}");
+    let (d, text) = rediagnosed(&keep.join("case5"), &[]);
+    let e = d["described_effects"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .find(|e| e["kind"] == "torque_gain")
+        .expect("the ladder's gain estimate");
+    let shoulder = &e["magnitudes"][1];
+    assert_eq!(shoulder["joint"], "lwr_1_joint");
+    let (value, se) = (
+        shoulder["value"].as_f64().unwrap(),
+        shoulder["se"].as_f64().unwrap(),
+    );
+    eprintln!("shoulder gain error {value:.4} ± {se:.4} against {truth:.4}");
+    assert!(
+        (value - truth).abs() <= 0.15 * truth.abs(),
+        "{value} vs {truth}"
+    );
+    assert!(se > 0.0 && se < 0.05 * truth.abs(), "{se}");
+    assert!(
+        text.contains("`torque_gain` from the description: gain error against the description"),
+        "{text}"
+    );
+}
+
+#[test]
+fn in_the_what_changed_mode_a_tilt_is_weighed_against_a_baseline_with_a_standing_gain() {
+    // Case 7 of seed 1: run 2 tilted by 15°, the baseline run 3, whose own diagnosis keeps a
+    // torque gain among its standing effects. The baseline's calibration fits the gain beside
+    // the inertial parameters; until 2026-11-27 nothing pinned the gain common to every joint
+    // (a scale of all of θ), the calibrated description carried 38 and 34 kg on two links, and
+    // every linearized change was weighed about it at a tenth of its size (this tilt at
+    // 0.024 rad, the delay, compliance and gain cases of the same pair alike).
+    let (_dir, keep, table) = kept_semi_real_cases(&["--real-baseline", "--only", "7"]);
+    let row = table.lines().nth(1).unwrap();
+    assert!(row.starts_with("7,") && row.contains(",tilt,"), "{row}");
+    let found = field(&table, row, "found");
+    assert_eq!(first_found(&found), "+ tilt", "{found}");
+    let injected: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(keep.join("case7/injected.json")).unwrap())
+            .unwrap();
+    let truth = injected["injection"]["magnitudes"][0].as_f64().unwrap();
+    let error: f64 = field(&table, row, "magnitude_error").parse().unwrap();
+    eprintln!("tilt {truth} rad, relative error {error}");
+    assert!(truth > 0.2, "{injected}");
+    assert!(error <= 0.2, "{row}");
+    // The command on the kept files, with its baseline: the same tilt.
+    let (d, _) = rediagnosed_in_what_changed_mode(&keep, &table, row);
+    let tilt = d["described_effects"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .find(|e| e["kind"] == "tilt")
+        .expect("the ladder's tilt")["magnitudes"][0]["value"]
+        .as_f64()
+        .unwrap();
+    assert!(
+        (tilt - truth).abs() <= 0.2 * truth,
+        "{tilt} rad against {truth}"
     );
 }

@@ -149,7 +149,12 @@ pub fn calibrate(model: &Model, runs: &[Run], opts: &Options) -> Result<Calibrat
         prior.iter().copied().chain(std::iter::repeat_n(0.0, extra)),
     );
     let ne = normal_equations(model, &nominal, runs, opts);
-    let identified = ident::identify(model, &ne, &full_prior, &iopts)?;
+    let identified = ident::identify(
+        model,
+        &gauge_pinned(&ne, model, &opts.terms),
+        &full_prior,
+        &iopts,
+    )?;
     let absorbed = super::magnitude::Identifiable::new(&ne.yty, prior.len());
     let identifiable: Vec<f64> = (prior.len()..prior.len() + extra)
         .map(|c| absorbed.fraction(c))
@@ -161,6 +166,23 @@ pub fn calibrate(model: &Model, runs: &[Run], opts: &Options) -> Result<Calibrat
         rigid,
         terms,
     })
+}
+
+/// `ne` (`[Y | E]` for `terms`) with each gauge the data do not determine pinned: the mean
+/// coefficient of a kind whose common mode lies in the span of `Y` (a torque gain common to
+/// every joint is a scale of `θ`).
+fn gauge_pinned(ne: &NormalEquations, model: &Model, terms: &[Variant]) -> NormalEquations {
+    let n = model.dof();
+    let mut c = model.layout().len;
+    let mut out = ne.clone();
+    for t in terms {
+        let nc = t.kind.columns(n);
+        if t.kind.common_mode_in_span() {
+            out = out.with_mean_pinned(c..c + nc);
+        }
+        c += nc;
+    }
+    out
 }
 
 /// The normal equations of `[Y | E]` over the runs (the rows of `opts.excluded` left out).

@@ -68,6 +68,12 @@ pub struct EffectEstimate {
     pub ambiguous_with: Vec<Kind>,
     /// What data would separate them.
     pub separate_by: Option<String>,
+    /// An explanation of the ladder from the description is stated as weighed at its step;
+    /// where the steps after it moved a magnitude by more than [`super::ladder::MOVED`]
+    /// standard errors (the larger of the two fits'), its magnitudes with every explanation
+    /// free: the later steps trade off with it.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub after_later_steps: Option<Vec<Magnitude>>,
 }
 
 impl EffectEstimate {

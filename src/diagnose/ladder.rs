@@ -161,8 +161,9 @@ pub struct BodyChange {
     /// Whether it reads as a payload: added mass beyond three standard errors, its centre of
     /// mass within the body's bounding ellipsoid doubled (a metre of the frame without one).
     pub payload: bool,
-    /// Mass change (kg) as the diagnosis states it: from the fit with every explanation free,
-    /// unless later steps moved it (`moved`), then as weighed at the body's own step.
+    /// Mass change (kg) as the diagnosis states it: as weighed at the body's own step (the fit
+    /// that chose it; later steps, mostly the robot's standing differences from its
+    /// description, add columns that can only blur it).
     pub mass: f64,
     /// Standard error of the mass change (kg); `None` when the data do not see the mass
     /// ([`Weighing::mass_se`]).
@@ -175,8 +176,7 @@ pub struct BodyChange {
     /// semi-real "what changed" cases a gain freed after a 2.8 kg payload put 8.2 kg on its
     /// body; the payload's own step weighed 2.88 kg.
     pub moved: bool,
-    /// The change weighed with every explanation free (the final fit; the stated one unless
-    /// `moved`).
+    /// The change weighed with every explanation free (the final fit).
     pub last: Weighing,
     /// The ten parameters of the change in the final fit, paper order.
     pub pi: [f64; 10],
@@ -220,11 +220,11 @@ impl Weighing {
 }
 
 impl BodyChange {
-    /// The change weighed at its step (`entered`) and with every explanation free (`last`):
-    /// stated as `last` unless that moved the mass.
+    /// The change weighed at its step (`entered`, stated) and with every explanation free
+    /// (`last`).
     fn new(body: String, entered: Weighing, last: Weighing, pi: [f64; 10]) -> BodyChange {
         let moved = last.moved_from(&entered);
-        let stated = if moved { entered } else { last };
+        let stated = entered;
         BodyChange {
             body,
             payload: false,
@@ -306,6 +306,20 @@ pub struct Ladder {
     /// Their posterior standard errors.
     #[serde(skip)]
     pub(crate) coefficient_se: Vec<Vec<f64>>,
+    /// Per effect a step chose, its coefficients and their standard errors in the fit of
+    /// that step.
+    #[serde(skip)]
+    pub(crate) entered_coefficients: Vec<(Explanation, Vec<f64>, Vec<f64>)>,
+}
+
+impl Ladder {
+    /// The coefficients of effect `v` and their standard errors in the fit of the step that
+    /// chose it.
+    pub(crate) fn entered(&self, v: Variant) -> Option<(&Vec<f64>, &Vec<f64>)> {
+        (self.entered_coefficients.iter())
+            .find(|e| e.0 == Explanation::Effect(v))
+            .map(|e| (&e.1, &e.2))
+    }
 }
 
 /// Normal equations of `[Y | E]` about one linearization point: the training data summed,
@@ -732,6 +746,7 @@ pub(crate) fn ladder(stage: &Stage, eps: f64, selected: &[Variant], settings: &S
     let mut set: Vec<Explanation> = vec![];
     let mut rungs = vec![given_rung(stage)];
     let mut entered: Vec<(Explanation, Weighing)> = vec![];
+    let mut entered_coefficients: Vec<(Explanation, Vec<f64>, Vec<f64>)> = vec![];
     // The columns about the description within its uncertainty, not the raw description.
     let (mut data, mut current) = settle(&problem, stage, &variants, data, &set, settings);
     let mut sse = problem.held_out(&data, &current);
@@ -752,6 +767,7 @@ pub(crate) fn ladder(stage: &Stage, eps: f64, selected: &[Variant], settings: &S
         if let Some(m) = body_mass(data.n, &current, &set, best, p0) {
             entered.push((best, m));
         }
+        entered_coefficients.extend(weighed_at_entry(&data, &current, &set, p0));
         let added = Added::taken(step, stage.model);
         rungs.push(rung(stage, at(&data, &current, &set), added));
     };
@@ -777,6 +793,7 @@ pub(crate) fn ladder(stage: &Stage, eps: f64, selected: &[Variant], settings: &S
         chosen: set,
         coefficients,
         coefficient_se,
+        entered_coefficients,
     }
 }
 
@@ -1328,6 +1345,23 @@ fn fixed_rung(step: &str, rms: Vec<f64>) -> Rung {
     }
 }
 
+/// The effect a step just chose (the last of `set`) with its coefficients and their standard
+/// errors in `fit` (`None` for friction).
+fn weighed_at_entry(
+    data: &Data,
+    fit: &Fit,
+    set: &[Explanation],
+    p0: usize,
+) -> Option<(Explanation, Vec<f64>, Vec<f64>)> {
+    let e = *set.last()?;
+    let Explanation::Effect(_) = e else {
+        return None;
+    };
+    let (_, mut c) = model_of(data, fit, set, p0);
+    let mut se = standard_errors(data, fit, set, p0);
+    Some((e, c.pop()?, se.pop()?))
+}
+
 /// The body change `e` weighed in a fit over `set` (`None` for an effect that is not a body
 /// change).
 fn body_mass(
@@ -1511,13 +1545,14 @@ mod tests {
              later steps trade off with its mass (with them free: +16.820 ± 1.700 kg, centre of \
              mass (0.000, 0.000, 0.050) m)"
         );
-        // Within two of the larger standard error: the final fit stated, nothing added.
+        // Within two of the larger standard error: the step's weighing stated, nothing added.
         let kept = change(weighing(2.93, 0.03), weighing(2.95, 0.05));
         assert!(!kept.moved);
-        assert_eq!(kept.stated(), weighing(2.95, 0.05));
+        assert_eq!(kept.stated(), weighing(2.93, 0.03));
+        assert_eq!(kept.last, weighing(2.95, 0.05));
         assert_eq!(
             kept.weighed(),
-            "+2.950 ± 0.050 kg, centre of mass (0.000, 0.000, 0.050) m"
+            "+2.930 ± 0.030 kg, centre of mass (0.000, 0.000, 0.050) m"
         );
         // The edge: 2 standard errors exactly is not moved, beyond it is; the entry's standard
         // error counts when it is the larger.

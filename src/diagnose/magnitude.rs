@@ -17,22 +17,51 @@ pub fn magnitudes_of(kind: Kind, c: &[f64], n: usize, gravity: f64) -> Vec<f64> 
     kind.magnitudes(c, n, gravity)
 }
 
-/// First-order standard error of magnitude `index` from its coefficients' errors.
+/// How an effect's coefficients read as its magnitudes: which model its columns were built
+/// about.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(crate) enum Reading {
+    /// About the re-identified model, which carries the effect where its parameters can
+    /// (cross-validation, the description test).
+    Identified,
+    /// About the description within its uncertainty, which does not (the ladder).
+    Anchored,
+}
+
+impl Reading {
+    /// The magnitudes of `kind` from coefficients `c` (`n` joints, gravity of norm `gravity`).
+    fn magnitudes(self, kind: Kind, c: &[f64], n: usize, gravity: f64) -> Vec<f64> {
+        match self {
+            Reading::Identified => kind.magnitudes(c, n, gravity),
+            Reading::Anchored => kind.anchored_magnitudes(c, n, gravity),
+        }
+    }
+
+    /// The magnitude's name and unit.
+    fn name(self, kind: Kind) -> (&'static str, &'static str) {
+        match self {
+            Reading::Identified => kind.magnitude(),
+            Reading::Anchored => kind.anchored_magnitude(),
+        }
+    }
+}
+
+/// First-order standard error of magnitude `index` (read as `reading`) from its coefficients'
+/// errors.
 pub(crate) fn magnitude_se(
-    kind: Kind,
+    (kind, reading): (Kind, Reading),
     c: &[f64],
     se: &[f64],
-    n: usize,
-    gravity: f64,
+    (n, gravity): (usize, f64),
     index: usize,
 ) -> f64 {
-    let base = magnitudes_of(kind, c, n, gravity)[index];
+    let base = reading.magnitudes(kind, c, n, gravity)[index];
     let mut v = 0.0;
     for i in 0..c.len() {
         let h = 1e-6 * c[i].abs().max(1e-6);
         let mut cp = c.to_vec();
         cp[i] += h;
-        let d = (magnitudes_of(kind, &cp, n, gravity)[index] - base) / h;
+        let d = (reading.magnitudes(kind, &cp, n, gravity)[index] - base) / h;
         v += (d * se[i]).powi(2);
     }
     v.sqrt()
@@ -148,6 +177,7 @@ pub(crate) fn cross_validated(
             magnitudes,
             separate_by: step.ambiguous_with.first().map(|&b| separate_by(v.kind, b)),
             ambiguous_with: step.ambiguous_with.clone(),
+            after_later_steps: None,
         });
         offset += columns;
     }
@@ -169,26 +199,27 @@ pub(crate) fn against_description(stage: &Stage, steps: &[anchor::Step]) -> Vec<
         .iter()
         .map(|st| {
             let v = stage.folds.variants[st.variant];
-            described_estimate(stage, v, &st.beta, &st.se, st.ambiguous_with.clone())
+            let found = (v, Reading::Identified);
+            described_estimate(stage, found, &st.beta, &st.se, st.ambiguous_with.clone())
         })
         .collect()
 }
 
 /// The estimate of variant `v` found against the description, from its coefficients `beta`
-/// and their posterior standard errors `se`: magnitudes with errors propagated to first order,
-/// identified through the description (identifiable fraction 1); what the data could not tell
-/// it apart from, with the data that would.
+/// (read as `reading`) and their posterior standard errors `se`: magnitudes with errors
+/// propagated to first order, identified through the description (identifiable fraction 1);
+/// what the data could not tell it apart from, with the data that would.
 pub(crate) fn described_estimate(
     stage: &Stage,
-    v: Variant,
+    (v, reading): (Variant, Reading),
     beta: &[f64],
     se: &[f64],
     ambiguous_with: Vec<Kind>,
 ) -> EffectEstimate {
     let n = stage.model.dof();
     let g = stage.model.gravity().norm().max(1e-12);
-    let (name, unit) = v.kind.magnitude();
-    let values = magnitudes_of(v.kind, beta, n, g);
+    let (name, unit) = reading.name(v.kind);
+    let values = reading.magnitudes(v.kind, beta, n, g);
     let single = values.len() == 1;
     let magnitudes = values
         .iter()
@@ -196,7 +227,7 @@ pub(crate) fn described_estimate(
         .map(|(i, &value)| Magnitude {
             joint: joint_label(stage, single, i, v),
             value,
-            se: magnitude_se(v.kind, beta, se, n, g, i),
+            se: magnitude_se((v.kind, reading), beta, se, (n, g), i),
             unit: unit.into(),
             identifiable: 1.0,
         })
@@ -209,5 +240,6 @@ pub(crate) fn described_estimate(
         magnitudes,
         separate_by: ambiguous_with.first().map(|&b| separate_by(v.kind, b)),
         ambiguous_with,
+        after_later_steps: None,
     }
 }

@@ -3,7 +3,7 @@
 
 use super::breakdown::Regime;
 use super::diagnosis::Diagnosis;
-use super::diagnosis::{EffectEstimate, Evidence};
+use super::diagnosis::{EffectEstimate, Evidence, Magnitude};
 use crate::effect::library::Kind;
 use crate::io::document::{escape_html, Block, Document, Section, Table, Text};
 use crate::io::plot::{colour, legend_outside, tick, Mark, LEGEND_WIDTH};
@@ -478,6 +478,9 @@ fn described_effect_blocks(d: &Diagnosis, s: &mut Section) {
             format!("{at} from the description: {}", e.magnitude_name),
         )));
         s.push(Block::Table(magnitude_table(e, false)));
+        if let Some(after) = &e.after_later_steps {
+            s.push(Block::Paragraph(Text::plain(traded_off(after))));
+        }
         let near_zero: Vec<&str> = (e.magnitudes.iter())
             .filter(|m| m.value.abs() < 2.0 * m.se || m.se == 0.0 && m.value == 0.0)
             .map(|m| m.joint.as_str())
@@ -489,6 +492,19 @@ fn described_effect_blocks(d: &Diagnosis, s: &mut Section) {
             ))));
         }
     }
+}
+
+/// What the steps after an explanation made of its magnitudes `after` (with every explanation
+/// free), stated beside its own step's.
+fn traded_off(after: &[Magnitude]) -> String {
+    let values: Vec<String> = after
+        .iter()
+        .map(|m| format!("{} {:.4e} ± {:.1e}", m.joint, m.value, m.se))
+        .collect();
+    format!(
+        "As weighed at its step; later steps trade off with it (with them free: {}).",
+        values.join(", ")
+    )
 }
 
 /// The "From the description" section: the description's gap explained step by step, with

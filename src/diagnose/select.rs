@@ -160,7 +160,7 @@ impl Folds {
         opts: &Options,
     ) -> Result<DVector<f64>, IdentError> {
         let cols = self.columns(chosen);
-        let sub = ne.select(&cols);
+        let mut sub = ne.select(&cols);
         let mut prior = DVector::zeros(cols.len());
         prior.rows_mut(0, self.p0).copy_from(&model.parameters());
         // Effects with a physical sign keep it (in the subset's column order).
@@ -171,6 +171,9 @@ impl Folds {
             let nc = kind.columns(self.n);
             if kind.non_negative() {
                 opts.nonnegative.extend(c..c + nc);
+            }
+            if kind.common_mode_in_span() {
+                sub = sub.with_mean_pinned(c..c + nc);
             }
             c += nc;
         }

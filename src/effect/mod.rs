@@ -288,6 +288,10 @@ pub(super) struct KindSpec {
     pub in_model_span: bool,
     /// The columns are linearized about the nominal model `θ̂₀`.
     pub linearized: bool,
+    /// Equal coefficients on every joint give a combination of the model's own columns (a
+    /// torque gain common to every joint is a scale of all of `θ`): fitted beside `θ`, the
+    /// coefficients' mean is a gauge the data do not determine, pinned at zero.
+    pub common_mode_in_span: bool,
     /// The ladder from the description offers it even when cross-validation did not select
     /// it: the re-identified model absorbs its signature (friction and inertial parameters fit
     /// a delay's `−d τ̇`), while no body's parameters mimic it from the description.
@@ -303,6 +307,10 @@ pub(super) struct KindSpec {
     pub grid: Grid,
     pub fill: Fill,
     pub magnitudes: Magnitudes,
+    /// The magnitude's name, unit and rule from the ladder from the description, whose
+    /// columns are built about a model that does not carry the effect, where they differ from
+    /// `magnitude` and `magnitudes` (`None`: the same).
+    pub anchored: Option<Anchored>,
     pub replay: Replay,
     /// The description a user would give when this effect is present: `None` if unchanged
     /// (rotor inertia left out: its rotors frozen into their bodies).
@@ -312,6 +320,14 @@ pub(super) struct KindSpec {
     /// How the semi-real benchmark scales it to be visible on a real log (`None`: not
     /// injected there).
     pub scale: Option<Scale>,
+}
+
+/// A kind's magnitude read against the description ([`KindSpec::anchored`]).
+pub(super) struct Anchored {
+    /// The magnitude's name and unit.
+    pub magnitude: (&'static str, &'static str),
+    /// Its rule.
+    pub magnitudes: Magnitudes,
 }
 
 /// `v` times `s`, element by element.
@@ -329,6 +345,7 @@ const fn row(kind: Kind, name: &'static str, columns: ColumnCount, fill: Fill) -
         magnitude_pairs: false,
         in_model_span: false,
         linearized: false,
+        common_mode_in_span: false,
         offered_from_description: false,
         rotor_parameter: false,
         approximate: false,
@@ -336,6 +353,7 @@ const fn row(kind: Kind, name: &'static str, columns: ColumnCount, fill: Fill) -
         grid: Grid::None,
         fill,
         magnitudes: same,
+        anchored: None,
         replay: |_, _, _, _| None,
         description: None,
         blind: Blind::No,
@@ -402,6 +420,33 @@ impl Kind {
     /// joints under gravity of norm `gravity` (m/s²).
     pub fn magnitudes(&self, c: &[f64], n: usize, gravity: f64) -> Vec<f64> {
         (self.spec().magnitudes)(c, n, gravity)
+    }
+
+    /// The magnitude's name and unit as the ladder from the description reads it (its
+    /// columns built about a model that does not carry the effect).
+    pub fn anchored_magnitude(&self) -> (&'static str, &'static str) {
+        self.spec()
+            .anchored
+            .as_ref()
+            .map_or(self.spec().magnitude, |a| a.magnitude)
+    }
+
+    /// The magnitudes of coefficients `c` as the ladder from the description reads them
+    /// ([`Kind::magnitudes`] unless the kind's row says otherwise).
+    pub fn anchored_magnitudes(&self, c: &[f64], n: usize, gravity: f64) -> Vec<f64> {
+        let rule = self
+            .spec()
+            .anchored
+            .as_ref()
+            .map_or(self.spec().magnitudes, |a| a.magnitudes);
+        rule(c, n, gravity)
+    }
+
+    /// Whether equal coefficients on every joint lie in the span of the model's columns, so
+    /// that their mean is pinned at zero wherever the kind is fitted beside `θ`
+    /// ([`KindSpec::common_mode_in_span`]).
+    pub fn common_mode_in_span(&self) -> bool {
+        self.spec().common_mode_in_span
     }
 
     /// Whether the columns lie in the span of the model's own (its parameters express the

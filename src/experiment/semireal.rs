@@ -610,6 +610,7 @@ pub fn run_case(
     let sidecar = crate::io::sidecar_path(&robot);
     crate::io::write_atomic(&sidecar, side.as_bytes())?;
     crate::io::write_atomic(&csv, logged_csv(&data).as_bytes())?;
+    write_injection(&dir.join("injected.json"), &inj, growth)?;
     let start = std::time::Instant::now();
     let given = crate::io::load_robot(&robot.to_string_lossy())?;
     let information = described_information(&sidecar, &given)?;
@@ -642,6 +643,19 @@ pub fn run_case(
         growth,
         ..score_case(i, base, &inj, &given, &d, start.elapsed().as_secs_f64())
     })
+}
+
+/// The change injected into a case (`injected.json` beside its files: the truth a kept case
+/// is scored against, in the diagnosis's convention) and the growth it reached.
+fn write_injection(path: &Path, inj: &Injection, growth: f64) -> Result<(), RealError> {
+    let json = serde_json::json!({
+        "schema": "physid.injection/1",
+        "injection": inj,
+        "growth": growth,
+    });
+    let text = serde_json::to_string_pretty(&json).expect("an injection serializes");
+    crate::io::write_atomic(path, text.as_bytes())?;
+    Ok(())
 }
 
 /// The baseline calibrated on `runs` of the recording `other`, its effect columns at that
@@ -1299,6 +1313,7 @@ mod tests {
             ],
             ambiguous_with: vec![],
             separate_by: None,
+            after_later_steps: None,
         };
         let truth = [2.38e-3, 1.7e-3, 1e-3];
         let plain = relative_error(&e, &truth, |_| 1.0).unwrap();

@@ -220,6 +220,27 @@ impl NormalEquations {
         out
     }
 
+    /// These equations with the pseudo-observation `mean(x[cols]) = 0` added at a weight that
+    /// dominates the data along that direction (a hundred times the largest of their diagonal
+    /// over `cols`, per column): for a direction the data do not determine (a gauge, such as a
+    /// torque gain common to every joint, which is a scale of all inertial parameters), so that
+    /// a fit does not wander along it. For fitting only: the sums no longer are the data's.
+    pub fn with_mean_pinned(&self, cols: std::ops::Range<usize>) -> Self {
+        let m = cols.len();
+        let mut out = self.clone();
+        if m == 0 {
+            return out;
+        }
+        let largest = cols.clone().map(|c| self.yty[(c, c)]).fold(0.0, f64::max);
+        let weight = 100.0 * largest.max(f64::MIN_POSITIVE) / m as f64;
+        for i in cols.clone() {
+            for j in cols.clone() {
+                out.yty[(i, j)] += weight;
+            }
+        }
+        out
+    }
+
     /// `Σ ‖Y θ − τ‖²` for parameters `theta`.
     pub fn residual_sum_of_squares(&self, theta: &DVector<f64>) -> f64 {
         (theta.dot(&(&self.yty * theta)) - 2.0 * theta.dot(&self.ytt) + self.tt).max(0.0)
@@ -373,5 +394,47 @@ impl JointSums {
         let mut ne = NormalEquations::from_sums(self.n, yty, ytt, self.tt, self.samples);
         ne.excluded = self.excluded;
         ne
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_pinned_mean_fixes_the_direction_the_data_leave_free_and_no_other() {
+        // τ = (a − b) x + c d: the data see a − b and c; the mean of a and b is free (as a gain
+        // common to every joint is free beside θ).
+        let rows = [(1.0, 2.0), (2.0, -1.0), (3.0, 0.5), (-1.0, 1.0)];
+        let (a, b, c) = (0.7, -0.3, -2.0);
+        let mut yty = DMatrix::zeros(3, 3);
+        let mut ytt = DVector::zeros(3);
+        let mut tt = 0.0;
+        for (x, d) in rows {
+            let y = DVector::from_vec(vec![x, -x, d]);
+            let t = (a - b) * x + c * d;
+            yty += &y * y.transpose();
+            ytt += &y * t;
+            tt += t * t;
+        }
+        let ne = NormalEquations::from_sums(1, yty, ytt, tt, rows.len());
+        assert_eq!(ne.yty.rank(1e-9), 2, "singular before");
+        let pinned = ne.with_mean_pinned(0..2);
+        let x = pinned
+            .yty
+            .clone()
+            .cholesky()
+            .expect("pinned")
+            .solve(&pinned.ytt);
+        // The mean at its pin, the difference and c the data's; the data's sums (for scoring)
+        // untouched.
+        assert!(
+            (x[0] - 0.5).abs() < 1e-9 && (x[1] + 0.5).abs() < 1e-9,
+            "{x}"
+        );
+        assert!((x[2] - c).abs() < 1e-9, "{x}");
+        assert!(ne.residual_sum_of_squares(&x) < 1e-12 * ne.tt);
+        assert_eq!(pinned.ytt, ne.ytt);
+        assert_eq!(pinned.tt, ne.tt);
     }
 }
