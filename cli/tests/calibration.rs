@@ -327,4 +327,31 @@ fn a_torque_gain_term_does_not_rescale_the_real_arm() {
         let mean = coefficients.iter().sum::<f64>() / coefficients.len() as f64;
         assert!(mean.abs() < 1e-3, "{terms}: mean gain coefficient {mean}");
     }
+    // A locked joint's gain is not seen by the data and stays out of the pin (pinned in, it
+    // took the pin's whole weight, read 15.7, and the six others kept a common −2.8, the
+    // gauge as free as before); its coefficient keeps the prior's zero.
+    let lock = ["--lock", "lwr_6_joint"];
+    let gained = run(&[&lock[..], &["--effects", "torque_gain"]].concat());
+    let reference = total_mass(&run(&lock));
+    let mass = total_mass(&gained);
+    eprintln!("locked wrist: {mass:.2} kg against {reference:.2} kg without the gain");
+    assert!(
+        (mass - reference).abs() <= 0.25 * reference,
+        "{mass} against {reference}"
+    );
+    let gain = &gained["effects"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .find(|e| e["kind"] == "torque_gain")
+        .expect("the gain term")["coefficients"];
+    let c: Vec<f64> = gain
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|c| c.as_f64().unwrap())
+        .collect();
+    assert!(c[6].abs() < 1e-6, "locked joint's gain {}", c[6]);
+    let mean = c[..6].iter().sum::<f64>() / 6.0;
+    assert!(mean.abs() < 1e-3, "mean of the joints fitted {mean}");
 }

@@ -220,21 +220,22 @@ impl NormalEquations {
         out
     }
 
-    /// These equations with the pseudo-observation `mean(x[cols]) = 0` added at a weight that
-    /// dominates the data along that direction (a hundred times the largest of their diagonal
-    /// over `cols`, per column): for a direction the data do not determine (a gauge, such as a
-    /// torque gain common to every joint, which is a scale of all inertial parameters), so that
-    /// a fit does not wander along it. For fitting only: the sums no longer are the data's.
+    /// These equations with the pseudo-observation `mean(x[seen]) = 0` added over the columns
+    /// of `cols` the data see (a column of a locked joint, all zero, keeps its prior), at a
+    /// weight that dominates the data along that direction (a hundred times the largest of
+    /// their diagonal): for a direction the data do not determine (a gauge, such as a torque
+    /// gain common to every joint, which is a scale of all inertial parameters), so that a fit
+    /// does not wander along it. For fitting only: the sums no longer are the data's.
     pub fn with_mean_pinned(&self, cols: std::ops::Range<usize>) -> Self {
-        let m = cols.len();
+        let seen: Vec<usize> = cols.filter(|&c| self.yty[(c, c)] > 0.0).collect();
         let mut out = self.clone();
-        if m == 0 {
+        if seen.is_empty() {
             return out;
         }
-        let largest = cols.clone().map(|c| self.yty[(c, c)]).fold(0.0, f64::max);
-        let weight = 100.0 * largest.max(f64::MIN_POSITIVE) / m as f64;
-        for i in cols.clone() {
-            for j in cols.clone() {
+        let largest = seen.iter().map(|&c| self.yty[(c, c)]).fold(0.0, f64::max);
+        let weight = 100.0 * largest / seen.len() as f64;
+        for &i in &seen {
+            for &j in &seen {
                 out.yty[(i, j)] += weight;
             }
         }
@@ -436,5 +437,20 @@ mod tests {
         assert!(ne.residual_sum_of_squares(&x) < 1e-12 * ne.tt);
         assert_eq!(pinned.ytt, ne.ytt);
         assert_eq!(pinned.tt, ne.tt);
+        // A column the data never see (a locked joint's gain) stays out of the mean: pinned in,
+        // it would take the pin's whole weight and leave the gauge free (on the KUKA with one
+        // joint locked it read 15.7 while the six others kept a common −2.8).
+        let mut yty4 = DMatrix::zeros(4, 4);
+        yty4.view_mut((0, 0), (3, 3)).copy_from(&ne.yty);
+        let mut ytt4 = DVector::zeros(4);
+        ytt4.rows_mut(0, 3).copy_from(&ne.ytt);
+        let mut four = NormalEquations::from_sums(1, yty4, ytt4, ne.tt, rows.len());
+        // The unseen column moved to 2, `d` to 3; columns 0–2 pinned: only 0 and 1 enter.
+        four.yty.swap_rows(2, 3);
+        four.yty.swap_columns(2, 3);
+        four.ytt.swap_rows(2, 3);
+        let pinned = four.with_mean_pinned(0..3);
+        assert_eq!(pinned.yty.row(2).iter().filter(|v| **v != 0.0).count(), 0);
+        assert!(pinned.yty[(0, 1)] > four.yty[(0, 1)]);
     }
 }
