@@ -269,6 +269,22 @@ fn total_mass(v: &serde_json::Value) -> f64 {
         .sum()
 }
 
+/// The torque gain term's coefficients (one per joint) in an identification's JSON.
+fn gain_coefficients(v: &serde_json::Value) -> Vec<f64> {
+    let gain = v["effects"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .find(|e| e["kind"] == "torque_gain")
+        .expect("the gain term");
+    gain["coefficients"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|c| c.as_f64().unwrap())
+        .collect()
+}
+
 #[test]
 fn a_torque_gain_term_does_not_rescale_the_real_arm() {
     // A gain common to every joint is a scale of all inertial parameters, which the data cannot
@@ -312,18 +328,7 @@ fn a_torque_gain_term_does_not_rescale_the_real_arm() {
             (mass - reference).abs() <= 0.25 * reference,
             "{terms}: {mass} kg against {reference} kg"
         );
-        let gain = gained["effects"]
-            .as_array()
-            .unwrap()
-            .iter()
-            .find(|e| e["kind"] == "torque_gain")
-            .expect("the gain term");
-        let coefficients: Vec<f64> = gain["coefficients"]
-            .as_array()
-            .unwrap()
-            .iter()
-            .map(|c| c.as_f64().unwrap())
-            .collect();
+        let coefficients = gain_coefficients(&gained);
         let mean = coefficients.iter().sum::<f64>() / coefficients.len() as f64;
         assert!(mean.abs() < 1e-3, "{terms}: mean gain coefficient {mean}");
     }
@@ -339,18 +344,7 @@ fn a_torque_gain_term_does_not_rescale_the_real_arm() {
         (mass - reference).abs() <= 0.25 * reference,
         "{mass} against {reference}"
     );
-    let gain = &gained["effects"]
-        .as_array()
-        .unwrap()
-        .iter()
-        .find(|e| e["kind"] == "torque_gain")
-        .expect("the gain term")["coefficients"];
-    let c: Vec<f64> = gain
-        .as_array()
-        .unwrap()
-        .iter()
-        .map(|c| c.as_f64().unwrap())
-        .collect();
+    let c = gain_coefficients(&gained);
     assert!(c[6].abs() < 1e-6, "locked joint's gain {}", c[6]);
     let mean = c[..6].iter().sum::<f64>() / 6.0;
     assert!(mean.abs() < 1e-3, "mean of the joints fitted {mean}");

@@ -481,6 +481,24 @@ fn rediagnosed_in_what_changed_mode(
     )
 }
 
+/// The ladder's estimate of `kind` in a diagnosis's JSON (`described_effects`).
+fn described_effect<'a>(d: &'a serde_json::Value, kind: &str) -> &'a serde_json::Value {
+    d["described_effects"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .find(|e| e["kind"] == kind)
+        .unwrap_or_else(|| panic!("no {kind} among the ladder's estimates"))
+}
+
+/// The change injected into the kept case in `case` (its `injected.json`, the truth).
+fn injected(case: &Path) -> serde_json::Value {
+    let text = std::fs::read_to_string(case.join("injected.json")).unwrap();
+    let v: serde_json::Value = serde_json::from_str(&text).unwrap();
+    assert_eq!(v["schema"], "physid.injection/1");
+    v
+}
+
 /// The first explanation of the first step in a case table's `found` field.
 fn first_found(found: &str) -> &str {
     found
@@ -630,11 +648,7 @@ fn a_torque_offset_on_the_real_arm_is_weighed_from_the_description_with_bounded_
     let s = steps(&d);
     eprintln!("offset: {s:?}");
     assert_eq!(s[0], "+ torque_offset", "{s:?}");
-    let described = d["described_effects"].as_array().unwrap();
-    let e = described
-        .iter()
-        .find(|e| e["kind"] == "torque_offset")
-        .expect("the ladder's offset estimate");
+    let e = described_effect(&d, "torque_offset");
     let magnitudes = e["magnitudes"].as_array().unwrap();
     assert_eq!(magnitudes.len(), offset.len());
     for (m, truth) in magnitudes.iter().zip(&offset) {
@@ -809,20 +823,12 @@ fn a_torque_constant_off_on_one_real_joint_is_weighed_against_the_description() 
     let found = field(&table, row, "found");
     assert_eq!(first_found(&found), "+ torque_gain", "{found}");
     // The truth the case was scored against, kept beside its files.
-    let injected: serde_json::Value =
-        serde_json::from_str(&std::fs::read_to_string(keep.join("case5/injected.json")).unwrap())
-            .unwrap();
-    assert_eq!(injected["schema"], "physid.injection/1");
+    let injected = injected(&keep.join("case5"));
     let gain = injected["injection"]["spec"]["gain"].as_array().unwrap();
     let truth = gain[1].as_f64().unwrap() - 1.0;
     assert!((truth + 0.248).abs() < 1e-3, "{injected}");
     let (d, text) = rediagnosed(&keep.join("case5"), &[]);
-    let e = d["described_effects"]
-        .as_array()
-        .unwrap()
-        .iter()
-        .find(|e| e["kind"] == "torque_gain")
-        .expect("the ladder's gain estimate");
+    let e = described_effect(&d, "torque_gain");
     let shoulder = &e["magnitudes"][1];
     assert_eq!(shoulder["joint"], "lwr_1_joint");
     let (value, se) = (
@@ -854,9 +860,7 @@ fn in_the_what_changed_mode_a_tilt_is_weighed_against_a_baseline_with_a_standing
     assert!(row.starts_with("7,") && row.contains(",tilt,"), "{row}");
     let found = field(&table, row, "found");
     assert_eq!(first_found(&found), "+ tilt", "{found}");
-    let injected: serde_json::Value =
-        serde_json::from_str(&std::fs::read_to_string(keep.join("case7/injected.json")).unwrap())
-            .unwrap();
+    let injected = injected(&keep.join("case7"));
     let truth = injected["injection"]["magnitudes"][0].as_f64().unwrap();
     let error: f64 = field(&table, row, "magnitude_error").parse().unwrap();
     eprintln!("tilt {truth} rad, relative error {error}");
@@ -864,12 +868,7 @@ fn in_the_what_changed_mode_a_tilt_is_weighed_against_a_baseline_with_a_standing
     assert!(error <= 0.2, "{row}");
     // The command on the kept files, with its baseline: the same tilt.
     let (d, _) = rediagnosed_in_what_changed_mode(&keep, &table, row);
-    let tilt = d["described_effects"]
-        .as_array()
-        .unwrap()
-        .iter()
-        .find(|e| e["kind"] == "tilt")
-        .expect("the ladder's tilt")["magnitudes"][0]["value"]
+    let tilt = described_effect(&d, "tilt")["magnitudes"][0]["value"]
         .as_f64()
         .unwrap();
     assert!(

@@ -172,17 +172,23 @@ pub fn calibrate(model: &Model, runs: &[Run], opts: &Options) -> Result<Calibrat
 /// coefficient of a kind whose common mode lies in the span of `Y` (a torque gain common to
 /// every joint is a scale of `θ`).
 fn gauge_pinned(ne: &NormalEquations, model: &Model, terms: &[Variant]) -> NormalEquations {
+    term_columns(model, terms)
+        .filter(|(kind, _)| kind.common_mode_in_span())
+        .fold(ne.clone(), |out, (_, cols)| out.with_mean_pinned(cols))
+}
+
+/// Each term's kind and its columns after the model's `layout().len`, in order.
+fn term_columns<'a>(
+    model: &Model,
+    terms: &'a [Variant],
+) -> impl Iterator<Item = (Kind, Range<usize>)> + 'a {
     let n = model.dof();
     let mut c = model.layout().len;
-    let mut out = ne.clone();
-    for t in terms {
-        let nc = t.kind.columns(n);
-        if t.kind.common_mode_in_span() {
-            out = out.with_mean_pinned(c..c + nc);
-        }
-        c += nc;
-    }
-    out
+    terms.iter().map(move |t| {
+        let cols = c..c + t.kind.columns(n);
+        c = cols.end;
+        (t.kind, cols)
+    })
 }
 
 /// The normal equations of `[Y | E]` over the runs (the rows of `opts.excluded` left out).
@@ -274,17 +280,10 @@ pub fn columns(terms: &[Variant], n: usize) -> usize {
 
 /// θ's columns that must be non-negative: those of the kinds with a physical sign.
 fn nonnegative_columns(model: &Model, terms: &[Variant]) -> Vec<usize> {
-    let n = model.dof();
-    let mut c = model.layout().len;
-    let mut out = vec![];
-    for t in terms {
-        let k = t.kind.columns(n);
-        if t.kind.non_negative() {
-            out.extend(c..c + k);
-        }
-        c += k;
-    }
-    out
+    term_columns(model, terms)
+        .filter(|(kind, _)| kind.non_negative())
+        .flat_map(|(_, cols)| cols)
+        .collect()
 }
 
 fn term_fits(

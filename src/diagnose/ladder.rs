@@ -224,13 +224,12 @@ impl BodyChange {
     /// (`last`).
     fn new(body: String, entered: Weighing, last: Weighing, pi: [f64; 10]) -> BodyChange {
         let moved = last.moved_from(&entered);
-        let stated = entered;
         BodyChange {
             body,
             payload: false,
-            mass: stated.mass,
-            mass_se: stated.mass_se,
-            com: stated.com,
+            mass: entered.mass,
+            mass_se: entered.mass_se,
+            com: entered.com,
             moved,
             last,
             pi,
@@ -306,8 +305,8 @@ pub struct Ladder {
     /// Their posterior standard errors.
     #[serde(skip)]
     pub(crate) coefficient_se: Vec<Vec<f64>>,
-    /// Per effect a step chose, its coefficients and their standard errors in the fit of
-    /// that step.
+    /// Per library effect a step chose (body changes are weighed in `bodies`), its
+    /// coefficients and their standard errors in the fit of that step.
     #[serde(skip)]
     pub(crate) entered_coefficients: Vec<(Explanation, Vec<f64>, Vec<f64>)>,
 }
@@ -1345,8 +1344,9 @@ fn fixed_rung(step: &str, rms: Vec<f64>) -> Rung {
     }
 }
 
-/// The effect a step just chose (the last of `set`) with its coefficients and their standard
-/// errors in `fit` (`None` for friction).
+/// The library effect a step just chose (the last of `set`) with its coefficients and their
+/// standard errors in `fit` (`None` for friction and a body change, weighed by
+/// [`body_mass`]).
 fn weighed_at_entry(
     data: &Data,
     fit: &Fit,
@@ -1354,9 +1354,12 @@ fn weighed_at_entry(
     p0: usize,
 ) -> Option<(Explanation, Vec<f64>, Vec<f64>)> {
     let e = *set.last()?;
-    let Explanation::Effect(_) = e else {
+    let Explanation::Effect(v) = e else {
         return None;
     };
+    if v.kind.is_body_change() {
+        return None;
+    }
     let (_, mut c) = model_of(data, fit, set, p0);
     let mut se = standard_errors(data, fit, set, p0);
     Some((e, c.pop()?, se.pop()?))

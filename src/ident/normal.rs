@@ -226,20 +226,19 @@ impl NormalEquations {
     /// their diagonal): for a direction the data do not determine (a gauge, such as a torque
     /// gain common to every joint, which is a scale of all inertial parameters), so that a fit
     /// does not wander along it. For fitting only: the sums no longer are the data's.
-    pub fn with_mean_pinned(&self, cols: std::ops::Range<usize>) -> Self {
+    pub fn with_mean_pinned(mut self, cols: std::ops::Range<usize>) -> Self {
         let seen: Vec<usize> = cols.filter(|&c| self.yty[(c, c)] > 0.0).collect();
-        let mut out = self.clone();
         if seen.is_empty() {
-            return out;
+            return self;
         }
         let largest = seen.iter().map(|&c| self.yty[(c, c)]).fold(0.0, f64::max);
         let weight = 100.0 * largest / seen.len() as f64;
         for &i in &seen {
             for &j in &seen {
-                out.yty[(i, j)] += weight;
+                self.yty[(i, j)] += weight;
             }
         }
-        out
+        self
     }
 
     /// `Σ ‖Y θ − τ‖²` for parameters `theta`.
@@ -420,7 +419,7 @@ mod tests {
         }
         let ne = NormalEquations::from_sums(1, yty, ytt, tt, rows.len());
         assert_eq!(ne.yty.rank(1e-9), 2, "singular before");
-        let pinned = ne.with_mean_pinned(0..2);
+        let pinned = ne.clone().with_mean_pinned(0..2);
         let x = pinned
             .yty
             .clone()
@@ -449,7 +448,7 @@ mod tests {
         four.yty.swap_rows(2, 3);
         four.yty.swap_columns(2, 3);
         four.ytt.swap_rows(2, 3);
-        let pinned = four.with_mean_pinned(0..3);
+        let pinned = four.clone().with_mean_pinned(0..3);
         assert_eq!(pinned.yty.row(2).iter().filter(|v| **v != 0.0).count(), 0);
         assert!(pinned.yty[(0, 1)] > four.yty[(0, 1)]);
     }
