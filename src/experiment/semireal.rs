@@ -294,8 +294,14 @@ impl Injection {
 
 /// Draws case `i`'s change on `description`.
 pub fn draw(i: usize, seed: u64, description: &Model, rate: f64) -> Injection {
+    draw_attempt(i, 0, seed, description, rate)
+}
+
+/// Draws case `i`'s change on `description`, attempt `a` (attempt 0 is [`draw`]; each
+/// attempt its own stream: the same seed gives the same draws whatever the thread count).
+fn draw_attempt(i: usize, a: usize, seed: u64, description: &Model, rate: f64) -> Injection {
     let mut rng = ChaCha8Rng::seed_from_u64(seed);
-    rng.set_stream(i as u64);
+    rng.set_stream(i as u64 | ((a as u64) << 32));
     let slots = slots();
     let slot = slots[i % slots.len()];
     let n = description.dof();
@@ -347,6 +353,71 @@ pub use crate::effect::MAX_GAIN_ERROR;
 
 /// The largest factor [`make_visible`] scales a drawn effect by.
 pub const MAX_SCALE: f64 = 4.0;
+
+/// The most draws [`draw_visible`] makes for a case.
+pub const MAX_DRAWS: usize = 8;
+
+/// The largest Cramér–Rao bound on a payload's mass ([`payload_mass_bound`], relative) a
+/// drawn payload may have: a third of the 15 % the benchmark scores its mass within. On the
+/// KUKA runs the payloads fall far either side (0.07–0.5 % on lwr_4..7_link; 15–22 % on
+/// lwr_3_link, whose origin lies on the shoulder's axes; lwr_2_link's mass is not in the
+/// runs at all).
+pub const MAX_MASS_BOUND: f64 = 0.05;
+
+/// Case `i`'s change, drawn until the run can show it: the first draw (made visible where it
+/// can be, [`make_visible`]) whose growth of the description's torque RMS reaches
+/// `VISIBLE.0` and, for a payload, whose mass the run determines ([`MAX_MASS_BOUND`]); at
+/// most [`MAX_DRAWS`] draws (the last is kept when none does). A change the real robot's own
+/// gap hides — a payload near a joint axis, a gain on a joint that carries almost no torque,
+/// however large within its physical bound — or a mass the motion cannot weigh is a test of
+/// the draw, not of a diagnosis; it is drawn again, on another body, joint or magnitude. The
+/// rule reads only the truth, the description and the base run, never a diagnosis. Returns
+/// the change, its growth and the number of draws made.
+pub fn draw_visible(i: usize, seed: u64, base: &Base, rate: f64) -> (Injection, f64, usize) {
+    let mut last = None;
+    for a in 0..MAX_DRAWS {
+        let drawn = draw_attempt(i, a, seed, &base.description, rate);
+        let (inj, growth) = make_visible(&drawn, base, rate);
+        let weighable = payload_mass_bound(base, &inj).is_none_or(|b| b <= MAX_MASS_BOUND);
+        if inj.slot == Slot::Clean || (growth >= VISIBLE.0 && weighable) {
+            return (inj, growth, a + 1);
+        }
+        last = Some((inj, growth));
+    }
+    let (inj, growth) = last.expect("at least one draw");
+    (inj, growth, MAX_DRAWS)
+}
+
+/// The Cramér–Rao bound on a payload's mass from its base run, relative to the mass: the
+/// payload's mass and first moment (the first four columns of its body's regressor over the
+/// logged motion, paper eq. 4) fitted against white noise at the base's standing gap
+/// (`base.rms`). A payload whose centre of mass lies near the axes of every joint that carries
+/// it shows only its first moment `m c` in gravity, and a slow run barely shows `m` in the
+/// inertial terms: its mass is not determined by the run, by any diagnosis (infinite where
+/// the four columns are dependent). `None` for what is not a payload, or a run without q̇, q̈.
+pub fn payload_mass_bound(base: &Base, inj: &Injection) -> Option<f64> {
+    let (Slot::Payload, Some(body)) = (inj.slot, inj.body) else {
+        return None;
+    };
+    let mass = *inj.magnitudes.first()?;
+    let model = &base.description;
+    let logged = &base.logged;
+    let n = model.dof();
+    let (qd, qdd) = (logged.qd.as_deref()?, logged.qdd.as_deref()?);
+    let mut data = crate::dynamics::Data::new(model);
+    let mut y = nalgebra::DMatrix::zeros(n, model.layout().len);
+    let mut gram = nalgebra::Matrix4::<f64>::zeros();
+    for k in 0..logged.len() {
+        let at = |v: &[f64]| v[k * n..(k + 1) * n].to_vec();
+        crate::dynamics::regressor(model, &mut data, &at(&logged.q), &at(qd), &at(qdd), &mut y);
+        let y_payload = y.fixed_columns::<4>(10 * body);
+        gram += y_payload.transpose() * y_payload;
+    }
+    let Some(covariance) = gram.try_inverse() else {
+        return Some(f64::INFINITY);
+    };
+    Some(base.rms * covariance[(0, 0)].max(0.0).sqrt() / mass)
+}
 
 /// The description's torque residual RMS (N m, over all joints and samples) on `logged`
 /// read as a robot writes it: without q̇, q̈, through the data pipeline with its own cutoff.
@@ -586,6 +657,11 @@ pub struct RealCase {
     /// The description's torque RMS on the changed run over that on the untouched one
     /// ([`description_rms`]): how visible the change is above the robot's standing gap.
     pub growth: f64,
+    /// The draws made before the change was visible ([`draw_visible`]; 1: the first).
+    pub draws: usize,
+    /// A payload's Cramér–Rao bound on its mass from the run, relative to the mass
+    /// ([`payload_mass_bound`]).
+    pub mass_bound: Option<f64>,
 }
 
 /// Runs case `i` on its base, writing its files (`robot.urdf`, `data.csv`) into `dir`.
@@ -598,7 +674,7 @@ pub fn run_case(
 ) -> Result<RealCase, RealError> {
     let base = &bases[i % bases.len()];
     let rate = base.logged.len() as f64 / (base.logged.t[base.logged.len() - 1] - base.logged.t[0]);
-    let (inj, growth) = make_visible(&draw(i, seed, &base.description, rate), base, rate);
+    let (inj, growth, draws) = draw_visible(i, seed, base, rate);
     let data = inject(&base.logged, &base.description, &inj);
     crate::io::create_dir_all(dir)?;
     let robot = dir.join("robot.urdf");
@@ -610,7 +686,7 @@ pub fn run_case(
     let sidecar = crate::io::sidecar_path(&robot);
     crate::io::write_atomic(&sidecar, side.as_bytes())?;
     crate::io::write_atomic(&csv, logged_csv(&data).as_bytes())?;
-    write_injection(&dir.join("injected.json"), &inj, growth)?;
+    write_injection(&dir.join("injected.json"), &inj, growth, draws)?;
     let start = std::time::Instant::now();
     let given = crate::io::load_robot(&robot.to_string_lossy())?;
     let information = described_information(&sidecar, &given)?;
@@ -641,17 +717,26 @@ pub fn run_case(
     };
     Ok(RealCase {
         growth,
+        draws,
+        mass_bound: payload_mass_bound(base, &inj),
         ..score_case(i, base, &inj, &given, &d, start.elapsed().as_secs_f64())
     })
 }
 
 /// The change injected into a case (`injected.json` beside its files: the truth a kept case
-/// is scored against, in the diagnosis's convention) and the growth it reached.
-fn write_injection(path: &Path, inj: &Injection, growth: f64) -> Result<(), RealError> {
+/// is scored against, in the diagnosis's convention), the growth it reached and the draws
+/// made ([`draw_visible`]).
+fn write_injection(
+    path: &Path,
+    inj: &Injection,
+    growth: f64,
+    draws: usize,
+) -> Result<(), RealError> {
     let json = serde_json::json!({
         "schema": "physid.injection/1",
         "injection": inj,
         "growth": growth,
+        "draws": draws,
     });
     let text = serde_json::to_string_pretty(&json).expect("an injection serializes");
     crate::io::write_atomic(path, text.as_bytes())?;
@@ -800,6 +885,8 @@ fn score_case(
         rms: [d.overall[0], d.overall[d.overall.len() - 1]],
         seconds,
         growth: f64::NAN,
+        draws: 1,
+        mass_bound: None,
     }
 }
 
@@ -877,6 +964,9 @@ fn relative_error(
 pub struct RealScores {
     /// Cases run.
     pub cases: usize,
+    /// Cases whose first draw was hidden by the base's standing gap and drawn again
+    /// ([`draw_visible`]).
+    pub redrawn: usize,
     /// Payload cases.
     pub payload: usize,
     /// Fraction whose first step is the payload on its body.
@@ -923,6 +1013,7 @@ pub fn score(results: &[RealCase]) -> RealScores {
         .collect();
     RealScores {
         cases: results.len(),
+        redrawn: results.iter().filter(|r| r.draws > 1).count(),
         payload: payload.len(),
         payload_found: super::fraction(payload.iter().map(|r| r.top1 == Some(true))),
         payload_mass_within_15: super::fraction(
@@ -981,6 +1072,8 @@ pub fn case_table(results: &[RealCase]) -> PolarsResult<DataFrame> {
         "rms_description" => results.iter().map(|r| r.rms[0]).collect::<Vec<_>>(),
         "rms_final" => results.iter().map(|r| r.rms[1]).collect::<Vec<_>>(),
         "growth" => results.iter().map(|r| r.growth).collect::<Vec<_>>(),
+        "draws" => results.iter().map(|r| r.draws as u64).collect::<Vec<_>>(),
+        "mass_bound" => results.iter().map(|r| r.mass_bound).collect::<Vec<_>>(),
         "first_also_fit" => s(&|r| r.first_also_fit.join(" | ")),
     )
 }
@@ -1287,6 +1380,99 @@ mod tests {
         );
         assert_eq!(bounded.magnitudes, vec![0.0, 0.0, -MAX_GAIN_ERROR]);
         assert!(growth > 1.0 && growth < 10.0, "{growth}");
+    }
+
+    /// A payload of `mass` on body `body` (index from 0) of the leg.
+    fn payload_on(body: usize, mass: f64) -> Injection {
+        Injection {
+            slot: Slot::Payload,
+            spec: Some(EffectSpec::Payload(Payload {
+                mass,
+                com: [0.02, -0.01, -0.1],
+                radius: 0.04,
+                body: Some(body + 1),
+            })),
+            magnitudes: vec![mass],
+            body: Some(body),
+            visible: None,
+        }
+    }
+
+    #[test]
+    fn a_payload_s_mass_bound_is_the_spread_of_its_least_squares_mass_under_white_noise() {
+        use rand_distr::{Distribution, StandardNormal};
+        let model = crate::model::cheetah3::leg();
+        let n = model.dof();
+        let (sigma, mass, knee) = (0.5, 2.0, n - 1);
+        let base = exact_base(exact(&model), &model, sigma);
+        let bound = payload_mass_bound(&base, &payload_on(knee, mass)).unwrap();
+        // Independently: the knee's four columns stacked, the mass fitted by least squares
+        // against white noise of the standing gap, its spread over 400 draws.
+        let log = &base.logged;
+        let mut y_payload = DMatrix::zeros(n * log.len(), 4);
+        let mut data = crate::dynamics::Data::new(&model);
+        let mut y = DMatrix::zeros(n, model.layout().len);
+        for k in 0..log.len() {
+            let r = k * n..(k + 1) * n;
+            let qd = &log.qd.as_ref().unwrap()[r.clone()];
+            let qdd = &log.qdd.as_ref().unwrap()[r.clone()];
+            crate::dynamics::regressor(&model, &mut data, &log.q[r.clone()], qd, qdd, &mut y);
+            let rows = y.fixed_columns::<4>(10 * knee);
+            y_payload.rows_mut(k * n, n).copy_from(&rows);
+        }
+        let solver = y_payload.clone().svd(true, true);
+        let mut rng = ChaCha8Rng::seed_from_u64(7);
+        let fitted: Vec<f64> = (0..400)
+            .map(|_| {
+                let noise = nalgebra::DVector::from_fn(y_payload.nrows(), |_, _| {
+                    let z: f64 = StandardNormal.sample(&mut rng);
+                    sigma * z
+                });
+                solver.solve(&noise, 1e-12).unwrap()[0]
+            })
+            .collect();
+        let spread = (fitted.iter().map(|m| m * m).sum::<f64>() / fitted.len() as f64).sqrt();
+        let ratio = bound * mass / spread;
+        assert!((ratio - 1.0).abs() < 0.1, "bound {bound}, spread {spread}");
+        // Twice the mass, half the relative bound; twice the gap, twice the bound.
+        let heavier = payload_mass_bound(&base, &payload_on(knee, 2.0 * mass)).unwrap();
+        assert!((heavier / bound - 0.5).abs() < 1e-9, "{heavier} vs {bound}");
+        // The first body turns about an axis through its origin: a payload on it shows only
+        // its first moment and its inertia, never its mass.
+        let first = payload_mass_bound(&base, &payload_on(0, mass)).unwrap();
+        assert!(first > 1e3 * bound, "{first} vs {bound}");
+        assert_eq!(payload_mass_bound(&base, &Injection::none()), None);
+    }
+
+    #[test]
+    fn a_case_is_drawn_again_until_the_run_shows_its_change_and_weighs_its_payload() {
+        let model = crate::model::cheetah3::leg();
+        let (mut log, _, _, shifted) = offset_case();
+        // A 0.5 N m standing offset (q̇, q̈ kept: payloads are injected from them) hides small
+        // changes on the leg.
+        log.tau.iter_mut().for_each(|t| *t += 0.5);
+        let base = exact_base(log, &model, shifted);
+        let slots = slots();
+        let mut redrawn = 0;
+        for i in 0..2 * slots.len() {
+            let (inj, growth, draws) = draw_visible(i, 3, &base, 1000.0);
+            assert_eq!(inj.slot, slots[i % slots.len()], "case {i}");
+            assert!((1..=MAX_DRAWS).contains(&draws), "case {i}: {draws}");
+            let shown = inj.slot == Slot::Clean
+                || (growth >= VISIBLE.0
+                    && payload_mass_bound(&base, &inj).is_none_or(|b| b <= MAX_MASS_BOUND));
+            assert!(shown || draws == MAX_DRAWS, "case {i}: growth {growth}");
+            if draws == 1 {
+                let first = make_visible(&draw(i, 3, &model, 1000.0), &base, 1000.0).0;
+                assert_eq!(inj.magnitudes, first.magnitudes, "case {i}");
+            } else {
+                redrawn += 1;
+            }
+            // The same seed, the same case.
+            let again = draw_visible(i, 3, &base, 1000.0);
+            assert_eq!((again.0.magnitudes, again.2), (inj.magnitudes, draws));
+        }
+        assert!(redrawn > 0, "no case needed a second draw");
     }
 
     #[test]
