@@ -372,20 +372,49 @@ pub const MAX_MASS_BOUND: f64 = 0.05;
 /// however large within its physical bound — or a mass the motion cannot weigh is a test of
 /// the draw, not of a diagnosis; it is drawn again, on another body, joint or magnitude. The
 /// rule reads only the truth, the description and the base run, never a diagnosis. Returns
-/// the change, its growth and the number of draws made.
-pub fn draw_visible(i: usize, seed: u64, base: &Base, rate: f64) -> (Injection, f64, usize) {
+/// the change kept.
+pub fn draw_visible(i: usize, seed: u64, base: &Base, rate: f64) -> Drawn {
     let mut last = None;
     for a in 0..MAX_DRAWS {
-        let drawn = draw_attempt(i, a, seed, &base.description, rate);
-        let (inj, growth) = make_visible(&drawn, base, rate);
-        let weighable = payload_mass_bound(base, &inj).is_none_or(|b| b <= MAX_MASS_BOUND);
-        if inj.slot == Slot::Clean || (growth >= VISIBLE.0 && weighable) {
-            return (inj, growth, a + 1);
+        let (injection, growth) = make_visible(
+            &draw_attempt(i, a, seed, &base.description, rate),
+            base,
+            rate,
+        );
+        let drawn = Drawn {
+            mass_bound: payload_mass_bound(base, &injection),
+            injection,
+            growth,
+            draws: a + 1,
+        };
+        if drawn.shows() {
+            return drawn;
         }
-        last = Some((inj, growth));
+        last = Some(drawn);
     }
-    let (inj, growth) = last.expect("at least one draw");
-    (inj, growth, MAX_DRAWS)
+    last.expect("at least one draw")
+}
+
+/// A case's change as [`draw_visible`] keeps it.
+#[derive(Clone, Debug)]
+pub struct Drawn {
+    /// The change.
+    pub injection: Injection,
+    /// The growth of the description's torque RMS it reaches ([`RealCase::growth`]).
+    pub growth: f64,
+    /// The draws made (1: the first).
+    pub draws: usize,
+    /// A payload's Cramér–Rao bound on its mass ([`payload_mass_bound`]).
+    pub mass_bound: Option<f64>,
+}
+
+impl Drawn {
+    /// Whether the run shows the change: none drawn, or a growth of at least `VISIBLE.0` and,
+    /// for a payload, a mass bound of at most [`MAX_MASS_BOUND`].
+    pub fn shows(&self) -> bool {
+        self.injection.slot == Slot::Clean
+            || (self.growth >= VISIBLE.0 && self.mass_bound.is_none_or(|b| b <= MAX_MASS_BOUND))
+    }
 }
 
 /// The Cramér–Rao bound on a payload's mass from its base run, relative to the mass: the
@@ -408,8 +437,9 @@ pub fn payload_mass_bound(base: &Base, inj: &Injection) -> Option<f64> {
     let mut y = nalgebra::DMatrix::zeros(n, model.layout().len);
     let mut gram = nalgebra::Matrix4::<f64>::zeros();
     for k in 0..logged.len() {
-        let at = |v: &[f64]| v[k * n..(k + 1) * n].to_vec();
-        crate::dynamics::regressor(model, &mut data, &at(&logged.q), &at(qd), &at(qdd), &mut y);
+        let r = k * n..(k + 1) * n;
+        let (q, qd, qdd) = (&logged.q[r.clone()], &qd[r.clone()], &qdd[r]);
+        crate::dynamics::regressor(model, &mut data, q, qd, qdd, &mut y);
         let y_payload = y.fixed_columns::<4>(10 * body);
         gram += y_payload.transpose() * y_payload;
     }
@@ -674,8 +704,9 @@ pub fn run_case(
 ) -> Result<RealCase, RealError> {
     let base = &bases[i % bases.len()];
     let rate = base.logged.len() as f64 / (base.logged.t[base.logged.len() - 1] - base.logged.t[0]);
-    let (inj, growth, draws) = draw_visible(i, seed, base, rate);
-    let data = inject(&base.logged, &base.description, &inj);
+    let drawn = draw_visible(i, seed, base, rate);
+    let inj = &drawn.injection;
+    let data = inject(&base.logged, &base.description, inj);
     crate::io::create_dir_all(dir)?;
     let robot = dir.join("robot.urdf");
     let csv = dir.join("data.csv");
@@ -686,7 +717,7 @@ pub fn run_case(
     let sidecar = crate::io::sidecar_path(&robot);
     crate::io::write_atomic(&sidecar, side.as_bytes())?;
     crate::io::write_atomic(&csv, logged_csv(&data).as_bytes())?;
-    write_injection(&dir.join("injected.json"), &inj, growth, draws)?;
+    write_injection(&dir.join("injected.json"), &drawn)?;
     let start = std::time::Instant::now();
     let given = crate::io::load_robot(&robot.to_string_lossy())?;
     let information = described_information(&sidecar, &given)?;
@@ -716,27 +747,22 @@ pub fn run_case(
         diagnose::diagnose_runs(&given, runs, vec![], HOLDOUT, &opts).map_err(diag_err)?
     };
     Ok(RealCase {
-        growth,
-        draws,
-        mass_bound: payload_mass_bound(base, &inj),
-        ..score_case(i, base, &inj, &given, &d, start.elapsed().as_secs_f64())
+        growth: drawn.growth,
+        draws: drawn.draws,
+        mass_bound: drawn.mass_bound,
+        ..score_case(i, base, inj, &given, &d, start.elapsed().as_secs_f64())
     })
 }
 
 /// The change injected into a case (`injected.json` beside its files: the truth a kept case
 /// is scored against, in the diagnosis's convention), the growth it reached and the draws
 /// made ([`draw_visible`]).
-fn write_injection(
-    path: &Path,
-    inj: &Injection,
-    growth: f64,
-    draws: usize,
-) -> Result<(), RealError> {
+fn write_injection(path: &Path, drawn: &Drawn) -> Result<(), RealError> {
     let json = serde_json::json!({
         "schema": "physid.injection/1",
-        "injection": inj,
-        "growth": growth,
-        "draws": draws,
+        "injection": drawn.injection,
+        "growth": drawn.growth,
+        "draws": drawn.draws,
     });
     let text = serde_json::to_string_pretty(&json).expect("an injection serializes");
     crate::io::write_atomic(path, text.as_bytes())?;
@@ -964,8 +990,8 @@ fn relative_error(
 pub struct RealScores {
     /// Cases run.
     pub cases: usize,
-    /// Cases whose first draw was hidden by the base's standing gap and drawn again
-    /// ([`draw_visible`]).
+    /// Cases whose first draw the run did not show (hidden by the base's standing gap, or a
+    /// payload's mass it cannot weigh) and were drawn again ([`draw_visible`]).
     pub redrawn: usize,
     /// Payload cases.
     pub payload: usize,
@@ -1455,12 +1481,14 @@ mod tests {
         let slots = slots();
         let mut redrawn = 0;
         for i in 0..2 * slots.len() {
-            let (inj, growth, draws) = draw_visible(i, 3, &base, 1000.0);
+            let drawn = draw_visible(i, 3, &base, 1000.0);
+            let (inj, growth, draws) = (&drawn.injection, drawn.growth, drawn.draws);
             assert_eq!(inj.slot, slots[i % slots.len()], "case {i}");
             assert!((1..=MAX_DRAWS).contains(&draws), "case {i}: {draws}");
+            assert_eq!(drawn.mass_bound, payload_mass_bound(&base, inj), "case {i}");
             let shown = inj.slot == Slot::Clean
-                || (growth >= VISIBLE.0
-                    && payload_mass_bound(&base, &inj).is_none_or(|b| b <= MAX_MASS_BOUND));
+                || (growth >= VISIBLE.0 && drawn.mass_bound.is_none_or(|b| b <= MAX_MASS_BOUND));
+            assert_eq!(drawn.shows(), shown, "case {i}");
             assert!(shown || draws == MAX_DRAWS, "case {i}: growth {growth}");
             if draws == 1 {
                 let first = make_visible(&draw(i, 3, &model, 1000.0), &base, 1000.0).0;
@@ -1470,7 +1498,10 @@ mod tests {
             }
             // The same seed, the same case.
             let again = draw_visible(i, 3, &base, 1000.0);
-            assert_eq!((again.0.magnitudes, again.2), (inj.magnitudes, draws));
+            assert_eq!(
+                (&again.injection.magnitudes, again.draws),
+                (&inj.magnitudes, draws)
+            );
         }
         assert!(redrawn > 0, "no case needed a second draw");
     }
