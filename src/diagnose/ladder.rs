@@ -203,6 +203,13 @@ impl Weighing {
                     body's frame origin, which lies on every joint axis before it)"
                 .into();
         };
+        if !mass_determined(self.mass, se) {
+            return format!(
+                "mass not determined by these data (standard error {se:.3} kg: the motion shows \
+                 the change's first moment m c, not m, so neither its mass nor its centre of \
+                 mass is stated)"
+            );
+        }
         let com = self.com.map_or(String::new(), |c| {
             format!(", centre of mass ({:.3}, {:.3}, {:.3}) m", c[0], c[1], c[2])
         });
@@ -1576,5 +1583,21 @@ mod tests {
             "{}",
             blind.weighed()
         );
+        // A mass seen but not determined (the semi-real 2.1 kg on the KUKA's lwr_3_link read as
+        // +11.030 ± 9055.005 kg) is stated as undetermined, with no number for m or c; the edge
+        // is `mass_determined`'s (a third of the larger of |m| and 1 kg).
+        let vague = change(weighing(11.03, 9055.005), weighing(11.03, 9055.005));
+        assert_eq!(
+            vague.weighed(),
+            "mass not determined by these data (standard error 9055.005 kg: the motion shows the \
+             change's first moment m c, not m, so neither its mass nor its centre of mass is \
+             stated)"
+        );
+        assert!(change(weighing(0.5, 0.34), weighing(0.5, 0.34))
+            .weighed()
+            .starts_with("mass not determined"));
+        assert!(change(weighing(0.5, 0.33), weighing(0.5, 0.33))
+            .weighed()
+            .starts_with("+0.500 ± 0.330 kg"));
     }
 }
