@@ -1583,9 +1583,19 @@ mod tests {
             "{}",
             blind.weighed()
         );
+    }
+
+    #[test]
+    fn a_chosen_body_s_mass_the_data_do_not_determine_is_stated_without_a_number() {
         // A mass seen but not determined (the semi-real 2.1 kg on the KUKA's lwr_3_link read as
         // +11.030 ± 9055.005 kg) is stated as undetermined, with no number for m or c; the edge
         // is `mass_determined`'s (a third of the larger of |m| and 1 kg).
+        let weighing = |mass: f64, mass_se: f64| Weighing {
+            mass,
+            mass_se: Some(mass_se),
+            com: Some([0.0, 0.0, 0.05]),
+        };
+        let change = |entered, last| BodyChange::new("lwr_3_link".into(), entered, last, [0.0; 10]);
         let vague = change(weighing(11.03, 9055.005), weighing(11.03, 9055.005));
         assert_eq!(
             vague.weighed(),
