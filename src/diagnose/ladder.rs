@@ -1535,13 +1535,17 @@ mod tests {
         assert!(aliased(&gram(&zero), 0..2).is_empty());
     }
 
-    #[test]
-    fn a_mass_later_steps_moved_is_stated_as_weighed_at_its_step() {
-        let weighing = |mass: f64, mass_se: f64| Weighing {
+    /// A change of `mass` ± `mass_se` kg, its centre of mass 5 cm along z.
+    fn weighing(mass: f64, mass_se: f64) -> Weighing {
+        Weighing {
             mass,
             mass_se: Some(mass_se),
             com: Some([0.0, 0.0, 0.05]),
-        };
+        }
+    }
+
+    #[test]
+    fn a_mass_later_steps_moved_is_stated_as_weighed_at_its_step() {
         let change = |entered, last| BodyChange::new("lwr_5_link".into(), entered, last, [0.0; 10]);
         // The semi-real "what changed" case: 2.93 ± 0.03 kg at its step, 16.8 ± 1.7 once a
         // torque gain was freed after it (the true payload 2.80 kg).
@@ -1590,11 +1594,6 @@ mod tests {
         // A mass seen but not determined (the semi-real 2.1 kg on the KUKA's lwr_3_link read as
         // +11.030 ± 9055.005 kg) is stated as undetermined, with no number for m or c; the edge
         // is `mass_determined`'s (a third of the larger of |m| and 1 kg).
-        let weighing = |mass: f64, mass_se: f64| Weighing {
-            mass,
-            mass_se: Some(mass_se),
-            com: Some([0.0, 0.0, 0.05]),
-        };
         let change = |entered, last| BodyChange::new("lwr_3_link".into(), entered, last, [0.0; 10]);
         let vague = change(weighing(11.03, 9055.005), weighing(11.03, 9055.005));
         assert_eq!(
