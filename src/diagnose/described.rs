@@ -42,10 +42,7 @@ pub(crate) fn from_description(
 /// ([`moved_by_later_steps`]); a body change's mass as the ladder states it
 /// ([`ladder::BodyChange::stated`]; identifiable 0 when the data do not see it).
 pub(crate) fn estimates(ladder: &Ladder, stage: &Stage) -> Vec<EffectEstimate> {
-    let effects = ladder.chosen.iter().filter_map(|e| match e {
-        Explanation::Effect(v) => Some(*v),
-        Explanation::Friction => None,
-    });
+    let effects = ladder.chosen.iter().filter_map(Explanation::variant);
     let mut bodies = ladder.bodies.iter();
     effects
         .zip(ladder.coefficients.iter().zip(&ladder.coefficient_se))

@@ -4,6 +4,7 @@
 use super::breakdown::Regime;
 use super::diagnosis::Diagnosis;
 use super::diagnosis::{EffectEstimate, Evidence, Magnitude};
+use super::ladder::AlsoFit;
 use crate::effect::library::Kind;
 use crate::io::document::{escape_html, Block, Document, Section, Table, Text};
 use crate::io::plot::{colour, legend_outside, tick, Mark, LEGEND_WIDTH};
@@ -567,6 +568,15 @@ fn ladder_notes(l: &super::ladder::Ladder, s: &mut Section) {
         }
         s.push(Block::Paragraph(t.and(".")));
     }
+    let steps = l
+        .rungs
+        .iter()
+        .map(|r| (Some(r.step.as_str()), &r.unweighed));
+    for (step, unweighed) in steps.chain([(None, &l.unweighed)]) {
+        if !unweighed.is_empty() {
+            s.push(Block::Paragraph(not_weighed(step, unweighed)));
+        }
+    }
     for b in &l.bodies {
         let what = if b.payload { "Payload" } else { "Change" };
         s.push(Block::Paragraph(
@@ -575,6 +585,24 @@ fn ladder_notes(l: &super::ladder::Ladder, s: &mut Section) {
                 .and(format!(": {}.", b.weighed())),
         ));
     }
+}
+
+/// The body changes a step (`None`: the ladder's stop) did not claim because the data do not
+/// weigh their mass.
+fn not_weighed(step: Option<&str>, unweighed: &[AlsoFit]) -> Text {
+    let mut t = Text::default().strong("Not claimed").and(": ");
+    for (i, a) in unweighed.iter().enumerate() {
+        t = if i > 0 { t.and(", ") } else { t };
+        t = t
+            .code(&a.name)
+            .and(format!(" ({:.1} %)", 100.0 * a.reduction));
+    }
+    t = t.and(" would lower the held-out mean square significantly");
+    t = match step {
+        Some(step) => t.and(" in the place of ").code(step),
+        None => t.and(" where the ladder stopped"),
+    };
+    t.and(", but these data do not weigh the mass: they see only its first moment m c, which the description's own error, carried to a motion it was not identified on, changes as well. Record a motion that weighs it (faster, over a wider range of the joints between the body and the base), or diagnose against a baseline run of the same motion (--baseline-data).")
 }
 
 /// The "How far" section: validation RMS along the selection, the structure left, the
