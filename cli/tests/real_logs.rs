@@ -224,3 +224,45 @@ fn a_short_file_that_widens_the_shared_cutoff_is_warned_about() {
     assert!(both.iter().all(|c| *c < 2.5), "{both:?}");
     assert!(!err.contains("reads a band edge"), "{err}");
 }
+
+#[test]
+fn a_mass_far_from_the_description_is_flagged_and_a_description_of_the_same_data_is_not() {
+    // The real KUKA run 1 identified from the URDF: the slow run does not determine every
+    // link's mass, and the constraints put the wrist link at a fifth of the URDF's 1.6 kg.
+    let dir = tempfile::tempdir().unwrap();
+    let k = common::root().join("data/kuka_lwr4");
+    let (run1, urdf) = (k.join("measurements_1.csv"), k.join("kuka_lwr4.urdf"));
+    let s = |p: &std::path::Path| p.to_str().unwrap().to_string();
+    let described = dir.path().join("described.urdf");
+    let run1_s = s(&run1);
+    let identify = |robot: &str, out: Option<&str>| {
+        let mut args = vec!["identify", "--data", &run1_s, "--robot", robot];
+        args.extend([
+            "--constraints",
+            "consistent",
+            "--friction",
+            "viscous,coulomb",
+        ]);
+        if let Some(out) = out {
+            args.extend(["--out-urdf", out]);
+        }
+        let (code, _, err) = common::physid(&args);
+        assert_eq!(code, 0, "{err}");
+        err
+    };
+    let err = identify(&s(&urdf), Some(&s(&described)));
+    let far: Vec<&str> = err
+        .lines()
+        .filter(|l| l.contains("times the description's"))
+        .collect();
+    eprintln!("{}", far.join("\n"));
+    assert!(
+        far.iter()
+            .any(|l| l.starts_with("warning: 'lwr_6_link': identified mass ")
+                && l.contains("the description's 1.600 kg; the data do not determine it")),
+        "{err}"
+    );
+    // Its own identification as the description: every mass where the description has it.
+    let again = identify(&s(&described), None);
+    assert!(!again.contains("times the description's"), "{again}");
+}

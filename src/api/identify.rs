@@ -782,6 +782,7 @@ fn score(
     let validation = validation_rms.map(|rms| split(&d.validation, rms));
     let mut notices = d.notices.clone();
     notices.extend(weak_data_warnings(o, &d, &identifiability));
+    notices.extend(far_mass_warnings(m, &fit.identified, &identifiability));
     // Effect terms are fitted on data read whole (never streamed), whose report holds the
     // sample period the snippet's delays are counted in.
     let snippet = d.data[0]
@@ -840,6 +841,47 @@ fn weak_data_warnings(
         out.push(Notice::warning(format!(
             "the data excite {} of {} parameter directions: the rest comes from the prior (the robot description), not from the data; record a motion that moves every joint",
             idf.rank, idf.parameters
+        )));
+    }
+    out
+}
+
+/// A body's identified mass is far from its description's beyond this factor (either way).
+pub const FAR_MASS: f64 = 2.0;
+
+/// Warnings for each body whose identified mass is more than [`FAR_MASS`] times its
+/// description's, or less than its inverse (bodies the description gives less than 1 g are
+/// left out), each saying whether the data determine that mass or the constraints placed it
+/// (standard error finite and below the mass). Directions the data do not determine go where
+/// the constraints allow: on a low-cost arm a 0.65 kg link came out at 9.4 kg, consistent and
+/// absurd.
+fn far_mass_warnings(
+    m: &Model,
+    identified: &ident::Identified,
+    idf: &analysis::Identifiability,
+) -> Vec<Notice> {
+    let names = m.parameter_names();
+    let mut out = vec![];
+    for body in m.bodies() {
+        let Some(fitted) = identified.bodies.iter().find(|b| b.name == body.name) else {
+            continue;
+        };
+        let (described, mass) = (body.inertia.mass(), fitted.pi[0]);
+        let ratio = mass / described;
+        if described < 1e-3 || (1.0 / FAR_MASS..=FAR_MASS).contains(&ratio) {
+            continue;
+        }
+        let se = (names.iter())
+            .position(|n| *n == format!("{}.m", body.name))
+            .map_or(f64::INFINITY, |c| idf.standard_errors[c]);
+        let why = if se.is_finite() && se < mass.abs() {
+            format!("the data determine it (standard error {se:.3} kg): the description's mass or the data's torque scale is off")
+        } else {
+            "the data do not determine it: the constraints placed it where they allow; bound it (a prior: --regularizer logdet --prior-weight, or geometry for the ellipsoid set) or record a motion that moves this body".to_string()
+        };
+        out.push(Notice::warning(format!(
+            "'{}': identified mass {mass:.3} kg is {ratio:.2} times the description's {described:.3} kg; {why}",
+            body.name
         )));
     }
     out
