@@ -106,6 +106,10 @@ pub struct Args {
     /// Margin ε of the strict matrix inequalities.
     #[arg(long, default_value_t = 1e-6, allow_negative_numbers = true)]
     eps: f64,
+    /// Hold each body's mass within LO..HI times the description's (0 <= LO <= 1 <= HI, e.g.
+    /// 0.5,2): what the data do not determine otherwise goes wherever the constraints allow.
+    #[arg(long, value_name = "LO,HI", value_parser = parse_factors, allow_hyphen_values = true)]
+    mass_bounds: Option<(f64, f64)>,
     /// Print JSON (schema: docs/identify-json.md).
     #[arg(long)]
     json: bool,
@@ -124,6 +128,19 @@ pub struct Args {
     /// −log det between J and the prior's J; Lee, Wensing & Park).
     #[arg(long, default_value = "euclidean")]
     regularizer: ident::Regularizer,
+}
+
+/// Two numbers `LO,HI` (each checked by the library's options).
+fn parse_factors(s: &str) -> Result<(f64, f64), String> {
+    let parts: Vec<&str> = s.split(',').map(str::trim).collect();
+    let [lo, hi] = parts.as_slice() else {
+        return Err(format!("'{s}': give two numbers LO,HI (e.g. 0.5,2)"));
+    };
+    let number = |x: &str| {
+        x.parse::<f64>()
+            .map_err(|_| format!("'{x}' in '{s}' is not a number (give LO,HI, e.g. 0.5,2)"))
+    };
+    Ok((number(lo)?, number(hi)?))
 }
 
 /// The effect terms from `--friction`, `--effects` and `--effects-from`.
@@ -153,6 +170,7 @@ fn options(a: &Args) -> anyhow::Result<IdentifyOptions> {
     o.read = a.read.options();
     o.allow_few_samples = a.allow_few_samples;
     o.information = a.out_urdf.is_some();
+    o.mass_bounds = a.mass_bounds;
     Ok(o)
 }
 
@@ -166,6 +184,9 @@ pub fn run(a: Args) -> anyhow::Result<()> {
     opts.terms = terms(&a, m)?;
     if a.export_problem.is_some() && !opts.terms.is_empty() {
         bail!("--export-problem writes the model's own problem: leave out the extra --friction terms and --effects");
+    }
+    if a.export_problem.is_some() && opts.mass_bounds.is_some() {
+        bail!("--export-problem writes the problem without mass bounds: leave out --mass-bounds");
     }
     let report = identify_reporting(m, &opts, &mut |notice| eprintln!("{notice}"))
         .map_err(super::option_error)?;
@@ -238,7 +259,7 @@ fn write_outputs(
         _ => {}
     }
     if let Some(p) = &a.export_problem {
-        let ident = opts.ident(rep.set)?;
+        let ident = opts.ident(m, rep.set)?;
         export_problem(p, m, &rep.normal_equations, &ident, &rep.identified)?;
     }
     Ok(())

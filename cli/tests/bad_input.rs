@@ -206,6 +206,17 @@ fn negative_option_values_reach_the_option_check() {
     );
     let (ok, err) = physid(&["identify", "--data", "x.csv", "--prior-weight", "-1"]);
     assert!(!ok && err.contains("--prior-weight"), "{err}");
+    for bounds in ["-1,2", "2,0.5", "0.5,inf", "1.5,2"] {
+        let (ok, err) = physid(&["identify", "--data", "x.csv", "--mass-bounds", bounds]);
+        let rule = format!("--mass-bounds {bounds}: give factors of the description's masses with 0 <= LO <= 1 <= HI");
+        assert!(!ok && err.contains(&rule), "{bounds}: {err}");
+    }
+    for bounds in ["0.5", "a,b", "", "1,2,3"] {
+        let (ok, err) = physid(&["identify", "--data", "x.csv", "--mass-bounds", bounds]);
+        let said =
+            err.contains("give two numbers LO,HI") || err.contains("is not a number (give LO,HI");
+        assert!(!ok && said, "{bounds}: {err}");
+    }
     let (ok, err) = physid(&["diagnose", "--data", "x.csv", "--cutoff", "-5"]);
     assert!(
         !ok && err.contains("--cutoff must be a positive frequency"),

@@ -266,3 +266,56 @@ fn a_mass_far_from_the_description_is_flagged_and_a_description_of_the_same_data
     let again = identify(&s(&described), None);
     assert!(!again.contains("times the description's"), "{again}");
 }
+
+#[test]
+fn mass_bounds_hold_every_mass_and_are_not_exported_silently() {
+    // Held within 0.5..2 times the URDF's masses, run 1's fit keeps each link there (the free
+    // fit puts lwr_6_link at 0.35 of 1.6 kg) and says which masses sit on a bound.
+    let dir = tempfile::tempdir().unwrap();
+    let k = common::root().join("data/kuka_lwr4");
+    let (run1, urdf) = (k.join("measurements_1.csv"), k.join("kuka_lwr4.urdf"));
+    let (run1, urdf) = (run1.to_str().unwrap(), urdf.to_str().unwrap());
+    let args = [
+        "identify",
+        "--data",
+        run1,
+        "--robot",
+        urdf,
+        "--constraints",
+        "consistent",
+        "--mass-bounds",
+        "0.5,2",
+        "--json",
+    ];
+    let (code, out, err) = common::physid(&args);
+    assert_eq!(code, 0, "{err}");
+    let v: serde_json::Value = serde_json::from_str(&out).unwrap();
+    let model = physid::io::load_robot(urdf).unwrap();
+    for (body, fitted) in model.bodies().iter().zip(v["bodies"].as_array().unwrap()) {
+        assert_eq!(fitted["name"], body.name.as_str());
+        let (m, d) = (fitted["pi"][0].as_f64().unwrap(), body.inertia.mass());
+        assert!(
+            m >= 0.5 * d * (1.0 - 1e-6) && m <= 2.0 * d * (1.0 + 1e-6),
+            "{}: {m} of {d}",
+            body.name
+        );
+    }
+    assert!(
+        err.contains("note: 'lwr_6_link': mass 0.800 kg at the lower bound, 0.5 times the description's 1.600 kg"),
+        "{err}"
+    );
+    assert!(
+        !err.contains("times the description's 1.600 kg; the data"),
+        "{err}"
+    );
+    let problem = dir.path().join("p.json");
+    let mut bounded_export = args[..args.len() - 1].to_vec();
+    bounded_export.extend(["--export-problem", problem.to_str().unwrap()]);
+    let (code, _, err) = common::physid(&bounded_export);
+    assert_eq!(code, 2, "{err}");
+    assert!(
+        err.contains("--export-problem writes the problem without mass bounds"),
+        "{err}"
+    );
+    assert!(!problem.exists());
+}

@@ -517,6 +517,9 @@ pub struct IdentifyOptions {
     /// over the training samples), which [`Identification::write_urdf`] writes into the
     /// sidecar as the description's uncertainty.
     pub information: bool,
+    /// Each body's mass held within `[lo, hi]` times the description's (`0 ≤ lo ≤ 1 ≤ hi`):
+    /// directions the data do not determine otherwise go wherever the constraints allow.
+    pub mass_bounds: Option<(f64, f64)>,
 }
 
 impl IdentifyOptions {
@@ -536,6 +539,7 @@ impl IdentifyOptions {
             read: ReadOptions::default(),
             allow_few_samples: false,
             information: false,
+            mass_bounds: None,
         }
     }
 
@@ -557,15 +561,27 @@ impl IdentifyOptions {
             ("--data", &self.data),
             ("--validate-data", &self.validate_data),
         ])?;
+        if let Some((lo, hi)) = self.mass_bounds {
+            if !(lo.is_finite() && hi.is_finite() && (0.0..=1.0).contains(&lo) && hi >= 1.0) {
+                return Err(ApiError::Options(format!(
+                    "--mass-bounds {lo},{hi}: give factors of the description's masses with 0 <= LO <= 1 <= HI (e.g. 0.5,2), so that the description itself lies within them"
+                )));
+            }
+        }
         Ok(())
     }
 
-    /// The identification's options under `set`, checked.
-    pub fn ident(&self, set: ConstraintSet) -> Result<Options, ApiError> {
+    /// The identification's options for `m` under `set`, checked.
+    pub fn ident(&self, m: &Model, set: ConstraintSet) -> Result<Options, ApiError> {
         let mut opts = Options::new(set);
         opts.prior_weight = self.prior_weight;
         opts.eps = self.eps;
         opts.regularizer = self.regularizer;
+        if let Some((lo, hi)) = self.mass_bounds {
+            opts.mass_bounds = (m.bodies().iter().enumerate())
+                .map(|(i, b)| (10 * i, lo * b.inertia.mass(), hi * b.inertia.mass()))
+                .collect();
+        }
         opts.validate()?;
         Ok(opts)
     }
@@ -688,7 +704,7 @@ pub fn identify_reporting(
 ) -> Result<Identification, ApiError> {
     o.validate()?;
     let chosen = constraint_set(o.constraints, m);
-    let opts = o.ident(chosen.set)?;
+    let opts = o.ident(m, chosen.set)?;
     let opened = open(m, o)?;
     opened.notices.iter().for_each(&mut *notify);
     check_equations(m, o, &opened)?;
@@ -783,6 +799,7 @@ fn score(
     let mut notices = d.notices.clone();
     notices.extend(weak_data_warnings(o, &d, &identifiability));
     notices.extend(far_mass_warnings(m, &fit.identified, &identifiability));
+    notices.extend(bound_mass_notes(m, o, &fit.identified));
     // Effect terms are fitted on data read whole (never streamed), whose report holds the
     // sample period the snippet's delays are counted in.
     let snippet = d.data[0]
@@ -883,6 +900,41 @@ fn far_mass_warnings(
             "'{}': identified mass {mass:.3} kg is {ratio:.2} times the description's {described:.3} kg; {why}",
             body.name
         )));
+    }
+    out
+}
+
+/// A note for each body whose identified mass lies on a bound of `o.mass_bounds` (within 10⁻⁴
+/// of the bound's width): the data, or the constraints, would have put it beyond; a warning
+/// where a mass lies outside its bounds (the solver did not hold them: checked from the
+/// parameters, as the constraint set is).
+fn bound_mass_notes(m: &Model, o: &IdentifyOptions, identified: &ident::Identified) -> Vec<Notice> {
+    let Some((lo, hi)) = o.mass_bounds else {
+        return vec![];
+    };
+    let mut out = vec![];
+    for body in m.bodies() {
+        let Some(fitted) = identified.bodies.iter().find(|b| b.name == body.name) else {
+            continue;
+        };
+        let (described, mass) = (body.inertia.mass(), fitted.pi[0]);
+        let near = |factor: f64| (mass - factor * described).abs() <= 1e-4 * (hi - lo) * described;
+        let slack = 1e-6 * described;
+        if mass < lo * described - slack || mass > hi * described + slack {
+            out.push(Notice::warning(format!(
+                "'{}': mass {mass:.6} kg is outside its bounds {lo}..{hi} times the description's {described:.6} kg: the solver did not hold them",
+                body.name
+            )));
+            continue;
+        }
+        for (factor, which) in [(lo, "lower"), (hi, "upper")] {
+            if described > 0.0 && near(factor) {
+                out.push(Notice::note(format!(
+                    "'{}': mass {mass:.3} kg at the {which} bound, {factor} times the description's {described:.3} kg (--mass-bounds): the fit would put it beyond",
+                    body.name
+                )));
+            }
+        }
     }
     out
 }

@@ -109,6 +109,9 @@ pub struct Options {
     /// Further columns of θ constrained to be non-negative (e.g. the diagnosis's effect terms
     /// with a physical sign); they make even `none` a cone program.
     pub nonnegative: Vec<usize>,
+    /// Bounds on masses: `(column of θ, lowest, highest)` in kg, each `lo ≤ θ_c ≤ hi`; they
+    /// make even `none` a cone program.
+    pub mass_bounds: Vec<(usize, f64, f64)>,
 }
 
 /// How the estimate is pulled towards the prior `θ̂`.
@@ -148,6 +151,7 @@ impl Options {
             force_cone_solver: false,
             regularizer: Regularizer::Euclidean,
             nonnegative: vec![],
+            mass_bounds: vec![],
         }
     }
 }
@@ -268,6 +272,15 @@ impl Options {
                 expected: "a finite number >= 0",
                 value: self.eps,
             });
+        }
+        for &(_, lo, hi) in &self.mass_bounds {
+            if !(lo.is_finite() && hi.is_finite() && 0.0 <= lo && lo <= hi) {
+                return Err(IdentError::InvalidOption {
+                    option: "mass_bounds",
+                    expected: "finite masses 0 <= lowest <= highest (kg)",
+                    value: if lo.is_finite() && lo >= 0.0 { hi } else { lo },
+                });
+            }
         }
         Ok(())
     }
@@ -466,7 +479,8 @@ pub fn identify(
     let direct = opts.constraints == ConstraintSet::None
         && !opts.force_cone_solver
         && !logdet
-        && opts.nonnegative.is_empty();
+        && opts.nonnegative.is_empty()
+        && opts.mass_bounds.is_empty();
     let (theta, solver) = if direct {
         let info = SolverInfo {
             status: SolveStatus::Direct,
@@ -635,17 +649,20 @@ fn solve_cone(
     run_clarabel(&ps, &q, rows, p, &d)
 }
 
+/// An affine form over θ, `Σ v θ_c + constant`, held non-negative.
+type Affine = (Vec<(usize, f64)>, f64);
+
 /// The constraint rows of the set `opts.constraints` per body (`I ⪰ ε1`, `J ⪰ ε1`, the CoM
 /// LMI), appended to `rows`; returns the rows that must be non-negative (`tr(JQ)`, friction,
-/// `opts.nonnegative`) as linear forms over θ.
+/// `opts.nonnegative`, the mass bounds) as affine forms over θ.
 fn physical_rows(
     model: &Model,
     opts: &Options,
     d: &[f64],
     rows: &mut ConeRows,
-) -> Result<Vec<Vec<(usize, f64)>>, IdentError> {
+) -> Result<Vec<Affine>, IdentError> {
     let set = opts.constraints;
-    let mut nonneg: Vec<Vec<(usize, f64)>> = vec![];
+    let mut nonneg: Vec<Affine> = vec![];
     for (name, col, ell) in bodies(model) {
         match set {
             ConstraintSet::None => {}
@@ -656,15 +673,19 @@ fn physical_rows(
                 lmi_rows(rows, Lmi::Pseudo, col, opts.eps, d);
                 com_rows(rows, &e, col, d);
                 let form = lmi::trace_jq_form(&e);
-                nonneg.push((0..10).map(|k| (col + k, form[k])).collect());
+                nonneg.push(((0..10).map(|k| (col + k, form[k])).collect(), 0.0));
             }
         }
     }
     if set != ConstraintSet::None {
         let l = model.layout();
-        nonneg.extend((l.viscous_col..l.len).map(|c| vec![(c, 1.0)]));
+        nonneg.extend((l.viscous_col..l.len).map(|c| (vec![(c, 1.0)], 0.0)));
     }
-    nonneg.extend(opts.nonnegative.iter().map(|&c| vec![(c, 1.0)]));
+    nonneg.extend(opts.nonnegative.iter().map(|&c| (vec![(c, 1.0)], 0.0)));
+    for &(c, lo, hi) in &opts.mass_bounds {
+        nonneg.push((vec![(c, 1.0)], -lo));
+        nonneg.push((vec![(c, -1.0)], hi));
+    }
     Ok(nonneg)
 }
 
@@ -727,16 +748,17 @@ fn logdet_rows(
     Ok(())
 }
 
-/// One non-negative cone over the linear forms `nonneg` (none when empty).
-fn nonnegative_rows(nonneg: &[Vec<(usize, f64)>], d: &[f64], rows: &mut ConeRows) {
+/// One non-negative cone over the affine forms `nonneg` (none when empty): `s = Σ v θ_c +
+/// constant`, i.e. `A = −v d_c`, `b = constant`.
+fn nonnegative_rows(nonneg: &[Affine], d: &[f64], rows: &mut ConeRows) {
     let r0 = rows.next_row();
-    for (r, terms) in nonneg.iter().enumerate() {
+    for (r, (terms, _)) in nonneg.iter().enumerate() {
         for &(c, v) in terms {
             rows.entry(r0 + r, c, -v * d[c]);
         }
     }
     rows.close(
-        std::iter::repeat_n(0.0, nonneg.len()),
+        nonneg.iter().map(|(_, constant)| *constant),
         SupportedConeT::NonnegativeConeT(nonneg.len()),
     );
 }
