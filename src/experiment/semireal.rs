@@ -1012,6 +1012,11 @@ pub struct RealScores {
     pub clean_no_payload: f64,
     /// Fraction of them with no step at all.
     pub clean_no_claim: f64,
+    /// Cases without a payload injected (untouched runs and every other change).
+    pub without_payload: usize,
+    /// Fraction of them in which no step of the ladder names a body (`+ payload on …`, `+
+    /// change of …`), first or later.
+    pub without_payload_no_body_step: f64,
     /// Cases with one injected change (payload and friction included).
     pub single: usize,
     /// Fraction whose first step names it.
@@ -1025,6 +1030,12 @@ pub struct RealScores {
     pub median_magnitude_error: f64,
     /// Median of the information-weighted error ([`RealCase::magnitude_error_weighted`]).
     pub median_magnitude_error_weighted: f64,
+}
+
+/// Whether a ladder step (`+ payload on lwr_5_link | payload or change on lwr_6_link`) names a
+/// body change.
+fn names_a_body(step: &str) -> bool {
+    step.starts_with("+ payload on") || step.starts_with("+ change of")
 }
 
 /// Scores of a set of cases.
@@ -1058,6 +1069,12 @@ pub fn score(results: &[RealCase]) -> RealScores {
         clean: clean.len(),
         clean_no_payload: super::fraction(clean.iter().map(|r| !r.payload_claimed)),
         clean_no_claim: super::fraction(clean.iter().map(|r| r.found.is_empty())),
+        without_payload: results.len() - payload.len(),
+        without_payload_no_body_step: super::fraction(
+            (results.iter())
+                .filter(|r| r.injected != "payload")
+                .map(|r| !r.found.iter().any(|s| names_a_body(s))),
+        ),
         single: results.iter().filter(|r| r.top1.is_some()).count(),
         top1: super::fraction(results.iter().filter_map(|r| r.top1)),
         visible_single: visible.len(),
