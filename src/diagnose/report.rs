@@ -556,7 +556,7 @@ fn ladder_notes(l: &super::ladder::Ladder, s: &mut Section) {
     for r in l.rungs.iter().filter(|r| !r.also_fit.is_empty()) {
         let mut t = Text::default()
             .strong("Also fit")
-            .and(" (more terms; set aside for ")
+            .and(" (set aside for ")
             .code(&r.step)
             .and(format!(
                 ", which takes {:.1} % of the held-out mean square): ",
