@@ -1722,9 +1722,7 @@ fn weighed_at_entry(
     p0: usize,
 ) -> Option<(Explanation, Vec<f64>, Vec<f64>)> {
     let e = *set.last()?;
-    let Some(v) = e.variant() else {
-        return None;
-    };
+    let v = e.variant()?;
     if v.kind.is_body_change() {
         return None;
     }
