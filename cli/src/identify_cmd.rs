@@ -10,9 +10,8 @@ use physid::api::identify::{
     SampleRange,
 };
 use physid::diagnose::library::Variant;
-use physid::ident::{self, analysis, ConstraintSet, NormalEquations, Options};
+use physid::ident::{self, analysis, ConstraintSet};
 use physid::model::Model;
-use serde_json::json;
 use std::path::{Path, PathBuf};
 
 /// How data files are read and prepared: `--topic` and `--stamp` for MCAP files and rosbag2
@@ -108,8 +107,8 @@ pub struct Args {
     eps: f64,
     /// Hold each body's mass within LO..HI times the description's (0 <= LO <= 1 <= HI, e.g.
     /// 0.5,2): what the data do not determine otherwise goes wherever the constraints allow.
-    #[arg(long, value_name = "LO,HI", value_parser = parse_factors, allow_hyphen_values = true)]
-    mass_bounds: Option<(f64, f64)>,
+    #[arg(long, value_name = "LO,HI", allow_hyphen_values = true)]
+    mass_bounds: Option<physid::api::identify::MassBounds>,
     /// Print JSON (schema: docs/identify-json.md).
     #[arg(long)]
     json: bool,
@@ -128,19 +127,6 @@ pub struct Args {
     /// −log det between J and the prior's J; Lee, Wensing & Park).
     #[arg(long, default_value = "euclidean")]
     regularizer: ident::Regularizer,
-}
-
-/// Two numbers `LO,HI` (each checked by the library's options).
-fn parse_factors(s: &str) -> Result<(f64, f64), String> {
-    let parts: Vec<&str> = s.split(',').map(str::trim).collect();
-    let [lo, hi] = parts.as_slice() else {
-        return Err(format!("'{s}': give two numbers LO,HI (e.g. 0.5,2)"));
-    };
-    let number = |x: &str| {
-        x.parse::<f64>()
-            .map_err(|_| format!("'{x}' in '{s}' is not a number (give LO,HI, e.g. 0.5,2)"))
-    };
-    Ok((number(lo)?, number(hi)?))
 }
 
 /// The effect terms from `--friction`, `--effects` and `--effects-from`.
@@ -260,37 +246,11 @@ fn write_outputs(
     }
     if let Some(p) = &a.export_problem {
         let ident = opts.ident(m, rep.set)?;
-        export_problem(p, m, &rep.normal_equations, &ident, &rep.identified)?;
+        let v =
+            physid::api::identify::problem_json(m, &rep.normal_equations, &ident, &rep.identified);
+        let v = physid::io::versioned("problem", &v);
+        physid::io::write_atomic(p, serde_json::to_string(&v)?.as_bytes())?;
     }
-    Ok(())
-}
-
-/// The problem as data, for independent solvers (scripts/check_cvxpy.py): the objective
-/// `θᵀ H θ − 2 gᵀ θ + c` as identification builds it ([`ident::objective`]) and, per body, its
-/// parameter columns and ellipsoid.
-fn export_problem(
-    p: &Path,
-    m: &Model,
-    ne: &NormalEquations,
-    opts: &Options,
-    r: &ident::Identified,
-) -> anyhow::Result<()> {
-    let prior = &m.parameters();
-    let ident::Objective { h, g, c } = ident::objective(m, ne, prior, opts);
-    let rows: Vec<Vec<f64>> = h.row_iter().map(|r| r.iter().copied().collect()).collect();
-    let bodies: Vec<_> = ident::bodies(m)
-        .into_iter()
-        .map(|(name, col, e)| json!({"name": name, "col": col, "ellipsoid": e.map(|e| json!({"center": e.center.as_slice(), "qs": e.qs.as_slice()}))}))
-        .collect();
-    let l = m.layout();
-    let v = json!({
-        "constraints": opts.constraints, "eps": opts.eps, "H": rows, "g": g.as_slice(), "c": c,
-        "regularizer": opts.regularizer, "w": opts.prior_weight, "prior": prior.as_slice(),
-        "bodies": bodies, "friction_cols": (l.viscous_col..l.len).collect::<Vec<_>>(),
-        "physid": {"objective": r.objective, "theta": r.theta.as_slice(), "status": r.solver.status},
-    });
-    let v = physid::io::versioned("problem", &v);
-    physid::io::write_atomic(p, serde_json::to_string(&v)?.as_bytes())?;
     Ok(())
 }
 

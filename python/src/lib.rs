@@ -753,7 +753,7 @@ fn identify<'py>(
         .map_err(|e| value_error(format!("--regularizer: {e}")))?;
     o.read = read_options(topic, stamp, cutoff, lock, only)?;
     o.allow_few_samples = allow_few_samples;
-    o.mass_bounds = mass_bounds;
+    o.mass_bounds = mass_bounds.map(|(lo, hi)| api::identify::MassBounds { lo, hi });
     // For `write_urdf`'s sidecar: one more pass over the training samples.
     o.information = true;
     let mut inputs: Vec<PathBuf> = o.data.iter().chain(&o.validate_data).cloned().collect();

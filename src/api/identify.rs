@@ -519,7 +519,7 @@ pub struct IdentifyOptions {
     pub information: bool,
     /// Each body's mass held within `[lo, hi]` times the description's (`0 ≤ lo ≤ 1 ≤ hi`):
     /// directions the data do not determine otherwise go wherever the constraints allow.
-    pub mass_bounds: Option<(f64, f64)>,
+    pub mass_bounds: Option<MassBounds>,
 }
 
 impl IdentifyOptions {
@@ -561,7 +561,7 @@ impl IdentifyOptions {
             ("--data", &self.data),
             ("--validate-data", &self.validate_data),
         ])?;
-        if let Some((lo, hi)) = self.mass_bounds {
+        if let Some(MassBounds { lo, hi }) = self.mass_bounds {
             if !(lo.is_finite() && hi.is_finite() && (0.0..=1.0).contains(&lo) && hi >= 1.0) {
                 return Err(ApiError::Options(format!(
                     "--mass-bounds {lo},{hi}: give factors of the description's masses with 0 <= LO <= 1 <= HI (e.g. 0.5,2), so that the description itself lies within them"
@@ -577,7 +577,7 @@ impl IdentifyOptions {
         opts.prior_weight = self.prior_weight;
         opts.eps = self.eps;
         opts.regularizer = self.regularizer;
-        if let Some((lo, hi)) = self.mass_bounds {
+        if let Some(MassBounds { lo, hi }) = self.mass_bounds {
             opts.mass_bounds = (m.bodies().iter().enumerate())
                 .map(|(i, b)| (10 * i, lo * b.inertia.mass(), hi * b.inertia.mass()))
                 .collect();
@@ -863,6 +863,61 @@ fn weak_data_warnings(
     out
 }
 
+/// The problem as data, for independent solvers (scripts/check_cvxpy.py): the objective
+/// `θᵀ H θ − 2 gᵀ θ + c` as identification builds it ([`ident::objective`]) and, per body, its
+/// parameter columns and ellipsoid; `r` is physid's answer to it.
+pub fn problem_json(
+    m: &Model,
+    ne: &crate::ident::NormalEquations,
+    opts: &Options,
+    r: &ident::Identified,
+) -> serde_json::Value {
+    use serde_json::json;
+    let prior = &m.parameters();
+    let ident::Objective { h, g, c } = ident::objective(m, ne, prior, opts);
+    let rows: Vec<Vec<f64>> = h.row_iter().map(|r| r.iter().copied().collect()).collect();
+    let bodies: Vec<_> = ident::bodies(m)
+        .into_iter()
+        .map(|(name, col, e)| json!({"name": name, "col": col, "ellipsoid": e.map(|e| json!({"center": e.center.as_slice(), "qs": e.qs.as_slice()}))}))
+        .collect();
+    let l = m.layout();
+    json!({
+        "constraints": opts.constraints, "eps": opts.eps, "H": rows, "g": g.as_slice(), "c": c,
+        "regularizer": opts.regularizer, "w": opts.prior_weight, "prior": prior.as_slice(),
+        "bodies": bodies, "friction_cols": (l.viscous_col..l.len).collect::<Vec<_>>(),
+        "physid": {"objective": r.objective, "theta": r.theta.as_slice(), "status": r.solver.status},
+    })
+}
+
+/// Each body's mass held within `[lo, hi]` times the description's (`--mass-bounds LO,HI`).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct MassBounds {
+    /// The lowest factor (0 ≤ lo ≤ 1).
+    pub lo: f64,
+    /// The highest factor (hi ≥ 1).
+    pub hi: f64,
+}
+
+impl std::str::FromStr for MassBounds {
+    type Err = String;
+
+    /// Two numbers `LO,HI`; their range is checked by [`IdentifyOptions::validate`].
+    fn from_str(s: &str) -> Result<Self, String> {
+        let parts: Vec<&str> = s.split(',').map(str::trim).collect();
+        let [lo, hi] = parts.as_slice() else {
+            return Err(format!("'{s}': give two numbers LO,HI (e.g. 0.5,2)"));
+        };
+        let number = |x: &str| {
+            x.parse::<f64>()
+                .map_err(|_| format!("'{x}' in '{s}' is not a number (give LO,HI, e.g. 0.5,2)"))
+        };
+        Ok(MassBounds {
+            lo: number(lo)?,
+            hi: number(hi)?,
+        })
+    }
+}
+
 /// A body's identified mass is far from its description's beyond this factor (either way).
 pub const FAR_MASS: f64 = 2.0;
 
@@ -909,7 +964,7 @@ fn far_mass_warnings(
 /// where a mass lies outside its bounds (the solver did not hold them: checked from the
 /// parameters, as the constraint set is).
 fn bound_mass_notes(m: &Model, o: &IdentifyOptions, identified: &ident::Identified) -> Vec<Notice> {
-    let Some((lo, hi)) = o.mass_bounds else {
+    let Some(MassBounds { lo, hi }) = o.mass_bounds else {
         return vec![];
     };
     let mut out = vec![];

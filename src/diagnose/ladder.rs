@@ -904,15 +904,7 @@ pub(crate) fn ladder(stage: &Stage, eps: f64, selected: &[Variant], settings: &S
         let added = Added::taken(step, stage.model);
         rungs.push(rung(stage, at(&data, &current, &set), added));
     };
-    let absorbed = absorbed_steps(&problem, stage, &data, &mut set, settings);
-    current = problem.fit(&data, &set);
-    for (name, e) in absorbed {
-        let added = Added {
-            e: Some(e),
-            ..Added::fixed(&name)
-        };
-        rungs.push(rung(stage, at(&data, &current, &set), added));
-    }
+    current = with_absorbed(&problem, &data, &mut set, settings, &mut rungs);
     rungs.push(reidentified_rung(stage));
     let (_, coefficients) = model_of(&data, &current, &set, p0);
     let coefficient_se = standard_errors(&data, &current, &set, p0);
@@ -929,6 +921,28 @@ pub(crate) fn ladder(stage: &Stage, eps: f64, selected: &[Variant], settings: &S
         coefficient_se,
         entered_coefficients,
     }
+}
+
+/// Phase two's rungs ([`absorbed_steps`]) appended to `rungs`, `set` grown by their kinds;
+/// returns the fit with every explanation free.
+fn with_absorbed(
+    problem: &Problem,
+    data: &Data,
+    set: &mut Vec<Explanation>,
+    settings: &Settings,
+    rungs: &mut Vec<Rung>,
+) -> Fit {
+    let stage = problem.stage;
+    let absorbed = absorbed_steps(problem, stage, data, set, settings);
+    let current = problem.fit(data, set);
+    for (name, e) in absorbed {
+        let added = Added {
+            e: Some(e),
+            ..Added::fixed(&name)
+        };
+        rungs.push(rung(stage, at(data, &current, set), added));
+    }
+    current
 }
 
 /// An explanation tied with a step: its name, and for a body change the mass (kg) it would add

@@ -211,8 +211,8 @@ pub enum IdentError {
         /// The model's parameters.
         params: usize,
     },
-    /// A non-negative column index outside the parameters.
-    #[error("non-negative column {column} outside the {params} parameters")]
+    /// A non-negative or mass-bounded column index outside the parameters.
+    #[error("non-negative or bounded column {column} outside the {params} parameters")]
     NonNegativeColumn {
         /// The column.
         column: usize,
@@ -256,6 +256,16 @@ impl std::fmt::Display for SolveStatus {
 }
 
 impl Options {
+    /// Whether the fit is plain least squares (no constraint, prior or bound needs the cone
+    /// solver).
+    fn solved_directly(&self) -> bool {
+        self.constraints == ConstraintSet::None
+            && !self.force_cone_solver
+            && self.regularizer != Regularizer::LogDet
+            && self.nonnegative.is_empty()
+            && self.mass_bounds.is_empty()
+    }
+
     /// Checks every value against its range (the CLI relies on this, and so can any caller).
     pub fn validate(&self) -> Result<(), IdentError> {
         let w = self.prior_weight;
@@ -431,6 +441,13 @@ fn check_problem(
             params: model.layout().len,
         });
     }
+    let bounded = opts.mass_bounds.iter().map(|b| &b.0);
+    if let Some(&c) = opts.nonnegative.iter().chain(bounded).find(|&&c| c >= p) {
+        return Err(IdentError::NonNegativeColumn {
+            column: c,
+            params: p,
+        });
+    }
     opts.validate()?;
     let ns = ne.samples;
     if ns == 0 || (opts.prior_weight == 0.0 && ns * model.dof() < p) {
@@ -456,7 +473,7 @@ pub fn identify(
     opts: &Options,
 ) -> Result<Identified, IdentError> {
     check_problem(model, ne, prior, opts)?;
-    let (p, w) = (ne.yty.nrows(), opts.prior_weight);
+    let w = opts.prior_weight;
     let logdet = opts.regularizer == Regularizer::LogDet;
     let Objective { h, g, c: constant } = objective(model, ne, prior, opts);
     // Never hand the solver non-finite data (Clarabel panics on them).
@@ -470,18 +487,7 @@ pub fn identify(
         ));
     }
     let start = std::time::Instant::now();
-    if let Some(&c) = opts.nonnegative.iter().find(|&&c| c >= p) {
-        return Err(IdentError::NonNegativeColumn {
-            column: c,
-            params: p,
-        });
-    }
-    let direct = opts.constraints == ConstraintSet::None
-        && !opts.force_cone_solver
-        && !logdet
-        && opts.nonnegative.is_empty()
-        && opts.mass_bounds.is_empty();
-    let (theta, solver) = if direct {
+    let (theta, solver) = if opts.solved_directly() {
         let info = SolverInfo {
             status: SolveStatus::Direct,
             iterations: 0,
