@@ -231,7 +231,7 @@ def test_mass_bounds_hold_every_mass_and_equal_the_cli(kuka, cli):
     ref = cli("identify", "--robot", KUKA_URDF, "--data", kuka_run(1), "--constraints", "consistent",
               "--friction", "viscous,coulomb", "--mass-bounds", "0.5,2")
     assert without_timings(bounded.to_dict()) == without_timings(ref)
-    described = {n[:-2]: v for n, v in zip(kuka.parameter_names(), kuka.parameters()) if n.endswith(".m")}
+    described = {n[:-2]: v for n, v in zip(kuka.parameter_names, kuka.parameters()) if n.endswith(".m")}
     masses = {b["name"]: b["pi"][0] for b in bounded.to_dict()["bodies"]}
     outside = [n for n, m in {b["name"]: b["pi"][0] for b in free.to_dict()["bodies"]}.items()
                if not 0.5 <= m / described[n] <= 2.0]
