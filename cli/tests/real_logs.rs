@@ -225,16 +225,21 @@ fn a_short_file_that_widens_the_shared_cutoff_is_warned_about() {
     assert!(!err.contains("reads a band edge"), "{err}");
 }
 
+/// The real KUKA run 1 (as distributed) and the URDF, as arguments.
+fn run1_and_urdf() -> (String, String) {
+    let k = root().join("data/kuka_lwr4");
+    let s = |p: PathBuf| p.to_str().unwrap().to_string();
+    (s(k.join("measurements_1.csv")), s(k.join("kuka_lwr4.urdf")))
+}
+
 #[test]
 fn a_mass_far_from_the_description_is_flagged_and_a_description_of_the_same_data_is_not() {
     // The real KUKA run 1 identified from the URDF: the slow run does not determine every
     // link's mass, and the constraints put the wrist link at a fifth of the URDF's 1.6 kg.
     let dir = tempfile::tempdir().unwrap();
-    let k = common::root().join("data/kuka_lwr4");
-    let (run1, urdf) = (k.join("measurements_1.csv"), k.join("kuka_lwr4.urdf"));
+    let (run1_s, urdf) = run1_and_urdf();
     let s = |p: &std::path::Path| p.to_str().unwrap().to_string();
     let described = dir.path().join("described.urdf");
-    let run1_s = s(&run1);
     let identify = |robot: &str, out: Option<&str>| {
         let mut args = vec!["identify", "--data", &run1_s, "--robot", robot];
         args.extend([
@@ -250,7 +255,7 @@ fn a_mass_far_from_the_description_is_flagged_and_a_description_of_the_same_data
         assert_eq!(code, 0, "{err}");
         err
     };
-    let err = identify(&s(&urdf), Some(&s(&described)));
+    let err = identify(&urdf, Some(&s(&described)));
     let far: Vec<&str> = err
         .lines()
         .filter(|l| l.contains("times the description's"))
@@ -272,9 +277,8 @@ fn mass_bounds_hold_every_mass_and_are_not_exported_silently() {
     // Held within 0.5..2 times the URDF's masses, run 1's fit keeps each link there (the free
     // fit puts lwr_6_link at 0.35 of 1.6 kg) and says which masses sit on a bound.
     let dir = tempfile::tempdir().unwrap();
-    let k = common::root().join("data/kuka_lwr4");
-    let (run1, urdf) = (k.join("measurements_1.csv"), k.join("kuka_lwr4.urdf"));
-    let (run1, urdf) = (run1.to_str().unwrap(), urdf.to_str().unwrap());
+    let (run1, urdf) = run1_and_urdf();
+    let (run1, urdf) = (run1.as_str(), urdf.as_str());
     let args = [
         "identify",
         "--data",

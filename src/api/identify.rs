@@ -918,6 +918,17 @@ impl std::str::FromStr for MassBounds {
     }
 }
 
+/// Each body of `m` with its described and identified mass (kg).
+fn masses<'a>(
+    m: &'a Model,
+    identified: &'a ident::Identified,
+) -> impl Iterator<Item = (&'a crate::model::Body, f64, f64)> + 'a {
+    m.bodies().iter().filter_map(|body| {
+        let fitted = identified.bodies.iter().find(|b| b.name == body.name)?;
+        Some((body, body.inertia.mass(), fitted.pi[0]))
+    })
+}
+
 /// A body's identified mass is far from its description's beyond this factor (either way).
 pub const FAR_MASS: f64 = 2.0;
 
@@ -934,11 +945,7 @@ fn far_mass_warnings(
 ) -> Vec<Notice> {
     let names = m.parameter_names();
     let mut out = vec![];
-    for body in m.bodies() {
-        let Some(fitted) = identified.bodies.iter().find(|b| b.name == body.name) else {
-            continue;
-        };
-        let (described, mass) = (body.inertia.mass(), fitted.pi[0]);
+    for (body, described, mass) in masses(m, identified) {
         let ratio = mass / described;
         if described < 1e-3 || (1.0 / FAR_MASS..=FAR_MASS).contains(&ratio) {
             continue;
@@ -968,11 +975,7 @@ fn bound_mass_notes(m: &Model, o: &IdentifyOptions, identified: &ident::Identifi
         return vec![];
     };
     let mut out = vec![];
-    for body in m.bodies() {
-        let Some(fitted) = identified.bodies.iter().find(|b| b.name == body.name) else {
-            continue;
-        };
-        let (described, mass) = (body.inertia.mass(), fitted.pi[0]);
+    for (body, described, mass) in masses(m, identified) {
         let near = |factor: f64| (mass - factor * described).abs() <= 1e-4 * (hi - lo) * described;
         let slack = 1e-6 * described;
         if mass < lo * described - slack || mass > hi * described + slack {
