@@ -1,8 +1,8 @@
 #!/usr/bin/env bash
 # Regenerates the committed results (results/NAME/) with the release binary, each by the command
 # its docs give. Usage: bash scripts/regenerate.sh [NAME ...]   (default: all but the blind
-# benchmarks, which take a few minutes each: give `blind`, `blind_seed2` and
-# `blind_real_{seed1,seed2,baseline_seed1,baseline_seed2}` by name). PHYSID_BIN=path runs that
+# benchmarks, which take a few minutes each: give `blind`, `blind_seed2`,
+# `blind_real_{seed1,seed2,baseline_seed1,baseline_seed2}` and `generalize` (15 min) by name). PHYSID_BIN=path runs that
 # binary instead of building one (a copy keeps a long regeneration apart from ongoing builds).
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -30,6 +30,7 @@ run() {
       mkdir -p results/blind_real
       "$B" blind --real "$runs" --real-robot $K/kuka_lwr4.urdf "${mode[@]}" --cases 55 --seed "$seed" \
         --out results/blind_real/$name ;;
+    generalize) "$B" generalize --cases 22 --seeds 1,2 --out results/generalize ;;
     *) echo "unknown result '$1'" >&2; exit 2 ;;
   esac
 }

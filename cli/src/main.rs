@@ -14,6 +14,7 @@ mod dynamics_cmd;
 mod excite_cmd;
 mod experiment_cmd;
 mod export_cmd;
+mod generalize_cmd;
 mod identify_cmd;
 mod model_cmd;
 mod progress;
@@ -37,6 +38,7 @@ pub struct Cli {
 enum Command {
     Diagnose(diagnose_cmd::Args),
     Blind(blind_cmd::Args),
+    Generalize(generalize_cmd::Args),
     Model(model_cmd::Args),
     Export(export_cmd::Args),
     Simulate(simulate_cmd::Args),
@@ -94,6 +96,7 @@ pub fn run(cli: Cli) -> anyhow::Result<()> {
     match cli.command {
         Command::Diagnose(a) => diagnose_cmd::run(a),
         Command::Blind(a) => blind_cmd::run(a),
+        Command::Generalize(a) => generalize_cmd::run(a),
         Command::Model(a) => model_cmd::run(a),
         Command::Export(a) => export_cmd::run(a),
         Command::Simulate(a) => simulate_cmd::run(a),

@@ -22,6 +22,8 @@ enum Output {
     BlindScores,
     /// `blind --real`'s `scores.json`.
     BlindRealScores,
+    /// `generalize`'s `scores.json`.
+    GeneralizeScores,
     /// `experiment`'s `provenance.json`.
     Provenance,
     /// `simulate --json`.
@@ -54,6 +56,7 @@ pub fn schema(output: &str) -> anyhow::Result<Value> {
         "diagnose" => schemars::schema_for!(physid::diagnose::Diagnosis),
         "blind_scores" => schemars::schema_for!(physid::experiment::blind::Scores),
         "blind_real_scores" => schemars::schema_for!(physid::experiment::semireal::RealScores),
+        "generalize_scores" => schemars::schema_for!(physid::experiment::generalize::Scores),
         "provenance" => schemars::schema_for!(physid::api::provenance::Provenance),
         "simulate" => schemars::schema_for!(physid::api::simulate::SimulateJson),
         "model" => schemars::schema_for!(physid::api::model::ModelJson),
@@ -80,6 +83,7 @@ pub fn run(a: Args) -> anyhow::Result<()> {
         Output::Diagnose => "diagnose",
         Output::BlindScores => "blind_scores",
         Output::BlindRealScores => "blind_real_scores",
+        Output::GeneralizeScores => "generalize_scores",
         Output::Provenance => "provenance",
         Output::Simulate => "simulate",
         Output::Model => "model",

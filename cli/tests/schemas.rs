@@ -12,6 +12,7 @@ fn the_committed_json_schemas_are_current() {
         ("diagnose", "diagnose"),
         ("blind_scores", "blind-scores"),
         ("blind_real_scores", "blind-real-scores"),
+        ("generalize_scores", "generalize-scores"),
         ("provenance", "provenance"),
         ("simulate", "simulate"),
         ("model", "model"),

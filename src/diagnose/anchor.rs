@@ -103,42 +103,57 @@ pub fn prior_precision(model: &Model, eps: f64) -> DMatrix<f64> {
 
 /// A description of `model` whose inertial parameters carry the errors the prior of relative
 /// uncertainty `eps` describes ([`body_precision`]): each body's and rotor's `J` becomes
-/// `J + ε J^½ G J^½`, redrawn in the (at 10 %, astronomically rare) case it is not positive
-/// definite. Kinematics, friction and rotors' gear ratios are kept; massless bodies too.
+/// `J + ε J^½ G J^½` ([`perturbed_body`]). Kinematics, friction and rotors' gear ratios are
+/// kept; massless bodies too.
 pub fn perturbed_description<R: Rng>(model: &Model, eps: f64, rng: &mut R) -> Model {
-    let mut draw = |pi: &InertialParams| -> InertialParams {
-        let j = pi.pseudo_inertia();
-        let eig = j.symmetric_eigen();
-        if eig.eigenvalues.min() <= 0.0 {
-            return *pi;
-        }
-        let half = eig.eigenvectors
-            * nalgebra::Matrix4::from_diagonal(&eig.eigenvalues.map(f64::sqrt))
-            * eig.eigenvectors.transpose();
-        loop {
-            let mut g = nalgebra::Matrix4::zeros();
-            for r in 0..4 {
-                for c in r..4 {
-                    let z: f64 = rng.sample(StandardNormal);
-                    g[(r, c)] = if r == c { z } else { z * 0.5f64.sqrt() };
-                    g[(c, r)] = g[(r, c)];
-                }
-            }
-            let q = j + half * g * half * eps;
-            let q = 0.5 * (q + q.transpose());
-            if q.symmetric_eigenvalues().min() > 0.0 {
-                return InertialParams::from_pseudo_inertia(&q);
-            }
-        }
-    };
+    perturbed_bodies(model, rng, |_| eps)
+}
+
+/// [`perturbed_description`] with each body's relative error drawn by `eps` (a body and its
+/// rotor share one draw): a CAD description whose bodies are wrong by different amounts.
+pub fn perturbed_bodies<R: Rng>(
+    model: &Model,
+    rng: &mut R,
+    mut eps: impl FnMut(&mut R) -> f64,
+) -> Model {
     model
         .with_bodies_edited(|_, b| {
-            b.inertia = draw(&b.inertia);
+            let e = eps(rng);
+            b.inertia = perturbed_body(&b.inertia, e, rng);
             if let Some(r) = b.rotor.as_mut() {
-                r.inertia = draw(&r.inertia);
+                r.inertia = perturbed_body(&r.inertia, e, rng);
             }
         })
         .expect("consistent inertias drawn about a valid model keep it valid")
+}
+
+/// One body's parameters `π` with the error of relative size `eps`: its pseudo-inertia
+/// `J + ε J^½ G J^½`, `G` symmetric Gaussian (unit diagonal variance), redrawn until positive
+/// definite (at 10 %, astronomically rare); `π` itself when `J` is not positive definite.
+pub fn perturbed_body<R: Rng>(pi: &InertialParams, eps: f64, rng: &mut R) -> InertialParams {
+    let j = pi.pseudo_inertia();
+    let eig = j.symmetric_eigen();
+    if eig.eigenvalues.min() <= 0.0 {
+        return *pi;
+    }
+    let half = eig.eigenvectors
+        * nalgebra::Matrix4::from_diagonal(&eig.eigenvalues.map(f64::sqrt))
+        * eig.eigenvectors.transpose();
+    loop {
+        let mut g = nalgebra::Matrix4::zeros();
+        for r in 0..4 {
+            for c in r..4 {
+                let z: f64 = rng.sample(StandardNormal);
+                g[(r, c)] = if r == c { z } else { z * 0.5f64.sqrt() };
+                g[(c, r)] = g[(r, c)];
+            }
+        }
+        let q = j + half * g * half * eps;
+        let q = 0.5 * (q + q.transpose());
+        if q.symmetric_eigenvalues().min() > 0.0 {
+            return InertialParams::from_pseudo_inertia(&q);
+        }
+    }
 }
 
 /// `τ_c`: the nominal residual's long-run variance over its variance (samples per independent

@@ -192,7 +192,10 @@ pub mod library;
 pub mod physics;
 
 pub use dead_zone::DeadZone;
-pub use payload::{payload_on_any_body, MAX_PAYLOAD_MASS, MAX_PAYLOAD_OFFSET};
+pub use payload::{
+    payload_on_any_body, payload_on_any_body_within, MAX_PAYLOAD_MASS, MAX_PAYLOAD_OFFSET,
+    PAYLOAD_MASS,
+};
 pub use physics::{toml_list, Physics, ScenarioError, State};
 pub use time_delay::MAX_DELAY_SAMPLES;
 pub use torque_gain::{relative_to_median, MAX_GAIN_ERROR};

@@ -144,9 +144,22 @@ impl Physics for Payload {
 /// random point of the body's bounding ellipsoid (within 10 cm of its frame without one).
 /// Returns the effect, the body (index from 0) and the mass (kg).
 pub fn payload_on_any_body(model: &Model, rng: &mut ChaCha8Rng) -> (EffectSpec, usize, f64) {
+    payload_on_any_body_within(model, rng, PAYLOAD_MASS)
+}
+
+/// The payload masses [`payload_on_any_body`] draws from (kg): an arm's tool or part.
+pub const PAYLOAD_MASS: (f64, f64) = (0.5, 3.0);
+
+/// [`payload_on_any_body`] with its mass uniform in `mass` (kg, `lo..hi`), for robots of
+/// another size.
+pub fn payload_on_any_body_within(
+    model: &Model,
+    rng: &mut ChaCha8Rng,
+    (lo, hi): (f64, f64),
+) -> (EffectSpec, usize, f64) {
     let n = model.dof();
     let body = rng.random_range(1.min(n - 1)..n);
-    let mass = 0.5 + 2.5 * rng.random::<f64>();
+    let mass = lo + (hi - lo) * rng.random::<f64>();
     let unit = loop {
         let u = Vector3::new(
             2.0 * rng.random::<f64>() - 1.0,

@@ -91,6 +91,14 @@ pub struct TorqueGain {
     pub gain: Vec<f64>,
 }
 
+impl TorqueGain {
+    /// The scenario effect of a logged torque scaled per joint by `gain` (a current sensor's
+    /// torque-constant error, present in every log of a robot).
+    pub fn spec(gain: Vec<f64>) -> EffectSpec {
+        EffectSpec::TorqueGain(TorqueGain { gain })
+    }
+}
+
 impl Physics for TorqueGain {
     fn toml_body(&self) -> String {
         format!("gain = {}", physics::toml_list(&self.gain))

@@ -19,6 +19,7 @@ use rayon::prelude::*;
 
 pub mod blind;
 pub mod compare;
+pub mod generalize;
 pub mod motions;
 pub mod plots;
 pub mod semireal;

@@ -96,6 +96,9 @@ pub struct Base {
     /// The description's torque RMS on the untouched run read as a robot writes it (N m,
     /// [`description_rms`]): the standing gap an injected effect is made visible above.
     pub rms: f64,
+    /// The payload masses drawn on this robot (kg, `lo..hi`; the KUKA's
+    /// [`crate::effect::PAYLOAD_MASS`] unless the robot's size asks for others).
+    pub payload_mass: (f64, f64),
 }
 
 /// What a semi-real benchmark is asked for.
@@ -256,6 +259,7 @@ pub fn bases(robot: &Model, paths: &[PathBuf], opts: &RealOptions) -> Result<Vec
             described_by: other.clone(),
             information,
             baseline,
+            payload_mass: crate::effect::PAYLOAD_MASS,
         });
     }
     Ok(out)
@@ -294,12 +298,19 @@ impl Injection {
 
 /// Draws case `i`'s change on `description`.
 pub fn draw(i: usize, seed: u64, description: &Model, rate: f64) -> Injection {
-    draw_attempt(i, 0, seed, description, rate)
+    draw_attempt(i, 0, seed, (description, crate::effect::PAYLOAD_MASS), rate)
 }
 
-/// Draws case `i`'s change on `description`, attempt `a` (attempt 0 is [`draw`]; each
-/// attempt its own stream: the same seed gives the same draws whatever the thread count).
-fn draw_attempt(i: usize, a: usize, seed: u64, description: &Model, rate: f64) -> Injection {
+/// Draws case `i`'s change on `description` (payload masses in `payload_mass`, kg), attempt `a`
+/// (attempt 0 is [`draw`]; each attempt its own stream: the same seed gives the same draws
+/// whatever the thread count).
+fn draw_attempt(
+    i: usize,
+    a: usize,
+    seed: u64,
+    (description, payload_mass): (&Model, (f64, f64)),
+    rate: f64,
+) -> Injection {
     let mut rng = ChaCha8Rng::seed_from_u64(seed);
     rng.set_stream(i as u64 | ((a as u64) << 32));
     let slots = slots();
@@ -307,7 +318,7 @@ fn draw_attempt(i: usize, a: usize, seed: u64, description: &Model, rate: f64) -
     let n = description.dof();
     match slot {
         Slot::Clean => Injection::none(),
-        Slot::Payload => draw_payload(slot, description, &mut rng),
+        Slot::Payload => draw_payload(slot, description, payload_mass, &mut rng),
         Slot::Friction => Injection {
             slot,
             spec: None,
@@ -329,9 +340,9 @@ fn draw_attempt(i: usize, a: usize, seed: u64, description: &Model, rate: f64) -
     }
 }
 
-/// A payload on a random body ([`crate::effect::payload_on_any_body`]).
-fn draw_payload(slot: Slot, model: &Model, rng: &mut ChaCha8Rng) -> Injection {
-    let (spec, body, mass) = crate::effect::payload_on_any_body(model, rng);
+/// A payload on a random body ([`crate::effect::payload_on_any_body_within`]).
+fn draw_payload(slot: Slot, model: &Model, mass: (f64, f64), rng: &mut ChaCha8Rng) -> Injection {
+    let (spec, body, mass) = crate::effect::payload_on_any_body_within(model, rng, mass);
     Injection {
         slot,
         spec: Some(spec),
@@ -377,7 +388,7 @@ pub fn draw_visible(i: usize, seed: u64, base: &Base, rate: f64) -> Drawn {
     let mut last = None;
     for a in 0..MAX_DRAWS {
         let (injection, growth) = make_visible(
-            &draw_attempt(i, a, seed, &base.description, rate),
+            &draw_attempt(i, a, seed, (&base.description, base.payload_mass), rate),
             base,
             rate,
         );
@@ -1034,7 +1045,7 @@ pub struct RealScores {
 
 /// Whether a ladder step (`+ payload on lwr_5_link | payload or change on lwr_6_link`) names a
 /// body change.
-fn names_a_body(step: &str) -> bool {
+pub(crate) fn names_a_body(step: &str) -> bool {
     step.starts_with("+ payload on") || step.starts_with("+ change of")
 }
 
@@ -1334,6 +1345,7 @@ mod tests {
             },
             baseline: None,
             rms,
+            payload_mass: crate::effect::PAYLOAD_MASS,
         }
     }
 

@@ -1,0 +1,144 @@
+//! `physid generalize`: a robot the diagnosis was never built around, simulated as a real robot,
+//! run end to end from a benchmark file; its bad inputs refused by name.
+
+#[path = "../../tests/common/mod.rs"]
+mod common;
+
+use std::path::Path;
+
+/// A benchmark file of the low-cost arm alone (10 s runs at 100 Hz), in `dir`.
+fn so100_bench(dir: &Path) -> String {
+    let urdf = common::root().join("data/so100/so100.urdf");
+    let text = format!(
+        "duration = 10.0\n[[robot]]\nname = \"so100\"\nrobot = \"{}\"\nrate = 100.0\ntorque_noise = 0.01\nencoder_step = 1.5e-3\nheld_out = true\n",
+        urdf.display()
+    );
+    let path = dir.join("bench.toml");
+    std::fs::write(&path, text).unwrap();
+    path.to_string_lossy().into_owned()
+}
+
+#[test]
+fn a_held_out_robot_is_run_scored_and_reported_apart_the_same_on_any_thread_count() {
+    let dir = tempfile::tempdir().unwrap();
+    let bench = so100_bench(dir.path());
+    let mut tables = vec![];
+    for threads in ["1", "2"] {
+        let out = dir.path().join(format!("out{threads}"));
+        let keep = dir.path().join(format!("keep{threads}"));
+        let (code, stdout, stderr) = common::physid(&[
+            "generalize",
+            "--robots",
+            &bench,
+            "--cases",
+            "3",
+            "--threads",
+            threads,
+            "--out",
+            out.to_str().unwrap(),
+            "--keep-cases",
+            keep.to_str().unwrap(),
+        ]);
+        assert_eq!(code, 0, "{stderr}");
+        let scores: serde_json::Value = serde_json::from_str(&stdout).unwrap();
+        assert_eq!(scores["schema"], "physid.generalize_scores/1");
+        let robot = &scores["robots"][0];
+        assert_eq!(
+            (robot["robot"].as_str(), robot["held_out"].as_bool()),
+            (Some("so100"), Some(true))
+        );
+        // Cases 0, 1 unchanged, 2 a payload: all three held out, none tuning.
+        assert_eq!(scores["held_out"]["cases"], 3);
+        assert_eq!(scores["held_out"]["unchanged"], 2);
+        assert_eq!(scores["held_out"]["payload"], 1);
+        assert_eq!(scores["tuning"]["cases"], 0);
+        // Both runs as a robot writes them, and each case's files.
+        for f in [
+            "so100_motion_a.csv",
+            "so100_motion_b.csv",
+            "case2/robot.urdf",
+            "case2/injected.json",
+        ] {
+            assert!(keep.join("so100/seed1").join(f).is_file(), "{f}");
+        }
+        let readme = std::fs::read_to_string(out.join("README.md")).unwrap();
+        assert!(readme.contains("so100 (held out)") && readme.contains("all held-out robots"));
+        tables.push(std::fs::read_to_string(out.join("cases.csv")).unwrap());
+    }
+    assert_eq!(
+        tables[0], tables[1],
+        "the case table depends on the thread count"
+    );
+}
+
+#[test]
+fn the_benchmark_s_bad_inputs_are_refused_by_name() {
+    let dir = tempfile::tempdir().unwrap();
+    let bench = so100_bench(dir.path());
+    let bad = dir.path().join("bad.toml");
+    std::fs::write(
+        &bad,
+        std::fs::read_to_string(&bench)
+            .unwrap()
+            .replace("rate = 100.0", "rate = 1.0"),
+    )
+    .unwrap();
+    let unknown = dir.path().join("unknown.toml");
+    std::fs::write(
+        &unknown,
+        std::fs::read_to_string(&bench).unwrap() + "colour = 3\n",
+    )
+    .unwrap();
+    let (bad, unknown) = (bad.to_str().unwrap(), unknown.to_str().unwrap());
+    let missing = dir.path().join("none.toml");
+    let cases: [(&[&str], &[&str]); 6] = [
+        (
+            &["generalize", "--robots", bad],
+            &["bad.toml", "robot[0].rate"],
+        ),
+        (
+            &["generalize", "--robots", unknown],
+            &["unknown.toml", "colour"],
+        ),
+        (
+            &["generalize", "--robots", missing.to_str().unwrap()],
+            &["none.toml"],
+        ),
+        (
+            &["generalize", "--robots", &bench, "--cases", "0"],
+            &["cases"],
+        ),
+        (
+            &["generalize", "--robots", &bench, "--cases", "-1"],
+            &["cases"],
+        ),
+        (
+            &[
+                "generalize",
+                "--robots",
+                &bench,
+                "--description-uncertainty",
+                "-1",
+            ],
+            &["--description-uncertainty"],
+        ),
+    ];
+    for (args, words) in cases {
+        let (code, _, err) = common::physid(args);
+        assert!(
+            code == 2 && words.iter().all(|w| err.contains(w)),
+            "{args:?}: {err}"
+        );
+    }
+    // The result folder is the benchmark file's own: refused before any work.
+    let (code, _, err) = common::physid(&[
+        "generalize",
+        "--robots",
+        &bench,
+        "--cases",
+        "1",
+        "--out",
+        dir.path().to_str().unwrap(),
+    ]);
+    assert!(code == 2 && err.contains("bench.toml"), "{err}");
+}
