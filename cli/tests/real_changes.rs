@@ -587,6 +587,17 @@ fn the_description_s_own_information_from_its_sidecar_alone_weighs_the_payload()
     let (d, err) = diagnose_stating(&robot, &loaded, &["--no-description-information"]);
     assert!(!err.contains("information matrix"), "{err}");
     assert!(d["ladder"].is_null(), "{}", d["ladder"]);
+    // The URDF copied without its sidecar: said, not silently held by the stated 5 % alone.
+    let copy = dir.path().join("copied.urdf");
+    std::fs::copy(&robot, &copy).unwrap();
+    let (_, err) = diagnose_stating(&copy, &loaded, &["--description-uncertainty", "0.05"]);
+    assert!(
+        err.contains("copied.urdf: written by physid identify with its information matrix in")
+            && err.contains("copied.physid.toml, which is not there"),
+        "{err}"
+    );
+    let (_, err) = diagnose_stating(&robot, &loaded, &["--description-uncertainty", "0.05"]);
+    assert!(!err.contains("which is not there"), "{err}");
 }
 
 /// The semi-real benchmark on the three KUKA runs, seed 1, with `extra` flags (which cases,

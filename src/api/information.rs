@@ -29,7 +29,12 @@ pub fn for_description(robot: &str, model: &Model) -> Result<DescriptionInformat
         notices: vec![],
     };
     let Some(path) = sidecar_of(robot) else {
-        return Ok(none);
+        return Ok(
+            missing_sidecar(robot).map_or(none, |w| DescriptionInformation {
+                matrix: None,
+                notices: vec![w],
+            }),
+        );
     };
     let Some(table) = SidecarInformation::read(&path)? else {
         return Ok(none);
@@ -49,6 +54,23 @@ pub fn for_description(robot: &str, model: &Model) -> Result<DescriptionInformat
                 "{shown}: [information] not used: {why}"
             ))],
         },
+    })
+}
+
+/// A warning when the URDF `robot` was written by `identify` with its information matrix in a
+/// sidecar that is not beside it (copied without it): the diagnosis then holds the description
+/// by the stated uncertainty alone, which can read a payload as a gain.
+fn missing_sidecar(robot: &str) -> Option<Notice> {
+    let path = Path::new(robot);
+    if path.extension().and_then(|e| e.to_str()) != Some("urdf") {
+        return None;
+    }
+    let text = std::fs::read_to_string(path).ok()?;
+    text.contains(crate::io::SIDECAR_MARK).then(|| {
+        Notice::warning(format!(
+            "{robot}: written by physid identify with its information matrix in {}, which is not there (copied without it?): the description is held by --description-uncertainty alone; copy the sidecar beside it",
+            crate::io::sidecar_path(path).display()
+        ))
     })
 }
 
@@ -236,7 +258,46 @@ mod tests {
                 text.replace("[information]", "[information]\n[information]"),
                 "leg.physid.toml",
             ),
+            (
+                text.replace("samples = 1234\n", "samples = 0\n"),
+                "samples = 0: an information matrix comes from at least one sample",
+            ),
         ]
+    }
+
+    /// The leg's table with its matrix `m`, as text.
+    fn with_matrix(info: &Information, m: DMatrix<f64>) -> String {
+        Information {
+            matrix: m,
+            ..info.clone()
+        }
+        .sidecar_table()
+    }
+
+    #[test]
+    fn a_table_no_identification_can_give_is_refused_saying_why() {
+        let (model, info) = leg_table();
+        let p = info.names.len();
+        // Positive diagonal, symmetric, indefinite: [[1000, 1e5], [1e5, 1000]] in one corner.
+        let mut indefinite = info.matrix.clone();
+        (indefinite[(0, 1)], indefinite[(1, 0)]) = (1e5, 1e5);
+        let cases = [
+            (with_matrix(&info, indefinite), "not positive semidefinite"),
+            (with_matrix(&info, DMatrix::zeros(p, p)), "matrix is zero"),
+            (
+                with_matrix(&info, &info.matrix * 1e300),
+                "beyond any robot's",
+            ),
+        ];
+        for (text, expected) in cases {
+            let err = read(&text, &model).expect_err(expected);
+            assert!(
+                err.contains("leg.physid.toml") && err.contains(expected),
+                "{expected}: {err}"
+            );
+        }
+        // The intact table, and one ten times larger (more samples of the same motion), pass.
+        assert!(read(&with_matrix(&info, &info.matrix * 10.0), &model).is_ok());
     }
 
     #[test]

@@ -283,8 +283,43 @@ impl SidecarInformation {
     }
 }
 
+/// The most a regressor column's RMS over an identification's samples can be (N m per unit
+/// parameter): accelerations of 10³ rad/s² on a 10 m lever are 10⁴; a table that implies 10⁶
+/// was scaled or corrupted after it was written.
+const MAX_REGRESSOR_RMS: f64 = 1e6;
+
+/// What the matrix says, checked against what an identification can give (largest diagonal
+/// `scale`): information from at least one sample, positive semidefinite (an indefinite matrix
+/// gives negative variances, and the ladder then claims payloads the intact table does not),
+/// not zero, and of a size samples of a robot can give (`YᵀY = I s² τ_c`).
+fn check_content(t: &SidecarInformation, scale: f64) -> Result<(), String> {
+    if t.samples == 0 {
+        return Err("samples = 0: an information matrix comes from at least one sample".into());
+    }
+    if scale == 0.0 {
+        return Err("matrix is zero: it carries no information (rewrite the sidecar with physid identify --out-urdf, or remove the table)".into());
+    }
+    let p = t.parameters.len();
+    let m = DMatrix::from_fn(p, p, |i, j| t.matrix[i][j] / scale);
+    let min = m.symmetric_eigenvalues().min();
+    if min < -1e-9 {
+        return Err(format!(
+            "matrix is not positive semidefinite (smallest eigenvalue {:e}, largest diagonal {scale:e}): an information matrix never is; the table was edited or corrupted",
+            min * scale
+        ));
+    }
+    let rms = (scale * t.residual_rms.powi(2) * t.correlation_samples / t.samples as f64).sqrt();
+    if rms.is_finite() && rms > MAX_REGRESSOR_RMS {
+        return Err(format!(
+            "matrix implies a regressor column of RMS {rms:e} over {} samples at residual_rms {:e}, beyond any robot's ({MAX_REGRESSOR_RMS:e}): the table was scaled or corrupted",
+            t.samples, t.residual_rms
+        ));
+    }
+    Ok(())
+}
+
 /// The table's own consistency: sizes, finite numbers, a symmetric matrix with a non-negative
-/// diagonal, distinct names.
+/// diagonal, distinct names, a content an identification can give ([`check_content`]).
 fn check(t: &SidecarInformation) -> Result<(), String> {
     let p = t.parameters.len();
     if t.at.len() != p {
@@ -324,6 +359,7 @@ fn check(t: &SidecarInformation) -> Result<(), String> {
             }
         }
     }
+    check_content(t, scale)?;
     let mut seen = std::collections::HashSet::new();
     if let Some(dup) = t.parameters.iter().find(|n| !seen.insert(n.as_str())) {
         return Err(format!("parameter {dup:?} named twice"));

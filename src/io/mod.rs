@@ -502,8 +502,35 @@ pub fn export_urdf(
         .file_name()
         .map_or("robot.urdf".into(), |n| n.to_string_lossy().into_owned());
     let side_text = urdf_patch::sidecar(identified, &name, &urdf_patch::mimic_links(&text), extra);
+    let text = if side_text.contains("\n[information]\n") {
+        with_sidecar_mark(&text, &side)
+    } else {
+        text
+    };
     write_atomic(out, text.as_bytes())?;
     write_atomic(&side, side_text.as_bytes())
+}
+
+/// The comment an identified URDF carries when its sidecar holds the identification's
+/// information matrix: a copy without the sidecar is then told, not silently held looser.
+pub const SIDECAR_MARK: &str = "physid identify: this description's uncertainty";
+
+/// `urdf` with the [`SIDECAR_MARK`] comment naming its sidecar `side`, after the XML
+/// declaration (or first).
+fn with_sidecar_mark(urdf: &str, side: &Path) -> String {
+    let name = side
+        .file_name()
+        .map_or_else(String::new, |n| n.to_string_lossy().into_owned());
+    let mark = format!(
+        "<!-- {SIDECAR_MARK} (its [information] table) is in {name} beside this file -->\n"
+    );
+    match urdf
+        .strip_prefix("<?xml")
+        .and_then(|rest| rest.find('\n').map(|i| i + 6))
+    {
+        Some(end) => format!("{}{mark}{}", &urdf[..end], &urdf[end..]),
+        None => format!("{mark}{urdf}"),
+    }
 }
 
 /// Identification data read from one file and put through the pipeline ([`crate::prepare`]).
