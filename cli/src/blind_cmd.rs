@@ -174,6 +174,12 @@ where
     if let Some(&i) = a.only.iter().find(|&&i| i >= a.cases) {
         anyhow::bail!("--only {i}: the cases are numbered 0 to {}", a.cases - 1);
     }
+    if let Some((k, &i)) = (a.only.iter().enumerate()).find(|(k, i)| a.only[..*k].contains(i)) {
+        anyhow::bail!(
+            "--only: case {i} given twice (entry {}): each case is run and scored once",
+            k + 1
+        );
+    }
     let temp = tempfile::tempdir()?;
     let work = a
         .keep_cases

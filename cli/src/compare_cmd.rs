@@ -86,10 +86,12 @@ fn options(a: &Args) -> anyhow::Result<CompareOptions> {
 /// `physid compare`.
 pub fn run(a: Args) -> anyhow::Result<()> {
     let opts = options(&a)?;
+    let summary = std::env::var_os("GITHUB_STEP_SUMMARY").map(std::path::PathBuf::from);
     let outputs: Vec<&std::path::Path> = a
         .markdown
         .iter()
         .chain(a.junit.iter())
+        .chain(summary.iter())
         .map(|p| p.as_path())
         .collect();
     let inputs: Vec<&std::path::Path> = [Some(a.result.as_path()), a.baseline.as_deref()]
@@ -129,13 +131,13 @@ pub fn run(a: Args) -> anyhow::Result<()> {
     if let Some(p) = &a.junit {
         physid::io::write_atomic(p, cmp.junit().as_bytes())?;
     }
-    if let Some(summary) = std::env::var_os("GITHUB_STEP_SUMMARY") {
+    if let Some(summary) = summary {
         use std::io::Write;
         let mut f = std::fs::OpenOptions::new()
             .create(true)
             .append(true)
             .open(&summary)
-            .with_context(|| format!("$GITHUB_STEP_SUMMARY {}", summary.to_string_lossy()))?;
+            .with_context(|| format!("$GITHUB_STEP_SUMMARY {}", summary.display()))?;
         f.write_all(md.as_bytes())?;
     }
     let n = cmp.regressions();

@@ -574,6 +574,18 @@ fn counts_from_the_user_are_bounded_before_anything_is_allocated() {
         "{err}"
     );
     assert!(!out.exists());
+    // Before: `--only 0,0` ran case 0 twice and scored it as two cases.
+    let (ok, err) = physid(&[
+        "blind",
+        "--cases",
+        "5",
+        "--only",
+        "0,0",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert!(!ok && err.contains("--only: case 0 given twice"), "{err}");
+    assert!(!out.exists());
     let values = format!(
         "[{}]",
         (1..=100)

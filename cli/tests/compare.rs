@@ -224,7 +224,33 @@ fn compare_refuses_what_it_cannot_judge() {
             physid(&["compare", &s(&same), "--baseline", &s(&base), flag, &target]);
         assert!(code == 2 && err.contains("rows.csv"), "{flag}: {err}");
     }
+    // Before: $GITHUB_STEP_SUMMARY pointing at the baseline's table appended the report to it.
+    let target = s(&base.join("rows.csv"));
+    let o = common::command()
+        .args(["compare", &s(&same), "--baseline", &s(&base)])
+        .env("GITHUB_STEP_SUMMARY", &target)
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        o.status.code() == Some(2) && err.contains("rows.csv"),
+        "{err}"
+    );
     assert_eq!(std::fs::read(base.join("rows.csv")).unwrap(), before);
+    // Before: a row repeated with another value let the later copy win (pass or 16
+    // regressions by row order).
+    let twice = baseline_copy(dir.path(), "twice", &|l| {
+        Some(if l.starts_with("3,311,consistent,") {
+            format!("{l}\n{}", with_seed(l, &|s| s))
+        } else {
+            l.to_string()
+        })
+    });
+    let (code, _, err) = physid(&["compare", &s(&twice), "--baseline", &s(&base)]);
+    assert!(
+        code == 2 && err.contains("are both seed 3, n_s 311, consistent"),
+        "{code} {err}"
+    );
 }
 
 #[test]

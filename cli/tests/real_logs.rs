@@ -323,3 +323,61 @@ fn mass_bounds_hold_every_mass_and_are_not_exported_silently() {
     );
     assert!(!problem.exists());
 }
+
+#[test]
+fn a_validation_range_the_pipeline_trims_away_is_refused_not_scored_as_zero() {
+    // Before: run 1 cut to t, q, τ (q̇, q̈ derived, 316 samples trimmed at each end) with
+    // `--validate 0:50` reported "validation 0.0000 N m" from no sample.
+    let dir = tempfile::tempdir().unwrap();
+    let (run1, urdf) = run1_and_urdf();
+    let text = std::fs::read_to_string(&run1).unwrap();
+    let header: Vec<&str> = text.lines().next().unwrap().split(',').collect();
+    let keep: Vec<usize> = (0..header.len())
+        .filter(|&i| header[i] == "t" || header[i].starts_with('q') || header[i].starts_with("tau"))
+        .filter(|&i| !header[i].starts_with("q_"))
+        .collect();
+    let cut: String = text
+        .lines()
+        .map(|l| {
+            let cells: Vec<&str> = l.split(',').collect();
+            keep.iter().map(|&i| cells[i]).collect::<Vec<_>>().join(",") + "\n"
+        })
+        .collect();
+    let tq = dir.path().join("tq.csv");
+    std::fs::write(&tq, cut).unwrap();
+    let tq = tq.to_str().unwrap();
+    let args = |v: &'static str| {
+        [
+            "identify",
+            "--robot",
+            &urdf,
+            "--data",
+            tq,
+            "--train",
+            "400:3000",
+            "--validate",
+            v,
+        ]
+        .map(String::from)
+    };
+    let (code, _, err) =
+        common::physid(&args("0:50").iter().map(String::as_str).collect::<Vec<_>>());
+    assert!(
+        code == 2
+            && err.contains(
+                "tq.csv: --validate 0:50: none of these samples is kept by the data pipeline"
+            ),
+        "{err}"
+    );
+    let (code, out, err) = common::physid(
+        &args("3000:3500")
+            .iter()
+            .map(String::as_str)
+            .collect::<Vec<_>>(),
+    );
+    assert_eq!(code, 0, "{err}");
+    assert!(
+        out.contains("validation") && !out.contains("validation 0.0000"),
+        "{out}"
+    );
+}

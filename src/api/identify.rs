@@ -708,6 +708,7 @@ pub fn identify_reporting(
     let opened = open(m, o)?;
     opened.notices.iter().for_each(&mut *notify);
     check_equations(m, o, &opened)?;
+    check_validation(o, &opened)?;
     let start = std::time::Instant::now();
     let fit = fit(
         m,
@@ -741,6 +742,29 @@ fn check_equations(m: &Model, o: &IdentifyOptions, d: &Opened) -> Result<(), Api
         ));
     }
     Ok(())
+}
+
+/// Validation samples that the data pipeline keeps, when any were asked for: a range inside
+/// the trimmed ends scored "0.0000 N m" from no sample.
+fn check_validation(o: &IdentifyOptions, d: &Opened) -> Result<(), ApiError> {
+    let used: usize = (d.validation.iter())
+        .map(|s| d.data[s.file].used(&s.range))
+        .sum();
+    if d.validation.is_empty() || used > 0 {
+        return Ok(());
+    }
+    let what = match &o.validate {
+        Some(r) => format!(
+            "--validate {}:{}",
+            r.start.unwrap_or(0),
+            r.end.map_or(String::new(), |e| e.to_string())
+        ),
+        None => "--validate-data".into(),
+    };
+    Err(ApiError::invalid(
+        o.files()[d.validation[0].file],
+        format!("{what}: none of these samples is kept by the data pipeline (the ends trimmed for the filter's settling, gaps, or joints too slow): nothing to validate on; pick samples further from the ends"),
+    ))
 }
 
 /// The samples `spans` of `data` (read from `files`) and their torque error `rms`, as the

@@ -304,7 +304,27 @@ fn samples(dir: &Path, metric: &str) -> Result<Vec<Sample>, CompareError> {
             path.display()
         )));
     }
+    check_once(&path, &out)?;
     Ok(out)
+}
+
+/// Each (grid point, `n_s`, constraint set, seed) once in the table at `path`: a repeated row
+/// would make the verdict depend on which copy is read last.
+fn check_once(path: &Path, samples: &[Sample]) -> Result<(), CompareError> {
+    let mut seen = std::collections::BTreeMap::new();
+    for (row, s) in samples.iter().enumerate() {
+        if let Some(first) = seen.insert((&s.group, s.seed), row) {
+            return Err(CompareError::Nothing(format!(
+                "{}: rows {first} and {row} (counting data rows from 0) are both seed {}, n_s {}, {}{}: a table holds each seed of a group once (concatenated runs?)",
+                path.display(),
+                s.seed,
+                s.group.n_s,
+                s.group.set,
+                if s.group.point.is_empty() { String::new() } else { format!(" at {}", s.group.point.join(", ")) }
+            )));
+        }
+    }
+    Ok(())
 }
 
 /// `P(W⁺ ≥ w)` for the signed-rank sum of `ranks` (each rank times two, so that average ranks
