@@ -336,3 +336,45 @@ fn a_csv_is_read_by_the_columns_used_and_the_first_bad_file_is_named() {
         "{err}"
     );
 }
+
+#[test]
+fn a_description_without_geometry_is_bounded_by_its_kinematic_tree() {
+    // The SO-ARM100 and UR5 as vendored carry no geometry: each body is bounded by the box of
+    // its joint, its children's joints and its centre of mass, plus a margin, grown until the
+    // description's own inertia lies inside; one warning names them all.
+    for urdf in ["data/so100/so100.urdf", "data/ur5/ur5.urdf"] {
+        let path = common::root().join(urdf);
+        let (m, warnings) =
+            physid::io::load_robot_with(path.to_str().unwrap(), &Default::default()).unwrap();
+        let said: Vec<&String> = warnings.iter().filter(|w| w.contains("kinematic tree's")).collect();
+        assert_eq!(said.len(), 1, "{warnings:?}");
+        for (i, b) in m.bodies().iter().enumerate() {
+            let e = b.bounding.as_ref().unwrap_or_else(|| panic!("{urdf}: {} unbounded", b.name));
+            assert!(said[0].contains(&format!("'{}'", b.name)));
+            let children = m.bodies().iter().filter(|c| c.parent == Some(i)).map(|c| c.x_tree.r);
+            let com = b.inertia.h() / b.inertia.mass();
+            for p in std::iter::once(nalgebra::Vector3::zeros()).chain(children).chain([com]) {
+                assert!(e.contains(&p), "{urdf}: {} misses {p:?}", b.name);
+            }
+            let t = b.inertia.consistency(Some(e)).trace_jq_per_mass.unwrap();
+            // Inside, and not needlessly loose: a body a tenth of a metre long is not given a
+            // metre (the margin is 5 cm plus a quarter of the segment).
+            assert!(t >= 0.0, "{urdf}: {} tr(JQ)/m = {t}", b.name);
+            let widest = e.semi_axes().max();
+            assert!(widest < 1.0, "{urdf}: {} semi-axis {widest} m", b.name);
+        }
+        // The tightest set the description supports is now the ellipsoid set.
+        assert_eq!(
+            physid::api::identify::constraint_set(None, &m).set,
+            physid::ident::ConstraintSet::Ellipsoid
+        );
+    }
+    // Without geometry and told to ignore it, nothing is bounded.
+    let opts = physid::io::robot_spec::RobotOptions {
+        geometry_ellipsoids: Some(false),
+        ..Default::default()
+    };
+    let so100 = common::root().join("data/so100/so100.urdf");
+    let (m, _) = physid::io::load_robot_with(so100.to_str().unwrap(), &opts).unwrap();
+    assert!(m.bodies().iter().all(|b| b.bounding.is_none()));
+}

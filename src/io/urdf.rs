@@ -209,13 +209,7 @@ pub fn from_str(
         }
     }
     warnings.extend(lost_meshes(&shapes, &base));
-    for (b, s) in bodies.iter_mut().zip(&shapes) {
-        b.shapes = s.shapes.clone();
-        b.bounding = s.bound(&b.name, &lookup).unwrap_or_else(|w| {
-            warnings.push(w);
-            None
-        });
-    }
+    bound_bodies(&mut bodies, &shapes, &lookup, &mut warnings);
     attach_rotors(&mut bodies, mimics, &lookup, &mut warnings)?;
     // The sidecar's ellipsoids come last: they override the geometry's.
     extras.apply(&mut bodies, &body_parent_link_x, path)?;
@@ -223,6 +217,78 @@ pub fn from_str(
     let model = physical_model(robot.name.clone(), bodies, (extras, base.shapes), path)?;
     check_bounds(&model, extras, path, &mut warnings)?;
     Ok((model, warnings))
+}
+
+/// Each body's shapes and bounding ellipsoid: its geometry's, or the kinematic tree's
+/// ([`kinematic_bounds`]) where none of its links has geometry (one warning naming them), or
+/// none with a warning saying why.
+fn bound_bodies(
+    bodies: &mut [Body],
+    shapes: &[Shapes],
+    lookup: &Lookup,
+    warnings: &mut Vec<String>,
+) {
+    let tree_bounds = kinematic_bounds(bodies);
+    let mut from_tree = vec![];
+    for ((b, s), tree) in bodies.iter_mut().zip(shapes).zip(tree_bounds) {
+        b.shapes = s.shapes.clone();
+        b.bounding = if s.has_no_geometry() && !lookup.opts.ignore_geometry {
+            from_tree.push(format!("'{}'", b.name));
+            Some(tree)
+        } else {
+            s.bound(&b.name, lookup).unwrap_or_else(|w| {
+                warnings.push(w);
+                None
+            })
+        };
+    }
+    if !from_tree.is_empty() {
+        warnings.push(format!(
+            "no geometry for {}: their bounding ellipsoids are the kinematic tree's (each body's joint, its children's joints and its centre of mass, {KINEMATIC_MARGIN} m + {KINEMATIC_SHARE} of the segment beyond, grown to hold the description's own inertia); give geometry or sidecar ellipsoids for surer bounds",
+            from_tree.join(", ")
+        ));
+    }
+}
+
+/// A bounding ellipsoid's margin beyond the kinematic segment (m) ...
+const KINEMATIC_MARGIN: f64 = 0.05;
+
+/// ... plus this share of the segment's length: a link's mass lies around the line between its
+/// joints, a housing or a motor's width beside it.
+const KINEMATIC_SHARE: f64 = 0.25;
+
+/// Each body's ellipsoid from the kinematic tree alone, for a description without geometry: the
+/// box of its joint's origin, its children's joint origins and its centre of mass, enlarged
+/// by [`KINEMATIC_MARGIN`] plus [`KINEMATIC_SHARE`] of the segment's length, then scaled until
+/// the description's own body lies inside (`tr(JQ) ≥ 0`).
+fn kinematic_bounds(bodies: &[Body]) -> Vec<crate::spatial::Ellipsoid> {
+    (0..bodies.len())
+        .map(|i| {
+            let b = &bodies[i];
+            let m = b.inertia.mass();
+            let mut points = vec![Vector3::zeros()];
+            points.extend(
+                (bodies.iter())
+                    .filter(|c| c.parent == Some(i))
+                    .map(|c| c.x_tree.r),
+            );
+            if m > 0.0 {
+                points.push(b.inertia.h() / m);
+            }
+            let reach = points.iter().map(|p| p.norm()).fold(0.0, f64::max);
+            let mut e = crate::spatial::Ellipsoid::around_points(
+                &points,
+                KINEMATIC_MARGIN + KINEMATIC_SHARE * reach,
+            );
+            for _ in 0..40 {
+                match b.inertia.consistency(Some(&e)).trace_jq_per_mass {
+                    Some(t) if t < 0.0 => e = e.scaled(1.25),
+                    _ => break,
+                }
+            }
+            e
+        })
+        .collect()
 }
 
 /// A warning per revolute or prismatic joint whose `<limit>` gives `lower` and `upper` both and
@@ -447,6 +513,13 @@ impl Shapes {
             lost.into_iter()
                 .map(|m| format!("link '{}': {m}", link.name)),
         );
+    }
+
+    /// Whether every link of the body with mass has no geometry at all (and none has any).
+    fn has_no_geometry(&self) -> bool {
+        self.pieces.is_empty()
+            && !self.missing.is_empty()
+            && (self.missing.iter()).all(|m| m.ends_with("has mass but no geometry"))
     }
 
     /// The bounding ellipsoid, or a warning naming the element and why there is none.

@@ -65,6 +65,19 @@ impl Ellipsoid {
         (v.transpose() * self.q_matrix() * v)[0] >= 0.0
     }
 
+    /// The axis-aligned ellipsoid around `points` (m, one frame), each semi-axis `margin` (m)
+    /// beyond the ellipsoid through the corners of their bounding box (half-extents times
+    /// `√d`, `d` the box's non-degenerate dimensions: a segment's ellipsoid reaches its ends).
+    pub fn around_points(points: &[Vector3<f64>], margin: f64) -> Self {
+        let first = points.first().copied().unwrap_or_else(Vector3::zeros);
+        let (lo, hi) = points
+            .iter()
+            .fold((first, first), |(lo, hi), p| (lo.inf(p), hi.sup(p)));
+        let half = (hi - lo) / 2.0;
+        let d = half.iter().filter(|&&e| e > 1e-9).count().max(1) as f64;
+        Self::axis_aligned((lo + hi) / 2.0, half * d.sqrt() + Vector3::repeat(margin))
+    }
+
     /// The same ellipsoid scaled about its centre by `s` (semi-axes times `s`).
     pub fn scaled(&self, s: f64) -> Self {
         Self {
