@@ -346,14 +346,27 @@ fn a_description_without_geometry_is_bounded_by_its_kinematic_tree() {
         let path = common::root().join(urdf);
         let (m, warnings) =
             physid::io::load_robot_with(path.to_str().unwrap(), &Default::default()).unwrap();
-        let said: Vec<&String> = warnings.iter().filter(|w| w.contains("kinematic tree's")).collect();
+        let said: Vec<&String> = warnings
+            .iter()
+            .filter(|w| w.contains("kinematic tree's"))
+            .collect();
         assert_eq!(said.len(), 1, "{warnings:?}");
         for (i, b) in m.bodies().iter().enumerate() {
-            let e = b.bounding.as_ref().unwrap_or_else(|| panic!("{urdf}: {} unbounded", b.name));
+            let e = b
+                .bounding
+                .as_ref()
+                .unwrap_or_else(|| panic!("{urdf}: {} unbounded", b.name));
             assert!(said[0].contains(&format!("'{}'", b.name)));
-            let children = m.bodies().iter().filter(|c| c.parent == Some(i)).map(|c| c.x_tree.r);
+            let children = m
+                .bodies()
+                .iter()
+                .filter(|c| c.parent == Some(i))
+                .map(|c| c.x_tree.r);
             let com = b.inertia.h() / b.inertia.mass();
-            for p in std::iter::once(nalgebra::Vector3::zeros()).chain(children).chain([com]) {
+            for p in std::iter::once(nalgebra::Vector3::zeros())
+                .chain(children)
+                .chain([com])
+            {
                 assert!(e.contains(&p), "{urdf}: {} misses {p:?}", b.name);
             }
             let t = b.inertia.consistency(Some(e)).trace_jq_per_mass.unwrap();

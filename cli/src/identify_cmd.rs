@@ -109,6 +109,10 @@ pub struct Args {
     /// 0.5,2): what the data do not determine otherwise goes wherever the constraints allow.
     #[arg(long, value_name = "LO,HI", allow_hyphen_values = true)]
     mass_bounds: Option<physid::api::identify::MassBounds>,
+    /// Hold the robot's total moving mass (links and rotors) within LO..HI kg (e.g. 3.5,3.9:
+    /// the arm weighed on a scale), where the data weigh only some bodies.
+    #[arg(long, value_name = "LO,HI", allow_hyphen_values = true)]
+    total_mass: Option<physid::api::identify::TotalMass>,
     /// Print JSON (schema: docs/identify-json.md).
     #[arg(long)]
     json: bool,
@@ -157,6 +161,7 @@ fn options(a: &Args) -> anyhow::Result<IdentifyOptions> {
     o.allow_few_samples = a.allow_few_samples;
     o.information = a.out_urdf.is_some();
     o.mass_bounds = a.mass_bounds;
+    o.total_mass = a.total_mass;
     Ok(o)
 }
 
@@ -171,8 +176,8 @@ pub fn run(a: Args) -> anyhow::Result<()> {
     if a.export_problem.is_some() && !opts.terms.is_empty() {
         bail!("--export-problem writes the model's own problem: leave out the extra --friction terms and --effects");
     }
-    if a.export_problem.is_some() && opts.mass_bounds.is_some() {
-        bail!("--export-problem writes the problem without mass bounds: leave out --mass-bounds");
+    if a.export_problem.is_some() && (opts.mass_bounds.is_some() || opts.total_mass.is_some()) {
+        bail!("--export-problem writes the problem without mass bounds: leave out --mass-bounds and --total-mass");
     }
     let report = identify_reporting(m, &opts, &mut |notice| eprintln!("{notice}"))
         .map_err(super::option_error)?;

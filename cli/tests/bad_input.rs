@@ -217,6 +217,17 @@ fn negative_option_values_reach_the_option_check() {
             err.contains("give two numbers LO,HI") || err.contains("is not a number (give LO,HI");
         assert!(!ok && said, "{bounds}: {err}");
     }
+    for total in ["-1,2", "0,1", "2,1", "1,inf", "NaN,2"] {
+        let (ok, err) = physid(&["identify", "--data", "x.csv", "--total-mass", total]);
+        let rule = format!("--total-mass {total}: give the robot's moving mass in kg as LO,HI");
+        assert!(!ok && err.contains(&rule), "{total}: {err}");
+    }
+    for total in ["3.7", "a,b", "", "1,2,3"] {
+        let (ok, err) = physid(&["identify", "--data", "x.csv", "--total-mass", total]);
+        let said = err.contains("give two numbers LO,HI (e.g. 3.5,3.9 kg)")
+            || err.contains("is not a number (give LO,HI, e.g. 3.5,3.9 kg)");
+        assert!(!ok && said, "{total}: {err}");
+    }
     let (ok, err) = physid(&["diagnose", "--data", "x.csv", "--cutoff", "-5"]);
     assert!(
         !ok && err.contains("--cutoff must be a positive frequency"),

@@ -322,6 +322,26 @@ fn mass_bounds_hold_every_mass_and_are_not_exported_silently() {
         "{err}"
     );
     assert!(!problem.exists());
+    // The same for a total mass.
+    let (run1, urdf) = run1_and_urdf();
+    let p = problem.to_str().unwrap();
+    let args = [
+        "identify",
+        "--data",
+        &run1,
+        "--robot",
+        &urdf,
+        "--total-mass",
+        "13,15",
+        "--export-problem",
+        p,
+    ];
+    let (code, _, err) = common::physid(&args);
+    assert!(
+        code == 2 && err.contains("leave out --mass-bounds and --total-mass"),
+        "{err}"
+    );
+    assert!(!problem.exists());
 }
 
 #[test]

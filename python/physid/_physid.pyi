@@ -107,10 +107,12 @@ def identify(
     only: Optional[Names] = None,
     allow_few_samples: bool = False,
     mass_bounds: Optional[tuple[float, float]] = None,
+    total_mass: Optional[tuple[float, float]] = None,
 ) -> Identification:
     """Identify from data files (CSV, MCAP, rosbag2) as `physid identify` does.
     mass_bounds=(lo, hi) holds each body's mass within lo..hi times the description's
-    (0 <= lo <= 1 <= hi), as --mass-bounds."""
+    (0 <= lo <= 1 <= hi), as --mass-bounds; total_mass=(lo, hi) holds the robot's moving
+    mass (links and rotors) within lo..hi kg, as --total-mass."""
 
 class Diagnosis:
     """A diagnosis of the gap between a description and its runs; to_dict() is

@@ -698,13 +698,15 @@ fn frame<'py>(
 /// `validate` (`"a:b"`, `(a, b)` or `range(a, b)`), `constraints`, `friction`, `effects`,
 /// `effects_from`, `prior_weight`, `eps`, `regularizer`, `topic`, `stamp`, `cutoff`, `lock`,
 /// `only`, `allow_few_samples`, `mass_bounds` (`(lo, hi)`: each body's mass within lo..hi times
-/// the description's, `0 <= lo <= 1 <= hi`). Warnings are raised as `physid.PhysidWarning`;
+/// the description's, `0 <= lo <= 1 <= hi`), `total_mass` (`(lo, hi)` kg: the robot's moving
+/// mass, links and rotors). Warnings are raised as `physid.PhysidWarning`;
 /// the GIL is released while it runs.
 #[pyfunction]
 #[pyo3(signature = (robot, data, *, validate_data = None, train = None, validate = None,
     constraints = None, friction = None, effects = None, effects_from = None,
     prior_weight = 1e-6, eps = 1e-6, regularizer = "euclidean", topic = None, stamp = "log",
-    cutoff = None, lock = None, only = None, allow_few_samples = false, mass_bounds = None))]
+    cutoff = None, lock = None, only = None, allow_few_samples = false, mass_bounds = None,
+    total_mass = None))]
 #[allow(clippy::too_many_arguments)]
 fn identify<'py>(
     py: Python<'py>,
@@ -727,6 +729,7 @@ fn identify<'py>(
     only: Option<&Bound<'py, PyAny>>,
     allow_few_samples: bool,
     mass_bounds: Option<(f64, f64)>,
+    total_mass: Option<(f64, f64)>,
 ) -> PyResult<Identification> {
     let m = &robot.model;
     let mut o = IdentifyOptions::new(paths("data", Some(data))?);
@@ -754,6 +757,7 @@ fn identify<'py>(
     o.read = read_options(topic, stamp, cutoff, lock, only)?;
     o.allow_few_samples = allow_few_samples;
     o.mass_bounds = mass_bounds.map(|(lo, hi)| api::identify::MassBounds { lo, hi });
+    o.total_mass = total_mass.map(|(lo, hi)| api::identify::TotalMass { lo, hi });
     // For `write_urdf`'s sidecar: one more pass over the training samples.
     o.information = true;
     let mut inputs: Vec<PathBuf> = o.data.iter().chain(&o.validate_data).cloned().collect();

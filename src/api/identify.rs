@@ -520,6 +520,9 @@ pub struct IdentifyOptions {
     /// Each body's mass held within `[lo, hi]` times the description's (`0 ≤ lo ≤ 1 ≤ hi`):
     /// directions the data do not determine otherwise go wherever the constraints allow.
     pub mass_bounds: Option<MassBounds>,
+    /// The robot's total moving mass (links and rotors) held within `lo..hi` kg: a scale's
+    /// reading, where the data weigh only some bodies.
+    pub total_mass: Option<TotalMass>,
 }
 
 impl IdentifyOptions {
@@ -540,6 +543,7 @@ impl IdentifyOptions {
             allow_few_samples: false,
             information: false,
             mass_bounds: None,
+            total_mass: None,
         }
     }
 
@@ -568,6 +572,13 @@ impl IdentifyOptions {
                 )));
             }
         }
+        if let Some(TotalMass { lo, hi }) = self.total_mass {
+            if !(lo.is_finite() && hi.is_finite() && lo > 0.0 && lo <= hi) {
+                return Err(ApiError::Options(format!(
+                    "--total-mass {lo},{hi}: give the robot's moving mass in kg as LO,HI with 0 < LO <= HI (e.g. 3.5,3.9)"
+                )));
+            }
+        }
         Ok(())
     }
 
@@ -581,6 +592,13 @@ impl IdentifyOptions {
             opts.mass_bounds = (m.bodies().iter().enumerate())
                 .map(|(i, b)| (10 * i, lo * b.inertia.mass(), hi * b.inertia.mass()))
                 .collect();
+        }
+        if let Some(TotalMass { lo, hi }) = self.total_mass {
+            let l = m.layout();
+            let cols = (0..m.dof())
+                .map(|i| 10 * i)
+                .chain(l.rotor_col.iter().flatten().copied());
+            opts.total_mass = Some((cols.collect(), lo, hi));
         }
         opts.validate()?;
         Ok(opts)
@@ -824,6 +842,7 @@ fn score(
     notices.extend(weak_data_warnings(o, &d, &identifiability));
     notices.extend(far_mass_warnings(m, &fit.identified, &identifiability));
     notices.extend(bound_mass_notes(m, o, &fit.identified));
+    notices.extend(total_mass_notes(m, o, &fit.identified));
     // Effect terms are fitted on data read whole (never streamed), whose report holds the
     // sample period the snippet's delays are counted in.
     let snippet = d.data[0]
@@ -911,6 +930,27 @@ pub fn problem_json(
         "bodies": bodies, "friction_cols": (l.viscous_col..l.len).collect::<Vec<_>>(),
         "physid": {"objective": r.objective, "theta": r.theta.as_slice(), "status": r.solver.status},
     })
+}
+
+/// The robot's total moving mass held within `[lo, hi]` kg (`--total-mass LO,HI`).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct TotalMass {
+    /// The lowest total (kg, > 0).
+    pub lo: f64,
+    /// The highest total (kg, ≥ lo).
+    pub hi: f64,
+}
+
+impl std::str::FromStr for TotalMass {
+    type Err = String;
+
+    /// Two numbers `LO,HI` in kg; their range is checked by [`IdentifyOptions::validate`].
+    fn from_str(s: &str) -> Result<Self, String> {
+        let MassBounds { lo, hi } = s
+            .parse::<MassBounds>()
+            .map_err(|e| e.replace("0.5,2", "3.5,3.9 kg"))?;
+        Ok(TotalMass { lo, hi })
+    }
 }
 
 /// Each body's mass held within `[lo, hi]` times the description's (`--mass-bounds LO,HI`).
@@ -1017,6 +1057,43 @@ fn bound_mass_notes(m: &Model, o: &IdentifyOptions, identified: &ident::Identifi
                 )));
             }
         }
+    }
+    out
+}
+
+/// A note when the identified total moving mass (links and rotors) lies on a bound of
+/// `o.total_mass` (within 10⁻⁴ of the bounds' width), a warning when outside it (checked from
+/// the parameters) or when the description's own total is outside it.
+fn total_mass_notes(m: &Model, o: &IdentifyOptions, identified: &ident::Identified) -> Vec<Notice> {
+    let Some(TotalMass { lo, hi }) = o.total_mass else {
+        return vec![];
+    };
+    let theta = &identified.theta;
+    let l = m.layout();
+    let cols = (0..m.dof())
+        .map(|i| 10 * i)
+        .chain(l.rotor_col.iter().flatten().copied());
+    let total: f64 = cols.map(|c| theta[c]).sum();
+    let described = m.total_mass();
+    let mut out = vec![];
+    if !(lo..=hi).contains(&described) {
+        out.push(Notice::warning(format!(
+            "--total-mass {lo},{hi}: the description's own total is {described:.3} kg, outside the bounds: check the scale's reading and what it weighed (links and rotors that move, not the base)"
+        )));
+    }
+    let slack = 1e-6 * hi;
+    if total < lo - slack || total > hi + slack {
+        out.push(Notice::warning(format!(
+            "total moving mass {total:.6} kg is outside --total-mass {lo},{hi}: the solver did not hold it"
+        )));
+    } else if let Some(which) = [(lo, "lower"), (hi, "upper")]
+        .into_iter()
+        .find(|(b, _)| (total - b).abs() <= 1e-4 * (hi - lo).max(1e-3 * hi))
+        .map(|(_, w)| w)
+    {
+        out.push(Notice::note(format!(
+            "total moving mass {total:.3} kg at the {which} bound of --total-mass {lo},{hi}: the fit would put it beyond"
+        )));
     }
     out
 }

@@ -112,6 +112,9 @@ pub struct Options {
     /// Bounds on masses: `(column of θ, lowest, highest)` in kg, each `lo ≤ θ_c ≤ hi`; they
     /// make even `none` a cone program.
     pub mass_bounds: Vec<(usize, f64, f64)>,
+    /// The robot's total mass held within `lo..hi` kg: `(mass columns of θ summed, lo, hi)`;
+    /// it makes even `none` a cone program.
+    pub total_mass: Option<(Vec<usize>, f64, f64)>,
 }
 
 /// How the estimate is pulled towards the prior `θ̂`.
@@ -152,6 +155,7 @@ impl Options {
             regularizer: Regularizer::Euclidean,
             nonnegative: vec![],
             mass_bounds: vec![],
+            total_mass: None,
         }
     }
 }
@@ -264,6 +268,7 @@ impl Options {
             && self.regularizer != Regularizer::LogDet
             && self.nonnegative.is_empty()
             && self.mass_bounds.is_empty()
+            && self.total_mass.is_none()
     }
 
     /// Checks every value against its range (the CLI relies on this, and so can any caller).
@@ -282,6 +287,19 @@ impl Options {
                 expected: "a finite number >= 0",
                 value: self.eps,
             });
+        }
+        if let Some((cols, lo, hi)) = &self.total_mass {
+            if cols.is_empty() || !(lo.is_finite() && hi.is_finite() && 0.0 <= *lo && lo <= hi) {
+                return Err(IdentError::InvalidOption {
+                    option: "total_mass",
+                    expected: "mass columns and finite masses 0 <= lowest <= highest (kg)",
+                    value: if lo.is_finite() && *lo >= 0.0 {
+                        *hi
+                    } else {
+                        *lo
+                    },
+                });
+            }
         }
         for &(_, lo, hi) in &self.mass_bounds {
             if !(lo.is_finite() && hi.is_finite() && 0.0 <= lo && lo <= hi) {
@@ -441,7 +459,8 @@ fn check_problem(
             params: model.layout().len,
         });
     }
-    let bounded = opts.mass_bounds.iter().map(|b| &b.0);
+    let summed = opts.total_mass.iter().flat_map(|t| t.0.iter());
+    let bounded = opts.mass_bounds.iter().map(|b| &b.0).chain(summed);
     if let Some(&c) = opts.nonnegative.iter().chain(bounded).find(|&&c| c >= p) {
         return Err(IdentError::NonNegativeColumn {
             column: c,
@@ -691,6 +710,10 @@ fn physical_rows(
     for &(c, lo, hi) in &opts.mass_bounds {
         nonneg.push((vec![(c, 1.0)], -lo));
         nonneg.push((vec![(c, -1.0)], hi));
+    }
+    if let Some((cols, lo, hi)) = &opts.total_mass {
+        nonneg.push((cols.iter().map(|&c| (c, 1.0)).collect(), -lo));
+        nonneg.push((cols.iter().map(|&c| (c, -1.0)).collect(), *hi));
     }
     Ok(nonneg)
 }
