@@ -183,6 +183,23 @@ const SETTLED: f64 = 1e-3;
 /// How far the tracked clock's phase moves toward each stamp ([`Clock::fit`]).
 const PHASE_GAIN: f64 = 0.05;
 
+/// The slowest joint-state log physid reads (Hz): a slower one is a time unit misread (stamps in
+/// milliseconds at 1 kHz read as one sample a second).
+pub const MIN_RATE: f64 = 5.0;
+
+/// The fastest joint-state log physid reads (Hz).
+pub const MAX_RATE: f64 = 1e5;
+
+/// What stamps with median period `period` (as read, "s") most likely are.
+fn unit_guess(period: f64) -> &'static str {
+    match period {
+        p if p > 1e5 => "stamps in nanoseconds? (divide t by 1e9)",
+        p if p > 1e2 => "stamps in microseconds? (divide t by 1e6)",
+        p if p > 0.2 => "stamps in milliseconds? (divide t by 1e3)",
+        _ => "stamps in minutes or hours? (multiply t to seconds)",
+    }
+}
+
 /// Stamps within this fraction of a period (RMS) of a uniform clock count as uniform.
 const UNIFORM_JITTER: f64 = 0.01;
 
@@ -210,6 +227,12 @@ pub enum PrepareError {
         "{0} samples with distinct time stamps: at least 2 are needed to know the sample rate"
     )]
     NoRate(usize),
+    /// A median sample period no robot's joint-state log has: stamps in another unit.
+    #[error("the median sample period is {period:.4} s ({:.3e} Hz), where joint states are logged at {MIN_RATE} Hz to {MAX_RATE} Hz: {}; physid reads t in seconds", 1.0 / period, unit_guess(*period))]
+    TimeUnit {
+        /// The median period as read (s).
+        period: f64,
+    },
     /// The cutoff is not a usable low-pass at this rate.
     #[error("cutoff {cutoff} Hz: the data are sampled at {rate:.4} Hz, so the cutoff must be positive and at most {max:.4} Hz ({MAX_CUTOFF_FRACTION} of the rate)")]
     Cutoff {
@@ -406,6 +429,9 @@ fn cutoff_of(
 pub fn prepare(logged: &Logged, opts: &Options) -> Result<Prepared, PrepareError> {
     logged.validate()?;
     let period = median_period(&logged.t).ok_or(PrepareError::NoRate(logged.len()))?;
+    if !(1.0 / MAX_RATE..=1.0 / MIN_RATE).contains(&period) {
+        return Err(PrepareError::TimeUnit { period });
+    }
     let rate = 1.0 / period;
     let max = MAX_CUTOFF_FRACTION * rate;
     if let Some(cutoff) = opts.cutoff.filter(|c| !(*c > 0.0 && *c <= max)) {

@@ -349,22 +349,8 @@ fn a_validation_range_the_pipeline_trims_away_is_refused_not_scored_as_zero() {
     // Before: run 1 cut to t, q, τ (q̇, q̈ derived, 316 samples trimmed at each end) with
     // `--validate 0:50` reported "validation 0.0000 N m" from no sample.
     let dir = tempfile::tempdir().unwrap();
-    let (run1, urdf) = run1_and_urdf();
-    let text = std::fs::read_to_string(&run1).unwrap();
-    let header: Vec<&str> = text.lines().next().unwrap().split(',').collect();
-    let keep: Vec<usize> = (0..header.len())
-        .filter(|&i| header[i] == "t" || header[i].starts_with('q') || header[i].starts_with("tau"))
-        .filter(|&i| !header[i].starts_with("q_"))
-        .collect();
-    let cut: String = text
-        .lines()
-        .map(|l| {
-            let cells: Vec<&str> = l.split(',').collect();
-            keep.iter().map(|&i| cells[i]).collect::<Vec<_>>().join(",") + "\n"
-        })
-        .collect();
-    let tq = dir.path().join("tq.csv");
-    std::fs::write(&tq, cut).unwrap();
+    let (_, urdf) = run1_and_urdf();
+    let tq = tq_csv(dir.path(), "tq.csv", 1.0);
     let tq = tq.to_str().unwrap();
     let args = |v: &'static str| {
         [
@@ -400,4 +386,54 @@ fn a_validation_range_the_pipeline_trims_away_is_refused_not_scored_as_zero() {
         out.contains("validation") && !out.contains("validation 0.0000"),
         "{out}"
     );
+}
+
+/// Run 1 cut to `t, q, τ` (as a robot without velocity logging writes it) into `dir/name`, its
+/// stamps multiplied by `time_scale` (1e3: milliseconds).
+fn tq_csv(dir: &std::path::Path, name: &str, time_scale: f64) -> std::path::PathBuf {
+    let (run1, _) = run1_and_urdf();
+    let text = std::fs::read_to_string(&run1).unwrap();
+    let header: Vec<&str> = text.lines().next().unwrap().split(',').collect();
+    let keep: Vec<usize> = (0..header.len())
+        .filter(|&i| header[i] == "t" || header[i].starts_with('q') || header[i].starts_with("tau"))
+        .filter(|&i| !header[i].starts_with("q_"))
+        .collect();
+    let mut cut = String::new();
+    for (k, l) in text.lines().enumerate() {
+        let cells: Vec<String> = l.split(',').map(String::from).collect();
+        let mut row: Vec<String> = keep.iter().map(|&i| cells[i].clone()).collect();
+        if k > 0 {
+            row[0] = (row[0].parse::<f64>().unwrap() * time_scale).to_string();
+        }
+        cut += &(row.join(",") + "\n");
+    }
+    let path = dir.join(name);
+    std::fs::write(&path, cut).unwrap();
+    path
+}
+
+#[test]
+fn stamps_in_another_unit_than_seconds_are_refused_naming_the_likely_one() {
+    // Before: run 1's stamps in milliseconds were read as seconds without a word (viscous
+    // friction up to 49 N m s/rad); in nanoseconds the cutoff came out at 2e-7 Hz.
+    let dir = tempfile::tempdir().unwrap();
+    let (_, urdf) = run1_and_urdf();
+    for (scale, unit) in [
+        (1e3, "milliseconds? (divide t by 1e3)"),
+        (1e9, "nanoseconds? (divide t by 1e9)"),
+    ] {
+        let tq = tq_csv(dir.path(), &format!("tq_{scale}.csv"), scale);
+        let (code, _, err) =
+            common::physid(&["identify", "--robot", &urdf, "--data", tq.to_str().unwrap()]);
+        assert!(
+            code == 2
+                && err.contains(&format!("tq_{scale}.csv: the median sample period"))
+                && err.contains(unit),
+            "{err}"
+        );
+    }
+    let tq = tq_csv(dir.path(), "tq_s.csv", 1.0);
+    let (code, _, err) =
+        common::physid(&["identify", "--robot", &urdf, "--data", tq.to_str().unwrap()]);
+    assert_eq!(code, 0, "{err}");
 }
