@@ -391,6 +391,16 @@ fn a_validation_range_the_pipeline_trims_away_is_refused_not_scored_as_zero() {
 /// Run 1 cut to `t, q, τ` (as a robot without velocity logging writes it) into `dir/name`, its
 /// stamps multiplied by `time_scale` (1e3: milliseconds).
 fn tq_csv(dir: &std::path::Path, name: &str, time_scale: f64) -> std::path::PathBuf {
+    tq_csv_scaled(dir, name, time_scale, 1.0)
+}
+
+/// [`tq_csv`] with the positions multiplied by `angle_scale` too (180/π: degrees).
+fn tq_csv_scaled(
+    dir: &std::path::Path,
+    name: &str,
+    time_scale: f64,
+    angle_scale: f64,
+) -> std::path::PathBuf {
     let (run1, _) = run1_and_urdf();
     let text = std::fs::read_to_string(&run1).unwrap();
     let header: Vec<&str> = text.lines().next().unwrap().split(',').collect();
@@ -404,6 +414,11 @@ fn tq_csv(dir: &std::path::Path, name: &str, time_scale: f64) -> std::path::Path
         let mut row: Vec<String> = keep.iter().map(|&i| cells[i].clone()).collect();
         if k > 0 {
             row[0] = (row[0].parse::<f64>().unwrap() * time_scale).to_string();
+            for (c, &i) in keep.iter().enumerate() {
+                if header[i].starts_with('q') {
+                    row[c] = (row[c].parse::<f64>().unwrap() * angle_scale).to_string();
+                }
+            }
         }
         cut += &(row.join(",") + "\n");
     }
@@ -436,4 +451,25 @@ fn stamps_in_another_unit_than_seconds_are_refused_naming_the_likely_one() {
     let (code, _, err) =
         common::physid(&["identify", "--robot", &urdf, "--data", tq.to_str().unwrap()]);
     assert_eq!(code, 0, "{err}");
+}
+
+#[test]
+fn positions_in_degrees_are_refused_naming_the_joint() {
+    // Before: run 1 in degrees was accepted, positions 20 times outside the URDF's limits.
+    let dir = tempfile::tempdir().unwrap();
+    let (_, urdf) = run1_and_urdf();
+    let deg = tq_csv_scaled(dir.path(), "deg.csv", 1.0, 180.0 / std::f64::consts::PI);
+    let (code, _, err) = common::physid(&[
+        "identify",
+        "--robot",
+        &urdf,
+        "--data",
+        deg.to_str().unwrap(),
+    ]);
+    assert!(
+        code == 2
+            && err.contains("deg.csv: joint 'lwr_0_joint': positions from")
+            && err.contains("the log is in degrees?"),
+        "{err}"
+    );
 }

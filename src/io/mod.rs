@@ -706,7 +706,39 @@ pub fn load_logged(
     let (logged, more_ignored) =
         match_joints(read, &names).map_err(|m| IoError::invalid(path, m))?;
     ignored.extend(more_ignored);
+    check_angle_unit(&logged, model).map_err(|m| IoError::invalid(path, m))?;
     Ok((logged, ignored, skipped))
+}
+
+/// Positions of a revolute joint with limits that lie far outside them (by half the range and
+/// 0.2 rad) while the same numbers read as degrees fit them: the log is in degrees.
+fn check_angle_unit(logged: &crate::prepare::Logged, model: &Model) -> Result<(), String> {
+    let n = logged.dof();
+    for (j, b) in model.bodies().iter().enumerate() {
+        let (lo, hi) = (b.limits.lower, b.limits.upper);
+        let revolute = matches!(b.joint, crate::model::Joint::Revolute { .. });
+        if !(revolute && lo.is_finite() && hi.is_finite()) || logged.len() == 0 {
+            continue;
+        }
+        let column = (0..logged.len()).map(|k| logged.q[k * n + j]);
+        let (min, max) = column.fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), q| {
+            (a.min(q), b.max(q))
+        });
+        let range = hi - lo;
+        let outside = |a: f64, b: f64, slack: f64| a < lo - slack || b > hi + slack;
+        let degrees = std::f64::consts::PI / 180.0;
+        if outside(min, max, 0.5 * range + 0.2)
+            && !outside(min * degrees, max * degrees, 0.1 * range + 0.05)
+        {
+            return Err(format!(
+                "joint '{}': positions from {min:.4} to {max:.4} rad, far outside its limits {lo:.4}..{hi:.4} rad, while as degrees ({:.4} to {:.4} rad) they fit: the log is in degrees? physid reads revolute positions in radians (multiply by π/180)",
+                b.joint_name,
+                min * degrees,
+                max * degrees
+            ));
+        }
+    }
+    Ok(())
 }
 
 /// The data's joints matched to the robot's `names` by name (reordered; joints the robot does
