@@ -717,7 +717,7 @@ fn check_angle_unit(logged: &crate::prepare::Logged, model: &Model) -> Result<()
     for (j, b) in model.bodies().iter().enumerate() {
         let (lo, hi) = (b.limits.lower, b.limits.upper);
         let revolute = matches!(b.joint, crate::model::Joint::Revolute { .. });
-        if !(revolute && lo.is_finite() && hi.is_finite()) || logged.len() == 0 {
+        if !(revolute && lo.is_finite() && hi.is_finite()) || logged.is_empty() {
             continue;
         }
         let column = (0..logged.len()).map(|k| logged.q[k * n + j]);
