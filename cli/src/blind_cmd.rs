@@ -24,9 +24,10 @@ pub struct Args {
     /// Worker threads (0 = all cores).
     #[arg(long, default_value_t = 0)]
     threads: usize,
-    /// Relative error drawn into each case's description's inertial parameters.
-    #[arg(long, default_value_t = blind::DESCRIPTION_ERROR, allow_negative_numbers = true)]
-    description_error: f64,
+    /// Relative error drawn into each case's description's inertial parameters (default 0.1;
+    /// not with --real, whose descriptions are identified from real runs).
+    #[arg(long, allow_negative_numbers = true, conflicts_with = "real")]
+    description_error: Option<f64>,
     /// The description uncertainty the diagnosis is told (default: the error drawn; 0
     /// turns the description test off).
     #[arg(long, allow_negative_numbers = true)]
@@ -111,7 +112,7 @@ pub fn run(a: Args) -> anyhow::Result<()> {
     let opts = BlindOptions {
         cases: a.cases,
         seed: a.seed,
-        description_error: a.description_error,
+        description_error: a.description_error.unwrap_or(blind::DESCRIPTION_ERROR),
         description_uncertainty: a.description_uncertainty,
     };
     opts.validate().map_err(super::option_error)?;
@@ -129,7 +130,7 @@ pub fn run(a: Args) -> anyhow::Result<()> {
                 a.seed,
                 &base,
                 &model,
-                a.description_error,
+                opts.description_error,
                 &diagnose_opts,
                 case_dir,
             )
@@ -144,7 +145,7 @@ pub fn run(a: Args) -> anyhow::Result<()> {
     );
     eprintln!("{} cases in {wall:.1} s", results.len());
     if let Some(dir) = &a.out {
-        let description = [a.description_error, opts.stated_uncertainty()];
+        let description = [opts.description_error, opts.stated_uncertainty()];
         blind::write_blind(
             dir,
             &results,

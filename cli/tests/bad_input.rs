@@ -585,6 +585,20 @@ fn counts_from_the_user_are_bounded_before_anything_is_allocated() {
         "{err}"
     );
     assert!(!out.exists());
+    // Before: `--description-error` with `--real` was ignored without a word.
+    let (ok, err) = physid(&[
+        "blind",
+        "--real",
+        "a.csv,b.csv",
+        "--real-robot",
+        "r.urdf",
+        "--description-error",
+        "0.2",
+    ]);
+    assert!(
+        !ok && err.contains("'--real <REAL>' cannot be used with '--description-error"),
+        "{err}"
+    );
     // Before: `--only 0,0` ran case 0 twice and scored it as two cases.
     let (ok, err) = physid(&[
         "blind",
