@@ -281,10 +281,12 @@ fn a_csv_is_read_by_the_columns_used_and_the_first_bad_file_is_named() {
         h.push(extra.to_string());
         h.join(",")
     };
+    // Angles within the leg's limits (±1.5 rad): positions far outside them that fit as degrees
+    // are refused as a log in degrees.
     let row = |k: usize, unused: &[u8]| {
         let mut line = format!(" {} ", k as f64 * 1e-3).into_bytes();
         for j in 0..6 {
-            line.extend(format!(", {:.3} ", 0.1 * (k + j) as f64).bytes());
+            line.extend(format!(", {:.4} ", 0.005 * (k + j) as f64).bytes());
         }
         line.push(b',');
         line.extend(unused);
@@ -303,7 +305,7 @@ fn a_csv_is_read_by_the_columns_used_and_the_first_bad_file_is_named() {
     let good = write("good.csv", &|k| row(k, b"\xff\xfe not text"));
     let (logged, _) = io::samples::read_csv_logged(&good, Some(&names)).unwrap();
     assert_eq!(logged.t.len(), 200);
-    assert!((logged.t[3] - 3e-3).abs() < 1e-15 && (logged.q[3 * 3 + 1] - 0.4).abs() < 1e-12);
+    assert!((logged.t[3] - 3e-3).abs() < 1e-15 && (logged.q[3 * 3 + 1] - 0.02).abs() < 1e-12);
     let bad_q = write("bad_q.csv", &|k| {
         if k == 7 {
             // The hip's angle is a byte that is not text.
