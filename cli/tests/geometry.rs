@@ -204,3 +204,39 @@ fn kuka_ellipsoids_from_geometry_give_plausible_masses_and_a_better_held_out_fit
         rms(&consistent)
     );
 }
+
+#[test]
+fn a_relative_robot_path_finds_the_same_meshes_as_the_absolute_one() {
+    // Before: `--robot panda_description/urdf/panda.urdf` run from the package's `robots`
+    // folder walked up only through the path as written, missed the `package://` meshes two
+    // folders above that the absolute path finds, and lost every bounding ellipsoid (the default
+    // constraint set and the diagnosis's ties changed with how the path was written).
+    let robots = common::root().join("data/panda/example-robot-data/robots");
+    let model = |cwd: &std::path::Path, robot: &str| {
+        let o = common::command()
+            .current_dir(cwd)
+            .args(["model", "--robot", robot, "--json"])
+            .output()
+            .unwrap();
+        let err = String::from_utf8_lossy(&o.stderr).into_owned();
+        assert!(o.status.success(), "{err}");
+        (
+            serde_json::from_slice::<serde_json::Value>(&o.stdout).unwrap(),
+            err,
+        )
+    };
+    let absolute = robots.join("panda_description/urdf/panda.urdf");
+    let (a, _) = model(&common::root(), absolute.to_str().unwrap());
+    let (r, err) = model(&robots, "panda_description/urdf/panda.urdf");
+    assert!(!err.contains("not found"), "{err}");
+    assert_eq!(a["bodies"], r["bodies"]);
+    let bounded = |v: &serde_json::Value| {
+        v["bodies"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .filter(|b| !b["ellipsoid"].is_null())
+            .count()
+    };
+    assert!(bounded(&r) >= 7, "{}", r["bodies"]);
+}

@@ -146,7 +146,11 @@ pub fn referenced_meshes(urdf: &Path, package_dirs: &[PathBuf]) -> Vec<PathBuf> 
 
 /// The file a mesh `filename` names (see the module docs), or why it was not found.
 fn resolve(filename: &str, lookup: &Lookup) -> Result<PathBuf, String> {
-    let base = lookup.urdf.parent().unwrap_or(Path::new("."));
+    // The URDF's real folder: a relative `--robot sub/arm.urdf` walks up past `sub` too (its
+    // folders above were not searched, and the same file found its meshes only when named by
+    // its absolute path).
+    let real = std::fs::canonicalize(lookup.urdf).unwrap_or_else(|_| lookup.urdf.to_path_buf());
+    let base = real.parent().unwrap_or(Path::new("."));
     let candidates: Vec<PathBuf> = if let Some(rest) = filename.strip_prefix("package://") {
         let (pkg, rel) = rest.split_once('/').unwrap_or((rest, ""));
         let ros = std::env::var_os("ROS_PACKAGE_PATH").unwrap_or_default();
