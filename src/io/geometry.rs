@@ -257,18 +257,32 @@ fn mesh_pieces(path: &Path, scale: &Vector3<f64>) -> Result<Vec<Piece>, String> 
         .collect())
 }
 
-/// The minimum-volume ellipsoid of `pieces`, grown by the margin, or why there is none.
-pub(crate) fn bound(pieces: &[Piece], opts: &GeometryOptions) -> Result<Ellipsoid, String> {
+/// The minimum-volume ellipsoid of `pieces`, grown by the margin, or why there is none; with a
+/// warning when the cache held an entry for this geometry that cannot bound it (planted or
+/// corrupted: ignored, solved again and replaced).
+pub(crate) fn bound(
+    pieces: &[Piece],
+    opts: &GeometryOptions,
+) -> Result<(Ellipsoid, Option<String>), String> {
     let key = super::cache::key(pieces);
-    let e = match super::cache::get(&key, &opts.cache) {
-        Some(e) => e,
-        None => {
+    let cached = super::cache::get(&key, &opts.cache);
+    let mut said = None;
+    let e = match cached {
+        Some(e) if bounding::could_bound(&e, pieces) => e,
+        stale => {
+            if stale.is_some() {
+                let folder = opts
+                    .cache
+                    .folder()
+                    .map_or("memory".into(), |f| f.display().to_string());
+                said = Some(format!("the cached ellipsoid {key} (in {folder}) does not bound this geometry (a piece outside it, or larger than its box's): ignored, solved again and replaced"));
+            }
             let e = bounding::minimum_volume_ellipsoid(pieces).map_err(|e| e.to_string())?;
             super::cache::put(&key, &e, &opts.cache);
             e
         }
     };
-    Ok(bounding::with_margin(&e, opts.margin))
+    Ok((bounding::with_margin(&e, opts.margin), said))
 }
 
 /// Pieces of a link moved into a body's frame by the link's pose in that frame.

@@ -236,7 +236,7 @@ fn bound_bodies(
             from_tree.push(format!("'{}'", b.name));
             Some(tree)
         } else {
-            s.bound(&b.name, lookup).unwrap_or_else(|w| {
+            s.bound(&b.name, lookup, warnings).unwrap_or_else(|w| {
                 warnings.push(w);
                 None
             })
@@ -522,11 +522,13 @@ impl Shapes {
             && (self.missing.iter()).all(|m| m.ends_with("has mass but no geometry"))
     }
 
-    /// The bounding ellipsoid, or a warning naming the element and why there is none.
+    /// The bounding ellipsoid, or a warning naming the element and why there is none; a cache
+    /// entry that could not bound the geometry is said in `warnings`.
     fn bound(
         &self,
         element: &str,
         lookup: &Lookup,
+        warnings: &mut Vec<String>,
     ) -> Result<Option<crate::spatial::Ellipsoid>, String> {
         // Without geometry (or with `ignore_geometry`, where `add` collects none): no bound.
         if self.pieces.is_empty() && self.missing.is_empty() {
@@ -538,9 +540,10 @@ impl Shapes {
                 self.missing.join("; ")
             ));
         }
-        geometry::bound(&self.pieces, lookup.opts)
-            .map(Some)
-            .map_err(|e| format!("no bounding ellipsoid for '{element}' from geometry: {e}"))
+        let (e, said) = geometry::bound(&self.pieces, lookup.opts)
+            .map_err(|e| format!("no bounding ellipsoid for '{element}' from geometry: {e}"))?;
+        warnings.extend(said.map(|s| format!("'{element}': {s}")));
+        Ok(Some(e))
     }
 }
 
@@ -793,10 +796,12 @@ fn attach_rotors(
             },
             gear_ratio: mimic.multiplier.unwrap_or(1.0),
             inertia: params,
-            bounding: shapes.bound(&jt.child.link, lookup).unwrap_or_else(|w| {
-                warnings.push(w);
-                None
-            }),
+            bounding: shapes
+                .bound(&jt.child.link, lookup, warnings)
+                .unwrap_or_else(|w| {
+                    warnings.push(w);
+                    None
+                }),
         });
     }
 

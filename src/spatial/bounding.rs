@@ -441,6 +441,46 @@ pub fn minimum_volume_ellipsoid(pieces: &[Piece]) -> Result<Ellipsoid, BoundingE
     Ok(enclose(e, pieces))
 }
 
+/// Whether `e` could be the minimum-volume ellipsoid of `pieces` (a cached answer checked
+/// without solving again): it contains every piece (to 10⁻⁷ of its size) and its volume is at
+/// most that of the ellipsoid through the corners of the pieces' bounding box (which contains
+/// them, so the minimum is no larger). A planted or corrupted cache entry fails one of them.
+pub fn could_bound(e: &Ellipsoid, pieces: &[Piece]) -> bool {
+    let Some(worst) = largest_norm(e, pieces) else {
+        return false;
+    };
+    let (mut lo, mut hi) = (
+        Vector3::repeat(f64::INFINITY),
+        Vector3::repeat(f64::NEG_INFINITY),
+    );
+    for p in pieces {
+        let (c, f) = p.center_and_span();
+        let reach = Vector3::from_fn(|k, _| f.iter().map(|v| v[k] * v[k]).sum::<f64>().sqrt());
+        lo = lo.inf(&(c - reach));
+        hi = hi.sup(&(c + reach));
+    }
+    let box_volume = ((hi - lo) / 2.0 * 3f64.sqrt()).product();
+    let volume = e.qs.determinant().max(0.0).sqrt();
+    worst <= 1.0 + 1e-7 && volume <= box_volume * (1.0 + 1e-9)
+}
+
+/// The largest `‖L (x − x_s)‖` over the pieces (`Lᵀ L = Q_s⁻¹`; at most 1 when all are inside),
+/// `None` for a degenerate ellipsoid.
+fn largest_norm(e: &Ellipsoid, pieces: &[Piece]) -> Option<f64> {
+    let l = e.qs.try_inverse()?.cholesky()?.l().transpose();
+    Some(
+        pieces
+            .iter()
+            .map(|p| {
+                let (c, f) = p.center_and_span();
+                let g = l * (c - e.center);
+                let gf: Vec<Vector3<f64>> = f.iter().map(|v| l * v).collect();
+                max_norm_on_unit_ball(&g, &gf)
+            })
+            .fold(0.0, f64::max),
+    )
+}
+
 /// Grows `e` about its centre just enough to contain every piece exactly (closing the solver's
 /// tolerance): the largest `‖L (x − x_s)‖` over each piece, with `Lᵀ L = Q_s⁻¹`.
 fn enclose(e: Ellipsoid, pieces: &[Piece]) -> Ellipsoid {
