@@ -269,3 +269,32 @@ fn a_blind_case_can_be_kept_and_rediagnosed_by_hand() {
         "{log}"
     );
 }
+
+#[test]
+fn an_axis_the_experiment_ignores_is_refused_before_anything_is_written() {
+    // Before: a grid over experiment.min_size with `sizes` given ran, and both values gave the
+    // same rows (sizes replace the log grid); min_size above max_size was accepted too.
+    let dir = tempfile::tempdir().unwrap();
+    let base = common::root().join("scenarios/sample_size.toml");
+    let cases = [
+        ("\"experiment.min_size\" = [10, 60]", "sizes = [30, 300]", "experiment.sizes: given with min_size/max_size/points (60, 10000, 12), which it replaces"),
+        ("\"sensors.torque_noise\" = [0.3]", "min_size = 500\nmax_size = 100", "experiment.min_size: 500 is above max_size 100"),
+    ];
+    for (k, (grid, experiment, said)) in cases.iter().enumerate() {
+        let sweep = dir.path().join(format!("s{k}.toml"));
+        std::fs::write(
+            &sweep,
+            format!("scenario = \"{}\"\n[grid]\n{grid}\n[experiment]\nseeds = 2\n{experiment}\nvalidation = 300\nconstraints = [\"none\"]\n", base.display()),
+        )
+        .unwrap();
+        let out = dir.path().join(format!("out{k}"));
+        let (code, _, err) = common::physid(&[
+            "sweep",
+            sweep.to_str().unwrap(),
+            "--out",
+            out.to_str().unwrap(),
+        ]);
+        assert!(code == 2 && err.contains(said), "{err}");
+        assert!(!out.exists());
+    }
+}

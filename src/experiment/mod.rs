@@ -179,6 +179,16 @@ impl ExperimentSpec {
         if self.seeds == 0 {
             return e("seeds", "must be at least 1".into());
         }
+        let log_grid = (self.min_size, self.max_size, self.points);
+        if self.sizes.is_some() && log_grid != (min_size(), max_size(), points()) {
+            return e("sizes", format!("given with min_size/max_size/points ({}, {}, {}), which it replaces: give the sizes or the log grid, not both (a sweep over min_size would change nothing)", log_grid.0, log_grid.1, log_grid.2));
+        }
+        if self.sizes.is_none() && self.min_size > self.max_size {
+            return e(
+                "min_size",
+                format!("{} is above max_size {}", self.min_size, self.max_size),
+            );
+        }
         if self.grid().first().is_none_or(|&s| s == 0) {
             return e("sizes", "need positive training sizes".into());
         }
