@@ -57,16 +57,25 @@ pub struct Args {
     real_baseline: bool,
 }
 
-/// One line per finished case, on standard error: what was injected and found, the verdict,
-/// the validation RMS before and after, and the progress.
+/// One line per finished case, on standard error: its number, the progress, and
+/// [`real_case_line`].
 fn print_real_case(
     r: &physid::experiment::semireal::RealCase,
     progress: &super::progress::Progress,
 ) {
     eprintln!(
-        "case {} ({}): {} on {}{}; found {}; {:.1} s",
+        "case {} ({}): {}",
         r.case,
         progress.status(),
+        real_case_line(r)
+    );
+}
+
+/// What a semi-real case injected on which run (and body) and what the ladder found, with its
+/// wall time (`blind --real` and `generalize` print it per case).
+pub fn real_case_line(r: &physid::experiment::semireal::RealCase) -> String {
+    format!(
+        "{} on {}{}; found {}; {:.1} s",
         r.injected,
         r.base,
         r.injected_body
@@ -78,7 +87,7 @@ fn print_real_case(
             r.found.join(", ")
         },
         r.seconds
-    );
+    )
 }
 
 fn print_case(r: &CaseResult, progress: &super::progress::Progress) {

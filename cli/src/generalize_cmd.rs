@@ -35,24 +35,8 @@ pub struct Args {
 }
 
 fn print_case(c: &Case) {
-    let r = &c.case;
-    eprintln!(
-        "{} seed {} case {}: {} on {}{}; found {}; {:.1} s",
-        c.robot,
-        c.seed,
-        r.case,
-        r.injected,
-        r.base,
-        r.injected_body
-            .as_ref()
-            .map_or(String::new(), |b| format!(" ({b})")),
-        if r.found.is_empty() {
-            "nothing".into()
-        } else {
-            r.found.join(", ")
-        },
-        r.seconds
-    );
+    let line = super::blind_cmd::real_case_line(&c.case);
+    eprintln!("{} seed {} case {}: {line}", c.robot, c.seed, c.case.case);
 }
 
 /// `physid generalize`.

@@ -594,11 +594,7 @@ impl IdentifyOptions {
                 .collect();
         }
         if let Some(TotalMass { lo, hi }) = self.total_mass {
-            let l = m.layout();
-            let cols = (0..m.dof())
-                .map(|i| 10 * i)
-                .chain(l.rotor_col.iter().flatten().copied());
-            opts.total_mass = Some((cols.collect(), lo, hi));
+            opts.total_mass = Some((mass_columns(m), lo, hi));
         }
         opts.validate()?;
         Ok(opts)
@@ -1061,6 +1057,13 @@ fn bound_mass_notes(m: &Model, o: &IdentifyOptions, identified: &ident::Identifi
     out
 }
 
+/// The columns of θ holding a mass: each link's, then each rotor's (their sum is the robot's
+/// moving mass, `--total-mass`).
+fn mass_columns(m: &Model) -> Vec<usize> {
+    let rotors = m.layout().rotor_col.iter().flatten().copied();
+    (0..m.dof()).map(|i| 10 * i).chain(rotors).collect()
+}
+
 /// A note when the identified total moving mass (links and rotors) lies on a bound of
 /// `o.total_mass` (within 10⁻⁴ of the bounds' width), a warning when outside it (checked from
 /// the parameters) or when the description's own total is outside it.
@@ -1068,12 +1071,7 @@ fn total_mass_notes(m: &Model, o: &IdentifyOptions, identified: &ident::Identifi
     let Some(TotalMass { lo, hi }) = o.total_mass else {
         return vec![];
     };
-    let theta = &identified.theta;
-    let l = m.layout();
-    let cols = (0..m.dof())
-        .map(|i| 10 * i)
-        .chain(l.rotor_col.iter().flatten().copied());
-    let total: f64 = cols.map(|c| theta[c]).sum();
+    let total: f64 = mass_columns(m).iter().map(|&c| identified.theta[c]).sum();
     let described = m.total_mass();
     let mut out = vec![];
     if !(lo..=hi).contains(&described) {

@@ -220,7 +220,7 @@ pub fn from_str(
 }
 
 /// Each body's shapes and bounding ellipsoid: its geometry's, or the kinematic tree's
-/// ([`kinematic_bounds`]) where none of its links has geometry (one warning naming them), or
+/// ([`kinematic_bound`]) where none of its links has geometry (one warning naming them), or
 /// none with a warning saying why.
 fn bound_bodies(
     bodies: &mut [Body],
@@ -228,13 +228,19 @@ fn bound_bodies(
     lookup: &Lookup,
     warnings: &mut Vec<String>,
 ) {
-    let tree_bounds = kinematic_bounds(bodies);
+    // Only the bodies without geometry need the tree's bound (each reads the whole tree).
+    let tree_bounds: Vec<Option<crate::spatial::Ellipsoid>> = (0..bodies.len())
+        .map(|i| {
+            (shapes[i].has_no_geometry() && !lookup.opts.ignore_geometry)
+                .then(|| kinematic_bound(bodies, i))
+        })
+        .collect();
     let mut from_tree = vec![];
     for ((b, s), tree) in bodies.iter_mut().zip(shapes).zip(tree_bounds) {
         b.shapes = s.shapes.clone();
-        b.bounding = if s.has_no_geometry() && !lookup.opts.ignore_geometry {
+        b.bounding = if tree.is_some() {
             from_tree.push(format!("'{}'", b.name));
-            Some(tree)
+            tree
         } else {
             s.bound(&b.name, lookup, warnings).unwrap_or_else(|w| {
                 warnings.push(w);
@@ -257,38 +263,34 @@ const KINEMATIC_MARGIN: f64 = 0.05;
 /// joints, a housing or a motor's width beside it.
 const KINEMATIC_SHARE: f64 = 0.25;
 
-/// Each body's ellipsoid from the kinematic tree alone, for a description without geometry: the
+/// Body `i`'s ellipsoid from the kinematic tree alone, for a description without geometry: the
 /// box of its joint's origin, its children's joint origins and its centre of mass, enlarged
 /// by [`KINEMATIC_MARGIN`] plus [`KINEMATIC_SHARE`] of the segment's length, then scaled until
 /// the description's own body lies inside (`tr(JQ) ≥ 0`).
-fn kinematic_bounds(bodies: &[Body]) -> Vec<crate::spatial::Ellipsoid> {
-    (0..bodies.len())
-        .map(|i| {
-            let b = &bodies[i];
-            let m = b.inertia.mass();
-            let mut points = vec![Vector3::zeros()];
-            points.extend(
-                (bodies.iter())
-                    .filter(|c| c.parent == Some(i))
-                    .map(|c| c.x_tree.r),
-            );
-            if m > 0.0 {
-                points.push(b.inertia.h() / m);
-            }
-            let reach = points.iter().map(|p| p.norm()).fold(0.0, f64::max);
-            let mut e = crate::spatial::Ellipsoid::around_points(
-                &points,
-                KINEMATIC_MARGIN + KINEMATIC_SHARE * reach,
-            );
-            for _ in 0..40 {
-                match b.inertia.consistency(Some(&e)).trace_jq_per_mass {
-                    Some(t) if t < 0.0 => e = e.scaled(1.25),
-                    _ => break,
-                }
-            }
-            e
-        })
-        .collect()
+fn kinematic_bound(bodies: &[Body], i: usize) -> crate::spatial::Ellipsoid {
+    let b = &bodies[i];
+    let m = b.inertia.mass();
+    let mut points = vec![Vector3::zeros()];
+    points.extend(
+        (bodies.iter())
+            .filter(|c| c.parent == Some(i))
+            .map(|c| c.x_tree.r),
+    );
+    if m > 0.0 {
+        points.push(b.inertia.h() / m);
+    }
+    let reach = points.iter().map(|p| p.norm()).fold(0.0, f64::max);
+    let mut e = crate::spatial::Ellipsoid::around_points(
+        &points,
+        KINEMATIC_MARGIN + KINEMATIC_SHARE * reach,
+    );
+    for _ in 0..40 {
+        match b.inertia.consistency(Some(&e)).trace_jq_per_mass {
+            Some(t) if t < 0.0 => e = e.scaled(1.25),
+            _ => break,
+        }
+    }
+    e
 }
 
 /// A warning per revolute or prismatic joint whose `<limit>` gives `lower` and `upper` both and

@@ -484,22 +484,10 @@ fn largest_norm(e: &Ellipsoid, pieces: &[Piece]) -> Option<f64> {
 /// Grows `e` about its centre just enough to contain every piece exactly (closing the solver's
 /// tolerance): the largest `‖L (x − x_s)‖` over each piece, with `Lᵀ L = Q_s⁻¹`.
 fn enclose(e: Ellipsoid, pieces: &[Piece]) -> Ellipsoid {
-    let Some(l) =
-        e.qs.try_inverse()
-            .and_then(|qi| qi.cholesky())
-            .map(|c| c.l().transpose())
-    else {
+    let Some(worst) = largest_norm(&e, pieces) else {
         return e;
     };
-    let worst = pieces
-        .iter()
-        .map(|p| {
-            let (c, f) = p.center_and_span();
-            let g = l * (c - e.center);
-            let gf: Vec<Vector3<f64>> = f.iter().map(|v| l * v).collect();
-            max_norm_on_unit_ball(&g, &gf)
-        })
-        .fold(1.0, f64::max);
+    let worst = worst.max(1.0);
     Ellipsoid {
         center: e.center,
         qs: e.qs * (worst * worst),
