@@ -127,6 +127,7 @@ pub fn run(a: Args) -> anyhow::Result<()> {
     opts.validate().map_err(super::option_error)?;
     if let Some(dir) = &a.out {
         physid::io::check_result_dir(dir, &physid::io::scenario_files(&a.scenario))?;
+        physid::io::check_result_target(dir, physid::io::SCORES_MARK)?;
     }
     let (base, model, _) = physid::sim::scenario::load(&a.scenario)?;
     let diagnose_opts = opts.diagnose_options();
@@ -234,6 +235,7 @@ fn run_real(a: Args, robot: &str) -> anyhow::Result<()> {
             .chain(a.real.iter().cloned())
             .collect();
         physid::io::check_result_dir(dir, &inputs)?;
+        physid::io::check_result_target(dir, physid::io::SCORES_MARK)?;
     }
     let model = physid::io::load_robot(robot)?;
     let bases = semireal::bases(&model, &a.real, &opts)?;

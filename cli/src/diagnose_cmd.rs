@@ -83,6 +83,7 @@ pub fn run(a: Args) -> anyhow::Result<()> {
             .chain(o.files().iter().map(|p| p.to_path_buf()))
             .collect();
         physid::io::check_result_dir(dir, &inputs)?;
+        physid::io::check_result_target(dir, physid::diagnose::report::REPORT_MARK)?;
     }
     let outcome =
         diagnose_files(&model, &o, &mut |n| eprintln!("{n}")).map_err(super::option_error)?;

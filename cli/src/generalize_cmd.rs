@@ -61,6 +61,7 @@ pub fn run(a: Args) -> anyhow::Result<()> {
             )
             .collect();
         physid::io::check_result_dir(dir, &inputs)?;
+        physid::io::check_result_target(dir, physid::io::SCORES_MARK)?;
     }
     let temp = tempfile::tempdir()?;
     let work = a.keep_cases.clone().unwrap_or_else(|| temp.path().into());

@@ -1018,3 +1018,55 @@ fn a_result_folder_never_holds_or_replaces_an_input() {
     assert!(!ok && err.contains("folder of the input"), "{err}");
     assert_eq!(listing(&kuka), vec!["kuka_lwr4.urdf"]);
 }
+
+#[test]
+fn a_report_folder_is_written_whole_never_into_a_user_s_folder_or_a_missing_one() {
+    let dir = tempfile::tempdir().unwrap();
+    let s = |p: &Path| p.to_str().unwrap().to_string();
+    let k = root().join("data/kuka_lwr4");
+    let (urdf, m1) = (k.join("kuka_lwr4.urdf"), k.join("measurements_1.csv"));
+    let report = |out: &Path| {
+        physid(&[
+            "diagnose",
+            "--robot",
+            &s(&urdf),
+            "--data",
+            &s(&m1),
+            "--only",
+            "lwr_1_joint,lwr_3_joint",
+            "--report",
+            &s(out),
+        ])
+    };
+    // A folder of the user's own files: refused before the work, the files untouched.
+    let own = dir.path().join("mine");
+    std::fs::create_dir(&own).unwrap();
+    std::fs::write(own.join("report.md"), "my notes").unwrap();
+    let (ok, err) = report(&own);
+    assert!(
+        !ok && err.contains("is a folder physid did not write (no report.json)"),
+        "{err}"
+    );
+    assert_eq!(
+        std::fs::read_to_string(own.join("report.md")).unwrap(),
+        "my notes"
+    );
+    // A folder under one that does not exist: refused, nothing created.
+    let (ok, err) = report(&dir.path().join("missing/rep"));
+    assert!(!ok && err.contains("does not exist"), "{err}");
+    assert!(!dir.path().join("missing").exists());
+    // Written, then written again over itself: the same files, nothing left beside them.
+    let out = dir.path().join("rep");
+    for _ in 0..2 {
+        let (ok, err) = report(&out);
+        assert!(ok, "{err}");
+    }
+    let mut names: Vec<String> = std::fs::read_dir(dir.path())
+        .unwrap()
+        .flatten()
+        .map(|e| e.file_name().to_string_lossy().into_owned())
+        .collect();
+    names.sort();
+    assert_eq!(names, ["mine", "rep"]);
+    assert!(out.join("report.json").is_file() && out.join("report.html").is_file());
+}

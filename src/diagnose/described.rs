@@ -20,11 +20,7 @@ pub(crate) fn from_description(
     selection: &Selection,
     effects: &mut Vec<EffectEstimate>,
 ) -> Option<(Ladder, Vec<EffectEstimate>)> {
-    let selected: Vec<Variant> = selection
-        .chosen
-        .iter()
-        .map(|&v| stage.folds.variants[v])
-        .collect();
+    let selected = selected_or_tied(stage, selection);
     let eps = stage.opts.description_uncertainty?;
     let l = ladder::ladder(stage, eps, &selected, &stage.opts.ladder);
     let described = estimates(&l, stage);
@@ -34,6 +30,23 @@ pub(crate) fn from_description(
         }
     }
     Some((l, described))
+}
+
+/// The variants cross-validation chose and every variant of the kinds it could not tell
+/// from them (a step's `ambiguous_with`): the ladder weighs each against the description,
+/// where a tie of the re-identified model may part (an offset on every joint and
+/// direction-dependent friction tie when the friction is free, not when it is pinned at the
+/// description's).
+fn selected_or_tied(stage: &Stage, selection: &Selection) -> Vec<Variant> {
+    let variants = &stage.folds.variants;
+    let tied: Vec<_> = selection
+        .steps
+        .iter()
+        .flat_map(|s| s.ambiguous_with.iter().copied())
+        .collect();
+    let chosen = selection.chosen.iter().map(|&v| variants[v]);
+    let of_tied = variants.iter().filter(|v| tied.contains(&v.kind)).copied();
+    chosen.chain(of_tied).collect()
 }
 
 /// The explanations as the diagnosis's effect estimates (described by the description

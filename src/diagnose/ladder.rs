@@ -1140,6 +1140,7 @@ fn next_step(
     let tied = Ties::of(&reduction, &widths, |i| eligible[i], settings.tie);
     let p0 = problem.theta_d.len();
     let chosen = simplest_or_best(data, &scored, tied.simplest[0], p0);
+    let chosen = friction_where_tied(&scored, &tied.within, chosen);
     let (best, r, t, _) = scored[chosen];
     let (ties, also_fit) = tied_with(&scored, &tied, chosen, &widths, model);
     let unweighed = unweighed_beside(
@@ -1173,6 +1174,21 @@ fn simplest_or_best(data: &Data, scored: &[Scored], simplest: usize, p0: usize) 
     } else {
         0
     }
+}
+
+/// The friction re-identified in place of the `chosen` explanation where it is among the
+/// `tied` and fits practically as well ([`CLOSE_FIT`]): of the changes a real robot goes
+/// through, its friction's (temperature, wear, lubrication) is the likeliest, and a friction
+/// twice as strong on the KUKA's slow motion fitted as a 24 ms delay of the logged torque does
+/// (38.2 % and 37.7 % of the held-out mean square; generalization benchmark, seed 2, case 15),
+/// the delay kept for its one column. No injected delay, payload or other effect of the
+/// benchmarks had the friction in its tie.
+fn friction_where_tied(scored: &[Scored], tied: &[usize], chosen: usize) -> usize {
+    let left = |i: usize| (1.0 - scored[i].1).max(1e-12);
+    tied.iter()
+        .copied()
+        .find(|&i| scored[i].0 == Explanation::Friction && left(i) <= CLOSE_FIT * left(chosen))
+        .unwrap_or(chosen)
 }
 
 /// Two explanations fit practically alike when one leaves at most this many times the held-out

@@ -694,11 +694,18 @@ fn structure_left(d: &Diagnosis) -> Text {
 /// Writes `report.json`, `report.md`, `where.svg`, `spectrum.svg`, `how_far.svg` and
 /// `report.html` (self-contained: the verdict first, the report's tables, the plots inline) into
 /// `dir`.
+/// `dir` is replaced whole once every file is written (an earlier report, or an empty or new
+/// folder in an existing one: [`crate::io::check_result_target`]).
 pub fn write(dir: &Path, d: &Diagnosis) -> Result<(), ReportError> {
-    std::fs::create_dir_all(dir).map_err(|source| IoError::Fs {
-        path: dir.to_path_buf(),
-        source,
-    })?;
+    crate::io::check_result_target(dir, REPORT_MARK)?;
+    crate::io::write_result_dir(dir, REPORT_MARK, |staged| write_files(staged, d))
+}
+
+/// The file that marks a report folder.
+pub const REPORT_MARK: &str = "report.json";
+
+/// The report's files written into `dir`.
+fn write_files(dir: &Path, d: &Diagnosis) -> Result<(), ReportError> {
     let json = serde_json::to_string_pretty(&crate::io::versioned("diagnose", d))
         .expect("a diagnosis serializes");
     crate::io::write_atomic(&dir.join("report.json"), json.as_bytes())?;

@@ -743,7 +743,21 @@ pub fn write_blind(
     description: [f64; 2],
     wall: f64,
 ) -> Result<(), BlindError> {
-    crate::io::create_dir_all(dir)?;
+    crate::io::write_result_dir(dir, crate::io::SCORES_MARK, |staged| {
+        write_blind_files(staged, results, scores, seed, scenario, description, wall)
+    })
+}
+
+/// The files of [`write_blind`] written into `dir`.
+fn write_blind_files(
+    dir: &Path,
+    results: &[CaseResult],
+    scores: &Scores,
+    seed: u64,
+    scenario: &Path,
+    description: [f64; 2],
+    wall: f64,
+) -> Result<(), BlindError> {
     let mut df = case_table(results)?;
     tables::write_csv(&dir.join("cases.csv"), &mut df)?;
     tables::write_parquet(

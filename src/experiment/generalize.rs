@@ -601,8 +601,20 @@ pub fn write(
     command: &str,
     wall: f64,
 ) -> Result<(), semireal::RealError> {
+    crate::io::write_result_dir(dir, crate::io::SCORES_MARK, |staged| {
+        write_files(staged, cases, scores, command, wall)
+    })
+}
+
+/// The files of [`write`] written into `dir`.
+fn write_files(
+    dir: &Path,
+    cases: &[Case],
+    scores: &Scores,
+    command: &str,
+    wall: f64,
+) -> Result<(), semireal::RealError> {
     use polars::prelude::*;
-    crate::io::create_dir_all(dir)?;
     let real: Vec<RealCase> = cases.iter().map(|c| c.case.clone()).collect();
     let mut df = semireal::case_table(&real)?;
     df.insert_column(

@@ -1141,7 +1141,19 @@ pub fn write(
     command: &str,
     wall: f64,
 ) -> Result<(), RealError> {
-    crate::io::create_dir_all(dir)?;
+    crate::io::write_result_dir(dir, crate::io::SCORES_MARK, |staged| {
+        write_files(staged, results, scores, command, wall)
+    })
+}
+
+/// The files of [`write`] written into `dir`.
+fn write_files(
+    dir: &Path,
+    results: &[RealCase],
+    scores: &RealScores,
+    command: &str,
+    wall: f64,
+) -> Result<(), RealError> {
     let mut df = case_table(results)?;
     tables::write_csv(&dir.join("cases.csv"), &mut df)?;
     let per_kind = df

@@ -209,6 +209,65 @@ fn without_temp_path(e: &std::io::Error) -> String {
 /// replaced by a new result.
 pub const RESULT_MARK: &str = "provenance.json";
 
+/// The file every benchmark result folder (`blind --out`, `generalize --out`) holds.
+pub const SCORES_MARK: &str = "scores.json";
+
+/// Whether `target` can take a result folder marked by `mark`: absent, an empty folder, or an
+/// earlier result holding `mark` (a folder of the user's own files is never replaced).
+fn check_replaceable(target: &Path, mark: &str) -> Result<(), IoError> {
+    if target.exists() && !target.is_dir() {
+        return Err(IoError::invalid(
+            target,
+            "exists and is not a directory; give a directory for the results",
+        ));
+    }
+    let foreign = std::fs::read_dir(target)
+        .map(|mut entries| entries.next().is_some())
+        .unwrap_or(false)
+        && !target.join(mark).is_file();
+    if foreign {
+        return Err(IoError::invalid(
+            target,
+            format!(
+                "is a folder physid did not write (no {mark}), and a result replaces its folder whole; give a new or empty folder, or an earlier result to replace"
+            ),
+        ));
+    }
+    Ok(())
+}
+
+/// Checked before any work: `dir` can take a result folder marked by `mark`
+/// ([`StagingDir::marked`]) and its parent folder exists (an output's folder is never created
+/// on a typo).
+pub fn check_result_target(dir: &Path, mark: &str) -> Result<(), IoError> {
+    check_replaceable(dir, mark)?;
+    let parent = match dir.parent() {
+        Some(d) if !d.as_os_str().is_empty() => d,
+        _ => Path::new("."),
+    };
+    if !parent.is_dir() {
+        return Err(IoError::invalid(
+            dir,
+            format!("its folder {} does not exist", parent.display()),
+        ));
+    }
+    Ok(())
+}
+
+/// Writes a result folder whole: `write` fills a staging folder beside `dir` that replaces
+/// `dir` in one rename once complete ([`StagingDir::marked`]), so an interrupted run leaves the
+/// older result (or nothing), never a mix of two.
+pub fn write_result_dir<E: From<IoError>>(
+    dir: &Path,
+    mark: &str,
+    write: impl FnOnce(&Path) -> Result<(), E>,
+) -> Result<(), E> {
+    let staging = StagingDir::marked(dir, mark)?;
+    write(staging.path())?;
+    staging.commit()?;
+    Ok(())
+}
+
 /// A result directory built beside its final place and moved there whole by [`Self::commit`],
 /// so a reader never sees half a result or a mix of two runs: until the commit, the files live
 /// in a hidden `.NAME.partial-XXXX` directory beside the target (removed on drop, and by the
@@ -223,24 +282,13 @@ impl StagingDir {
     /// Stages a result for `target`, checking before any work that it can be written: `target`
     /// is a directory or absent, and its parent directory can hold a new one.
     pub fn new(target: &Path) -> Result<Self, IoError> {
-        if target.exists() && !target.is_dir() {
-            return Err(IoError::invalid(
-                target,
-                "exists and is not a directory; give a directory for the results",
-            ));
-        }
-        let foreign = std::fs::read_dir(target)
-            .map(|mut entries| entries.next().is_some())
-            .unwrap_or(false)
-            && !target.join(RESULT_MARK).is_file();
-        if foreign {
-            return Err(IoError::invalid(
-                target,
-                format!(
-                    "is a folder physid did not write (no {RESULT_MARK}), and a result replaces its folder whole; give a new or empty folder, or an earlier result to replace"
-                ),
-            ));
-        }
+        Self::marked(target, RESULT_MARK)
+    }
+
+    /// [`Self::new`] for a result whose folder holds `mark` (`report.json` for a diagnosis
+    /// report, `scores.json` for a benchmark): a non-empty folder without it is refused.
+    pub fn marked(target: &Path, mark: &str) -> Result<Self, IoError> {
+        check_replaceable(target, mark)?;
         let name = target
             .file_name()
             .ok_or_else(|| IoError::invalid(target, "has no directory name"))?
@@ -773,4 +821,55 @@ fn match_joints(
         )
     })?;
     Ok((matched, ignored))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn listing(dir: &Path) -> Vec<String> {
+        let mut names: Vec<String> = std::fs::read_dir(dir)
+            .unwrap()
+            .flatten()
+            .map(|e| e.file_name().to_string_lossy().into_owned())
+            .collect();
+        names.sort();
+        names
+    }
+
+    #[test]
+    fn a_result_folder_is_replaced_whole_or_not_at_all() {
+        let root = tempfile::tempdir().unwrap();
+        let out = root.path().join("res");
+        let write = |files: &[&str], fail_after: Option<usize>| {
+            write_result_dir(&out, "scores.json", |dir| {
+                for (i, f) in files.iter().enumerate() {
+                    if fail_after == Some(i) {
+                        return Err(IoError::invalid(dir, "cut short"));
+                    }
+                    write_atomic(&dir.join(f), f.as_bytes())?;
+                }
+                Ok(())
+            })
+        };
+        write(&["scores.json", "a.csv"], None).unwrap();
+        assert_eq!(listing(&out), ["a.csv", "scores.json"]);
+        // A run that fails after one file leaves the earlier result as it was.
+        assert!(write(&["scores.json", "b.csv"], Some(1)).is_err());
+        assert_eq!(listing(&out), ["a.csv", "scores.json"]);
+        assert_eq!(listing(root.path()), ["res"]);
+        // A complete run replaces it whole: nothing of the earlier one is left beside it.
+        write(&["scores.json", "b.csv"], None).unwrap();
+        assert_eq!(listing(&out), ["b.csv", "scores.json"]);
+        assert_eq!(listing(root.path()), ["res"]);
+        // A folder of the user's own files is never replaced; a missing parent is refused.
+        let own = root.path().join("own");
+        std::fs::create_dir(&own).unwrap();
+        std::fs::write(own.join("notes.md"), "mine").unwrap();
+        let e = check_result_target(&own, "scores.json").unwrap_err();
+        assert!(e.to_string().contains("no scores.json"), "{e}");
+        let e = check_result_target(&root.path().join("no/res"), "scores.json").unwrap_err();
+        assert!(e.to_string().contains("does not exist"), "{e}");
+        assert_eq!(listing(&own), ["notes.md"]);
+    }
 }
