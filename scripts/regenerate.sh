@@ -19,8 +19,9 @@ run() {
     excitation_kuka) "$B" experiment scenarios/excitation/compare_kuka.toml --out results/excitation_kuka ;;
     kuka_diagnosis)
       "$B" diagnose --robot $K/kuka_lwr4.urdf --data $K/measurements_1.csv $K/measurements_2.csv \
-        --validate $K/measurements_3.csv --report results/kuka_diagnosis > results/kuka_diagnosis/.diagnose.txt 2>&1
-      mv results/kuka_diagnosis/.diagnose.txt results/kuka_diagnosis/diagnose.txt ;;
+        --validate $K/measurements_3.csv --report results/kuka_diagnosis > results/.kuka_diagnosis.txt 2>&1
+      # The report folder is replaced whole by the command; its text joins it afterwards.
+      mv results/.kuka_diagnosis.txt results/kuka_diagnosis/diagnose.txt ;;
     blind) "$B" blind --cases 102 --seed 1 --out results/blind ;;
     blind_seed2) "$B" blind --cases 102 --seed 2 --out results/blind_seed2 ;;
     blind_real_seed1|blind_real_seed2|blind_real_baseline_seed1|blind_real_baseline_seed2)

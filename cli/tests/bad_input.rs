@@ -1070,3 +1070,31 @@ fn a_report_folder_is_written_whole_never_into_a_user_s_folder_or_a_missing_one(
     assert_eq!(names, ["mine", "rep"]);
     assert!(out.join("report.json").is_file() && out.join("report.html").is_file());
 }
+
+#[test]
+fn an_excitation_reference_too_large_for_memory_or_of_one_sample_is_refused_before_anything_is_written(
+) {
+    // Before: `--duration 1e5 --rate 1e5 --csv` aborted on allocation with the scenario
+    // already written; `--rate 0.01` wrote a one-sample CSV.
+    let dir = tempfile::tempdir().unwrap();
+    let (out, csv) = (dir.path().join("sc.toml"), dir.path().join("ref.csv"));
+    let s = |p: &Path| p.to_str().unwrap().to_string();
+    for (args, words) in [
+        (
+            ["--duration", "1e5", "--rate", "1e5"],
+            "samples of --csv/--mcap, about",
+        ),
+        (
+            ["--duration", "10", "--rate", "0.01"],
+            "--rate 0.01 Hz over --duration 10 s gives 1 samples of --csv/--mcap; give a rate of at least 0.9 Hz",
+        ),
+    ] {
+        let mut a = vec!["excite", "--robot", "cheetah3", "--iterations", "1"];
+        a.extend(args);
+        let (o, c) = (s(&out), s(&csv));
+        a.extend(["--out", &o, "--csv", &c]);
+        let (ok, err) = physid(&a);
+        assert!(!ok && err.contains(words), "{args:?}: {err}");
+        assert!(!out.exists() && !csv.exists(), "{args:?}: written");
+    }
+}

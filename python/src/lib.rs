@@ -348,17 +348,37 @@ fn identify_arrays<'py>(
 
 /// Runs `work` on its own thread with the GIL released, checking for Ctrl-C (and any other
 /// pending Python signal) every 50 ms: an interrupt raises `KeyboardInterrupt` at once, the
-/// abandoned work finishing in the background with its result dropped (the library has no
-/// cancellation point inside one solve; nothing it writes is touched by these calls).
+/// abandoned work finishing in the background with its result dropped. For work that writes
+/// files, use [`cancellable`].
 fn interruptible<T: Send + 'static>(
     py: Python<'_>,
     work: impl FnOnce() -> T + Send + 'static,
 ) -> PyResult<T> {
+    cancellable(py, move |_| work())
+}
+
+/// A flag set when the call that started a work was interrupted: the work asks it between its
+/// steps and before each write, and stops (nothing written after the exception was raised,
+/// beyond a file whose writing had already begun).
+type Cancel = std::sync::Arc<std::sync::atomic::AtomicBool>;
+
+/// Whether `cancel` is set.
+fn is_cancelled(cancel: &Cancel) -> bool {
+    cancel.load(std::sync::atomic::Ordering::SeqCst)
+}
+
+/// [`interruptible`], the work handed the flag an interrupt sets ([`Cancel`]).
+fn cancellable<T: Send + 'static>(
+    py: Python<'_>,
+    work: impl FnOnce(Cancel) -> T + Send + 'static,
+) -> PyResult<T> {
+    let cancel: Cancel = Default::default();
+    let flag = cancel.clone();
     let (tx, rx) = std::sync::mpsc::channel();
     std::thread::Builder::new()
         .name("physid".into())
         .spawn(move || {
-            let _ = tx.send(work());
+            let _ = tx.send(work(flag));
         })
         .map_err(|e| value_error(format!("could not start a worker thread: {e}")))?;
     let mut rx = rx;
@@ -368,7 +388,12 @@ fn interruptible<T: Send + 'static>(
         rx = back;
         match got {
             Ok(out) => return Ok(out),
-            Err(std::sync::mpsc::RecvTimeoutError::Timeout) => py.check_signals()?,
+            Err(std::sync::mpsc::RecvTimeoutError::Timeout) => {
+                if let Err(interrupt) = py.check_signals() {
+                    cancel.store(true, std::sync::atomic::Ordering::SeqCst);
+                    return Err(interrupt);
+                }
+            }
             Err(std::sync::mpsc::RecvTimeoutError::Disconnected) => {
                 return Err(pyo3::exceptions::PyRuntimeError::new_err(
                     "physid's worker thread panicked: please report this with its input",
@@ -1202,7 +1227,7 @@ fn excite_from(
 /// simulation, sensors and processing are kept. Keywords are the CLI's flags. The design is
 /// simulated to check the robot's limits (`check=False` skips it); the scenario (`out`) and
 /// the reference trajectory (`csv`, `mcap`) are written only when it stays within them, never
-/// over an input. Ctrl-C interrupts it.
+/// over an input. Ctrl-C stops it: nothing is written after the interrupt.
 #[pyfunction]
 #[pyo3(signature = (robot = None, *, scenario = None, duration = 20.0, harmonics = 5,
     base_frequency = 0.5, objective = "d-optimal", seed = 1, iterations = 1000, starts = 4,
@@ -1253,9 +1278,11 @@ fn excite(
         check,
     };
     let pool = thread_pool(threads)?;
-    let (result, notices) = interruptible(py, move || {
+    let (result, notices) = cancellable(py, move |cancel| {
         let mut notices = vec![];
-        let result = pool.install(|| api::excite::excite(&opts, &mut |n| notices.push(n)));
+        let stop = || is_cancelled(&cancel);
+        let result =
+            pool.install(|| api::excite::excite_until(&opts, &mut |n| notices.push(n), &stop));
         (result, notices)
     })?;
     warn(py, &notices)?;
@@ -1319,7 +1346,7 @@ fn score_motion<'py>(
 /// processed samples as CSV at `csv`), as `physid simulate` does: `engine` (`"physid"` or
 /// `"rapier"`), `duration` (s) and `seed` override the scenario's. `progress`, if given, is
 /// called with the fraction done (0 to 1, at most every percent), e.g. to drive a tqdm bar.
-/// Outputs never replace an input (the scenario, its robot's files). Ctrl-C interrupts it.
+/// Outputs never replace an input (the scenario, its robot's files). Ctrl-C stops the run (within a percent of it) and nothing is written.
 #[pyfunction]
 #[pyo3(signature = (scenario, out, *, csv = None, engine = None, duration = None, seed = None,
     progress = None))]
@@ -1356,7 +1383,8 @@ fn simulate(
         seed,
     };
     let (path, log, table) = (scenario.clone(), out.clone(), csv.clone());
-    let (result, callback_error) = interruptible(py, move || {
+    let (result, callback_error) = cancellable(py, move |cancel| {
+        let stop = || is_cancelled(&cancel);
         let mut shown = -1.0;
         let mut failed: Option<PyErr> = None;
         let mut report = |f: f64| {
@@ -1369,9 +1397,15 @@ fn simulate(
                 failed = Some(e);
             }
         };
-        let run = api::simulate::simulate(&path, &opts, &mut report).and_then(|run| {
+        let run = api::simulate::simulate_until(&path, &opts, &mut report, &stop).and_then(|run| {
+            if stop() {
+                return Err(api::ApiError::Cancelled);
+            }
             run.write_mcap(&log)?;
             if let Some(c) = &table {
+                if stop() {
+                    return Err(api::ApiError::Cancelled);
+                }
                 run.write_csv(c)?;
             }
             Ok(run)
@@ -1622,7 +1656,7 @@ impl Sweep {
 /// with the constraint sets, written to `out` (default `results/<sweep name>`), resumable
 /// (finished cells are skipped) and shardable (`shard=(k, n)`: the cells with index ≡ k mod
 /// n); merged once every cell is there. `progress(done, total)` is called after each cell.
-/// Ctrl-C interrupts it (finished cells stay).
+/// Ctrl-C stops it: the cells finished stay, none is written after the interrupt and nothing is merged.
 #[pyfunction]
 #[pyo3(signature = (sweep, *, out = None, shard = None, threads = None, progress = None))]
 fn sweep(
@@ -1635,7 +1669,8 @@ fn sweep(
 ) -> PyResult<Sweep> {
     let opts = api::sweep::SweepOptions { sweep, out, shard };
     let pool = thread_pool(threads)?;
-    let (result, failed) = interruptible(py, move || {
+    let (result, failed) = cancellable(py, move |cancel| {
+        let stop = || is_cancelled(&cancel);
         let failed: std::sync::Mutex<Option<PyErr>> = std::sync::Mutex::new(None);
         let result = api::sweep::plan(&opts).and_then(|plan| {
             let done = std::sync::atomic::AtomicUsize::new(0);
@@ -1649,7 +1684,10 @@ fn sweep(
                     }
                 }
             };
-            pool.install(|| plan.run(&report))?;
+            pool.install(|| plan.run_until(&report, &stop))?;
+            if stop() {
+                return Err(api::ApiError::Cancelled);
+            }
             let merged = plan.merge()?;
             Ok((plan, merged))
         });

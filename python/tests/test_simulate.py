@@ -138,3 +138,40 @@ def test_the_integrator_is_the_scenario_s_and_named_in_the_report(tmp_path):
     with pytest.raises(ValueError, match="simulation.integrator.*rapier"):
         physid.simulate(scenario("ralston3", 1), str(tmp_path / "r.mcap"), engine="rapier")
     assert not (tmp_path / "r.mcap").exists()
+
+
+def interrupted(call, after=0.3):
+    """`call()` interrupted by a Ctrl-C `after` seconds in (KeyboardInterrupt expected)."""
+    import _thread
+    import signal
+    import threading
+
+    previous = signal.signal(signal.SIGINT, signal.default_int_handler)
+    timer = threading.Timer(after, _thread.interrupt_main)
+    timer.start()
+    try:
+        with pytest.raises(KeyboardInterrupt):
+            call()
+    finally:
+        timer.cancel()
+        signal.signal(signal.SIGINT, previous)
+
+
+def test_an_interrupted_simulation_stops_and_writes_nothing(tmp_path):
+    # Before: the abandoned run kept going and wrote its log seconds later, over the file of
+    # the next call.
+    import time
+
+    from test_identify import physid_workers
+
+    out, csv = tmp_path / "long.mcap", tmp_path / "long.csv"
+    interrupted(lambda: physid.simulate(SHELL, str(out), csv=str(csv), duration=100.0))
+    # The worker stops at its next progress report (a percent of the run) ...
+    for _ in range(400):
+        if not physid_workers():
+            break
+        time.sleep(0.05)
+    assert physid_workers() == []
+    # ... and wrote nothing.
+    assert not out.exists() and not csv.exists()
+    assert [p.name for p in tmp_path.iterdir()] == []

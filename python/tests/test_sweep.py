@@ -61,3 +61,30 @@ def test_bad_sweeps_are_named(tmp_path):
     with pytest.raises(ValueError, match="torque_noise"):
         physid.sweep(str(bad), out=str(tmp_path / "r2"))
     assert not (tmp_path / "r2").exists() or not any((tmp_path / "r2").rglob("*.parquet"))
+
+
+def test_an_interrupted_sweep_writes_no_cell_after_and_does_not_merge(tmp_path):
+    # Before: the abandoned sweep still ran every cell and merged the tables.
+    import time
+
+    from test_identify import physid_workers
+    from test_simulate import interrupted
+
+    s = sweep_file(tmp_path)
+    out = tmp_path / "res"
+
+    def cells():
+        return sorted(p.name for p in (out / "cells").glob("*.parquet"))
+
+    interrupted(lambda: physid.sweep(s, out=str(out), threads=1), after=0.2)
+    for _ in range(600):
+        if not physid_workers():
+            break
+        time.sleep(0.05)
+    assert physid_workers() == []
+    written = len(cells())
+    assert written < 4, cells()
+    assert not (out / "rows.csv").exists() and not (out / "summary.md").exists()
+    # Run again: the sweep resumes from the cells written, runs the rest and merges.
+    done = physid.sweep(s, out=str(out), threads=1)
+    assert done.merged and done.cells["ran"] == 4 - written

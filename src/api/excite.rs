@@ -219,7 +219,36 @@ impl ExciteOptions {
                 self.rate,
             ));
         }
+        if self.csv.is_some() || self.mcap.is_some() {
+            self.check_reference_size()?;
+        }
         Ok(())
+    }
+
+    /// The reference trajectory `--csv`/`--mcap` would hold: at least [`MIN_REFERENCE`]
+    /// samples, and within the memory available (it is built whole before it is written).
+    fn check_reference_size(&self) -> Result<(), ApiError> {
+        let samples = (self.duration * self.rate).round() + 1.0;
+        if samples < MIN_REFERENCE as f64 {
+            return Err(ApiError::Options(format!(
+                "--rate {} Hz over --duration {} s gives {samples} samples of --csv/--mcap; give a rate of at least {} Hz",
+                self.rate,
+                self.duration,
+                (MIN_REFERENCE as f64 - 1.0) / self.duration
+            )));
+        }
+        // t and q, q̇, q̈, τ per joint (at most a few dozen joints), as numbers and as text.
+        let needed = samples * (1.0 + 4.0 * REFERENCE_JOINTS_BOUND) * 8.0 * 3.0;
+        match crate::io::available_memory() {
+            Some(bytes) if needed > bytes => Err(ApiError::Options(format!(
+                "--rate {} Hz over --duration {} s gives {samples:.3e} samples of --csv/--mcap, about {:.1} GB to build, where {:.1} GB are available; lower --rate or --duration",
+                self.rate,
+                self.duration,
+                needed / 1e9,
+                bytes / 1e9
+            ))),
+            _ => Ok(()),
+        }
     }
 
     /// The design's settings for `model`, its rate limits defaulted from the description
@@ -307,6 +336,16 @@ pub fn excite(
     opts: &ExciteOptions,
     notify: &mut dyn FnMut(Notice),
 ) -> Result<Excitation, ApiError> {
+    excite_until(opts, notify, &|| false)
+}
+
+/// [`excite`], ending with [`ApiError::Cancelled`] and nothing written once `stop` returns
+/// true (asked after the design and after its check in simulation).
+pub fn excite_until(
+    opts: &ExciteOptions,
+    notify: &mut dyn FnMut(Notice),
+    stop: &dyn Fn() -> bool,
+) -> Result<Excitation, ApiError> {
     opts.validate()?;
     let base = ExciteBase::load(&opts.from, notify)?;
     let DesignSettings {
@@ -342,6 +381,9 @@ pub fn excite(
     } else {
         None
     };
+    if stop() {
+        return Err(ApiError::Cancelled);
+    }
     let written = if check.as_ref().is_none_or(|c| c.within) {
         write_design(opts, &base.model, &d, &scenario)?
     } else {
@@ -357,27 +399,36 @@ pub fn excite(
     })
 }
 
+/// The fewest samples a reference trajectory (`--csv`, `--mcap`) is written with.
+pub const MIN_REFERENCE: usize = 10;
+
+/// Joints the reference's memory check allows for (the design's robot is not loaded yet when
+/// the options are checked; a robot with more joints is still written, at a proportionally
+/// larger size).
+const REFERENCE_JOINTS_BOUND: f64 = 12.0;
+
 /// Writes the designed `scenario` (`--out`) and its reference trajectory (`--csv`, `--mcap`,
-/// sampled once for both); the scenario's path when written.
+/// sampled once for both, before anything is written); the scenario's path when written.
 fn write_design(
     opts: &ExciteOptions,
     model: &Model,
     d: &design::Design,
     scenario: &str,
 ) -> Result<Option<PathBuf>, ApiError> {
+    let reference = (opts.csv.is_some() || opts.mcap.is_some())
+        .then(|| reference_trajectory(model, &d.series, opts.duration, opts.rate));
+    if let Some(reference) = &reference {
+        if let Some(p) = &opts.csv {
+            crate::io::samples::write_reference_csv(p, reference)?;
+        }
+        if let Some(p) = &opts.mcap {
+            crate::io::mcap_log::write_reference(p, reference)?;
+        }
+    }
     let mut written = None;
     if let Some(out) = &opts.out {
         crate::io::write_atomic(out, scenario.as_bytes())?;
         written = Some(out.clone());
-    }
-    if opts.csv.is_some() || opts.mcap.is_some() {
-        let reference = reference_trajectory(model, &d.series, opts.duration, opts.rate);
-        if let Some(p) = &opts.csv {
-            crate::io::samples::write_reference_csv(p, &reference)?;
-        }
-        if let Some(p) = &opts.mcap {
-            crate::io::mcap_log::write_reference(p, &reference)?;
-        }
     }
     Ok(written)
 }

@@ -105,6 +105,9 @@ pub enum ApiError {
     /// An option's value is not valid (the message names the option).
     #[error("{0}")]
     Options(String),
+    /// Stopped by its caller before the end (Python's Ctrl-C): nothing more was written.
+    #[error("cancelled")]
+    Cancelled,
     /// A file's content is not what the option needs.
     #[error("{}: {message}", path.display())]
     Invalid {

@@ -79,6 +79,16 @@ pub fn simulate(
     opts: &SimulateOptions,
     progress: &mut dyn FnMut(f64),
 ) -> Result<Simulation, ApiError> {
+    simulate_until(path, opts, progress, &|| false)
+}
+
+/// [`simulate`], ended early once `stop` returns true ([`crate::sim::run_until`]).
+pub fn simulate_until(
+    path: &Path,
+    opts: &SimulateOptions,
+    progress: &mut dyn FnMut(f64),
+    stop: &dyn Fn() -> bool,
+) -> Result<Simulation, ApiError> {
     let (mut scenario, model, scenario_text) = crate::sim::scenario::load(path)?;
     if let Some(e) = opts.engine {
         scenario.simulation.engine = e;
@@ -90,11 +100,12 @@ pub fn simulate(
         scenario.simulation.seed = s;
     }
     let start = std::time::Instant::now();
-    let recording =
-        crate::sim::run(&model, &scenario, progress).map_err(|source| ApiError::Simulation {
+    let recording = crate::sim::run_until(&model, &scenario, progress, stop).map_err(|source| {
+        ApiError::Simulation {
             path: path.to_path_buf(),
             source,
-        })?;
+        }
+    })?;
     Ok(Simulation {
         path: path.to_path_buf(),
         scenario,

@@ -142,7 +142,25 @@ impl SweepPlan {
     /// Runs the cells still to do, in parallel in the current rayon pool; `done()` is called
     /// after each cell is written.
     pub fn run(&self, done: &(dyn Fn() + Sync)) -> Result<(), ApiError> {
+        self.run_until(done, &|| false)
+    }
+
+    /// [`Self::run`], ending with [`ApiError::Cancelled`] once `stop` returns true: asked
+    /// before each cell and before its file is written, so no cell is written after it.
+    pub fn run_until(
+        &self,
+        done: &(dyn Fn() + Sync),
+        stop: &(dyn Fn() -> bool + Sync),
+    ) -> Result<(), ApiError> {
+        let cancelled = || {
+            if stop() {
+                Err(ApiError::Cancelled)
+            } else {
+                Ok(())
+            }
+        };
         self.todo.par_iter().try_for_each(|&i| {
+            cancelled()?;
             let c = &self.cells[i];
             let cell_error = |source| ApiError::Cell {
                 id: c.id(),
@@ -156,6 +174,7 @@ impl SweepPlan {
                 .map(|(k, v)| (k.clone(), sweep::value_text(v)))
                 .collect();
             let mut df = tables::with_constants(tables::long_table(&rows, &self.joints)?, &consts)?;
+            cancelled()?;
             tables::write_parquet(&self.cell_file(c), &mut df)?;
             done();
             Ok(())

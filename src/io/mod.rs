@@ -351,6 +351,17 @@ impl StagingDir {
     }
 }
 
+/// The memory available to a new allocation (bytes; Linux's `MemAvailable`, `None` where it
+/// cannot be read).
+pub fn available_memory() -> Option<f64> {
+    std::fs::read_to_string("/proc/meminfo").ok().and_then(|m| {
+        m.lines()
+            .find_map(|l| l.strip_prefix("MemAvailable:"))
+            .and_then(|v| v.trim().trim_end_matches("kB").trim().parse::<f64>().ok())
+            .map(|kb| kb * 1024.0)
+    })
+}
+
 /// Creates a directory and its parents, naming it on failure.
 pub fn create_dir_all(dir: &Path) -> Result<(), IoError> {
     std::fs::create_dir_all(dir).map_err(|source| IoError::Fs {

@@ -18,7 +18,18 @@ pub fn run(
     scenario: &scenario::Scenario,
     progress: &mut dyn FnMut(f64),
 ) -> Result<crate::trajectory::Recording, simulate::SimError> {
-    simulate::simulate(model, scenario, progress)
+    simulate::simulate(model, scenario, progress, &|| false)
+}
+
+/// [`run`], ended early with [`simulate::SimError::Cancelled`] once `stop` returns true (asked
+/// about a hundred times in a run).
+pub fn run_until(
+    model: &Model,
+    scenario: &scenario::Scenario,
+    progress: &mut dyn FnMut(f64),
+    stop: &dyn Fn() -> bool,
+) -> Result<crate::trajectory::Recording, simulate::SimError> {
+    simulate::simulate(model, scenario, progress, stop)
 }
 
 /// A joint-torque law `τ(t, q, q̇)` (N m).

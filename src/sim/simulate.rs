@@ -62,6 +62,12 @@ pub enum SimError {
     /// The other engine refused the model.
     #[error("{0}")]
     Engine(String),
+    /// Stopped by its caller (`stop` returned true) before the end: nothing is returned.
+    #[error("cancelled at t = {t:.3} s")]
+    Cancelled {
+        /// Time reached (s).
+        t: f64,
+    },
 }
 
 /// Joint torque limit for the motor torque-speed curve: at motor speed `ω = N q̇`, a motor with
@@ -84,10 +90,14 @@ fn back_emf_limit(tau: f64, qd: f64, n: f64, kt: f64, r: f64, v: f64) -> f64 {
 /// The processed signals are wrong near the ends of the recording (the zero-phase filters'
 /// one-sided differences and padding, [`settle_samples`] at each end): a fit or a score should
 /// leave those samples out, as the sample-size experiment does.
+///
+/// `stop` is asked at each progress report: when it returns true the run ends with
+/// [`SimError::Cancelled`].
 pub fn simulate(
     model: &Model,
     scenario: &Scenario,
     progress: &mut dyn FnMut(f64),
+    stop: &dyn Fn() -> bool,
 ) -> Result<Recording, SimError> {
     let n = model.dof();
     scenario.validate(n)?;
@@ -110,7 +120,7 @@ pub fn simulate(
     let loads = Loads { model, scenario };
     // Each period's command, delivered torque and effect torques (N m), reused.
     let (mut cmd, mut tau_mot, mut fx) = (vec![0.0; n], vec![0.0; n], vec![0.0; n]);
-    let mut last_report = 0usize;
+    let mut report = Report { samples, done: 0 };
     for k in 0..samples {
         let t = k as f64 / s.rate;
         let (q, qd) = engine.state();
@@ -128,10 +138,7 @@ pub fn simulate(
         sensors.log(&tau_mot);
         logs.measured(t, &sensors);
         check_state(model, engine.as_ref(), t + dt, s.max_speed)?;
-        if k * 100 / samples > last_report {
-            last_report = k * 100 / samples;
-            progress(k as f64 / samples as f64);
-        }
+        report.tick(k, t, progress, stop)?;
     }
     progress(1.0);
     let Logs {
@@ -331,6 +338,35 @@ impl<'a> SensorChain<'a> {
     }
 }
 
+/// A run's progress, reported to its caller at each percent.
+struct Report {
+    samples: usize,
+    /// Percent reported so far.
+    done: usize,
+}
+
+impl Report {
+    /// After sample `k` (time `t`, s): `progress(fraction)` at each new percent, then the end
+    /// ([`SimError::Cancelled`]) where `stop` says so.
+    fn tick(
+        &mut self,
+        k: usize,
+        t: f64,
+        progress: &mut dyn FnMut(f64),
+        stop: &dyn Fn() -> bool,
+    ) -> Result<(), SimError> {
+        let percent = k * 100 / self.samples;
+        if percent > self.done {
+            self.done = percent;
+            progress(k as f64 / self.samples as f64);
+            if stop() {
+                return Err(SimError::Cancelled { t });
+            }
+        }
+        Ok(())
+    }
+}
+
 /// Samples the offline processing ([`process`]) needs at each end before what it derives has
 /// settled: the filter's settling length for q̈ (two cascaded derivations), 2 for plain
 /// differences.
@@ -352,13 +388,7 @@ const ARRAYS_PER_SAMPLE: usize = 24;
 /// `MemAvailable`; unchecked where it cannot be read).
 fn check_memory(samples: usize, joints: usize) -> Result<(), SimError> {
     let needed = (samples as f64) * (joints.max(1) * ARRAYS_PER_SAMPLE * 8 + 8) as f64;
-    let available = std::fs::read_to_string("/proc/meminfo").ok().and_then(|m| {
-        m.lines()
-            .find_map(|l| l.strip_prefix("MemAvailable:"))
-            .and_then(|v| v.trim().trim_end_matches("kB").trim().parse::<f64>().ok())
-            .map(|kb| kb * 1024.0)
-    });
-    match available {
+    match crate::io::available_memory() {
         Some(bytes) if needed > bytes => Err(SimError::TooLarge {
             samples,
             joints,
