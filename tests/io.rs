@@ -393,3 +393,30 @@ fn a_description_without_geometry_is_bounded_by_its_kinematic_tree() {
     let (m, _) = physid::io::load_robot_with(so100.to_str().unwrap(), &opts).unwrap();
     assert!(m.bodies().iter().all(|b| b.bounding.is_none()));
 }
+
+#[test]
+fn a_csv_header_with_a_column_twice_or_a_numbered_gap_is_refused_naming_it() {
+    let dir = tempfile::tempdir().unwrap();
+    let model = physid::model::cheetah3::leg();
+    let names = model.joint_names();
+    for (header, words) in [
+        (
+            "t,q1,q1,q3,tau1,tau2,tau3",
+            "column q1 appears twice (columns 2 and 3, counting from 1)",
+        ),
+        (
+            "t,q1,q3,tau1,tau2,tau3",
+            "column q3 without q2: numbered columns run q1..qn without a gap",
+        ),
+    ] {
+        let path = dir.path().join("h.csv");
+        std::fs::write(
+            &path,
+            format!("{header}\n0,0,0,0,0,0,0\n0.001,0,0,0,0,0,0\n"),
+        )
+        .unwrap();
+        let e = physid::io::samples::read_csv(&path, Some(&names)).unwrap_err();
+        assert!(e.to_string().contains(words), "{header}: {e}");
+        assert!(e.to_string().contains("h.csv"), "{e}");
+    }
+}

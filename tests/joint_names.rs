@@ -286,6 +286,30 @@ fn a_rosbag2_directory_split_in_two_files_on_another_topic_reads_whole() {
     let from_db = read(&db_bag, &model, &opts).0;
     assert_eq!(from_db.q, measured.q);
     assert_eq!(from_db.tau, measured.tau);
+    // A message stored as text, and the database compressed whole: each named.
+    let saved = std::fs::read(&db).unwrap();
+    let conn = rusqlite::Connection::open(&db).unwrap();
+    conn.execute(
+        "UPDATE messages SET data = CAST(data AS TEXT) WHERE id = 3",
+        [],
+    )
+    .unwrap();
+    drop(conn);
+    let err = io::load_trajectory_with(&db_bag, &model, &opts)
+        .unwrap_err()
+        .to_string();
+    assert!(
+        err.contains("run_sqlite_0.db3") && err.contains("message 2: its data column holds text"),
+        "{err}"
+    );
+    let mut zstd = vec![0x28, 0xb5, 0x2f, 0xfd];
+    zstd.extend_from_slice(&saved[..64]);
+    std::fs::write(&db, &zstd).unwrap();
+    let err = io::load_trajectory_with(&db_bag, &model, &opts)
+        .unwrap_err()
+        .to_string();
+    assert!(err.contains("is zstd-compressed"), "{err}");
+    std::fs::write(&db, &saved).unwrap();
     // A storage physid cannot read is named.
     std::fs::write(
         db_bag.join("metadata.yaml"),

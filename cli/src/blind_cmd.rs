@@ -10,10 +10,10 @@ use std::path::PathBuf;
 pub struct Args {
     /// Number of cases (categories cycle: 4 clean, one per single effect the library draws, 1
     /// with two effects, 1 out of the library, 2 changed robots; 21 slots).
-    #[arg(long, default_value_t = 102)]
+    #[arg(allow_negative_numbers = true, long, default_value_t = 102)]
     cases: usize,
     /// Seed of every draw.
-    #[arg(long, default_value_t = 1)]
+    #[arg(allow_negative_numbers = true, long, default_value_t = 1)]
     seed: u64,
     /// Base scenario (robot, excitation, sensors).
     #[arg(long, default_value = "scenarios/blind.toml")]
@@ -22,7 +22,7 @@ pub struct Args {
     #[arg(long)]
     out: Option<PathBuf>,
     /// Worker threads (0 = all cores).
-    #[arg(long, default_value_t = 0)]
+    #[arg(allow_negative_numbers = true, long, default_value_t = 0)]
     threads: usize,
     /// Relative error drawn into each case's description's inertial parameters (default 0.1;
     /// not with --real, whose descriptions are identified from real runs).
@@ -41,7 +41,7 @@ pub struct Args {
     #[arg(long)]
     keep_cases: Option<PathBuf>,
     /// Run only these cases (numbers below --cases, comma-separated); the scores cover them.
-    #[arg(long, value_delimiter = ',')]
+    #[arg(allow_negative_numbers = true, long, value_delimiter = ',')]
     only: Vec<usize>,
     /// Semi-real benchmark: real runs of the robot `--real-robot` (CSV, MCAP or rosbag2 with
     /// q̇ and q̈; at least two), each case one of them with a change injected and a

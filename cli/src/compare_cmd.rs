@@ -23,21 +23,21 @@ pub struct Args {
     #[arg(long)]
     metric: Option<String>,
     /// Relative tolerance of the median ratio (default 0.05).
-    #[arg(long)]
+    #[arg(allow_negative_numbers = true, long)]
     tolerance: Option<f64>,
     /// One-sided level of the signed-rank test (default 0.01).
-    #[arg(long)]
+    #[arg(allow_negative_numbers = true, long)]
     alpha: Option<f64>,
     /// Fewest seed pairs a group needs to be able to fail (default 6; raised to what --alpha
     /// needs: the exact test's smallest p on n pairs is 2^-n, so 7 at 0.01).
-    #[arg(long)]
+    #[arg(allow_negative_numbers = true, long)]
     min_pairs: Option<usize>,
     /// Let groups with too few pairs to reach --alpha pass (by default they fail the run with
     /// exit 2: a group that cannot fail is not a pass).
     #[arg(long)]
     allow_too_few: bool,
     /// Only groups with n_s at most this.
-    #[arg(long)]
+    #[arg(allow_negative_numbers = true, long)]
     max_n_s: Option<u64>,
     /// TOML with any of metric, tolerance, alpha, min_pairs, max_n_s (flags override it).
     #[arg(long)]

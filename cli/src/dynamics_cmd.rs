@@ -15,10 +15,10 @@ pub struct Args {
     #[command(flatten)]
     robot: RobotArgs,
     /// Number of random states (at most 100,000).
-    #[arg(long, default_value_t = 20, value_parser = clap::value_parser!(u64).range(1..=100_000))]
+    #[arg(allow_negative_numbers = true, long, default_value_t = 20, value_parser = clap::value_parser!(u64).range(1..=100_000))]
     samples: u64,
     /// Random seed.
-    #[arg(long, default_value_t = 1)]
+    #[arg(allow_negative_numbers = true, long, default_value_t = 1)]
     seed: u64,
     /// Range of the random joint positions, velocities and accelerations (±).
     #[arg(long, default_value_t = 2.0, allow_negative_numbers = true)]

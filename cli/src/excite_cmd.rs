@@ -23,28 +23,28 @@ pub struct Args {
     #[arg(long)]
     robot: Option<String>,
     /// Duration of the written scenario (s).
-    #[arg(long, default_value_t = 20.0)]
+    #[arg(allow_negative_numbers = true, long, default_value_t = 20.0)]
     duration: f64,
     /// Harmonics per joint.
-    #[arg(long, default_value_t = 5)]
+    #[arg(allow_negative_numbers = true, long, default_value_t = 5)]
     harmonics: usize,
     /// Fundamental frequency (Hz): the motion repeats every 1/f s.
-    #[arg(long, default_value_t = 0.5)]
+    #[arg(allow_negative_numbers = true, long, default_value_t = 0.5)]
     base_frequency: f64,
     /// What is maximized.
     #[arg(long, value_enum, default_value = "d-optimal")]
     objective: ObjectiveArg,
     /// Seed of the random starts and steps.
-    #[arg(long, default_value_t = 1)]
+    #[arg(allow_negative_numbers = true, long, default_value_t = 1)]
     seed: u64,
     /// Optimization steps per start (0: a random excitation scaled into the limits).
-    #[arg(long, default_value_t = 1000)]
+    #[arg(allow_negative_numbers = true, long, default_value_t = 1000)]
     iterations: usize,
     /// Random starts (in parallel; the best is kept).
-    #[arg(long, default_value_t = 4)]
+    #[arg(allow_negative_numbers = true, long, default_value_t = 4)]
     starts: usize,
     /// Fraction of every limit left free.
-    #[arg(long, default_value_t = 0.15)]
+    #[arg(allow_negative_numbers = true, long, default_value_t = 0.15)]
     margin: f64,
     /// Acceleration limit (rad/s²): one for every joint, or one per joint separated by commas.
     /// Default: the description's (a URDF `<limit acceleration=…>`, a robot TOML's
@@ -71,7 +71,7 @@ pub struct Args {
     #[arg(long, default_value_t = 1000.0, allow_negative_numbers = true)]
     rate: f64,
     /// Samples per period at which the information is evaluated.
-    #[arg(long, default_value_t = 200)]
+    #[arg(allow_negative_numbers = true, long, default_value_t = 200)]
     samples: usize,
     /// Write the scenario here (TOML); it must not exist as an input of this run.
     #[arg(long)]
@@ -87,7 +87,7 @@ pub struct Args {
     #[arg(long, requires = "scenario")]
     score: bool,
     /// Worker threads (0 = all cores). Results do not depend on it.
-    #[arg(long, default_value_t = 0)]
+    #[arg(allow_negative_numbers = true, long, default_value_t = 0)]
     threads: usize,
 }
 

@@ -15,10 +15,10 @@ pub struct Args {
     #[arg(long, default_value = "results/sample_size")]
     out: PathBuf,
     /// Override the number of seeds.
-    #[arg(long)]
+    #[arg(allow_negative_numbers = true, long)]
     seeds: Option<usize>,
     /// Worker threads (default: all cores). Results do not depend on it.
-    #[arg(long)]
+    #[arg(allow_negative_numbers = true, long)]
     threads: Option<usize>,
 }
 

@@ -18,7 +18,12 @@ pub struct Args {
     #[arg(long, default_value_t = 22, allow_negative_numbers = true)]
     cases: usize,
     /// Seeds: each draws another real robot and other runs per robot.
-    #[arg(long, value_delimiter = ',', default_value = "1")]
+    #[arg(
+        allow_negative_numbers = true,
+        long,
+        value_delimiter = ',',
+        default_value = "1"
+    )]
     seeds: Vec<u64>,
     /// The description's relative uncertainty the diagnosis is told.
     #[arg(long, default_value_t = 0.05, allow_negative_numbers = true)]
@@ -30,7 +35,7 @@ pub struct Args {
     #[arg(long)]
     keep_cases: Option<PathBuf>,
     /// Worker threads (0 = all cores).
-    #[arg(long, default_value_t = 0)]
+    #[arg(allow_negative_numbers = true, long, default_value_t = 0)]
     threads: usize,
 }
 

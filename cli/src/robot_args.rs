@@ -18,7 +18,7 @@ pub struct RobotArgs {
     no_rotors: bool,
     /// URDF robots: lengthen every semi-axis of the bounding ellipsoids computed from the
     /// geometry by this much (m).
-    #[arg(long, value_name = "M")]
+    #[arg(allow_negative_numbers = true, long, value_name = "M")]
     ellipsoid_margin: Option<f64>,
     /// URDF robots: a folder holding ROS packages, for `package://` meshes (repeatable; the
     /// URDF's own folders and ROS_PACKAGE_PATH are searched first).

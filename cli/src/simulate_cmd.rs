@@ -22,7 +22,7 @@ pub struct Args {
     #[arg(long, allow_negative_numbers = true)]
     duration: Option<f64>,
     /// Override the seed.
-    #[arg(long)]
+    #[arg(allow_negative_numbers = true, long)]
     seed: Option<u64>,
     /// Print the summary as JSON.
     #[arg(long)]

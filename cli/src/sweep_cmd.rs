@@ -32,7 +32,7 @@ pub struct Args {
     #[arg(long)]
     shard: Option<String>,
     /// Worker threads (default: all cores).
-    #[arg(long)]
+    #[arg(allow_negative_numbers = true, long)]
     threads: Option<usize>,
 }
 

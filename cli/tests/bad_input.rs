@@ -367,6 +367,22 @@ fn logs_and_designs_as_robots_use_them_refuse_what_they_cannot_be() {
         !ok && err.contains("cutoff 5000 Hz: the data are sampled at 200.04"),
         "{err}"
     );
+    // One far below any filter the data can hold (before: blamed on "absurd values" in the
+    // data).
+    let (ok, err) = physid(&[
+        "identify",
+        "--data",
+        data.to_str().unwrap(),
+        "--robot",
+        kuka,
+        "--cutoff",
+        "1e-300",
+    ]);
+    assert!(
+        !ok && err.contains("cutoff 1e-300 Hz: the data are sampled at 200.04")
+            && err.contains("must be at least 2.0004e-2 Hz"),
+        "{err}"
+    );
     // physid's own ground-truth channel is not a JointState topic: refused with its type and
     // the topics that are (before: its JointSample arrays were read as joint states).
     let sc = root().join("scenarios/cheetah3_shell.toml");

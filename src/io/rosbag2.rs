@@ -75,11 +75,27 @@ pub fn files(dir: &Path) -> Result<(Vec<PathBuf>, Storage), IoError> {
     Ok((files, storage))
 }
 
+/// A database file compressed whole (`ros2 bag record --compression-mode file`: zstd) is
+/// refused by name: SQLite would only say it is not a database.
+fn check_not_compressed(path: &Path) -> Result<(), IoError> {
+    use std::io::Read;
+    let mut magic = [0u8; 4];
+    let read = std::fs::File::open(path).and_then(|mut f| f.read_exact(&mut magic));
+    if read.is_ok() && magic == [0x28, 0xb5, 0x2f, 0xfd] {
+        return Err(IoError::invalid(
+            path,
+            "is zstd-compressed (recorded with --compression-mode file): decompress it first (`zstd -d FILE`, or `ros2 bag decompress`), then read the .db3",
+        ));
+    }
+    Ok(())
+}
+
 /// Feeds every message of a rosbag2 SQLite database to `reader`, in time order.
 pub(crate) fn read_sqlite(path: &Path, reader: &mut Reader) -> Result<(), IoError> {
     use rusqlite::{Connection, OpenFlags};
     let bad = |m: String| IoError::invalid(path, m);
     let sql = |e: rusqlite::Error| bad(format!("not a readable rosbag2 database: {e}"));
+    check_not_compressed(path)?;
     let db = Connection::open_with_flags(path, OpenFlags::SQLITE_OPEN_READ_ONLY).map_err(sql)?;
     let mut topics = std::collections::HashMap::new();
     {
@@ -112,7 +128,18 @@ pub(crate) fn read_sqlite(path: &Path, reader: &mut Reader) -> Result<(), IoErro
             .get_ref(2)
             .map_err(sql)?
             .as_blob()
-            .map_err(|e| bad(format!("message {sequence}: {e}")))?;
+            .map_err(|_| {
+                let got = match row.get_ref(2) {
+                    Ok(rusqlite::types::ValueRef::Text(_)) => "text",
+                    Ok(rusqlite::types::ValueRef::Integer(_)) => "an integer",
+                    Ok(rusqlite::types::ValueRef::Real(_)) => "a real number",
+                    Ok(rusqlite::types::ValueRef::Null) => "NULL",
+                    _ => "not a blob",
+                };
+                bad(format!(
+                    "message {sequence}: its data column holds {got}, where rosbag2 stores each message's CDR bytes as a BLOB"
+                ))
+            })?;
         let (topic, kind) = topics.get(&id).ok_or_else(|| {
             bad(format!(
                 "message {sequence} names topic id {id}, which the topics table lacks"

@@ -116,6 +116,7 @@ impl Columns {
             .iter()
             .map(str::to_string)
             .collect();
+        check_unique(&header, path)?;
         let col = |name: &str| header.iter().position(|h| h == name);
         let t = col("t").ok_or_else(|| bad("missing column t".into()))?;
         let JointKeys {
@@ -164,6 +165,31 @@ struct JointKeys {
     ignored: Vec<String>,
 }
 
+/// A header names each column physid reads (`t`, `q…`, `dq…`, `ddq…`, `tau…`) once.
+fn check_unique(header: &[String], path: &Path) -> Result<(), IoError> {
+    let read = |h: &str| h == "t" || ["q", "dq", "ddq", "tau"].iter().any(|g| h.starts_with(g));
+    for (i, h) in header.iter().enumerate().filter(|(_, h)| read(h)) {
+        if let Some(j) = header[..i].iter().position(|x| x == h) {
+            return Err(IoError::invalid(
+                path,
+                format!(
+                    "column {h} appears twice (columns {} and {}, counting from 1)",
+                    j + 1,
+                    i + 1
+                ),
+            ));
+        }
+    }
+    Ok(())
+}
+
+/// Whether `h` is a numbered position column `qK` with `K > n`.
+fn numbered_beyond(h: &str, n: usize) -> bool {
+    h.strip_prefix('q')
+        .and_then(|k| k.parse::<usize>().ok())
+        .is_some_and(|k| k > n)
+}
+
 /// The joints of a CSV header, checked against the robot's when given.
 fn joint_keys(
     header: &[String],
@@ -195,6 +221,12 @@ fn joint_keys(
         let n = (1..)
             .take_while(|j| col(&format!("q{j}")).is_some())
             .count();
+        if let Some(after) = header.iter().find(|h| numbered_beyond(h, n)) {
+            return Err(bad(format!(
+                "column {after} without q{}: numbered columns run q1..qn without a gap",
+                n + 1
+            )));
+        }
         if n == 0 {
             return Err(bad(
                 "no q1 or q_<joint> column: expected a header `t, q1..qn, dq1..dqn, [ddq1..ddqn,] tau1..taun` or columns named q_<joint>, dq_<joint>, …"
