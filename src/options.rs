@@ -15,7 +15,7 @@ pub trait OptionError {
                 "processing_cutoff" => "cutoff".to_string(),
                 other => other.replace('_', "-"),
             };
-            format!("--{flag} must be {expected}, got {value}")
+            format!("--{flag} must be {expected}, got {}", readable(value))
         })
     }
 }
@@ -39,3 +39,38 @@ macro_rules! option_error {
     };
 }
 pub(crate) use option_error;
+
+/// `x` as written for a reader: plainly between 10⁻³ and 10⁶, and a whole number below 10¹⁵
+/// (a count), else in scientific notation (`1e300`, not three hundred digits).
+pub fn readable(x: f64) -> String {
+    let whole = x.fract() == 0.0 && x.abs() < 1e15;
+    if whole || !x.is_finite() || (1e-3..1e6).contains(&x.abs()) {
+        format!("{x}")
+    } else {
+        format!("{x:e}")
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    #[test]
+    fn numbers_are_written_as_a_reader_reads_them() {
+        let shown: Vec<String> = [0.0, -1.0, 0.25, 1e9, 1e300, 1e-300, 2.5e-5, f64::NAN]
+            .into_iter()
+            .map(super::readable)
+            .collect();
+        assert_eq!(
+            shown,
+            [
+                "0",
+                "-1",
+                "0.25",
+                "1000000000",
+                "1e300",
+                "1e-300",
+                "2.5e-5",
+                "NaN"
+            ]
+        );
+    }
+}

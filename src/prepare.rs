@@ -177,15 +177,6 @@ const MOTION_OVER_NOISE: f64 = 1e3;
 /// Butterworth hardly filters and its bilinear design degenerates near Nyquist.
 pub const MAX_CUTOFF_FRACTION: f64 = 0.4;
 
-/// `x` as written for a reader: plainly between 10⁻³ and 10⁶, else in scientific notation.
-fn readable(x: f64) -> String {
-    if x == 0.0 || (1e-3..1e6).contains(&x.abs()) {
-        format!("{x}")
-    } else {
-        format!("{x:e}")
-    }
-}
-
 /// The lowest cutoff accepted, as a fraction of the sample rate (0.01 Hz at 100 Hz): the
 /// filter then settles over about 10⁵ samples.
 pub const MIN_CUTOFF_FRACTION: f64 = 1e-4;
@@ -247,7 +238,7 @@ pub enum PrepareError {
         period: f64,
     },
     /// The cutoff is not a usable low-pass at this rate.
-    #[error("cutoff {} Hz: the data are sampled at {rate:.4} Hz, so the cutoff must be at least {min:.4e} Hz ({MIN_CUTOFF_FRACTION:e} of the rate: below, the filter settles over more samples than a log holds and its coefficients lose their precision) and at most {max:.4} Hz ({MAX_CUTOFF_FRACTION} of the rate)", readable(*cutoff), min = MIN_CUTOFF_FRACTION * rate)]
+    #[error("cutoff {} Hz: the data are sampled at {rate:.4} Hz, so the cutoff must be at least {min:.4e} Hz ({MIN_CUTOFF_FRACTION:e} of the rate: below, the filter settles over more samples than a log holds and its coefficients lose their precision) and at most {max:.4} Hz ({MAX_CUTOFF_FRACTION} of the rate)", crate::options::readable(*cutoff), min = MIN_CUTOFF_FRACTION * rate)]
     Cutoff {
         /// The cutoff asked for (Hz).
         cutoff: f64,

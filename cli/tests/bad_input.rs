@@ -1114,3 +1114,41 @@ fn an_excitation_reference_too_large_for_memory_or_of_one_sample_is_refused_befo
         assert!(!out.exists() && !csv.exists(), "{args:?}: written");
     }
 }
+
+#[test]
+fn absurd_margins_and_a_folder_as_an_output_file_are_refused_by_name() {
+    // Before: --eps/--ellipsoid-margin 1e300 reached the cone solver ("NumericalError", no
+    // option named); `excite --csv .` failed with "Device or resource busy" after writing.
+    let k = root().join("data/kuka_lwr4");
+    let (urdf, m1) = (k.join("kuka_lwr4.urdf"), k.join("measurements_1.csv"));
+    let (urdf, m1) = (urdf.to_str().unwrap(), m1.to_str().unwrap());
+    let identify = ["identify", "--robot", urdf, "--data", m1];
+    refused_naming(&[
+        (
+            &[&identify[..], &["--eps", "1e300"]].concat(),
+            &["--eps must be a margin in [0, 1]", "got 1e300"],
+        ),
+        (
+            &[&identify[..], &["--ellipsoid-margin", "1e300"]].concat(),
+            &["ellipsoid margin 1e300 m must be", "at most 10 m"],
+        ),
+    ]);
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("sc.toml");
+    let (ok, err) = physid(&[
+        "excite",
+        "--robot",
+        "cheetah3",
+        "--iterations",
+        "1",
+        "--out",
+        out.to_str().unwrap(),
+        "--csv",
+        dir.path().to_str().unwrap(),
+    ]);
+    assert!(
+        !ok && err.contains("is a folder: give a file name for this output"),
+        "{err}"
+    );
+    assert!(!out.exists());
+}

@@ -28,11 +28,15 @@ fn api_error<E: physid::options::OptionError + std::error::Error>(e: E) -> PyErr
     if let Some(message) = e.flag_message() {
         return PyValueError::new_err(message);
     }
-    // The message and its causes, as the CLI's "Caused by" lines, on one line.
+    // The message and its causes, as the CLI's "Caused by" lines, on one line (a cause the
+    // message already quotes, as an I/O error's "path: reason", once).
     let mut message = e.to_string();
     let mut cause = std::error::Error::source(&e);
     while let Some(c) = cause {
-        message = format!("{message}: {c}");
+        let text = c.to_string();
+        if !message.ends_with(&text) {
+            message = format!("{message}: {text}");
+        }
         cause = c.source();
     }
     PyValueError::new_err(message)

@@ -93,6 +93,9 @@ impl std::str::FromStr for ConstraintSet {
     }
 }
 
+/// The largest margin `ε` of the strict matrix inequalities (kg m²).
+pub const MAX_EPS: f64 = 1.0;
+
 /// Identification options.
 #[derive(Clone, Debug)]
 pub struct Options {
@@ -281,10 +284,10 @@ impl Options {
                 value: w,
             });
         }
-        if !(self.eps.is_finite() && self.eps >= 0.0) {
+        if !(self.eps.is_finite() && (0.0..=MAX_EPS).contains(&self.eps)) {
             return Err(IdentError::InvalidOption {
                 option: "eps",
-                expected: "a finite number >= 0",
+                expected: "a margin in [0, 1] (kg m², of the matrix inequalities; beyond, no robot body's pseudo-inertia has room for it)",
                 value: self.eps,
             });
         }

@@ -156,6 +156,12 @@ pub fn check_distinct_recordings(inputs: &[(&str, &Path)]) -> Result<(), IoError
 /// whose directory does not exist.
 pub fn check_outputs(outputs: &[&Path], inputs: &[&Path]) -> Result<(), IoError> {
     for (i, out) in outputs.iter().enumerate() {
+        if out.is_dir() {
+            return Err(IoError::invalid(
+                out,
+                "is a folder: give a file name for this output",
+            ));
+        }
         if let Some(dir) = out.parent().filter(|d| !d.as_os_str().is_empty()) {
             if !dir.is_dir() {
                 return Err(IoError::invalid(

@@ -178,12 +178,16 @@ pub struct RobotOptions {
     pub geometry_ellipsoids: Option<bool>,
 }
 
+/// The widest ellipsoid margin accepted (m).
+pub const MAX_MARGIN: f64 = 10.0;
+
 impl RobotOptions {
-    /// Checks the margin (finite, ≥ 0).
+    /// Checks the margin (finite, 0 to [`MAX_MARGIN`]).
     pub fn validate(&self) -> Result<(), String> {
         match self.ellipsoid_margin {
-            Some(m) if !(m.is_finite() && m >= 0.0) => Err(format!(
-                "ellipsoid margin {m} m must be a finite number >= 0"
+            Some(m) if !(m.is_finite() && (0.0..=MAX_MARGIN).contains(&m)) => Err(format!(
+                "ellipsoid margin {} m must be a finite number >= 0 and at most {MAX_MARGIN} m (a wider ellipsoid bounds nothing on a robot)",
+                crate::options::readable(m)
             )),
             _ => Ok(()),
         }
