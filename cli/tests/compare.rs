@@ -251,6 +251,42 @@ fn compare_refuses_what_it_cannot_judge() {
         code == 2 && err.contains("are both seed 3, n_s 311, consistent"),
         "{code} {err}"
     );
+    // Before: a negative metric value dropped its pair ("fewer than 7 seed pairs" with 8);
+    // a set compared with itself, an unknown set and --max-n-s 0 all read "no group pairs".
+    let negative = baseline_copy(dir.path(), "negative", &|l| {
+        Some(if l.starts_with("3,311,consistent,") {
+            let mut cells: Vec<String> = l.split(',').map(String::from).collect();
+            cells[6] = format!("-{}", cells[6]);
+            cells.join(",")
+        } else {
+            l.to_string()
+        })
+    });
+    let (code, _, err) = physid(&["compare", &s(&negative), "--baseline", &s(&base)]);
+    assert!(
+        code == 2 && err.contains("seed 3: a comparison needs finite values above 0"),
+        "{code} {err}"
+    );
+    for (args, words) in [
+        (
+            vec!["--variant", "consistent<=consistent"],
+            "compares a set with itself",
+        ),
+        (
+            vec!["--variant", "consistent<=nope"],
+            "no rows of the set 'nope' (the rows' sets: consistent, ellipsoid, none, semi)",
+        ),
+        (
+            vec!["--variant", "consistent<=none", "--max-n-s", "0"],
+            "--max-n-s must be at least 1 sample, got 0",
+        ),
+    ] {
+        let mut a = vec!["compare".to_string(), s(&base)];
+        a.extend(args.iter().map(|x| x.to_string()));
+        let refs: Vec<&str> = a.iter().map(String::as_str).collect();
+        let (code, _, err) = physid(&refs);
+        assert!(code == 2 && err.contains(words), "{args:?}: {code} {err}");
+    }
 }
 
 #[test]

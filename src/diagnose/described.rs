@@ -36,17 +36,26 @@ pub(crate) fn from_description(
 /// from them (a step's `ambiguous_with`): the ladder weighs each against the description,
 /// where a tie of the re-identified model may part (an offset on every joint and
 /// direction-dependent friction tie when the friction is free, not when it is pinned at the
-/// description's).
-fn selected_or_tied(stage: &Stage, selection: &Selection) -> Vec<Variant> {
+/// description's). A refinement of the friction is not offered for a tie alone: the ladder's
+/// friction re-identified is the friction change it weighs (offered for its tie with an
+/// offset, direction-dependent friction had taken a doubled friction's place on a real KUKA
+/// run, semi-real seed 1, case 15).
+fn selected_or_tied(stage: &Stage, selection: &Selection) -> ladder::Selected {
     let variants = &stage.folds.variants;
     let tied: Vec<_> = selection
         .steps
         .iter()
         .flat_map(|s| s.ambiguous_with.iter().copied())
+        .filter(|k| !k.refines_friction())
         .collect();
-    let chosen = selection.chosen.iter().map(|&v| variants[v]);
-    let of_tied = variants.iter().filter(|v| tied.contains(&v.kind)).copied();
-    chosen.chain(of_tied).collect()
+    ladder::Selected {
+        chosen: selection.chosen.iter().map(|&v| variants[v]).collect(),
+        tied: variants
+            .iter()
+            .filter(|v| tied.contains(&v.kind))
+            .copied()
+            .collect(),
+    }
 }
 
 /// The explanations as the diagnosis's effect estimates (described by the description

@@ -865,9 +865,30 @@ fn on_body(model: &Model, b: usize, x: &nalgebra::Vector3<f64>) -> bool {
     }
 }
 
+/// What cross-validation offers the ladder: the variants it chose, and those of the kinds it
+/// could not tell from them (a step's `ambiguous_with`).
+pub(crate) struct Selected {
+    /// The variants chosen.
+    pub chosen: Vec<Variant>,
+    /// Every variant of the kinds tied with a chosen one.
+    pub tied: Vec<Variant>,
+}
+
+impl Selected {
+    /// Whether the ladder offers `v` for cross-validation's sake.
+    fn offers(&self, v: &Variant) -> bool {
+        self.chosen.contains(v) || self.tied.contains(v)
+    }
+
+    /// Whether `v` is offered only for its tie with a chosen variant.
+    fn tied_only(&self, v: &Variant) -> bool {
+        self.tied.contains(v) && !self.chosen.contains(v) && !v.kind.offered_from_description()
+    }
+}
+
 /// The diagnosis's ladder from the description (module docs), with relative uncertainty `eps`
 /// of the description's inertial parameters.
-pub(crate) fn ladder(stage: &Stage, eps: f64, selected: &[Variant], settings: &Settings) -> Ladder {
+pub(crate) fn ladder(stage: &Stage, eps: f64, selected: &Selected, settings: &Settings) -> Ladder {
     let problem = problem(stage, eps);
     let variants = offered(stage);
     let p0 = problem.theta_d.len();
@@ -958,7 +979,7 @@ type Scored = (Explanation, f64, f64, Option<f64>);
 fn scored_candidates(
     problem: &Problem,
     data: &Data,
-    selected: &[Variant],
+    selected: &Selected,
     set: &[Explanation],
     sse: &[f64],
 ) -> Vec<Scored> {
@@ -1101,13 +1122,19 @@ struct NextStep {
 fn next_step(
     problem: &Problem,
     data: &Data,
-    selected: &[Variant],
+    selected: &Selected,
     set: &[Explanation],
     sse: &[f64],
     settings: &Settings,
 ) -> Result<NextStep, (Stop, Vec<AlsoFit>)> {
     let model = problem.stage.model;
     let mut scored = scored_candidates(problem, data, selected, set, sse);
+    // A kind offered only for its tie in cross-validation competes where it is significant
+    // itself; it never ends the ladder in another's place.
+    scored.retain(|s| {
+        let tied_only = s.0.variant().is_some_and(|v| selected.tied_only(&v));
+        !tied_only || (s.1 >= settings.min_reduction && s.2 >= settings.min_t)
+    });
     scored.sort_by(|a, b| b.1.total_cmp(&a.1));
     // A body step must weigh its mass: where the data see only a body's first moment `m c`,
     // a description's error carried to another motion fits as well as a payload does.
@@ -1472,7 +1499,7 @@ fn still_a_body(p: &InertialParams) -> bool {
 /// cross-validation `selected` and the kinds offered from the description whatever it
 /// selected (a delay; their variants; a kind once), a payload or change on each body not yet
 /// freed, and the friction. (Kinds the parameters absorb are the description test's.)
-fn candidates(data: &Data, selected: &[Variant], set: &[Explanation]) -> Vec<Explanation> {
+fn candidates(data: &Data, selected: &Selected, set: &[Explanation]) -> Vec<Explanation> {
     let used_kinds: Vec<Kind> = set
         .iter()
         .filter_map(|e| match e {
@@ -1484,7 +1511,7 @@ fn candidates(data: &Data, selected: &[Variant], set: &[Explanation]) -> Vec<Exp
         .variants
         .iter()
         .filter(|v| {
-            v.kind.is_body_change() || v.kind.offered_from_description() || selected.contains(v)
+            v.kind.is_body_change() || v.kind.offered_from_description() || selected.offers(v)
         })
         .filter(|v| !used_kinds.contains(&v.kind))
         .map(|v| Explanation::Effect(*v))

@@ -572,6 +572,14 @@ impl Kind {
         self.spec().grid == Grid::Body
     }
 
+    /// Whether the kind refines the model's own viscous and Coulomb friction (its shape at low
+    /// speed, by direction, by load) rather than adding another effect: a change
+    /// of the friction is first the friction re-identified.
+    pub fn refines_friction(&self) -> bool {
+        use Kind::*;
+        matches!(self, Stribeck | AsymmetricCoulomb | LoadDependentFriction)
+    }
+
     /// The kinds the semi-real benchmark injects on real logs (`experiment::semireal`): those
     /// whose injection needs no model of the robot beyond its description.
     pub fn semi_real_singles() -> Vec<Kind> {

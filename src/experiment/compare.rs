@@ -71,6 +71,9 @@ impl CompareOptions {
         if self.min_pairs < 1 {
             return Err(bad("min_pairs", "at least 1", 0.0));
         }
+        if self.max_n_s == Some(0) {
+            return Err(bad("max_n_s", "at least 1 sample", 0.0));
+        }
         Ok(())
     }
 
@@ -105,7 +108,7 @@ pub enum CompareError {
     Nothing(String),
     /// A metric value that is not a finite number.
     #[error(
-        "{table}: {metric} = {value} at {group}, seed {seed}: a comparison needs finite values"
+        "{table}: {metric} = {value} at {group}, seed {seed}: a comparison needs finite values above 0 (it judges the ratio of the two)"
     )]
     NonFinite {
         /// Which table: the candidate or the reference.
@@ -401,6 +404,31 @@ fn judge(pairs: &[(f64, f64)], opts: &CompareOptions) -> (f64, f64, f64, f64, Ou
     (median(&y), median(&x), ratio, p, outcome)
 }
 
+/// The two sets `variants` compares are two, and both in the rows.
+fn check_variants(
+    dir: &Path,
+    rows: &[Sample],
+    better: &str,
+    reference: &str,
+) -> Result<(), CompareError> {
+    let nothing = |m: String| Err(CompareError::Nothing(format!("{}: {m}", dir.display())));
+    if better == reference {
+        return nothing(format!(
+            "--variant {better}<={reference} compares a set with itself: give two sets"
+        ));
+    }
+    let mut sets: Vec<&str> = rows.iter().map(|s| s.group.set.as_str()).collect();
+    sets.sort_unstable();
+    sets.dedup();
+    match [better, reference].into_iter().find(|v| !sets.contains(v)) {
+        Some(missing) => nothing(format!(
+            "no rows of the set '{missing}' (the rows' sets: {})",
+            sets.join(", ")
+        )),
+        None => Ok(()),
+    }
+}
+
 /// Per seed: the candidate's and the reference's value.
 type BySeed = BTreeMap<i64, (Option<f64>, Option<f64>)>;
 
@@ -414,7 +442,7 @@ fn group_result(
 ) -> Result<GroupResult, CompareError> {
     for (&seed, (a, b)) in seeds {
         for (table, v) in [("candidate", a), ("reference", b)] {
-            if let Some(v) = v.filter(|v| !v.is_finite()) {
+            if let Some(v) = v.filter(|v| !(v.is_finite() && *v > 0.0)) {
                 return Err(CompareError::NonFinite {
                     table,
                     metric: opts.metric.clone(),
@@ -519,6 +547,7 @@ pub fn variants(
 ) -> Result<Comparison, CompareError> {
     opts.validate()?;
     let rows = samples(dir, &opts.metric)?;
+    check_variants(dir, &rows, better, reference)?;
     let mut by: BTreeMap<(Vec<String>, u64), BySeed> = BTreeMap::new();
     for s in &rows {
         let slot = if s.group.set == better {
