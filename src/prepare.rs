@@ -177,6 +177,15 @@ const MOTION_OVER_NOISE: f64 = 1e3;
 /// Butterworth hardly filters and its bilinear design degenerates near Nyquist.
 pub const MAX_CUTOFF_FRACTION: f64 = 0.4;
 
+/// Names joined by commas, or "none".
+fn list_or_none(names: &[String]) -> String {
+    if names.is_empty() {
+        "none".into()
+    } else {
+        names.join(", ")
+    }
+}
+
 /// The lowest cutoff accepted, as a fraction of the sample rate (0.01 Hz at 100 Hz): the
 /// filter then settles over about 10⁵ samples.
 pub const MIN_CUTOFF_FRACTION: f64 = 1e-4;
@@ -257,6 +266,14 @@ pub enum PrepareError {
         joint: String,
         /// The data's joints.
         have: String,
+    },
+    /// Every joint locked (asked, or its torque never measured): nothing left to fit.
+    #[error("every joint is held still: locked as asked ({}) or with a torque column of zeros only ({}); nothing is left to identify or diagnose", list_or_none(asked), list_or_none(unmeasured))]
+    AllLocked {
+        /// Joints locked as asked (`--lock`, or outside `--only`).
+        asked: Vec<String>,
+        /// Joints whose logged torque is zero throughout.
+        unmeasured: Vec<String>,
     },
     /// Stamps too irregular to read as a sampled signal.
     #[error("run starting at sample {start}: the time stamps scatter by {jitter:.0} % of the median period {period:e} s (RMS, about the best uniform clock): too irregular to differentiate; give header stamps (--stamp header) if the log has them, or resample the data")]
@@ -493,6 +510,15 @@ pub fn prepare(logged: &Logged, opts: &Options) -> Result<Prepared, PrepareError
         });
     }
     finish(logged, &mut runs, &mut report, &locked);
+    if report.locked.len() == logged.dof() {
+        return Err(PrepareError::AllLocked {
+            asked: locked
+                .iter()
+                .map(|&j| logged.joint_names[j].clone())
+                .collect(),
+            unmeasured: report.unmeasured.clone(),
+        });
+    }
     Ok(Prepared { runs, report })
 }
 

@@ -1152,3 +1152,66 @@ fn absurd_margins_and_a_folder_as_an_output_file_are_refused_by_name() {
     );
     assert!(!out.exists());
 }
+
+#[test]
+fn a_semi_real_run_too_short_for_a_diagnosis_is_refused_at_once_naming_it() {
+    // Before: "case 1: training data have 20 samples" after 6 s, no file named.
+    let dir = tempfile::tempdir().unwrap();
+    let k = root().join("data/kuka_lwr4");
+    let text = std::fs::read_to_string(k.join("measurements_1.csv")).unwrap();
+    let short = dir.path().join("short.csv");
+    std::fs::write(
+        &short,
+        text.lines().take(101).collect::<Vec<_>>().join("\n") + "\n",
+    )
+    .unwrap();
+    let runs = format!(
+        "{},{}",
+        k.join("measurements_2.csv").display(),
+        short.display()
+    );
+    let urdf = k.join("kuka_lwr4.urdf");
+    let (ok, err) = physid(&[
+        "blind",
+        "--real",
+        &runs,
+        "--real-robot",
+        urdf.to_str().unwrap(),
+        "--cases",
+        "2",
+    ]);
+    assert!(
+        !ok && err.contains(
+            "short.csv: 100 samples: a run of the semi-real benchmark needs at least 640"
+        ),
+        "{err}"
+    );
+}
+
+#[test]
+fn every_joint_locked_is_said_as_such() {
+    // Before: "no joint moves faster than 0.05 rad/s often enough to estimate the noise floor".
+    let k = root().join("data/kuka_lwr4");
+    let all = (0..7)
+        .map(|j| format!("lwr_{j}_joint"))
+        .collect::<Vec<_>>()
+        .join(",");
+    let (urdf, m1) = (k.join("kuka_lwr4.urdf"), k.join("measurements_1.csv"));
+    for command in ["identify", "diagnose"] {
+        let (ok, err) = physid(&[
+            command,
+            "--robot",
+            urdf.to_str().unwrap(),
+            "--data",
+            m1.to_str().unwrap(),
+            "--lock",
+            &all,
+        ]);
+        assert!(
+            !ok && err.contains(
+                "measurements_1.csv: every joint is held still: locked as asked (lwr_0_joint,"
+            ),
+            "{command}: {err}"
+        );
+    }
+}

@@ -210,6 +210,30 @@ fn described(
     Ok((information, description))
 }
 
+/// The run at `path` as logged, checked before any work: its q̇ and q̈ logged (the injected
+/// torques are computed from them) and at least [`MIN_RUN`] samples.
+fn checked_run(robot: &Model, path: &Path) -> Result<crate::prepare::Logged, RealError> {
+    let (logged, _, _) = crate::io::load_logged(path, robot, &crate::io::DataOptions::default())?;
+    if logged.qd.is_none() || logged.qdd.is_none() {
+        return Err(RealError::NoAccelerations(path.to_path_buf()));
+    }
+    if logged.len() < MIN_RUN {
+        return Err(RealError::Io(crate::io::IoError::invalid(
+            path,
+            format!(
+                "{} samples: a run of the semi-real benchmark needs at least {MIN_RUN} (each case's diagnosis holds out a part of it and needs {} training samples)",
+                logged.len(),
+                diagnose::stage::MIN_SAMPLES
+            ),
+        )));
+    }
+    Ok(logged)
+}
+
+/// The fewest samples a base run may have: ten times what a diagnosis trains on at least,
+/// so that its holdout and trimmed ends leave enough.
+pub const MIN_RUN: usize = 10 * diagnose::stage::MIN_SAMPLES;
+
 /// The bases of `paths` on `robot`: each run's description identified on the next run
 /// (cyclically) by the diagnosis's nominal fit.
 pub fn bases(robot: &Model, paths: &[PathBuf], opts: &RealOptions) -> Result<Vec<Base>, RealError> {
@@ -219,6 +243,11 @@ pub fn bases(robot: &Model, paths: &[PathBuf], opts: &RealOptions) -> Result<Vec
     let roles: Vec<(&str, &Path)> = paths.iter().map(|p| ("--real", p.as_path())).collect();
     crate::io::check_distinct_recordings(&roles)?;
     let dopts = opts.diagnose_options();
+    let mut logs = paths
+        .iter()
+        .map(|path| checked_run(robot, path))
+        .collect::<Result<Vec<_>, _>>()?
+        .into_iter();
     let mut out = vec![];
     for (k, path) in paths.iter().enumerate() {
         let other = &paths[(k + 1) % paths.len()];
@@ -226,8 +255,7 @@ pub fn bases(robot: &Model, paths: &[PathBuf], opts: &RealOptions) -> Result<Vec
         let cutoff = loaded.report.cutoff;
         let runs = loaded.trajectories();
         let (information, description) = described(robot, &runs, other, &dopts)?;
-        let (logged, _, _) =
-            crate::io::load_logged(path, robot, &crate::io::DataOptions::default())?;
+        let logged = logs.next().expect("one log per path");
         let baseline = if opts.baseline {
             Some(calibrated_baseline(
                 &description,
@@ -238,9 +266,6 @@ pub fn bases(robot: &Model, paths: &[PathBuf], opts: &RealOptions) -> Result<Vec
         } else {
             None
         };
-        if logged.qd.is_none() || logged.qdd.is_none() {
-            return Err(RealError::NoAccelerations(path.clone()));
-        }
         let rms = description_rms(
             &inject(&logged, &description, &Injection::none()),
             &description,
