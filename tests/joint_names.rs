@@ -310,6 +310,21 @@ fn a_rosbag2_directory_split_in_two_files_on_another_topic_reads_whole() {
         .to_string();
     assert!(err.contains("is zstd-compressed"), "{err}");
     std::fs::write(&db, &saved).unwrap();
+    // The same file listed twice (before: its messages read twice).
+    std::fs::write(
+        db_bag.join("metadata.yaml"),
+        "rosbag2_bagfile_information:\n  storage_identifier: sqlite3\n  relative_file_paths: [run_sqlite_0.db3, run_sqlite_0.db3]\n",
+    )
+    .unwrap();
+    let err = io::load_trajectory_with(&db_bag, &model, &opts)
+        .unwrap_err()
+        .to_string();
+    assert!(
+        err.contains("metadata.yaml")
+            && err
+                .contains("lists run_sqlite_0.db3 twice in relative_file_paths (entries 1 and 2)"),
+        "{err}"
+    );
     // A storage physid cannot read is named.
     std::fs::write(
         db_bag.join("metadata.yaml"),

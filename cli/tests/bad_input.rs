@@ -667,6 +667,26 @@ fn counts_from_the_user_are_bounded_before_anything_is_allocated() {
     )
     .unwrap();
     assert!(physid::experiment::sweep::load(&small).is_ok());
+    // The same value twice on an axis (before: two cells of one configuration, accepted).
+    let twice = dir.path().join("twice.toml");
+    std::fs::write(
+        &twice,
+        format!(
+            "scenario = {:?}\n[grid]\n\"sensors.torque_noise\" = [0.1, 0.3, 0.1]\n",
+            scenario.to_str().unwrap()
+        ),
+    )
+    .unwrap();
+    let e = physid::experiment::sweep::load(&twice)
+        .unwrap_err()
+        .to_string();
+    assert!(
+        e.contains("twice.toml")
+            && e.contains(
+                "grid.\"sensors.torque_noise\": the value 0.1 is listed twice (entries 1 and 3)"
+            ),
+        "{e}"
+    );
 }
 
 #[test]

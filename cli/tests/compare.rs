@@ -267,6 +267,34 @@ fn compare_refuses_what_it_cannot_judge() {
         code == 2 && err.contains("seed 3: a comparison needs finite values above 0"),
         "{code} {err}"
     );
+    // Before: a word among the metric's numbers dropped its row, and a seed 3.5 paired with
+    // seed 3, without a word.
+    let word = baseline_copy(dir.path(), "word", &|l| {
+        Some(if l.starts_with("3,311,consistent,") {
+            let mut cells: Vec<String> = l.split(',').map(String::from).collect();
+            cells[6] = "n/a".into();
+            cells.join(",")
+        } else {
+            l.to_string()
+        })
+    });
+    let (code, _, err) = physid(&["compare", &s(&word), "--baseline", &s(&base)]);
+    assert!(
+        code == 2 && err.contains("column 'val_rms'"),
+        "{code} {err}"
+    );
+    let half = baseline_copy(dir.path(), "half", &|l| {
+        Some(if l.starts_with("3,") {
+            format!("3.5{}", &l[1..])
+        } else {
+            l.to_string()
+        })
+    });
+    let (code, _, err) = physid(&["compare", &s(&half), "--baseline", &s(&base)]);
+    assert!(
+        code == 2 && err.contains("column 'seed' holds 3.5 in data row"),
+        "{code} {err}"
+    );
     for (args, words) in [
         (
             vec!["--variant", "consistent<=consistent"],

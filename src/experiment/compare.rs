@@ -267,8 +267,11 @@ fn samples(dir: &Path, metric: &str) -> Result<Vec<Sample>, CompareError> {
             column: c.into(),
             columns: names.join(", "),
         })?;
-        Ok(column.cast(t).map_err(|e| invalid(c, e))?)
+        // Strict: a value that is not of the type (a word among the metric's numbers) is an
+        // error, not a row dropped.
+        Ok(column.strict_cast(t).map_err(|e| invalid(c, e))?)
     };
+    check_whole_seeds(&df, &path)?;
     let seed = cast("seed", &DataType::Int64)?;
     let n_s = cast("n_s", &DataType::UInt64)?;
     let set = cast("constraints", &DataType::String)?;
@@ -309,6 +312,29 @@ fn samples(dir: &Path, metric: &str) -> Result<Vec<Sample>, CompareError> {
     }
     check_once(&path, &out)?;
     Ok(out)
+}
+
+/// Seeds are whole numbers: a seed `3.5` would be read as seed 3 and paired with it.
+fn check_whole_seeds(df: &DataFrame, path: &Path) -> Result<(), CompareError> {
+    let Ok(seed) = df.column("seed") else {
+        return Ok(());
+    };
+    if !seed.dtype().is_float() {
+        return Ok(());
+    }
+    let values = seed.f64().map_err(|e| IoError::Invalid {
+        path: path.to_path_buf(),
+        message: format!("column 'seed': {e}"),
+    })?;
+    let fractional =
+        (0..values.len()).find_map(|i| values.get(i).filter(|v| v.fract() != 0.0).map(|v| (i, v)));
+    match fractional {
+        Some((row, v)) => Err(CompareError::Nothing(format!(
+            "{}: column 'seed' holds {v} in data row {row} (counting from 0): seeds are whole numbers",
+            path.display()
+        ))),
+        None => Ok(()),
+    }
 }
 
 /// Each (grid point, `n_s`, constraint set, seed) once in the table at `path`: a repeated row

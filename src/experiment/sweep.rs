@@ -132,6 +132,21 @@ pub fn load(path: &Path) -> Result<(SweepSpec, PathBuf, String), IoError> {
                 format!("grid.\"{k}\": give a non-empty list of values"),
             ));
         }
+        let values = v.as_array().expect("an array, checked above");
+        if let Some((i, x)) = values
+            .iter()
+            .enumerate()
+            .find(|(i, x)| values[..*i].contains(x))
+        {
+            return Err(IoError::invalid(
+                path,
+                format!(
+                    "grid.\"{k}\": the value {x} is listed twice (entries {} and {}): each grid point is one cell per seed",
+                    values.iter().position(|y| y == x).map_or(0, |p| p + 1),
+                    i + 1
+                ),
+            ));
+        }
     }
     let points = spec.grid.values().try_fold(1usize, |n, v| {
         n.checked_mul(v.as_array().map_or(1, Vec::len))
