@@ -1235,3 +1235,50 @@ fn every_joint_locked_is_said_as_such() {
         );
     }
 }
+
+#[test]
+fn a_cutoff_that_filters_nothing_is_warned_about() {
+    // Before: accepted without a word on a log that carries q̇ and q̈.
+    let k = root().join("data/kuka_lwr4");
+    let (urdf, m1) = (k.join("kuka_lwr4.urdf"), k.join("measurements_1.csv"));
+    let run = |data: &Path| {
+        common::command()
+            .args(["identify", "--robot", urdf.to_str().unwrap(), "--data"])
+            .arg(data)
+            .args(["--cutoff", "5"])
+            .output()
+            .unwrap()
+    };
+    let o = run(&m1);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(o.status.success(), "{err}");
+    assert!(
+        err.contains("warning: --cutoff 5 Hz filters nothing: every file logs q̇ and q̈"),
+        "{err}"
+    );
+    // The same run as t, q, τ: the cutoff filters the derived q̇ and q̈, no warning.
+    let dir = tempfile::tempdir().unwrap();
+    let text = std::fs::read_to_string(&m1).unwrap();
+    let header: Vec<&str> = text.lines().next().unwrap().split(',').collect();
+    let keep: Vec<usize> = (0..header.len())
+        .filter(|&i| {
+            let h = header[i];
+            h == "t" || (h.starts_with('q') && !h.starts_with("q_")) || h.starts_with("tau")
+        })
+        .collect();
+    let cut: Vec<String> = text
+        .lines()
+        .map(|l| {
+            let cells: Vec<&str> = l.split(',').collect();
+            keep.iter().map(|&i| cells[i]).collect::<Vec<_>>().join(",")
+        })
+        .collect();
+    let tq = dir.path().join("tq.csv");
+    std::fs::write(&tq, cut.join("\n") + "\n").unwrap();
+    let o = run(&tq);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        o.status.success() && !err.contains("filters nothing"),
+        "{err}"
+    );
+}

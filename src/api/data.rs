@@ -390,6 +390,22 @@ fn is_bag(path: &Path) -> bool {
     path.is_dir() || path.extension().and_then(|e| e.to_str()) == Some("mcap")
 }
 
+/// `--cutoff` given to an identification without effect terms where no file has a signal to
+/// derive (each logs q̇ and q̈): the filter it sets is applied to nothing, which the user should
+/// know. (The diagnosis and effect terms process their columns at the cutoff.)
+pub fn unused_cutoff_notice<'a>(
+    read: &DataOptions,
+    reports: impl IntoIterator<Item = &'a crate::prepare::Report>,
+) -> Option<Notice> {
+    let cutoff = read.prepare.cutoff?;
+    let derives = reports.into_iter().any(|r| r.derived_qd || r.derived_qdd);
+    (!derives).then(|| {
+        Notice::warning(format!(
+            "--cutoff {cutoff} Hz filters nothing: every file logs q̇ and q̈, and the cutoff applies only to what the pipeline derives"
+        ))
+    })
+}
+
 /// `--topic` and `--stamp` (options of bags) given for no bag at all are an error (they cannot
 /// mean what the user meant); given with some bags, a warning for each other file.
 pub fn bag_option_notices(paths: &[&Path], read: &DataOptions) -> Result<Vec<Notice>, ApiError> {

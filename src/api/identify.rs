@@ -631,6 +631,14 @@ fn open(m: &Model, o: &IdentifyOptions) -> Result<Opened, ApiError> {
             notices.extend(file_notices(path, loaded));
         }
     }
+    let reports = data.iter().filter_map(|d| match d {
+        Data::Memory(loaded) => Some(&loaded.report),
+        _ => None,
+    });
+    if o.terms.is_empty() {
+        // With effect terms the cutoff also processes their columns (as the diagnosis does).
+        notices.extend(super::data::unused_cutoff_notice(&read, reports));
+    }
     let whole = |files: Range<usize>| -> Vec<Span> {
         files
             .map(|file| Span {
