@@ -11,7 +11,11 @@ use std::path::PathBuf;
 /// Design a Fourier excitation that carries the most information about the robot's
 /// identifiable parameters within its joint limits, write it as a scenario that `simulate` and
 /// `experiment` run as is, and check the limits in simulation.
+/// The sample rate of --csv and --mcap when --rate is not given (Hz).
+const DEFAULT_RATE: f64 = 1000.0;
+
 #[derive(clap::Args, Debug)]
+#[command(group(clap::ArgGroup::new("reference").args(["csv", "mcap"]).multiple(true)))]
 pub struct Args {
     /// Base scenario: its robot, simulation, sensors, processing and experiment are kept and
     /// its excitation replaced; a Fourier excitation's `offset ± amplitude` narrows the joint
@@ -67,9 +71,9 @@ pub struct Args {
     /// /physid/excitation: position, velocity, acceleration).
     #[arg(long)]
     mcap: Option<PathBuf>,
-    /// Sample rate of --csv and --mcap (Hz).
-    #[arg(long, default_value_t = 1000.0, allow_negative_numbers = true)]
-    rate: f64,
+    /// Sample rate of --csv and --mcap (Hz; default 1000); needs one of them.
+    #[arg(long, allow_negative_numbers = true, requires = "reference")]
+    rate: Option<f64>,
     /// Samples per period at which the information is evaluated.
     #[arg(allow_negative_numbers = true, long, default_value_t = 200)]
     samples: usize,
@@ -162,7 +166,7 @@ fn options(a: &Args) -> ExciteOptions {
         max_jerk: a.max_jerk.clone(),
         ramp: a.ramp,
         samples: a.samples,
-        rate: a.rate,
+        rate: a.rate.unwrap_or(DEFAULT_RATE),
         out: a.out.clone(),
         csv: a.csv.clone(),
         mcap: a.mcap.clone(),

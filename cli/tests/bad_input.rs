@@ -439,8 +439,13 @@ fn logs_and_designs_as_robots_use_them_refuse_what_they_cannot_be() {
             "--max-jerk must be a positive number (rad/s³), got 0",
         ),
         (
-            vec!["--rate", "0"],
+            vec!["--rate", "0", "--csv", "never-written.csv"],
             "--rate must be a sample rate in (0, 100000] Hz, got 0",
+        ),
+        // A rate for no reference output (before: accepted without a word).
+        (
+            vec!["--rate", "500"],
+            "the following required arguments were not provided:\n  <--csv <CSV>|--mcap <MCAP>>",
         ),
     ] {
         let mut a = vec!["excite", "--robot", "cheetah3", "--iterations", "1"];
