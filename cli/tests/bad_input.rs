@@ -1287,3 +1287,32 @@ fn a_cutoff_that_filters_nothing_is_warned_about() {
         "{err}"
     );
 }
+
+#[test]
+fn experiment_sizes_beyond_one_run_are_blamed_on_the_sizes_before_anything_is_made() {
+    // Before: "scenario simulation.duration: more than 1e8 samples" for a cell, and an empty
+    // cells/ folder left.
+    let dir = tempfile::tempdir().unwrap();
+    let sweep = dir.path().join("s.toml");
+    let base = root().join("scenarios/sample_size.toml");
+    std::fs::write(
+        &sweep,
+        format!(
+            "scenario = {:?}\n[grid]\n\"sensors.torque_noise\" = [0.1]\n[experiment]\nseeds = 1\nsizes = [30, 300000000]\n",
+            base.to_str().unwrap()
+        ),
+    )
+    .unwrap();
+    let out = dir.path().join("res");
+    let (ok, err) = physid(&[
+        "sweep",
+        sweep.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert!(
+        !ok && err.contains("experiment.sizes: the largest training size 300000000"),
+        "{err}"
+    );
+    assert!(!out.exists());
+}

@@ -195,6 +195,16 @@ impl ExperimentSpec {
         if self.validation == 0 {
             return e("validation", "must be at least 1".into());
         }
+        let largest = self.grid().last().copied().unwrap_or(0);
+        if largest.saturating_add(self.validation) > MAX_EXPERIMENT_SAMPLES {
+            return e(
+                "sizes",
+                format!(
+                    "the largest training size {largest} and {} validation samples are more than the {MAX_EXPERIMENT_SAMPLES} samples one simulated run may hold",
+                    self.validation
+                ),
+            );
+        }
         if self.constraints.is_empty() {
             return e("constraints", "name at least one set".into());
         }
@@ -217,6 +227,9 @@ impl ExperimentSpec {
         Ok(())
     }
 }
+
+/// The most samples an experiment's run may hold (the simulation's bound, 1e8).
+pub const MAX_EXPERIMENT_SAMPLES: usize = 100_000_000;
 
 /// One (seed, size, set) cell.
 #[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
