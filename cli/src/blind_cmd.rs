@@ -46,7 +46,7 @@ pub struct Args {
     /// Semi-real benchmark: real runs of the robot `--real-robot` (CSV, MCAP or rosbag2 with
     /// q̇ and q̈; at least two), each case one of them with a change injected and a
     /// description identified on another (docs/diagnose.md, "Semi-real benchmark").
-    #[arg(long, value_delimiter = ',', requires = "real_robot")]
+    #[arg(long, value_delimiter = ',', requires = "real_robot", value_parser = non_empty_path)]
     real: Vec<PathBuf>,
     /// The robot of the `--real` runs (URDF, robot TOML or a built-in name).
     #[arg(long, requires = "real")]
@@ -55,6 +55,16 @@ pub struct Args {
     /// baseline ("what changed", `diagnose --baseline-data`).
     #[arg(long, requires = "real")]
     real_baseline: bool,
+}
+
+/// A path from a comma-separated list, refused when empty (two commas in a row, or one at the
+/// end).
+fn non_empty_path(s: &str) -> Result<PathBuf, String> {
+    if s.trim().is_empty() {
+        Err("an empty entry in the list (two commas in a row, or one at either end)".into())
+    } else {
+        Ok(PathBuf::from(s))
+    }
 }
 
 /// One line per finished case, on standard error: its number, the progress, and

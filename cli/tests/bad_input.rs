@@ -1211,6 +1211,19 @@ fn a_semi_real_run_too_short_for_a_diagnosis_is_refused_at_once_naming_it() {
         ),
         "{err}"
     );
+    // An empty entry in the list (before: clap's "a value is required").
+    let runs = format!(",{}", k.join("measurements_2.csv").display());
+    let (ok, err) = physid(&[
+        "blind",
+        "--real",
+        &runs,
+        "--real-robot",
+        urdf.to_str().unwrap(),
+    ]);
+    assert!(
+        !ok && err.contains("invalid value '' for '--real <REAL>': an empty entry in the list"),
+        "{err}"
+    );
 }
 
 #[test]
