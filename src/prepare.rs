@@ -454,6 +454,34 @@ fn band_edge_split(logged: &Logged, period: f64) -> Result<Split, PrepareError> 
     split_runs(logged, period, max_bridged(1.0 / period, MIN_DATA_CUTOFF))
 }
 
+/// A cutoff asked for lies within what the rate allows ([`MIN_CUTOFF_FRACTION`] to
+/// [`MAX_CUTOFF_FRACTION`] of it).
+fn check_cutoff(cutoff: Option<f64>, rate: f64) -> Result<(), PrepareError> {
+    let (min, max) = (MIN_CUTOFF_FRACTION * rate, MAX_CUTOFF_FRACTION * rate);
+    match cutoff.filter(|c| !(*c >= min && *c <= max)) {
+        Some(cutoff) => Err(PrepareError::Cutoff { cutoff, rate, max }),
+        None => Ok(()),
+    }
+}
+
+/// Some joint is left free after the joints `asked` to be locked and those never measured.
+fn check_not_all_locked(
+    logged: &Logged,
+    report: &Report,
+    asked: &[usize],
+) -> Result<(), PrepareError> {
+    if report.locked.len() < logged.dof() {
+        return Ok(());
+    }
+    Err(PrepareError::AllLocked {
+        asked: asked
+            .iter()
+            .map(|&j| logged.joint_names[j].clone())
+            .collect(),
+        unmeasured: report.unmeasured.clone(),
+    })
+}
+
 /// Runs the pipeline (module docs) on `logged`, which [`Logged::validate`] has passed.
 pub fn prepare(logged: &Logged, opts: &Options) -> Result<Prepared, PrepareError> {
     logged.validate()?;
@@ -462,11 +490,7 @@ pub fn prepare(logged: &Logged, opts: &Options) -> Result<Prepared, PrepareError
         return Err(PrepareError::TimeUnit { period });
     }
     let rate = 1.0 / period;
-    let max = MAX_CUTOFF_FRACTION * rate;
-    let min = MIN_CUTOFF_FRACTION * rate;
-    if let Some(cutoff) = opts.cutoff.filter(|c| !(*c >= min && *c <= max)) {
-        return Err(PrepareError::Cutoff { cutoff, rate, max });
-    }
+    check_cutoff(opts.cutoff, rate)?;
     let locked = lock_columns(logged, &opts.lock)?;
     let derive = Derive {
         qd: logged.qd.is_none(),
@@ -510,15 +534,7 @@ pub fn prepare(logged: &Logged, opts: &Options) -> Result<Prepared, PrepareError
         });
     }
     finish(logged, &mut runs, &mut report, &locked);
-    if report.locked.len() == logged.dof() {
-        return Err(PrepareError::AllLocked {
-            asked: locked
-                .iter()
-                .map(|&j| logged.joint_names[j].clone())
-                .collect(),
-            unmeasured: report.unmeasured.clone(),
-        });
-    }
+    check_not_all_locked(logged, &report, &locked)?;
     Ok(Prepared { runs, report })
 }
 

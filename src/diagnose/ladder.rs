@@ -1118,7 +1118,9 @@ struct NextStep {
 }
 
 /// The next step: every candidate fitted with the set so far and scored on the held-out data;
-/// the winner and the candidates tied with it, or why the ladder stops.
+/// the winner and the candidates tied with it, or why the ladder stops. A body step must weigh
+/// its mass: where the data see only a body's first moment `m c`, a description's error
+/// carried to another motion fits as well as a payload does.
 fn next_step(
     problem: &Problem,
     data: &Data,
@@ -1128,16 +1130,9 @@ fn next_step(
     settings: &Settings,
 ) -> Result<NextStep, (Stop, Vec<AlsoFit>)> {
     let model = problem.stage.model;
-    let mut scored = scored_candidates(problem, data, selected, set, sse);
-    // A kind offered only for its tie in cross-validation competes where it is significant
-    // itself; it never ends the ladder in another's place.
-    scored.retain(|s| {
-        let tied_only = s.0.variant().is_some_and(|v| selected.tied_only(&v));
-        !tied_only || (s.1 >= settings.min_reduction && s.2 >= settings.min_t)
-    });
+    let scored = scored_candidates(problem, data, selected, set, sse);
+    let mut scored = significant_if_tied_only(scored, selected, settings);
     scored.sort_by(|a, b| b.1.total_cmp(&a.1));
-    // A body step must weigh its mass: where the data see only a body's first moment `m c`,
-    // a description's error carried to another motion fits as well as a payload does.
     let (scored, unweighed): (Vec<Scored>, Vec<Scored>) = scored
         .into_iter()
         .partition(|s| s.0.body(data.n).is_none() || s.3.is_some());
@@ -1184,6 +1179,20 @@ fn next_step(
         also_fit,
         unweighed,
     })
+}
+
+/// A kind offered only for its tie in cross-validation competes where it is significant
+/// itself: it never ends the ladder in another's place.
+fn significant_if_tied_only(
+    mut scored: Vec<Scored>,
+    selected: &Selected,
+    settings: &Settings,
+) -> Vec<Scored> {
+    scored.retain(|s| {
+        let tied_only = s.0.variant().is_some_and(|v| selected.tied_only(&v));
+        !tied_only || (s.1 >= settings.min_reduction && s.2 >= settings.min_t)
+    });
+    scored
 }
 
 /// A simpler explanation is kept over the best-fitting one (`scored[0]`) only where it is

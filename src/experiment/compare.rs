@@ -249,7 +249,8 @@ fn point_of(grid: &[(String, Column)], i: usize) -> Vec<String> {
         .collect()
 }
 
-/// The samples of `metric` in the rows table of `dir`.
+/// The samples of `metric` in the rows table of `dir`, each column read strictly (a word among
+/// the metric's numbers is an error, not a row dropped).
 fn samples(dir: &Path, metric: &str) -> Result<Vec<Sample>, CompareError> {
     let (path, df) = rows_table(dir)?;
     let names: Vec<String> = df
@@ -267,12 +268,9 @@ fn samples(dir: &Path, metric: &str) -> Result<Vec<Sample>, CompareError> {
             column: c.into(),
             columns: names.join(", "),
         })?;
-        // Strict: a value that is not of the type (a word among the metric's numbers) is an
-        // error, not a row dropped.
         Ok(column.strict_cast(t).map_err(|e| invalid(c, e))?)
     };
-    check_whole_seeds(&df, &path)?;
-    let seed = cast("seed", &DataType::Int64)?;
+    let seed = check_whole_seeds(&df, &path).and_then(|_| cast("seed", &DataType::Int64))?;
     let n_s = cast("n_s", &DataType::UInt64)?;
     let set = cast("constraints", &DataType::String)?;
     let value = cast(metric, &DataType::Float64)?;

@@ -102,6 +102,19 @@ fn check_not_compressed(path: &Path) -> Result<(), IoError> {
     Ok(())
 }
 
+/// Why message `sequence`'s data column (`value`) is not the CDR bytes rosbag2 stores.
+fn not_a_blob(value: Option<rusqlite::types::ValueRef>, sequence: u64) -> String {
+    use rusqlite::types::ValueRef;
+    let got = match value {
+        Some(ValueRef::Text(_)) => "text",
+        Some(ValueRef::Integer(_)) => "an integer",
+        Some(ValueRef::Real(_)) => "a real number",
+        Some(ValueRef::Null) => "NULL",
+        _ => "not a blob",
+    };
+    format!("message {sequence}: its data column holds {got}, where rosbag2 stores each message's CDR bytes as a BLOB")
+}
+
 /// Feeds every message of a rosbag2 SQLite database to `reader`, in time order.
 pub(crate) fn read_sqlite(path: &Path, reader: &mut Reader) -> Result<(), IoError> {
     use rusqlite::{Connection, OpenFlags};
@@ -140,18 +153,7 @@ pub(crate) fn read_sqlite(path: &Path, reader: &mut Reader) -> Result<(), IoErro
             .get_ref(2)
             .map_err(sql)?
             .as_blob()
-            .map_err(|_| {
-                let got = match row.get_ref(2) {
-                    Ok(rusqlite::types::ValueRef::Text(_)) => "text",
-                    Ok(rusqlite::types::ValueRef::Integer(_)) => "an integer",
-                    Ok(rusqlite::types::ValueRef::Real(_)) => "a real number",
-                    Ok(rusqlite::types::ValueRef::Null) => "NULL",
-                    _ => "not a blob",
-                };
-                bad(format!(
-                    "message {sequence}: its data column holds {got}, where rosbag2 stores each message's CDR bytes as a BLOB"
-                ))
-            })?;
+            .map_err(|_| bad(not_a_blob(row.get_ref(2).ok(), sequence)))?;
         let (topic, kind) = topics.get(&id).ok_or_else(|| {
             bad(format!(
                 "message {sequence} names topic id {id}, which the topics table lacks"
