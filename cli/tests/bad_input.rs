@@ -201,7 +201,7 @@ fn negative_option_values_reach_the_option_check() {
     // Before: "unexpected argument '-1' found" without naming the option's rule.
     let (ok, err) = physid(&["identify", "--data", "x.csv", "--eps", "-1"]);
     assert!(
-        !ok && err.contains("--eps must be a finite number >= 0, got -1"),
+        !ok && err.contains("--eps must be a margin in [0, 1]"),
         "{err}"
     );
     let (ok, err) = physid(&["identify", "--data", "x.csv", "--prior-weight", "-1"]);
