@@ -70,7 +70,15 @@ def test_an_interrupted_sweep_writes_no_cell_after_and_does_not_merge(tmp_path):
     from test_identify import physid_workers
     from test_simulate import interrupted
 
-    s = sweep_file(tmp_path)
+    # Cells of 40,000 samples each (a few seconds on one thread), so the interrupt lands
+    # in the first.
+    p = tmp_path / "long.toml"
+    p.write_text(
+        f'scenario = "{BASE}"\n[grid]\n"sensors.torque_noise" = [0.1, 0.5]\n'
+        "[experiment]\nseeds = 2\nsizes = [30, 20000]\nvalidation = 20000\n"
+        'constraints = ["none", "ellipsoid"]\n'
+    )
+    s = str(p)
     out = tmp_path / "res"
 
     def cells():
