@@ -55,7 +55,9 @@ pub struct Args {
     /// `limits.acceleration`), else 3 rad/s², below common arms' limits.
     #[arg(long, value_delimiter = ',', allow_negative_numbers = true)]
     max_acceleration: Option<Vec<f64>>,
-    /// Jerk limit (rad/s³), as --max-acceleration; default the description's, else 30 rad/s³.
+    /// Jerk limit (rad/s³), as --max-acceleration; default the description's, else 30 rad/s³;
+    /// `inf`: no jerk limit (the acceleration limit, which bounds the motor current, has no such
+    /// value).
     #[arg(long, value_delimiter = ',', allow_negative_numbers = true)]
     max_jerk: Option<Vec<f64>>,
     /// Start and end at rest (s): the motion fades in from rest over this long and out to rest
