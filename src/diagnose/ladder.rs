@@ -1203,7 +1203,7 @@ fn significant_if_tied_only(
 /// (semi-real seed 2, case 27: the gain was injected); 1.42 kg on `lwr_5_link` 97.4 % and a gain
 /// on every joint 95.2 % (baseline mode, case 13: the payload).
 fn simplest_or_best(data: &Data, scored: &[Scored], simplest: usize, p0: usize) -> usize {
-    let left = |i: usize| (1.0 - scored[i].1).max(1e-12);
+    let left = |i: usize| left_after(&scored[i]);
     let nested = || spanned_by(data, &scored[simplest].0, &scored[0].0, p0);
     if simplest == 0 || left(simplest) <= CLOSE_FIT * left(0) || nested() {
         simplest
@@ -1220,11 +1220,16 @@ fn simplest_or_best(data: &Data, scored: &[Scored], simplest: usize, p0: usize) 
 /// the delay kept for its one column. No injected delay, payload or other effect of the
 /// benchmarks had the friction in its tie.
 fn friction_where_tied(scored: &[Scored], tied: &[usize], chosen: usize) -> usize {
-    let left = |i: usize| (1.0 - scored[i].1).max(1e-12);
+    let left = |i: usize| left_after(&scored[i]);
     tied.iter()
         .copied()
         .find(|&i| scored[i].0 == Explanation::Friction && left(i) <= CLOSE_FIT * left(chosen))
         .unwrap_or(chosen)
+}
+
+/// The fraction of the held-out mean square a candidate leaves (kept above zero for ratios).
+fn left_after(s: &Scored) -> f64 {
+    (1.0 - s.1).max(1e-12)
 }
 
 /// Two explanations fit practically alike when one leaves at most this many times the held-out

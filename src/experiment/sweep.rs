@@ -133,16 +133,13 @@ pub fn load(path: &Path) -> Result<(SweepSpec, PathBuf, String), IoError> {
             ));
         }
         let values = v.as_array().expect("an array, checked above");
-        if let Some((i, x)) = values
-            .iter()
-            .enumerate()
-            .find(|(i, x)| values[..*i].contains(x))
-        {
+        if let Some((j, i)) = crate::io::first_repeat(values, |_| true) {
             return Err(IoError::invalid(
                 path,
                 format!(
-                    "grid.\"{k}\": the value {x} is listed twice (entries {} and {}): each grid point is one cell per seed",
-                    values.iter().position(|y| y == x).map_or(0, |p| p + 1),
+                    "grid.\"{k}\": the value {} is listed twice (entries {} and {}): each grid point is one cell per seed",
+                    values[i],
+                    j + 1,
                     i + 1
                 ),
             ));

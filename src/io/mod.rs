@@ -357,6 +357,19 @@ impl StagingDir {
     }
 }
 
+/// The first item of `items` (among those `counted`) that repeats an earlier one: the earlier
+/// one's index and its own.
+pub fn first_repeat<T: PartialEq>(
+    items: &[T],
+    counted: impl Fn(&T) -> bool,
+) -> Option<(usize, usize)> {
+    items
+        .iter()
+        .enumerate()
+        .filter(|(_, x)| counted(x))
+        .find_map(|(i, x)| items[..i].iter().position(|y| y == x).map(|j| (j, i)))
+}
+
 /// The memory available to a new allocation (bytes; Linux's `MemAvailable`, `None` where it
 /// cannot be read).
 pub fn available_memory() -> Option<f64> {

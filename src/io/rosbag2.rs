@@ -62,14 +62,11 @@ pub fn files(dir: &Path) -> Result<(Vec<PathBuf>, Storage), IoError> {
         return Err(bad("lists no relative_file_paths".into()));
     }
     let listed = &info.relative_file_paths;
-    if let Some((i, f)) = listed
-        .iter()
-        .enumerate()
-        .find(|(i, f)| listed[..*i].contains(f))
-    {
+    if let Some((j, i)) = super::first_repeat(listed, |_| true) {
         return Err(bad(format!(
-            "lists {f} twice in relative_file_paths (entries {} and {}): each file of a recording is read once",
-            listed.iter().position(|x| x == f).map_or(0, |p| p + 1),
+            "lists {} twice in relative_file_paths (entries {} and {}): each file of a recording is read once",
+            listed[i],
+            j + 1,
             i + 1
         )));
     }

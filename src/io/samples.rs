@@ -167,20 +167,19 @@ struct JointKeys {
 
 /// A header names each column physid reads (`t`, `q…`, `dq…`, `ddq…`, `tau…`) once.
 fn check_unique(header: &[String], path: &Path) -> Result<(), IoError> {
-    let read = |h: &str| h == "t" || ["q", "dq", "ddq", "tau"].iter().any(|g| h.starts_with(g));
-    for (i, h) in header.iter().enumerate().filter(|(_, h)| read(h)) {
-        if let Some(j) = header[..i].iter().position(|x| x == h) {
-            return Err(IoError::invalid(
-                path,
-                format!(
-                    "column {h} appears twice (columns {} and {}, counting from 1)",
-                    j + 1,
-                    i + 1
-                ),
-            ));
-        }
+    let read = |h: &String| h == "t" || ["q", "dq", "ddq", "tau"].iter().any(|g| h.starts_with(g));
+    match super::first_repeat(header, read) {
+        Some((j, i)) => Err(IoError::invalid(
+            path,
+            format!(
+                "column {} appears twice (columns {} and {}, counting from 1)",
+                header[i],
+                j + 1,
+                i + 1
+            ),
+        )),
+        None => Ok(()),
     }
-    Ok(())
 }
 
 /// Whether `h` is a numbered position column `qK` with `K > n`.
