@@ -286,6 +286,46 @@ fn a_rosbag2_directory_split_in_two_files_on_another_topic_reads_whole() {
     let from_db = read(&db_bag, &model, &opts).0;
     assert_eq!(from_db.q, measured.q);
     assert_eq!(from_db.tau, measured.tau);
+    // The one recording given as its MCAP bag and as its SQLite conversion: the files differ,
+    // the samples do not (before: every sample counted twice).
+    let err = io::load_all(&[&bag, &db_bag], &model, &opts)
+        .unwrap_err()
+        .to_string();
+    assert!(
+        err.contains("run_sqlite")
+            && err.contains(&format!("holds the same {} samples as", measured.len()))
+            && err.contains("run_2026"),
+        "{err}"
+    );
+    // metadata.yaml of another recording: the topic listed with another type, or a topic
+    // listed with messages that no file holds (before: read without a word).
+    for (listed, says) in [
+        (
+            "name: /leg/joint_states\n        type: std_msgs/msg/Float64MultiArray\n      message_count: 300",
+            "lists /leg/joint_states as std_msgs/msg/Float64MultiArray, but the bag's files store it as sensor_msgs/msg/JointState",
+        ),
+        (
+            "name: /joint_states\n        type: sensor_msgs/msg/JointState\n      message_count: 300",
+            "lists /joint_states (sensor_msgs/msg/JointState) with 300 messages, but none of the bag's files has a message on it",
+        ),
+    ] {
+        std::fs::write(
+            db_bag.join("metadata.yaml"),
+            format!("rosbag2_bagfile_information:\n  storage_identifier: sqlite3\n  relative_file_paths: [run_sqlite_0.db3]\n  topics_with_message_count:\n    - topic_metadata:\n        {listed}\n"),
+        )
+        .unwrap();
+        let err = io::load_trajectory_with(&db_bag, &model, &opts)
+            .unwrap_err()
+            .to_string();
+        assert!(err.contains("metadata.yaml") && err.contains(says), "{err}");
+    }
+    // The metadata rosbag2 writes for these files (the topic, its type, a count) reads.
+    std::fs::write(
+        db_bag.join("metadata.yaml"),
+        "rosbag2_bagfile_information:\n  storage_identifier: sqlite3\n  relative_file_paths: [run_sqlite_0.db3]\n  topics_with_message_count:\n    - topic_metadata:\n        name: /leg/joint_states\n        type: sensor_msgs/msg/JointState\n        serialization_format: cdr\n      message_count: 300\n    - topic_metadata:\n        name: /rosout\n        type: rcl_interfaces/msg/Log\n      message_count: 0\n",
+    )
+    .unwrap();
+    assert_eq!(read(&db_bag, &model, &opts).0.q, measured.q);
     // A message stored as text, and the database compressed whole: each named.
     let saved = std::fs::read(&db).unwrap();
     let conn = rusqlite::Connection::open(&db).unwrap();

@@ -588,6 +588,11 @@ impl<'a> Reader<'a> {
         Ok(())
     }
 
+    /// The topics of the messages read so far: name → message type.
+    pub(crate) fn topics(&self) -> &BTreeMap<String, String> {
+        &self.topics
+    }
+
     /// The log read, or an error naming what the topic asked for is and which topics carry
     /// joint states.
     pub(crate) fn finish(self, path: &Path) -> Result<Log, IoError> {

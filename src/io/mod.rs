@@ -363,11 +363,14 @@ pub fn first_repeat<T: PartialEq>(
     items: &[T],
     counted: impl Fn(&T) -> bool,
 ) -> Option<(usize, usize)> {
-    items
-        .iter()
-        .enumerate()
-        .filter(|(_, x)| counted(x))
-        .find_map(|(i, x)| items[..i].iter().position(|y| y == x).map(|j| (j, i)))
+    first_repeat_by(items, |y, x| counted(x) && y == x)
+}
+
+/// The first item of `items` that `equal` finds equal to an earlier one: the earlier one's
+/// index and its own.
+pub fn first_repeat_by<T>(items: &[T], equal: impl Fn(&T, &T) -> bool) -> Option<(usize, usize)> {
+    (items.iter().enumerate())
+        .find_map(|(i, x)| items[..i].iter().position(|y| equal(y, x)).map(|j| (j, i)))
 }
 
 /// The memory available to a new allocation (bytes; Linux's `MemAvailable`, `None` where it
@@ -690,12 +693,11 @@ pub fn load_all(
             .collect();
         each.into_iter().collect::<Result<_, _>>()?
     };
+    let logs: Vec<&crate::prepare::Logged> = read.iter().map(|(l, _, _)| l).collect();
+    check_distinct_samples(paths, &logs)?;
     let mut popts = opts.prepare.clone();
     let own_edges = match popts.cutoff {
-        None => {
-            let logs: Vec<&crate::prepare::Logged> = read.iter().map(|(l, _, _)| l).collect();
-            crate::prepare::band_edges(&logs)
-        }
+        None => crate::prepare::band_edges(&logs),
         Some(_) => vec![None; read.len()],
     };
     popts.band_edge = own_edges.iter().flatten().copied().reduce(f64::max);
@@ -721,6 +723,30 @@ pub fn load_all(
         .collect()
 }
 
+/// Refuses two runs of `paths` whose samples are the same (every angle and torque equal): one
+/// recording in two files (an MCAP bag and its SQLite conversion, a CSV export), which
+/// [`check_distinct_recordings`] cannot see from the files' bytes and which would count each
+/// sample twice.
+fn check_distinct_samples(
+    paths: &[&Path],
+    logs: &[&crate::prepare::Logged],
+) -> Result<(), IoError> {
+    let same = |a: &crate::prepare::Logged, b: &crate::prepare::Logged| {
+        !a.is_empty() && a.q == b.q && a.tau == b.tau
+    };
+    let Some((i, j)) = first_repeat_by(logs, |a, b| same(a, b)) else {
+        return Ok(());
+    };
+    Err(IoError::invalid(
+        paths[j],
+        format!(
+            "holds the same {} samples as {} (every angle and torque equal): one recording given twice, in two files or formats; each run counts once",
+            logs[j].len(),
+            paths[i].display()
+        ),
+    ))
+}
+
 /// Reads joint states from an MCAP file or a rosbag2 directory (its `metadata.yaml` and the
 /// files it lists, in order; MCAP or SQLite storage) into one log, times from its first
 /// message ([`mcap_log::read_with`] for one file). Errors name the file, the topic and the
@@ -737,6 +763,9 @@ pub fn read_joint_log(path: &Path, opts: &mcap_log::ReadOptions) -> Result<mcap_
             rosbag2::Storage::Mcap => reader.mcap_file(file)?,
             rosbag2::Storage::Sqlite3 => rosbag2::read_sqlite(file, &mut reader)?,
         }
+    }
+    if path.is_dir() {
+        rosbag2::check_listed_topics(path, reader.topics())?;
     }
     let mut log = reader.finish(path)?;
     log.files = files;

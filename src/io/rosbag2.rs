@@ -28,12 +28,27 @@ struct Information {
     storage_identifier: Option<String>,
     #[serde(default)]
     relative_file_paths: Vec<String>,
+    #[serde(default)]
+    topics_with_message_count: Vec<TopicCount>,
 }
 
-/// The storage files of a rosbag2 directory, in the order its `metadata.yaml` lists them
-/// (`relative_file_paths`), and how they store messages. Errors name the directory or the
-/// metadata file and the key at fault.
-pub fn files(dir: &Path) -> Result<(Vec<PathBuf>, Storage), IoError> {
+/// One entry of `topics_with_message_count`.
+#[derive(Deserialize, Debug)]
+struct TopicCount {
+    topic_metadata: TopicMetadata,
+    #[serde(default)]
+    message_count: u64,
+}
+
+#[derive(Deserialize, Debug)]
+struct TopicMetadata {
+    name: String,
+    #[serde(rename = "type")]
+    kind: String,
+}
+
+/// The bag's `metadata.yaml`, parsed; errors name the file.
+fn information(dir: &Path) -> Result<(PathBuf, Information), IoError> {
     let meta_path = dir.join("metadata.yaml");
     if !meta_path.is_file() {
         return Err(IoError::invalid(
@@ -42,10 +57,44 @@ pub fn files(dir: &Path) -> Result<(Vec<PathBuf>, Storage), IoError> {
         ));
     }
     let text = super::read_to_string(&meta_path)?;
-    let bad = |m: String| IoError::invalid(&meta_path, m);
     let meta: Metadata = serde_yaml_ng::from_str(&text)
-        .map_err(|e| bad(format!("not a rosbag2 metadata file: {e}")))?;
-    let info = meta.rosbag2_bagfile_information;
+        .map_err(|e| IoError::invalid(&meta_path, format!("not a rosbag2 metadata file: {e}")))?;
+    Ok((meta_path, meta.rosbag2_bagfile_information))
+}
+
+/// Checks the topics the bag's files hold (`stored`: name → message type, of those with
+/// messages) against those its `metadata.yaml` lists with messages: a topic listed with
+/// another type, or listed with messages none of the files has, means the metadata belongs
+/// to another recording (or the files to another bag), and is refused naming both.
+pub(crate) fn check_listed_topics(
+    dir: &Path,
+    stored: &std::collections::BTreeMap<String, String>,
+) -> Result<(), IoError> {
+    let (meta_path, info) = information(dir)?;
+    for listed in &info.topics_with_message_count {
+        let TopicMetadata { name, kind } = &listed.topic_metadata;
+        let problem = match stored.get(name) {
+            Some(had) if had != kind => format!("lists {name} as {kind}, but the bag's files store it as {had}"),
+            None if listed.message_count > 0 => format!(
+                "lists {name} ({kind}) with {} messages, but none of the bag's files has a message on it",
+                listed.message_count
+            ),
+            _ => continue,
+        };
+        return Err(IoError::invalid(
+            &meta_path,
+            format!("{problem}: the metadata and the storage files are of different recordings (`ros2 bag reindex` rewrites metadata.yaml from the files)"),
+        ));
+    }
+    Ok(())
+}
+
+/// The storage files of a rosbag2 directory, in the order its `metadata.yaml` lists them
+/// (`relative_file_paths`), and how they store messages. Errors name the directory or the
+/// metadata file and the key at fault.
+pub fn files(dir: &Path) -> Result<(Vec<PathBuf>, Storage), IoError> {
+    let (meta_path, info) = information(dir)?;
+    let bad = |m: String| IoError::invalid(&meta_path, m);
     let storage = match info.storage_identifier.as_deref() {
         Some("mcap") => Storage::Mcap,
         Some("sqlite3") => Storage::Sqlite3,
