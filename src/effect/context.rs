@@ -231,6 +231,23 @@ fn processed_without_own(x: &[f64], at: &Layout, cutoff: f64, taps: &OwnTaps) ->
 
 /// The motor's offset in a backlash dead zone of `width` (rad) driven by the torque `tau`
 /// (sample-major), divided by the width: `effect::DeadZone` with the model's rotors.
+/// The torque (N m, sample-major) that carries each joint's motor across a backlash dead zone:
+/// behind a rotor, the logged torque low-passed (`low_passed`), since the rotor's inertia
+/// averages the sensor's chatter about zero and crosses once in tens of ms; without one, the
+/// logged torque itself (`raw`), since a motor without inertia sits on the side of each
+/// torque it is given, so a torque that chatters about zero (a feedback loop closed on the
+/// motor-side encoder) moves the encoder across the whole gap each time, and the processed
+/// offset is the filtered chatter rather than one step at the low-passed torque's zero.
+fn dead_zone_drive(model: &Model, low_passed: &[f64], raw: &[f64]) -> Vec<f64> {
+    let n = model.dof();
+    let has_rotor: Vec<bool> = (model.bodies().iter())
+        .map(|b| b.rotor.as_ref().is_some_and(|r| r.armature() > 0.0))
+        .collect();
+    (low_passed.iter().zip(raw).enumerate())
+        .map(|(i, (&lp, &r))| if has_rotor[i % n] { lp } else { r })
+        .collect()
+}
+
 fn dead_zone_offsets(model: &Model, tau: &[f64], at: &Layout, width: f64) -> Vec<f64> {
     let n = at.n;
     let Some(dt) = at.dt else {
@@ -313,12 +330,12 @@ impl<'a> Context<'a> {
         let taps = own_taps(at.dt, cutoff);
         let inner = |v: [Vec<f64>; 3]| v.map(|s| at.inner(s));
         let logged = processed_like_encoder(&at.tau, &at, cutoff);
-        // The side of the dead zone follows the torque actually delivered: the logged torque,
-        // low-passed (one crossing where the noisy torque chatters about zero), drives the
-        // motor across the gap as the simulator's dead zone does (`effect::DeadZone`:
-        // the description's rotor inertia, a crossing of tens of ms), at each width of the
-        // grid; the tangent takes half its sign (an instant crossing).
-        let half_sign: Vec<f64> = logged[0]
+        // The side of the dead zone follows the torque actually delivered
+        // ([`dead_zone_drive`]), which carries the motor across the gap as the simulator's
+        // dead zone does (`effect::DeadZone`), at each width of the grid; the tangent takes
+        // half its sign (an instant crossing).
+        let drive = dead_zone_drive(model, &logged[0], &at.tau);
+        let half_sign: Vec<f64> = drive
             .iter()
             .map(|t| 0.5 * crate::dynamics::sign(*t))
             .collect();
@@ -327,7 +344,7 @@ impl<'a> Context<'a> {
         for width in backlash_widths() {
             slack.push((
                 width,
-                processed(&dead_zone_offsets(model, &logged[0], &at, width)),
+                processed(&dead_zone_offsets(model, &drive, &at, width)),
             ));
         }
         let defl = inner(without_own(logged, &at.tau, &at, cutoff, &taps));
@@ -510,6 +527,41 @@ mod tests {
                 "channel {c}"
             );
         }
+    }
+
+    #[test]
+    fn a_motor_without_a_rotor_crosses_the_gap_with_each_torque_it_is_given() {
+        // A torque that chatters about zero (a feedback loop on the motor-side encoder): behind
+        // a rotor the dead zone is driven by the low-passed torque (one crossing), without one
+        // by the torque as logged, so the unit-width offset flips with every sign change.
+        let leg = crate::model::cheetah3::leg();
+        let bare = leg.without_rotors();
+        let n = leg.dof();
+        let raw: Vec<f64> = (0..600 * n)
+            .map(|i| if (i / n) % 2 == 0 { 1.3 } else { -0.7 })
+            .collect();
+        let low_passed = vec![0.1; raw.len()];
+        assert_eq!(dead_zone_drive(&leg, &low_passed, &raw), low_passed);
+        assert_eq!(dead_zone_drive(&bare, &low_passed, &raw), raw);
+        let mut tr = Trajectory::new(bare.joint_names(), true);
+        for k in 0..600 {
+            let tau = &raw[k * n..(k + 1) * n];
+            tr.push(k as f64 * 1e-3, &[0.0; 3], &[0.0; 3], Some(&[0.0; 3]), tau);
+        }
+        let ctx = Context::new(&bare, &bare.parameters(), &tr, 20.0);
+        let at = Layout::of(&tr);
+        let offsets = dead_zone_offsets(&bare, &raw, &at, 0.02);
+        // (The offset of a period is the one its start had: the previous torque's side.)
+        let flips = offsets.chunks(n).map(|s| s[0]).collect::<Vec<_>>();
+        assert!(flips[1..]
+            .windows(2)
+            .all(|w| w[0] == -w[1] && w[0].abs() == 0.5));
+        // Filtered at 20 Hz the 500 Hz chatter averages out: the processed offset is near
+        // zero (0.13 from leaving each sample's own taps out, which see only the other side),
+        // where the low-passed torque (0.3 N m throughout) would hold the motor at +½.
+        let angle = &ctx.slack(0.02)[0];
+        let mut middle = angle.chunks(n).skip(200).take(200);
+        assert!(middle.all(|s| s[0].abs() < 0.2), "{angle:?}");
     }
 
     /// The leg moving smoothly for `m` samples at 1 kHz, its torque smooth with a fast ripple.
