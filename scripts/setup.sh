@@ -31,7 +31,7 @@ setup_rust() {
     die "no cargo on PATH: install Rust 1.86 or newer (https://rustup.rs, or Debian's cargo package)"
 }
 
-# The Debian packages physid links against: OpenBLAS (BLAS and LAPACK, linked by build.rs).
+# The Debian packages physid links against: OpenBLAS (BLAS and LAPACK, linked by crates/core/build.rs).
 setup_system() {
   install_debian libopenblas-dev
 }

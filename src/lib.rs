@@ -5,7 +5,8 @@
 //! Inertial Parameter Identification" (RA-L 2018).
 //!
 //! The crate is built in floors; each module imports only from the floors below its own
-//! (checked by `tests/layering.rs`; docs/architecture.md §6):
+//! (floors 0 and 1 are the crate `physid-core`, which Cargo keeps from reaching up; the others
+//! are checked by `tests/layering.rs`; docs/architecture.md §6):
 //!
 //! 0. [`conic`]: the one builder of conic programs for Clarabel (PSD, second-order and
 //!    exponential cones, the log-det device), used by identification and the bounding
@@ -32,18 +33,15 @@
 #![warn(missing_docs)]
 
 pub mod api;
-pub mod conic;
 pub mod diagnose;
 pub mod dynamics;
 pub mod effect;
 pub mod experiment;
 pub mod ident;
 pub mod io;
-pub mod linalg;
 pub mod model;
-pub mod options;
 pub mod prepare;
-pub mod signal;
 pub mod sim;
-pub mod spatial;
-pub mod trajectory;
+
+// Floors 0 and 1 are their own crate (crates/core): Cargo keeps them from reaching up.
+pub use physid_core::{conic, linalg, options, signal, spatial, trajectory};

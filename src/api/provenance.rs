@@ -89,10 +89,10 @@ pub fn dependency_versions() -> serde_json::Map<String, serde_json::Value> {
             }
         }
     }
-    // The BLAS/LAPACK is the system's, linked by build.rs: record which library file.
+    // The BLAS/LAPACK is the system's, linked by crates/core/build.rs: record which library file.
     out.insert(
         "openblas".to_string(),
-        serde_json::Value::String(env!("PHYSID_OPENBLAS").to_string()),
+        serde_json::Value::String(physid_core::OPENBLAS_LIBRARY.to_string()),
     );
     out
 }

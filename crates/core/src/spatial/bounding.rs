@@ -183,7 +183,7 @@ pub fn capsule_ends(radius: f64, length: f64) -> Vec<Piece> {
 /// The vertices of the convex hull of `points` (parry's quickhull), which bound exactly what
 /// the points bound; all distinct points when the hull is degenerate (flat or too few points).
 pub fn hull_vertices(points: &[Vector3<f64>]) -> Vec<Vector3<f64>> {
-    use rapier3d_f64::parry::{math::Vector3 as P, transformation::try_convex_hull};
+    use parry3d_f64::{math::Vector3 as P, transformation::try_convex_hull};
     let input: Vec<P> = points.iter().map(|p| P::new(p.x, p.y, p.z)).collect();
     let mut out: Vec<Vector3<f64>> = match try_convex_hull(&input) {
         Ok((vertices, faces)) => {

@@ -21,8 +21,11 @@ pub trait OptionError {
 }
 
 /// Implements [`OptionError`] for an error enum with an `InvalidOption { option, expected,
-/// value }` variant.
-macro_rules! option_error {
+/// value }` variant (exported at the crate's root for the floors above; use it as
+/// `options::option_error!`).
+#[doc(hidden)]
+#[macro_export]
+macro_rules! __option_error {
     ($t:ty) => {
         impl $crate::options::OptionError for $t {
             fn invalid_option(&self) -> Option<(&'static str, &'static str, f64)> {
@@ -38,7 +41,7 @@ macro_rules! option_error {
         }
     };
 }
-pub(crate) use option_error;
+pub use crate::__option_error as option_error;
 
 /// `x` as written for a reader: plainly between 10⁻³ and 10⁶, and a whole number below 10¹⁵
 /// (a count), else in scientific notation (`1e300`, not three hundred digits).
