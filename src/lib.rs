@@ -5,8 +5,8 @@
 //! Inertial Parameter Identification" (RA-L 2018).
 //!
 //! The crate is built in floors; each module imports only from the floors below its own
-//! (floors 0 and 1 are the crate `physid-core`, which Cargo keeps from reaching up; the others
-//! are checked by `tests/layering.rs`; docs/architecture.md §6):
+//! (the ground floors, conic to dynamics, are the crate `physid-core`, which Cargo keeps from
+//! reaching up; the others are checked by `tests/layering.rs`; docs/architecture.md §6):
 //!
 //! 0. [`conic`]: the one builder of conic programs for Clarabel (PSD, second-order and
 //!    exponential cones, the log-det device), used by identification and the bounding
@@ -34,14 +34,12 @@
 
 pub mod api;
 pub mod diagnose;
-pub mod dynamics;
 pub mod effect;
 pub mod experiment;
 pub mod ident;
 pub mod io;
-pub mod model;
 pub mod prepare;
 pub mod sim;
 
-// Floors 0 and 1 are their own crate (crates/core): Cargo keeps them from reaching up.
-pub use physid_core::{conic, linalg, options, signal, spatial, trajectory};
+// The ground floors are their own crate (crates/core): Cargo keeps them from reaching up.
+pub use physid_core::{conic, dynamics, linalg, model, options, signal, spatial, trajectory};

@@ -594,7 +594,8 @@ fn the_api_floor_returns_named_types_not_tuples() {
 fn the_model_is_immutable_its_fields_private() {
     // pinocchio's Model: read through accessors, changed only by building another
     // (`with_parameters`, `with_bodies_edited`, ...), so that no edit leaves its layout stale.
-    let text = std::fs::read_to_string(common::root().join("src/model/mod.rs")).unwrap();
+    let text =
+        std::fs::read_to_string(common::root().join("crates/core/src/model/mod.rs")).unwrap();
     let start = text
         .find("pub struct Model {")
         .expect("Model in src/model/mod.rs");

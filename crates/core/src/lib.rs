@@ -10,13 +10,19 @@
 //!    `J(π)` and the ellipsoid conditions), [`signal`] (filters, differentiation), [`linalg`]
 //!    (scaling, least squares, minimum-norm solves), [`trajectory`] (joint time series,
 //!    recordings, sample rate, hold-out split, concatenation), [`options`] (the invalid-option
-//!    report every `Options::validate` shares).
+//!    report every `Options::validate` shares);
+//! 2. [`model`]: the immutable robot (tree, joints, rotors with their armature, friction,
+//!    limits, ellipsoids), the built-in Cheetah-3 leg, random trees;
+//! 3. [`dynamics`]: RNEA, CRBA, forward dynamics, generalized gravity, the regressor `Y θ` of
+//!    the paper's eq. 9, energy, kinematics, one algorithm per file.
 //!
 //! The `physid` crate re-exports each module under its own name (`physid::spatial`, …).
 #![warn(missing_docs)]
 
 pub mod conic;
+pub mod dynamics;
 pub mod linalg;
+pub mod model;
 pub mod options;
 pub mod signal;
 pub mod spatial;
