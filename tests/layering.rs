@@ -361,19 +361,85 @@ fn the_circle_check_sees_a_circle_when_there_is_one() {
     );
 }
 
+/// Whether a (trimmed) line starts a function with a body on the lines below: any
+/// visibility (`pub`, `pub(crate)`, `pub(in path)`), then any of `const`, `async`, `unsafe`,
+/// `extern "ABI"`, then `fn`; not a declaration without a body (`;`) or a one-line function.
+fn opens_a_function_body(t: &str) -> bool {
+    let mut rest = t;
+    if let Some(r) = rest.strip_prefix("pub") {
+        rest = match r.strip_prefix('(') {
+            Some(inner) => match inner.find(')') {
+                Some(close) => inner[close + 1..].trim_start(),
+                None => return false,
+            },
+            None if r.starts_with(' ') => r.trim_start(),
+            None => return false,
+        };
+    }
+    loop {
+        let before = rest;
+        for q in ["const ", "async ", "unsafe "] {
+            rest = rest.strip_prefix(q).unwrap_or(rest);
+        }
+        if let Some(r) = rest.strip_prefix("extern ") {
+            let r = r.trim_start();
+            rest = match r.strip_prefix('"') {
+                Some(abi) => abi
+                    .split_once('"')
+                    .map_or(r, |(_, after)| after.trim_start()),
+                None => r,
+            };
+        }
+        if rest == before {
+            break;
+        }
+    }
+    let line = t.trim_end();
+    rest.starts_with("fn ") && !line.ends_with(';') && !(line.contains('{') && line.ends_with('}'))
+}
+
 #[test]
-fn no_library_function_is_longer_than_60_lines() {
+fn a_function_opens_with_any_visibility_and_qualifiers() {
+    for yes in [
+        "fn f() {",
+        "pub fn f(",
+        "pub(crate) fn f<T>(x: T) -> T {",
+        "pub(in crate::io) fn f() {",
+        "pub(super) const fn f() -> u8 {",
+        "const fn f() {",
+        "pub unsafe extern \"C\" fn f() {",
+        "async fn f() {",
+    ] {
+        assert!(opens_a_function_body(yes), "{yes}");
+    }
+    for no in [
+        "fn f(&self) -> u8;",
+        "pub const fn f() -> u8 { 1 }",
+        "let fn_name = 3;",
+        "pub struct F {",
+        "// fn in a comment",
+        "pubfn f() {",
+    ] {
+        assert!(!opens_a_function_body(no), "{no}");
+    }
+}
+
+#[test]
+fn no_function_is_longer_than_60_lines() {
+    // The library's, the binary's and the Python extension's.
+    let mut files: Vec<PathBuf> = library_files().into_iter().map(|(_, f)| f).collect();
+    for glue in ["cli/src", "python/src"] {
+        let before = files.len();
+        rust_files(&common::root().join(glue), &mut files);
+        assert!(files.len() > before, "{glue}: the file walk found nothing");
+    }
     let mut long = vec![];
-    for (_, file) in &library_files() {
+    for file in &files {
         let text = std::fs::read_to_string(file).unwrap();
         let lines: Vec<&str> = text.lines().collect();
         for (i, line) in lines.iter().enumerate() {
             let t = line.trim_start();
-            let is_fn = t.starts_with("fn ")
-                || t.starts_with("pub fn ")
-                || t.starts_with("pub(crate) fn ")
-                || t.starts_with("pub(super) fn ");
-            if !is_fn {
+            if !opens_a_function_body(t) {
                 continue;
             }
             let indent = line.len() - t.len();

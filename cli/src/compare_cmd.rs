@@ -87,30 +87,7 @@ fn options(a: &Args) -> anyhow::Result<CompareOptions> {
 pub fn run(a: Args) -> anyhow::Result<()> {
     let opts = options(&a)?;
     let summary = std::env::var_os("GITHUB_STEP_SUMMARY").map(std::path::PathBuf::from);
-    let outputs: Vec<&std::path::Path> = a
-        .markdown
-        .iter()
-        .chain(a.junit.iter())
-        .chain(summary.iter())
-        .map(|p| p.as_path())
-        .collect();
-    let inputs: Vec<&std::path::Path> = [Some(a.result.as_path()), a.baseline.as_deref()]
-        .into_iter()
-        .flatten()
-        .collect();
-    // Every file of an input directory is an input (its rows.parquet, rows.csv, provenance).
-    let files: Vec<std::path::PathBuf> = inputs
-        .iter()
-        .filter_map(|d| std::fs::read_dir(d).ok())
-        .flatten()
-        .filter_map(|e| e.ok().map(|e| e.path()))
-        .filter(|p| p.is_file())
-        .collect();
-    let inputs: Vec<&std::path::Path> = inputs
-        .into_iter()
-        .chain(files.iter().map(|p| p.as_path()))
-        .collect();
-    physid::io::check_outputs(&outputs, &inputs)?;
+    check_files(&a, summary.as_deref())?;
     let cmp = match (&a.baseline, &a.variant) {
         (Some(b), _) => compare::against_baseline(&a.result, b, &opts)?,
         (None, Some(v)) => {
@@ -123,6 +100,41 @@ pub fn run(a: Args) -> anyhow::Result<()> {
         }
         (None, None) => bail!("give --baseline DIR or --variant A<=B"),
     };
+    write(&a, &cmp, summary.as_deref())?;
+    verdict(&cmp, &opts)
+}
+
+/// Refuses outputs (`--markdown`, `--junit`, the CI step summary) that are inputs: the result
+/// and baseline directories and every file in them (rows.parquet, rows.csv, provenance).
+fn check_files(a: &Args, summary: Option<&std::path::Path>) -> anyhow::Result<()> {
+    let outputs: Vec<&std::path::Path> = (a.markdown.iter().chain(a.junit.iter()))
+        .map(|p| p.as_path())
+        .chain(summary)
+        .collect();
+    let dirs: Vec<&std::path::Path> = [Some(a.result.as_path()), a.baseline.as_deref()]
+        .into_iter()
+        .flatten()
+        .collect();
+    let files: Vec<std::path::PathBuf> = (dirs.iter())
+        .filter_map(|d| std::fs::read_dir(d).ok())
+        .flatten()
+        .filter_map(|e| e.ok().map(|e| e.path()))
+        .filter(|p| p.is_file())
+        .collect();
+    let inputs: Vec<&std::path::Path> = dirs
+        .into_iter()
+        .chain(files.iter().map(|p| p.as_path()))
+        .collect();
+    physid::io::check_outputs(&outputs, &inputs)?;
+    Ok(())
+}
+
+/// Prints the Markdown and writes it, the JUnit XML and the CI step summary where asked.
+fn write(
+    a: &Args,
+    cmp: &compare::Comparison,
+    summary: Option<&std::path::Path>,
+) -> anyhow::Result<()> {
     let md = cmp.markdown();
     print!("{md}");
     if let Some(p) = &a.markdown {
@@ -136,10 +148,15 @@ pub fn run(a: Args) -> anyhow::Result<()> {
         let mut f = std::fs::OpenOptions::new()
             .create(true)
             .append(true)
-            .open(&summary)
+            .open(summary)
             .with_context(|| format!("$GITHUB_STEP_SUMMARY {}", summary.display()))?;
         f.write_all(md.as_bytes())?;
     }
+    Ok(())
+}
+
+/// Exit 1 on a regression; an error where groups cannot reach alpha (unless allowed).
+fn verdict(cmp: &compare::Comparison, opts: &CompareOptions) -> anyhow::Result<()> {
     let n = cmp.regressions();
     if n > 0 {
         return Err(super::Failed(format!(

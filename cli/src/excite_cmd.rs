@@ -192,6 +192,25 @@ fn print_score(s: &MotionScore, a: &Args) -> anyhow::Result<()> {
     Ok(())
 }
 
+/// Each joint's peaks in the check in simulation against the robot's own limits.
+fn print_simulated_use(sim: &[SimulatedUse]) {
+    println!("in simulation (peak / the robot's own limit): joint, q range [limits] rad, speed, acceleration rad/s², torque");
+    for u in sim {
+        println!(
+            "  {:<14} [{:.3}, {:.3}] in [{:.3}, {:.3}]  {:>5.2}  {:>7.2}  {:>5.2}{}",
+            u.joint,
+            u.q_range[0],
+            u.q_range[1],
+            u.q_limits[0],
+            u.q_limits[1],
+            u.velocity,
+            u.acceleration,
+            u.torque,
+            if u.within { "" } else { "  LEFT A LIMIT" }
+        );
+    }
+}
+
 fn print_design(d: &Design, simulated: Option<&[SimulatedUse]>, a: &Args) {
     println!(
         "{} Fourier excitation: {} harmonics at {} Hz (period {:.2} s), objective {} = {:.4} (best random start {:.4}); log det F / r = {:.4}; condition number {:.3e}; {} of {} parameter combinations identifiable; {} evaluations in {:.2} s",
@@ -226,21 +245,7 @@ fn print_design(d: &Design, simulated: Option<&[SimulatedUse]>, a: &Args) {
         );
     }
     if let Some(sim) = simulated {
-        println!("in simulation (peak / the robot's own limit): joint, q range [limits] rad, speed, acceleration rad/s², torque");
-        for u in sim {
-            println!(
-                "  {:<14} [{:.3}, {:.3}] in [{:.3}, {:.3}]  {:>5.2}  {:>7.2}  {:>5.2}{}",
-                u.joint,
-                u.q_range[0],
-                u.q_range[1],
-                u.q_limits[0],
-                u.q_limits[1],
-                u.velocity,
-                u.acceleration,
-                u.torque,
-                if u.within { "" } else { "  LEFT A LIMIT" }
-            );
-        }
+        print_simulated_use(sim);
     }
     if let Some(out) = &a.out {
         if simulated.is_some_and(|s| !s.iter().all(|u| u.within)) {

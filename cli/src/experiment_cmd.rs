@@ -164,9 +164,55 @@ fn run_motions(
     let provenance = provenance_metadata(path, spec);
     tables::write_parquet_with(&out.join("excitations.parquet"), &mut summary, &provenance)?;
     tables::write_csv(&out.join("excitations.csv"), &mut summary)?;
+    plot_motions(out, &summary, spec, &names)?;
+    let reach = write_reach(out, path, spec, &names, &rows, (wall, threads))?;
+    Provenance::new(path, text, spec, threads, wall).write(out)?;
+    staging.commit()?;
+    println!(
+        "{} motions × {} seeds in {wall:.1} s on {threads} threads; wrote {}/",
+        names.len(),
+        spec.seeds,
+        a.out.display()
+    );
+    print!("{}", reach_markdown(&names[0], &reach));
+    Ok(())
+}
+
+/// `excitations.md` and `excitations.json`: the median curves of the motions (`names`, their
+/// `rows`) and the samples each needs to reach the first one's largest-size errors, which it
+/// returns; `(wall, threads)` the run's.
+fn write_reach(
+    out: &Path,
+    path: &Path,
+    spec: &experiment::ExperimentSpec,
+    names: &[String],
+    rows: &[Vec<experiment::Row>],
+    (wall, threads): (f64, usize),
+) -> anyhow::Result<Vec<experiment::motions::Reach>> {
+    use experiment::motions;
+    let curves = motions::median_curves(names, rows, spec);
+    let reach = motions::reach(&curves, &names[0]);
+    let md = excitations_markdown(path, spec, names, &curves, &reach, wall, threads);
+    physid::io::write_atomic(&out.join("excitations.md"), md.as_bytes())?;
+    let json = serde_json::json!({ "reference": names[0], "reach": reach, "curves": curves });
+    physid::io::write_atomic(
+        &out.join("excitations.json"),
+        serde_json::to_string_pretty(&physid::io::versioned("excitations", &json))?.as_bytes(),
+    )?;
+    Ok(reach)
+}
+
+/// One line per motion against the training size, per constraint set: the validation error
+/// (`validation_SET.svg`) and the pseudo-inertia error (`parameter_SET.svg`).
+fn plot_motions(
+    out: &std::path::Path,
+    summary: &polars::prelude::DataFrame,
+    spec: &experiment::ExperimentSpec,
+    names: &[String],
+) -> anyhow::Result<()> {
     let name_refs: Vec<&str> = names.iter().map(|s| s.as_str()).collect();
     for set in &spec.constraints {
-        let s = tables::filter_eq(&summary, "constraints", set.name())?;
+        let s = tables::filter_eq(summary, "constraints", set.name())?;
         plots::plot_vs_ns_by(
             &s,
             "excitation",
@@ -192,24 +238,6 @@ fn run_motions(
             &out.join(format!("parameter_{}.svg", set.name())),
         )?;
     }
-    let curves = motions::median_curves(&names, &rows, spec);
-    let reach = motions::reach(&curves, &names[0]);
-    let md = excitations_markdown(path, spec, &names, &curves, &reach, wall, threads);
-    physid::io::write_atomic(&out.join("excitations.md"), md.as_bytes())?;
-    let json = serde_json::json!({ "reference": names[0], "reach": reach, "curves": curves });
-    physid::io::write_atomic(
-        &out.join("excitations.json"),
-        serde_json::to_string_pretty(&physid::io::versioned("excitations", &json))?.as_bytes(),
-    )?;
-    Provenance::new(path, text, spec, threads, wall).write(out)?;
-    staging.commit()?;
-    println!(
-        "{} motions × {} seeds in {wall:.1} s on {threads} threads; wrote {}/",
-        names.len(),
-        spec.seeds,
-        a.out.display()
-    );
-    print!("{}", reach_markdown(&names[0], &reach));
     Ok(())
 }
 
@@ -240,6 +268,42 @@ fn reach_markdown(reference: &str, reach: &[experiment::motions::Reach]) -> Stri
         );
     }
     s
+}
+
+/// One table of `excitations.md`: a median (`pick`: 0 validation RMS, 1 pseudo-inertia
+/// error, 2 validation against the true model) per training size and motion, under `set`.
+fn median_table(
+    label: &str,
+    pick: usize,
+    set: physid::ident::ConstraintSet,
+    names: &[String],
+    curves: &[experiment::motions::MedianCurve],
+    spec: &experiment::ExperimentSpec,
+) -> String {
+    use physid::io::md_cell;
+    let mut md = format!("\n## {label}, {}\n\n| n_s |", set.name());
+    for n in names {
+        md += &format!(" {} |", md_cell(n));
+    }
+    md += &format!("\n|---|{}\n", "---|".repeat(names.len()));
+    let of_set: Vec<&experiment::motions::MedianCurve> =
+        curves.iter().filter(|c| c.constraints == set).collect();
+    for (i, n_s) in spec.grid().iter().enumerate() {
+        md += &format!("| {n_s} |");
+        for c in &of_set {
+            let v = [c.val_rms[i], c.j_err[i], c.val_truth_rms[i]][pick];
+            md += &format!(" {v:.4} |");
+        }
+        md += "\n";
+    }
+    if pick < 2 {
+        md += &format!(
+            "\n![{label}, {set}]({}_{set}.svg)\n",
+            if pick == 0 { "validation" } else { "parameter" },
+            set = set.name()
+        );
+    }
+    md
 }
 
 /// `excitations.md`.
@@ -275,28 +339,7 @@ fn excitations_markdown(
         ("Median pseudo-inertia error ‖Ĵ − J‖/‖J‖ (mean over bodies)", 1),
     ] {
         for set in &spec.constraints {
-            md += &format!("\n## {label}, {}\n\n| n_s |", set.name());
-            for n in names {
-                md += &format!(" {} |", md_cell(n));
-            }
-            md += &format!("\n|---|{}\n", "---|".repeat(names.len()));
-            let of_set: Vec<&experiment::motions::MedianCurve> =
-                curves.iter().filter(|c| c.constraints == *set).collect();
-            for (i, n_s) in spec.grid().iter().enumerate() {
-                md += &format!("| {n_s} |");
-                for c in &of_set {
-                    let v = [c.val_rms[i], c.j_err[i], c.val_truth_rms[i]][pick];
-                    md += &format!(" {v:.4} |");
-                }
-                md += "\n";
-            }
-            if pick < 2 {
-                md += &format!(
-                    "\n![{label}, {set}]({}_{set}.svg)\n",
-                    if pick == 0 { "validation" } else { "parameter" },
-                    set = set.name()
-                );
-            }
+            md += &median_table(label, pick, *set, names, curves, spec);
         }
     }
     md += &format!(

@@ -72,6 +72,19 @@ pub fn run(a: Args) -> anyhow::Result<()> {
         );
         return Ok(());
     }
+    print_summary(path, &run, &report, out, csv);
+    Ok(())
+}
+
+/// The text summary of a simulation: rate and speed, joint ranges and peaks, the regressor's
+/// rank and condition, how well physid's inverse dynamics explains the run, what was written.
+fn print_summary(
+    path: &std::path::Path,
+    run: &physid::api::simulate::Simulation,
+    report: &physid::api::simulate::SimulateJson,
+    out: &std::path::Path,
+    csv: Option<&std::path::Path>,
+) {
     let (rec, ex, wall) = (&run.recording, &report.excitation, report.wall_seconds);
     let sim_s = report.simulated_seconds;
     let engine_name = match &report.integrator {
@@ -116,7 +129,6 @@ pub fn run(a: Args) -> anyhow::Result<()> {
         out.display(),
         csv.map_or(String::new(), |c| format!(" and {}", c.display()))
     );
-    Ok(())
 }
 
 fn fmt_e(v: &[f64]) -> String {

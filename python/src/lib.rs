@@ -765,19 +765,7 @@ fn identify<'py>(
     o.validate_data = paths("validate_data", validate_data)?;
     o.train = sample_range("--train", train)?;
     o.validate = sample_range("--validate", validate)?;
-    o.constraints = constraints
-        .map(str::parse)
-        .transpose()
-        .map_err(|e| value_error(format!("--constraints: {e}")))?;
-    let friction = match friction {
-        Some(f) => names(Some(f))?,
-        None => vec!["viscous".into(), "coulomb".into()],
-    };
-    o.terms = api::identify::parse_terms(&friction, &names(effects)?).map_err(value_error)?;
-    if let Some(p) = &effects_from {
-        o.terms
-            .extend(api::identify::confirmed_effects(p, m).map_err(value_error)?);
-    }
+    set_model_options(&mut o, m, constraints, (friction, effects), &effects_from)?;
     o.prior_weight = prior_weight;
     o.eps = eps;
     o.regularizer = regularizer
@@ -806,6 +794,31 @@ fn identify<'py>(
         source: robot.source.clone(),
         inputs,
     })
+}
+
+/// `identify`'s model keywords onto `o`: the constraint set, the friction and effect terms
+/// (`(friction, effects)`), and the effects confirmed in a diagnosis report (`effects_from`).
+fn set_model_options(
+    o: &mut IdentifyOptions,
+    m: &physid::model::Model,
+    constraints: Option<&str>,
+    (friction, effects): (Option<&Bound<'_, PyAny>>, Option<&Bound<'_, PyAny>>),
+    effects_from: &Option<PathBuf>,
+) -> PyResult<()> {
+    o.constraints = constraints
+        .map(str::parse)
+        .transpose()
+        .map_err(|e| value_error(format!("--constraints: {e}")))?;
+    let friction = match friction {
+        Some(f) => names(Some(f))?,
+        None => vec!["viscous".into(), "coulomb".into()],
+    };
+    o.terms = api::identify::parse_terms(&friction, &names(effects)?).map_err(value_error)?;
+    if let Some(p) = effects_from {
+        o.terms
+            .extend(api::identify::confirmed_effects(p, m).map_err(value_error)?);
+    }
+    Ok(())
 }
 
 /// A diagnosis of the gap between a robot description and its runs (`physid diagnose`):
@@ -1365,16 +1378,7 @@ fn simulate(
     seed: Option<u64>,
     progress: Option<PyObject>,
 ) -> PyResult<Simulation> {
-    let engine = match engine {
-        None => None,
-        Some("physid") => Some(physid::sim::scenario::Engine::Physid),
-        Some("rapier") => Some(physid::sim::scenario::Engine::Rapier),
-        Some(other) => {
-            return Err(value_error(format!(
-                "--engine: '{other}' is not one of physid, rapier"
-            )))
-        }
-    };
+    let engine = engine_of(engine)?;
     let files = physid::io::scenario_files(&scenario);
     let inputs: Vec<&Path> = files.iter().map(PathBuf::as_path).collect();
     let outputs: Vec<&Path> = std::iter::once(out.as_path())
@@ -1423,9 +1427,20 @@ fn simulate(
     Ok(Simulation { run, out })
 }
 
-/// A table's CSV text (or why it could not be made) as a pandas DataFrame: the columns of
-/// the CLI's CSV.
-/// A table written by the library as CSV text, read back as a DataFrame of `backend`.
+/// `simulate`'s `engine` keyword (`None`: the scenario's own).
+fn engine_of(engine: Option<&str>) -> PyResult<Option<physid::sim::scenario::Engine>> {
+    match engine {
+        None => Ok(None),
+        Some("physid") => Ok(Some(physid::sim::scenario::Engine::Physid)),
+        Some("rapier") => Ok(Some(physid::sim::scenario::Engine::Rapier)),
+        Some(other) => Err(value_error(format!(
+            "--engine: '{other}' is not one of physid, rapier"
+        ))),
+    }
+}
+
+/// A table written by the library as CSV text (or why it could not be made), read back as a
+/// DataFrame of `backend`: the columns of the CLI's CSV.
 fn table_of<'py>(
     py: Python<'py>,
     csv: Result<String, String>,
