@@ -37,9 +37,9 @@ pub mod diagnose;
 pub mod effect;
 pub mod experiment;
 pub mod ident;
-pub mod io;
-pub mod prepare;
 pub mod sim;
 
 // The ground floors are their own crate (crates/core): Cargo keeps them from reaching up.
 pub use physid_core::{conic, dynamics, linalg, model, options, signal, spatial, trajectory};
+// So is the io floor (crates/io: file formats and the data pipeline).
+pub use physid_io::{self as io, prepare};

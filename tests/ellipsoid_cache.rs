@@ -1,4 +1,4 @@
-//! The cache of bounding ellipsoids (src/io/cache.rs): a warm cache gives the very ellipsoids a
+//! The cache of bounding ellipsoids (crates/io/src/cache.rs): a warm cache gives the very ellipsoids a
 //! cold one computes, a file is what the next run reads, and a cache file that is garbage,
 //! non-finite or not positive definite is ignored and replaced, never used.
 

@@ -1,4 +1,4 @@
-//! A URDF link's geometry as bounding pieces ([`crate::spatial::bounding`]), for the paper's
+//! A URDF link's geometry as bounding pieces ([`physid_core::spatial::bounding`]), for the paper's
 //! "bounding ellipsoids from CAD geometry".
 //!
 //! - A link's `<collision>` shapes are used; if it has none, or one of them cannot be read, its
@@ -12,9 +12,9 @@
 //!   folders of `ROS_PACKAGE_PATH` and [`GeometryOptions::package_dirs`]; `file://` and plain
 //!   paths are absolute or relative to the URDF's folder.
 
-use crate::spatial::bounding::{self, Piece};
-use crate::spatial::{rpy_to_matrix, Ellipsoid};
 use nalgebra::{Matrix3, Vector3};
+use physid_core::spatial::bounding::{self, Piece};
+use physid_core::spatial::{rpy_to_matrix, Ellipsoid};
 use std::path::{Path, PathBuf};
 
 /// How bounding ellipsoids are taken from a description's geometry.
@@ -291,8 +291,8 @@ pub(crate) fn into_frame(pieces: &[Piece], rot: &Matrix3<f64>, pos: &Vector3<f64
 }
 
 /// A URDF geometry as a shape (m), a mesh by the file it resolves to (`None` when it does not).
-fn shape_kind(g: &urdf_rs::Geometry, lookup: &Lookup) -> Option<crate::model::ShapeKind> {
-    use crate::model::ShapeKind;
+fn shape_kind(g: &urdf_rs::Geometry, lookup: &Lookup) -> Option<physid_core::model::ShapeKind> {
+    use physid_core::model::ShapeKind;
     use urdf_rs::Geometry as G;
     Some(match g {
         G::Box { size } => ShapeKind::Box { size: size.0 },
@@ -318,8 +318,8 @@ fn shape_kind(g: &urdf_rs::Geometry, lookup: &Lookup) -> Option<crate::model::Sh
 pub(crate) fn link_shapes_and_missing(
     link: &urdf_rs::Link,
     lookup: &Lookup,
-) -> (Vec<crate::model::Shape>, Vec<String>) {
-    use crate::model::Shape;
+) -> (Vec<physid_core::model::Shape>, Vec<String>) {
+    use physid_core::model::Shape;
     use urdf_rs::Geometry as G;
     let collision: Vec<_> = link
         .collision
@@ -357,7 +357,7 @@ pub(crate) fn link_shapes_and_missing(
         .into_iter()
         .filter_map(|(origin, g)| {
             let kind = shape_kind(g, lookup)?;
-            let pose = crate::spatial::Transform::from_pose(
+            let pose = physid_core::spatial::Transform::from_pose(
                 &rpy_to_matrix(&Vector3::from(origin.rpy.0)),
                 &Vector3::from(origin.xyz.0),
             );

@@ -18,10 +18,10 @@
 use super::geometry::{self, Lookup};
 use super::robot_spec::RobotExtras;
 use super::IoError;
-use crate::model::{Body, Joint, JointFriction, JointLimits, Model, Rotor, STANDARD_GRAVITY};
-use crate::spatial::bounding::Piece;
-use crate::spatial::{rpy_to_matrix, InertialParams, Transform};
 use nalgebra::{Matrix3, Vector3};
+use physid_core::model::{Body, Joint, JointFriction, JointLimits, Model, Rotor, STANDARD_GRAVITY};
+use physid_core::spatial::bounding::Piece;
+use physid_core::spatial::{rpy_to_matrix, InertialParams, Transform};
 use std::collections::HashMap;
 use std::path::Path;
 
@@ -130,7 +130,7 @@ fn root_element(xml: &str) -> Option<&str> {
 fn physical_model(
     name: String,
     bodies: Vec<Body>,
-    (extras, base_shapes): (&RobotExtras, Vec<crate::model::Shape>),
+    (extras, base_shapes): (&RobotExtras, Vec<physid_core::model::Shape>),
     path: &Path,
 ) -> Result<Model, IoError> {
     let model_err = |source| IoError::Model {
@@ -229,7 +229,7 @@ fn bound_bodies(
     warnings: &mut Vec<String>,
 ) {
     // Only the bodies without geometry need the tree's bound (each reads the whole tree).
-    let tree_bounds: Vec<Option<crate::spatial::Ellipsoid>> = (0..bodies.len())
+    let tree_bounds: Vec<Option<physid_core::spatial::Ellipsoid>> = (0..bodies.len())
         .map(|i| {
             (shapes[i].has_no_geometry() && !lookup.opts.ignore_geometry)
                 .then(|| kinematic_bound(bodies, i))
@@ -267,7 +267,7 @@ const KINEMATIC_SHARE: f64 = 0.25;
 /// box of its joint's origin, its children's joint origins and its centre of mass, enlarged
 /// by [`KINEMATIC_MARGIN`] plus [`KINEMATIC_SHARE`] of the segment's length, then scaled until
 /// the description's own body lies inside (`tr(JQ) ≥ 0`).
-fn kinematic_bound(bodies: &[Body], i: usize) -> crate::spatial::Ellipsoid {
+fn kinematic_bound(bodies: &[Body], i: usize) -> physid_core::spatial::Ellipsoid {
     let b = &bodies[i];
     let m = b.inertia.mass();
     let mut points = vec![Vector3::zeros()];
@@ -280,7 +280,7 @@ fn kinematic_bound(bodies: &[Body], i: usize) -> crate::spatial::Ellipsoid {
         points.push(b.inertia.h() / m);
     }
     let reach = points.iter().map(|p| p.norm()).fold(0.0, f64::max);
-    let mut e = crate::spatial::Ellipsoid::around_points(
+    let mut e = physid_core::spatial::Ellipsoid::around_points(
         &points,
         KINEMATIC_MARGIN + KINEMATIC_SHARE * reach,
     );
@@ -468,7 +468,7 @@ type PendingRotor<'r> = (
 #[derive(Default)]
 struct Shapes {
     /// The shapes themselves, for export.
-    shapes: Vec<crate::model::Shape>,
+    shapes: Vec<physid_core::model::Shape>,
     /// Meshes of the shapes that were not found (left out of every export).
     lost: Vec<String>,
     pieces: Vec<Piece>,
@@ -507,7 +507,7 @@ impl Shapes {
     fn add_shapes(&mut self, link: &urdf_rs::Link, x_link: &Transform, lookup: &Lookup) {
         let (shapes, lost) = geometry::link_shapes_and_missing(link, lookup);
         self.shapes
-            .extend(shapes.into_iter().map(|s| crate::model::Shape {
+            .extend(shapes.into_iter().map(|s| physid_core::model::Shape {
                 pose: s.pose.compose(x_link),
                 kind: s.kind,
             }));
@@ -531,7 +531,7 @@ impl Shapes {
         element: &str,
         lookup: &Lookup,
         warnings: &mut Vec<String>,
-    ) -> Result<Option<crate::spatial::Ellipsoid>, String> {
+    ) -> Result<Option<physid_core::spatial::Ellipsoid>, String> {
         // Without geometry (or with `ignore_geometry`, where `add` collects none): no bound.
         if self.pieces.is_empty() && self.missing.is_empty() {
             return Ok(None);

@@ -14,7 +14,7 @@
 
 use super::samples::{Logged, Trajectory};
 use super::IoError;
-use crate::trajectory::Recording;
+use physid_core::trajectory::Recording;
 use serde::{Deserialize, Serialize};
 use std::collections::BTreeMap;
 use std::path::Path;

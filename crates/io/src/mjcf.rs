@@ -1,7 +1,7 @@
 //! MJCF export for MuJoCo cross-checks.
 //!
 //! MuJoCo has no geared rotor body, so each rotor is exported as physid's
-//! [`RotorModel::Reflected`](crate::model::RotorModel::Reflected): the rotor's inertia is lumped
+//! [`RotorModel::Reflected`](physid_core::model::RotorModel::Reflected): the rotor's inertia is lumped
 //! into its parent body (frozen at zero rotor angle) and its spin inertia becomes the joint's
 //! `armature = N² I_axis`; a rotor on the fixed base (the leg's ab/ad rotor) is a static body
 //! welded to the world, so the file's total mass is the model's. MuJoCo's `mj_inverse` on this
@@ -15,9 +15,9 @@
 //! the description's shapes as visual geoms (group 1, no contacts, so `mj_inverse` never sees a
 //! contact force; STL and OBJ meshes by absolute path, other mesh formats left out).
 
-use crate::model::{Joint, Model, Rotor, Shape, ShapeKind};
-use crate::spatial::{Ellipsoid, InertialParams, Transform};
 use nalgebra::{Rotation3, SymmetricEigen, UnitQuaternion, Vector3};
+use physid_core::model::{Joint, Model, Rotor, Shape, ShapeKind};
+use physid_core::spatial::{Ellipsoid, InertialParams, Transform};
 use std::fmt::Write;
 
 fn v3(v: &Vector3<f64>) -> String {
@@ -172,7 +172,7 @@ fn ellipsoid_geom(e: &Ellipsoid) -> String {
 }
 
 /// A joint with its armature, friction and limits.
-fn joint(b: &crate::model::Body) -> String {
+fn joint(b: &physid_core::model::Body) -> String {
     let (kind, axis) = match b.joint {
         Joint::Revolute { axis } => ("hinge", axis),
         Joint::Prismatic { axis } => ("slide", axis),

@@ -13,7 +13,7 @@
 use super::mcap_log::{check_cdr_lengths, JointSample, JOINT_SAMPLE_TYPE, TOPIC_PROCESSED};
 use super::mcap_walk::{each_message, Flow, Summary};
 use super::IoError;
-use crate::trajectory::{check_value, SampleRef, SampleSink, SAMPLE_GROUPS};
+use physid_core::trajectory::{check_value, SampleRef, SampleSink, SAMPLE_GROUPS};
 use std::ops::Range;
 use std::path::Path;
 

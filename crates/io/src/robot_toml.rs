@@ -34,10 +34,12 @@ use super::robot_spec::{
     RobotOptions, RotorSpec,
 };
 use super::IoError;
-use crate::model::cheetah3::{self, LegOptions, Truth};
-use crate::model::{Body, Joint, JointFriction, JointLimits, Model, RotorModel, STANDARD_GRAVITY};
-use crate::spatial::Transform;
 use nalgebra::Vector3;
+use physid_core::model::cheetah3::{self, LegOptions, Truth};
+use physid_core::model::{
+    Body, Joint, JointFriction, JointLimits, Model, RotorModel, STANDARD_GRAVITY,
+};
+use physid_core::spatial::Transform;
 use serde::Deserialize;
 use std::path::{Path, PathBuf};
 
@@ -157,7 +159,7 @@ impl RobotSpec {
 }
 
 /// A TOML error with the file name, line and column.
-pub(crate) fn toml_error(path: &Path, e: toml::de::Error) -> IoError {
+pub fn toml_error(path: &Path, e: toml::de::Error) -> IoError {
     IoError::Parse {
         path: path.to_path_buf(),
         message: e.to_string().trim_end().to_string(),

@@ -9,9 +9,9 @@
 //! A file that cannot be read, does not parse or holds a non-finite or non-positive-definite
 //! shape is ignored and replaced: the cache can make a run faster, never its answer different.
 
-use crate::spatial::bounding::Piece;
-use crate::spatial::Ellipsoid;
 use nalgebra::{Matrix3, Vector3};
+use physid_core::spatial::bounding::Piece;
+use physid_core::spatial::Ellipsoid;
 use std::collections::HashMap;
 use std::path::PathBuf;
 use std::sync::Mutex;
@@ -102,7 +102,7 @@ pub fn put(key: &str, e: &Ellipsoid, dir: &CacheDir) {
         "qs_m2": e.qs.as_slice(),
     })
     .to_string();
-    let _ = crate::io::write_atomic(&folder.join(format!("{key}.json")), text.as_bytes());
+    let _ = crate::write_atomic(&folder.join(format!("{key}.json")), text.as_bytes());
 }
 
 /// Forgets what this process computed (the disk cache stays): for a long-lived process, and

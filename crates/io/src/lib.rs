@@ -1,6 +1,12 @@
-//! File formats: robot descriptions in (URDF, TOML), models out (MJCF, URDF), and the one
-//! place that touches the file system. Every error names the file and the element at fault;
-//! every file is written atomically (temporary file, then rename).
+//! # physid-io
+//!
+//! File formats: robot descriptions in (URDF, TOML), models out (MJCF, URDF), logs in (CSV,
+//! MCAP, rosbag2 in MCAP or SQLite storage) and through the data pipeline ([`prepare`]), and
+//! the one place that touches the file system. Every error names the file and the element at
+//! fault; every file is written atomically (temporary file, then rename). A floor of physid
+//! (docs/architecture.md §6) of its own crate: it stands on `physid-core` only, which Cargo
+//! enforces; the `physid` crate re-exports it as `physid::io` (and `physid::prepare`).
+#![warn(missing_docs)]
 
 pub mod cache;
 pub mod document;
@@ -10,6 +16,7 @@ pub mod mcap_stream;
 mod mcap_walk;
 pub mod mjcf;
 pub mod plot;
+pub mod prepare;
 pub mod robot_spec;
 pub mod robot_toml;
 pub mod rosbag2;
@@ -17,8 +24,8 @@ pub mod samples;
 pub mod urdf;
 pub mod urdf_patch;
 
-use crate::model::{cheetah3, Model, ModelError};
-use crate::trajectory::Trajectory;
+use physid_core::model::{cheetah3, Model, ModelError};
+use physid_core::trajectory::Trajectory;
 use std::path::{Path, PathBuf};
 
 /// An input or output failure, naming the file and what in it is wrong.
@@ -74,7 +81,8 @@ pub enum IoError {
 }
 
 impl IoError {
-    pub(crate) fn invalid(path: &Path, message: impl Into<String>) -> Self {
+    /// An error naming `path` and what in it is wrong.
+    pub fn invalid(path: &Path, message: impl Into<String>) -> Self {
         IoError::Invalid {
             path: path.to_path_buf(),
             message: message.into(),
@@ -823,7 +831,7 @@ fn check_angle_unit(logged: &crate::prepare::Logged, model: &Model) -> Result<()
     let n = logged.dof();
     for (j, b) in model.bodies().iter().enumerate() {
         let (lo, hi) = (b.limits.lower, b.limits.upper);
-        let revolute = matches!(b.joint, crate::model::Joint::Revolute { .. });
+        let revolute = matches!(b.joint, physid_core::model::Joint::Revolute { .. });
         if !(revolute && lo.is_finite() && hi.is_finite()) || logged.is_empty() {
             continue;
         }

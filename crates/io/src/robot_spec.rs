@@ -4,9 +4,9 @@
 
 use super::geometry::GeometryOptions;
 use super::IoError;
-use crate::model::{Body, JointFriction, RotorModel};
-use crate::spatial::{rpy_to_matrix, Ellipsoid, InertialParams, Transform};
 use nalgebra::{Matrix3, Vector3};
+use physid_core::model::{Body, JointFriction, RotorModel};
+use physid_core::spatial::{rpy_to_matrix, Ellipsoid, InertialParams, Transform};
 use serde::Deserialize;
 use std::path::Path;
 
@@ -187,7 +187,7 @@ impl RobotOptions {
         match self.ellipsoid_margin {
             Some(m) if !(m.is_finite() && (0.0..=MAX_MARGIN).contains(&m)) => Err(format!(
                 "ellipsoid margin {} m must be a finite number >= 0 and at most {MAX_MARGIN} m (a wider ellipsoid bounds nothing on a robot)",
-                crate::options::readable(m)
+                physid_core::options::readable(m)
             )),
             _ => Ok(()),
         }
@@ -234,19 +234,19 @@ pub(crate) fn rotor_from_spec(
     joint_name: &str,
     joint_axis: Vector3<f64>,
     x_parent: &Transform,
-) -> Result<crate::model::Rotor, String> {
+) -> Result<physid_core::model::Rotor, String> {
     let name = spec
         .name
         .clone()
         .unwrap_or_else(|| format!("{joint_name}_rotor"));
     let what = format!("rotor '{name}'");
-    Ok(crate::model::Rotor {
+    Ok(physid_core::model::Rotor {
         x_rot: spec.origin.transform().compose(x_parent),
         joint: {
             let axis = spec.axis.map_or(joint_axis, Vector3::from);
             match spec.kind {
-                RotorJointType::Revolute => crate::model::Joint::Revolute { axis },
-                RotorJointType::Prismatic => crate::model::Joint::Prismatic { axis },
+                RotorJointType::Revolute => physid_core::model::Joint::Revolute { axis },
+                RotorJointType::Prismatic => physid_core::model::Joint::Prismatic { axis },
             }
         },
         gear_ratio: spec.gear_ratio,

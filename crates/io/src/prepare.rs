@@ -24,8 +24,8 @@
 //!
 //! Floor 2 (architecture.md §6): imports `trajectory` and `signal`.
 
-use crate::signal::{butterworth_lowpass, differentiate, FilterError, Sos};
-use crate::trajectory::{check_value, Margins, SampleError, Trajectory};
+use physid_core::signal::{butterworth_lowpass, differentiate, FilterError, Sos};
+use physid_core::trajectory::{check_value, Margins, SampleError, Trajectory};
 use serde::Serialize;
 
 /// Joint samples as read from a log, before the pipeline: time stamps as written (not yet
@@ -61,7 +61,7 @@ impl Logged {
         self.t.is_empty()
     }
 
-    /// Lengths consistent, every value finite and within [`crate::trajectory::max_abs`]; the
+    /// Lengths consistent, every value finite and within [`physid_core::trajectory::max_abs`]; the
     /// time stamps' order is the pipeline's to judge.
     pub fn validate(&self) -> Result<(), SampleError> {
         let (m, n) = (self.len(), self.dof());
@@ -88,7 +88,7 @@ impl Logged {
             check_value(k, t, "t", "t", t)?;
             for (name, v) in groups {
                 let Some(v) = v else { continue };
-                let limit = crate::trajectory::max_abs(name).0;
+                let limit = physid_core::trajectory::max_abs(name).0;
                 for j in 0..n {
                     let x = v[k * n + j];
                     // The field's name is only written out for a value that fails.
@@ -247,7 +247,7 @@ pub enum PrepareError {
         period: f64,
     },
     /// The cutoff is not a usable low-pass at this rate.
-    #[error("cutoff {} Hz: the data are sampled at {rate:.4} Hz, so the cutoff must be at least {min:.4e} Hz ({MIN_CUTOFF_FRACTION:e} of the rate: below, the filter settles over more samples than a log holds and its coefficients lose their precision) and at most {max:.4} Hz ({MAX_CUTOFF_FRACTION} of the rate)", crate::options::readable(*cutoff), min = MIN_CUTOFF_FRACTION * rate)]
+    #[error("cutoff {} Hz: the data are sampled at {rate:.4} Hz, so the cutoff must be at least {min:.4e} Hz ({MIN_CUTOFF_FRACTION:e} of the rate: below, the filter settles over more samples than a log holds and its coefficients lose their precision) and at most {max:.4} Hz ({MAX_CUTOFF_FRACTION} of the rate)", physid_core::options::readable(*cutoff), min = MIN_CUTOFF_FRACTION * rate)]
     Cutoff {
         /// The cutoff asked for (Hz).
         cutoff: f64,

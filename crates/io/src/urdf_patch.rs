@@ -15,9 +15,9 @@
 //! replaced from the end of the file backwards so earlier ranges stay valid.
 
 use super::IoError;
-use crate::model::Model;
-use crate::spatial::InertialParams;
 use nalgebra::Vector3;
+use physid_core::model::Model;
+use physid_core::spatial::InertialParams;
 use std::ops::Range;
 use std::path::Path;
 
@@ -198,7 +198,7 @@ fn fixed_descendants<'a, 'i>(
 
 /// An ellipsoid as a sidecar `[[robot.ellipsoid]]` entry: centre, semi-axes and the
 /// roll-pitch-yaw of its principal axes.
-fn ellipsoid_toml(name: &str, e: &crate::spatial::Ellipsoid, p: &InertialParams) -> String {
+fn ellipsoid_toml(name: &str, e: &physid_core::spatial::Ellipsoid, p: &InertialParams) -> String {
     let eig = nalgebra::SymmetricEigen::new(e.qs);
     let mut r = eig.eigenvectors;
     if r.determinant() < 0.0 {
@@ -225,14 +225,14 @@ fn ellipsoid_toml(name: &str, e: &crate::spatial::Ellipsoid, p: &InertialParams)
 
 /// A rotor that the URDF does not carry, as a sidecar `[[robot.rotor]]` (origin relative to its
 /// parent body's link, inertial as the paper's ten parameters).
-fn rotor_toml(joint: &str, r: &crate::model::Rotor) -> String {
+fn rotor_toml(joint: &str, r: &physid_core::model::Rotor) -> String {
     let (rot, pos) = r.x_rot.to_pose();
     let (roll, pitch, yaw) = nalgebra::Rotation3::from_matrix_unchecked(rot).euler_angles();
     let pi: Vec<String> = r.inertia.0.iter().map(|x| num(*x)).collect();
     let a = r.joint.axis();
     let kind = match r.joint {
-        crate::model::Joint::Revolute { .. } => "",
-        crate::model::Joint::Prismatic { .. } => "type = \"prismatic\"\n",
+        physid_core::model::Joint::Revolute { .. } => "",
+        physid_core::model::Joint::Prismatic { .. } => "type = \"prismatic\"\n",
     };
     format!(
         "[[robot.rotor]]\njoint = \"{joint}\"\nname = \"{}\"\n{kind}gear_ratio = {}\naxis = [{}, {}, {}]\norigin = {{ xyz = [{}, {}, {}], rpy = [{roll}, {pitch}, {yaw}] }}\ninertial = {{ pi = [{}] }}\n",
@@ -254,8 +254,8 @@ pub fn sidecar(
 ) -> String {
     let g = model.gravity();
     let rotor_model = match model.rotor_model() {
-        crate::model::RotorModel::Full => "full",
-        crate::model::RotorModel::Reflected => "reflected",
+        physid_core::model::RotorModel::Full => "full",
+        physid_core::model::RotorModel::Reflected => "reflected",
     };
     let mut s = format!(
         "# physid sidecar of {urdf_file}: what URDF cannot carry. Use it as --robot <this file>.\n[robot]\nurdf = \"{urdf_file}\"\ngeometry_ellipsoids = false\nrotor_model = \"{rotor_model}\"\ngravity = [{}, {}, {}]\n",

@@ -6,8 +6,8 @@
 
 use super::IoError;
 pub use crate::prepare::Logged;
-use crate::trajectory::SAMPLE_GROUPS;
-pub use crate::trajectory::{SampleError, SampleRef, SampleSink, Trajectory};
+use physid_core::trajectory::SAMPLE_GROUPS;
+pub use physid_core::trajectory::{SampleError, SampleRef, SampleSink, Trajectory};
 use std::path::Path;
 
 /// Shortest text that reads back as the same `f64`, in exponent form for very small or large
@@ -331,7 +331,7 @@ pub fn read_csv_logged(
                     c.header[col]
                 ))
             })?;
-            crate::trajectory::check_value(k, t.unwrap_or(v), group, &c.header[col], v)
+            physid_core::trajectory::check_value(k, t.unwrap_or(v), group, &c.header[col], v)
                 .map_err(|e| bad(format!("line {line}: {e}")))?;
             Ok(v)
         };
@@ -363,7 +363,7 @@ pub fn read_csv_logged(
 
 /// Checks sample `k`'s time `t` (s, column `name`): finite, and after the previous `prev`.
 fn check_time(k: usize, t: f64, prev: f64, name: &str) -> Result<(), String> {
-    crate::trajectory::check_value(k, t, "t", name, t)
+    physid_core::trajectory::check_value(k, t, "t", name, t)
         .map_err(|e| format!("line {}: {e}", k + 2))?;
     if t <= prev {
         return Err(format!(
@@ -411,7 +411,7 @@ pub fn stream_csv(
         // The value of column `c` in group `g` (t, q, dq, ddq, tau), checked like a trajectory's.
         let checked = |g: &str, c: usize, t: f64| -> Result<f64, IoError> {
             let v = get(c)?;
-            crate::trajectory::check_value(k, t, g, &header[c], v)
+            physid_core::trajectory::check_value(k, t, g, &header[c], v)
                 .map_err(|e| bad(format!("line {}: {e}", k + 2)))?;
             Ok(v)
         };
