@@ -131,14 +131,32 @@ fn runs_join_as_sums_and_bad_terms_are_named() {
         code == 2 && err.contains("the same recording is given twice"),
         "{err}"
     );
-    // ... but the same samples in another file (a trailing newline more) join as a sum: the
-    // same normal equations per sample, the same optimum.
+    // ... and so are the same samples in another file (a trailing newline more), by content.
     let again = dir.path().join("again.csv");
     let mut bytes = std::fs::read(a).unwrap();
     bytes.push(b'\n');
     std::fs::write(&again, bytes).unwrap();
+    let (code, _, err) = physid(&["identify", "--data", a, again.to_str().unwrap()]);
+    assert!(
+        code == 2 && err.contains("holds the same 8000 samples as"),
+        "{err}"
+    );
+    // The run cut in two files joins as a sum: the same normal equations per sample (q̇, q̈
+    // logged, nothing derived across the cut), the same optimum.
+    let text = std::fs::read_to_string(a).unwrap();
+    let (header, rows) = text.split_once('\n').unwrap();
+    let rows: Vec<&str> = rows.lines().collect();
+    let halves = [(0, &rows[..rows.len() / 2]), (1, &rows[rows.len() / 2..])].map(|(i, part)| {
+        let path = dir.path().join(format!("half{i}.csv"));
+        std::fs::write(&path, format!("{header}\n{}\n", part.join("\n"))).unwrap();
+        path
+    });
     let once = identify(&["--data", a]);
-    let twice = identify(&["--data", a, again.to_str().unwrap()]);
+    let twice = identify(&[
+        "--data",
+        halves[0].to_str().unwrap(),
+        halves[1].to_str().unwrap(),
+    ]);
     let (x, y) = (
         once["theta"].as_array().unwrap(),
         twice["theta"].as_array().unwrap(),
