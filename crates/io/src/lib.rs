@@ -354,7 +354,12 @@ impl StagingDir {
         };
         let staged = self.dir.keep();
         if self.target.exists() {
-            let old = staged.with_extension("old");
+            // The older result steps aside under the staging name (`.NAME.partial-XXXX.old`):
+            // a kill while it is removed leaves what the next run clears, never a stray
+            // `.NAME.old` (`with_extension` would cut the name at its first dot).
+            let mut old_name = staged.file_name().unwrap_or_default().to_os_string();
+            old_name.push(".old");
+            let old = staged.with_file_name(old_name);
             std::fs::rename(&self.target, &old).map_err(fs_err(&self.target))?;
             std::fs::rename(&staged, &self.target).map_err(fs_err(&self.target))?;
             std::fs::remove_dir_all(&old).map_err(fs_err(&old))?;
