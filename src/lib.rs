@@ -34,7 +34,6 @@
 
 pub mod api;
 pub mod diagnose;
-pub mod effect;
 pub mod experiment;
 pub mod ident;
 pub mod sim;
@@ -43,3 +42,5 @@ pub mod sim;
 pub use physid_core::{conic, dynamics, linalg, model, options, signal, spatial, trajectory};
 // So is the io floor (crates/io: file formats and the data pipeline).
 pub use physid_io::{self as io, prepare};
+// And the effect library (crates/effect).
+pub use physid_effect as effect;

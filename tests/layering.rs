@@ -41,32 +41,48 @@ fn library_roots() -> Vec<PathBuf> {
         root.join("src"),
         root.join("crates/core/src"),
         root.join("crates/io/src"),
+        root.join("crates/effect/src"),
     ]
 }
 
-/// The floor module a library file belongs to (`rel`: its path below its source folder):
-/// its first component, but in the io crate, whose root is the `io` module, every file but
-/// `prepare.rs` is `io`.
-fn module_of(src: &Path, rel: &Path) -> String {
-    let first = rel
-        .components()
-        .next()
-        .unwrap()
-        .as_os_str()
-        .to_string_lossy();
-    let module = first.trim_end_matches(".rs").to_string();
-    match src.ends_with("crates/io/src") && module != "prepare" {
-        true => "io".to_string(),
-        false => module,
+/// The module a crate's root is, for the floors' crates whose root is one module (`io`,
+/// `effect`); `None` for crates of several modules (the library's, the ground floors').
+fn root_module(src: &Path) -> Option<&'static str> {
+    ["io", "effect"]
+        .into_iter()
+        .find(|m| src.ends_with(format!("crates/{m}/src")))
+}
+
+/// A library file's path as a module path below the library's root (`rel`: its path below its
+/// source folder `src`): in a crate whose root is one module, `io/cache.rs`, `effect/mod.rs`
+/// for its `lib.rs` (`prepare.rs` of the io crate is its own module).
+fn logical(src: &Path, rel: &Path) -> PathBuf {
+    match root_module(src) {
+        Some("io") if rel == Path::new("prepare.rs") => rel.to_path_buf(),
+        Some(m) if rel == Path::new("lib.rs") => Path::new(m).join("mod.rs"),
+        Some(m) => Path::new(m).join(rel),
+        None => rel.to_path_buf(),
     }
 }
 
-/// The floor module `crate::name` names from a file under `src` (in the io crate, any name
-/// but `prepare` is an item of the `io` module at its root).
+/// The floor module a library file belongs to: its logical path's first component.
+fn module_of(src: &Path, rel: &Path) -> String {
+    let logical = logical(src, rel);
+    let first = logical.components().next().unwrap();
+    first
+        .as_os_str()
+        .to_string_lossy()
+        .trim_end_matches(".rs")
+        .to_string()
+}
+
+/// The floor module `crate::name` names from a file under `src` (in a crate whose root is one
+/// module, any name but the io crate's `prepare` is an item of that module).
 fn target_of(src: &Path, name: &str) -> String {
-    match src.ends_with("crates/io/src") && name != "prepare" {
-        true => "io".to_string(),
-        false => name.to_string(),
+    match root_module(src) {
+        Some("io") if name == "prepare" => name.to_string(),
+        Some(m) => m.to_string(),
+        None => name.to_string(),
     }
 }
 
@@ -287,9 +303,11 @@ fn no_import_circle_among_the_files_of_a_folder() {
             }
         }
     }
-    // The io crate's root is the io module's folder.
-    let io = common::root().join("crates/io/src");
-    folders.push((io.clone(), io));
+    // The io and effect crates' roots are their modules' folders.
+    for m in ["io", "effect"] {
+        let root = common::root().join(format!("crates/{m}/src"));
+        folders.push((root.clone(), root));
+    }
     let mut circles = vec![];
     let mut edges_seen = 0;
     for (src, dir) in &folders {
@@ -534,9 +552,9 @@ fn the_entry_modules_stay_short() {
     }
 }
 
-/// The files of `src/effect/` that are not a kind's: the table, the checks and trait of the
+/// The files of `crates/effect/src/` that are not a kind's: the table, the checks and trait of the
 /// simulator's form, the per-data state, the columns over a data set, the dead zone's dynamics.
-const EFFECT_SHARED: [&str; 5] = ["mod", "physics", "context", "library", "dead_zone"];
+const EFFECT_SHARED: [&str; 6] = ["mod", "lib", "physics", "context", "library", "dead_zone"];
 
 /// Lines of library code outside the kinds' own files that name a particular kind, as
 /// `Kind::X` (the diagnosis's table) or `EffectSpec::X` (the simulator's form).
@@ -561,13 +579,13 @@ fn kind_branches(rel: &Path, text: &str) -> Vec<String> {
 
 #[test]
 fn effect_kinds_are_matched_only_in_their_files() {
-    // A new effect kind is one file of `src/effect/` (its row of the table and its simulator
+    // A new effect kind is one file of `crates/effect/src/` (its row of the table and its simulator
     // form): no other library file names a particular kind, neither its `Kind` nor its
     // `EffectSpec` variant (tests and the CLI's flag names aside). The table's `mod.rs` lists
     // them, and the semi-real benchmark's order of injected kinds is kept there.
     let mut branching = vec![];
     for (src, file) in &library_files() {
-        let rel = file.strip_prefix(src).unwrap();
+        let rel = &logical(src, file.strip_prefix(src).unwrap());
         let stem = rel.file_stem().unwrap().to_str().unwrap();
         let kind_file = rel.starts_with("effect") && !EFFECT_SHARED.contains(&stem);
         if kind_file || rel == Path::new("effect/mod.rs") {
@@ -711,7 +729,7 @@ fn the_model_is_immutable_its_fields_private() {
     assert!(public.is_empty(), "public fields of Model: {public:?}");
 }
 
-/// The entries of the `effect_kinds!` list in `src/effect/mod.rs`: per entry its module, its
+/// The entries of the `effect_kinds!` list in `crates/effect/src/lib.rs`: per entry its module, its
 /// `Kind` variant and its `EffectSpec` variant (each when given).
 fn effect_entries(table: &str) -> Vec<(String, Option<String>, Option<String>)> {
     let head = "\neffect_kinds! {\n";
@@ -741,12 +759,12 @@ fn effect_entries(table: &str) -> Vec<(String, Option<String>, Option<String>)> 
 fn every_effect_kind_has_its_own_file_and_one_entry_in_the_list() {
     // The kinds are the entries of `effect_kinds!` (the macro makes `Kind`, `KIND_TABLE`,
     // `EffectSpec` and its `physics()` arms from them, and checks at compile time that each
-    // table row is its own kind's); each entry's module is `src/effect/<module>.rs`, named
+    // table row is its own kind's); each entry's module is `crates/effect/src/<module>.rs`, named
     // after its variants, holding the kind's row (`SPEC`, naming that variant) and, for the
     // simulator's form, its struct and `impl Physics`; every file of the folder is an entry's
     // or one of the shared ones.
-    let dir = common::root().join("src/effect");
-    let table = std::fs::read_to_string(dir.join("mod.rs")).unwrap();
+    let dir = common::root().join("crates/effect/src");
+    let table = std::fs::read_to_string(dir.join("lib.rs")).unwrap();
     let entries = effect_entries(&table);
     let kinds = entries.iter().filter(|e| e.1.is_some()).count();
     let specs = entries.iter().filter(|e| e.2.is_some()).count();
@@ -764,7 +782,7 @@ fn every_effect_kind_has_its_own_file_and_one_entry_in_the_list() {
     let mut missing = vec![];
     for (module, kind, spec) in &entries {
         let Ok(text) = std::fs::read_to_string(dir.join(format!("{module}.rs"))) else {
-            missing.push(format!("{module}: no file src/effect/{module}.rs"));
+            missing.push(format!("{module}: no file crates/effect/src/{module}.rs"));
             continue;
         };
         for name in kind.iter().chain(spec) {
@@ -793,7 +811,7 @@ fn every_effect_kind_has_its_own_file_and_one_entry_in_the_list() {
         let owned = EFFECT_SHARED.contains(&file.as_str()) || entries.iter().any(|e| e.0 == file);
         if !owned {
             missing.push(format!(
-                "src/effect/{file}.rs is neither an entry's nor a shared file"
+                "crates/effect/src/{file}.rs is neither an entry's nor a shared file"
             ));
         }
     }

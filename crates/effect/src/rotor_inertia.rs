@@ -3,7 +3,7 @@
 //! One row of the effect table (`super::KIND_TABLE`); equations and units in docs/diagnose.md.
 
 use super::{row, Blind, ColumnCount::PerJoint, Kind, KindSpec};
-use crate::model::Model;
+use physid_core::model::Model;
 
 /// The kind's row: name, columns, magnitudes, replay and the blind benchmark's draw.
 pub(super) const SPEC: KindSpec = KindSpec {
@@ -15,7 +15,7 @@ pub(super) const SPEC: KindSpec = KindSpec {
     blind: Blind::Single,
     draw: |m, _, _| {
         let armature = (0..m.dof())
-            .map(|i| crate::dynamics::armature(m, i))
+            .map(|i| physid_core::dynamics::armature(m, i))
             .collect();
         (None, armature)
     },

@@ -4,16 +4,16 @@
 //! ([`Context`]); a sample as a kind's columns see it ([`Sample`]) and their workspaces
 //! ([`Scratch`]). It knows no effect kind: the kinds (`super::kinds`) read it.
 
-use crate::dynamics::{regressor, Data};
-use crate::model::Model;
-use crate::trajectory::Trajectory;
 use nalgebra::{DMatrix, DVector, Vector3};
+use physid_core::dynamics::{regressor, Data};
+use physid_core::model::Model;
+use physid_core::trajectory::Trajectory;
 
 /// The sample period (s) of `tr`, `None` when it has none to give (fewer than two samples, or
 /// time stamps that do not advance): then nothing is differentiated or filtered, and the
 /// columns made of processed signals (compliance, backlash) are zero, never computed at a
 /// made-up rate. The diagnosis refuses such data up front (`stage::check_data`).
-pub(crate) fn sample_period(tr: &Trajectory) -> Option<f64> {
+pub fn sample_period(tr: &Trajectory) -> Option<f64> {
     tr.sample_period().filter(|dt| dt.is_finite() && *dt > 0.0)
 }
 
@@ -148,9 +148,9 @@ fn processed_like_encoder(x: &[f64], at: &Layout, cutoff: f64) -> [Vec<f64>; 3] 
 /// One signal processed like an encoder angle (see [`processed_like_encoder`]).
 fn process_column(col: &[f64], dt: f64, cutoff: f64) -> [Vec<f64>; 3] {
     let fs = 1.0 / dt;
-    let sos = crate::signal::butterworth_lowpass(2, cutoff.min(0.4 * fs), fs).ok();
+    let sos = physid_core::signal::butterworth_lowpass(2, cutoff.min(0.4 * fs), fs).ok();
     let filt = |v: &[f64]| sos.as_ref().map_or_else(|| v.to_vec(), |s| s.filtfilt(v));
-    let diff = |v: &[f64]| crate::signal::differentiate(v, dt);
+    let diff = |v: &[f64]| physid_core::signal::differentiate(v, dt);
     let d1 = filt(&diff(col));
     let d2 = filt(&diff(&d1));
     [filt(col), d1, d2]
@@ -295,7 +295,7 @@ fn predictions(
     let n = model.dof();
     let mut a = Vec::with_capacity(tr.len() * n);
     let mut b = Vec::with_capacity(tr.len() * n);
-    crate::dynamics::for_each_regressor(model, tr, 0..tr.len(), &mut |_, y| {
+    physid_core::dynamics::for_each_regressor(model, tr, 0..tr.len(), &mut |_, y| {
         a.extend((y * theta_a).iter());
         b.extend((y * theta_b).iter());
     });
@@ -337,7 +337,7 @@ impl<'a> Context<'a> {
         let drive = dead_zone_drive(model, &logged[0], &at.tau);
         let half_sign: Vec<f64> = drive
             .iter()
-            .map(|t| 0.5 * crate::dynamics::sign(*t))
+            .map(|t| 0.5 * physid_core::dynamics::sign(*t))
             .collect();
         let processed = |x: &[f64]| inner(processed_without_own(x, &at, cutoff, &taps));
         let mut slack = vec![(0.0, processed(&half_sign))];
@@ -534,7 +534,7 @@ mod tests {
         // A torque that chatters about zero (a feedback loop on the motor-side encoder): behind
         // a rotor the dead zone is driven by the low-passed torque (one crossing), without one
         // by the torque as logged, so the unit-width offset flips with every sign change.
-        let leg = crate::model::cheetah3::leg();
+        let leg = physid_core::model::cheetah3::leg();
         let bare = leg.without_rotors();
         let n = leg.dof();
         let raw: Vec<f64> = (0..600 * n)
@@ -585,7 +585,7 @@ mod tests {
 
     #[test]
     fn a_held_out_part_is_processed_as_the_whole_run_was() {
-        let model = crate::model::cheetah3::leg();
+        let model = physid_core::model::cheetah3::leg();
         let n = model.dof();
         let theta0 = model.parameters();
         let tr = moving_leg(&model, 3000);

@@ -8,8 +8,8 @@
 use super::physics::{self, Physics, ScenarioError};
 use super::EffectSpec;
 use super::{body_index, row, uniform, Blind, ColumnCount::Fixed, Grid, Kind, KindSpec};
-use crate::model::Model;
-use crate::spatial::InertialParams;
+use physid_core::model::Model;
+use physid_core::spatial::InertialParams;
 use nalgebra::Matrix3;
 use nalgebra::Vector3;
 use rand::Rng;

@@ -2,7 +2,7 @@
 //! log, its scenario keys, their checks and TOML) and the checks the kinds share. Each kind's
 //! struct and its physics live in the kind's own file; `super::EffectSpec` lists them once.
 
-use crate::model::Model;
+use physid_core::model::Model;
 
 /// The state an acting effect reads at one instant of the simulation.
 pub struct State<'a> {
@@ -67,11 +67,7 @@ pub struct ScenarioError {
 }
 
 /// `Ok` if `ok`, else the error of `key` with the reason.
-pub(crate) fn check(
-    ok: bool,
-    key: &str,
-    reason: impl FnOnce() -> String,
-) -> Result<(), ScenarioError> {
+pub fn check(ok: bool, key: &str, reason: impl FnOnce() -> String) -> Result<(), ScenarioError> {
     if ok {
         Ok(())
     } else {
@@ -83,21 +79,21 @@ pub(crate) fn check(
 }
 
 /// A finite number ≥ 0.
-pub(crate) fn non_negative(v: f64, key: &str) -> Result<(), ScenarioError> {
+pub fn non_negative(v: f64, key: &str) -> Result<(), ScenarioError> {
     check(v.is_finite() && v >= 0.0, key, || {
         format!("{v} must be a finite number >= 0")
     })
 }
 
 /// A finite number > 0.
-pub(crate) fn positive(v: f64, key: &str) -> Result<(), ScenarioError> {
+pub fn positive(v: f64, key: &str) -> Result<(), ScenarioError> {
     check(v.is_finite() && v > 0.0, key, || {
         format!("{v} must be a finite number > 0")
     })
 }
 
 /// One finite number per joint.
-pub(crate) fn per_joint(v: &[f64], n: usize, key: &str) -> Result<(), ScenarioError> {
+pub fn per_joint(v: &[f64], n: usize, key: &str) -> Result<(), ScenarioError> {
     check(v.len() == n, key, || {
         format!("has {} entries, the robot has {n} joints", v.len())
     })?;

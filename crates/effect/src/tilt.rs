@@ -7,9 +7,9 @@ use super::context::{Context, Sample, Scratch};
 use super::physics::{self, Physics, ScenarioError};
 use super::EffectSpec;
 use super::{row, times, uniform, Blind, ColumnCount::Fixed, Kind, KindSpec};
-use crate::dynamics::{regressor, Data};
-use crate::model::Model;
-use crate::spatial::rot_axis_angle;
+use physid_core::dynamics::{regressor, Data};
+use physid_core::model::Model;
+use physid_core::spatial::rot_axis_angle;
 use nalgebra::{DMatrix, Vector3};
 use rand_chacha::ChaCha8Rng;
 use serde::{Deserialize, Serialize};
@@ -128,7 +128,7 @@ mod tests {
 
     #[test]
     fn tilt_angles_invert_the_simulators_tilt() {
-        let model = crate::model::cheetah3::leg();
+        let model = physid_core::model::cheetah3::leg();
         for (roll, pitch) in [(0.01, -0.02), (-0.003, 0.0), (0.05, 0.04)] {
             let spec = EffectSpec::Tilt(Tilt { roll, pitch });
             let tilted = spec.physics().on_robot(&model).expect("tilted").gravity();

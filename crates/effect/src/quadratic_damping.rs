@@ -4,7 +4,7 @@
 
 use super::physics::{self, Physics, ScenarioError, State};
 use super::EffectSpec;
-use crate::model::Model;
+use physid_core::model::Model;
 use rand::Rng;
 use rand_chacha::ChaCha8Rng;
 use serde::{Deserialize, Serialize};

@@ -13,9 +13,9 @@
 pub use super::context::Context;
 use super::context::{Sample, Scratch};
 pub use super::Kind;
-use crate::dynamics::{regressor, Data};
-use crate::trajectory::Trajectory;
 use nalgebra::DMatrix;
+use physid_core::dynamics::{regressor, Data};
+use physid_core::trajectory::Trajectory;
 use serde::Serialize;
 
 /// Whether a joint moving at `qd` (rad/s) is slower than `min_speed`: its rows are left out of

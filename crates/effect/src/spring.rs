@@ -5,7 +5,7 @@
 use super::physics::{self, Physics, ScenarioError, State};
 use super::EffectSpec;
 use super::{per_joint, row, uniform, Blind, ColumnCount::PerJoint, Kind, KindSpec};
-use crate::model::Model;
+use physid_core::model::Model;
 use rand_chacha::ChaCha8Rng;
 use serde::{Deserialize, Serialize};
 

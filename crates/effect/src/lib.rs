@@ -8,11 +8,14 @@
 //! variant, table row and, if the simulator makes it, [`EffectSpec`] variant, all from it).
 //! The per-data state the columns read is [`context`], the columns over a data set
 //! [`library`]. Both the simulator (`sim`) and the diagnosis (`diagnose`) stand on this floor.
-//! Equations and units in `docs/diagnose.md`.
+//! Equations and units in `docs/diagnose.md`. A floor of physid (docs/architecture.md §6) of
+//! its own crate, standing on `physid-core` only; the `physid` crate re-exports it as
+//! `physid::effect`.
 //!
 //! Sign convention: a coefficient is the physical magnitude of the injected effect (each
 //! kind's [`Physics`]), e.g. the columns of an acting friction are `−∂τ_effect/∂c` because the
 //! motor torque must overcome it.
+#![warn(missing_docs)]
 
 /// The kinds, one entry each in report order (the order of [`Kind`] and [`KIND_TABLE`]): the
 /// kind's file (`mod`), its [`Kind`] variant and table row (`kind`, when the diagnosis offers
@@ -55,7 +58,7 @@ macro_rules! effect_kinds {
         }
 
         /// One row per kind, in report order ([`Kind::ALL`], whose length is this table's).
-        pub(super) const KIND_TABLE: &[KindSpec] = &[
+        pub(crate) const KIND_TABLE: &[KindSpec] = &[
             $( $( own_row($module::SPEC, Kind::$kind), )? )*
         ];
     };
@@ -200,9 +203,9 @@ pub use physics::{toml_list, Physics, ScenarioError, State};
 pub use time_delay::MAX_DELAY_SAMPLES;
 pub use torque_gain::{relative_to_median, MAX_GAIN_ERROR};
 
-use crate::model::Model;
 use context::{backlash_widths, Context, Sample, Scratch};
 use nalgebra::DMatrix;
+use physid_core::model::Model;
 use rand::Rng;
 use rand_chacha::ChaCha8Rng;
 use serde::{Deserialize, Serialize};
@@ -224,7 +227,7 @@ impl EffectSpec {
 
 /// How many columns a kind adds for `n` joints.
 #[derive(Clone, Copy, Debug, PartialEq)]
-pub(super) enum ColumnCount {
+pub(crate) enum ColumnCount {
     /// A fixed number, whatever the joint count.
     Fixed(usize),
     /// `k` per joint.
@@ -233,7 +236,7 @@ pub(super) enum ColumnCount {
 
 /// The search grid of a kind's one-dimensional parameter.
 #[derive(Clone, Copy, Debug, PartialEq)]
-pub(super) enum Grid {
+pub(crate) enum Grid {
     /// No parameter (one variant, `param = 0`).
     None,
     /// Stribeck velocities (rad/s): 0.04 · √2^i, i = 0..9.
@@ -251,7 +254,7 @@ pub(super) enum Grid {
 
 /// Where the blind benchmark draws a kind.
 #[derive(Clone, Copy, Debug, PartialEq)]
-pub(super) enum Blind {
+pub(crate) enum Blind {
     /// Not drawn (offered, not benchmarked).
     No,
     /// In single-effect cases.
@@ -275,7 +278,7 @@ type Draw = fn(&Model, &mut ChaCha8Rng, f64) -> (Option<EffectSpec>, Vec<f64>);
 type Scale = fn(&EffectSpec, f64, f64, &[f64]) -> Option<(EffectSpec, Vec<f64>)>;
 
 /// Everything physid knows about one kind: one row of [`KIND_TABLE`].
-pub(super) struct KindSpec {
+pub(crate) struct KindSpec {
     pub kind: Kind,
     /// snake_case name, as in scenario files.
     pub name: &'static str,
@@ -326,7 +329,7 @@ pub(super) struct KindSpec {
 }
 
 /// A kind's magnitude read against the description ([`KindSpec::anchored`]).
-pub(super) struct Anchored {
+pub(crate) struct Anchored {
     /// The magnitude's name and unit.
     pub magnitude: (&'static str, &'static str),
     /// Its rule.
@@ -378,7 +381,7 @@ impl Kind {
     };
 
     /// The kind's row of [`KIND_TABLE`].
-    pub(super) fn spec(&self) -> &'static KindSpec {
+    pub(crate) fn spec(&self) -> &'static KindSpec {
         KIND_TABLE
             .iter()
             .find(|s| s.kind == *self)
@@ -777,7 +780,7 @@ mod tests {
     fn every_drawn_effect_is_replayed_by_its_own_kind() {
         // Draw → the scenario effect the simulator makes; replay of the coefficients that
         // describe it → the same effect kind (the scenario's name is the library's).
-        let model = crate::model::cheetah3::leg();
+        let model = physid_core::model::cheetah3::leg();
         let mut rng = <ChaCha8Rng as rand::SeedableRng>::seed_from_u64(7);
         for k in Kind::ALL {
             let (spec, mags) = k.draw(&model, &mut rng, 1000.0);

@@ -6,7 +6,7 @@
 use super::physics::{self, Physics, ScenarioError};
 use super::EffectSpec;
 use super::{row, signed, Anchored, Blind, ColumnCount::PerJoint, Kind, KindSpec};
-use crate::model::Model;
+use physid_core::model::Model;
 use rand::Rng;
 use rand_chacha::ChaCha8Rng;
 use serde::{Deserialize, Serialize};
@@ -120,6 +120,6 @@ impl Physics for TorqueGain {
 /// every joint is a scale of all inertial parameters, so only the joints' differences are
 /// identifiable).
 pub fn relative_to_median(v: &[f64]) -> Vec<f64> {
-    let m = crate::linalg::median(v);
+    let m = physid_core::linalg::median(v);
     v.iter().map(|x| x - m).collect()
 }

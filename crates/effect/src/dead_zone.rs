@@ -3,7 +3,7 @@
 //! (`context`), which knows no kind.
 
 use super::EffectSpec;
-use crate::model::Model;
+use physid_core::model::Model;
 
 /// The motor's side of a backlash dead zone, per joint: its offset `s ∈ [−b/2, b/2]` from the
 /// link (rad at the joint). Inside the gap the motor (its rotor's spin inertia reflected to the
@@ -57,7 +57,7 @@ impl DeadZone {
         if !self.started {
             self.started = true;
             for (j, t) in tau_mot.iter().enumerate() {
-                self.offset[j] = half(j) * crate::dynamics::sign(*t);
+                self.offset[j] = half(j) * physid_core::dynamics::sign(*t);
             }
         }
         let now = self.offset.clone();
@@ -87,7 +87,7 @@ mod tests {
     use super::*;
 
     fn zone(width: f64) -> (DeadZone, f64) {
-        let leg = crate::model::cheetah3::leg();
+        let leg = physid_core::model::cheetah3::leg();
         let j = leg.bodies()[1].rotor.as_ref().expect("rotor").armature();
         let zone = DeadZone::new(
             &leg,

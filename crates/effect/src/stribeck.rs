@@ -5,7 +5,7 @@
 use super::physics::{self, Physics, ScenarioError, State};
 use super::EffectSpec;
 use super::{per_joint, row, uniform, Blind, ColumnCount::PerJoint, Grid, Kind, KindSpec};
-use crate::dynamics::sign;
+use physid_core::dynamics::sign;
 use serde::{Deserialize, Serialize};
 
 /// The kind's row: name, columns, magnitudes, replay and the blind benchmark's draw.
