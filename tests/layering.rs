@@ -646,11 +646,23 @@ fn the_library_crate_has_no_command_line_dependencies() {
     let library = deps(&manifest("Cargo.toml"));
     let binary = deps(&manifest("cli/Cargo.toml"));
     assert!(library.iter().any(|d| d == "clarabel"), "{library:?}");
+    // The floors' own crates are the library too.
+    let floors: Vec<(String, Vec<String>)> = ["core", "io", "effect"]
+        .iter()
+        .map(|c| format!("crates/{c}/Cargo.toml"))
+        .map(|p| (p.clone(), deps(&manifest(&p))))
+        .collect();
     for cli_only in ["clap", "anyhow", "indicatif", "libc"] {
         assert!(
             !library.iter().any(|d| d == cli_only),
             "the library depends on {cli_only}"
         );
+        for (path, floor) in &floors {
+            assert!(
+                !floor.iter().any(|d| d == cli_only),
+                "{path} depends on {cli_only}"
+            );
+        }
         assert!(
             binary.iter().any(|d| d == cli_only),
             "cli/ lacks {cli_only}"
