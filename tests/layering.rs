@@ -76,14 +76,11 @@ fn module_of(src: &Path, rel: &Path) -> String {
         .to_string()
 }
 
-/// The floor module `crate::name` names from a file under `src` (in a crate whose root is one
-/// module, any name but the io crate's `prepare` is an item of that module).
+/// The floor module `crate::name` names from a file under `src`: that of a file `name.rs` at
+/// its root (in a crate whose root is one module, any name but the io crate's `prepare` is an
+/// item of that module).
 fn target_of(src: &Path, name: &str) -> String {
-    match root_module(src) {
-        Some("io") if name == "prepare" => name.to_string(),
-        Some(m) => m.to_string(),
-        None => name.to_string(),
-    }
+    module_of(src, Path::new(&format!("{name}.rs")))
 }
 
 /// Every `.rs` file of the library, with the source folder it is under.

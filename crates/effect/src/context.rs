@@ -240,11 +240,9 @@ fn processed_without_own(x: &[f64], at: &Layout, cutoff: f64, taps: &OwnTaps) ->
 /// offset is the filtered chatter rather than one step at the low-passed torque's zero.
 fn dead_zone_drive(model: &Model, low_passed: &[f64], raw: &[f64]) -> Vec<f64> {
     let n = model.dof();
-    let has_rotor: Vec<bool> = (model.bodies().iter())
-        .map(|b| b.rotor.as_ref().is_some_and(|r| r.armature() > 0.0))
-        .collect();
+    let inertia = super::dead_zone::motor_inertia(model);
     (low_passed.iter().zip(raw).enumerate())
-        .map(|(i, (&lp, &r))| if has_rotor[i % n] { lp } else { r })
+        .map(|(i, (&lp, &r))| if inertia[i % n] > 0.0 { lp } else { r })
         .collect()
 }
 

@@ -35,14 +35,9 @@ impl DeadZone {
     /// Dead zones of `width` (rad per joint) on `model`'s rotors.
     pub fn of_widths(model: &Model, width: Vec<f64>) -> Self {
         let n = width.len();
-        let inertia = model
-            .bodies()
-            .iter()
-            .map(|b| b.rotor.as_ref().map_or(0.0, |r| r.armature()))
-            .collect();
         Self {
             width,
-            inertia,
+            inertia: motor_inertia(model),
             offset: vec![0.0; n],
             rate: vec![0.0; n],
             started: false,
@@ -80,6 +75,14 @@ impl DeadZone {
         }
         now
     }
+}
+
+/// The inertia (kg m² or kg, at the joint) each joint's motor crosses a dead zone with: its
+/// rotor's armature; zero without a rotor, which crosses at once ([`DeadZone::step`]).
+pub(crate) fn motor_inertia(model: &Model) -> Vec<f64> {
+    (model.bodies().iter())
+        .map(|b| b.rotor.as_ref().map_or(0.0, |r| r.armature()))
+        .collect()
 }
 
 #[cfg(test)]

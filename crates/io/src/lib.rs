@@ -765,10 +765,10 @@ fn check_distinct_samples(
 /// message ([`mcap_log::read_with`] for one file). Errors name the file, the topic and the
 /// message.
 pub fn read_joint_log(path: &Path, opts: &mcap_log::ReadOptions) -> Result<mcap_log::Log, IoError> {
-    let (files, storage) = if path.is_dir() {
-        rosbag2::files(path)?
-    } else {
-        (vec![path.to_path_buf()], rosbag2::Storage::Mcap)
+    let bag = path.is_dir().then(|| rosbag2::open(path)).transpose()?;
+    let (files, storage) = match &bag {
+        Some(b) => (b.files.clone(), b.storage),
+        None => (vec![path.to_path_buf()], rosbag2::Storage::Mcap),
     };
     let mut reader = mcap_log::Reader::new(opts);
     for file in &files {
@@ -777,8 +777,8 @@ pub fn read_joint_log(path: &Path, opts: &mcap_log::ReadOptions) -> Result<mcap_
             rosbag2::Storage::Sqlite3 => rosbag2::read_sqlite(file, &mut reader)?,
         }
     }
-    if path.is_dir() {
-        rosbag2::check_listed_topics(path, reader.topics())?;
+    if let Some(b) = &bag {
+        b.check_listed_topics(reader.topics())?;
     }
     let mut log = reader.finish(path)?;
     log.files = files;

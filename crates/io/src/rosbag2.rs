@@ -62,37 +62,53 @@ fn information(dir: &Path) -> Result<(PathBuf, Information), IoError> {
     Ok((meta_path, meta.rosbag2_bagfile_information))
 }
 
-/// Checks the topics the bag's files hold (`stored`: name → message type, of those with
-/// messages) against those its `metadata.yaml` lists with messages: a topic listed with
-/// another type, or listed with messages none of the files has, means the metadata belongs
-/// to another recording (or the files to another bag), and is refused naming both.
-pub(crate) fn check_listed_topics(
-    dir: &Path,
-    stored: &std::collections::BTreeMap<String, String>,
-) -> Result<(), IoError> {
-    let (meta_path, info) = information(dir)?;
-    for listed in &info.topics_with_message_count {
-        let TopicMetadata { name, kind } = &listed.topic_metadata;
-        let problem = match stored.get(name) {
-            Some(had) if had != kind => format!("lists {name} as {kind}, but the bag's files store it as {had}"),
-            None if listed.message_count > 0 => format!(
-                "lists {name} ({kind}) with {} messages, but none of the bag's files has a message on it",
-                listed.message_count
-            ),
-            _ => continue,
-        };
-        return Err(IoError::invalid(
-            &meta_path,
-            format!("{problem}: the metadata and the storage files are of different recordings (`ros2 bag reindex` rewrites metadata.yaml from the files)"),
-        ));
-    }
-    Ok(())
-}
-
 /// The storage files of a rosbag2 directory, in the order its `metadata.yaml` lists them
 /// (`relative_file_paths`), and how they store messages. Errors name the directory or the
 /// metadata file and the key at fault.
 pub fn files(dir: &Path) -> Result<(Vec<PathBuf>, Storage), IoError> {
+    open(dir).map(|bag| (bag.files, bag.storage))
+}
+
+/// A rosbag2 directory as its `metadata.yaml` describes it, read once: its storage files and
+/// how they store messages ([`files`]), and the topics it lists.
+pub(crate) struct Bag {
+    pub files: Vec<PathBuf>,
+    pub storage: Storage,
+    meta_path: PathBuf,
+    listed: Vec<TopicCount>,
+}
+
+impl Bag {
+    /// Checks the topics the bag's files hold (`stored`: name → message type, of those with
+    /// messages) against those its `metadata.yaml` lists with messages: a topic listed with
+    /// another type, or listed with messages none of the files has, means the metadata belongs
+    /// to another recording (or the files to another bag), and is refused naming both.
+    pub fn check_listed_topics(
+        &self,
+        stored: &std::collections::BTreeMap<String, String>,
+    ) -> Result<(), IoError> {
+        for listed in &self.listed {
+            let TopicMetadata { name, kind } = &listed.topic_metadata;
+            let problem = match stored.get(name) {
+                Some(had) if had != kind => format!("lists {name} as {kind}, but the bag's files store it as {had}"),
+                None if listed.message_count > 0 => format!(
+                    "lists {name} ({kind}) with {} messages, but none of the bag's files has a message on it",
+                    listed.message_count
+                ),
+                _ => continue,
+            };
+            return Err(IoError::invalid(
+                &self.meta_path,
+                format!("{problem}: the metadata and the storage files are of different recordings (`ros2 bag reindex` rewrites metadata.yaml from the files)"),
+            ));
+        }
+        Ok(())
+    }
+}
+
+/// The bag in `dir`, its `metadata.yaml` checked: a storage physid reads, files listed once
+/// each and present.
+pub(crate) fn open(dir: &Path) -> Result<Bag, IoError> {
     let (meta_path, info) = information(dir)?;
     let bad = |m: String| IoError::invalid(&meta_path, m);
     let storage = match info.storage_identifier.as_deref() {
@@ -130,7 +146,12 @@ pub fn files(dir: &Path) -> Result<(Vec<PathBuf>, Storage), IoError> {
             missing.display()
         )));
     }
-    Ok((files, storage))
+    Ok(Bag {
+        files,
+        storage,
+        meta_path,
+        listed: info.topics_with_message_count,
+    })
 }
 
 /// A database file compressed whole (`ros2 bag record --compression-mode file`: zstd) is
