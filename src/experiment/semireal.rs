@@ -1181,27 +1181,24 @@ fn write_files(
 ) -> Result<(), RealError> {
     let mut df = case_table(results)?;
     tables::write_csv(&dir.join("cases.csv"), &mut df)?;
-    let per_kind = df
-        .clone()
-        .lazy()
-        .group_by([col("injected")])
-        .agg([
-            len().alias("cases"),
-            col("top1").cast(DataType::Float64).mean().alias("top1"),
-            col("growth").median().alias("median_growth"),
-            col("payload_claimed")
-                .cast(DataType::Float64)
-                .mean()
-                .alias("payload_claimed"),
-            col("magnitude_error")
-                .median()
-                .alias("median_magnitude_error"),
-            col("magnitude_error_weighted")
-                .median()
-                .alias("median_magnitude_error_weighted"),
-        ])
-        .sort(["injected"], Default::default())
-        .collect()?;
+    use tables::Stat::{Count, Mean, Median};
+    let per_kind = tables::Groups::of(&df, &["injected"])?
+        .agg(
+            &df,
+            &[
+                ("", Count, "cases"),
+                ("top1", Mean, "top1"),
+                ("growth", Median, "median_growth"),
+                ("payload_claimed", Mean, "payload_claimed"),
+                ("magnitude_error", Median, "median_magnitude_error"),
+                (
+                    "magnitude_error_weighted",
+                    Median,
+                    "median_magnitude_error_weighted",
+                ),
+            ],
+        )?
+        .sort(["injected"], Default::default())?;
     let md = format!(
         "# Semi-real blind benchmark\n\n`{command}` ({wall:.0} s wall).\n\nReal runs as the base, the description identified on another run, one change injected per case (docs/diagnose.md, \"Semi-real benchmark\").\n\n## Scores\n\n```json\n{}\n```\n\n## By injected change\n\n{}\n## Cases\n\n{}",
         serde_json::to_string_pretty(scores)?,

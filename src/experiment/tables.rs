@@ -105,8 +105,79 @@ pub fn long_table(rows: &[Row], joints: &[String]) -> PolarsResult<DataFrame> {
     DataFrame::new_infer_height(cols)
 }
 
-fn q(c: &str, p: f64, alias: &str) -> Expr {
-    col(c).quantile(lit(p), QuantileMethod::Linear).alias(alias)
+/// A per-group statistic of one column (booleans count as 0 and 1; nulls are skipped).
+#[derive(Clone, Copy, Debug)]
+pub enum Stat {
+    /// The group's row count (the column is not read).
+    Count,
+    /// The arithmetic mean.
+    Mean,
+    /// The median (the mean of the two middle values of an even count).
+    Median,
+    /// The quantile at this fraction, interpolated linearly between order statistics.
+    Quantile(f64),
+}
+
+/// A table's rows grouped by key columns, groups in first-appearance order.
+pub struct Groups {
+    /// One row per group: its key values.
+    keys: DataFrame,
+    /// The row indices of each group.
+    rows: Vec<IdxCa>,
+}
+
+impl Groups {
+    /// Groups the rows of `df` by the columns `keys` (polars' stable group-by).
+    pub fn of(df: &DataFrame, keys: &[&str]) -> PolarsResult<Self> {
+        let by = df.group_by_stable(keys.iter().copied())?;
+        let rows = by
+            .get_groups()
+            .iter()
+            .map(|g| match g {
+                GroupsIndicator::Idx((_, idx)) => IdxCa::from_vec("".into(), idx.to_vec()),
+                GroupsIndicator::Slice([first, len]) => {
+                    IdxCa::from_vec("".into(), (first..first + len).collect())
+                }
+            })
+            .collect();
+        Ok(Self {
+            keys: DataFrame::new_infer_height(by.keys())?,
+            rows,
+        })
+    }
+
+    /// The key columns and one column per `(column, statistic, name)`.
+    pub fn agg(&self, df: &DataFrame, aggs: &[(&str, Stat, &str)]) -> PolarsResult<DataFrame> {
+        let mut out = self.keys.clone();
+        for &(column, stat, name) in aggs {
+            out.with_column(self.stat(df, column, stat)?.with_name(name.into()))?;
+        }
+        Ok(out)
+    }
+
+    /// `stat` of `column` in each group.
+    fn stat(&self, df: &DataFrame, column: &str, stat: Stat) -> PolarsResult<Column> {
+        if let Stat::Count = stat {
+            let n: Vec<IdxSize> = self.rows.iter().map(|r| r.len() as IdxSize).collect();
+            return Ok(Series::new("".into(), n).into_column());
+        }
+        let values = df.column(column)?.cast(&DataType::Float64)?;
+        let values = values.f64()?;
+        let per_group = self
+            .rows
+            .iter()
+            .map(|rows| {
+                let group = values.take(rows)?;
+                Ok(match stat {
+                    Stat::Mean => group.mean(),
+                    Stat::Median => group.median(),
+                    Stat::Quantile(p) => group.quantile(p, QuantileMethod::Linear)?,
+                    Stat::Count => unreachable!("counted above"),
+                })
+            })
+            .collect::<PolarsResult<Vec<Option<f64>>>>()?;
+        Ok(Series::new("".into(), per_group).into_column())
+    }
 }
 
 /// Median and quartiles over seeds per (n_s, set), in first-appearance order.
@@ -151,10 +222,8 @@ pub fn strings(df: &DataFrame, name: &str) -> PolarsResult<Vec<String>> {
 
 /// The rows of `df` whose string column `column` equals `value`.
 pub fn filter_eq(df: &DataFrame, column: &str, value: &str) -> PolarsResult<DataFrame> {
-    df.clone()
-        .lazy()
-        .filter(col(column).eq(lit(value)))
-        .collect()
+    let mask = df.column(column)?.str()?.equal(value);
+    df.filter(&mask)
 }
 
 /// Stacks tables with the same columns.
@@ -171,48 +240,49 @@ pub fn concat(tables: Vec<DataFrame>) -> PolarsResult<DataFrame> {
 
 /// Median and quartiles over seeds per (`keys`…, n_s, set), in first-appearance order.
 pub fn summary_by(long: &DataFrame, keys: &[&str]) -> PolarsResult<DataFrame> {
-    let mut by: Vec<Expr> = keys.iter().map(|k| col(*k)).collect();
-    by.extend([col("n_s"), col("constraints")]);
-    long.clone()
-        .lazy()
-        .group_by_stable(by)
-        .agg([
-            len().alias("seeds"),
-            q("val_rms", 0.25, "val_rms_q25"),
-            col("val_rms").median().alias("val_rms_median"),
-            q("val_rms", 0.75, "val_rms_q75"),
-            q("val_truth_rms", 0.25, "val_truth_rms_q25"),
-            col("val_truth_rms").median().alias("val_truth_rms_median"),
-            q("val_truth_rms", 0.75, "val_truth_rms_q75"),
-            q("j_err", 0.25, "j_err_q25"),
-            col("j_err").median().alias("j_err_median"),
-            q("j_err", 0.75, "j_err_q75"),
-            col("consistent")
-                .cast(DataType::Float64)
-                .mean()
-                .alias("consistent_fraction"),
-            col("solve_ms").median().alias("solve_ms_median"),
-        ])
-        .collect()
+    use Stat::{Count, Mean, Median, Quantile};
+    let mut by = keys.to_vec();
+    by.extend(["n_s", "constraints"]);
+    Groups::of(long, &by)?.agg(
+        long,
+        &[
+            ("", Count, "seeds"),
+            ("val_rms", Quantile(0.25), "val_rms_q25"),
+            ("val_rms", Median, "val_rms_median"),
+            ("val_rms", Quantile(0.75), "val_rms_q75"),
+            ("val_truth_rms", Quantile(0.25), "val_truth_rms_q25"),
+            ("val_truth_rms", Median, "val_truth_rms_median"),
+            ("val_truth_rms", Quantile(0.75), "val_truth_rms_q75"),
+            ("j_err", Quantile(0.25), "j_err_q25"),
+            ("j_err", Median, "j_err_median"),
+            ("j_err", Quantile(0.75), "j_err_q75"),
+            ("consistent", Mean, "consistent_fraction"),
+            ("solve_ms", Median, "solve_ms_median"),
+        ],
+    )
 }
 
-/// The n_s × set table of one summary column.
+/// The n_s × set table of one summary column: one row per training size (first-appearance
+/// order), one column per set (the first matching row's value; null where none).
 pub fn pivot(summary: &DataFrame, value: &str, sets: &[&str]) -> PolarsResult<DataFrame> {
-    let on_columns = Arc::new(df!["constraints" => sets.to_vec()]?);
-    summary
-        .clone()
-        .lazy()
-        .pivot(
-            by_name(["constraints"], true, false),
-            on_columns,
-            by_name(["n_s"], true, false),
-            by_name([value], true, false),
-            element().first(),
-            true,
-            "_".into(),
-            polars::frame::PivotColumnNaming::Auto,
-        )
-        .collect()
+    let sizes = Groups::of(summary, &["n_s"])?;
+    let constraints = strings(summary, "constraints")?;
+    let values = summary.column(value)?.cast(&DataType::Float64)?;
+    let values = values.f64()?;
+    let mut out = sizes.keys.clone();
+    for set in sets {
+        let cell: Vec<Option<f64>> = sizes
+            .rows
+            .iter()
+            .map(|rows| {
+                rows.into_no_null_iter()
+                    .find(|&i| constraints[i as usize] == *set)
+                    .and_then(|i| values.get(i as usize))
+            })
+            .collect();
+        out.with_column(Series::new((*set).into(), cell).into_column())?;
+    }
+    Ok(out)
 }
 
 fn polars_err(path: &Path, e: PolarsError) -> IoError {
