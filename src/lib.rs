@@ -4,9 +4,9 @@
 //! The method is Wensing, Kim & Slotine, "Linear Matrix Inequalities for Physically-Consistent
 //! Inertial Parameter Identification" (RA-L 2018).
 //!
-//! The crate is built in floors; each module imports only from the floors below its own
-//! (the ground floors, conic to dynamics, are the crate `physid-core`, which Cargo keeps from
-//! reaching up; the others are checked by `tests/layering.rs`; docs/architecture.md §6):
+//! The library is built in floors, each a crate of the workspace that depends only on the
+//! floors below its own (docs/architecture.md §6); this crate is the `api` floor and
+//! re-exports every floor below as a module:
 //!
 //! 0. [`conic`]: the one builder of conic programs for Clarabel (PSD, second-order and
 //!    exponential cones, the log-det device), used by identification and the bounding
@@ -33,14 +33,15 @@
 #![warn(missing_docs)]
 
 pub mod api;
-pub mod diagnose;
-pub mod experiment;
-pub mod ident;
-pub mod sim;
 
 // The ground floors are their own crate (crates/core): Cargo keeps them from reaching up.
 pub use physid_core::{conic, dynamics, linalg, model, options, signal, spatial, trajectory};
 // So is the io floor (crates/io: file formats and the data pipeline).
 pub use physid_io::{self as io, prepare};
-// And the effect library (crates/effect).
+// And the effect library (crates/effect), identification, simulation, the diagnosis and the
+// experiments (crates/ident, sim, diagnose, experiment).
+pub use physid_diagnose as diagnose;
 pub use physid_effect as effect;
+pub use physid_experiment as experiment;
+pub use physid_ident as ident;
+pub use physid_sim as sim;

@@ -32,24 +32,40 @@ fn floor(module: &str) -> Option<u8> {
     FLOORS.iter().find(|(m, _)| *m == module).map(|(_, f)| *f)
 }
 
-/// The library's source folders: the `physid` crate's and its floors' own crates
-/// (`crates/core`, the ground floors, and `crates/io`, whose imports of the floors above Cargo
-/// already refuses; the checks below still hold them to the other rules).
+/// The floors' own crates (`crates/NAME`), in floor order: the ground floors (`core`, floors
+/// 0 to 3), then crates whose root is one module of the floor of that name.
+const CRATES: [&str; 7] = [
+    "core",
+    "io",
+    "effect",
+    "ident",
+    "sim",
+    "diagnose",
+    "experiment",
+];
+
+/// The library's source folders: the `physid` crate's (the api facade) and its floors' crates.
+/// Cargo refuses an import of a crate not depended on; the checks below hold every crate to
+/// the rules Cargo cannot see (floors inside one crate, function length, printing, …).
 fn library_roots() -> Vec<PathBuf> {
     let root = common::root();
-    vec![
-        root.join("src"),
-        root.join("crates/core/src"),
-        root.join("crates/io/src"),
-        root.join("crates/effect/src"),
-    ]
+    let mut roots = vec![root.join("src")];
+    roots.extend(CRATES.iter().map(|c| root.join(format!("crates/{c}/src"))));
+    let on_disk = std::fs::read_dir(root.join("crates")).unwrap().count();
+    assert_eq!(
+        on_disk,
+        CRATES.len(),
+        "a crate under crates/ not listed in CRATES"
+    );
+    roots
 }
 
-/// The module a crate's root is, for the floors' crates whose root is one module (`io`,
-/// `effect`); `None` for crates of several modules (the library's, the ground floors').
+/// The module a crate's root is, for the floors' crates whose root is one module (all but
+/// `core`); `None` for crates of several modules (the library's, the ground floors').
 fn root_module(src: &Path) -> Option<&'static str> {
-    ["io", "effect"]
-        .into_iter()
+    CRATES[1..]
+        .iter()
+        .copied()
         .find(|m| src.ends_with(format!("crates/{m}/src")))
 }
 
@@ -90,7 +106,7 @@ fn library_files() -> Vec<(PathBuf, PathBuf)> {
         let mut files = vec![];
         rust_files(&src, &mut files);
         assert!(
-            files.len() >= 6,
+            files.len() >= 4,
             "{}: the file walk found nothing",
             src.display()
         );
@@ -300,8 +316,8 @@ fn no_import_circle_among_the_files_of_a_folder() {
             }
         }
     }
-    // The io and effect crates' roots are their modules' folders.
-    for m in ["io", "effect"] {
+    // The single-module crates' roots are their modules' folders.
+    for m in &CRATES[1..] {
         let root = common::root().join(format!("crates/{m}/src"));
         folders.push((root.clone(), root));
     }
@@ -336,11 +352,13 @@ fn no_import_circle_among_the_files_of_a_folder() {
     );
 }
 
-/// The names a file reaches through `super::` that are not sibling modules: items of its
-/// folder's `mod.rs` (a back arrow to the parent that calls it).
+/// The names a file reaches through `super::` or `crate::` that are not sibling modules: items
+/// of its folder's `mod.rs` or crate's `lib.rs` (a back arrow to the parent that calls it).
 fn back_arrows(code: &str, siblings: &[String]) -> Vec<String> {
-    let mut out: Vec<String> = names_after(code, "super::")
+    // In a crate whose root is the folder, `crate::name` reaches the root (lib.rs) too.
+    let mut out: Vec<String> = ["super::", "crate::"]
         .into_iter()
+        .flat_map(|prefix| names_after(code, prefix))
         .filter(|n| !n.is_empty() && n != "self" && !siblings.contains(n))
         .collect();
     out.sort();
@@ -348,24 +366,25 @@ fn back_arrows(code: &str, siblings: &[String]) -> Vec<String> {
     out
 }
 
-/// Folders whose `mod.rs` only declares and re-exports: a pipeline of steps (its files import
-/// each other, never the parent that runs them). Other folders keep the floor's shared types
-/// in `mod.rs` (`io::IoError`, `dynamics::Data`, `model::Model`), which their files build on.
-const PIPELINE_FOLDERS: [&str; 1] = ["diagnose"];
+/// Folders whose `mod.rs` (or a crate's `lib.rs`) only declares and re-exports: a pipeline of
+/// steps (its files import each other, never the parent that runs them). Other folders keep
+/// the floor's shared types in `mod.rs` (`io::IoError`, `dynamics::Data`, `model::Model`),
+/// which their files build on.
+const PIPELINE_FOLDERS: [&str; 1] = ["crates/diagnose/src"];
 
 #[test]
 fn no_back_arrow_to_mod_rs_inside_a_pipeline_folder() {
-    let src = common::root().join("src");
+    let root = common::root();
     let mut arrows = vec![];
     let mut files_seen = 0;
     for folder in PIPELINE_FOLDERS {
-        let files = child_files(&src.join(folder));
+        let files = child_files(&root.join(folder));
         let siblings: Vec<String> = files.iter().map(|(stem, _)| stem.clone()).collect();
         for (stem, f) in &files {
             files_seen += 1;
             let code = module_code(f);
             for name in back_arrows(&code, &siblings) {
-                arrows.push(format!("src/{folder}/{stem}.rs: super::{name}"));
+                arrows.push(format!("{folder}/{stem}.rs: super::{name}"));
             }
         }
     }
@@ -531,7 +550,7 @@ fn the_entry_modules_stay_short() {
     // command (argument parsing and printing): their sizes stay under those docs/architecture.md
     // §6 states.
     let root = common::root();
-    let mut files = vec![("src/diagnose/mod.rs".to_string(), 400)];
+    let mut files = vec![("crates/diagnose/src/lib.rs".to_string(), 400)];
     let mut cli = vec![];
     rust_files(&root.join("cli/src"), &mut cli);
     assert!(cli.len() > 10, "the CLI's files not found");
@@ -644,7 +663,7 @@ fn the_library_crate_has_no_command_line_dependencies() {
     let binary = deps(&manifest("cli/Cargo.toml"));
     assert!(library.iter().any(|d| d == "clarabel"), "{library:?}");
     // The floors' own crates are the library too.
-    let floors: Vec<(String, Vec<String>)> = ["core", "io", "effect"]
+    let floors: Vec<(String, Vec<String>)> = CRATES
         .iter()
         .map(|c| format!("crates/{c}/Cargo.toml"))
         .map(|p| (p.clone(), deps(&manifest(&p))))
@@ -833,5 +852,93 @@ fn every_effect_kind_has_its_own_file_and_one_entry_in_the_list() {
             ("a_b".to_string(), Some("AB".to_string()), None),
             ("c".to_string(), None, Some("C".to_string()))
         ]
+    );
+}
+
+/// The crates' floors (docs/architecture.md §6): core → io → ident | effect → sim → diagnose →
+/// experiment → physid (the api) → cli | python. Cargo refuses a circle between crates but not
+/// an edge up the floors (io depending on sim, say, while sim does not depend on io).
+const CRATE_FLOORS: [(&str, u8); 10] = [
+    ("physid-core", 0),
+    ("physid-io", 1),
+    ("physid-effect", 2),
+    ("physid-ident", 2),
+    ("physid-sim", 3),
+    ("physid-diagnose", 4),
+    ("physid-experiment", 5),
+    ("physid", 6),
+    ("physid-cli", 7),
+    ("physid-python", 7),
+];
+
+/// Each workspace crate's manifest and the workspace crates it depends on (path dependencies,
+/// normal and build; a crate's tests may use any crate below or above).
+fn crate_edges() -> Vec<(String, Vec<String>)> {
+    let root = common::root();
+    let mut manifests = vec![
+        root.join("Cargo.toml"),
+        root.join("cli/Cargo.toml"),
+        root.join("python/Cargo.toml"),
+    ];
+    manifests.extend(
+        CRATES
+            .iter()
+            .map(|c| root.join(format!("crates/{c}/Cargo.toml"))),
+    );
+    manifests
+        .iter()
+        .map(|path| {
+            let m: toml::Table = toml::from_str(&std::fs::read_to_string(path).unwrap()).unwrap();
+            let name = m["package"]["name"].as_str().unwrap().to_string();
+            let deps = ["dependencies", "build-dependencies"]
+                .iter()
+                .filter_map(|k| m.get(*k).and_then(|d| d.as_table()))
+                .flat_map(|t| t.iter())
+                .filter(|(_, v)| v.get("path").is_some())
+                .map(|(k, v)| {
+                    v.get("package")
+                        .and_then(|p| p.as_str())
+                        .unwrap_or(k)
+                        .to_string()
+                })
+                .collect();
+            (name, deps)
+        })
+        .collect()
+}
+
+#[test]
+fn no_crate_depends_on_one_of_its_own_floor_or_above() {
+    let floor_of = |name: &str| {
+        CRATE_FLOORS
+            .iter()
+            .find(|(c, _)| *c == name)
+            .map(|(_, f)| *f)
+            .unwrap_or_else(|| panic!("crate {name} has no floor in CRATE_FLOORS"))
+    };
+    let edges = crate_edges();
+    assert_eq!(edges.len(), CRATE_FLOORS.len());
+    let mut up = vec![];
+    for (name, deps) in &edges {
+        for dep in deps {
+            if floor_of(dep) >= floor_of(name) {
+                up.push(format!(
+                    "{name} (floor {}) -> {dep} (floor {})",
+                    floor_of(name),
+                    floor_of(dep)
+                ));
+            }
+        }
+    }
+    assert!(
+        up.is_empty(),
+        "edges that do not run down the floors:\n{}",
+        up.join("\n")
+    );
+    let io = &edges.iter().find(|(n, _)| n == "physid-io").unwrap().1;
+    assert_eq!(
+        io,
+        &["physid-core".to_string()],
+        "the scan reads the io crate's manifest"
     );
 }

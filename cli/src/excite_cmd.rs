@@ -8,12 +8,12 @@ use physid::api::excite::{
 use physid::sim::design::{Design, Objective};
 use std::path::PathBuf;
 
-/// Design a Fourier excitation that carries the most information about the robot's
-/// identifiable parameters within its joint limits, write it as a scenario that `simulate` and
-/// `experiment` run as is, and check the limits in simulation.
 /// The sample rate of --csv and --mcap when --rate is not given (Hz).
 const DEFAULT_RATE: f64 = 1000.0;
 
+/// Design a Fourier excitation that carries the most information about the robot's
+/// identifiable parameters within its joint limits, write it as a scenario that `simulate` and
+/// `experiment` run as is, and check the limits in simulation.
 #[derive(clap::Args, Debug)]
 #[command(group(clap::ArgGroup::new("reference").args(["csv", "mcap"]).multiple(true)))]
 pub struct Args {

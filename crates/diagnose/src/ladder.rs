@@ -1,0 +1,2146 @@
+//! **From the description**: why the user's model does not match the robot, as one ladder of
+//! explanations that starts at the description as given.
+//!
+//! The residual of a model re-identified on the data has already absorbed whatever the inertial
+//! parameters can mimic (a payload, a gain, a tilt); selecting effects on it, as
+//! [`super::select`] does, then names what is left of them, or nothing. Here every explanation
+//! competes from the description instead:
+//!
+//! - the **base** is the description, its inertial parameters free to move only as far as their
+//!   stated uncertainty allows: a Gaussian prior of relative size `ε` on each body's
+//!   pseudo-inertia ([`super::anchor::prior_precision`]), against the data's likelihood (weight
+//!   `1/(s² τ_c)`, `s²` the re-identified model's residual mean square, `τ_c` its correlation
+//!   time), with friction fixed at the description's; and confined to the region the stated
+//!   uncertainty gives (its `χ²` quantile at 10⁻³), since a fixed prior yields to any gap given
+//!   data enough and would absorb a payload before any explanation is offered (a prior that
+//!   carries data's information, a baseline's, needs no region);
+//! - the **candidates** are every effect of the library (its coefficients free), a payload or
+//!   change on any body (its ten parameters free: `Δπ_b`), and the friction re-identified;
+//! - each is fitted on the training data and **scored on the held-out data**: the one that
+//!   lowers the held-out error most is kept if it lowers it by at least `min_reduction`
+//!   (relative) with a block t statistic of at least `min_t` over `blocks` held-out blocks;
+//!   candidates within `tie` of its reduction are reported as ambiguous with it;
+//! - after each step the linearized columns (gain, tilt, delay, compliance, backlash, …) are
+//!   **rebuilt about the current model**, payload included, and the chosen set refitted until
+//!   the held-out error settles, so a payload and a gain are told apart by what they predict,
+//!   not by where the previous model stood;
+//! - the last rung re-identifies every parameter: what the explanations leave.
+//!
+//! A body's freed parameters whose mass change is positive and physically consistent are
+//! reported as a payload; otherwise as a change of the body.
+
+use super::anchor;
+use super::residual::{finite_mean_square, mask_slow, mean_square, residual_rms};
+use super::select::Folds;
+use super::stage::Stage;
+use super::stats::Ties;
+use nalgebra::{DMatrix, DVector};
+use physid_core::linalg::least_squares_nonneg;
+use physid_core::model::Model;
+use physid_core::spatial::InertialParams;
+use physid_effect::library::{Context, Kind, Variant};
+use serde::Serialize;
+
+pub use super::options::LadderSettings as Settings;
+
+/// What one step explains.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(crate) enum Explanation {
+    /// An effect of the library (for a payload: a body's ten parameters).
+    Effect(Variant),
+    /// A payload as a point mass on one body (`Variant` of the body-change kind): its mass
+    /// `m ≥ 0` and first moment `h = m c` free, its second moments those of a point at the
+    /// centre `c` (m, body frame) the fit settled on ([`point_mass_map`]). Four numbers where
+    /// a change of the body takes ten: a rigid object fixed to a link is first tried as this.
+    PointMass(Variant, [f64; 3]),
+    /// The friction coefficients re-identified.
+    Friction,
+}
+
+impl Explanation {
+    /// The library variant it frees (a body's for a point mass; none for friction).
+    pub(crate) fn variant(&self) -> Option<Variant> {
+        match self {
+            Explanation::Effect(v) | Explanation::PointMass(v, _) => Some(*v),
+            Explanation::Friction => None,
+        }
+    }
+
+    /// The body whose parameters it frees (a payload or change), if any, for `n` joints.
+    fn body(&self, n: usize) -> Option<usize> {
+        let v = self.variant()?;
+        v.kind.body(v.param, n).filter(|_| v.kind.is_body_change())
+    }
+
+    /// Its name in a report: the kind; for a body, `reads_as` ("payload", or "payload or
+    /// change" while what it reads as is not known) on the body's name.
+    fn name(&self, model: &Model, reads_as: &str) -> String {
+        match self {
+            Explanation::PointMass(v, _) => Explanation::Effect(*v).name(model, reads_as),
+            Explanation::Effect(v) if v.kind.is_body_change() => {
+                match v.kind.body(v.param, model.dof()) {
+                    Some(b) => format!("{reads_as} on {}", model.bodies()[b].name),
+                    None => format!("{reads_as} on body {}", v.param),
+                }
+            }
+            Explanation::Effect(v) => v.kind.name().to_string(),
+            Explanation::Friction => "friction re-identified".into(),
+        }
+    }
+
+    /// Its rung's name once chosen: `+ payload on lwr_7_link`, `+ tilt`, `friction
+    /// re-identified`.
+    fn step_name(&self, model: &Model) -> String {
+        match self {
+            Explanation::Friction => self.name(model, PAYLOAD),
+            _ => format!("+ {}", self.name(model, PAYLOAD)),
+        }
+    }
+}
+
+/// One rung: the held-out error once the explanations so far are in.
+#[derive(Clone, Debug, Serialize, schemars::JsonSchema)]
+pub struct Rung {
+    /// `"description as given"`, `"description within its uncertainty"`, `"+ payload on
+    /// lwr_7_link"`, `"friction re-identified"`, …, `"inertial parameters re-identified"`.
+    pub step: String,
+    /// The effect kind of the step, if it is one (a payload is `payload`).
+    pub kind: Option<Kind>,
+    /// Its grid value (the body number for a payload, the Stribeck velocity, …).
+    pub param: f64,
+    /// Held-out RMS per joint (N m; joint-samples slower than the speed threshold left out).
+    pub rms: Vec<f64>,
+    /// Over all joints.
+    pub overall: f64,
+    /// Relative reduction of the held-out mean square by this step (0 for the fixed rungs).
+    pub reduction: f64,
+    /// Block t statistic of the reduction.
+    pub t: f64,
+    /// Other explanations within the tie of this step's reduction.
+    pub ambiguous_with: Vec<String>,
+    /// Per entry of `ambiguous_with`, the mass (kg) that body change would add, fitted in this
+    /// step's place (`None` for an effect, or a body whose mass the data do not determine:
+    /// [`mass_determined`]): where the data cannot tell the bodies apart, the payload's mass on
+    /// the body it is known to sit on.
+    pub ambiguous_mass: Vec<Option<f64>>,
+    /// Explanations of another complexity within the tie of this step, set aside for it (best
+    /// first): wider ones the data fit about as well or better, simpler ones that fit worse.
+    pub also_fit: Vec<AlsoFit>,
+    /// Body changes the data fit within the tie of this step but whose mass they do not weigh
+    /// ([`mass_determined`]: only the first moment `m c` is seen), best first: not claimed, as a
+    /// description's error carried to another motion fits them as well as a payload does.
+    pub unweighed: Vec<AlsoFit>,
+}
+
+/// An explanation of another complexity than a step's, tied with it and set aside for it.
+#[derive(Clone, Debug, Serialize, schemars::JsonSchema)]
+pub struct AlsoFit {
+    /// Its name, as a step would be named (`payload or change on lwr_5_link`, `spring`, …).
+    pub name: String,
+    /// Its relative reduction of the held-out mean square in the step's place (the step's own
+    /// is the rung's `reduction`).
+    pub reduction: f64,
+    /// For a body change, the mass (kg) it would add in the step's place (`None` otherwise, or
+    /// where the data do not determine the body's mass: [`mass_determined`]).
+    pub mass: Option<f64>,
+}
+
+impl AlsoFit {
+    /// What follows its name: `(+1.38 kg, 97.4 %)`, the mass a body change would add and its
+    /// reduction of the held-out mean square.
+    pub fn detail(&self) -> String {
+        let mass = match self.mass {
+            Some(m) => format!("{m:+.2} kg, "),
+            None if self.name.starts_with(UNREAD) => "mass undetermined, ".into(),
+            None => String::new(),
+        };
+        format!("({mass}{:.1} %)", 100.0 * self.reduction)
+    }
+}
+
+impl Rung {
+    /// The explanations tied with this step, a body change with the mass it would add
+    /// (`payload or change on lwr_6_link (+1.52 kg)`).
+    pub fn alternatives(&self) -> Vec<String> {
+        self.ambiguous_with
+            .iter()
+            .enumerate()
+            .map(
+                |(i, name)| match self.ambiguous_mass.get(i).copied().flatten() {
+                    Some(m) => format!("{name} ({m:+.2} kg)"),
+                    None if name.starts_with(UNREAD) => format!("{name} (mass undetermined)"),
+                    None => name.clone(),
+                },
+            )
+            .collect()
+    }
+}
+
+/// A body's parameters freed by the ladder: the change found, in the body's frame.
+#[derive(Clone, Debug, Serialize, schemars::JsonSchema)]
+pub struct BodyChange {
+    /// Body or rotor name.
+    pub body: String,
+    /// Whether it reads as a payload: added mass beyond three standard errors, its centre of
+    /// mass within the body's bounding ellipsoid doubled (a metre of the frame without one).
+    pub payload: bool,
+    /// Mass change (kg) as the diagnosis states it: as weighed at the body's own step (the fit
+    /// that chose it; later steps, mostly the robot's standing differences from its
+    /// description, add columns that can only blur it).
+    pub mass: f64,
+    /// Standard error of the mass change (kg); `None` when the data do not see the mass
+    /// ([`Weighing::mass_se`]).
+    pub mass_se: Option<f64>,
+    /// Centre of mass of the change (m, body frame), when its mass is positive.
+    pub com: Option<[f64; 3]>,
+    /// Whether steps taken after the body's moved its mass by more than [`MOVED`] standard
+    /// errors (the larger of the two fits'): their columns trade off with it (a torque gain
+    /// with a payload's gravity), and the data do not weigh it apart from them. On the
+    /// semi-real "what changed" cases a gain freed after a 2.8 kg payload put 8.2 kg on its
+    /// body; the payload's own step weighed 2.88 kg.
+    pub moved: bool,
+    /// The change weighed with every explanation free (the final fit).
+    pub last: Weighing,
+    /// The ten parameters of the change in the final fit, paper order.
+    pub pi: [f64; 10],
+}
+
+/// A body change's mass and centre of mass from one fit.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, schemars::JsonSchema)]
+pub struct Weighing {
+    /// Mass change (kg).
+    pub mass: f64,
+    /// Its standard error (kg); `None` when no joint torque feels the mass (the body's frame
+    /// origin lies on every joint axis before it, as `lwr_2_link`'s on the KUKA): only its first
+    /// and second moments are seen, and the mass is the ridge's zero.
+    pub mass_se: Option<f64>,
+    /// Centre of mass of the change (m, body frame), when its mass is positive.
+    pub com: Option<[f64; 3]>,
+}
+
+impl Weighing {
+    /// `+2.000 ± 0.010 kg, centre of mass (0.001, 0.002, 0.030) m`.
+    fn text(&self) -> String {
+        let Some(se) = self.mass_se else {
+            return "mass not seen by these data (no joint torque changes with mass at the \
+                    body's frame origin, which lies on every joint axis before it)"
+                .into();
+        };
+        if !mass_determined(self.mass, se) {
+            return format!(
+                "mass not determined by these data (standard error {se:.3} kg: the motion shows \
+                 the change's first moment m c, not m, so neither its mass nor its centre of \
+                 mass is stated)"
+            );
+        }
+        let com = self.com.map_or(String::new(), |c| {
+            format!(", centre of mass ({:.3}, {:.3}, {:.3}) m", c[0], c[1], c[2])
+        });
+        format!("{:+.3} ± {se:.3} kg{com}", self.mass)
+    }
+
+    /// Whether `self` (a later fit) moved the mass from `entered` by more than [`MOVED`]
+    /// standard errors (the larger of the two); never for a mass the data do not see.
+    fn moved_from(&self, entered: &Weighing) -> bool {
+        match (self.mass_se, entered.mass_se) {
+            (Some(a), Some(b)) => (self.mass - entered.mass).abs() > MOVED * a.max(b),
+            _ => false,
+        }
+    }
+}
+
+impl BodyChange {
+    /// The change weighed at its step (`entered`, stated) and with every explanation free
+    /// (`last`).
+    fn new(body: String, entered: Weighing, last: Weighing, pi: [f64; 10]) -> BodyChange {
+        let moved = last.moved_from(&entered);
+        BodyChange {
+            body,
+            payload: false,
+            mass: entered.mass,
+            mass_se: entered.mass_se,
+            com: entered.com,
+            moved,
+            last,
+            pi,
+        }
+    }
+
+    /// The weighing stated.
+    pub fn stated(&self) -> Weighing {
+        Weighing {
+            mass: self.mass,
+            mass_se: self.mass_se,
+            com: self.com,
+        }
+    }
+
+    /// Its mass and centre of mass as the reports print them:
+    /// `+2.000 ± 0.010 kg, centre of mass (0.001, 0.002, 0.030) m`, and when later steps moved
+    /// the mass, what they made of it.
+    pub fn weighed(&self) -> String {
+        let stated = self.stated().text();
+        if self.moved {
+            format!(
+                "{stated} when its step was taken; later steps trade off with its mass (with \
+                 them free: {})",
+                self.last.text()
+            )
+        } else {
+            stated
+        }
+    }
+}
+
+/// A body's mass moved by more than this many standard errors after its step was taken is
+/// reported as traded off with the later steps.
+pub const MOVED: f64 = 2.0;
+
+/// Why the ladder stopped.
+#[derive(Clone, Debug, PartialEq, Serialize, schemars::JsonSchema)]
+#[serde(rename_all = "snake_case")]
+pub enum Stop {
+    /// The best remaining candidate did not lower the held-out error enough.
+    NotSignificant {
+        /// Its name.
+        best: String,
+        /// Its relative reduction.
+        reduction: f64,
+        /// Its block t statistic.
+        t: f64,
+    },
+    /// The maximum number of steps was reached.
+    MaxSteps,
+    /// Nothing left to try.
+    NoCandidate,
+}
+
+/// The ladder's outcome.
+#[derive(Clone, Debug, Serialize, schemars::JsonSchema)]
+pub struct Ladder {
+    /// The stated relative uncertainty `ε` of the description's inertial parameters.
+    pub uncertainty: f64,
+    /// The rungs, from the description as given to everything re-identified.
+    pub rungs: Vec<Rung>,
+    /// The bodies whose parameters a step freed.
+    pub bodies: Vec<BodyChange>,
+    /// Body changes that would have been the next step, but whose mass the data do not weigh
+    /// (only the first moment `m c` is seen), best first: not claimed ([`Rung::unweighed`]).
+    pub unweighed: Vec<AlsoFit>,
+    /// Why it stopped.
+    pub stop: Stop,
+    /// The chosen explanations, in order (for the magnitudes).
+    #[serde(skip)]
+    pub(crate) chosen: Vec<Explanation>,
+    /// Per chosen effect (in `chosen` order, friction skipped), its coefficients.
+    #[serde(skip)]
+    pub(crate) coefficients: Vec<Vec<f64>>,
+    /// Their posterior standard errors.
+    #[serde(skip)]
+    pub(crate) coefficient_se: Vec<Vec<f64>>,
+    /// Per library effect a step chose (body changes are weighed in `bodies`), its
+    /// coefficients and their standard errors in the fit of that step.
+    #[serde(skip)]
+    pub(crate) entered_coefficients: Vec<(Explanation, Vec<f64>, Vec<f64>)>,
+}
+
+impl Ladder {
+    /// The coefficients of effect `v` and their standard errors in the fit of the step that
+    /// chose it.
+    pub(crate) fn entered(&self, v: Variant) -> Option<(&Vec<f64>, &Vec<f64>)> {
+        (self.entered_coefficients.iter())
+            .find(|e| e.0 == Explanation::Effect(v))
+            .map(|e| (&e.1, &e.2))
+    }
+}
+
+/// Normal equations of `[Y | E]` about one linearization point: the training data summed,
+/// the held-out data per block.
+struct Data {
+    /// Joints.
+    n: usize,
+    /// The model parameters the linearized columns were built about.
+    theta_lin: DVector<f64>,
+    variants: Vec<Variant>,
+    offsets: Vec<usize>,
+    /// The training data's blocks (the description test reads them).
+    folds: Folds,
+    train: physid_ident::NormalEquations,
+    held: Vec<physid_ident::NormalEquations>,
+}
+
+impl Data {
+    /// Columns of every variant about the model parameters `theta`.
+    fn build(stage: &Stage, variants: &[Variant], theta: &DVector<f64>, blocks: usize) -> Data {
+        let (model, opts) = (stage.model, stage.opts);
+        let cutoff = opts.processing_cutoff;
+        let ctx_t = Context::new(model, theta, stage.train, cutoff);
+        let ctx_v = Context::new(model, theta, stage.validate, cutoff);
+        let ms = opts.min_speed;
+        let (t, v) = (stage.train, stage.validate);
+        let train = Folds::build(&ctx_t, t, 0..t.len(), variants.to_vec(), 2, &[], ms);
+        let held = Folds::build(&ctx_v, v, 0..v.len(), variants.to_vec(), blocks, &[], ms);
+        Data {
+            n: model.dof(),
+            theta_lin: theta.clone(),
+            variants: variants.to_vec(),
+            offsets: train.offsets.clone(),
+            train: train.sum_except(usize::MAX),
+            folds: train,
+            held: held.blocks,
+        }
+    }
+
+    /// The variant's index.
+    fn index(&self, v: &Variant) -> usize {
+        self.variants
+            .iter()
+            .position(|w| w == v)
+            .expect("an offered variant")
+    }
+}
+
+/// The fixed parts of every fit: the description, its prior, the data's weight.
+struct Problem<'a> {
+    stage: &'a Stage<'a>,
+    theta_d: DVector<f64>,
+    prior: DMatrix<f64>,
+    /// The prior's part from the stated relative uncertainty alone (the information of a
+    /// baseline or a sidecar left out): the region the base may move in is measured by it, as
+    /// run-to-run differences of a real robot exceed what one run's information allows.
+    stated: DMatrix<f64>,
+    /// `P θ_d` and `P_ε θ_d`: the prior's pull towards the description.
+    prior_g: DVector<f64>,
+    stated_g: DVector<f64>,
+    weight: f64,
+    /// The squared radius of the description's stated uncertainty: the `χ²` quantile, over the
+    /// parameters the prior covers, exceeded with probability [`OUTSIDE`]; infinite when the
+    /// prior carries the information of data (a baseline's, a sidecar's): a prior that grows
+    /// with the data is not overrun by them.
+    radius2: f64,
+}
+
+/// Probability that a description drawn from its stated uncertainty lies outside the region
+/// the ladder's base may move in.
+const OUTSIDE: f64 = 1e-3;
+
+/// A chosen body step reads as a payload (renamed a change by `name_changes` when it is not one).
+const PAYLOAD: &str = "payload";
+/// A body step not chosen: what it reads as is not known.
+const UNREAD: &str = "payload or change";
+
+/// A fit: the parameters over `cols` (model columns, then the chosen effects').
+struct Fit {
+    cols: Vec<usize>,
+    w: DVector<f64>,
+    /// The posterior covariance's diagonal over `cols` (for standard errors).
+    var: Vec<f64>,
+    /// Over `cols`: an explanation's column the data do not see at all (zero on every sample:
+    /// the mass of a body whose frame origin lies on every joint axis before it), whose value
+    /// and variance only the ridge sets.
+    unseen: Vec<bool>,
+}
+
+impl Problem<'_> {
+    /// `min w·‖Z x − τ‖² + (x_Y − θ_d)ᵀ (P + (λ − 1) P_ε) (x_Y − θ_d)` over the model's columns
+    /// and the chosen effects', friction fixed at the description's unless re-identified (`P`
+    /// the prior, `P_ε` its stated-uncertainty part: the Lagrangian of the prior fit confined
+    /// to the stated region); `λ = 1` unless that
+    /// leaves the description's parameters outside their stated uncertainty
+    /// (`(x_Y − θ_d)ᵀ P_ε (x_Y − θ_d) > r²`, [`Problem::radius2`]), then the `λ ≥ 1` that puts them
+    /// on its edge. A Gaussian prior alone yields to any gap given data enough (a 2.5 kg payload
+    /// on a 0.3 kg link is eighty standard deviations away, yet ten thousand samples outweigh
+    /// them): the description "within its uncertainty" must stay within it, so that what lies
+    /// beyond is left for the explanations to claim.
+    fn fit(&self, data: &Data, set: &[Explanation]) -> Fit {
+        let system = self.system(data, set);
+        let at_one = system.solve(1.0);
+        if self.distance2(&at_one) <= self.radius2 {
+            return system.with_variance(at_one, 1.0);
+        }
+        // The distance falls as λ grows: bisection on ln λ.
+        let (mut lo, mut hi) = (0.0_f64, 30.0_f64);
+        let mut best = (system.solve(hi.exp()), hi.exp());
+        for _ in 0..48 {
+            let mid = 0.5 * (lo + hi);
+            let w = system.solve(mid.exp());
+            if self.distance2(&w) <= self.radius2 {
+                hi = mid;
+                best = (w, mid.exp());
+            } else {
+                lo = mid;
+            }
+        }
+        system.with_variance(best.0, best.1)
+    }
+
+    /// The squared Mahalanobis distance of a fit's model parameters from the description,
+    /// under the stated uncertainty.
+    fn distance2(&self, w: &DVector<f64>) -> f64 {
+        let p0 = self.theta_d.len();
+        let dx = w.rows(0, p0) - &self.theta_d;
+        dx.dot(&(&self.stated * &dx))
+    }
+
+    /// The normal equations of a fit over the columns `set` frees, the prior apart.
+    fn system(&self, data: &Data, set: &[Explanation]) -> System<'_> {
+        let p0 = self.theta_d.len();
+        let l = self.stage.model.layout();
+        let n = self.stage.model.dof();
+        let mut cols: Vec<usize> = (0..p0).collect();
+        let mut signed = vec![];
+        let mut effect_terms = vec![];
+        let mut point_masses = vec![];
+        for e in set {
+            if let Some(v) = e.variant() {
+                let at = data.offsets[data.index(&v)];
+                let width = v.kind.columns(n);
+                if let Explanation::PointMass(_, c) = e {
+                    point_masses.push((cols.len(), *c));
+                } else if anchor::signed(v.kind) {
+                    signed.extend(cols.len()..cols.len() + width);
+                }
+                if !v.kind.is_body_change() {
+                    effect_terms.extend(cols.len()..cols.len() + width);
+                }
+                cols.extend(at..at + width);
+            }
+        }
+        let fixed: Vec<usize> = if set.contains(&Explanation::Friction) {
+            vec![]
+        } else {
+            (l.viscous_col..l.len).collect()
+        };
+        let m = cols.len();
+        let ne = &data.train;
+        let h = DMatrix::from_fn(m, m, |i, j| self.weight * ne.yty[(cols[i], cols[j])]);
+        let g = DVector::from_fn(m, |i, _| self.weight * ne.ytt[cols[i]]);
+        let aliased = aliased(&h, effect_terms);
+        let free: Vec<usize> = (0..m)
+            .filter(|i| !fixed.contains(&cols[*i]) && !aliased.contains(i))
+            .collect();
+        let nonneg = free_positions(&free, &signed);
+        let (reduce, nonneg) = point_mass_reduction(&free, &point_masses, nonneg);
+        System {
+            cols,
+            h,
+            g,
+            prior: &self.prior,
+            prior_g: &self.prior_g,
+            stated: &self.stated,
+            stated_g: &self.stated_g,
+            theta_d: &self.theta_d,
+            nonneg,
+            reduce,
+            fixed,
+            free,
+        }
+    }
+}
+
+/// A column whose residual curvature, after the columns tested before it (their Gram matrix
+/// `h`), is below this fraction of its own lies in their span.
+const ALIASED: f64 = 1e-9;
+
+/// Of the effect columns at `positions` (in the order chosen), those the earlier ones already
+/// span: an effect whose term another chosen effect holds (a spring's constant after an
+/// offset). They are held at zero, so the explanation chosen first carries the value: the
+/// split between aliased columns is not determined by any data, and would be reported with an
+/// unbounded error. A body change's ten columns are not among them: their structural null
+/// space stays with the ridge's smallest change, whose physical consistency the ladder tests.
+fn aliased(h: &DMatrix<f64>, positions: impl IntoIterator<Item = usize>) -> Vec<usize> {
+    let mut kept: Vec<usize> = vec![];
+    let mut out = vec![];
+    for c in positions {
+        let own = h[(c, c)];
+        let hk = DMatrix::from_fn(kept.len(), kept.len(), |i, j| h[(kept[i], kept[j])]);
+        let b = DVector::from_fn(kept.len(), |i, _| h[(kept[i], c)]);
+        let explained = match hk.cholesky() {
+            Some(ch) => b.dot(&ch.solve(&b)),
+            None => 0.0,
+        };
+        if own > 0.0 && own - explained <= ALIASED * own {
+            out.push(c);
+        } else if own > 0.0 {
+            kept.push(c);
+        }
+    }
+    out
+}
+
+/// One fit's normal equations: the data's `w ZᵀZ`, `w Zᵀτ` over `cols`, the prior added with
+/// its scale at each solve.
+struct System<'a> {
+    cols: Vec<usize>,
+    h: DMatrix<f64>,
+    g: DVector<f64>,
+    prior: &'a DMatrix<f64>,
+    prior_g: &'a DVector<f64>,
+    /// The stated uncertainty's part of the prior (the one the trust region scales).
+    stated: &'a DMatrix<f64>,
+    stated_g: &'a DVector<f64>,
+    theta_d: &'a DVector<f64>,
+    /// Columns held at the description's values (friction unless re-identified).
+    fixed: Vec<usize>,
+    /// Indices into `cols` that are free.
+    free: Vec<usize>,
+    /// Positions among the fit's unknowns (`free`, or the reduced ones of `reduce`) of
+    /// coefficients with a physical sign (a compliance, a delay, a backlash width, a point
+    /// mass, …): held at or above zero, as the selection holds them.
+    nonneg: Vec<usize>,
+    /// `x_free = T y`: the free parameters as a linear map of fewer unknowns, where a point
+    /// mass ties a body change's ten parameters to four ([`point_mass_map`]).
+    reduce: Option<DMatrix<f64>>,
+}
+
+/// The map `T` (free × unknowns) of a fit's free parameters onto its unknowns for the point
+/// masses whose ten columns start at the `cols` positions given (with their centres), and
+/// `nonneg` (positions in `free`) moved to the unknowns, each point mass's mass added; `None`
+/// and `nonneg` as given without point masses.
+fn point_mass_reduction(
+    free: &[usize],
+    point_masses: &[(usize, [f64; 3])],
+    nonneg: Vec<usize>,
+) -> (Option<DMatrix<f64>>, Vec<usize>) {
+    if point_masses.is_empty() {
+        return (None, nonneg);
+    }
+    let block = |f: usize| {
+        point_masses
+            .iter()
+            .find(|(start, _)| (*start..start + 10).contains(&f))
+    };
+    let unknowns = free.len() - 6 * point_masses.len();
+    let mut t = DMatrix::zeros(free.len(), unknowns);
+    let mut moved = vec![];
+    let mut k = 0;
+    for (i, &f) in free.iter().enumerate() {
+        match block(f) {
+            Some(&(start, c)) if f == start => {
+                let b = point_mass_map(&c);
+                for (r, row) in (i..i + 10).enumerate() {
+                    for a in 0..4 {
+                        t[(row, k + a)] = b[(r, a)];
+                    }
+                }
+                moved.push(k);
+                k += 4;
+            }
+            Some(_) => {}
+            None => {
+                t[(i, k)] = 1.0;
+                if nonneg.contains(&i) {
+                    moved.push(k);
+                }
+                k += 1;
+            }
+        }
+    }
+    // `k` only grows: `moved` is in order.
+    (Some(t), moved)
+}
+
+/// `B(c)` (10 × 4): a body's ten parameters `π = [m, h, I_xx, I_xy, I_xz, I_yy, I_yz, I_zz]`
+/// (inertia about the body frame's origin) of a point mass near `c` (m, body frame), as a
+/// linear map of its mass and first moment `[m, h]`: `I = −m (|c|² 1 − c cᵀ) + Σ_k h_k (2 c_k 1
+/// − e_k cᵀ − c e_kᵀ)`, the linearization about `h = m c` of the point mass's `I = (|h|² 1 −
+/// h hᵀ)/m`, exact there (`I = m (|c|² 1 − c cᵀ)`) and homogeneous in `(m, h)`.
+pub(crate) fn point_mass_map(c: &[f64; 3]) -> nalgebra::SMatrix<f64, 10, 4> {
+    let mut b = nalgebra::SMatrix::<f64, 10, 4>::zeros();
+    b[(0, 0)] = 1.0;
+    for k in 0..3 {
+        b[(1 + k, 1 + k)] = 1.0;
+    }
+    let c2 = c[0] * c[0] + c[1] * c[1] + c[2] * c[2];
+    let delta = |i: usize, j: usize| f64::from(u8::from(i == j));
+    // Inertia entries in π order: (x,x) (x,y) (x,z) (y,y) (y,z) (z,z).
+    let entries = [(0, 0), (0, 1), (0, 2), (1, 1), (1, 2), (2, 2)];
+    for (r, &(i, j)) in entries.iter().enumerate() {
+        b[(4 + r, 0)] = -(c2 * delta(i, j) - c[i] * c[j]);
+        for k in 0..3 {
+            b[(4 + r, 1 + k)] = 2.0 * c[k] * delta(i, j) - delta(i, k) * c[j] - c[i] * delta(j, k);
+        }
+    }
+    b
+}
+
+/// The positions in `free` of the `cols` indices `signed`.
+fn free_positions(free: &[usize], signed: &[usize]) -> Vec<usize> {
+    free.iter()
+        .enumerate()
+        .filter(|(_, c)| signed.contains(c))
+        .map(|(i, _)| i)
+        .collect()
+}
+
+impl System<'_> {
+    /// The free block's scaled system with the stated uncertainty's part of the prior weighted
+    /// by `lambda`, and its scales.
+    fn scaled(&self, lambda: f64) -> (DMatrix<f64>, DVector<f64>, Vec<f64>) {
+        let m = self.cols.len();
+        let p0 = self.prior.nrows();
+        let mut h = self.h.clone();
+        let mut g = self.g.clone();
+        let mut hv = h.view_mut((0, 0), (p0, p0));
+        hv += self.prior + self.stated * (lambda - 1.0);
+        let mut gv = g.rows_mut(0, p0);
+        gv += self.prior_g + self.stated_g * (lambda - 1.0);
+        // A tiny ridge relative to each column's own curvature (a column nothing sees gets a
+        // unit one): free effect columns stay determined without being pulled.
+        for i in 0..m {
+            let v = h[(i, i)];
+            h[(i, i)] = if v > 0.0 { v * (1.0 + 1e-10) } else { 1.0 };
+        }
+        let fixed_value = |f: usize| self.theta_d[f];
+        let free = &self.free;
+        let hf = DMatrix::from_fn(free.len(), free.len(), |i, j| h[(free[i], free[j])]);
+        let gf = DVector::from_fn(free.len(), |i, _| {
+            g[free[i]]
+                - self
+                    .fixed
+                    .iter()
+                    .map(|&f| h[(free[i], f)] * fixed_value(f))
+                    .sum::<f64>()
+        });
+        let (hf, gf) = match &self.reduce {
+            Some(t) => (t.transpose() * hf * t, t.transpose() * gf),
+            None => (hf, gf),
+        };
+        // Scaled to unit diagonal: the prior's precision spans twenty decades (a thin body's
+        // J⁻¹), which an unscaled Cholesky turns into garbage.
+        let u = hf.nrows();
+        let d: Vec<f64> = (0..u).map(|i| 1.0 / hf[(i, i)].sqrt()).collect();
+        let hs = DMatrix::from_fn(u, u, |i, j| d[i] * hf[(i, j)] * d[j]);
+        let gs = DVector::from_fn(u, |i, _| d[i] * gf[i]);
+        (hs, gs, d)
+    }
+
+    /// The parameters over `cols` with the stated part of the prior weighted by `lambda`.
+    fn solve(&self, lambda: f64) -> DVector<f64> {
+        let (hs, gs, d) = self.scaled(lambda);
+        let y = least_squares_nonneg(&hs, &gs, &self.nonneg);
+        let unknowns = DVector::from_fn(y.len(), |i, _| d[i] * y[i]);
+        let x = match &self.reduce {
+            Some(t) => t * unknowns,
+            None => unknowns,
+        };
+        let mut w = DVector::zeros(self.cols.len());
+        for &f in &self.fixed {
+            w[f] = self.theta_d[f];
+        }
+        for (i, &f) in self.free.iter().enumerate() {
+            w[f] = x[i];
+        }
+        w
+    }
+
+    /// The fit `w` found at prior weight `lambda`, with its posterior variances.
+    fn with_variance(self, w: DVector<f64>, lambda: f64) -> Fit {
+        let (hs, _, d) = self.scaled(lambda);
+        let u = hs.nrows();
+        let inv = hs
+            .cholesky()
+            .map(|c| c.inverse())
+            .unwrap_or_else(|| DMatrix::zeros(u, u));
+        let cov = DMatrix::from_fn(u, u, |i, j| d[i] * inv[(i, j)] * d[j]);
+        let cov = match &self.reduce {
+            Some(t) => t * cov * t.transpose(),
+            None => cov,
+        };
+        let mut var = vec![0.0; self.cols.len()];
+        for (i, &f) in self.free.iter().enumerate() {
+            var[f] = cov[(i, i)];
+        }
+        let p0 = self.prior.nrows();
+        let unseen = (0..self.cols.len())
+            .map(|f| f >= p0 && self.h[(f, f)] <= 0.0)
+            .collect();
+        Fit {
+            cols: self.cols,
+            w,
+            var,
+            unseen,
+        }
+    }
+}
+
+impl Problem<'_> {
+    /// Held-out sum of squares per block.
+    fn held_out(&self, data: &Data, fit: &Fit) -> Vec<f64> {
+        data.held
+            .iter()
+            .map(|b| b.select(&fit.cols).residual_sum_of_squares(&fit.w))
+            .collect()
+    }
+}
+
+/// The relative reduction of the summed `after` below `before`, and the block t statistic of
+/// the per-block log ratios `ln(before_b / after_b)`: scale-free, so blocks of large torques do
+/// not drown a change that helps every block alike.
+fn improvement(before: &[f64], after: &[f64]) -> (f64, f64) {
+    let d: Vec<f64> = before
+        .iter()
+        .zip(after)
+        .map(|(a, b)| (a.max(1e-300) / b.max(1e-300)).ln())
+        .collect();
+    let k = d.len() as f64;
+    let total: f64 = before.iter().sum();
+    let mean = d.iter().sum::<f64>() / k;
+    let var = d.iter().map(|x| (x - mean).powi(2)).sum::<f64>() / (k - 1.0).max(1.0);
+    let t = if var > 0.0 {
+        mean / (var / k).sqrt()
+    } else if mean > 0.0 {
+        f64::INFINITY
+    } else {
+        0.0
+    };
+    let reduction = (total - after.iter().sum::<f64>()) / total.max(1e-300);
+    (reduction, t)
+}
+
+/// The variants the ladder offers: the stage's effect kinds (rotor parameters left out when the
+/// model has rotors: they would test the description) and a payload on every body.
+fn offered(stage: &Stage) -> Vec<Variant> {
+    let n = stage.model.dof();
+    let rotors = stage.model.rotor_count() > 0;
+    let mut out: Vec<Variant> = stage
+        .folds
+        .variants
+        .iter()
+        .copied()
+        .filter(|v| !(v.kind.is_body_change() || (rotors && v.kind.is_rotor_parameter())))
+        .collect();
+    let bodies: Vec<Kind> = Kind::body_change().into_iter().collect();
+    out.extend(physid_effect::library::variants(&bodies, n));
+    out
+}
+
+/// The model parameters of a fit (payloads added to their bodies' parameters) and the
+/// coefficients of each chosen effect, in the order of `set` (friction skipped).
+fn model_of(
+    data: &Data,
+    fit: &Fit,
+    set: &[Explanation],
+    p0: usize,
+) -> (DVector<f64>, Vec<Vec<f64>>) {
+    let mut theta = fit.w.rows(0, p0).into_owned();
+    let mut coefs = vec![];
+    for (_, v, cols) in effect_columns(set, data.n, p0) {
+        let x: Vec<f64> = fit.w.as_slice()[cols].to_vec();
+        if let Some(b) = v.kind.body(v.param, data.n) {
+            for (k, xk) in x.iter().enumerate() {
+                theta[10 * b + k] += xk;
+            }
+        }
+        coefs.push(x);
+    }
+    (theta, coefs)
+}
+
+/// The chosen effects of `set` (friction skipped), each with its columns in a fit over the
+/// model's `p0` columns followed by the effects' in `set` order.
+fn effect_columns(
+    set: &[Explanation],
+    n: usize,
+    p0: usize,
+) -> Vec<(Explanation, Variant, std::ops::Range<usize>)> {
+    let mut c = p0;
+    let mut out = vec![];
+    for e in set {
+        if let Some(v) = e.variant() {
+            let d = v.kind.columns(n);
+            out.push((*e, v, c..c + d));
+            c += d;
+        }
+    }
+    out
+}
+
+/// Whether a centre of mass `x` (m, body frame) lies on or near body `b`: within its bounding
+/// ellipsoid doubled about its centre, or within a metre of the frame without one.
+fn on_body(model: &Model, b: usize, x: &nalgebra::Vector3<f64>) -> bool {
+    match &model.bodies()[b].bounding {
+        Some(e) => e.scaled(2.0).contains(x),
+        None => x.norm() <= 1.0,
+    }
+}
+
+/// What cross-validation offers the ladder: the variants it chose, and those of the kinds it
+/// could not tell from them (a step's `ambiguous_with`).
+pub(crate) struct Selected {
+    /// The variants chosen.
+    pub chosen: Vec<Variant>,
+    /// Every variant of the kinds tied with a chosen one.
+    pub tied: Vec<Variant>,
+}
+
+impl Selected {
+    /// Whether the ladder offers `v` for cross-validation's sake.
+    fn offers(&self, v: &Variant) -> bool {
+        self.chosen.contains(v) || self.tied.contains(v)
+    }
+
+    /// Whether `v` is offered only for its tie with a chosen variant.
+    fn tied_only(&self, v: &Variant) -> bool {
+        self.tied.contains(v) && !self.chosen.contains(v) && !v.kind.offered_from_description()
+    }
+}
+
+/// The diagnosis's ladder from the description (module docs), with relative uncertainty `eps`
+/// of the description's inertial parameters.
+pub(crate) fn ladder(stage: &Stage, eps: f64, selected: &Selected, settings: &Settings) -> Ladder {
+    let problem = problem(stage, eps);
+    let variants = offered(stage);
+    let p0 = problem.theta_d.len();
+    let data = Data::build(stage, &variants, &problem.theta_d, settings.blocks);
+    let mut set: Vec<Explanation> = vec![];
+    let mut rungs = vec![given_rung(stage)];
+    let mut entered: Vec<(Explanation, Weighing)> = vec![];
+    let mut entered_coefficients: Vec<(Explanation, Vec<f64>, Vec<f64>)> = vec![];
+    let mut unweighed = vec![];
+    // The columns about the description within its uncertainty, not the raw description.
+    let (mut data, mut current) = settle(&problem, stage, &variants, data, &mut set, settings);
+    let mut sse = problem.held_out(&data, &current);
+    let within = Added::fixed("description within its uncertainty");
+    rungs.push(rung(stage, at(&data, &current, &set), within));
+    let stop = loop {
+        if set.len() >= settings.max_steps {
+            break Stop::MaxSteps;
+        }
+        let step = match next_step(&problem, &data, selected, &set, &sse, settings) {
+            Ok(step) => step,
+            Err((stop, left)) => {
+                unweighed = left;
+                break stop;
+            }
+        };
+        let best = step.e;
+        set.push(best);
+        (data, current) = settle(&problem, stage, &variants, data, &mut set, settings);
+        sse = problem.held_out(&data, &current);
+        if let Some(m) = body_mass(data.n, &current, &set, best, p0) {
+            entered.push((best, m));
+        }
+        entered_coefficients.extend(weighed_at_entry(&data, &current, &set, p0));
+        let added = Added::taken(step, stage.model);
+        rungs.push(rung(stage, at(&data, &current, &set), added));
+    };
+    current = with_absorbed(&problem, &data, &mut set, settings, &mut rungs);
+    rungs.push(reidentified_rung(stage));
+    let (_, coefficients) = model_of(&data, &current, &set, p0);
+    let coefficient_se = standard_errors(&data, &current, &set, p0);
+    let bodies = body_changes(stage, &current, &set, &entered);
+    name_changes(&mut rungs, &bodies);
+    Ladder {
+        uncertainty: eps,
+        bodies,
+        rungs,
+        stop,
+        unweighed,
+        chosen: set,
+        coefficients,
+        coefficient_se,
+        entered_coefficients,
+    }
+}
+
+/// Phase two's rungs ([`absorbed_steps`]) appended to `rungs`, `set` grown by their kinds;
+/// returns the fit with every explanation free.
+fn with_absorbed(
+    problem: &Problem,
+    data: &Data,
+    set: &mut Vec<Explanation>,
+    settings: &Settings,
+    rungs: &mut Vec<Rung>,
+) -> Fit {
+    let stage = problem.stage;
+    let absorbed = absorbed_steps(problem, stage, data, set, settings);
+    let current = problem.fit(data, set);
+    for (name, e) in absorbed {
+        let added = Added {
+            e: Some(e),
+            ..Added::fixed(&name)
+        };
+        rungs.push(rung(stage, at(data, &current, set), added));
+    }
+    current
+}
+
+/// An explanation tied with a step: its name, and for a body change the mass (kg) it would add
+/// in the step's place.
+type Tie = (String, Option<f64>);
+
+/// A scored candidate: the explanation, its reduction of the held-out error, its block t, and
+/// for a body change the mass (kg) it adds.
+type Scored = (Explanation, f64, f64, Option<f64>);
+
+/// Every candidate fitted with the set so far and scored on the held-out data against `sse`
+/// (a changed body must still be a body).
+fn scored_candidates(
+    problem: &Problem,
+    data: &Data,
+    selected: &Selected,
+    set: &[Explanation],
+    sse: &[f64],
+) -> Vec<Scored> {
+    let model = problem.stage.model;
+    let p0 = problem.theta_d.len();
+    candidates(data, selected, set)
+        .into_iter()
+        .flat_map(|e| with_point_mass(problem, data, set, e))
+        .filter_map(|e| {
+            let mut trial = set.to_vec();
+            trial.push(e);
+            let fit = problem.fit(data, &trial);
+            if !bodies_consistent(data, &fit, &trial, p0, model) {
+                return None;
+            }
+            let (r, t) = improvement(sse, &problem.held_out(data, &fit));
+            // A body change's columns come last: its ten parameters, the mass first (none
+            // where the data do not determine it).
+            let mass = e.body(data.n).and_then(|_| {
+                let w = weighing(&fit, fit.w.len() - 10);
+                w.mass_se
+                    .filter(|&se| mass_determined(w.mass, se))
+                    .map(|_| w.mass)
+            });
+            Some((e, r, t, mass))
+        })
+        .collect()
+}
+
+/// `e`, preceded for a change of a body by the payload on it as a point mass
+/// ([`point_mass`]), where one fits.
+fn with_point_mass(
+    problem: &Problem,
+    data: &Data,
+    set: &[Explanation],
+    e: Explanation,
+) -> Vec<Explanation> {
+    match e {
+        Explanation::Effect(v) if v.kind.is_body_change() => point_mass(problem, data, set, v)
+            .into_iter()
+            .chain([e])
+            .collect(),
+        _ => vec![e],
+    }
+}
+
+/// Fits of a point mass's centre: Gauss–Newton steps on `(m, c)`.
+const POINT_MASS_STEPS: usize = 6;
+
+/// A point mass's centre has settled when a step moves it by less than this (m).
+const POINT_MASS_SETTLED: f64 = 1e-4;
+
+/// The point mass on `v`'s body fitted with `set`, from the body's own centre of mass in the
+/// description ([`recentre`]); `None` where the data weigh a mass but no positive one on or
+/// near the body fits. Where they do not weigh it (only `m c` is seen, `h/m` is noise), the
+/// point mass at the body's centre: it can be scored, and said, but is never a step.
+fn point_mass(
+    problem: &Problem,
+    data: &Data,
+    set: &[Explanation],
+    v: Variant,
+) -> Option<Explanation> {
+    let model = problem.stage.model;
+    let b = Explanation::Effect(v).body(data.n)?;
+    let own = model.bodies()[b].inertia.com().unwrap_or_default();
+    let mut trial = set.to_vec();
+    trial.push(Explanation::PointMass(v, own.into()));
+    let fit = recentre(problem, data, &mut trial);
+    let weighed = weighing(&fit, fit.w.len() - 10);
+    let seen = weighed
+        .mass_se
+        .is_some_and(|se| mass_determined(weighed.mass, se));
+    let fits = weighed.com.is_some_and(|c| on_body(model, b, &c.into()));
+    (!seen || fits).then(|| trial[trial.len() - 1])
+}
+
+/// Moves each point mass of `set` to the centre its fit gives (`c ← h/m`: each fit is exact at
+/// the centre it is linearized about, [`point_mass_map`], so the fixed point is the best point
+/// mass) until none moves by [`POINT_MASS_SETTLED`], in at most [`POINT_MASS_STEPS`] fits. A
+/// point mass whose mass the data do not weigh, or whose centre would leave its body, stays.
+/// Returns the fit at the centres reached.
+fn recentre(problem: &Problem, data: &Data, set: &mut [Explanation]) -> Fit {
+    let model = problem.stage.model;
+    let p0 = problem.theta_d.len();
+    let mut fit = problem.fit(data, set);
+    for _ in 0..POINT_MASS_STEPS {
+        let mut moved = 0.0_f64;
+        let columns = effect_columns(set, data.n, p0);
+        for e in set.iter_mut() {
+            let body = e.body(data.n);
+            let Explanation::PointMass(v, c) = e else {
+                continue;
+            };
+            let at = columns
+                .iter()
+                .find(|x| x.0.variant() == Some(*v))
+                .map(|x| x.2.start);
+            let (Some(at), Some(b)) = (at, body) else {
+                continue;
+            };
+            let w = weighing(&fit, at);
+            let seen = w.mass_se.is_some_and(|se| mass_determined(w.mass, se));
+            let next = w.com.filter(|x| seen && on_body(model, b, &(*x).into()));
+            if let Some(next) = next {
+                moved =
+                    moved.max((nalgebra::Vector3::from(next) - nalgebra::Vector3::from(*c)).norm());
+                *c = next;
+            }
+        }
+        if moved < POINT_MASS_SETTLED {
+            break;
+        }
+        fit = problem.fit(data, set);
+    }
+    fit
+}
+
+/// Whether data weigh a body change's mass `m` (kg) with standard error `se`: `se` at most a
+/// third of the larger of `|m|` and 1 kg. A mass beyond it is not reported as a number: on a
+/// slow motion a body whose frame origin lies on its ancestors' joint axes shows only its first
+/// moment `m c`, and the fit's smallest change then sets the mass (a semi-real payload of
+/// 2.08 kg on the KUKA's `lwr_3_link` read as 0.74 ± 6,795 kg).
+pub fn mass_determined(m: f64, se: f64) -> bool {
+    se.is_finite() && se <= m.abs().max(1.0) / 3.0
+}
+
+/// A step the ladder takes: the explanation kept, its reduction of the held-out mean square
+/// and block t, the explanations of its size tied with it, and those with more columns.
+struct NextStep {
+    e: Explanation,
+    reduction: f64,
+    t: f64,
+    ties: Vec<Tie>,
+    also_fit: Vec<AlsoFit>,
+    unweighed: Vec<AlsoFit>,
+}
+
+/// The next step: every candidate fitted with the set so far and scored on the held-out data;
+/// the winner and the candidates tied with it, or why the ladder stops. A body step must weigh
+/// its mass: where the data see only a body's first moment `m c`, a description's error
+/// carried to another motion fits as well as a payload does.
+fn next_step(
+    problem: &Problem,
+    data: &Data,
+    selected: &Selected,
+    set: &[Explanation],
+    sse: &[f64],
+    settings: &Settings,
+) -> Result<NextStep, (Stop, Vec<AlsoFit>)> {
+    let model = problem.stage.model;
+    let scored = scored_candidates(problem, data, selected, set, sse);
+    let mut scored = significant_if_tied_only(scored, selected, settings);
+    scored.sort_by(|a, b| b.1.total_cmp(&a.1));
+    let (scored, unweighed): (Vec<Scored>, Vec<Scored>) = scored
+        .into_iter()
+        .partition(|s| s.0.body(data.n).is_none() || s.3.is_some());
+    let Some(&(best, r, t, _)) = scored.first() else {
+        let left = unweighed_beside(&unweighed, settings.min_reduction, settings, model);
+        return Err((Stop::NoCandidate, left));
+    };
+    if r < settings.min_reduction || t < settings.min_t {
+        let stop = Stop::NotSignificant {
+            best: best.name(model, UNREAD),
+            reduction: r,
+            t,
+        };
+        let left = unweighed_beside(&unweighed, settings.min_reduction, settings, model);
+        return Err((stop, left));
+    }
+    // Ties: within `tie` of the winner's reduction, leaving at most `LEFT_TIE` times what it
+    // leaves; the simplest (fewest columns) is kept, the others of its size reported as
+    // ambiguous with it. What is left matters once the winner explains most of the gap: on a
+    // payload "what changed" case the payload took 99.0 % of the held-out error, a torque gain
+    // 92.0 % (eight times the payload's remainder), and the gain, tied by reduction alone, was
+    // kept for its fewer columns.
+    let reduction: Vec<f64> = scored.iter().map(|s| s.1).collect();
+    let t_stats: Vec<f64> = scored.iter().map(|s| s.2).collect();
+    let widths: Vec<usize> = scored.iter().map(|s| complexity(&s.0, data.n)).collect();
+    let eligible = tie_eligible(&reduction, &t_stats, settings);
+    let tied = Ties::of(&reduction, &widths, |i| eligible[i], settings.tie);
+    let p0 = problem.theta_d.len();
+    let chosen = simplest_or_best(data, &scored, tied.simplest[0], p0);
+    let chosen = friction_where_tied(&scored, &tied.within, chosen);
+    let (best, r, t, _) = scored[chosen];
+    let (ties, also_fit) = tied_with(&scored, &tied, chosen, &widths, model);
+    let unweighed = unweighed_beside(
+        &unweighed,
+        reduction[0] * (1.0 - settings.tie),
+        settings,
+        model,
+    );
+    Ok(NextStep {
+        e: best,
+        reduction: r,
+        t,
+        ties,
+        also_fit,
+        unweighed,
+    })
+}
+
+/// A kind offered only for its tie in cross-validation competes where it is significant
+/// itself: it never ends the ladder in another's place.
+fn significant_if_tied_only(
+    mut scored: Vec<Scored>,
+    selected: &Selected,
+    settings: &Settings,
+) -> Vec<Scored> {
+    scored.retain(|s| {
+        let tied_only = s.0.variant().is_some_and(|v| selected.tied_only(&v));
+        !tied_only || (s.1 >= settings.min_reduction && s.2 >= settings.min_t)
+    });
+    scored
+}
+
+/// A simpler explanation is kept over the best-fitting one (`scored[0]`) only where it is
+/// nested in it (its columns lie in the span of the best's: a spring holds an offset, so it always
+/// fits at least as well) or leaves at most [`CLOSE_FIT`] times the held-out error the best
+/// leaves. Two explanations that are not nested are told apart by what they fit: a torque gain
+/// on one shoulder joint took 92 % of the held-out mean square and a payload on `lwr_4_link` 89 %
+/// (semi-real seed 2, case 27: the gain was injected); 1.42 kg on `lwr_5_link` 97.4 % and a gain
+/// on every joint 95.2 % (baseline mode, case 13: the payload).
+fn simplest_or_best(data: &Data, scored: &[Scored], simplest: usize, p0: usize) -> usize {
+    let left = |i: usize| left_after(&scored[i]);
+    let nested = || spanned_by(data, &scored[simplest].0, &scored[0].0, p0);
+    if simplest == 0 || left(simplest) <= CLOSE_FIT * left(0) || nested() {
+        simplest
+    } else {
+        0
+    }
+}
+
+/// The friction re-identified in place of the `chosen` explanation where it is among the
+/// `tied` and fits practically as well ([`CLOSE_FIT`]): of the changes a real robot goes
+/// through, its friction's (temperature, wear, lubrication) is the likeliest, and a friction
+/// twice as strong on the KUKA's slow motion fitted as a 24 ms delay of the logged torque does
+/// (38.2 % and 37.7 % of the held-out mean square; generalization benchmark, seed 2, case 15),
+/// the delay kept for its one column. No injected delay, payload or other effect of the
+/// benchmarks had the friction in its tie.
+fn friction_where_tied(scored: &[Scored], tied: &[usize], chosen: usize) -> usize {
+    let left = |i: usize| left_after(&scored[i]);
+    tied.iter()
+        .copied()
+        .find(|&i| scored[i].0 == Explanation::Friction && left(i) <= CLOSE_FIT * left(chosen))
+        .unwrap_or(chosen)
+}
+
+/// The fraction of the held-out mean square a candidate leaves (kept above zero for ratios).
+fn left_after(s: &Scored) -> f64 {
+    (1.0 - s.1).max(1e-12)
+}
+
+/// Two explanations fit practically alike when one leaves at most this many times the held-out
+/// error the other leaves. Measured on the semi-real benchmark, seed 2: a compliance left 1.21
+/// times what a spring left (case 32: the compliance was injected, and is kept), a point mass
+/// 1.49 times what a torque gain left (case 27: the gain was injected).
+const CLOSE_FIT: f64 = 1.25;
+
+/// An explanation's columns as combinations of the data's (`(column, weight)` lists, one per
+/// column): an effect's own, a point mass's four of its body's ten, the friction's.
+fn column_combinations(data: &Data, e: &Explanation, p0: usize) -> Vec<Vec<(usize, f64)>> {
+    match e {
+        Explanation::Effect(v) => {
+            let at = data.offsets[data.index(v)];
+            (at..at + v.kind.columns(data.n))
+                .map(|c| vec![(c, 1.0)])
+                .collect()
+        }
+        Explanation::PointMass(v, c) => {
+            let (at, b) = (data.offsets[data.index(v)], point_mass_map(c));
+            (0..4)
+                .map(|k| (0..10).map(|r| (at + r, b[(r, k)])).collect())
+                .collect()
+        }
+        // The model's last 2n columns: viscous, then Coulomb coefficients.
+        Explanation::Friction => (p0 - 2 * data.n..p0).map(|c| vec![(c, 1.0)]).collect(),
+    }
+}
+
+/// Whether every column of `a` lies in the span of `b`'s on the training data (its residual
+/// curvature after them below [`ALIASED`]-like 10⁻⁶ of its own).
+fn spanned_by(data: &Data, a: &Explanation, b: &Explanation, p0: usize) -> bool {
+    let (ca, cb) = (
+        column_combinations(data, a, p0),
+        column_combinations(data, b, p0),
+    );
+    let h = &data.train.yty;
+    let gram = |x: &[(usize, f64)], y: &[(usize, f64)]| -> f64 {
+        x.iter()
+            .flat_map(|&(i, u)| y.iter().map(move |&(j, v)| u * v * h[(i, j)]))
+            .sum()
+    };
+    let hbb = DMatrix::from_fn(cb.len(), cb.len(), |i, j| gram(&cb[i], &cb[j]));
+    let scale: Vec<f64> = (0..cb.len())
+        .map(|i| 1.0 / hbb[(i, i)].max(1e-300).sqrt())
+        .collect();
+    let hbb = DMatrix::from_fn(cb.len(), cb.len(), |i, j| scale[i] * hbb[(i, j)] * scale[j]);
+    let Some(ch) = (hbb + DMatrix::identity(cb.len(), cb.len()) * 1e-12).cholesky() else {
+        return false;
+    };
+    ca.iter().all(|x| {
+        let own = gram(x, x);
+        let hb = DVector::from_fn(cb.len(), |i, _| scale[i] * gram(&cb[i], x));
+        own <= 0.0 || own - hb.dot(&ch.solve(&hb)) <= 1e-6 * own
+    })
+}
+
+/// Of the `tied` candidates (`scored` best first, `widths` their complexity), those of the
+/// `chosen` one's complexity are its ambiguity group, the others (simpler or wider) set aside
+/// for it; each named once (other grid points of the chosen kind are not another explanation;
+/// of another kind's, the best is named).
+fn tied_with(
+    scored: &[Scored],
+    tied: &Ties,
+    chosen: usize,
+    widths: &[usize],
+    model: &Model,
+) -> (Vec<Tie>, Vec<AlsoFit>) {
+    let own = scored[chosen].0.name(model, UNREAD);
+    let name = |i: usize| scored[i].0.name(model, UNREAD);
+    let mut ties: Vec<Tie> = vec![];
+    let mut also_fit: Vec<AlsoFit> = vec![];
+    for &i in tied.within.iter().filter(|&&i| i != chosen) {
+        let name = name(i);
+        let known = name == own
+            || ties.iter().any(|x| x.0 == name)
+            || also_fit.iter().any(|x| x.name == name);
+        if known {
+            continue;
+        }
+        if widths[i] == widths[chosen] {
+            ties.push((name, scored[i].3));
+        } else {
+            let (reduction, mass) = (scored[i].1, scored[i].3);
+            also_fit.push(AlsoFit {
+                name,
+                reduction,
+                mass,
+            });
+        }
+    }
+    (ties, also_fit)
+}
+
+/// The body changes whose mass the data do not weigh (`unweighed`, best first) that lower the
+/// held-out mean square by at least `least` with a significant t, each body once: said beside
+/// the step (or the stop), never taken as one.
+fn unweighed_beside(
+    unweighed: &[Scored],
+    least: f64,
+    settings: &Settings,
+    model: &Model,
+) -> Vec<AlsoFit> {
+    let mut out: Vec<AlsoFit> = vec![];
+    for &(e, reduction, t, _) in unweighed {
+        let name = e.name(model, UNREAD);
+        let known = out.iter().any(|x| x.name == name);
+        if reduction >= least && t >= settings.min_t && !known {
+            out.push(AlsoFit {
+                name,
+                reduction,
+                mass: None,
+            });
+        }
+    }
+    out
+}
+
+/// A candidate that leaves more than this many times the held-out error the best leaves does
+/// not fit the data as well, whatever its reduction.
+const LEFT_TIE: f64 = 2.0;
+
+/// Which candidates (sorted by `reduction`, best first, with their block `t`) may tie with the
+/// best: significant themselves, and leaving at most [`LEFT_TIE`] times the held-out error the
+/// best leaves (the reduction's own cut is [`Ties::of`]'s).
+fn tie_eligible(reduction: &[f64], t: &[f64], settings: &Settings) -> Vec<bool> {
+    let left_cut = (1.0 - reduction[0]) * LEFT_TIE;
+    reduction
+        .iter()
+        .zip(t)
+        .map(|(r, t)| *t >= settings.min_t && 1.0 - r <= left_cut)
+        .collect()
+}
+
+/// Per chosen effect, the posterior standard errors of its coefficients (in `set` order,
+/// friction skipped), from the fit's covariance and the data weight's scale.
+fn standard_errors(data: &Data, fit: &Fit, set: &[Explanation], p0: usize) -> Vec<Vec<f64>> {
+    effect_columns(set, data.n, p0)
+        .into_iter()
+        .map(|(_, _, cols)| cols.map(|i| fit.var[i].max(0.0).sqrt()).collect())
+        .collect()
+}
+
+/// A body's rung named for what its change reads as: a payload, or a change of the body.
+fn name_changes(rungs: &mut [Rung], bodies: &[BodyChange]) {
+    for b in bodies.iter().filter(|b| !b.payload) {
+        let payload = format!("+ payload on {}", b.body);
+        for r in rungs.iter_mut().filter(|r| r.step == payload) {
+            r.step = format!("+ change of {}", b.body);
+        }
+    }
+}
+
+/// The description, its prior and the data's weight (the re-identified model's residual).
+fn problem<'a>(stage: &'a Stage, eps: f64) -> Problem<'a> {
+    let (model, train, opts) = (stage.model, stage.train, stage.opts);
+    let (_, res) = residual_rms(&stage.ctx_train, train, &[], &stage.theta0, opts.min_speed);
+    let masked = mask_slow(train, &res, opts.min_speed);
+    let s2 = finite_mean_square(&masked);
+    let tau_c = anchor::correlation_time(&masked, model.dof(), train.sample_rate().unwrap_or(1.0));
+    let stated = prior_precision(model, eps);
+    let prior = match &opts.description_information {
+        Some(info) if info.nrows() == model.layout().len => Some(&stated + info),
+        _ => None,
+    };
+    let covered = (0..stated.nrows())
+        .filter(|&i| stated[(i, i)] > 0.0)
+        .count();
+    // With information, the base is held as strongly as the data that determined it: no
+    // region is needed (and a real robot's run-to-run differences exceed one run's region).
+    let radius2 = match prior {
+        Some(_) => f64::INFINITY,
+        None => anchor::chi2_upper_quantile(covered, OUTSIDE),
+    };
+    let prior = prior.unwrap_or_else(|| stated.clone());
+    let theta_d = model.parameters();
+    Problem {
+        stage,
+        prior_g: &prior * &theta_d,
+        stated_g: &stated * &theta_d,
+        theta_d,
+        prior,
+        stated,
+        weight: 1.0 / (s2 * tau_c).max(1e-300),
+        radius2,
+    }
+}
+
+/// Smallest eigenvalue of a body's pseudo-inertia the prior trusts, relative to its trace: an
+/// identified description often sits on the boundary `J ⪰ ε_J 1` (a body flat in one
+/// direction), where the affine-invariant prior would pin that direction to a relative `ε` of
+/// nothing (a precision twenty decades above the others).
+const J_FLOOR: f64 = 1e-3;
+
+/// [`anchor::prior_precision`] with each body's `J` floored at [`J_FLOOR`] of its trace.
+fn prior_precision(model: &Model, eps: f64) -> DMatrix<f64> {
+    let l = model.layout();
+    let mut p = DMatrix::zeros(l.len, l.len);
+    let floored = |pi: &InertialParams| {
+        let j = pi.pseudo_inertia();
+        let floor = J_FLOOR * j.trace();
+        InertialParams::from_pseudo_inertia(&(j + nalgebra::Matrix4::identity() * floor))
+    };
+    let mut put = |c: usize, pi: &InertialParams| {
+        p.view_mut((c, c), (10, 10))
+            .copy_from(&anchor::body_precision(&floored(pi), eps));
+    };
+    for (i, b) in model.bodies().iter().enumerate() {
+        put(10 * i, &b.inertia);
+        if let (Some(c), Some(r)) = (l.rotor_col[i], &b.rotor) {
+            put(c, &r.inertia);
+        }
+    }
+    p
+}
+
+/// How complex an explanation is, for ties: the numbers it adds (a point mass its four), so a
+/// payload as a point mass comes before a torque gain on more than four joints and before the
+/// change of any body ([`simplest_or_best`] says when the simpler one is kept).
+fn complexity(e: &Explanation, n: usize) -> usize {
+    match e {
+        Explanation::Effect(v) => v.kind.columns(n),
+        Explanation::PointMass(..) => 4,
+        Explanation::Friction => 2 * n,
+    }
+}
+
+/// Whether every body a payload or change in `set` frees is still a plausible body: a positive
+/// total mass, the change's centre of mass (for a positive change) inside the body's bounding
+/// ellipsoid doubled about its centre, or within a metre of the frame without one, and the
+/// changed body physically consistent within a tolerance ([`still_a_body`]; not asked of a body
+/// the description itself does not make consistent). The change's own second moments are not
+/// judged: the data rarely see every one of them.
+fn bodies_consistent(
+    data: &Data,
+    fit: &Fit,
+    set: &[Explanation],
+    p0: usize,
+    model: &Model,
+) -> bool {
+    let (theta, _) = model_of(data, fit, set, p0);
+    let mut ok = true;
+    for (_, v, cols) in effect_columns(set, data.n, p0) {
+        if let Some(b) = v.kind.body(v.param, data.n) {
+            let c = cols.start;
+            let total = theta[10 * b];
+            let dm = fit.w[c];
+            // A centre only where the mass is weighed (else `h/m` is the ridge's, and such a
+            // change is never a step: `unweighed_beside`).
+            let weighed = !fit.unseen[c] && mass_determined(dm, fit.var[c].max(0.0).sqrt());
+            let com = (dm > 0.0 && weighed)
+                .then(|| nalgebra::Vector3::new(fit.w[c + 1], fit.w[c + 2], fit.w[c + 3]) / dm);
+            ok &= total > 0.0 && com.is_none_or(|x| on_body(model, b, &x));
+            let changed = <[f64; 10]>::try_from(&theta.as_slice()[10 * b..10 * b + 10])
+                .ok()
+                .and_then(|pi| InertialParams::from_slice(&pi).ok());
+            ok &= changed.is_some_and(|p| still_a_body(&p))
+                || !still_a_body(&model.bodies()[b].inertia);
+        }
+    }
+    ok
+}
+
+/// How far below zero a changed body's pseudo-inertia may reach, relative to its trace: the
+/// description's own bodies often sit on the boundary `J ⪰ 0` (an identified body flat in one
+/// direction), where a real change's noise in an undetermined direction dips just below it.
+const BODY_TOLERANCE: f64 = 1e-2;
+
+/// Whether a body's ten parameters `π` (a description plus a change) are still those of a body:
+/// `λ_min(J(π)) ≥ −`[`BODY_TOLERANCE`]` tr J(π)`. A change of ten free parameters can take up
+/// structure that no body makes (on the real KUKA, run 2 described by run 3: −0.07 kg with
+/// +0.28 kg m² about two axes on the last link, leaving its `J` an eigenvalue of −0.09 kg m²
+/// against a trace of 1.0); a point mass added is always a body.
+fn still_a_body(p: &InertialParams) -> bool {
+    let j = p.pseudo_inertia();
+    let lowest = j.symmetric_eigenvalues().min();
+    lowest >= -BODY_TOLERANCE * j.trace()
+}
+
+/// Every explanation not yet chosen that the held-out phase offers: the effects
+/// cross-validation `selected` and the kinds offered from the description whatever it
+/// selected (a delay; their variants; a kind once), a payload or change on each body not yet
+/// freed, and the friction. (Kinds the parameters absorb are the description test's.)
+fn candidates(data: &Data, selected: &Selected, set: &[Explanation]) -> Vec<Explanation> {
+    let used_kinds: Vec<Kind> = set
+        .iter()
+        .filter_map(|e| match e {
+            Explanation::Effect(v) if !v.kind.is_body_change() => Some(v.kind),
+            _ => None,
+        })
+        .collect();
+    let mut out: Vec<Explanation> = data
+        .variants
+        .iter()
+        .filter(|v| {
+            v.kind.is_body_change() || v.kind.offered_from_description() || selected.offers(v)
+        })
+        .filter(|v| !used_kinds.contains(&v.kind))
+        .map(|v| Explanation::Effect(*v))
+        .filter(|e| !set.iter().any(|x| x.variant() == e.variant()))
+        .collect();
+    if !set.contains(&Explanation::Friction) {
+        out.push(Explanation::Friction);
+    }
+    out
+}
+
+/// After a step: the columns rebuilt once about the model it fitted (payloads included) and
+/// the set refitted there, kept only if the held-out error does not rise (a linearization is
+/// trusted near its point, not followed wherever a fit leads it).
+fn settle(
+    problem: &Problem,
+    stage: &Stage,
+    variants: &[Variant],
+    data: Data,
+    set: &mut [Explanation],
+    settings: &Settings,
+) -> (Data, Fit) {
+    let p0 = problem.theta_d.len();
+    let fit = recentre(problem, &data, set);
+    let before: f64 = problem.held_out(&data, &fit).iter().sum();
+    let (theta, _) = model_of(&data, &fit, set, p0);
+    let moved = Data::build(stage, variants, &theta, settings.blocks);
+    let mut moved_set = set.to_vec();
+    let refit = recentre(problem, &moved, &mut moved_set);
+    let after: f64 = problem.held_out(&moved, &refit).iter().sum();
+    if after <= before {
+        set.copy_from_slice(&moved_set);
+        (moved, refit)
+    } else {
+        (data, fit)
+    }
+}
+
+/// Phase two: kinds the parameters absorb (a gain, a tilt: the re-identified model mimics
+/// them, so cross-validation never offers them) tested against the description's prior about
+/// the ladder's model ([`anchor::select`], the explanations so far free), each confirmed on the
+/// held-out data alone and kept only while the bodies stay plausible. Returns the accepted
+/// steps' rung names; `set` grows by them.
+fn absorbed_steps(
+    problem: &Problem,
+    stage: &Stage,
+    data: &Data,
+    set: &mut Vec<Explanation>,
+    settings: &Settings,
+) -> Vec<(String, Explanation)> {
+    let chosen: Vec<usize> = set
+        .iter()
+        .filter_map(|e| e.variant().map(|v| data.index(&v)))
+        .collect();
+    let rotors = stage.model.rotor_count() > 0;
+    let exclude: Vec<Kind> = Kind::ALL
+        .into_iter()
+        .filter(|k| k.is_body_change() || (rotors && k.is_rotor_parameter()))
+        .collect();
+    let train = anchor::Anchor {
+        ne: &data.train,
+        weight: problem.weight,
+        mean: problem.theta_d.clone(),
+        precision: problem.prior.clone(),
+    };
+    let room = settings.max_steps.saturating_sub(set.len());
+    let (steps, _) = anchor::select(&train, &data.folds, &chosen, &exclude, room, settings.tie);
+    let held_sum = data
+        .held
+        .iter()
+        .skip(1)
+        .fold(data.held[0].clone(), |acc, b| acc.merged(b));
+    let held = anchor::Anchor {
+        ne: &held_sum,
+        ..train
+    };
+    let mut base = data.folds.columns(&chosen);
+    let mut out = vec![];
+    for step in steps {
+        let v = data.folds.variants[step.variant];
+        let d = v.kind.columns(data.n);
+        let at = data.offsets[step.variant];
+        let cand: Vec<usize> = (at..at + d).collect();
+        let threshold = anchor::chi2_upper_quantile(d, anchor::CONFIRM_ALPHA);
+        if held.fit(&base, &cand, anchor::signed(v.kind)).statistic < threshold {
+            break;
+        }
+        let e = Explanation::Effect(v);
+        let mut trial = set.clone();
+        trial.push(e);
+        let fit = problem.fit(data, &trial);
+        if !bodies_consistent(data, &fit, &trial, problem.theta_d.len(), stage.model) {
+            break;
+        }
+        base.extend(cand);
+        set.push(e);
+        out.push((e.step_name(stage.model), e));
+    }
+    out
+}
+
+/// What a rung is scored at: the ladder's data, its fit and the explanations freed in it.
+struct At<'a> {
+    data: &'a Data,
+    fit: &'a Fit,
+    set: &'a [Explanation],
+}
+
+fn at<'a>(data: &'a Data, fit: &'a Fit, set: &'a [Explanation]) -> At<'a> {
+    At { data, fit, set }
+}
+
+/// The step a rung adds: its name, the explanation (none on the fixed rungs), its held-out
+/// reduction of the mean square and t statistic, and the explanations tied with it.
+struct Added {
+    step: String,
+    e: Option<Explanation>,
+    score: (f64, f64),
+    ties: Vec<Tie>,
+    also_fit: Vec<AlsoFit>,
+    unweighed: Vec<AlsoFit>,
+}
+
+impl Added {
+    /// The rung of a step the ladder took.
+    fn taken(step: NextStep, model: &Model) -> Self {
+        Added {
+            step: step.e.step_name(model),
+            e: Some(step.e),
+            score: (step.reduction, step.t),
+            ties: step.ties,
+            also_fit: step.also_fit,
+            unweighed: step.unweighed,
+        }
+    }
+
+    /// A rung that adds no scored step.
+    fn fixed(step: &str) -> Self {
+        Added {
+            step: step.into(),
+            e: None,
+            score: (0.0, 0.0),
+            ties: vec![],
+            also_fit: vec![],
+            unweighed: vec![],
+        }
+    }
+}
+
+/// The held-out rung of a fit.
+fn rung(stage: &Stage, at: At, added: Added) -> Rung {
+    let Added {
+        step,
+        e,
+        score: (reduction, t),
+        ties,
+        also_fit,
+        unweighed,
+    } = added;
+    let rms = held_out_rms(stage, at);
+    let (kind, param) = match e {
+        Some(e) => e.variant().map_or((None, 0.0), |v| (Some(v.kind), v.param)),
+        None => (None, 0.0),
+    };
+    Rung {
+        step,
+        kind,
+        param,
+        overall: mean_square(&rms).sqrt(),
+        rms,
+        reduction,
+        t,
+        ambiguous_with: ties.iter().map(|x| x.0.clone()).collect(),
+        ambiguous_mass: ties.iter().map(|x| x.1).collect(),
+        also_fit,
+        unweighed,
+    }
+}
+
+/// Held-out RMS per joint (N m) of a fit: its model with its effects, at the fit's own
+/// linearization point.
+fn held_out_rms(stage: &Stage, at: At) -> Vec<f64> {
+    let At { data, fit, set } = at;
+    let p0 = stage.model.layout().len;
+    let (theta, coefs) = model_of(data, fit, set, p0);
+    let variants: Vec<Variant> = set
+        .iter()
+        .filter_map(|e| match e {
+            Explanation::Effect(v) if !v.kind.is_body_change() => Some(*v),
+            _ => None,
+        })
+        .collect();
+    let mut full = theta.iter().copied().collect::<Vec<f64>>();
+    for (e, c) in set.iter().filter(|e| e.variant().is_some()).zip(&coefs) {
+        if let Some(v) = e.variant() {
+            if !v.kind.is_body_change() {
+                full.extend(c);
+            }
+        }
+    }
+    // At the fit's own linearization point: the same columns the held-out score saw.
+    let ctx = Context::new(
+        stage.model,
+        &data.theta_lin,
+        stage.validate,
+        stage.opts.processing_cutoff,
+    );
+    let (rms, _) = residual_rms(
+        &ctx,
+        stage.validate,
+        &variants,
+        &DVector::from_vec(full),
+        stage.opts.min_speed,
+    );
+    rms
+}
+
+/// The description as given, scored on the held-out data.
+fn given_rung(stage: &Stage) -> Rung {
+    let theta = stage.model.parameters();
+    let (rms, _) = residual_rms(
+        &stage.ctx_val,
+        stage.validate,
+        &[],
+        &theta,
+        stage.opts.min_speed,
+    );
+    fixed_rung("description as given", rms)
+}
+
+/// Everything re-identified: the stage's nominal model.
+fn reidentified_rung(stage: &Stage) -> Rung {
+    let (rms, _) = residual_rms(
+        &stage.ctx_val,
+        stage.validate,
+        &[],
+        &stage.theta0,
+        stage.opts.min_speed,
+    );
+    fixed_rung("inertial parameters re-identified", rms)
+}
+
+fn fixed_rung(step: &str, rms: Vec<f64>) -> Rung {
+    Rung {
+        step: step.into(),
+        kind: None,
+        param: 0.0,
+        overall: mean_square(&rms).sqrt(),
+        rms,
+        reduction: 0.0,
+        t: 0.0,
+        ambiguous_with: vec![],
+        ambiguous_mass: vec![],
+        also_fit: vec![],
+        unweighed: vec![],
+    }
+}
+
+/// The library effect a step just chose (the last of `set`) with its coefficients and their
+/// standard errors in `fit` (`None` for friction and a body change, weighed by
+/// [`body_mass`]).
+fn weighed_at_entry(
+    data: &Data,
+    fit: &Fit,
+    set: &[Explanation],
+    p0: usize,
+) -> Option<(Explanation, Vec<f64>, Vec<f64>)> {
+    let e = *set.last()?;
+    let v = e.variant()?;
+    if v.kind.is_body_change() {
+        return None;
+    }
+    let (_, mut c) = model_of(data, fit, set, p0);
+    let mut se = standard_errors(data, fit, set, p0);
+    Some((e, c.pop()?, se.pop()?))
+}
+
+/// The body change `e` weighed in a fit over `set` (`None` for an effect that is not a body
+/// change).
+fn body_mass(
+    n: usize,
+    fit: &Fit,
+    set: &[Explanation],
+    e: Explanation,
+    p0: usize,
+) -> Option<Weighing> {
+    let (_, v, cols) =
+        (effect_columns(set, n, p0).into_iter()).find(|x| x.0.variant() == e.variant())?;
+    v.kind.is_body_change().then(|| weighing(fit, cols.start))
+}
+
+/// The body change whose ten columns start at `c` in `fit`, weighed.
+fn weighing(fit: &Fit, c: usize) -> Weighing {
+    let mass = fit.w[c];
+    let h = nalgebra::Vector3::new(fit.w[c + 1], fit.w[c + 2], fit.w[c + 3]);
+    let seen = !fit.unseen[c];
+    Weighing {
+        mass,
+        mass_se: seen.then(|| fit.var[c].max(0.0).sqrt()),
+        com: (seen && mass > 0.0).then(|| (h / mass).into()),
+    }
+}
+
+/// The bodies a payload step freed: their change, read as a payload when its mass is positive
+/// beyond three standard errors and its centre lies on or near the body.
+fn body_changes(
+    stage: &Stage,
+    fit: &Fit,
+    set: &[Explanation],
+    entered: &[(Explanation, Weighing)],
+) -> Vec<BodyChange> {
+    let n = stage.model.dof();
+    let p0 = stage.model.layout().len;
+    let mut out = vec![];
+    for (e, v, cols) in effect_columns(set, n, p0) {
+        let Some(b) = v.kind.body(v.param, n).filter(|_| v.kind.is_body_change()) else {
+            continue;
+        };
+        let last = weighing(fit, cols.start);
+        let entered = (entered.iter())
+            .find(|x| x.0.variant() == e.variant())
+            .map_or(last, |x| x.1);
+        let pi = fit.w.as_slice()[cols].try_into().unwrap_or([0.0; 10]);
+        let mut change = BodyChange::new(stage.model.bodies()[b].name.clone(), entered, last, pi);
+        // Its second moments are seldom determined by the data (a payload's inertia about the
+        // joint axes trades with its neighbours'): judged by its mass and centre only.
+        let com_ok = change
+            .com
+            .is_some_and(|x| on_body(stage.model, b, &nalgebra::Vector3::from(x)));
+        change.payload = change.mass_se.is_some_and(|se| change.mass > 3.0 * se) && com_ok;
+        out.push(change);
+    }
+    out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The Gram matrix `ZᵀZ` of the columns of `z`.
+    fn gram(z: &DMatrix<f64>) -> DMatrix<f64> {
+        z.transpose() * z
+    }
+
+    /// A mass is a number only where the data weigh it; a tied body change without one says
+    /// so, an effect says nothing.
+    #[test]
+    fn a_tied_body_s_mass_is_given_only_where_the_data_weigh_it() {
+        // The semi-real lwr_3_link case, its neighbours, and the edges of the rule.
+        assert!(!mass_determined(0.742, 6794.95));
+        assert!(mass_determined(0.932, 0.0748));
+        assert!(mass_determined(0.283, 0.0268));
+        assert!(mass_determined(0.1, 1.0 / 3.0) && !mass_determined(0.1, 0.34));
+        assert!(mass_determined(6.0, 2.0) && !mass_determined(6.0, 2.01));
+        assert!(!mass_determined(1.0, f64::NAN) && !mass_determined(1.0, f64::INFINITY));
+        let rung = Rung {
+            step: "+ payload on lwr_5_link".into(),
+            kind: None,
+            param: 0.0,
+            rms: vec![],
+            overall: 0.0,
+            reduction: 0.5,
+            t: 6.0,
+            ambiguous_with: vec![
+                "payload or change on lwr_4_link".into(),
+                "payload or change on lwr_3_link".into(),
+                "tilt".into(),
+            ],
+            ambiguous_mass: vec![Some(0.932), None, None],
+            also_fit: vec![],
+            unweighed: vec![],
+        };
+        assert_eq!(
+            rung.alternatives(),
+            vec![
+                "payload or change on lwr_4_link (+0.93 kg)",
+                "payload or change on lwr_3_link (mass undetermined)",
+                "tilt",
+            ]
+        );
+        let also = |name: &str, mass| AlsoFit {
+            name: name.into(),
+            reduction: 0.974,
+            mass,
+        };
+        assert_eq!(
+            also("payload or change on lwr_5_link", Some(1.34)).detail(),
+            "(+1.34 kg, 97.4 %)"
+        );
+        assert_eq!(
+            also("payload or change on lwr_3_link", None).detail(),
+            "(mass undetermined, 97.4 %)"
+        );
+        assert_eq!(also("spring", None).detail(), "(97.4 %)");
+    }
+
+    #[test]
+    fn a_candidate_that_leaves_far_more_than_the_best_does_not_tie_with_it() {
+        let settings = Settings::default();
+        assert_eq!((settings.tie, settings.min_t, LEFT_TIE), (0.1, 3.0, 2.0));
+        // The payload case: 99.0 % against a gain's 92.0 % is no tie (the gain leaves eight
+        // times more), 98.1 % is (1.9 times); one below min_t never ties.
+        let near_all = tie_eligible(
+            &[0.990, 0.981, 0.920, 0.985],
+            &[21.0, 9.0, 10.7, 2.0],
+            &settings,
+        );
+        assert_eq!(near_all, vec![true, true, false, false]);
+        // Small reductions: what is left differs little, the reduction's own cut decides.
+        let small = [0.30, 0.28, 0.25];
+        let eligible = tie_eligible(&small, &[5.0; 3], &settings);
+        assert_eq!(eligible, vec![true; 3]);
+        let t = Ties::of(&small, &[7, 1, 1], |i| eligible[i], settings.tie);
+        assert_eq!(t.within, vec![0, 1]);
+    }
+
+    #[test]
+    fn columns_the_earlier_ones_span_are_aliased_in_order() {
+        let k = 50;
+        let q = |i: usize| (0.3 * i as f64).sin();
+        // A model column, an offset (constant), a spring (angle, constant), a duplicate of the
+        // angle plus twice the constant, and a column of its own.
+        let z = DMatrix::from_fn(k, 6, |i, c| match c {
+            0 => q(i).powi(2),
+            1 => 1.0,
+            2 => q(i),
+            3 => 1.0,
+            4 => q(i) + 2.0,
+            _ => (1.1 * i as f64).cos(),
+        });
+        let h = gram(&z);
+        // The model column (0) is not tested: the effect range starts at 1.
+        assert_eq!(aliased(&h, 1..6), vec![3, 4]);
+        // The spring first: the offset after it adds nothing.
+        let swapped = DMatrix::from_fn(k, 3, |i, c| [q(i), 1.0, 1.0][c]);
+        assert_eq!(aliased(&gram(&swapped), 0..3), vec![2]);
+        // Nearly but not exactly collinear columns are kept.
+        let near = DMatrix::from_fn(k, 2, |i, c| [1.0, 1.0 + 1e-3 * q(i)][c]);
+        assert!(aliased(&gram(&near), 0..2).is_empty());
+        // A column nothing sees (zero) is neither kept nor aliased.
+        let zero = DMatrix::from_fn(k, 2, |i, c| [0.0, q(i)][c]);
+        assert!(aliased(&gram(&zero), 0..2).is_empty());
+    }
+
+    /// A change of `mass` ± `mass_se` kg, its centre of mass 5 cm along z.
+    fn weighing(mass: f64, mass_se: f64) -> Weighing {
+        Weighing {
+            mass,
+            mass_se: Some(mass_se),
+            com: Some([0.0, 0.0, 0.05]),
+        }
+    }
+
+    #[test]
+    fn a_mass_later_steps_moved_is_stated_as_weighed_at_its_step() {
+        let change = |entered, last| BodyChange::new("lwr_5_link".into(), entered, last, [0.0; 10]);
+        // The semi-real "what changed" case: 2.93 ± 0.03 kg at its step, 16.8 ± 1.7 once a
+        // torque gain was freed after it (the true payload 2.80 kg).
+        let moved = change(weighing(2.93, 0.03), weighing(16.82, 1.70));
+        assert!(moved.moved);
+        assert_eq!(moved.stated(), weighing(2.93, 0.03));
+        assert_eq!(moved.last, weighing(16.82, 1.70));
+        assert_eq!(
+            moved.weighed(),
+            "+2.930 ± 0.030 kg, centre of mass (0.000, 0.000, 0.050) m when its step was taken; \
+             later steps trade off with its mass (with them free: +16.820 ± 1.700 kg, centre of \
+             mass (0.000, 0.000, 0.050) m)"
+        );
+        // Within two of the larger standard error: the step's weighing stated, nothing added.
+        let kept = change(weighing(2.93, 0.03), weighing(2.95, 0.05));
+        assert!(!kept.moved);
+        assert_eq!(kept.stated(), weighing(2.93, 0.03));
+        assert_eq!(kept.last, weighing(2.95, 0.05));
+        assert_eq!(
+            kept.weighed(),
+            "+2.930 ± 0.030 kg, centre of mass (0.000, 0.000, 0.050) m"
+        );
+        // The edge: 2 standard errors exactly is not moved, beyond it is; the entry's standard
+        // error counts when it is the larger.
+        assert!(!change(weighing(2.5, 0.125), weighing(3.0, 0.25)).moved);
+        assert!(change(weighing(2.5, 0.125), weighing(3.0625, 0.25)).moved);
+        assert!(!change(weighing(2.5, 0.375), weighing(3.0625, 0.125)).moved);
+        // A mass the data do not see (lwr_2_link on the KUKA: its frame origin on both joint
+        // axes before it) has no standard error, never moves and is not a payload's weight.
+        let unseen = Weighing {
+            mass: 0.0,
+            mass_se: None,
+            com: None,
+        };
+        let blind = change(unseen, unseen);
+        assert!(!blind.moved && blind.mass_se.is_none());
+        assert!(
+            blind.weighed().starts_with("mass not seen by these data"),
+            "{}",
+            blind.weighed()
+        );
+    }
+
+    #[test]
+    fn a_chosen_body_s_mass_the_data_do_not_determine_is_stated_without_a_number() {
+        // A mass seen but not determined (the semi-real 2.1 kg on the KUKA's lwr_3_link read as
+        // +11.030 ± 9055.005 kg) is stated as undetermined, with no number for m or c; the edge
+        // is `mass_determined`'s (a third of the larger of |m| and 1 kg).
+        let change = |entered, last| BodyChange::new("lwr_3_link".into(), entered, last, [0.0; 10]);
+        let vague = change(weighing(11.03, 9055.005), weighing(11.03, 9055.005));
+        assert_eq!(
+            vague.weighed(),
+            "mass not determined by these data (standard error 9055.005 kg: the motion shows the \
+             change's first moment m c, not m, so neither its mass nor its centre of mass is \
+             stated)"
+        );
+        assert!(change(weighing(0.5, 0.34), weighing(0.5, 0.34))
+            .weighed()
+            .starts_with("mass not determined"));
+        assert!(change(weighing(0.5, 0.33), weighing(0.5, 0.33))
+            .weighed()
+            .starts_with("+0.500 ± 0.330 kg"));
+    }
+
+    /// The ten parameters of a point mass `m` at `c` (inertia about the frame's origin).
+    fn point(m: f64, c: [f64; 3]) -> [f64; 10] {
+        let c = nalgebra::Vector3::from(c);
+        InertialParams::from_mass_com_inertia(m, &c, &nalgebra::Matrix3::zeros())
+            .0
+            .into()
+    }
+
+    #[test]
+    fn the_point_mass_map_is_exact_at_its_centre_and_first_order_near_it() {
+        let c = [0.03, -0.02, 0.11];
+        let b = point_mass_map(&c);
+        // At `h = m c`: the point mass itself, for any mass.
+        for m in [0.1, 2.5] {
+            let x = nalgebra::Vector4::new(m, m * c[0], m * c[1], m * c[2]);
+            let pi = b * x;
+            let truth = point(m, c);
+            for k in 0..10 {
+                assert!(
+                    (pi[k] - truth[k]).abs() < 1e-14,
+                    "m {m}, entry {k}: {} {}",
+                    pi[k],
+                    truth[k]
+                );
+            }
+        }
+        // Near it (the centre 1 mm off): the error is second order in the offset,
+        // `m |δc|²`-sized, against a first-order change of the inertia of `2 m |c| |δc|`.
+        let (m, d) = (2.0, [1e-3, -1e-3, 1e-3]);
+        let moved = [c[0] + d[0], c[1] + d[1], c[2] + d[2]];
+        let x = nalgebra::Vector4::new(m, m * moved[0], m * moved[1], m * moved[2]);
+        let (pi, truth, at_c) = (b * x, point(m, moved), point(m, c));
+        for k in 4..10 {
+            let error = (pi[k] - truth[k]).abs();
+            let change = (truth[k] - at_c[k]).abs();
+            assert!(error <= 2.0 * m * 3e-6, "entry {k}: error {error}");
+            assert!(
+                error < 0.05 * change.max(1e-9) || change < 1e-6,
+                "entry {k}: {error} of {change}"
+            );
+        }
+    }
+
+    #[test]
+    fn a_point_mass_ties_its_body_s_ten_free_parameters_to_four() {
+        // Free: two model parameters, a signed effect coefficient, a point mass's ten columns.
+        let free: Vec<usize> = (0..13).collect();
+        let c = [0.1, 0.0, -0.2];
+        let (t, nonneg) = point_mass_reduction(&free, &[(3, c)], vec![2]);
+        let t = t.expect("a map with a point mass");
+        assert_eq!((t.nrows(), t.ncols()), (13, 7));
+        // The others map one to one; the block is B(c); the signed coefficient and the mass
+        // are kept non-negative.
+        for i in 0..3 {
+            assert_eq!(t[(i, i)], 1.0);
+        }
+        let b = point_mass_map(&c);
+        for r in 0..10 {
+            for a in 0..4 {
+                assert_eq!(t[(3 + r, 3 + a)], b[(r, a)]);
+            }
+        }
+        assert_eq!(nonneg, vec![2, 3]);
+        // Without a point mass, nothing is mapped.
+        let (none, kept) = point_mass_reduction(&free, &[], vec![2]);
+        assert!(none.is_none());
+        assert_eq!(kept, vec![2]);
+    }
+
+    #[test]
+    fn a_changed_body_must_stay_a_body_within_the_tolerance() {
+        let link = point(0.7, [0.0, 0.0, 0.05]);
+        let link = InertialParams::from_slice(&link).unwrap();
+        // A point mass added is a body; so is a body at the boundary J ⪰ 0 (rank one).
+        let added = point(2.0, [0.0, 0.01, 0.13]);
+        let sum: Vec<f64> = link.0.iter().zip(&added).map(|(a, b)| a + b).collect();
+        let sum = InertialParams::from_slice(&sum.try_into().unwrap()).unwrap();
+        assert!(still_a_body(&link) && still_a_body(&sum));
+        // The change the real KUKA's run 2 took on its last link (described by run 3): −0.07 kg
+        // with +0.28 kg m² about two axes leaves J an eigenvalue of −0.09 against a trace of 1.0.
+        let described = InertialParams::from_slice(&[
+            0.70433, -0.03885, -0.02856, -0.01098, 0.01199, -0.00012, -0.00408, 0.01271, 0.00335,
+            0.00623,
+        ])
+        .unwrap();
+        let change = [
+            -0.0514, 0.0019, 0.0234, -0.0505, 0.2818, 0.1570, 0.0118, 0.2865, 0.0458, 0.1407,
+        ];
+        let changed: Vec<f64> = described
+            .0
+            .iter()
+            .zip(&change)
+            .map(|(a, b)| a + b)
+            .collect();
+        let changed = InertialParams::from_slice(&changed.try_into().unwrap()).unwrap();
+        assert!(still_a_body(&described));
+        assert!(!still_a_body(&changed));
+    }
+}

@@ -1,0 +1,455 @@
+//! Streaming least-squares data: `YᵀY`, `Yᵀτ`, `τᵀτ` and the sample count, accumulated in one
+//! pass (architecture.md §5), so memory and the cone program's size do not grow with the number of
+//! samples. Rows are buffered in blocks and added with one matrix product per block.
+
+use nalgebra::{DMatrix, DVector};
+use physid_core::dynamics::{regressor, Data};
+use physid_core::model::Model;
+use physid_core::trajectory::{SampleSink, Trajectory};
+
+/// Rows per block before the `YᵀY` update (a multiple of every joint count up to 8).
+const BLOCK_SAMPLES: usize = 128;
+
+/// Samples per chunk of a parallel accumulation. Fixed, so that the chunks, the order in which
+/// their sums are added, and so every result, do not depend on the thread count.
+const CHUNK_SAMPLES: usize = 1024;
+
+pub use physid_core::dynamics::for_each_regressor;
+
+/// The normal equations of `min Σ_k ‖Y_k θ − τ_k‖²` over the samples added so far.
+#[derive(Clone, Debug)]
+pub struct NormalEquations {
+    /// `Σ Y_kᵀ Y_k` (p×p).
+    pub yty: DMatrix<f64>,
+    /// `Σ Y_kᵀ τ_k`.
+    pub ytt: DVector<f64>,
+    /// `Σ ‖τ_k‖²`.
+    pub tt: f64,
+    /// Number of samples added.
+    pub samples: usize,
+    n: usize,
+    /// Joints whose rows are left out (locked joints: their torque is not fitted).
+    excluded: Vec<usize>,
+    rows: DMatrix<f64>,
+    taus: DVector<f64>,
+    filled: usize,
+}
+
+impl NormalEquations {
+    /// Empty normal equations for a model with `n` joints and `p` parameters.
+    pub fn new(n: usize, p: usize) -> Self {
+        Self {
+            yty: DMatrix::zeros(p, p),
+            ytt: DVector::zeros(p),
+            tt: 0.0,
+            samples: 0,
+            n,
+            excluded: vec![],
+            rows: DMatrix::zeros(BLOCK_SAMPLES * n, p),
+            taus: DVector::zeros(BLOCK_SAMPLES * n),
+            filled: 0,
+        }
+    }
+
+    /// The same, empty, normal equations leaving out the rows of `joints` (their torques are
+    /// not fitted: locked joints).
+    pub fn excluding(mut self, joints: &[usize]) -> Self {
+        self.excluded = joints.to_vec();
+        self
+    }
+
+    /// Equations per sample: the joints whose rows are fitted.
+    pub fn rows_per_sample(&self) -> usize {
+        self.n - self.excluded.len()
+    }
+
+    /// Adds one sample's regressor `y` (n×p) and torque `tau`.
+    pub fn add(&mut self, y: &DMatrix<f64>, tau: &[f64]) {
+        let r0 = self.filled * self.n;
+        self.rows
+            .view_mut((r0, 0), (self.n, y.ncols()))
+            .copy_from(y);
+        for (j, t) in tau.iter().enumerate() {
+            self.taus[r0 + j] = *t;
+        }
+        for &j in &self.excluded {
+            self.rows.row_mut(r0 + j).fill(0.0);
+            self.taus[r0 + j] = 0.0;
+        }
+        self.filled += 1;
+        self.samples += 1;
+        if self.filled == BLOCK_SAMPLES {
+            self.flush();
+        }
+    }
+
+    /// Adds the buffered rows into the sums: the upper triangle of `YᵀY` by BLAS `dsyrk`
+    /// (symmetric rank-k update, half the work of a general product).
+    fn flush(&mut self) {
+        if self.filled == 0 {
+            return;
+        }
+        let m = self.filled * self.n;
+        add_gram(Gram::RowsTimesRows, &self.rows, m, &mut self.yty);
+        let rows = self.rows.rows(0, m);
+        let taus = self.taus.rows(0, m);
+        self.ytt.gemv_tr(1.0, &rows, &taus, 1.0);
+        self.tt += taus.norm_squared();
+        self.filled = 0;
+    }
+
+    /// Folds in buffered rows and fills the lower triangle; call before reading the sums.
+    pub fn finish(mut self) -> Self {
+        self.flush();
+        self.yty.fill_lower_triangle_with_upper_triangle();
+        self
+    }
+
+    /// Combines two finished accumulations (for parallel or incremental use).
+    pub fn merged(mut self, other: &NormalEquations) -> Self {
+        self.absorb(other);
+        self
+    }
+
+    /// Adds a finished accumulation's sums into these.
+    fn absorb(&mut self, other: &NormalEquations) {
+        self.yty += &other.yty;
+        self.ytt += &other.ytt;
+        self.tt += other.tt;
+        self.samples += other.samples;
+        if self.excluded.is_empty() {
+            self.excluded = other.excluded.clone();
+        }
+    }
+
+    /// Accumulates samples `range` of a trajectory (which must carry q̈) for `model`, in
+    /// chunks of fixed length in parallel (the current rayon pool): the same sums whatever the
+    /// thread count.
+    pub fn from_trajectory(model: &Model, tr: &Trajectory, range: std::ops::Range<usize>) -> Self {
+        Self::from_trajectory_excluding(model, tr, range, &[])
+    }
+
+    /// [`Self::from_trajectory`] leaving out the rows of `excluded` joints.
+    pub fn from_trajectory_excluding(
+        model: &Model,
+        tr: &Trajectory,
+        range: std::ops::Range<usize>,
+        excluded: &[usize],
+    ) -> Self {
+        use rayon::prelude::*;
+        let empty = || Self::new(model.dof(), model.layout().len).excluding(excluded);
+        let chunks: Vec<std::ops::Range<usize>> = range
+            .clone()
+            .step_by(CHUNK_SAMPLES)
+            .map(|start| start..(start + CHUNK_SAMPLES).min(range.end))
+            .collect();
+        // Chunks in parallel (the regressor and its rank-k updates), their sums added in
+        // chunk order.
+        let parts: Vec<Self> = chunks
+            .into_par_iter()
+            .map(|chunk| {
+                let mut sums = JointSums::new(model, excluded);
+                for_each_regressor(model, tr, chunk, &mut |k, y| sums.add(y, tr.tau_at(k)));
+                sums.finish()
+            })
+            .collect();
+        parts
+            .iter()
+            .fold(empty().finish(), |sum, part| sum.merged(part))
+    }
+
+    /// Accumulates the samples a source streams (e.g. a CSV read from disk by
+    /// `io::samples::stream_csv`): memory does not depend on the source's length. Returns the
+    /// sums and what the source returns (its sample count).
+    pub fn from_stream<E>(
+        model: &Model,
+        source: impl FnOnce(&mut SampleSink) -> Result<usize, E>,
+    ) -> Result<(Self, usize), E> {
+        let (n, p) = (model.dof(), model.layout().len);
+        // The same chunks, summed in the same order, as `from_trajectory`: a file streamed
+        // gives the sums it gives in memory, bit for bit.
+        let mut sum = Self::new(n, p).finish();
+        let mut chunk = JointSums::new(model, &[]);
+        let mut d = Data::new(model);
+        let mut y = DMatrix::zeros(n, p);
+        let total = source(&mut |_, s| {
+            regressor(model, &mut d, s.q, s.qd, s.qdd, &mut y);
+            chunk.add(&y, s.tau);
+            if chunk.samples == CHUNK_SAMPLES {
+                let full = std::mem::replace(&mut chunk, JointSums::new(model, &[]));
+                sum.absorb(&full.finish());
+            }
+        })?;
+        sum.absorb(&chunk.finish());
+        Ok((sum, total))
+    }
+
+    /// Finished normal equations from their sums (e.g. a sub-problem or a sum of blocks).
+    pub fn from_sums(
+        n: usize,
+        yty: DMatrix<f64>,
+        ytt: DVector<f64>,
+        tt: f64,
+        samples: usize,
+    ) -> Self {
+        let p = yty.ncols();
+        Self {
+            yty,
+            ytt,
+            tt,
+            samples,
+            n,
+            excluded: vec![],
+            rows: DMatrix::zeros(0, p),
+            taus: DVector::zeros(0),
+            filled: 0,
+        }
+    }
+
+    /// The normal equations of the columns `cols` only (in that order).
+    pub fn select(&self, cols: &[usize]) -> Self {
+        let m = cols.len();
+        let mut out = Self::from_sums(
+            self.n,
+            DMatrix::from_fn(m, m, |i, j| self.yty[(cols[i], cols[j])]),
+            DVector::from_fn(m, |i, _| self.ytt[cols[i]]),
+            self.tt,
+            self.samples,
+        );
+        out.excluded = self.excluded.clone();
+        out
+    }
+
+    /// These equations with the pseudo-observation `mean(x[seen]) = 0` added over the columns
+    /// of `cols` the data see (a column of a locked joint, all zero, keeps its prior), at a
+    /// weight that dominates the data along that direction (a hundred times the largest of
+    /// their diagonal): for a direction the data do not determine (a gauge, such as a torque
+    /// gain common to every joint, which is a scale of all inertial parameters), so that a fit
+    /// does not wander along it. For fitting only: the sums no longer are the data's.
+    pub fn with_mean_pinned(mut self, cols: std::ops::Range<usize>) -> Self {
+        let seen: Vec<usize> = cols.filter(|&c| self.yty[(c, c)] > 0.0).collect();
+        if seen.is_empty() {
+            return self;
+        }
+        let largest = seen.iter().map(|&c| self.yty[(c, c)]).fold(0.0, f64::max);
+        let weight = 100.0 * largest / seen.len() as f64;
+        for &i in &seen {
+            for &j in &seen {
+                self.yty[(i, j)] += weight;
+            }
+        }
+        self
+    }
+
+    /// `Σ ‖Y θ − τ‖²` for parameters `theta`.
+    pub fn residual_sum_of_squares(&self, theta: &DVector<f64>) -> f64 {
+        (theta.dot(&(&self.yty * theta)) - 2.0 * theta.dot(&self.ytt) + self.tt).max(0.0)
+    }
+}
+
+/// Which products of a buffer of samples [`add_gram`] sums.
+#[derive(Clone, Copy)]
+enum Gram {
+    /// Samples are the buffer's rows: `G += AᵀA` over its first `k` rows.
+    RowsTimesRows,
+    /// Samples are the buffer's columns: `G += A Aᵀ` over its first `k` columns.
+    ColumnsTimesColumns,
+}
+
+/// The upper triangle of `g` (`c × c`) plus the Gram matrix of the first `k` samples of the
+/// buffer `a`, by BLAS `dsyrk` (a symmetric rank-k update: half the work of a general
+/// product), on one BLAS thread.
+fn add_gram(layout: Gram, a: &DMatrix<f64>, k: usize, g: &mut DMatrix<f64>) {
+    let (c, lda) = (g.ncols(), a.nrows());
+    let (trans, samples_fit) = match layout {
+        Gram::RowsTimesRows => (b'T', a.nrows() >= k && a.ncols() == c),
+        Gram::ColumnsTimesColumns => (b'N', a.ncols() >= k && a.nrows() == c),
+    };
+    assert!(samples_fit && g.nrows() == c, "Gram buffer shapes");
+    physid_core::spatial::single_threaded_blas();
+    // SAFETY: `a` is column-major (`lda` rows) and holds at least `k` samples of `c` entries
+    // (checked above); `g` is c×c.
+    unsafe {
+        blas::dsyrk(
+            b'U',
+            trans,
+            c as i32,
+            k as i32,
+            1.0,
+            a.as_slice(),
+            lda as i32,
+            1.0,
+            g.as_mut_slice(),
+            c as i32,
+        );
+    }
+}
+
+/// One joint's rows of the regressor over the columns they can touch ([`row_columns`]),
+/// buffered transposed (column `s` of `rows` is the `s`-th buffered sample's row), and their
+/// sums over those columns.
+struct JointRows {
+    joint: usize,
+    cols: Vec<usize>,
+    rows: DMatrix<f64>,
+    taus: DVector<f64>,
+    /// `Σ y yᵀ` over `cols` (upper triangle).
+    gram: DMatrix<f64>,
+    /// `Σ y τ` over `cols`.
+    ytt: DVector<f64>,
+}
+
+/// The normal equations of a model's regressor accumulated joint by joint: row `k` of `Y` is
+/// zero outside the columns of `k`'s subtree and friction, so `YᵀY = Σ_k Σ_s y_k yₖᵀ` costs
+/// `Σ_k |C_k|²` per sample instead of `n p²` (on a 3-joint leg with rotors, 5,900 against 13,100).
+struct JointSums {
+    n: usize,
+    p: usize,
+    excluded: Vec<usize>,
+    joints: Vec<JointRows>,
+    filled: usize,
+    samples: usize,
+    tt: f64,
+}
+
+impl JointSums {
+    /// Empty sums for `model`'s regressor, leaving out the rows of `excluded` joints.
+    fn new(model: &Model, excluded: &[usize]) -> Self {
+        let joints = physid_core::dynamics::row_columns(model)
+            .into_iter()
+            .enumerate()
+            .filter(|(k, _)| !excluded.contains(k))
+            .map(|(joint, cols)| {
+                let c = cols.len();
+                JointRows {
+                    joint,
+                    cols,
+                    rows: DMatrix::zeros(c, BLOCK_SAMPLES),
+                    taus: DVector::zeros(BLOCK_SAMPLES),
+                    gram: DMatrix::zeros(c, c),
+                    ytt: DVector::zeros(c),
+                }
+            })
+            .collect();
+        Self {
+            n: model.dof(),
+            p: model.layout().len,
+            excluded: excluded.to_vec(),
+            joints,
+            filled: 0,
+            samples: 0,
+            tt: 0.0,
+        }
+    }
+
+    /// Adds one sample's regressor `y` (n×p, the model's layout) and torque `tau`.
+    fn add(&mut self, y: &DMatrix<f64>, tau: &[f64]) {
+        let (n, s) = (self.n, self.filled);
+        let y = y.as_slice();
+        for jr in &mut self.joints {
+            let column = &mut jr.rows.as_mut_slice()[s * jr.cols.len()..][..jr.cols.len()];
+            for (out, &c) in column.iter_mut().zip(&jr.cols) {
+                *out = y[c * n + jr.joint];
+            }
+            jr.taus[s] = tau[jr.joint];
+        }
+        self.filled += 1;
+        self.samples += 1;
+        if self.filled == BLOCK_SAMPLES {
+            self.flush();
+        }
+    }
+
+    /// Adds the buffered rows into each joint's sums (`gram` by BLAS `dsyrk`).
+    fn flush(&mut self) {
+        let k = self.filled;
+        if k == 0 {
+            return;
+        }
+        for jr in &mut self.joints {
+            add_gram(Gram::ColumnsTimesColumns, &jr.rows, k, &mut jr.gram);
+            let rows = jr.rows.columns(0, k);
+            let taus = jr.taus.rows(0, k);
+            jr.ytt.gemv(1.0, &rows, &taus, 1.0);
+            self.tt += taus.norm_squared();
+        }
+        self.filled = 0;
+    }
+
+    /// The finished normal equations: each joint's sums added into `YᵀY` and `Yᵀτ` at its
+    /// columns, joints in order.
+    fn finish(mut self) -> NormalEquations {
+        self.flush();
+        let mut yty = DMatrix::zeros(self.p, self.p);
+        let mut ytt = DVector::zeros(self.p);
+        for jr in &self.joints {
+            for (b, &cb) in jr.cols.iter().enumerate() {
+                ytt[cb] += jr.ytt[b];
+                for (a, &ca) in jr.cols.iter().enumerate().take(b + 1) {
+                    yty[(ca, cb)] += jr.gram[(a, b)];
+                }
+            }
+        }
+        yty.fill_lower_triangle_with_upper_triangle();
+        let mut ne = NormalEquations::from_sums(self.n, yty, ytt, self.tt, self.samples);
+        ne.excluded = self.excluded;
+        ne
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_pinned_mean_fixes_the_direction_the_data_leave_free_and_no_other() {
+        // τ = (a − b) x + c d: the data see a − b and c; the mean of a and b is free (as a gain
+        // common to every joint is free beside θ).
+        let rows = [(1.0, 2.0), (2.0, -1.0), (3.0, 0.5), (-1.0, 1.0)];
+        let (a, b, c) = (0.7, -0.3, -2.0);
+        let mut yty = DMatrix::zeros(3, 3);
+        let mut ytt = DVector::zeros(3);
+        let mut tt = 0.0;
+        for (x, d) in rows {
+            let y = DVector::from_vec(vec![x, -x, d]);
+            let t = (a - b) * x + c * d;
+            yty += &y * y.transpose();
+            ytt += &y * t;
+            tt += t * t;
+        }
+        let ne = NormalEquations::from_sums(1, yty, ytt, tt, rows.len());
+        assert_eq!(ne.yty.rank(1e-9), 2, "singular before");
+        let pinned = ne.clone().with_mean_pinned(0..2);
+        let x = pinned
+            .yty
+            .clone()
+            .cholesky()
+            .expect("pinned")
+            .solve(&pinned.ytt);
+        // The mean at its pin, the difference and c the data's; the data's sums (for scoring)
+        // untouched.
+        assert!(
+            (x[0] - 0.5).abs() < 1e-9 && (x[1] + 0.5).abs() < 1e-9,
+            "{x}"
+        );
+        assert!((x[2] - c).abs() < 1e-9, "{x}");
+        assert!(ne.residual_sum_of_squares(&x) < 1e-12 * ne.tt);
+        assert_eq!(pinned.ytt, ne.ytt);
+        assert_eq!(pinned.tt, ne.tt);
+        // A column the data never see (a locked joint's gain) stays out of the mean: pinned in,
+        // it would take the pin's whole weight and leave the gauge free (on the KUKA with one
+        // joint locked it read 15.7 while the six others kept a common −2.8).
+        let mut yty4 = DMatrix::zeros(4, 4);
+        yty4.view_mut((0, 0), (3, 3)).copy_from(&ne.yty);
+        let mut ytt4 = DVector::zeros(4);
+        ytt4.rows_mut(0, 3).copy_from(&ne.ytt);
+        let mut four = NormalEquations::from_sums(1, yty4, ytt4, ne.tt, rows.len());
+        // The unseen column moved to 2, `d` to 3; columns 0–2 pinned: only 0 and 1 enter.
+        four.yty.swap_rows(2, 3);
+        four.yty.swap_columns(2, 3);
+        four.ytt.swap_rows(2, 3);
+        let pinned = four.clone().with_mean_pinned(0..3);
+        assert_eq!(pinned.yty.row(2).iter().filter(|v| **v != 0.0).count(), 0);
+        assert!(pinned.yty[(0, 1)] > four.yty[(0, 1)]);
+    }
+}
