@@ -25,10 +25,11 @@
 //!    from files);
 //! 5. [`diagnose`]: the sim-to-real diagnosis as named steps (breakdown, selection, the
 //!    description test, magnitudes, gap, verdict);
-//! 6. [`experiment`]: the sample-size experiment of the paper's last figure, sweeps, the blind
-//!    benchmark;
-//! 7. [`api`]: the library's entry point per command, typed options in, typed reports out;
-//! 8. the `physid` binary (its own crate, `cli/`): one clap `Args` per command, errors printed
+//! 6. [`experiment`]: the sample-size experiment of the paper's last figure, motions compared,
+//!    sweeps, the CI comparison of results, their tables and plots;
+//! 7. [`bench`]: the diagnosis's benchmarks (simulated blind, semi-real, generalization);
+//! 8. [`api`]: the library's entry point per command, typed options in, typed reports out;
+//! 9. the `physid` binary (its own crate, `cli/`): one clap `Args` per command, errors printed
 //!    once.
 #![warn(missing_docs)]
 
@@ -39,7 +40,8 @@ pub use physid_core::{conic, dynamics, linalg, model, options, signal, spatial, 
 // So is the io floor (crates/io: file formats and the data pipeline).
 pub use physid_io::{self as io, prepare};
 // And the effect library (crates/effect), identification, simulation, the diagnosis and the
-// experiments (crates/ident, sim, diagnose, experiment).
+// experiments and the diagnosis's benchmarks (crates/ident, sim, diagnose, experiment, bench).
+pub use physid_bench as bench;
 pub use physid_diagnose as diagnose;
 pub use physid_effect as effect;
 pub use physid_experiment as experiment;

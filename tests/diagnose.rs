@@ -253,14 +253,14 @@ fn blind_cases_are_diagnosed_from_files_and_scored() {
     let path = common::root().join("scenarios/blind.toml");
     let (sc, m, _) = physid::sim::scenario::load(&path).unwrap();
     let dir = tempfile::tempdir().unwrap();
-    let e = physid::experiment::blind::DESCRIPTION_ERROR;
+    let e = physid::bench::blind::DESCRIPTION_ERROR;
     let opts = DiagOptions {
         description_uncertainty: Some(e),
         ..Default::default()
     };
     // Case 0 is clean, case 7 a spring (slot 3), case 12 rotor inertia left out (slot 8).
     let run = |i: usize, sub: &str| {
-        physid::experiment::blind::run_case(i, 3, &sc, &m, e, &opts, &dir.path().join(sub)).unwrap()
+        physid::bench::blind::run_case(i, 3, &sc, &m, e, &opts, &dir.path().join(sub)).unwrap()
     };
     let clean = run(0, "a");
     assert!(clean.found.is_empty(), "{clean:?}");
@@ -279,7 +279,7 @@ fn blind_cases_are_diagnosed_from_files_and_scored() {
         let rel = (b.inertia.mass() - t.inertia.mass()) / t.inertia.mass();
         assert!(rel != 0.0 && rel.abs() < 5.0 * e, "{}: {rel}", b.name);
     }
-    let s = physid::experiment::blind::score(&[clean, spring, rotor]);
+    let s = physid::bench::blind::score(&[clean, spring, rotor]);
     assert_eq!((s.clean, s.single), (1, 2));
     assert_eq!(s.clean_no_claim, 1.0);
 }

@@ -4,8 +4,8 @@
 /// Each library `Options` rejects, by name, what the command line rejects.
 #[test]
 fn library_options_reject_what_the_cli_rejects() {
+    use physid::bench::blind::{BlindError, BlindOptions};
     use physid::diagnose;
-    use physid::experiment::blind::{BlindError, BlindOptions};
     use physid::ident::{self, ConstraintSet, IdentError};
 
     let named = |e: &diagnose::DiagnoseError| match e {

@@ -1,6 +1,6 @@
 //! `physid blind`: the blind benchmark of the diagnosis.
 
-use physid::experiment::blind::{self, BlindOptions, CaseResult};
+use physid::bench::blind::{self, BlindOptions, CaseResult};
 use rayon::prelude::*;
 use std::path::PathBuf;
 
@@ -69,10 +69,7 @@ fn non_empty_path(s: &str) -> Result<PathBuf, String> {
 
 /// One line per finished case, on standard error: its number, the progress, and
 /// [`real_case_line`].
-fn print_real_case(
-    r: &physid::experiment::semireal::RealCase,
-    progress: &super::progress::Progress,
-) {
+fn print_real_case(r: &physid::bench::semireal::RealCase, progress: &super::progress::Progress) {
     eprintln!(
         "case {} ({}): {}",
         r.case,
@@ -83,7 +80,7 @@ fn print_real_case(
 
 /// What a semi-real case injected on which run (and body) and what the ladder found, with its
 /// wall time (`blind --real` and `generalize` print it per case).
-pub fn real_case_line(r: &physid::experiment::semireal::RealCase) -> String {
+pub fn real_case_line(r: &physid::bench::semireal::RealCase) -> String {
     format!(
         "{} on {}{}; found {}; {:.1} s",
         r.injected,
@@ -231,7 +228,7 @@ where
 
 /// `physid blind --real`: the semi-real benchmark.
 fn run_real(a: Args, robot: &str) -> anyhow::Result<()> {
-    use physid::experiment::semireal::{self, RealCase, RealOptions};
+    use physid::bench::semireal::{self, RealCase, RealOptions};
     let opts = RealOptions {
         cases: a.cases,
         seed: a.seed,

@@ -1,8 +1,8 @@
 //! `physid generalize`: the diagnosis on robots of several makers and sizes, some held out of
 //! tuning.
 
-use physid::experiment::generalize::{self, Case, Spec};
-use physid::experiment::semireal::RealOptions;
+use physid::bench::generalize::{self, Case, Spec};
+use physid::bench::semireal::RealOptions;
 use std::path::PathBuf;
 
 /// The generalization benchmark: each robot of the benchmark file simulated as a real robot,

@@ -54,9 +54,9 @@ pub fn schema(output: &str) -> anyhow::Result<Value> {
     let s = match output {
         "identify" => schemars::schema_for!(physid::api::identify::IdentifyJson),
         "diagnose" => schemars::schema_for!(physid::diagnose::Diagnosis),
-        "blind_scores" => schemars::schema_for!(physid::experiment::blind::Scores),
-        "blind_real_scores" => schemars::schema_for!(physid::experiment::semireal::RealScores),
-        "generalize_scores" => schemars::schema_for!(physid::experiment::generalize::Scores),
+        "blind_scores" => schemars::schema_for!(physid::bench::blind::Scores),
+        "blind_real_scores" => schemars::schema_for!(physid::bench::semireal::RealScores),
+        "generalize_scores" => schemars::schema_for!(physid::bench::generalize::Scores),
         "provenance" => schemars::schema_for!(physid::api::provenance::Provenance),
         "simulate" => schemars::schema_for!(physid::api::simulate::SimulateJson),
         "model" => schemars::schema_for!(physid::api::model::ModelJson),

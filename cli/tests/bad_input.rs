@@ -1279,7 +1279,7 @@ fn a_cutoff_that_filters_nothing_is_warned_about() {
     let model = io::load_robot(urdf.to_str().unwrap()).unwrap();
     let (logged, _, _) = io::load_logged(&m1, &model, &Default::default()).unwrap();
     let tq = dir.path().join("tq.csv");
-    std::fs::write(&tq, physid::experiment::semireal::logged_csv(&logged)).unwrap();
+    std::fs::write(&tq, physid::bench::semireal::logged_csv(&logged)).unwrap();
     let o = run(&tq);
     let err = String::from_utf8_lossy(&o.stderr);
     assert!(

@@ -6,8 +6,8 @@
 mod common;
 
 use common::{physid, root};
+use physid::bench::semireal::{self, Injection, Slot};
 use physid::effect::{Backlash, Compliance, Payload, TimeDelay};
-use physid::experiment::semireal::{self, Injection, Slot};
 use physid::sim::scenario::EffectSpec;
 use std::path::{Path, PathBuf};
 

@@ -176,7 +176,7 @@ fn positions_and_torques(dir: &Path, r: usize, seconds: Option<f64>) -> PathBuf 
         logged.tau.truncate(keep * n);
     }
     let path = dir.join(format!("run{r}_{}.csv", seconds.map_or(0.0, |s| s)));
-    std::fs::write(&path, physid::experiment::semireal::logged_csv(&logged)).unwrap();
+    std::fs::write(&path, physid::bench::semireal::logged_csv(&logged)).unwrap();
     path
 }
 

@@ -7,6 +7,9 @@ import numpy as np
 import numpy.typing as npt
 
 Array = npt.NDArray[np.float64]
+# Joint values as numpy arrays of any integer or float dtype, nested lists, or pandas/polars
+# frames: (samples, n), or one sample (n,).
+ArrayLike = npt.ArrayLike
 Path = Union[str, os.PathLike[str]]
 Paths = Union[Path, Sequence[Path]]
 Names = Union[str, Sequence[str]]
@@ -37,12 +40,12 @@ class Robot:
     def parameter_names(self) -> list[str]: ...
     def parameters(self) -> Array:
         """The description's parameter vector theta."""
-    def inverse_dynamics(self, q: Array, qd: Array, qdd: Array) -> Array:
-        """tau = RNEA + friction (N m), shape (samples, n)."""
-    def mass_matrix(self, q: Array) -> Array:
-        """H(q) (kg m^2), shape (samples, n, n)."""
-    def regressor(self, q: Array, qd: Array, qdd: Array) -> Array:
-        """Y(q, qd, qdd) with Y @ theta = tau, shape (samples, n, p)."""
+    def inverse_dynamics(self, q: ArrayLike, qd: ArrayLike, qdd: ArrayLike) -> Array:
+        """tau = RNEA + friction (N m), shape (samples, n); (n,) for one sample given as (n,)."""
+    def mass_matrix(self, q: ArrayLike) -> Array:
+        """H(q) (kg m^2), shape (samples, n, n); (n, n) for one sample given as (n,)."""
+    def regressor(self, q: ArrayLike, qd: ArrayLike, qdd: ArrayLike) -> Array:
+        """Y(q, qd, qdd) with Y @ theta = tau, shape (samples, n, p); (n, p) for one sample."""
     def describe(self) -> dict[str, Any]:
         """The JSON of `physid model --json`."""
     def write_mjcf(self, path: Path) -> None:
@@ -347,10 +350,10 @@ def load(
 
 def identify_arrays(
     robot: Robot,
-    q: Array,
-    qd: Array,
-    qdd: Array,
-    tau: Array,
+    q: ArrayLike,
+    qd: ArrayLike,
+    qdd: ArrayLike,
+    tau: ArrayLike,
     constraints: Optional[str] = None,
     prior_weight: float = 1e-6,
 ) -> dict[str, Any]:

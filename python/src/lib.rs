@@ -4,7 +4,7 @@
 //! `n` is one sample), results likewise. Errors raise `ValueError` with the library's message;
 //! long calls release the GIL.
 
-use numpy::{IntoPyArray, PyArray1, PyArray2, PyArray3, PyArrayMethods, PyReadonlyArrayDyn};
+use numpy::{IntoPyArray, PyArray1, PyArrayDyn, PyArrayMethods, PyReadonlyArrayDyn};
 use physid::api;
 use physid::api::data::{Notice, ReadOptions};
 use physid::api::identify::{IdentifyOptions, SampleRange};
@@ -12,7 +12,7 @@ use physid::api::model::RobotOptions;
 use physid::ident::{ConstraintSet, NormalEquations, Options};
 use physid::model::{Model, RotorModel};
 use physid::trajectory::Trajectory;
-use pyo3::exceptions::PyValueError;
+use pyo3::exceptions::{PyTypeError, PyValueError};
 use pyo3::prelude::*;
 use pyo3::types::{PyBytes, PyDict};
 use std::path::{Path, PathBuf};
@@ -58,45 +58,88 @@ fn plain<'py>(py: Python<'py>, value: &impl serde::Serialize) -> PyResult<Bound<
     py.import("json")?.call_method1("loads", (text,))
 }
 
-/// An array of joint values as a flat sample-major vector and its sample count: `(samples, n)`
-/// or one sample of `n`.
-fn samples(name: &str, a: &PyReadonlyArrayDyn<'_, f64>, n: usize) -> PyResult<(Vec<f64>, usize)> {
-    let view = a.as_array();
+/// Joint values given as an array-like, read once: sample-major, with their sample count and
+/// whether they were one sample (shape `(n,)`, answered with one sample as pinocchio does).
+struct Joints {
+    values: Vec<f64>,
+    samples: usize,
+    one: bool,
+}
+
+/// An array-like of joint values as [`Joints`]: anything `numpy.asarray` reads as real numbers
+/// (numpy arrays of any integer or float dtype, nested lists, pandas and polars frames), of
+/// shape `(samples, n)` or one sample `(n,)`.
+fn samples(name: &str, a: &Bound<'_, PyAny>, n: usize) -> PyResult<Joints> {
+    let array = a.py().import("numpy")?.call_method1("asarray", (a,))?;
+    let dtype = array.getattr("dtype")?;
+    let kind: String = dtype.getattr("kind")?.extract()?;
+    if !matches!(kind.as_str(), "i" | "u" | "f") {
+        return Err(PyTypeError::new_err(format!(
+            "{name}: an array of real numbers is needed, not one of dtype {dtype}"
+        )));
+    }
+    let array: PyReadonlyArrayDyn<'_, f64> =
+        array.call_method1("astype", ("float64",))?.extract()?;
+    let view = array.as_array();
     let shape = view.shape().to_vec();
-    let count = match shape[..] {
-        [m] if m == n => 1,
-        [s, m] if m == n => s,
+    let (samples, one) = match shape[..] {
+        [m] if m == n => (1, true),
+        [s, m] if m == n => (s, false),
         _ => {
             return Err(value_error(format!(
             "{name} has shape {shape:?}: give (samples, {n}) or ({n},) for the robot's {n} joints"
         )))
         }
     };
-    Ok((view.iter().copied().collect(), count))
+    Ok(Joints {
+        values: view.iter().copied().collect(),
+        samples,
+        one,
+    })
 }
 
-/// Positions, velocities and accelerations as flat sample-major vectors, and q's samples (the
-/// library checks that the others have as many).
+/// Positions, velocities and accelerations as flat sample-major vectors, q's sample count (the
+/// library checks that the others have as many), and whether q was one sample.
 struct States {
     q: Vec<f64>,
     qd: Vec<f64>,
     qdd: Vec<f64>,
     samples: usize,
+    one: bool,
 }
 
 fn states(
-    q: &PyReadonlyArrayDyn<'_, f64>,
-    qd: &PyReadonlyArrayDyn<'_, f64>,
-    qdd: &PyReadonlyArrayDyn<'_, f64>,
+    q: &Bound<'_, PyAny>,
+    qd: &Bound<'_, PyAny>,
+    qdd: &Bound<'_, PyAny>,
     n: usize,
 ) -> PyResult<States> {
-    let (q, count) = samples("q", q, n)?;
+    let q = samples("q", q, n)?;
     Ok(States {
-        q,
-        qd: samples("qd", qd, n)?.0,
-        qdd: samples("qdd", qdd, n)?.0,
-        samples: count,
+        qd: samples("qd", qd, n)?.values,
+        qdd: samples("qdd", qdd, n)?.values,
+        samples: q.samples,
+        one: q.one,
+        q: q.values,
     })
+}
+
+/// `values` shaped `(samples, rest…)`, or `(rest…)` for one sample given as one.
+fn shaped<'py>(
+    py: Python<'py>,
+    values: Vec<f64>,
+    samples: usize,
+    one: bool,
+    rest: &[usize],
+) -> PyResult<Bound<'py, PyArrayDyn<f64>>> {
+    let shape: Vec<usize> = if one {
+        rest.to_vec()
+    } else {
+        std::iter::once(samples)
+            .chain(rest.iter().copied())
+            .collect()
+    };
+    values.into_pyarray(py).reshape(shape)
 }
 
 /// A robot: the built-in leg (`"cheetah3"`), a URDF file, or a robot TOML file.
@@ -209,60 +252,53 @@ impl Robot {
         self.model.parameters().as_slice().to_vec().into_pyarray(py)
     }
 
-    /// `τ = RNEA(q, q̇, q̈) + friction` (N m): `(samples, n)`.
+    /// `τ = RNEA(q, q̇, q̈) + friction` (N m): `(samples, n)`, or `(n,)` for one sample given
+    /// as `(n,)`. q (rad or m), q̇, q̈: array-likes of shape `(samples, n)` or `(n,)`.
     fn inverse_dynamics<'py>(
         &self,
         py: Python<'py>,
-        q: PyReadonlyArrayDyn<'py, f64>,
-        qd: PyReadonlyArrayDyn<'py, f64>,
-        qdd: PyReadonlyArrayDyn<'py, f64>,
-    ) -> PyResult<Bound<'py, PyArray2<f64>>> {
+        q: &Bound<'py, PyAny>,
+        qd: &Bound<'py, PyAny>,
+        qdd: &Bound<'py, PyAny>,
+    ) -> PyResult<Bound<'py, PyArrayDyn<f64>>> {
         let n = self.model.dof();
-        let States {
-            q,
-            qd,
-            qdd,
-            samples: s,
-        } = states(&q, &qd, &qdd, n)?;
+        let x = states(q, qd, qdd, n)?;
         let tau = py
-            .allow_threads(|| api::dynamics::inverse_dynamics(&self.model, &q, &qd, &qdd))
+            .allow_threads(|| api::dynamics::inverse_dynamics(&self.model, &x.q, &x.qd, &x.qdd))
             .map_err(value_error)?;
-        tau.into_pyarray(py).reshape([s, n])
+        shaped(py, tau, x.samples, x.one, &[n])
     }
 
-    /// The joint-space mass matrix `H(q)` (kg m²): `(samples, n, n)`.
+    /// The joint-space mass matrix `H(q)` (kg m²): `(samples, n, n)`, or `(n, n)` for one
+    /// sample given as `(n,)`.
     fn mass_matrix<'py>(
         &self,
         py: Python<'py>,
-        q: PyReadonlyArrayDyn<'py, f64>,
-    ) -> PyResult<Bound<'py, PyArray3<f64>>> {
+        q: &Bound<'py, PyAny>,
+    ) -> PyResult<Bound<'py, PyArrayDyn<f64>>> {
         let n = self.model.dof();
-        let (q, s) = samples("q", &q, n)?;
+        let q = samples("q", q, n)?;
         let h = py
-            .allow_threads(|| api::dynamics::mass_matrices(&self.model, &q))
+            .allow_threads(|| api::dynamics::mass_matrices(&self.model, &q.values))
             .map_err(value_error)?;
-        h.into_pyarray(py).reshape([s, n, n])
+        shaped(py, h, q.samples, q.one, &[n, n])
     }
 
-    /// The regressor `Y(q, q̇, q̈)`, `Y θ = τ`: `(samples, n, p)`.
+    /// The regressor `Y(q, q̇, q̈)`, `Y θ = τ`: `(samples, n, p)`, or `(n, p)` for one sample
+    /// given as `(n,)`.
     fn regressor<'py>(
         &self,
         py: Python<'py>,
-        q: PyReadonlyArrayDyn<'py, f64>,
-        qd: PyReadonlyArrayDyn<'py, f64>,
-        qdd: PyReadonlyArrayDyn<'py, f64>,
-    ) -> PyResult<Bound<'py, PyArray3<f64>>> {
+        q: &Bound<'py, PyAny>,
+        qd: &Bound<'py, PyAny>,
+        qdd: &Bound<'py, PyAny>,
+    ) -> PyResult<Bound<'py, PyArrayDyn<f64>>> {
         let (n, p) = (self.model.dof(), self.model.layout().len);
-        let States {
-            q,
-            qd,
-            qdd,
-            samples: s,
-        } = states(&q, &qd, &qdd, n)?;
+        let x = states(q, qd, qdd, n)?;
         let y = py
-            .allow_threads(|| api::dynamics::regressors(&self.model, &q, &qd, &qdd))
+            .allow_threads(|| api::dynamics::regressors(&self.model, &x.q, &x.qd, &x.qdd))
             .map_err(value_error)?;
-        y.into_pyarray(py).reshape([s, n, p])
+        shaped(py, y, x.samples, x.one, &[n, p])
     }
 
     /// The robot described: bodies, rotors, joints, gravity torque at rest (the JSON of
@@ -292,10 +328,10 @@ impl Robot {
 fn identify_arrays<'py>(
     py: Python<'py>,
     robot: &Robot,
-    q: PyReadonlyArrayDyn<'py, f64>,
-    qd: PyReadonlyArrayDyn<'py, f64>,
-    qdd: PyReadonlyArrayDyn<'py, f64>,
-    tau: PyReadonlyArrayDyn<'py, f64>,
+    q: &Bound<'py, PyAny>,
+    qd: &Bound<'py, PyAny>,
+    qdd: &Bound<'py, PyAny>,
+    tau: &Bound<'py, PyAny>,
     constraints: Option<&str>,
     prior_weight: f64,
 ) -> PyResult<Bound<'py, PyDict>> {
@@ -315,8 +351,9 @@ fn identify_arrays<'py>(
         qd,
         qdd,
         samples: s,
-    } = states(&q, &qd, &qdd, n)?;
-    let tau = samples("tau", &tau, n)?.0;
+        ..
+    } = states(q, qd, qdd, n)?;
+    let tau = samples("tau", tau, n)?.values;
     // Lengths, sample counts and finiteness, named by array, sample and joint.
     api::dynamics::samples(m, &q, &[("qd", &qd), ("qdd", &qdd), ("tau", &tau)])
         .map_err(value_error)?;

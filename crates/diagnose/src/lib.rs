@@ -16,10 +16,11 @@
 //!
 //! [`diagnose`] runs the steps in that order on a training and a validation trajectory, over a
 //! shared `Stage` (the data, the nominal fit and the effect columns); [`diagnose_runs`] joins
-//! runs first. The blind benchmark that scores it is `experiment::blind`.
+//! runs first. The blind benchmark that scores it is `bench::blind`.
 //!
 //! A floor of physid (docs/architecture.md §6) of its own crate, `physid-diagnose`; the `physid`
 //! crate re-exports it as `physid::diagnose`.
+#![warn(missing_docs)]
 
 pub mod anchor;
 pub mod baseline;

@@ -6,16 +6,18 @@
 
 use super::physics::{self, Physics, ScenarioError};
 use super::EffectSpec;
-use super::{per_joint, row, times, Blind, ColumnCount::PerJoint, Grid, Kind, KindSpec};
+use super::{per_joint, row, times, Blind, ColumnCount::PerJoint, Grid, Kind, KindSpec, Property};
 use serde::{Deserialize, Serialize};
 
 /// The kind's row: name, columns, magnitudes, replay and the blind benchmark's draw.
 pub(super) const SPEC: KindSpec = KindSpec {
-    non_negative: true,
     magnitude: ("dead-zone width b", "rad"),
-    linearized: true,
-    // Offered from the description for the reason compliance is (its file).
-    offered_from_description: true,
+    properties: &[
+        Property::NonNegative,
+        Property::Linearized,
+        // Offered from the description for the reason compliance is (its file).
+        Property::OfferedFromDescription,
+    ],
     replay: |_, c, _, _| {
         let width = c.iter().map(|b| b.max(0.0)).collect();
         Some(EffectSpec::Backlash(Backlash { width }))

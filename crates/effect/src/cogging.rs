@@ -4,7 +4,7 @@
 
 use super::physics::{self, Physics, ScenarioError, State};
 use super::EffectSpec;
-use super::{per_joint, row, Blind, ColumnCount::PerJoint, Grid, Kind, KindSpec};
+use super::{per_joint, row, Blind, ColumnCount::PerJoint, Grid, Kind, KindSpec, Property};
 use physid_core::model::Model;
 use rand::Rng;
 use rand_chacha::ChaCha8Rng;
@@ -13,9 +13,11 @@ use serde::{Deserialize, Serialize};
 /// The kind's row: name, columns, magnitudes, replay and the blind benchmark's draw.
 pub(super) const SPEC: KindSpec = KindSpec {
     magnitude: ("amplitude", "N m"),
-    magnitude_pairs: true,
     grid: Grid::CoggingHarmonic,
-    needs_rotor: true,
+    properties: &[
+        Property::MagnitudePairs,
+        Property::NeedsRotor,
+    ],
     magnitudes: |c, n, _| (0..n).map(|j| c[j].hypot(c[n + j])).collect(),
     replay: replay_cogging,
     blind: Blind::SingleAndPair,

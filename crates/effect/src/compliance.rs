@@ -5,19 +5,21 @@
 
 use super::physics::{self, Physics, ScenarioError};
 use super::EffectSpec;
-use super::{per_joint, row, times, Blind, ColumnCount::PerJoint, Grid, Kind, KindSpec};
+use super::{per_joint, row, times, Blind, ColumnCount::PerJoint, Grid, Kind, KindSpec, Property};
 use serde::{Deserialize, Serialize};
 
 /// The kind's row: name, columns, magnitudes, replay and the blind benchmark's draw.
 pub(super) const SPEC: KindSpec = KindSpec {
-    non_negative: true,
     magnitude: ("compliance 1/k", "rad/(N m)"),
-    linearized: true,
-    // A deflection `κ τ` shifts the gravity torque by `−κ ∂g/∂q τ`, which a spring and the
-    // re-identified inertial parameters take in: on the real KUKA runs cross-validation named
-    // neither this nor backlash, while from the description their columns take 60–95 % of the
-    // held-out mean square (semi-real benchmark, 2026-11-27).
-    offered_from_description: true,
+    properties: &[
+        Property::NonNegative,
+        Property::Linearized,
+        // A deflection `κ τ` shifts the gravity torque by `−κ ∂g/∂q τ`, which a spring and the
+        // re-identified inertial parameters take in: on the real KUKA runs cross-validation named
+        // neither this nor backlash, while from the description their columns take 60–95 % of the
+        // held-out mean square (semi-real benchmark).
+        Property::OfferedFromDescription,
+    ],
     replay: |_, c, _, _| {
         let stiffness = c.iter().map(|k| 1.0 / k).collect();
         Some(EffectSpec::Compliance(Compliance { stiffness }))

@@ -277,39 +277,46 @@ type Draw = fn(&Model, &mut ChaCha8Rng, f64) -> (Option<EffectSpec>, Vec<f64>);
 /// magnitudes)` → the effect `s` times as strong and its magnitudes (`None`: not this kind).
 type Scale = fn(&EffectSpec, f64, f64, &[f64]) -> Option<(EffectSpec, Vec<f64>)>;
 
+/// A yes-or-no property of a kind; a row of [`KIND_TABLE`] lists those that hold.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(crate) enum Property {
+    /// The coefficients have a physical sign (≥ 0), kept in every fit.
+    NonNegative,
+    /// Per-joint magnitude `i` needs columns `i` and `n + i` (an amplitude of a sine and a
+    /// cosine); without it, column `i` (a spring's rest term is not its stiffness).
+    MagnitudePairs,
+    /// The columns lie in the span of the model's own (only the description test sees it).
+    InModelSpan,
+    /// The columns are linearized about the nominal model `θ̂₀`.
+    Linearized,
+    /// Equal coefficients on every joint give a combination of the model's own columns (a
+    /// torque gain common to every joint is a scale of all of `θ`): fitted beside `θ`, the
+    /// coefficients' mean is a gauge the data do not determine, pinned at zero.
+    CommonModeInSpan,
+    /// The ladder from the description offers it even when cross-validation did not select
+    /// it: the re-identified model absorbs its signature (friction and inertial parameters fit
+    /// a delay's `−d τ̇`), while no body's parameters mimic it from the description.
+    OfferedFromDescription,
+    /// A model with rotors carries this effect among its own parameters (the rotors' inertia).
+    RotorParameter,
+    /// The columns approximate the effect by more than a linearization (reflected inertia
+    /// without the rotor's gyroscopic terms).
+    Approximate,
+    /// A motor-side effect at the rotor's angle: offered only on joints whose rotor (and gear
+    /// ratio) the description knows (cogging: a link-angle harmonic is not cogging).
+    NeedsRotor,
+}
+
 /// Everything physid knows about one kind: one row of [`KIND_TABLE`].
 pub(crate) struct KindSpec {
     pub kind: Kind,
     /// snake_case name, as in scenario files.
     pub name: &'static str,
     pub columns: ColumnCount,
-    /// The coefficients have a physical sign (≥ 0), kept in every fit.
-    pub non_negative: bool,
     /// The magnitude's name and unit.
     pub magnitude: (&'static str, &'static str),
-    /// Per-joint magnitude `i` needs columns `i` and `n + i` (an amplitude of a sine and a
-    /// cosine); otherwise column `i` (a spring's rest term is not its stiffness).
-    pub magnitude_pairs: bool,
-    /// The columns lie in the span of the model's own (only the description test sees it).
-    pub in_model_span: bool,
-    /// The columns are linearized about the nominal model `θ̂₀`.
-    pub linearized: bool,
-    /// Equal coefficients on every joint give a combination of the model's own columns (a
-    /// torque gain common to every joint is a scale of all of `θ`): fitted beside `θ`, the
-    /// coefficients' mean is a gauge the data do not determine, pinned at zero.
-    pub common_mode_in_span: bool,
-    /// The ladder from the description offers it even when cross-validation did not select
-    /// it: the re-identified model absorbs its signature (friction and inertial parameters fit
-    /// a delay's `−d τ̇`), while no body's parameters mimic it from the description.
-    pub offered_from_description: bool,
-    /// A model with rotors carries this effect among its own parameters (the rotors' inertia).
-    pub rotor_parameter: bool,
-    /// The columns approximate the effect by more than a linearization (reflected inertia
-    /// without the rotor's gyroscopic terms).
-    pub approximate: bool,
-    /// A motor-side effect at the rotor's angle: offered only on joints whose rotor (and gear
-    /// ratio) the description knows (cogging: a link-angle harmonic is not cogging).
-    pub needs_rotor: bool,
+    /// What holds of its columns and of its place in the diagnosis (none by default).
+    pub properties: &'static [Property],
     pub grid: Grid,
     pub fill: Fill,
     pub magnitudes: Magnitudes,
@@ -346,16 +353,8 @@ const fn row(kind: Kind, name: &'static str, columns: ColumnCount, fill: Fill) -
         kind,
         name,
         columns,
-        non_negative: false,
         magnitude: ("", ""),
-        magnitude_pairs: false,
-        in_model_span: false,
-        linearized: false,
-        common_mode_in_span: false,
-        offered_from_description: false,
-        rotor_parameter: false,
-        approximate: false,
-        needs_rotor: false,
+        properties: &[],
         grid: Grid::None,
         fill,
         magnitudes: same,
@@ -365,6 +364,13 @@ const fn row(kind: Kind, name: &'static str, columns: ColumnCount, fill: Fill) -
         blind: Blind::No,
         draw: |_, _, _| (None, vec![]),
         scale: None,
+    }
+}
+
+impl KindSpec {
+    /// Whether `property` holds of the kind.
+    fn has(&self, property: Property) -> bool {
+        self.properties.contains(&property)
     }
 }
 
@@ -405,7 +411,7 @@ impl Kind {
     /// static excess, load-dependent friction, reflected rotor inertia, compliance, backlash. A
     /// fit that needs the opposite sign is not this effect.
     pub fn non_negative(&self) -> bool {
-        self.spec().non_negative
+        self.spec().has(Property::NonNegative)
     }
 
     /// The magnitude's name and unit, per joint (or for the whole robot).
@@ -415,7 +421,7 @@ impl Kind {
 
     /// The columns (offsets within the kind's own) magnitude `i` of `n` joints depends on.
     pub fn magnitude_columns(&self, i: usize, n: usize) -> Vec<usize> {
-        if self.spec().magnitude_pairs {
+        if self.spec().has(Property::MagnitudePairs) {
             vec![i, n + i]
         } else {
             vec![i]
@@ -452,37 +458,37 @@ impl Kind {
     /// that their mean is pinned at zero wherever the kind is fitted beside `θ`
     /// ([`KindSpec::common_mode_in_span`]).
     pub fn common_mode_in_span(&self) -> bool {
-        self.spec().common_mode_in_span
+        self.spec().has(Property::CommonModeInSpan)
     }
 
     /// Whether the columns lie in the span of the model's own (its parameters express the
     /// effect exactly): cross-validation cannot see it and does not offer it.
     pub fn in_model_span(&self) -> bool {
-        self.spec().in_model_span
+        self.spec().has(Property::InModelSpan)
     }
 
     /// Whether the columns are linearized about the nominal model (they need `θ̂₀`).
     pub fn linearized(&self) -> bool {
-        self.spec().linearized
+        self.spec().has(Property::Linearized)
     }
 
     /// Whether the ladder from the description offers it whatever cross-validation selected
     /// (see `ladder::candidates`).
     pub fn offered_from_description(&self) -> bool {
-        self.spec().offered_from_description
+        self.spec().has(Property::OfferedFromDescription)
     }
 
     /// Whether the columns only approximate the effect (linearized about the nominal model, or
     /// reflected rotor inertia without gyroscopic terms): what they miss biases the parameters,
     /// so the test against the description does not run beside such an effect.
     pub fn approximate(&self) -> bool {
-        self.spec().linearized || self.spec().approximate
+        self.spec().has(Property::Linearized) || self.spec().has(Property::Approximate)
     }
 
     /// Whether a model with rotors carries this effect among its own parameters (reflected
     /// rotor inertia): testing it against the description would test the description.
     pub fn is_rotor_parameter(&self) -> bool {
-        self.spec().rotor_parameter
+        self.spec().has(Property::RotorParameter)
     }
 
     /// The grid of the one-dimensional search for a robot of `n` joints, if any: Stribeck
@@ -501,7 +507,7 @@ impl Kind {
 
     /// Whether the kind acts at the rotor's angle and needs the description's rotors.
     pub fn needs_rotor(&self) -> bool {
-        self.spec().needs_rotor
+        self.spec().has(Property::NeedsRotor)
     }
 
     /// Whether the kind has a grid.
@@ -583,7 +589,7 @@ impl Kind {
         matches!(self, Stribeck | AsymmetricCoulomb | LoadDependentFriction)
     }
 
-    /// The kinds the semi-real benchmark injects on real logs (`experiment::semireal`): those
+    /// The kinds the semi-real benchmark injects on real logs (`bench::semireal`): those
     /// whose injection needs no model of the robot beyond its description.
     pub fn semi_real_singles() -> Vec<Kind> {
         use Kind::*;

@@ -5,15 +5,17 @@
 
 use super::physics::{self, Physics, ScenarioError, State};
 use super::EffectSpec;
-use super::{per_joint, row, Blind, ColumnCount::PerJoint, Kind, KindSpec};
+use super::{per_joint, row, Blind, ColumnCount::PerJoint, Kind, KindSpec, Property};
 use physid_core::dynamics::sign;
 use serde::{Deserialize, Serialize};
 
 /// The kind's row: name, columns, magnitudes, replay and the blind benchmark's draw.
 pub(super) const SPEC: KindSpec = KindSpec {
-    non_negative: true,
     magnitude: ("coefficient mu", "-"),
-    linearized: true,
+    properties: &[
+        Property::NonNegative,
+        Property::Linearized,
+    ],
     replay: |_, c, _, _| {
         let coefficient = c.to_vec();
         Some(EffectSpec::LoadDependentFriction(LoadDependentFriction {

@@ -7,7 +7,7 @@
 
 use super::physics::{self, Physics, ScenarioError};
 use super::EffectSpec;
-use super::{body_index, row, uniform, Blind, ColumnCount::Fixed, Grid, Kind, KindSpec};
+use super::{body_index, row, uniform, Blind, ColumnCount::Fixed, Grid, Kind, KindSpec, Property};
 use physid_core::model::Model;
 use physid_core::spatial::InertialParams;
 use nalgebra::Matrix3;
@@ -19,7 +19,9 @@ use serde::{Deserialize, Serialize};
 /// The kind's row: name, columns, magnitudes, replay and the blind benchmark's draw.
 pub(super) const SPEC: KindSpec = KindSpec {
     magnitude: ("payload mass", "kg"),
-    in_model_span: true,
+    properties: &[
+        Property::InModelSpan,
+    ],
     grid: Grid::Body,
     magnitudes: |c, _, _| vec![c[0]],
     blind: Blind::Single,

@@ -2,15 +2,17 @@
 //!
 //! One row of the effect table (`super::KIND_TABLE`); equations and units in docs/diagnose.md.
 
-use super::{row, Blind, ColumnCount::PerJoint, Kind, KindSpec};
+use super::{row, Blind, ColumnCount::PerJoint, Kind, KindSpec, Property};
 use physid_core::model::Model;
 
 /// The kind's row: name, columns, magnitudes, replay and the blind benchmark's draw.
 pub(super) const SPEC: KindSpec = KindSpec {
-    non_negative: true,
     magnitude: ("reflected inertia", "kg m^2"),
-    rotor_parameter: true,
-    approximate: true,
+    properties: &[
+        Property::NonNegative,
+        Property::RotorParameter,
+        Property::Approximate,
+    ],
     description: Some(Model::with_rotors_frozen),
     blind: Blind::Single,
     draw: |m, _, _| {

@@ -4,13 +4,15 @@
 
 use super::physics::{self, Physics, ScenarioError, State};
 use super::EffectSpec;
-use super::{per_joint, row, uniform, Blind, ColumnCount::PerJoint, Grid, Kind, KindSpec};
+use super::{per_joint, row, uniform, Blind, ColumnCount::PerJoint, Grid, Kind, KindSpec, Property};
 use physid_core::dynamics::sign;
 use serde::{Deserialize, Serialize};
 
 /// The kind's row: name, columns, magnitudes, replay and the blind benchmark's draw.
 pub(super) const SPEC: KindSpec = KindSpec {
-    non_negative: true,
+    properties: &[
+        Property::NonNegative,
+    ],
     magnitude: ("static excess F_s", "N m"),
     grid: Grid::StribeckVelocity,
     replay: |m, c, v, _| {

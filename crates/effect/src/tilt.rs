@@ -6,7 +6,7 @@
 use super::context::{Context, Sample, Scratch};
 use super::physics::{self, Physics, ScenarioError};
 use super::EffectSpec;
-use super::{row, times, uniform, Blind, ColumnCount::Fixed, Kind, KindSpec};
+use super::{row, times, uniform, Blind, ColumnCount::Fixed, Kind, KindSpec, Property};
 use physid_core::dynamics::{regressor, Data};
 use physid_core::model::Model;
 use physid_core::spatial::rot_axis_angle;
@@ -17,7 +17,9 @@ use serde::{Deserialize, Serialize};
 /// The kind's row: name, columns, magnitudes, replay and the blind benchmark's draw.
 pub(super) const SPEC: KindSpec = KindSpec {
     magnitude: ("tilt angle", "rad"),
-    linearized: true,
+    properties: &[
+        Property::Linearized,
+    ],
     magnitudes: |c, _, g| vec![(c[0].hypot(c[1]) / g).atan()],
     replay: |m, c, _, _| {
         tilt_angles(m, c).map(|(roll, pitch)| EffectSpec::Tilt(Tilt { roll, pitch }))

@@ -4,21 +4,23 @@
 
 use super::physics::{self, Physics, ScenarioError};
 use super::EffectSpec;
-use super::{row, Blind, ColumnCount::Fixed, Kind, KindSpec};
+use super::{row, Blind, ColumnCount::Fixed, Kind, KindSpec, Property};
 use rand::Rng;
 use serde::{Deserialize, Serialize};
 
 /// The kind's row: name, columns, magnitudes, replay and the blind benchmark's draw.
 pub(super) const SPEC: KindSpec = KindSpec {
-    // The logged torque lags: a "negative delay" is no delay, and was the best single
-    // column for a compliant transmission's encoder, which leads the link.
-    non_negative: true,
     magnitude: ("delay", "s"),
-    linearized: true,
-    // On real KUKA logs at 200 Hz a lag of 125 ms doubles the description's error, yet the
-    // re-identified model's friction and parameters take it in (cross-validation then selects
-    // a spring); from the description its one column takes 70 % of the held-out mean square.
-    offered_from_description: true,
+    properties: &[
+        // The logged torque lags: a "negative delay" is no delay, and was the best single
+        // column for a compliant transmission's encoder, which leads the link.
+        Property::NonNegative,
+        Property::Linearized,
+        // On real KUKA logs at 200 Hz a lag of 125 ms doubles the description's error, yet the
+        // re-identified model's friction and parameters take it in (cross-validation then selects
+        // a spring); from the description its one column takes 70 % of the held-out mean square.
+        Property::OfferedFromDescription,
+    ],
     magnitudes: |c, _, _| vec![c[0]],
     replay: |_, c, _, dt| {
         let samples = (c[0] / dt).round();

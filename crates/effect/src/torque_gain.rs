@@ -5,7 +5,7 @@
 
 use super::physics::{self, Physics, ScenarioError};
 use super::EffectSpec;
-use super::{row, signed, Anchored, Blind, ColumnCount::PerJoint, Kind, KindSpec};
+use super::{row, signed, Anchored, Blind, ColumnCount::PerJoint, Kind, KindSpec, Property};
 use physid_core::model::Model;
 use rand::Rng;
 use rand_chacha::ChaCha8Rng;
@@ -14,18 +14,19 @@ use serde::{Deserialize, Serialize};
 /// The kind's row: name, columns, magnitudes, replay and the blind benchmark's draw.
 pub(super) const SPEC: KindSpec = KindSpec {
     magnitude: ("gain error relative to the median joint", "-"),
-    linearized: true,
-    // `β = c 1` adds `c Y θ̂₀`: with `θ` free the fit could scale every inertial parameter and
-    // take it back in the gains. Until 2026-11-27 nothing pinned it: `identify --effects
-    // torque_gain` on the KUKA run 3 gave the wrist links 12 kg (2.3 kg without the term),
-    // and the "what changed" mode diagnosed against that description.
-    common_mode_in_span: true,
+    properties: &[
+        Property::Linearized,
+        // `β = c 1` adds `c Y θ̂₀`: with `θ` free the fit could scale every inertial parameter and
+        // take it back in the gains. Unpinned, `identify --effects torque_gain` on the KUKA run 3
+        // gave the wrist links 12 kg (2.3 kg without the term).
+        Property::CommonModeInSpan,
+    ],
     magnitudes: gain_magnitudes,
     // From the description the column is the prediction of a model without the gain
     // (`τ = Y θ + β Y θ_d`, so `1 + g = 1 + β`), and the description's prior pins the scale a
     // gain common to every joint would otherwise trade with: each joint's gain is its own.
     // Read as the re-identified model's (`β/(1 − β)` relative to the median joint), a 25 %
-    // gain on one KUKA joint came out as 6 % (semi-real benchmark, 2026-11-27).
+    // gain on one KUKA joint came out as 6 % (semi-real benchmark).
     anchored: Some(Anchored {
         magnitude: ("gain error against the description", "-"),
         magnitudes: |c, _, _| c.to_vec(),

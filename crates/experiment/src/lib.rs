@@ -10,6 +10,7 @@
 //!
 //! A floor of physid (docs/architecture.md §6) of its own crate, `physid-experiment`; the `physid`
 //! crate re-exports it as `physid::experiment`.
+#![warn(missing_docs)]
 
 use nalgebra::{DMatrix, DVector};
 use physid_core::model::Model;
@@ -20,12 +21,9 @@ use rand::SeedableRng;
 use rand_distr::{Distribution, Normal};
 use rayon::prelude::*;
 
-pub mod blind;
 pub mod compare;
-pub mod generalize;
 pub mod motions;
 pub mod plots;
-pub mod semireal;
 pub mod sweep;
 pub mod tables;
 use serde::{Deserialize, Serialize};
@@ -616,7 +614,7 @@ pub fn run(
 }
 
 /// The fraction of `xs` that hold (NaN when there are none: a score of nothing is no score).
-pub(crate) fn fraction(xs: impl IntoIterator<Item = bool>) -> f64 {
+pub fn fraction(xs: impl IntoIterator<Item = bool>) -> f64 {
     let (hold, all) = xs
         .into_iter()
         .fold((0usize, 0usize), |(h, n), x| (h + usize::from(x), n + 1));
@@ -629,7 +627,7 @@ pub(crate) fn fraction(xs: impl IntoIterator<Item = bool>) -> f64 {
 
 /// The median of the finite values of `v` (NaN when there are none: a median of nothing is no
 /// score, not a perfect one).
-pub(crate) fn median(v: &[f64]) -> f64 {
+pub fn median(v: &[f64]) -> f64 {
     median_iqr(v).1
 }
 

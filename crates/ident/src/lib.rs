@@ -20,6 +20,7 @@
 //!
 //! A floor of physid (docs/architecture.md §6) of its own crate, `physid-ident`; the `physid`
 //! crate re-exports it as `physid::ident`.
+#![warn(missing_docs)]
 
 pub mod analysis;
 pub mod information;

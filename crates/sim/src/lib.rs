@@ -2,6 +2,7 @@
 //!
 //! A floor of physid (docs/architecture.md §6) of its own crate, `physid-sim`; the `physid`
 //! crate re-exports it as `physid::sim`.
+#![warn(missing_docs)]
 
 pub mod design;
 pub mod effects;

@@ -1,4 +1,4 @@
-//! The generalization benchmark: the semi-real benchmark's cases ([`super::semireal`]) on
+//! The generalization benchmark: the semi-real benchmark's cases ([`crate::semireal`]) on
 //! robots of several makers and sizes, each simulated as a real robot differs from its
 //! published description, some robots held out of every tuning decision.
 //!
@@ -22,7 +22,7 @@
 //! Scores are kept per robot and pooled separately over the robots used to tune the diagnosis
 //! and the robots held out of it ([`RobotEntry::held_out`]).
 
-use super::semireal::{self, RealCase, RealOptions};
+use crate::semireal::{self, RealCase, RealOptions};
 use physid_core::model::Model;
 use physid_sim::scenario::{ExcitationSpec, ProcessingSpec, Scenario, SensorSpec, SimulationSpec};
 use rand::{Rng, SeedableRng};
@@ -495,26 +495,31 @@ pub fn group_scores<'a>(cases: impl IntoIterator<Item = &'a Case>) -> GroupScore
         .filter(|c| !["clean", "payload", "friction_changed"].contains(&c.injected.as_str()))
         .partition(|c| c.growth >= semireal::VISIBLE.0);
     let names_body = |c: &RealCase| c.found.iter().any(|s| semireal::names_a_body(s));
-    let top1 = |v: &[&RealCase]| super::fraction(v.iter().map(|c| c.top1 == Some(true)));
+    let top1 =
+        |v: &[&RealCase]| physid_experiment::fraction(v.iter().map(|c| c.top1 == Some(true)));
     let mass_err: Vec<f64> = payload.iter().filter_map(|c| c.magnitude_error).collect();
     GroupScores {
         cases: cases.len(),
         unchanged: unchanged.len(),
-        unchanged_no_body_claim: super::fraction(unchanged.iter().map(|c| !names_body(c))),
-        unchanged_no_claim: super::fraction(unchanged.iter().map(|c| c.found.is_empty())),
+        unchanged_no_body_claim: physid_experiment::fraction(
+            unchanged.iter().map(|c| !names_body(c)),
+        ),
+        unchanged_no_claim: physid_experiment::fraction(
+            unchanged.iter().map(|c| c.found.is_empty()),
+        ),
         payload: payload.len(),
         payload_named_first: top1(&payload),
-        payload_mass_within_25: super::fraction(
+        payload_mass_within_25: physid_experiment::fraction(
             (payload.iter())
                 .map(|c| c.top1 == Some(true) && c.magnitude_error.is_some_and(|e| e <= 0.25)),
         ),
-        median_payload_mass_error: super::median(&mass_err),
+        median_payload_mass_error: physid_experiment::median(&mass_err),
         effect: effect.len(),
         effect_top1: top1(&effect),
         effect_hidden: hidden.len(),
         friction: friction.len(),
         friction_top1: top1(&friction),
-        without_payload_no_body_step: super::fraction(
+        without_payload_no_body_step: physid_experiment::fraction(
             (cases.iter())
                 .filter(|c| c.injected != "payload")
                 .map(|c| !names_body(c)),
@@ -638,12 +643,12 @@ fn write_files(
             cases.iter().map(|c| c.seed).collect::<Vec<_>>(),
         ),
     )?;
-    super::tables::write_csv(&dir.join("cases.csv"), &mut df)?;
+    physid_experiment::tables::write_csv(&dir.join("cases.csv"), &mut df)?;
     let md = format!(
         "# Generalization benchmark\n\n`{command}` ({wall:.0} s wall).\n\nEach robot simulated as a real robot differs from its published description (docs/diagnose.md, \"Generalization benchmark\"); the description identified on one motion, the case on the other. Robots marked held out were kept out of every tuning decision.\n\n## Scores by robot\n\n{}\n## Scores\n\n```json\n{}\n```\n\n## Cases\n\n{}",
-        super::tables::markdown(&score_table(scores)?),
+        physid_experiment::tables::markdown(&score_table(scores)?),
         serde_json::to_string_pretty(scores)?,
-        super::tables::markdown(&df)
+        physid_experiment::tables::markdown(&df)
     );
     physid_io::write_atomic(&dir.join("README.md"), md.as_bytes())?;
     physid_io::write_atomic(

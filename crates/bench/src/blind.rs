@@ -11,10 +11,10 @@
 //! inertial-parameter errors drawn from the description prior ([`diagnose::anchor`]), and, for
 //! `rotor_inertia`, its rotors frozen into the links they sit on.
 
-use crate::tables;
 use physid_core::model::Model;
 use physid_diagnose::{self as diagnose, Diagnosis, Verdict};
 use physid_effect::library::Kind;
+use physid_experiment::tables;
 use physid_sim::scenario::{EffectSpec, Scenario};
 use polars::prelude::*;
 use rand::{Rng, SeedableRng};
@@ -248,7 +248,7 @@ impl BlindOptions {
             expected,
             value,
         };
-        if self.cases == 0 || self.cases > super::semireal::MAX_CASES {
+        if self.cases == 0 || self.cases > crate::semireal::MAX_CASES {
             return Err(invalid("cases", "in 1..=100000", self.cases as f64));
         }
         let e = self.description_error;
@@ -663,29 +663,35 @@ pub fn score(results: &[CaseResult]) -> Scores {
     Scores {
         cases: results.len(),
         single: of(Category::Single).count(),
-        top1: super::fraction(of(Category::Single).filter_map(|r| r.top1)),
-        top1_unique: super::fraction(of(Category::Single).filter_map(|r| r.top1_unique)),
+        top1: physid_experiment::fraction(of(Category::Single).filter_map(|r| r.top1)),
+        top1_unique: physid_experiment::fraction(
+            of(Category::Single).filter_map(|r| r.top1_unique),
+        ),
         single_visible: of(Category::Single)
             .filter(|r| r.visible_gap >= VISIBLE)
             .count(),
-        top1_visible: super::fraction(
+        top1_visible: physid_experiment::fraction(
             of(Category::Single)
                 .filter(|r| r.visible_gap >= VISIBLE)
                 .filter_map(|r| r.top1),
         ),
-        median_magnitude_error: super::median(&std::mem::take(&mut mags)),
-        median_gap_closed: super::median(&std::mem::take(&mut gaps)),
+        median_magnitude_error: physid_experiment::median(&std::mem::take(&mut mags)),
+        median_gap_closed: physid_experiment::median(&std::mem::take(&mut gaps)),
         clean: of(Category::Clean).count(),
-        clean_no_claim: super::fraction(of(Category::Clean).map(|r| r.found.is_empty())),
+        clean_no_claim: physid_experiment::fraction(
+            of(Category::Clean).map(|r| r.found.is_empty()),
+        ),
         two: of(Category::Two).count(),
-        two_both_found: super::fraction(of(Category::Two).filter_map(|r| r.both_found)),
+        two_both_found: physid_experiment::fraction(of(Category::Two).filter_map(|r| r.both_found)),
         out_of_library: of(Category::OutOfLibrary).count(),
-        out_of_library_unexplained: super::fraction(
+        out_of_library_unexplained: physid_experiment::fraction(
             of(Category::OutOfLibrary).map(|r| r.verdict != Verdict::Explained),
         ),
         changed: of(Category::Changed).count(),
-        changed_found: super::fraction(of(Category::Changed).filter_map(|r| r.changed_found)),
-        changed_mass_error: super::median(
+        changed_found: physid_experiment::fraction(
+            of(Category::Changed).filter_map(|r| r.changed_found),
+        ),
+        changed_mass_error: physid_experiment::median(
             &of(Category::Changed)
                 .filter_map(|r| r.magnitude_error)
                 .collect::<Vec<_>>(),
