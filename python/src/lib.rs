@@ -317,6 +317,21 @@ impl Robot {
     }
 }
 
+/// Samples given as arrays as a trajectory on a nominal 1 kHz clock, their lengths, sample
+/// counts and finiteness checked (named by array, sample and joint).
+fn array_trajectory(robot: &Robot, x: States, tau: Vec<f64>) -> PyResult<Trajectory> {
+    let m = &robot.model;
+    api::dynamics::samples(m, &x.q, &[("qd", &x.qd), ("qdd", &x.qdd), ("tau", &tau)])
+        .map_err(value_error)?;
+    let mut tr = Trajectory::new(robot.joint_names(), true);
+    tr.t = (0..x.samples).map(|k| k as f64 * 1e-3).collect();
+    tr.q = x.q;
+    tr.qd = x.qd;
+    tr.qdd = Some(x.qdd);
+    tr.tau = tau;
+    Ok(tr)
+}
+
 /// Identifies `robot`'s parameters θ from samples given as arrays (`(samples, n)` each, N m
 /// for `tau`) under a constraint set (`none`, `semi`, `consistent`, `ellipsoid`; default: the
 /// tightest the description supports), the description as the prior. Returns a dict: `theta`
@@ -346,23 +361,12 @@ fn identify_arrays<'py>(
     let mut opts = Options::new(set);
     opts.prior_weight = prior_weight;
     opts.validate().map_err(value_error)?;
-    let States {
-        q,
-        qd,
-        qdd,
-        samples: s,
-        ..
-    } = states(q, qd, qdd, n)?;
-    let tau = samples("tau", tau, n)?.values;
-    // Lengths, sample counts and finiteness, named by array, sample and joint.
-    api::dynamics::samples(m, &q, &[("qd", &qd), ("qdd", &qdd), ("tau", &tau)])
-        .map_err(value_error)?;
-    let mut tr = Trajectory::new(robot.joint_names(), true);
-    tr.q = q;
-    tr.qd = qd;
-    tr.qdd = Some(qdd);
-    tr.tau = tau;
-    tr.t = (0..s).map(|k| k as f64 * 1e-3).collect();
+    let tr = array_trajectory(
+        robot,
+        states(q, qd, qdd, n)?,
+        samples("tau", tau, n)?.values,
+    )?;
+    let s = tr.len();
     let identified = py
         .allow_threads(|| {
             let ne = NormalEquations::from_trajectory(m, &tr, 0..s);

@@ -41,12 +41,11 @@ def test_integer_and_float32_arrays_are_read_as_their_values(kuka, states):
     q32, qd32, qdd32 = (a.astype(np.float32) for a in states)
     expected = kuka.inverse_dynamics(q32.astype(np.float64), qd32.astype(np.float64), qdd32.astype(np.float64))
     np.testing.assert_array_equal(kuka.inverse_dynamics(q32, qd32, qdd32), expected)
-    zeros = np.zeros((2, 7), dtype=np.int32)
-    np.testing.assert_array_equal(
-        kuka.inverse_dynamics(zeros, zeros, zeros), kuka.inverse_dynamics(np.zeros((2, 7)), np.zeros((2, 7)), np.zeros((2, 7)))
-    )
-    # At rest, zero velocity and acceleration: the gravity torque, not zero (the call did work).
-    assert np.abs(kuka.inverse_dynamics(zeros, zeros, zeros)).max() > 1.0
+    ones, zeros = np.ones((2, 7), dtype=np.int32), np.zeros((2, 7), dtype=np.int64)
+    tau = kuka.inverse_dynamics(ones, zeros, zeros)
+    np.testing.assert_array_equal(tau, kuka.inverse_dynamics(np.ones((2, 7)), np.zeros((2, 7)), np.zeros((2, 7))))
+    # At rest at 1 rad on every joint: the gravity torque (the integers were read as numbers).
+    assert np.abs(tau).max() > 1.0
 
 
 def test_one_sample_in_one_sample_out_as_pinocchio(kuka, states):
