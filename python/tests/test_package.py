@@ -34,6 +34,14 @@ def test_every_public_name_has_a_docstring():
     assert missing == []
 
 
+def test_every_class_of_the_stubs_is_exported():
+    # A class a user meets as a return value (physid.simulate's Simulation) is importable and
+    # in physid.__all__, as the stubs promise.
+    classes = [name for name in stub_names() if name[0].isupper() and name != "PhysidWarning"]
+    assert "Simulation" in classes
+    assert [c for c in classes if c not in physid.__all__ or not hasattr(physid, c)] == []
+
+
 def test_every_public_name_is_in_the_stubs():
     stubs = stub_names()
     missing = []
