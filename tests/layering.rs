@@ -645,14 +645,16 @@ fn anyhow_and_printing_stay_in_the_binary() {
     assert!(found.is_empty(), "in the library:\n{}", found.join("\n"));
 }
 
+/// A workspace manifest (`path` below the repository's root), parsed.
+fn manifest(path: &str) -> toml::Table {
+    toml::from_str(&std::fs::read_to_string(common::root().join(path)).unwrap()).unwrap()
+}
+
 #[test]
 fn the_library_crate_has_no_command_line_dependencies() {
     // The workspace's split: argument parsing, anyhow, progress bars and signals belong to the
     // binary's crate (cli/Cargo.toml), not to the library a Python package or another tool
     // links.
-    let manifest = |path: &str| -> toml::Table {
-        toml::from_str(&std::fs::read_to_string(common::root().join(path)).unwrap()).unwrap()
-    };
     let deps = |m: &toml::Table| -> Vec<String> {
         m["dependencies"]
             .as_table()
@@ -858,8 +860,8 @@ fn every_effect_kind_has_its_own_file_and_one_entry_in_the_list() {
 }
 
 /// The crates' floors (docs/architecture.md §6): core → io → ident | effect → sim → diagnose →
-/// experiment → bench → physid (the api) → cli | python. Cargo refuses a circle between crates but not
-/// an edge up the floors (io depending on sim, say, while sim does not depend on io).
+/// experiment → bench → physid (the api) → cli | python. Cargo refuses a circle between crates
+/// but not an edge up the floors (io depending on sim, say, while sim does not depend on io).
 const CRATE_FLOORS: [(&str, u8); 11] = [
     ("physid-core", 0),
     ("physid-io", 1),
@@ -877,21 +879,14 @@ const CRATE_FLOORS: [(&str, u8); 11] = [
 /// Each workspace crate's manifest and the workspace crates it depends on (path dependencies,
 /// normal and build; a crate's tests may use any crate below or above).
 fn crate_edges() -> Vec<(String, Vec<String>)> {
-    let root = common::root();
-    let mut manifests = vec![
-        root.join("Cargo.toml"),
-        root.join("cli/Cargo.toml"),
-        root.join("python/Cargo.toml"),
-    ];
-    manifests.extend(
-        CRATES
-            .iter()
-            .map(|c| root.join(format!("crates/{c}/Cargo.toml"))),
-    );
+    let mut manifests: Vec<String> = ["Cargo.toml", "cli/Cargo.toml", "python/Cargo.toml"]
+        .map(String::from)
+        .to_vec();
+    manifests.extend(CRATES.iter().map(|c| format!("crates/{c}/Cargo.toml")));
     manifests
         .iter()
         .map(|path| {
-            let m: toml::Table = toml::from_str(&std::fs::read_to_string(path).unwrap()).unwrap();
+            let m = manifest(path);
             let name = m["package"]["name"].as_str().unwrap().to_string();
             let deps = ["dependencies", "build-dependencies"]
                 .iter()

@@ -773,18 +773,18 @@ fn write_blind_files(
     // Per injected kind (single cases): count, top-1, median magnitude error.
     use tables::Stat::{Count, Mean, Median};
     let singles = tables::filter_eq(&df, "category", "single")?;
-    let per_kind = tables::Groups::of(&singles, &["injected"])?
-        .agg(
-            &singles,
-            &[
-                ("", Count, "cases"),
-                ("top1", Mean, "top1"),
-                ("magnitude_error", Median, "median_magnitude_error"),
-                ("gap_closed", Median, "median_gap_closed"),
-                ("visible_gap", Median, "median_visible_gap"),
-            ],
-        )?
-        .sort(["injected"], Default::default())?;
+    let per_kind = tables::group_stats(
+        &singles,
+        &["injected"],
+        &[
+            ("", Count, "cases"),
+            ("top1", Mean, "top1"),
+            ("magnitude_error", Median, "median_magnitude_error"),
+            ("gap_closed", Median, "median_gap_closed"),
+            ("visible_gap", Median, "median_visible_gap"),
+        ],
+    )?
+    .sort(["injected"], Default::default())?;
     let md = format!(
         "# Blind benchmark\n\n`physid blind --cases {} --seed {seed} --description-error {} --description-uncertainty {}` on `{}` ({:.0} s wall).\n\nEach case's description carries inertial-parameter errors of relative size `--description-error`; the diagnosis is told `--description-uncertainty` (0: no test against the description).\n\n## Scores\n\n```json\n{}\n```\n\n## Single effects by kind\n\n{}\n## Cases\n\n{}",
         scores.cases,

@@ -118,8 +118,18 @@ pub enum Stat {
     Quantile(f64),
 }
 
+/// One row per group of `df`'s rows by the columns `keys` (first-appearance order): the key
+/// values and one column per `(column, statistic, name)` of `aggs`.
+pub fn group_stats(
+    df: &DataFrame,
+    keys: &[&str],
+    aggs: &[(&str, Stat, &str)],
+) -> PolarsResult<DataFrame> {
+    Groups::of(df, keys)?.agg(df, aggs)
+}
+
 /// A table's rows grouped by key columns, groups in first-appearance order.
-pub struct Groups {
+struct Groups {
     /// One row per group: its key values.
     keys: DataFrame,
     /// The row indices of each group.
@@ -128,7 +138,7 @@ pub struct Groups {
 
 impl Groups {
     /// Groups the rows of `df` by the columns `keys` (polars' stable group-by).
-    pub fn of(df: &DataFrame, keys: &[&str]) -> PolarsResult<Self> {
+    fn of(df: &DataFrame, keys: &[&str]) -> PolarsResult<Self> {
         let by = df.group_by_stable(keys.iter().copied())?;
         let rows = by
             .get_groups()
@@ -146,8 +156,8 @@ impl Groups {
         })
     }
 
-    /// The key columns and one column per `(column, statistic, name)`.
-    pub fn agg(&self, df: &DataFrame, aggs: &[(&str, Stat, &str)]) -> PolarsResult<DataFrame> {
+    /// The key columns and one column per `(column, statistic, name)` of the rows of `df`.
+    fn agg(&self, df: &DataFrame, aggs: &[(&str, Stat, &str)]) -> PolarsResult<DataFrame> {
         let mut out = self.keys.clone();
         for &(column, stat, name) in aggs {
             out.with_column(self.stat(df, column, stat)?.with_name(name.into()))?;
@@ -243,8 +253,9 @@ pub fn summary_by(long: &DataFrame, keys: &[&str]) -> PolarsResult<DataFrame> {
     use Stat::{Count, Mean, Median, Quantile};
     let mut by = keys.to_vec();
     by.extend(["n_s", "constraints"]);
-    Groups::of(long, &by)?.agg(
+    group_stats(
         long,
+        &by,
         &[
             ("", Count, "seeds"),
             ("val_rms", Quantile(0.25), "val_rms_q25"),

@@ -293,23 +293,23 @@ pub(super) fn write_files(
     let mut df = case_table(results)?;
     tables::write_csv(&dir.join("cases.csv"), &mut df)?;
     use tables::Stat::{Count, Mean, Median};
-    let per_kind = tables::Groups::of(&df, &["injected"])?
-        .agg(
-            &df,
-            &[
-                ("", Count, "cases"),
-                ("top1", Mean, "top1"),
-                ("growth", Median, "median_growth"),
-                ("payload_claimed", Mean, "payload_claimed"),
-                ("magnitude_error", Median, "median_magnitude_error"),
-                (
-                    "magnitude_error_weighted",
-                    Median,
-                    "median_magnitude_error_weighted",
-                ),
-            ],
-        )?
-        .sort(["injected"], Default::default())?;
+    let per_kind = tables::group_stats(
+        &df,
+        &["injected"],
+        &[
+            ("", Count, "cases"),
+            ("top1", Mean, "top1"),
+            ("growth", Median, "median_growth"),
+            ("payload_claimed", Mean, "payload_claimed"),
+            ("magnitude_error", Median, "median_magnitude_error"),
+            (
+                "magnitude_error_weighted",
+                Median,
+                "median_magnitude_error_weighted",
+            ),
+        ],
+    )?
+    .sort(["injected"], Default::default())?;
     let md = format!(
         "# Semi-real blind benchmark\n\n`{command}` ({wall:.0} s wall).\n\nReal runs as the base, the description identified on another run, one change injected per case (docs/diagnose.md, \"Semi-real benchmark\").\n\n## Scores\n\n```json\n{}\n```\n\n## By injected change\n\n{}\n## Cases\n\n{}",
         serde_json::to_string_pretty(scores)?,
