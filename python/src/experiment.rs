@@ -1,0 +1,138 @@
+//! `physid.experiment`: the sample-size experiment of a scenario (`physid experiment`).
+
+use crate::convert::*;
+use crate::errors::*;
+use crate::work::*;
+use pyo3::prelude::*;
+use std::path::PathBuf;
+
+/// The sample-size experiment of a scenario (`physid experiment`): every (seed, n_s,
+/// constraint set) cell; `rows()` and `summary()` are the CLI's `rows.csv` and `summary.csv`
+/// as pandas DataFrames.
+#[pyclass(frozen, module = "physid")]
+pub(crate) struct Experiment {
+    rows: Vec<physid::experiment::Row>,
+    joints: Vec<String>,
+    bodies: Vec<String>,
+    sets: Vec<String>,
+    seconds: f64,
+}
+
+impl Experiment {
+    /// The long table (or, with `summary`, its summary over seeds) as CSV text.
+    fn csv(&self, summary: bool) -> Result<String, String> {
+        use physid::experiment::tables;
+        let long = tables::long_table_with_bodies(&self.rows, &self.joints, &self.bodies)
+            .map_err(|e| e.to_string())?;
+        let mut table = if summary {
+            tables::summary(&long).map_err(|e| e.to_string())?
+        } else {
+            long
+        };
+        tables::csv_text(&mut table).map_err(|e| e.to_string())
+    }
+}
+
+#[pymethods]
+impl Experiment {
+    /// One row per (seed, n_s, constraint set): validation and training RMS (N m), parameter
+    /// errors against the truth, consistency, solver status and time (the CLI's rows.csv).
+    #[pyo3(signature = (backend = "pandas"))]
+    fn rows<'py>(&self, py: Python<'py>, backend: &str) -> PyResult<Bound<'py, PyAny>> {
+        table_of(py, self.csv(false), backend)
+    }
+
+    /// Median and quartiles over seeds per n_s × constraint set (the CLI's summary.csv).
+    #[pyo3(signature = (backend = "pandas"))]
+    fn summary<'py>(&self, py: Python<'py>, backend: &str) -> PyResult<Bound<'py, PyAny>> {
+        table_of(py, self.csv(true), backend)
+    }
+
+    /// The constraint sets compared, loosest first.
+    #[getter]
+    fn constraints(&self) -> Vec<String> {
+        self.sets.clone()
+    }
+
+    /// Wall time of the run (s).
+    #[getter]
+    fn seconds(&self) -> f64 {
+        self.seconds
+    }
+
+    fn __repr__(&self) -> String {
+        format!(
+            "Experiment({} cells, constraint sets {}, {:.1} s)",
+            self.rows.len(),
+            self.sets.join(", "),
+            self.seconds
+        )
+    }
+}
+
+/// Runs the sample-size experiment of a scenario file (its `[experiment]` table) as
+/// `physid experiment` does, seeds in parallel on `threads` workers (default: all cores; the
+/// results do not depend on it); `seeds` overrides the scenario's count. `progress`, if given,
+/// is called with (seeds done, seeds). Ctrl-C interrupts it.
+#[pyfunction]
+#[pyo3(signature = (scenario, *, seeds = None, threads = None, progress = None))]
+pub(crate) fn experiment(
+    py: Python<'_>,
+    scenario: PathBuf,
+    seeds: Option<usize>,
+    threads: Option<usize>,
+    progress: Option<PyObject>,
+) -> PyResult<Experiment> {
+    let shown = scenario.display().to_string();
+    let (sc, model, _) = physid::sim::scenario::load(&scenario).map_err(value_error)?;
+    let mut spec = physid::experiment::ExperimentSpec::from_scenario(&sc)
+        .map_err(|e| value_error(format!("{shown}: [experiment]: {e}")))?;
+    if let Some(n) = seeds {
+        spec.seeds = n;
+    }
+    spec.validate()
+        .map_err(|e| value_error(format!("{shown}: {e}")))?;
+    if !spec.excitations.is_empty() {
+        return Err(value_error(format!(
+            "{shown}: an experiment over several excitation motions ([[experiment.excitations]]) is not in the Python package yet: run `physid experiment {shown}`"
+        )));
+    }
+    let pool = thread_pool(threads)?;
+    let (joints, bodies) = (
+        model.joint_names(),
+        physid::ident::bodies(&model)
+            .into_iter()
+            .map(|(n, _, _)| n)
+            .collect(),
+    );
+    let sets = spec
+        .constraints
+        .iter()
+        .map(|s| s.name().to_string())
+        .collect();
+    let start = std::time::Instant::now();
+    let (rows, failed) = interruptible(py, move || {
+        let failed: std::sync::Mutex<Option<PyErr>> = std::sync::Mutex::new(None);
+        let report = |done: usize, total: usize| {
+            let Some(cb) = &progress else { return };
+            if let Err(e) = Python::with_gil(|py| cb.call1(py, (done, total)).map(|_| ())) {
+                if let Ok(mut f) = failed.lock() {
+                    f.get_or_insert(e);
+                }
+            }
+        };
+        let rows = pool.install(|| physid::experiment::run(&model, &sc, &spec, &report));
+        (rows, failed.into_inner().ok().flatten())
+    })?;
+    if let Some(e) = failed {
+        return Err(e);
+    }
+    let rows = rows.map_err(|e| value_error(format!("running the experiment of {shown}: {e}")))?;
+    Ok(Experiment {
+        rows,
+        joints,
+        bodies,
+        sets,
+        seconds: start.elapsed().as_secs_f64(),
+    })
+}

@@ -1,0 +1,401 @@
+//! `physid.load`, `physid.identify`, `physid.identify_arrays` and the `Identification` (`physid identify`).
+
+use crate::arrays::*;
+use crate::convert::*;
+use crate::errors::*;
+use crate::robot::Robot;
+use crate::work::*;
+use numpy::{IntoPyArray, PyArray1};
+use physid::api;
+use physid::api::identify::IdentifyOptions;
+use physid::ident::{ConstraintSet, NormalEquations, Options};
+use physid::model::Model;
+use physid::trajectory::Trajectory;
+use pyo3::prelude::*;
+use pyo3::types::PyDict;
+use std::path::{Path, PathBuf};
+
+/// Samples given as arrays as a trajectory on a nominal 1 kHz clock, their lengths, sample
+/// counts and finiteness checked (named by array, sample and joint).
+pub(crate) fn array_trajectory(robot: &Robot, x: States, tau: Vec<f64>) -> PyResult<Trajectory> {
+    let m = &robot.model;
+    api::dynamics::samples(m, &x.q, &[("qd", &x.qd), ("qdd", &x.qdd), ("tau", &tau)])
+        .map_err(value_error)?;
+    let mut tr = Trajectory::new(robot.model.joint_names(), true);
+    tr.t = (0..x.samples).map(|k| k as f64 * 1e-3).collect();
+    tr.q = x.q;
+    tr.qd = x.qd;
+    tr.qdd = Some(x.qdd);
+    tr.tau = tau;
+    Ok(tr)
+}
+
+/// Identifies `robot`'s parameters θ from samples given as arrays (`(samples, n)` each, N m
+/// for `tau`) under a constraint set (`none`, `semi`, `consistent`, `ellipsoid`; default: the
+/// tightest the description supports), the description as the prior. Returns a dict: `theta`
+/// (an array), `parameter_names`, `constraints`, `constraints_hold`, `objective`, `bodies`,
+/// `friction`, `solver`.
+#[pyfunction]
+#[pyo3(signature = (robot, q, qd, qdd, tau, constraints = None, prior_weight = 1e-6))]
+#[allow(clippy::too_many_arguments)]
+pub(crate) fn identify_arrays<'py>(
+    py: Python<'py>,
+    robot: &Robot,
+    q: &Bound<'py, PyAny>,
+    qd: &Bound<'py, PyAny>,
+    qdd: &Bound<'py, PyAny>,
+    tau: &Bound<'py, PyAny>,
+    constraints: Option<&str>,
+    prior_weight: f64,
+) -> PyResult<Bound<'py, PyDict>> {
+    let m = &robot.model;
+    let n = m.dof();
+    let given = constraints
+        .map(|c| c.parse::<ConstraintSet>())
+        .transpose()
+        .map_err(value_error)?;
+    let chosen = api::identify::constraint_set(given, m);
+    let (set, because) = (chosen.set, chosen.because);
+    let mut opts = Options::new(set);
+    opts.prior_weight = prior_weight;
+    opts.validate().map_err(value_error)?;
+    let tr = array_trajectory(
+        robot,
+        states(q, qd, qdd, n)?,
+        samples("tau", tau, n)?.values,
+    )?;
+    let s = tr.len();
+    let identified = py
+        .allow_threads(|| {
+            let ne = NormalEquations::from_trajectory(m, &tr, 0..s);
+            physid::ident::identify(m, &ne, &m.parameters(), &opts)
+        })
+        .map_err(value_error)?;
+    let out = PyDict::new(py);
+    out.set_item(
+        "theta",
+        identified.theta.as_slice().to_vec().into_pyarray(py),
+    )?;
+    out.set_item("parameter_names", m.parameter_names())?;
+    out.set_item("constraints", set.name())?;
+    out.set_item("constraints_default_because", because)?;
+    out.set_item("constraints_hold", identified.constraints_hold)?;
+    out.set_item("objective", identified.objective)?;
+    out.set_item("samples", s)?;
+    let rest = to_python(py, "identified", &identified)?;
+    for key in ["bodies", "viscous", "coulomb", "solver"] {
+        out.set_item(key, rest.get_item(key)?)?;
+    }
+    Ok(out)
+}
+
+/// Reads data files (CSV, MCAP, rosbag2) for `robot` through physid's pipeline (gaps split into
+/// runs, q̇ and q̈ derived where not logged, one cutoff for all files). Returns per file a dict:
+/// `runs` (each with `t`, `q`, `qd`, `qdd`, `tau` arrays and `index`, each sample's index in the
+/// file), `pipeline` (what was done, as `identify --json` reports it) and `notices`.
+#[pyfunction]
+#[pyo3(signature = (robot, data, *, topic = None, stamp = "log", cutoff = None, lock = None, only = None))]
+#[allow(clippy::too_many_arguments)]
+pub(crate) fn load<'py>(
+    py: Python<'py>,
+    robot: &Robot,
+    data: &Bound<'py, PyAny>,
+    topic: Option<String>,
+    stamp: &str,
+    cutoff: Option<f64>,
+    lock: Option<&Bound<'py, PyAny>>,
+    only: Option<&Bound<'py, PyAny>>,
+) -> PyResult<Vec<Bound<'py, PyDict>>> {
+    let m = &robot.model;
+    let files = paths("data", Some(data))?;
+    let read = read_options(topic, stamp, cutoff, lock, only)?
+        .resolve(m)
+        .map_err(value_error)?;
+    let refs: Vec<&Path> = files.iter().map(PathBuf::as_path).collect();
+    let mut notices = api::data::bag_option_notices(&refs, &read).map_err(value_error)?;
+    let (model, owned) = (m.clone(), files.clone());
+    let loaded = interruptible(py, move || {
+        let refs: Vec<&Path> = owned.iter().map(PathBuf::as_path).collect();
+        physid::io::load_all(&refs, &model, &read)
+    })?
+    .map_err(value_error)?;
+    let mut out = vec![];
+    for (path, l) in refs.iter().zip(&loaded) {
+        let file_notes = api::data::file_notices(path, l);
+        let d = PyDict::new(py);
+        let mut runs = vec![];
+        for r in &l.runs {
+            let run = trajectory_dict(py, &r.trajectory)?;
+            run.set_item("index", r.index.clone())?;
+            runs.push(run);
+        }
+        d.set_item("file", path.to_path_buf())?;
+        d.set_item("runs", runs)?;
+        d.set_item("pipeline", plain(py, &l.report)?)?;
+        d.set_item(
+            "notices",
+            file_notes.iter().map(|n| n.to_string()).collect::<Vec<_>>(),
+        )?;
+        notices.extend(file_notes);
+        out.push(d);
+    }
+    warn(py, &notices)?;
+    Ok(out)
+}
+
+/// What `identify` found (the report behind `physid identify`): `to_dict()` is its `--json`.
+#[pyclass(frozen, module = "physid")]
+pub(crate) struct Identification {
+    report: api::identify::Identification,
+    /// Wall time of the library's `identify` call (s).
+    seconds: f64,
+    model: Model,
+    source: String,
+    inputs: Vec<PathBuf>,
+}
+
+#[pymethods]
+impl Identification {
+    /// θ as identified: the model's parameters, then the effect terms' coefficients.
+    #[getter]
+    fn theta<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<f64>> {
+        self.report
+            .identified
+            .theta
+            .as_slice()
+            .to_vec()
+            .into_pyarray(py)
+    }
+
+    /// The names of θ's entries.
+    #[getter]
+    fn parameter_names(&self) -> Vec<String> {
+        api::identify::theta_names(&self.model, &self.report.terms)
+    }
+
+    /// The constraint set identified under.
+    #[getter]
+    fn constraints(&self) -> &'static str {
+        self.report.set.name()
+    }
+
+    /// Whether the constraint set's matrix inequalities hold at the answer.
+    #[getter]
+    fn constraints_hold(&self) -> bool {
+        self.report.identified.constraints_hold
+    }
+
+    /// RMS torque error over all fitted joints on the training samples (N m).
+    #[getter]
+    fn train_rms(&self) -> f64 {
+        self.report.train.rms_overall
+    }
+
+    /// RMS torque error on the held-out samples (N m), `None` when nothing was held out.
+    #[getter]
+    fn validation_rms(&self) -> Option<f64> {
+        self.report.validation.as_ref().map(|v| v.rms_overall)
+    }
+
+    /// Wall time of the library's own `identify` call (s): reading, fit, scores; what the
+    /// Python call adds is the rest of its wall time.
+    #[getter]
+    fn seconds(&self) -> f64 {
+        self.seconds
+    }
+
+    /// The notes and warnings, as `physid identify` prints them.
+    #[getter]
+    fn notices(&self) -> Vec<String> {
+        self.report.notices.iter().map(|n| n.to_string()).collect()
+    }
+
+    /// Each body's (and rotor's) identified π and its consistency margins, one row per body:
+    /// a pandas DataFrame (`name`, `m`, `hx` … `Izz`, `min_eig_I`, `min_eig_J`, `tr_JQ`,
+    /// `consistent`).
+    #[pyo3(signature = (backend = "pandas"))]
+    fn bodies<'py>(&self, py: Python<'py>, backend: &str) -> PyResult<Bound<'py, PyAny>> {
+        let b = &self.report.identified.bodies;
+        let cols = PyDict::new(py);
+        cols.set_item("name", b.iter().map(|b| b.name.clone()).collect::<Vec<_>>())?;
+        for (k, key) in physid::spatial::PARAM_NAMES.iter().enumerate() {
+            cols.set_item(*key, b.iter().map(|b| b.pi[k]).collect::<Vec<_>>())?;
+        }
+        let c = |f: fn(&physid::spatial::ConsistencyReport) -> Option<f64>| {
+            b.iter().map(|b| f(&b.consistency)).collect::<Vec<_>>()
+        };
+        cols.set_item("min_eig_I", c(|c| Some(c.min_eig_spatial)))?;
+        cols.set_item("min_eig_J", c(|c| Some(c.min_eig_pseudo)))?;
+        cols.set_item("tr_JQ", c(|c| c.trace_jq))?;
+        let consistent: Vec<bool> = b.iter().map(|b| b.consistency.consistent()).collect();
+        cols.set_item("consistent", consistent)?;
+        frame(py, cols.into_any(), backend)
+    }
+
+    /// One row per joint: `joint`, `viscous` (N m s/rad), `coulomb` (N m) and the RMS torque
+    /// errors `train_rms` and `validation_rms` (N m; NaN for a locked joint or nothing held out).
+    #[pyo3(signature = (backend = "pandas"))]
+    fn joints<'py>(&self, py: Python<'py>, backend: &str) -> PyResult<Bound<'py, PyAny>> {
+        let r = &self.report;
+        let n = self.model.dof();
+        let cols = PyDict::new(py);
+        let names: Vec<String> = self.model.joint_names();
+        cols.set_item("joint", names)?;
+        cols.set_item("viscous", r.identified.viscous.clone())?;
+        cols.set_item("coulomb", r.identified.coulomb.clone())?;
+        let rms = |v: Option<&Vec<Option<f64>>>| -> Vec<f64> {
+            (0..n)
+                .map(|j| v.and_then(|v| v[j]).unwrap_or(f64::NAN))
+                .collect()
+        };
+        cols.set_item("train_rms", rms(Some(&r.train.rms)))?;
+        cols.set_item("validation_rms", rms(r.validation.as_ref().map(|v| &v.rms)))?;
+        frame(py, cols.into_any(), backend)
+    }
+
+    /// The report as `physid identify --json` prints it.
+    fn to_dict<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
+        to_python(py, "identify", &self.report.json(&self.model))
+    }
+
+    /// Writes the identified model as URDF (the robot's own URDF with only `<inertial>` and
+    /// `<dynamics>` changed, plus the sidecar `<name>.physid.toml`); never over an input.
+    fn write_urdf(&self, py: Python<'_>, path: PathBuf) -> PyResult<()> {
+        let sidecar = physid::io::sidecar_path(&path);
+        let mut inputs: Vec<PathBuf> = self.inputs.clone();
+        inputs.extend(physid::io::robot_files(&self.source, &[]));
+        let refs: Vec<&Path> = inputs.iter().map(PathBuf::as_path).collect();
+        physid::io::check_outputs(&[&path, &sidecar], &refs).map_err(value_error)?;
+        let notices = self
+            .report
+            .write_urdf(&path, &self.source, &self.model)
+            .map_err(value_error)?;
+        warn(py, &notices)
+    }
+
+    /// Writes the identified model as MJCF for MuJoCo (rotors as joint armature), never over
+    /// an input.
+    fn write_mjcf(&self, py: Python<'_>, path: PathBuf) -> PyResult<()> {
+        let identified = self.report.model(&self.model).map_err(api_error)?;
+        let mut inputs: Vec<PathBuf> = self.inputs.clone();
+        inputs.extend(physid::io::robot_files(&self.source, &[]));
+        let notices = api::export::write_mjcf(&identified, &path, &inputs).map_err(api_error)?;
+        warn(py, &notices)
+    }
+
+    fn __repr__(&self) -> String {
+        let v = self
+            .validation_rms()
+            .map_or(String::new(), |v| format!(", validation RMS {v:.4} N m"));
+        format!(
+            "Identification('{}', {}, constraints hold: {}, train RMS {:.4} N m{v})",
+            self.model.name(),
+            self.report.set.name(),
+            if self.report.identified.constraints_hold {
+                "True"
+            } else {
+                "False"
+            },
+            self.report.train.rms_overall
+        )
+    }
+}
+
+/// Identifies `robot` from data files as `physid identify` does, its flags as keyword
+/// arguments: `data` (a path or list: CSV, MCAP, rosbag2), `validate_data`, `train` and
+/// `validate` (`"a:b"`, `(a, b)` or `range(a, b)`), `constraints`, `friction`, `effects`,
+/// `effects_from`, `prior_weight`, `eps`, `regularizer`, `topic`, `stamp`, `cutoff`, `lock`,
+/// `only`, `allow_few_samples`, `mass_bounds` (`(lo, hi)`: each body's mass within lo..hi times
+/// the description's, `0 <= lo <= 1 <= hi`), `total_mass` (`(lo, hi)` kg: the robot's moving
+/// mass, links and rotors). Warnings are raised as `physid.PhysidWarning`;
+/// the GIL is released while it runs.
+#[pyfunction]
+#[pyo3(signature = (robot, data, *, validate_data = None, train = None, validate = None,
+    constraints = None, friction = None, effects = None, effects_from = None,
+    prior_weight = 1e-6, eps = 1e-6, regularizer = "euclidean", topic = None, stamp = "log",
+    cutoff = None, lock = None, only = None, allow_few_samples = false, mass_bounds = None,
+    total_mass = None))]
+#[allow(clippy::too_many_arguments)]
+pub(crate) fn identify<'py>(
+    py: Python<'py>,
+    robot: &Robot,
+    data: &Bound<'py, PyAny>,
+    validate_data: Option<&Bound<'py, PyAny>>,
+    train: Option<&Bound<'py, PyAny>>,
+    validate: Option<&Bound<'py, PyAny>>,
+    constraints: Option<&str>,
+    friction: Option<&Bound<'py, PyAny>>,
+    effects: Option<&Bound<'py, PyAny>>,
+    effects_from: Option<PathBuf>,
+    prior_weight: f64,
+    eps: f64,
+    regularizer: &str,
+    topic: Option<String>,
+    stamp: &str,
+    cutoff: Option<f64>,
+    lock: Option<&Bound<'py, PyAny>>,
+    only: Option<&Bound<'py, PyAny>>,
+    allow_few_samples: bool,
+    mass_bounds: Option<(f64, f64)>,
+    total_mass: Option<(f64, f64)>,
+) -> PyResult<Identification> {
+    let m = &robot.model;
+    let mut o = IdentifyOptions::new(paths("data", Some(data))?);
+    o.validate_data = paths("validate_data", validate_data)?;
+    o.train = sample_range("--train", train)?;
+    o.validate = sample_range("--validate", validate)?;
+    set_model_options(&mut o, m, constraints, (friction, effects), &effects_from)?;
+    o.prior_weight = prior_weight;
+    o.eps = eps;
+    o.regularizer = regularizer
+        .parse()
+        .map_err(|e| value_error(format!("--regularizer: {e}")))?;
+    o.read = read_options(topic, stamp, cutoff, lock, only)?;
+    o.allow_few_samples = allow_few_samples;
+    o.mass_bounds = mass_bounds.map(|(lo, hi)| api::identify::MassBounds { lo, hi });
+    o.total_mass = total_mass.map(|(lo, hi)| api::identify::TotalMass { lo, hi });
+    // For `write_urdf`'s sidecar: one more pass over the training samples.
+    o.information = true;
+    let mut inputs: Vec<PathBuf> = o.data.iter().chain(&o.validate_data).cloned().collect();
+    inputs.extend(effects_from);
+    let model = m.clone();
+    let (report, seconds) = interruptible(py, move || {
+        let start = std::time::Instant::now();
+        let report = api::identify::identify(&model, &o);
+        (report, start.elapsed().as_secs_f64())
+    })?;
+    let report = report.map_err(api_error)?;
+    warn(py, &report.notices)?;
+    Ok(Identification {
+        report,
+        seconds,
+        model: m.clone(),
+        source: robot.source.clone(),
+        inputs,
+    })
+}
+
+/// `identify`'s model keywords onto `o`: the constraint set, the friction and effect terms
+/// (`(friction, effects)`), and the effects confirmed in a diagnosis report (`effects_from`).
+pub(crate) fn set_model_options(
+    o: &mut IdentifyOptions,
+    m: &physid::model::Model,
+    constraints: Option<&str>,
+    (friction, effects): (Option<&Bound<'_, PyAny>>, Option<&Bound<'_, PyAny>>),
+    effects_from: &Option<PathBuf>,
+) -> PyResult<()> {
+    o.constraints = constraints
+        .map(str::parse)
+        .transpose()
+        .map_err(|e| value_error(format!("--constraints: {e}")))?;
+    let friction = match friction {
+        Some(f) => names(Some(f))?,
+        None => vec!["viscous".into(), "coulomb".into()],
+    };
+    o.terms = api::identify::parse_terms(&friction, &names(effects)?).map_err(value_error)?;
+    if let Some(p) = effects_from {
+        o.terms
+            .extend(api::identify::confirmed_effects(p, m).map_err(value_error)?);
+    }
+    Ok(())
+}
