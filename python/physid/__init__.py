@@ -17,15 +17,13 @@ The Rust library (Wensing, Kim & Slotine, RA-L 2018) in Python, over numpy array
     d = physid.diagnose(robot, "run3.csv", baseline_data="run2.csv",
                         description_uncertainty=0.05)   # what changed; shows as HTML in a notebook
 
-Errors raise ValueError with the CLI's message (naming the flag, file, sample or joint);
-warnings about the data or the answer are issued as PhysidWarning.
+Errors are physid.Error, each also the built-in of its kind: InputError (a ValueError naming
+the keyword, file, sample or joint), MissingFileError (a FileNotFoundError), SolverError (a
+RuntimeError); warnings about the data or the answer are issued as PhysidWarning, a robot
+description's once per file.
 """
 
-
-class PhysidWarning(UserWarning):
-    """A warning about the data or the answer (the CLI prints it as `warning: ...`)."""
-
-
+from .errors import Error, InputError, MissingFileError, PhysidWarning, SolverError
 from ._physid import (  # noqa: E402
     Comparison,
     Diagnosis,
@@ -51,12 +49,16 @@ from ._physid import (  # noqa: E402
 __all__ = [
     "Comparison",
     "Diagnosis",
+    "Error",
     "Excitation",
     "Experiment",
     "Identification",
+    "InputError",
+    "MissingFileError",
     "PhysidWarning",
     "Robot",
     "Simulation",
+    "SolverError",
     "Sweep",
     "compare",
     "diagnose",

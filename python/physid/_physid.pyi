@@ -29,7 +29,7 @@ class Robot:
         no_geometry_ellipsoids: bool = False,
     ) -> None:
         """Load the robot; the keyword arguments are the CLI's robot flags. Loader warnings are
-        issued as physid.PhysidWarning."""
+        issued as physid.PhysidWarning, once per file and process."""
     @property
     def name(self) -> str: ...
     @property
@@ -38,6 +38,10 @@ class Robot:
     def joint_names(self) -> list[str]: ...
     @property
     def parameter_names(self) -> list[str]: ...
+    @property
+    def notices(self) -> list[str]:
+        """The loader's notes and warnings; its warnings are raised as PhysidWarning the
+        first time a file is loaded in a process."""
     def parameters(self) -> Array:
         """The description's parameter vector theta."""
     def inverse_dynamics(self, q: ArrayLike, qd: ArrayLike, qdd: ArrayLike) -> Array:
@@ -271,9 +275,9 @@ class Sweep:
     def merged(self) -> bool: ...
     @property
     def markdown(self) -> str:
-        """summary.md (ValueError while cells are missing)."""
+        """summary.md (physid.InputError while cells are missing)."""
     def rows(self, backend: str = "pandas") -> Any:
-        """rows.csv as a pandas DataFrame (ValueError while cells are missing)."""
+        """rows.csv as a pandas DataFrame (physid.InputError while cells are missing)."""
     def summary(self, backend: str = "pandas") -> Any:
         """summary.csv as a pandas DataFrame."""
 

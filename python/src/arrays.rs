@@ -33,7 +33,7 @@ pub(crate) fn samples(name: &str, a: &Bound<'_, PyAny>, n: usize) -> PyResult<Jo
         [m] if m == n => (1, true),
         [s, m] if m == n => (s, false),
         _ => {
-            return Err(value_error(format!(
+            return Err(exception(format!(
             "{name} has shape {shape:?}: give (samples, {n}) or ({n},) for the robot's {n} joints"
         )))
         }

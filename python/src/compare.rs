@@ -92,21 +92,21 @@ pub(crate) fn compare(
     opts.validate().map_err(api_error)?;
     let cmp = match (&baseline, &variant) {
         (Some(_), Some(_)) => {
-            return Err(value_error("give baseline or variant, not both"));
+            return Err(exception("give baseline or variant, not both"));
         }
         (Some(b), None) => py
             .allow_threads(|| compare::against_baseline(&result, b, &opts))
             .map_err(api_error)?,
         (None, Some(v)) => {
             let Some((better, reference)) = v.split_once("<=") else {
-                return Err(value_error(format!(
+                return Err(exception(format!(
                     "--variant '{v}': give two constraint sets as A<=B, e.g. ellipsoid<=consistent"
                 )));
             };
             py.allow_threads(|| compare::variants(&result, better.trim(), reference.trim(), &opts))
                 .map_err(api_error)?
         }
-        (None, None) => return Err(value_error("give baseline=DIR or variant=\"A<=B\"")),
+        (None, None) => return Err(exception("give baseline=DIR or variant=\"A<=B\"")),
     };
     Ok(Comparison { cmp })
 }

@@ -15,7 +15,7 @@ pub(crate) fn to_python<'py>(
     schema: &str,
     value: &impl serde::Serialize,
 ) -> PyResult<Bound<'py, PyAny>> {
-    let text = serde_json::to_string(&physid::io::versioned(schema, value)).map_err(value_error)?;
+    let text = serde_json::to_string(&physid::io::versioned(schema, value)).map_err(exception)?;
     py.import("json")?.call_method1("loads", (text,))
 }
 
@@ -24,7 +24,7 @@ pub(crate) fn plain<'py>(
     py: Python<'py>,
     value: &impl serde::Serialize,
 ) -> PyResult<Bound<'py, PyAny>> {
-    let text = serde_json::to_string(value).map_err(value_error)?;
+    let text = serde_json::to_string(value).map_err(exception)?;
     py.import("json")?.call_method1("loads", (text,))
 }
 
@@ -35,7 +35,7 @@ pub(crate) fn paths(what: &str, v: Option<&Bound<'_, PyAny>>) -> PyResult<Vec<Pa
         return Ok(vec![one]);
     }
     v.extract::<Vec<PathBuf>>()
-        .map_err(|_| value_error(format!("{what}: give a path or a list of paths")))
+        .map_err(|_| exception(format!("{what}: give a path or a list of paths")))
 }
 
 /// A list of names from `"a,b"` or `["a", "b"]`.
@@ -54,7 +54,7 @@ pub(crate) fn sample_range(
 ) -> PyResult<Option<SampleRange>> {
     let Some(v) = v else { return Ok(None) };
     if let Ok(s) = v.extract::<String>() {
-        return SampleRange::parse(&s, what).map(Some).map_err(value_error);
+        return SampleRange::parse(&s, what).map(Some).map_err(exception);
     }
     if let Ok((a, b)) = v.extract::<(Option<usize>, Option<usize>)>() {
         return Ok(Some(SampleRange { start: a, end: b }));
@@ -72,7 +72,7 @@ pub(crate) fn sample_range(
             }));
         }
     }
-    Err(value_error(format!(
+    Err(exception(format!(
         "{what}: give \"a:b\", (a, b) or range(a, b) of sample indices (non-negative, step 1)"
     )))
 }
@@ -89,7 +89,7 @@ pub(crate) fn read_options(
         topic,
         stamp: stamp
             .parse()
-            .map_err(|e| value_error(format!("--stamp: {e}")))?,
+            .map_err(|e| exception(format!("--stamp: {e}")))?,
         cutoff,
         lock: names(lock)?,
         only: names(only)?,
@@ -102,7 +102,7 @@ pub(crate) fn frames<'py>(py: Python<'py>, backend: &str) -> PyResult<Bound<'py,
         "pandas" => "the package's extra 'tables'",
         "polars" => "the package's extra 'polars'",
         other => {
-            return Err(value_error(format!(
+            return Err(exception(format!(
                 "backend: '{other}' is not one of pandas, polars"
             )))
         }
@@ -148,7 +148,7 @@ pub(crate) fn table_of<'py>(
     csv: Result<String, String>,
     backend: &str,
 ) -> PyResult<Bound<'py, PyAny>> {
-    let text = csv.map_err(value_error)?;
+    let text = csv.map_err(exception)?;
     let module = frames(py, backend)?;
     let buffer = py
         .import("io")?

@@ -53,7 +53,7 @@ impl Diagnosis {
     /// The notes and warnings, as `physid diagnose` prints them.
     #[getter]
     fn notices(&self) -> Vec<String> {
-        self.notices.iter().map(|n| n.to_string()).collect()
+        notice_texts(&self.notices)
     }
 
     /// The gap per joint: validation RMS (N m) of the description as given, the re-identified
@@ -102,7 +102,7 @@ impl Diagnosis {
 
     /// The self-contained HTML report (`report.html`), plots inline.
     fn html(&self) -> PyResult<String> {
-        let plots = physid::diagnose::report::plots(&self.diagnosis).map_err(value_error)?;
+        let plots = physid::diagnose::report::plots(&self.diagnosis).map_err(exception)?;
         Ok(physid::diagnose::report::html(&self.diagnosis, &plots))
     }
 
@@ -113,8 +113,8 @@ impl Diagnosis {
     /// Writes the report folder (`report.html`, `report.md`, `report.json`, SVG plots), as
     /// `physid diagnose --report`; never into a folder that is or holds an input.
     fn write_report(&self, path: PathBuf) -> PyResult<()> {
-        physid::io::check_result_dir(&path, &self.inputs).map_err(value_error)?;
-        physid::diagnose::report::write(&path, &self.diagnosis).map_err(value_error)
+        physid::io::check_result_dir(&path, &self.inputs).map_err(exception)?;
+        physid::diagnose::report::write(&path, &self.diagnosis).map_err(exception)
     }
 
     fn __repr__(&self) -> String {
@@ -162,7 +162,7 @@ pub(crate) fn diagnose<'py>(
     o.diagnosis = physid::diagnose::Options {
         constraints: constraints
             .parse()
-            .map_err(|e| value_error(format!("--constraints: {e}")))?,
+            .map_err(|e| exception(format!("--constraints: {e}")))?,
         description_uncertainty,
         every_body: payload_any_body,
         ..Default::default()

@@ -51,7 +51,7 @@ impl Excitation {
     /// `PhysidWarning`s.
     #[getter]
     fn notices(&self) -> Vec<String> {
-        self.notices.iter().map(|n| n.text.clone()).collect()
+        notice_texts(&self.notices)
     }
 
     /// The designed reference trajectory at `rate` Hz (default 1000) over the run: `t` (s),
@@ -60,7 +60,7 @@ impl Excitation {
     #[pyo3(signature = (rate = 1000.0))]
     fn reference<'py>(&self, py: Python<'py>, rate: f64) -> PyResult<Bound<'py, PyDict>> {
         if !(rate.is_finite() && rate > 0.0 && rate <= 1e5) {
-            return Err(value_error(format!(
+            return Err(exception(format!(
                 "--rate must be a sample rate in (0, 100000] Hz, got {rate}"
             )));
         }
@@ -113,7 +113,7 @@ pub(crate) fn objective(name: &str) -> PyResult<physid::sim::design::Objective> 
         "d-optimal" => Ok(Objective::DOptimal),
         "e-optimal" => Ok(Objective::EOptimal),
         "condition" => Ok(Objective::Condition),
-        other => Err(value_error(format!(
+        other => Err(exception(format!(
             "--objective: '{other}' is not one of d-optimal, e-optimal, condition"
         ))),
     }
@@ -126,7 +126,7 @@ pub(crate) fn excite_from(
 ) -> PyResult<api::excite::ExciteFrom> {
     use api::excite::ExciteFrom;
     match (robot, scenario) {
-        (Some(_), Some(_)) => Err(value_error(
+        (Some(_), Some(_)) => Err(exception(
             "give a robot or a base scenario, not both (the scenario names its robot)",
         )),
         (None, Some(s)) => Ok(ExciteFrom::Scenario(s)),
@@ -136,7 +136,7 @@ pub(crate) fn excite_from(
                 // that file gives.
                 let robot = robot.get();
                 if !robot.as_file {
-                    return Err(value_error(format!(
+                    return Err(exception(format!(
                         "excite designs for a robot file as a scenario names it: this Robot ('{}') was loaded with rotor options or comes from a simulation; give its file (or a Robot loaded without options)",
                         robot.source
                     )));
@@ -147,7 +147,7 @@ pub(crate) fn excite_from(
                 r.extract::<PathBuf>()?.to_string_lossy().into_owned(),
             ))
         }
-        (None, None) => Err(value_error("give a robot (or scenario=, a base scenario)")),
+        (None, None) => Err(exception("give a robot (or scenario=, a base scenario)")),
     }
 }
 
@@ -215,7 +215,7 @@ pub(crate) fn excite(
             pool.install(|| api::excite::excite_until(&opts, &mut |n| notices.push(n), &stop));
         (result, notices)
     })?;
-    warn(py, &notices)?;
+    warn_once(py, &notices)?;
     Ok(Excitation {
         inner: result.map_err(api_error)?,
         out,
@@ -262,7 +262,7 @@ pub(crate) fn score_motion<'py>(
         let result = pool.install(|| api::excite::score_motion(&opts, &mut |n| notices.push(n)));
         (result, notices)
     })?;
-    warn(py, &notices)?;
+    warn_once(py, &notices)?;
     let s = result.map_err(api_error)?;
     let out = PyDict::new(py);
     out.set_item("d_optimal", s.d_optimal)?;

@@ -84,16 +84,16 @@ pub(crate) fn experiment(
     progress: Option<PyObject>,
 ) -> PyResult<Experiment> {
     let shown = scenario.display().to_string();
-    let (sc, model, _) = physid::sim::scenario::load(&scenario).map_err(value_error)?;
+    let (sc, model, _) = physid::sim::scenario::load(&scenario).map_err(exception)?;
     let mut spec = physid::experiment::ExperimentSpec::from_scenario(&sc)
-        .map_err(|e| value_error(format!("{shown}: [experiment]: {e}")))?;
+        .map_err(|e| exception(format!("{shown}: [experiment]: {e}")))?;
     if let Some(n) = seeds {
         spec.seeds = n;
     }
     spec.validate()
-        .map_err(|e| value_error(format!("{shown}: {e}")))?;
+        .map_err(|e| exception(format!("{shown}: {e}")))?;
     if !spec.excitations.is_empty() {
-        return Err(value_error(format!(
+        return Err(exception(format!(
             "{shown}: an experiment over several excitation motions ([[experiment.excitations]]) is not in the Python package yet: run `physid experiment {shown}`"
         )));
     }
@@ -127,7 +127,7 @@ pub(crate) fn experiment(
     if let Some(e) = failed {
         return Err(e);
     }
-    let rows = rows.map_err(|e| value_error(format!("running the experiment of {shown}: {e}")))?;
+    let rows = rows.map_err(|e| exception(format!("running the experiment of {shown}: {e}")))?;
     Ok(Experiment {
         rows,
         joints,

@@ -20,7 +20,7 @@ use std::path::{Path, PathBuf};
 pub(crate) fn array_trajectory(robot: &Robot, x: States, tau: Vec<f64>) -> PyResult<Trajectory> {
     let m = &robot.model;
     api::dynamics::samples(m, &x.q, &[("qd", &x.qd), ("qdd", &x.qdd), ("tau", &tau)])
-        .map_err(value_error)?;
+        .map_err(exception)?;
     let mut tr = Trajectory::new(robot.model.joint_names(), true);
     tr.t = (0..x.samples).map(|k| k as f64 * 1e-3).collect();
     tr.q = x.q;
@@ -53,12 +53,12 @@ pub(crate) fn identify_arrays<'py>(
     let given = constraints
         .map(|c| c.parse::<ConstraintSet>())
         .transpose()
-        .map_err(value_error)?;
+        .map_err(exception)?;
     let chosen = api::identify::constraint_set(given, m);
     let (set, because) = (chosen.set, chosen.because);
     let mut opts = Options::new(set);
     opts.prior_weight = prior_weight;
-    opts.validate().map_err(value_error)?;
+    opts.validate().map_err(exception)?;
     let tr = array_trajectory(
         robot,
         states(q, qd, qdd, n)?,
@@ -70,7 +70,7 @@ pub(crate) fn identify_arrays<'py>(
             let ne = NormalEquations::from_trajectory(m, &tr, 0..s);
             physid::ident::identify(m, &ne, &m.parameters(), &opts)
         })
-        .map_err(value_error)?;
+        .map_err(exception)?;
     let out = PyDict::new(py);
     out.set_item(
         "theta",
@@ -110,15 +110,15 @@ pub(crate) fn load<'py>(
     let files = paths("data", Some(data))?;
     let read = read_options(topic, stamp, cutoff, lock, only)?
         .resolve(m)
-        .map_err(value_error)?;
+        .map_err(exception)?;
     let refs: Vec<&Path> = files.iter().map(PathBuf::as_path).collect();
-    let mut notices = api::data::bag_option_notices(&refs, &read).map_err(value_error)?;
+    let mut notices = api::data::bag_option_notices(&refs, &read).map_err(exception)?;
     let (model, owned) = (m.clone(), files.clone());
     let loaded = interruptible(py, move || {
         let refs: Vec<&Path> = owned.iter().map(PathBuf::as_path).collect();
         physid::io::load_all(&refs, &model, &read)
     })?
-    .map_err(value_error)?;
+    .map_err(exception)?;
     let mut out = vec![];
     for (path, l) in refs.iter().zip(&loaded) {
         let file_notes = api::data::file_notices(path, l);
@@ -207,7 +207,7 @@ impl Identification {
     /// The notes and warnings, as `physid identify` prints them.
     #[getter]
     fn notices(&self) -> Vec<String> {
-        self.report.notices.iter().map(|n| n.to_string()).collect()
+        notice_texts(&self.report.notices)
     }
 
     /// Each body's (and rotor's) identified π and its consistency margins, one row per body:
@@ -265,11 +265,11 @@ impl Identification {
         let mut inputs: Vec<PathBuf> = self.inputs.clone();
         inputs.extend(physid::io::robot_files(&self.source, &[]));
         let refs: Vec<&Path> = inputs.iter().map(PathBuf::as_path).collect();
-        physid::io::check_outputs(&[&path, &sidecar], &refs).map_err(value_error)?;
+        physid::io::check_outputs(&[&path, &sidecar], &refs).map_err(exception)?;
         let notices = self
             .report
             .write_urdf(&path, &self.source, &self.model)
-            .map_err(value_error)?;
+            .map_err(exception)?;
         warn(py, &notices)
     }
 
@@ -349,7 +349,7 @@ pub(crate) fn identify<'py>(
     o.eps = eps;
     o.regularizer = regularizer
         .parse()
-        .map_err(|e| value_error(format!("--regularizer: {e}")))?;
+        .map_err(|e| exception(format!("--regularizer: {e}")))?;
     o.read = read_options(topic, stamp, cutoff, lock, only)?;
     o.allow_few_samples = allow_few_samples;
     o.mass_bounds = mass_bounds.map(|(lo, hi)| api::identify::MassBounds { lo, hi });
@@ -387,15 +387,15 @@ pub(crate) fn set_model_options(
     o.constraints = constraints
         .map(str::parse)
         .transpose()
-        .map_err(|e| value_error(format!("--constraints: {e}")))?;
+        .map_err(|e| exception(format!("--constraints: {e}")))?;
     let friction = match friction {
         Some(f) => names(Some(f))?,
         None => vec!["viscous".into(), "coulomb".into()],
     };
-    o.terms = api::identify::parse_terms(&friction, &names(effects)?).map_err(value_error)?;
+    o.terms = api::identify::parse_terms(&friction, &names(effects)?).map_err(exception)?;
     if let Some(p) = effects_from {
         o.terms
-            .extend(api::identify::confirmed_effects(p, m).map_err(value_error)?);
+            .extend(api::identify::confirmed_effects(p, m).map_err(exception)?);
     }
     Ok(())
 }

@@ -5,6 +5,7 @@ use crate::convert::*;
 use crate::errors::*;
 use numpy::{IntoPyArray, PyArray1, PyArrayDyn};
 use physid::api;
+use physid::api::data::Notice;
 use physid::api::model::RobotOptions;
 use physid::model::{Model, RotorModel};
 use pyo3::prelude::*;
@@ -19,6 +20,8 @@ pub(crate) struct Robot {
     /// The model is the dynamics `source` gives by itself (no rotor option changed it), so a
     /// scenario may name the file for it.
     pub(crate) as_file: bool,
+    /// The loader's notes and warnings.
+    pub(crate) notices: Vec<Notice>,
 }
 
 #[pymethods]
@@ -39,15 +42,15 @@ impl Robot {
         package_dirs: Option<&Bound<'_, PyAny>>,
         no_geometry_ellipsoids: bool,
     ) -> PyResult<Self> {
-        let robot: PathBuf = robot.extract().map_err(|_| {
-            value_error("robot: give \"cheetah3\" or a path to a URDF or robot TOML")
-        })?;
+        let robot: PathBuf = robot
+            .extract()
+            .map_err(|_| exception("robot: give \"cheetah3\" or a path to a URDF or robot TOML"))?;
         let rotor_model = match rotor_model {
             None => None,
             Some("full") => Some(RotorModel::Full),
             Some("reflected") => Some(RotorModel::Reflected),
             Some(other) => {
-                return Err(value_error(format!(
+                return Err(exception(format!(
                     "--rotor-model: '{other}' is not one of full, reflected"
                 )))
             }
@@ -62,11 +65,12 @@ impl Robot {
         };
         let api::model::LoadedRobot { model, notices } =
             py.allow_threads(|| opts.load()).map_err(api_error)?;
-        warn(py, &notices)?;
+        warn_once(py, &notices)?;
         Ok(Robot {
             model,
             source: opts.robot,
             as_file: rotor_model.is_none() && !no_rotors,
+            notices,
         })
     }
 
@@ -89,6 +93,13 @@ impl Robot {
         };
         let inputs = physid::io::robot_files(&self.source, &[]);
         api::export::write_urdf(&self.model, robot, &path, &inputs).map_err(api_error)
+    }
+
+    /// The loader's notes and warnings about the description (its warnings are raised as
+    /// `PhysidWarning` the first time a file is loaded in a process, and kept here every time).
+    #[getter]
+    fn notices(&self) -> Vec<String> {
+        notice_texts(&self.notices)
     }
 
     /// The robot's name.
@@ -133,7 +144,7 @@ impl Robot {
         let x = states(q, qd, qdd, n)?;
         let tau = py
             .allow_threads(|| api::dynamics::inverse_dynamics(&self.model, &x.q, &x.qd, &x.qdd))
-            .map_err(value_error)?;
+            .map_err(exception)?;
         shaped(py, tau, x.samples, x.one, &[n])
     }
 
@@ -148,7 +159,7 @@ impl Robot {
         let q = samples("q", q, n)?;
         let h = py
             .allow_threads(|| api::dynamics::mass_matrices(&self.model, &q.values))
-            .map_err(value_error)?;
+            .map_err(exception)?;
         shaped(py, h, q.samples, q.one, &[n, n])
     }
 
@@ -165,7 +176,7 @@ impl Robot {
         let x = states(q, qd, qdd, n)?;
         let y = py
             .allow_threads(|| api::dynamics::regressors(&self.model, &x.q, &x.qd, &x.qdd))
-            .map_err(value_error)?;
+            .map_err(exception)?;
         shaped(py, y, x.samples, x.one, &[n, p])
     }
 

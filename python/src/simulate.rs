@@ -58,6 +58,7 @@ impl Simulation {
             model: self.run.model.clone(),
             source: self.run.path.to_string_lossy().into_owned(),
             as_file: false,
+            notices: vec![],
         }
     }
 
@@ -102,7 +103,7 @@ pub(crate) fn simulate(
     let outputs: Vec<&Path> = std::iter::once(out.as_path())
         .chain(csv.as_deref())
         .collect();
-    physid::io::check_outputs(&outputs, &inputs).map_err(value_error)?;
+    physid::io::check_outputs(&outputs, &inputs).map_err(exception)?;
     let opts = api::simulate::SimulateOptions {
         engine,
         duration,
@@ -151,7 +152,7 @@ pub(crate) fn engine_of(engine: Option<&str>) -> PyResult<Option<physid::sim::sc
         None => Ok(None),
         Some("physid") => Ok(Some(physid::sim::scenario::Engine::Physid)),
         Some("rapier") => Ok(Some(physid::sim::scenario::Engine::Rapier)),
-        Some(other) => Err(value_error(format!(
+        Some(other) => Err(exception(format!(
             "--engine: '{other}' is not one of physid, rapier"
         ))),
     }

@@ -63,7 +63,7 @@ impl Sweep {
     /// summary.md.
     #[getter]
     fn markdown(&self) -> PyResult<String> {
-        self.table(2).map_err(value_error)
+        self.table(2).map_err(exception)
     }
 
     fn __repr__(&self) -> String {
@@ -142,7 +142,7 @@ pub(crate) fn sweep(
         None => None,
         Some(mut m) => {
             let csv = |df: &mut polars::prelude::DataFrame| {
-                physid::experiment::tables::csv_text(df).map_err(value_error)
+                physid::experiment::tables::csv_text(df).map_err(exception)
             };
             Some((csv(&mut m.rows)?, csv(&mut m.summary)?, m.markdown))
         }

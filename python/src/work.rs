@@ -37,7 +37,7 @@ pub(crate) fn cancellable<T: Send + 'static>(
         .spawn(move || {
             let _ = tx.send(work(flag));
         })
-        .map_err(|e| value_error(format!("could not start a worker thread: {e}")))?;
+        .map_err(|e| exception(format!("could not start a worker thread: {e}")))?;
     let mut rx = rx;
     loop {
         let tick = std::time::Duration::from_millis(50);
@@ -69,5 +69,5 @@ pub(crate) fn thread_pool(threads: Option<usize>) -> PyResult<rayon::ThreadPool>
         .num_threads(workers)
         .thread_name(|i| format!("physid-rayon-{i}"))
         .build()
-        .map_err(value_error)
+        .map_err(exception)
 }

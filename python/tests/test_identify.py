@@ -89,44 +89,45 @@ def test_warnings_are_python_warnings(kuka):
 @pytest.mark.parametrize(
     "kw, message",
     [
-        (dict(constraints="tight"), "--constraints"),
-        (dict(friction="viscous"), "--friction: viscous and coulomb are the model's own"),
-        (dict(friction=["viscous", "coulomb", "sticky"]), "--friction: unknown term 'sticky'"),
-        (dict(effects="bogus"), "--effects: unknown term 'bogus'"),
-        (dict(train="5:3"), r"--train: 5:3 is not a non-empty range within the 5027 samples"),
-        (dict(train="x:3"), "--train: 'x' is not a sample index"),
-        (dict(train=range(0, 100, 2)), "--train: give"),
-        (dict(train=3.5), "--train: give"),
-        (dict(validate="0:10", validate_data=kuka_run(2)), "give --validate or --validate-data, not both"),
-        (dict(validate_data=kuka_run(1)), "the same recording is given twice"),
-        (dict(lock="nosuch"), "--lock: the robot has no joint 'nosuch'"),
-        (dict(only=["lwr_0_joint"], lock=["lwr_1_joint"]), "--lock and --only"),
-        (dict(cutoff=-3.0), "--cutoff must be a positive frequency in Hz, got -3"),
-        (dict(cutoff=float("nan")), "--cutoff must be a positive frequency"),
-        (dict(prior_weight=-1.0), "--prior-weight must be a finite number >= 0, got -1"),
-        (dict(eps=float("inf")), "--eps"),
-        (dict(stamp="wall"), "--stamp"),
-        (dict(regularizer="l1"), "--regularizer"),
-        (dict(train="0:5"), "5 samples give 35 equations for 84 parameters"),
-        (dict(mass_bounds=(2.0, 0.5)), r"--mass-bounds 2,0.5: give factors"),
-        (dict(mass_bounds=(-1.0, 2.0)), r"--mass-bounds -1,2: give factors"),
-        (dict(mass_bounds=(0.5, float("inf"))), r"--mass-bounds 0.5,inf: give factors"),
-        (dict(mass_bounds=(float("nan"), 2.0)), r"--mass-bounds NaN,2: give factors"),
+        (dict(constraints="tight"), "constraints"),
+        (dict(friction="viscous"), "friction: viscous and coulomb are the model's own"),
+        (dict(friction=["viscous", "coulomb", "sticky"]), "friction: unknown term 'sticky'"),
+        (dict(effects="bogus"), "effects: unknown term 'bogus'"),
+        (dict(train="5:3"), r"train: 5:3 is not a non-empty range within the 5027 samples"),
+        (dict(train="x:3"), "train: 'x' is not a sample index"),
+        (dict(train=range(0, 100, 2)), "train: give"),
+        (dict(train=3.5), "train: give"),
+        (dict(validate="0:10", validate_data=kuka_run(2)), "give validate or validate_data, not both"),
+        (dict(validate_data=kuka_run(1)), r".*measurements_1.csv: the same recording is given twice \(data .*measurements_1.csv and validate_data .*measurements_1.csv\)"),
+        (dict(lock="nosuch"), "lock: the robot has no joint 'nosuch'"),
+        (dict(only=["lwr_0_joint"], lock=["lwr_1_joint"]), "lock and only"),
+        (dict(cutoff=-3.0), "cutoff must be a positive frequency in Hz, got -3"),
+        (dict(cutoff=float("nan")), "cutoff must be a positive frequency"),
+        (dict(prior_weight=-1.0), "prior_weight must be a finite number >= 0, got -1"),
+        (dict(eps=float("inf")), "eps"),
+        (dict(stamp="wall"), "stamp"),
+        (dict(regularizer="l1"), "regularizer"),
+        (dict(train="0:5"), ".*measurements_1.csv: 5 samples give 35 equations for 84 parameters: .* allow_few_samples"),
+        (dict(mass_bounds=(2.0, 0.5)), r"mass_bounds 2,0.5: give factors"),
+        (dict(mass_bounds=(-1.0, 2.0)), r"mass_bounds -1,2: give factors"),
+        (dict(mass_bounds=(0.5, float("inf"))), r"mass_bounds 0.5,inf: give factors"),
+        (dict(mass_bounds=(float("nan"), 2.0)), r"mass_bounds NaN,2: give factors"),
     ],
 )
 def test_bad_options_raise_the_clis_message(kuka, kw, message):
-    with pytest.raises(ValueError, match=message):
+    with pytest.raises(physid.InputError, match="^" + message) as raised:
         quiet_identify(kuka, kuka_run(1), **kw)
+    assert "--" not in str(raised.value), "a CLI flag in a Python message"
 
 
 def test_bad_data_raise_naming_the_file(kuka, tmp_path):
-    with pytest.raises(ValueError, match="nope.csv: No such file") as e:
+    with pytest.raises(FileNotFoundError, match="No such file or directory: .*nope.csv") as e:
         physid.identify(kuka, str(tmp_path / "nope.csv"))
     # The operating system's reason once (before: twice, as the message and as its cause).
     assert str(e.value).count("No such file or directory") == 1, str(e.value)
     with pytest.raises(ValueError, match="data: give a path or a list of paths"):
         physid.identify(kuka, 42)
-    with pytest.raises(ValueError, match="--data: give at least one run"):
+    with pytest.raises(ValueError, match="data: give at least one run"):
         physid.identify(kuka, [])
     bad = tmp_path / "bad.csv"
     lines = open(kuka_run(1)).read().splitlines()
@@ -151,9 +152,9 @@ def test_load_reads_like_identify(kuka, tmp_path):
     row = open(kuka_run(1)).read().splitlines()[1 + run["index"][0]].split(",")
     tau_cols = [header.index(f"tau{j}") for j in range(1, 8)]
     assert np.allclose(run["tau"][0], [float(row[i]) for i in tau_cols], rtol=0, atol=1e-12)
-    with pytest.raises(ValueError, match="--only: the robot has no joint 'x'"):
+    with pytest.raises(ValueError, match="only: the robot has no joint 'x'"):
         physid.load(kuka, kuka_run(1), only="x")
-    with pytest.raises(ValueError, match="--stamp"):
+    with pytest.raises(ValueError, match="stamp"):
         physid.load(kuka, kuka_run(1), stamp="later")
 
 
@@ -257,8 +258,8 @@ def test_total_mass_holds_the_robot_s_mass_and_equals_the_cli(kuka, cli):
     total = lambda r: sum(b["pi"][0] for b in r.to_dict()["bodies"])
     assert total(free) > 20.0, total(free)
     assert 13.0 <= total(held) <= 14.0 * (1 + 1e-6)
-    assert any("at the upper bound of --total-mass 13,14" in n for n in held.notices)
+    assert any("at the upper bound of total_mass 13,14" in n for n in held.notices)
     assert any("the description's own total is 14.400 kg" in n for n in held.notices)
     for bad in [(0.0, 1.0), (2.0, 1.0), (float("nan"), 1.0)]:
-        with pytest.raises(ValueError, match="--total-mass"):
+        with pytest.raises(ValueError, match="total_mass"):
             physid.identify(kuka, kuka_run(1), total_mass=bad)

@@ -22,6 +22,12 @@ pub mod sweep;
 
 use std::path::PathBuf;
 
+// The error types an entry point's error may carry among its causes, and the trait naming an
+// invalid option, for bindings that tell kinds of failure apart (the Python package).
+pub use crate::ident::IdentError;
+pub use crate::io::IoError;
+pub use crate::options::OptionError;
+
 /// An error of an entry point, naming what is at fault.
 #[derive(Debug, thiserror::Error)]
 pub enum ApiError {
@@ -134,8 +140,6 @@ impl ApiError {
         }
     }
 }
-
-use crate::options::OptionError;
 
 impl OptionError for ApiError {
     /// The invalid option of the identification or the diagnosis beneath, if that is the

@@ -11,12 +11,31 @@ pub trait OptionError {
     /// error.
     fn flag_message(&self) -> Option<String> {
         self.invalid_option().map(|(option, expected, value)| {
-            let flag = match option {
-                "processing_cutoff" => "cutoff".to_string(),
-                other => other.replace('_', "-"),
-            };
+            let flag = keyword(option).replace('_', "-");
             format!("--{flag} must be {expected}, got {}", readable(value))
         })
+    }
+
+    /// The error as a keyword-argument API words it (the Python package): the option named as
+    /// its keyword (`processing_cutoff` is `cutoff`, other fields as they are); `None` for any
+    /// other error.
+    fn keyword_message(&self) -> Option<String> {
+        self.invalid_option().map(|(option, expected, value)| {
+            format!(
+                "{} must be {expected}, got {}",
+                keyword(option),
+                readable(value)
+            )
+        })
+    }
+}
+
+/// The name a user gives an option field as (the flag `--name-with-dashes`, the keyword
+/// `name_with_underscores`).
+fn keyword(option: &str) -> &str {
+    match option {
+        "processing_cutoff" => "cutoff",
+        other => other,
     }
 }
 

@@ -150,8 +150,9 @@ pub fn check_distinct_recordings(inputs: &[(&str, &Path)]) -> Result<(), IoError
                 return Err(IoError::invalid(
                     b,
                     format!(
-                        "the same recording is given twice ({role_a} {} and {role_b}): each run counts once, and a baseline or validation run must be another recording",
-                        a.display()
+                        "the same recording is given twice ({role_a} {} and {role_b} {}): each run counts once, and a baseline or validation run must be another recording",
+                        a.display(),
+                        b.display()
                     ),
                 ));
             }
