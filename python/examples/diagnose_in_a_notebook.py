@@ -12,5 +12,7 @@ robot = physid.Robot("data/kuka_lwr4/kuka_lwr4.urdf")
 d = physid.diagnose(robot, "data/kuka_lwr4/measurements_3.csv")
 print(d.verdict, "-", d.summary)
 print(d.gap().round(3).to_string(index=False))   # validation RMS per joint, step by step
+print(d.effects().round(3).to_string(index=False))   # every effect's magnitude per joint, with its SE
+print("payload:", d.payload)                     # a physid.BodyChange (body, mass, com), or None
 d.write_report(f"{sys.argv[1] if len(sys.argv) > 1 else '.'}/kuka_diagnosis")   # report.html, .md, .json, SVGs
 # In Jupyter: `d` alone renders the report (Diagnosis._repr_html_).

@@ -24,6 +24,7 @@ description's once per file.
 """
 
 from .errors import Error, InputError, MissingFileError, PhysidWarning, SolverError
+from .results import BodyChange
 from ._physid import (  # noqa: E402
     Comparison,
     Diagnosis,
@@ -47,6 +48,7 @@ from ._physid import (  # noqa: E402
 )
 
 __all__ = [
+    "BodyChange",
     "Comparison",
     "Diagnosis",
     "Error",

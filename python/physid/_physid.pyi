@@ -2,6 +2,7 @@
 
 import os
 from typing import Any, Callable, Optional, Sequence, Union
+from .results import BodyChange
 
 import numpy as np
 import numpy.typing as npt
@@ -130,8 +131,22 @@ class Diagnosis:
     @property
     def summary(self) -> str: ...
     @property
-    def effects(self) -> list[str]:
-        """The effects found, in the order they were selected."""
+    def effect_kinds(self) -> list[str]:
+        """The effects found, in the order they were selected (kind names)."""
+    def effects(self, backend: str = "pandas") -> Any:
+        """DataFrame, one row per effect and joint: effect, evidence, param, magnitude, joint,
+        value, se, unit, identifiable, ambiguous_with; the selection's effects, then the
+        ladder's (a payload as `payload` rows)."""
+    def ladder(self, backend: str = "pandas") -> Any:
+        """DataFrame, one row per rung of the ladder from the description: step, kind, param,
+        overall (held-out RMS, N m), reduction, t, mass (kg, a body change's), alternatives,
+        then the held-out RMS per joint (N m). No rows without a ladder."""
+    @property
+    def bodies(self) -> list[BodyChange]:
+        """The body changes the ladder found, in order (empty without a ladder)."""
+    @property
+    def payload(self) -> Optional[BodyChange]:
+        """The payload named (body, mass in kg, mass_se, com in m, body frame), or None."""
     @property
     def standing(self) -> Optional[list[str]]:
         """What-changed mode: the baseline's standing effects taken out of the data."""

@@ -123,6 +123,25 @@ pub(crate) fn frame<'py>(
     frames(py, backend)?.getattr("DataFrame")?.call1((data,))
 }
 
+/// A DataFrame of `backend` from `rows` (a list of dicts), its columns `columns` in that
+/// order (so a table without rows still has them).
+pub(crate) fn records<'py>(
+    py: Python<'py>,
+    rows: Bound<'py, PyAny>,
+    columns: &[&str],
+    backend: &str,
+) -> PyResult<Bound<'py, PyAny>> {
+    let table = PyDict::new(py);
+    for c in columns {
+        let column = pyo3::types::PyList::empty(py);
+        for row in rows.try_iter()? {
+            column.append(row?.get_item(c)?)?;
+        }
+        table.set_item(c, column)?;
+    }
+    frame(py, table.into_any(), backend)
+}
+
 /// A trajectory's signals as a dict of numpy arrays: `t` (s), and `q`, `qd`, `qdd`, `tau` as
 /// `(samples, n)` (`qdd` absent when unknown).
 pub(crate) fn trajectory_dict<'py>(

@@ -34,14 +34,114 @@ impl Diagnosis {
         self.diagnosis.summary.clone()
     }
 
-    /// The effects found, in the order they were selected (kind names).
+    /// The effects found, in the order they were selected (kind names; `effects()` has their
+    /// magnitudes).
     #[getter]
-    fn effects(&self) -> Vec<String> {
+    fn effect_kinds(&self) -> Vec<String> {
         self.diagnosis
             .effects
             .iter()
             .map(|e| e.kind.name().to_string())
             .collect()
+    }
+
+    /// The effects found and their magnitudes, one row per effect and joint (a pandas
+    /// DataFrame), those of the selection on the run's own data first, then those the ladder
+    /// explained the description's gap with (a payload's mass, CoM and inertia as `payload`
+    /// rows; `bodies` has them as values): `effect` (kind), `evidence` (`cross_validation`,
+    /// `description`), `param` (its grid value: Stribeck velocity in
+    /// rad/s, cogging harmonic; 0 otherwise), `magnitude` (what the value is), `joint` (or
+    /// `robot`), `value` and its standard error `se` in `unit`, `identifiable` (the fraction of
+    /// the effect not absorbed by the rigid-body parameters: near 0, the value means nothing),
+    /// `ambiguous_with` (kinds the data cannot tell apart from it, comma-separated).
+    #[pyo3(signature = (backend = "pandas"))]
+    fn effects<'py>(&self, py: Python<'py>, backend: &str) -> PyResult<Bound<'py, PyAny>> {
+        let rows = pyo3::types::PyList::empty(py);
+        let d = &self.diagnosis;
+        for e in d.effects.iter().chain(&d.described_effects) {
+            let ambiguous: Vec<&str> = e.ambiguous_with.iter().map(|k| k.name()).collect();
+            for m in &e.magnitudes {
+                let row = PyDict::new(py);
+                row.set_item("effect", e.kind.name())?;
+                row.set_item("evidence", physid::io::serde_name(&e.evidence))?;
+                row.set_item("param", e.param)?;
+                row.set_item("magnitude", &e.magnitude_name)?;
+                row.set_item("joint", &m.joint)?;
+                row.set_item("value", m.value)?;
+                row.set_item("se", m.se)?;
+                row.set_item("unit", &m.unit)?;
+                row.set_item("identifiable", m.identifiable)?;
+                row.set_item("ambiguous_with", ambiguous.join(","))?;
+                rows.append(row)?;
+            }
+        }
+        let columns = [
+            "effect", "evidence", "param", "magnitude", "joint", "value", "se", "unit",
+            "identifiable", "ambiguous_with",
+        ];
+        records(py, rows.into_any(), &columns, backend)
+    }
+
+    /// The ladder of explanations from the description (how the diagnosis reads a description
+    /// with a stated uncertainty or its identification's information), one row per rung (a
+    /// pandas DataFrame): `step` (`description as given`, `+ payload on lwr_7_link`, …), `kind`
+    /// (the effect kind, `payload` for a body change; None for the fixed rungs), `param`,
+    /// `overall` (held-out RMS over the joints, N m, with this step and those before it in),
+    /// `reduction` (of the held-out mean square by this step), `t` (its block t statistic),
+    /// `mass` (kg, the mass a body-change step adds as weighed at it; NaN otherwise),
+    /// `alternatives` (explanations tied with it, `; `-separated), then the held-out RMS per
+    /// joint (N m), one column per joint. No rows when the diagnosis ran without a ladder.
+    #[pyo3(signature = (backend = "pandas"))]
+    fn ladder<'py>(&self, py: Python<'py>, backend: &str) -> PyResult<Bound<'py, PyAny>> {
+        let d = &self.diagnosis;
+        let rows = pyo3::types::PyList::empty(py);
+        let ladder = d.ladder.iter();
+        for (rung, mass) in ladder.flat_map(|l| l.rungs.iter().zip(l.rung_masses())) {
+            let row = PyDict::new(py);
+            row.set_item("step", &rung.step)?;
+            row.set_item("kind", rung.kind.map(|k| k.name()))?;
+            row.set_item("param", rung.param)?;
+            row.set_item("overall", rung.overall)?;
+            row.set_item("reduction", rung.reduction)?;
+            row.set_item("t", rung.t)?;
+            row.set_item("mass", mass.unwrap_or(f64::NAN))?;
+            row.set_item("alternatives", rung.alternatives().join("; "))?;
+            for (joint, rms) in d.joints.iter().zip(&rung.rms) {
+                row.set_item(joint, rms)?;
+            }
+            rows.append(row)?;
+        }
+        let mut columns = vec!["step", "kind", "param", "overall", "reduction", "t", "mass", "alternatives"];
+        columns.extend(d.joints.iter().map(String::as_str));
+        records(py, rows.into_any(), &columns, backend)
+    }
+
+    /// The body changes the ladder found (`physid.BodyChange` values: body, mass and its
+    /// standard error, centre of mass, whether it reads as a payload), in the order found;
+    /// empty without a ladder.
+    #[getter]
+    fn bodies<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
+        let found = match &self.diagnosis.ladder {
+            Some(l) => plain(py, &l.bodies)?,
+            None => pyo3::types::PyList::empty(py).into_any(),
+        };
+        py.import("physid.results")?
+            .getattr("body_changes")?
+            .call1((found,))
+    }
+
+    /// The payload the diagnosis names (the first body change that reads as one): a
+    /// `physid.BodyChange` with `body`, `mass` (kg), `mass_se`, `com` (m, body frame); `None`
+    /// when it names none.
+    #[getter]
+    fn payload<'py>(&self, py: Python<'py>) -> PyResult<Option<Bound<'py, PyAny>>> {
+        for b in self.bodies(py)?.try_iter()? {
+            let b = b?;
+            if b.getattr("payload")?.extract::<bool>()? {
+                return Ok(Some(b));
+            }
+        }
+        Ok(None)
     }
 
     /// In "what changed" mode, the baseline's standing effects taken out of the data.

@@ -24,12 +24,12 @@ def test_diagnosis_equals_the_cli(run3, cli, tmp_path):
     ref = cli("diagnose", "--robot", KUKA_URDF, "--data", kuka_run(3))
     assert without_timings(run3.to_dict()) == without_timings(ref)
     assert run3.verdict == ref["verdict"] and run3.summary == ref["summary"]
-    assert run3.effects == [e["kind"] for e in ref["effects"]]
+    assert run3.effect_kinds == [e["kind"] for e in ref["effects"]]
     gap = run3.gap()
     assert list(gap["joint"]) == [g["joint"] for g in ref["gap"]]
     assert np.array_equal(gap["nominal"].to_numpy(), [g["nominal"] for g in ref["gap"]])
     assert np.array_equal(gap["noise_floor"].to_numpy(), [g["noise_floor"] for g in ref["gap"]])
-    for i, name in enumerate(run3.effects):
+    for i, name in enumerate(run3.effect_kinds):
         assert np.array_equal(gap[f"+ {name}"].to_numpy(), [g["after"][i] for g in ref["gap"]])
 
 

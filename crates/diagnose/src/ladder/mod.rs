@@ -352,6 +352,20 @@ pub struct Ladder {
 }
 
 impl Ladder {
+    /// Per rung, the mass (kg) its body change adds as stated ([`BodyChange::mass`]); `None`
+    /// for a rung that is not a body change. Body changes are found, and listed in
+    /// [`Ladder::bodies`], in the order of their rungs.
+    pub fn rung_masses(&self) -> Vec<Option<f64>> {
+        let mut bodies = self.bodies.iter();
+        self.rungs
+            .iter()
+            .map(|r| {
+                let body_change = r.kind.is_some_and(|k| k.is_body_change());
+                body_change.then(|| bodies.next().map(|b| b.mass)).flatten()
+            })
+            .collect()
+    }
+
     /// The coefficients of effect `v` and their standard errors in the fit of the step that
     /// chose it.
     pub(crate) fn entered(&self, v: Variant) -> Option<(&Vec<f64>, &Vec<f64>)> {
