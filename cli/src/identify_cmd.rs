@@ -473,7 +473,7 @@ fn print_terms(terms: &[physid::diagnose::calibrate::TermFit], m: &Model) {
     }
     println!("\neffect terms (identified with the model):");
     for t in terms {
-        let (what, unit) = t.magnitude;
+        let (what, unit) = (&t.magnitude.0, &t.magnitude.1);
         let values: Vec<String> = t.magnitudes.iter().map(|v| format!("{v:.4}")).collect();
         let per = if t.magnitudes.len() == m.dof() {
             "per joint"

@@ -8,12 +8,18 @@ use std::path::PathBuf;
 /// A comparison of experiment or sweep results (`physid compare`): per group (grid point, n_s,
 /// constraint set) the paired seeds' medians, ratio, one-sided p-value and outcome.
 #[pyclass(frozen, module = "physid")]
+#[derive(serde::Serialize, serde::Deserialize)]
 pub(crate) struct Comparison {
     cmp: physid::experiment::compare::Comparison,
 }
 
 #[pymethods]
 impl Comparison {
+    /// Pickles (and copies) as its state in physid's binary form.
+    fn __reduce__<'py>(&self, py: Python<'py>) -> PyResult<crate::pickle::Reduced<'py>> {
+        crate::pickle::reduce(py, "Comparison", self)
+    }
+
     /// Groups that regressed.
     #[getter]
     fn regressions(&self) -> usize {

@@ -13,6 +13,7 @@ use std::path::PathBuf;
 /// A diagnosis of the gap between a robot description and its runs (`physid diagnose`):
 /// `to_dict()` is its `--json`; in a notebook it shows itself as the HTML report, plots inline.
 #[pyclass(frozen, module = "physid")]
+#[derive(serde::Serialize, serde::Deserialize)]
 pub(crate) struct Diagnosis {
     diagnosis: physid::diagnose::Diagnosis,
     standing: Option<Vec<String>>,
@@ -22,6 +23,11 @@ pub(crate) struct Diagnosis {
 
 #[pymethods]
 impl Diagnosis {
+    /// Pickles (and copies) as its state in physid's binary form.
+    fn __reduce__<'py>(&self, py: Python<'py>) -> PyResult<crate::pickle::Reduced<'py>> {
+        crate::pickle::reduce(py, "Diagnosis", self)
+    }
+
     /// The verdict (e.g. `explained`, `partially_explained`, `unexplained`, `no_effect`).
     #[getter]
     fn verdict(&self) -> String {
@@ -76,8 +82,16 @@ impl Diagnosis {
             }
         }
         let columns = [
-            "effect", "evidence", "param", "magnitude", "joint", "value", "se", "unit",
-            "identifiable", "ambiguous_with",
+            "effect",
+            "evidence",
+            "param",
+            "magnitude",
+            "joint",
+            "value",
+            "se",
+            "unit",
+            "identifiable",
+            "ambiguous_with",
         ];
         records(py, rows.into_any(), &columns, backend)
     }
@@ -111,7 +125,16 @@ impl Diagnosis {
             }
             rows.append(row)?;
         }
-        let mut columns = vec!["step", "kind", "param", "overall", "reduction", "t", "mass", "alternatives"];
+        let mut columns = vec![
+            "step",
+            "kind",
+            "param",
+            "overall",
+            "reduction",
+            "t",
+            "mass",
+            "alternatives",
+        ];
         columns.extend(d.joints.iter().map(String::as_str));
         records(py, rows.into_any(), &columns, backend)
     }

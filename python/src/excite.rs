@@ -13,6 +13,7 @@ use std::path::PathBuf;
 /// A designed excitation (`physid excite`): the design, the scenario that runs it, its check
 /// in simulation against the robot's limits.
 #[pyclass(frozen, module = "physid")]
+#[derive(serde::Serialize, serde::Deserialize)]
 pub(crate) struct Excitation {
     inner: api::excite::Excitation,
     out: Option<PathBuf>,
@@ -21,6 +22,11 @@ pub(crate) struct Excitation {
 
 #[pymethods]
 impl Excitation {
+    /// Pickles (and copies) as its state in physid's binary form.
+    fn __reduce__<'py>(&self, py: Python<'py>) -> PyResult<crate::pickle::Reduced<'py>> {
+        crate::pickle::reduce(py, "Excitation", self)
+    }
+
     /// The scenario's text (TOML): the base's tables as they were, the design as its
     /// `[excitation]`; `physid.simulate` and `physid.experiment` run it once written.
     #[getter]

@@ -10,6 +10,7 @@ use std::path::PathBuf;
 /// constraint set) cell; `rows()` and `summary()` are the CLI's `rows.csv` and `summary.csv`
 /// as pandas DataFrames.
 #[pyclass(frozen, module = "physid")]
+#[derive(serde::Serialize, serde::Deserialize)]
 pub(crate) struct Experiment {
     rows: Vec<physid::experiment::Row>,
     joints: Vec<String>,
@@ -35,6 +36,11 @@ impl Experiment {
 
 #[pymethods]
 impl Experiment {
+    /// Pickles (and copies) as its state in physid's binary form.
+    fn __reduce__<'py>(&self, py: Python<'py>) -> PyResult<crate::pickle::Reduced<'py>> {
+        crate::pickle::reduce(py, "Experiment", self)
+    }
+
     /// One row per (seed, n_s, constraint set): validation and training RMS (N m), parameter
     /// errors against the truth, consistency, solver status and time (the CLI's rows.csv).
     #[pyo3(signature = (backend = "pandas"))]

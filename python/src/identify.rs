@@ -145,6 +145,7 @@ pub(crate) fn load<'py>(
 
 /// What `identify` found (the report behind `physid identify`): `to_dict()` is its `--json`.
 #[pyclass(frozen, module = "physid")]
+#[derive(serde::Serialize, serde::Deserialize)]
 pub(crate) struct Identification {
     report: api::identify::Identification,
     /// Wall time of the library's `identify` call (s).
@@ -156,6 +157,11 @@ pub(crate) struct Identification {
 
 #[pymethods]
 impl Identification {
+    /// Pickles (and copies) as its state in physid's binary form.
+    fn __reduce__<'py>(&self, py: Python<'py>) -> PyResult<crate::pickle::Reduced<'py>> {
+        crate::pickle::reduce(py, "Identification", self)
+    }
+
     /// θ as identified: the model's parameters, then the effect terms' coefficients.
     #[getter]
     fn theta<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<f64>> {

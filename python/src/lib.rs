@@ -12,6 +12,7 @@ mod errors;
 mod excite;
 mod experiment;
 mod identify;
+mod pickle;
 mod robot;
 mod simulate;
 mod sweep;
@@ -52,5 +53,6 @@ fn _physid(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(identify::identify, m)?)?;
     m.add_function(wrap_pyfunction!(identify::load, m)?)?;
     m.add_function(wrap_pyfunction!(version, m)?)?;
+    m.add_function(wrap_pyfunction!(pickle::_restore, m)?)?;
     Ok(())
 }

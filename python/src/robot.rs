@@ -13,6 +13,7 @@ use std::path::PathBuf;
 
 /// A robot: the built-in leg (`"cheetah3"`), a URDF file, or a robot TOML file.
 #[pyclass(frozen, module = "physid")]
+#[derive(serde::Serialize, serde::Deserialize)]
 pub(crate) struct Robot {
     pub(crate) model: Model,
     /// The robot as given (`cheetah3` or a file), for outputs that copy its URDF.
@@ -26,6 +27,11 @@ pub(crate) struct Robot {
 
 #[pymethods]
 impl Robot {
+    /// Pickles (and copies) as its state in physid's binary form.
+    fn __reduce__<'py>(&self, py: Python<'py>) -> PyResult<crate::pickle::Reduced<'py>> {
+        crate::pickle::reduce(py, "Robot", self)
+    }
+
     /// Loads `robot` (`"cheetah3"`, a URDF or a robot TOML path); `rotor_model` (`"full"` or
     /// `"reflected"`), `no_rotors`, `ellipsoid_margin` (m), `package_dirs` and
     /// `no_geometry_ellipsoids` as the CLI's robot flags. The loader's warnings are issued as

@@ -13,6 +13,7 @@ use std::path::{Path, PathBuf};
 /// A simulated excitation experiment (`physid simulate`), its log written: `to_dict()` is its
 /// `--json`; the signals as numpy arrays.
 #[pyclass(frozen, module = "physid")]
+#[derive(serde::Serialize, serde::Deserialize)]
 pub(crate) struct Simulation {
     run: api::simulate::Simulation,
     out: PathBuf,
@@ -20,6 +21,11 @@ pub(crate) struct Simulation {
 
 #[pymethods]
 impl Simulation {
+    /// Pickles (and copies) as its state in physid's binary form.
+    fn __reduce__<'py>(&self, py: Python<'py>) -> PyResult<crate::pickle::Reduced<'py>> {
+        crate::pickle::reduce(py, "Simulation", self)
+    }
+
     /// The true signals: state, accelerations and the torque the actuators delivered (`tau`),
     /// with its parts `friction` (the true friction torque) and `effects` (the injected
     /// physical effects' torque), `(samples, n)` N m each.

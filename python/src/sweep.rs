@@ -11,6 +11,7 @@ use std::path::PathBuf;
 /// A parameter sweep's result (`physid sweep`): its folder, what ran, and once every cell is
 /// there the merged tables (`rows()`, `summary()` as pandas DataFrames, `markdown`).
 #[pyclass(frozen, module = "physid")]
+#[derive(serde::Serialize, serde::Deserialize)]
 pub(crate) struct Sweep {
     out: PathBuf,
     cells: usize,
@@ -23,6 +24,11 @@ pub(crate) struct Sweep {
 
 #[pymethods]
 impl Sweep {
+    /// Pickles (and copies) as its state in physid's binary form.
+    fn __reduce__<'py>(&self, py: Python<'py>) -> PyResult<crate::pickle::Reduced<'py>> {
+        crate::pickle::reduce(py, "Sweep", self)
+    }
+
     /// The result folder (cells/, and once merged rows.csv, summary.csv/.md/.svg).
     #[getter]
     fn out(&self) -> PathBuf {

@@ -352,7 +352,7 @@ pub struct Rms {
 
 /// A note or warning about the data or the run, for the user (the binary prints each on
 /// standard error as `note: …` or `warning: …`; Python issues warnings).
-#[derive(Clone, Debug, PartialEq, Eq, serde::Serialize)]
+#[derive(Clone, Debug, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
 pub struct Notice {
     /// A warning (the answer may be wrong), or a note (what was done).
     pub warning: bool,

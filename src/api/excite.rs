@@ -14,7 +14,7 @@ use std::path::{Path, PathBuf};
 
 /// The limits as the simulated robot used them (peak over the run / the robot's own limit,
 /// no margin).
-#[derive(Clone, Debug, serde::Serialize, schemars::JsonSchema)]
+#[derive(Clone, Debug, serde::Serialize, serde::Deserialize, schemars::JsonSchema)]
 pub struct SimulatedUse {
     /// Joint name.
     pub joint: String,
@@ -34,7 +34,7 @@ pub struct SimulatedUse {
 }
 
 /// `excite --json` (schema `physid.excite/1`, docs/schemas/).
-#[derive(serde::Serialize, schemars::JsonSchema)]
+#[derive(serde::Serialize, serde::Deserialize, schemars::JsonSchema)]
 pub struct ExciteJson {
     /// The design.
     pub design: Design,
@@ -47,7 +47,7 @@ pub struct ExciteJson {
 }
 
 /// The check of a design in simulation: each joint's peaks against its limits.
-#[derive(Clone, Debug)]
+#[derive(Clone, Debug, serde::Serialize, serde::Deserialize)]
 pub struct LimitCheck {
     /// Per joint, in the robot's order.
     pub joints: Vec<SimulatedUse>,
@@ -294,7 +294,7 @@ pub struct DesignSettings {
 }
 
 /// A designed excitation: the design, the scenario that runs it, its check in simulation.
-#[derive(Clone, Debug)]
+#[derive(Clone, Debug, serde::Serialize, serde::Deserialize)]
 pub struct Excitation {
     /// The robot it was designed for.
     pub model: Model,
@@ -456,7 +456,7 @@ pub fn reference_trajectory(
 
 /// A motion's information measures (`excite --score`): the design's three objectives on the
 /// true states of a simulated run.
-#[derive(Clone, Debug, serde::Serialize)]
+#[derive(Clone, Debug, serde::Serialize, serde::Deserialize)]
 pub struct MotionScore {
     /// `log det F / r`.
     pub d_optimal: f64,

@@ -18,7 +18,7 @@ use std::ops::Range;
 use std::path::{Path, PathBuf};
 
 /// One data file and what the pipeline did to it.
-#[derive(Clone, serde::Serialize, schemars::JsonSchema)]
+#[derive(Clone, serde::Serialize, serde::Deserialize, schemars::JsonSchema)]
 pub struct DataJson {
     /// The file.
     pub file: PathBuf,
@@ -28,7 +28,7 @@ pub struct DataJson {
 }
 
 /// One body's errors against the ground truth.
-#[derive(Clone, serde::Serialize, schemars::JsonSchema)]
+#[derive(Clone, serde::Serialize, serde::Deserialize, schemars::JsonSchema)]
 pub struct TruthError {
     /// Body or rotor name.
     pub name: String,
@@ -43,7 +43,7 @@ pub struct TruthError {
 }
 
 /// A run and its sample range (`[start, end)`, indices of the file as read).
-#[derive(Clone, Debug, serde::Serialize, schemars::JsonSchema)]
+#[derive(Clone, Debug, serde::Serialize, serde::Deserialize, schemars::JsonSchema)]
 pub struct RunRange {
     /// The data file.
     pub file: PathBuf,
@@ -55,7 +55,7 @@ pub struct RunRange {
 }
 
 /// The training or validation part of `identify --json`.
-#[derive(Clone, Debug, serde::Serialize, schemars::JsonSchema)]
+#[derive(Clone, Debug, serde::Serialize, serde::Deserialize, schemars::JsonSchema)]
 pub struct Split {
     /// The first run's sample range.
     pub range: Option<[usize; 2]>,
@@ -68,7 +68,7 @@ pub struct Split {
 }
 
 /// Friction per joint.
-#[derive(serde::Serialize, schemars::JsonSchema)]
+#[derive(serde::Serialize, serde::Deserialize, schemars::JsonSchema)]
 pub struct Friction {
     /// `B` (N m s/rad).
     pub viscous: Vec<f64>,
@@ -77,7 +77,7 @@ pub struct Friction {
 }
 
 /// `identify --json` (docs/identify-json.md; JSON Schema docs/schemas/identify.schema.json).
-#[derive(serde::Serialize, schemars::JsonSchema)]
+#[derive(serde::Serialize, serde::Deserialize, schemars::JsonSchema)]
 pub struct IdentifyJson {
     /// The first training file.
     pub data: PathBuf,
@@ -674,6 +674,7 @@ fn open(m: &Model, o: &IdentifyOptions) -> Result<Opened, ApiError> {
 
 /// What one identification found, with its scores and what the data pipeline did: the
 /// report behind `identify`'s text and JSON.
+#[derive(serde::Serialize, serde::Deserialize)]
 pub struct Identification {
     /// The identified model (effect coefficients after the model's parameters in `theta`).
     pub identified: ident::Identified,

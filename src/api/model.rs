@@ -7,7 +7,7 @@ use crate::model::Model;
 use crate::spatial::{ConsistencyReport, Ellipsoid, InertialParams};
 
 /// An ellipsoid: centre (m), semi-axes (m, ascending), `Q_s` (m²).
-#[derive(serde::Serialize, schemars::JsonSchema)]
+#[derive(serde::Serialize, serde::Deserialize, schemars::JsonSchema)]
 pub struct EllipsoidJson {
     /// Centre (m, body frame).
     pub center: Vec<f64>,
@@ -19,7 +19,7 @@ pub struct EllipsoidJson {
 
 /// One body or rotor: its ten parameters (paper order, own frame), mass (kg), CoM (m),
 /// principal moments about the CoM (kg m²), consistency margins, bounding ellipsoid.
-#[derive(serde::Serialize, schemars::JsonSchema)]
+#[derive(serde::Serialize, serde::Deserialize, schemars::JsonSchema)]
 pub struct BodyJson {
     /// Its bounding ellipsoid, if it has one.
     pub ellipsoid: Option<EllipsoidJson>,
@@ -38,7 +38,7 @@ pub struct BodyJson {
 }
 
 /// One joint: friction and limits `[lower, upper, velocity, effort]`.
-#[derive(serde::Serialize, schemars::JsonSchema)]
+#[derive(serde::Serialize, serde::Deserialize, schemars::JsonSchema)]
 pub struct JointJson {
     /// Joint name.
     pub name: String,
@@ -49,7 +49,7 @@ pub struct JointJson {
 }
 
 /// `model --json` (schema `physid.model/1`, docs/schemas/).
-#[derive(serde::Serialize, schemars::JsonSchema)]
+#[derive(serde::Serialize, serde::Deserialize, schemars::JsonSchema)]
 pub struct ModelJson {
     /// The robot's name.
     pub name: String,

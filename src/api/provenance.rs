@@ -18,7 +18,7 @@ pub fn git_revision() -> String {
 }
 
 /// `provenance.json` of an experiment (schema `physid.provenance/1`, docs/schemas/).
-#[derive(serde::Serialize, schemars::JsonSchema)]
+#[derive(serde::Serialize, serde::Deserialize, schemars::JsonSchema)]
 pub struct Provenance {
     /// The scenario file as given.
     pub scenario_file: std::path::PathBuf,

@@ -10,7 +10,7 @@ use crate::trajectory::Recording;
 use std::path::{Path, PathBuf};
 
 /// `simulate --json` (schema `physid.simulate/1`, docs/schemas/).
-#[derive(Clone, Debug, serde::Serialize, schemars::JsonSchema)]
+#[derive(Clone, Debug, serde::Serialize, serde::Deserialize, schemars::JsonSchema)]
 pub struct SimulateJson {
     /// The scenario file.
     pub scenario: PathBuf,
@@ -37,7 +37,7 @@ pub struct SimulateJson {
 }
 
 /// How well physid's inverse dynamics explains the recording, per joint (N m).
-#[derive(Clone, Debug, serde::Serialize, schemars::JsonSchema)]
+#[derive(Clone, Debug, serde::Serialize, serde::Deserialize, schemars::JsonSchema)]
 pub struct Residual {
     /// RMS per joint (N m).
     pub rms: Vec<f64>,
@@ -57,6 +57,7 @@ pub struct SimulateOptions {
 }
 
 /// A simulated experiment: the scenario as run, its robot and the recording.
+#[derive(serde::Serialize, serde::Deserialize)]
 pub struct Simulation {
     /// The scenario file.
     pub path: PathBuf,

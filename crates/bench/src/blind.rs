@@ -23,7 +23,7 @@ use serde::Serialize;
 use std::path::Path;
 
 /// What a case injects.
-#[derive(Clone, Debug, Serialize, PartialEq)]
+#[derive(Clone, Debug, Serialize, serde::Deserialize, PartialEq)]
 #[serde(rename_all = "snake_case")]
 pub enum Category {
     /// Nothing.
@@ -40,7 +40,7 @@ pub enum Category {
 }
 
 /// A change of the simulated robot that its description does not carry.
-#[derive(Clone, Debug, Serialize, PartialEq)]
+#[derive(Clone, Debug, Serialize, serde::Deserialize, PartialEq)]
 #[serde(rename_all = "snake_case")]
 pub enum Change {
     /// Every joint's viscous and Coulomb friction scaled by its factor.
@@ -86,7 +86,7 @@ impl Change {
 }
 
 /// An injected effect with the magnitudes the diagnosis should find.
-#[derive(Clone, Debug, Serialize)]
+#[derive(Clone, Debug, Serialize, serde::Deserialize)]
 pub struct Injected {
     /// The library kind (`None` outside the library).
     pub kind: Option<Kind>,
@@ -111,7 +111,7 @@ impl Injected {
 }
 
 /// One scored case.
-#[derive(Clone, Debug, Serialize)]
+#[derive(Clone, Debug, Serialize, serde::Deserialize)]
 pub struct CaseResult {
     /// Case index.
     pub case: usize,
@@ -614,7 +614,7 @@ impl Marks {
 pub const VISIBLE: f64 = 0.15;
 
 /// The benchmark's scores.
-#[derive(Clone, Debug, Serialize, schemars::JsonSchema)]
+#[derive(Clone, Debug, Serialize, serde::Deserialize, schemars::JsonSchema)]
 pub struct Scores {
     /// Cases run.
     pub cases: usize,

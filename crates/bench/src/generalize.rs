@@ -362,7 +362,7 @@ fn as_logged(rec: &physid_core::trajectory::Recording) -> physid_core::trajector
 }
 
 /// One case of the benchmark with its robot.
-#[derive(Clone, Debug, Serialize)]
+#[derive(Clone, Debug, Serialize, serde::Deserialize)]
 pub struct Case {
     /// The robot's name.
     pub robot: String,
@@ -446,7 +446,7 @@ pub fn run(
 }
 
 /// Scores over a group of cases (one robot, or the tuning or held-out robots pooled).
-#[derive(Clone, Debug, Default, Serialize, schemars::JsonSchema)]
+#[derive(Clone, Debug, Default, Serialize, serde::Deserialize, schemars::JsonSchema)]
 pub struct GroupScores {
     /// Cases.
     pub cases: usize,
@@ -528,7 +528,7 @@ pub fn group_scores<'a>(cases: impl IntoIterator<Item = &'a Case>) -> GroupScore
 }
 
 /// One robot's scores.
-#[derive(Clone, Debug, Serialize, schemars::JsonSchema)]
+#[derive(Clone, Debug, Serialize, serde::Deserialize, schemars::JsonSchema)]
 pub struct RobotScores {
     /// The robot.
     pub robot: String,
@@ -540,7 +540,7 @@ pub struct RobotScores {
 }
 
 /// The benchmark's scores: per robot, and pooled over the tuning and the held-out robots.
-#[derive(Clone, Debug, Serialize, schemars::JsonSchema)]
+#[derive(Clone, Debug, Serialize, serde::Deserialize, schemars::JsonSchema)]
 pub struct Scores {
     /// Per robot, in the benchmark file's order.
     pub robots: Vec<RobotScores>,

@@ -5,7 +5,7 @@
 //! Floor 1 (architecture.md §6): imports nothing from physid.
 
 /// Joint data sampled in time, stored sample-major (`q[k * n + j]`).
-#[derive(Clone, Debug, PartialEq)]
+#[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct Trajectory {
     /// Joint names (length `n`).
     pub joint_names: Vec<String>,
@@ -34,7 +34,7 @@ pub struct Trajectory {
 /// its ends. A signal processed over the run (the diagnosis filters and differentiates the
 /// torque as the encoder angle was) then continues across its ends as the data's own processing
 /// did, instead of starting afresh at them.
-#[derive(Clone, Debug, Default, PartialEq)]
+#[derive(Clone, Debug, Default, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct Margins {
     /// Torques before the run's first sample, ending at the sample just before it.
     pub before: Vec<f64>,
@@ -542,7 +542,7 @@ impl Trajectory {
 }
 
 /// Everything one simulated experiment produces.
-#[derive(Clone, Debug)]
+#[derive(Clone, Debug, serde::Serialize, serde::Deserialize)]
 pub struct Recording {
     /// True state, accelerations and the torque the actuators delivered (τ_mot).
     pub truth: Trajectory,

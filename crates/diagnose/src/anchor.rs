@@ -199,7 +199,7 @@ pub struct Anchor<'a> {
 }
 
 /// One candidate's test.
-#[derive(Clone, Debug, Serialize, schemars::JsonSchema)]
+#[derive(Clone, Debug, Serialize, serde::Deserialize, schemars::JsonSchema)]
 pub struct Test {
     /// The kind.
     pub kind: Kind,
@@ -353,7 +353,7 @@ pub fn chi2_upper_quantile(d: usize, p: f64) -> f64 {
 }
 
 /// One accepted step of the description test.
-#[derive(Clone, Debug, Serialize, schemars::JsonSchema)]
+#[derive(Clone, Debug, Serialize, serde::Deserialize, schemars::JsonSchema)]
 pub struct Step {
     /// The kind kept.
     pub kind: Kind,
@@ -379,7 +379,7 @@ pub struct Step {
 }
 
 /// The description test's outcome.
-#[derive(Clone, Debug, Serialize, schemars::JsonSchema)]
+#[derive(Clone, Debug, Serialize, serde::Deserialize, schemars::JsonSchema)]
 pub struct Report {
     /// The stated relative uncertainty `ε` of the description's inertial parameters.
     pub uncertainty: f64,
@@ -413,11 +413,14 @@ pub enum TestStop {
     /// A step passed on the training data but not again on the held-out data, and was
     /// dropped with those after it.
     NotConfirmed(Kind),
+    /// A stop as a report states it, read back from its JSON (its sentence).
+    Stated(String),
 }
 
 impl std::fmt::Display for TestStop {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         match self {
+            Self::Stated(sentence) => f.write_str(sentence),
             Self::MaxEffects(max) => write!(f, "reached the maximum of {max} effects"),
             Self::NoCandidate => f.write_str("no candidate left"),
             Self::BelowThreshold {
@@ -441,6 +444,12 @@ impl std::fmt::Display for TestStop {
 impl Serialize for TestStop {
     fn serialize<S: serde::Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
         s.collect_str(self)
+    }
+}
+
+impl<'de> serde::Deserialize<'de> for TestStop {
+    fn deserialize<D: serde::Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        <String as serde::Deserialize>::deserialize(d).map(Self::Stated)
     }
 }
 

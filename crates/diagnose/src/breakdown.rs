@@ -8,7 +8,7 @@ use physid_core::trajectory::Trajectory;
 use serde::Serialize;
 
 /// One regime of one joint.
-#[derive(Clone, Debug, Serialize, schemars::JsonSchema, PartialEq)]
+#[derive(Clone, Debug, Serialize, serde::Deserialize, schemars::JsonSchema, PartialEq)]
 pub struct Regime {
     /// Joint name.
     pub joint: String,
@@ -23,7 +23,7 @@ pub struct Regime {
 }
 
 /// Where a residual lies.
-#[derive(Clone, Debug, Serialize, schemars::JsonSchema, PartialEq)]
+#[derive(Clone, Debug, Serialize, serde::Deserialize, schemars::JsonSchema, PartialEq)]
 pub struct Breakdown {
     /// RMS residual per joint (N m).
     pub rms: Vec<f64>,

@@ -77,7 +77,7 @@ impl Options {
 }
 
 /// One identified effect term.
-#[derive(Clone, Debug, Serialize, schemars::JsonSchema)]
+#[derive(Clone, Debug, Serialize, serde::Deserialize, schemars::JsonSchema)]
 pub struct TermFit {
     /// The kind.
     pub kind: Kind,
@@ -87,7 +87,7 @@ pub struct TermFit {
     /// [`library`]).
     pub coefficients: Vec<f64>,
     /// What the magnitudes are, and their unit.
-    pub magnitude: (&'static str, &'static str),
+    pub magnitude: (String, String),
     /// The magnitudes per joint (or one for the robot), as the diagnosis reports them.
     pub magnitudes: Vec<f64>,
     /// Per coefficient, the fraction of its column the rigid-body regressor does not explain
@@ -306,7 +306,10 @@ fn term_fits(
             TermFit {
                 kind: t.kind,
                 param: t.param,
-                magnitude: t.kind.magnitude(),
+                magnitude: {
+                    let (what, unit) = t.kind.magnitude();
+                    (what.to_string(), unit.to_string())
+                },
                 magnitudes: t.kind.magnitudes(&coefficients, n, g),
                 coefficients,
                 identifiable,

@@ -10,7 +10,7 @@ use physid_ident::ConstraintSet;
 use serde::Serialize;
 
 /// One estimated magnitude.
-#[derive(Clone, Debug, Serialize, schemars::JsonSchema)]
+#[derive(Clone, Debug, Serialize, serde::Deserialize, schemars::JsonSchema)]
 pub struct Magnitude {
     /// Joint name, or `"robot"` for one value for the whole robot.
     pub joint: String,
@@ -41,7 +41,9 @@ impl Magnitude {
 }
 
 /// What an effect was found by.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, schemars::JsonSchema)]
+#[derive(
+    Clone, Copy, Debug, PartialEq, Eq, Serialize, serde::Deserialize, schemars::JsonSchema,
+)]
 #[serde(rename_all = "snake_case")]
 pub enum Evidence {
     /// It lowers the cross-validated torque error ([`select`]).
@@ -52,7 +54,7 @@ pub enum Evidence {
 }
 
 /// One selected effect with its magnitudes.
-#[derive(Clone, Debug, Serialize, schemars::JsonSchema)]
+#[derive(Clone, Debug, Serialize, serde::Deserialize, schemars::JsonSchema)]
 pub struct EffectEstimate {
     /// The kind.
     pub kind: Kind,
@@ -86,7 +88,7 @@ impl EffectEstimate {
 /// One step of the gap from the description explained ([`super::explain`]): what it adds to
 /// the description (whose inertial parameters stay pinned until the last step) and the
 /// validation RMS with everything added so far.
-#[derive(Clone, Debug, Serialize, schemars::JsonSchema)]
+#[derive(Clone, Debug, Serialize, serde::Deserialize, schemars::JsonSchema)]
 pub struct DescriptionStep {
     /// `+ <effect>`, `friction re-identified` or `inertial parameters re-identified`.
     pub step: String,
@@ -101,7 +103,7 @@ pub struct DescriptionStep {
 }
 
 /// Validation error of one joint along the selection.
-#[derive(Clone, Debug, Serialize, schemars::JsonSchema)]
+#[derive(Clone, Debug, Serialize, serde::Deserialize, schemars::JsonSchema)]
 pub struct JointGap {
     /// Joint name.
     pub joint: String,
@@ -119,7 +121,9 @@ pub struct JointGap {
 }
 
 /// The verdict.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, schemars::JsonSchema)]
+#[derive(
+    Clone, Copy, Debug, PartialEq, Eq, Serialize, serde::Deserialize, schemars::JsonSchema,
+)]
 #[serde(rename_all = "snake_case")]
 pub enum Verdict {
     /// No effect selected and the residual is at the noise floor.
@@ -139,7 +143,7 @@ pub enum Verdict {
 }
 
 /// A whole diagnosis.
-#[derive(Clone, Debug, Serialize, schemars::JsonSchema)]
+#[derive(Clone, Debug, Serialize, serde::Deserialize, schemars::JsonSchema)]
 pub struct Diagnosis {
     /// Robot name.
     pub robot: String,

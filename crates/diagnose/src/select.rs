@@ -201,7 +201,7 @@ impl Folds {
 }
 
 /// One kind's best score in a step.
-#[derive(Clone, Debug, Serialize, schemars::JsonSchema)]
+#[derive(Clone, Debug, Serialize, serde::Deserialize, schemars::JsonSchema)]
 pub struct Score {
     /// The kind.
     pub kind: Kind,
@@ -216,7 +216,7 @@ pub struct Score {
 }
 
 /// One accepted step.
-#[derive(Clone, Debug, Serialize, schemars::JsonSchema)]
+#[derive(Clone, Debug, Serialize, serde::Deserialize, schemars::JsonSchema)]
 pub struct Step {
     /// The kind kept.
     pub kind: Kind,
@@ -238,7 +238,7 @@ pub struct Step {
 }
 
 /// The outcome of the forward selection.
-#[derive(Clone, Debug, Serialize, schemars::JsonSchema)]
+#[derive(Clone, Debug, Serialize, serde::Deserialize, schemars::JsonSchema)]
 pub struct Selection {
     /// Cross-validation blocks (the runs when several training runs are given).
     pub blocks: usize,
@@ -282,11 +282,14 @@ pub enum SelectionStop {
         /// The blocks a step must improve.
         needed: usize,
     },
+    /// A stop as a report states it, read back from its JSON (its sentence).
+    Stated(String),
 }
 
 impl std::fmt::Display for SelectionStop {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         match self {
+            Self::Stated(sentence) => f.write_str(sentence),
             Self::MaxEffects(max) => write!(f, "reached the maximum of {max} effects"),
             Self::NoCandidate => f.write_str("no candidate left"),
             Self::NotSignificant {
@@ -310,6 +313,12 @@ impl std::fmt::Display for SelectionStop {
 impl Serialize for SelectionStop {
     fn serialize<S: serde::Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
         s.collect_str(self)
+    }
+}
+
+impl<'de> serde::Deserialize<'de> for SelectionStop {
+    fn deserialize<D: serde::Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        <String as serde::Deserialize>::deserialize(d).map(Self::Stated)
     }
 }
 

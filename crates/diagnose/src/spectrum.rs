@@ -11,7 +11,7 @@ use serde::Serialize;
 const SEGMENT: usize = 1024;
 
 /// A residual's spectrum on one joint.
-#[derive(Clone, Debug, Serialize, schemars::JsonSchema)]
+#[derive(Clone, Debug, Serialize, serde::Deserialize, schemars::JsonSchema)]
 pub struct Spectrum {
     /// Joint name.
     pub joint: String,

@@ -30,7 +30,7 @@ const BLOCKS: usize = 10;
 pub const T_MIN: f64 = 2.0;
 
 /// What the generic function found in the final residual.
-#[derive(Clone, Debug, Serialize, schemars::JsonSchema)]
+#[derive(Clone, Debug, Serialize, serde::Deserialize, schemars::JsonSchema)]
 pub struct StructureLeft {
     /// Relative reduction of the validation residual's mean square over all joints (0: none;
     /// negative: the fit does not carry over).

@@ -51,7 +51,7 @@ macro_rules! effect_kinds {
 
         /// An effect kind the diagnosis can offer.
         #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
-        #[derive(Serialize, schemars::JsonSchema)]
+        #[derive(Serialize, serde::Deserialize, schemars::JsonSchema)]
         #[serde(rename_all = "snake_case")]
         pub enum Kind {
             $( $( $(#[$kind_doc])* $kind, )? )*

@@ -28,7 +28,7 @@ pub fn slow(qd: f64, min_speed: f64) -> bool {
 pub type RowSink<'f> = dyn FnMut(usize, &DMatrix<f64>, &[f64]) + 'f;
 
 /// An effect kind at one point of its grid (`param` = Stribeck velocity or cogging harmonic).
-#[derive(Clone, Copy, Debug, PartialEq, Serialize, schemars::JsonSchema)]
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, serde::Deserialize, schemars::JsonSchema)]
 pub struct Variant {
     /// The kind.
     pub kind: Kind,

@@ -154,7 +154,7 @@ struct Group {
 }
 
 /// The verdict of one group.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
 #[serde(rename_all = "snake_case")]
 pub enum Outcome {
     /// Not worse by more than the tolerance, or not significantly.
@@ -166,7 +166,7 @@ pub enum Outcome {
 }
 
 /// One compared group.
-#[derive(Clone, Debug, serde::Serialize)]
+#[derive(Clone, Debug, serde::Serialize, serde::Deserialize)]
 pub struct GroupResult {
     /// Grid point (`key=value` pairs; empty for an experiment).
     pub point: Vec<String>,
@@ -189,7 +189,7 @@ pub struct GroupResult {
 }
 
 /// A whole comparison.
-#[derive(Clone, Debug, serde::Serialize)]
+#[derive(Clone, Debug, serde::Serialize, serde::Deserialize)]
 pub struct Comparison {
     /// What was compared, in words.
     pub title: String,

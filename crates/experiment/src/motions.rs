@@ -212,7 +212,7 @@ pub fn samples_to_reach(ns: &[usize], errors: &[f64], target: f64) -> Option<f64
 }
 
 /// One motion's medians over seeds, per training size, for one constraint set.
-#[derive(Clone, Debug, Serialize)]
+#[derive(Clone, Debug, Serialize, serde::Deserialize)]
 pub struct MedianCurve {
     /// The motion.
     pub excitation: String,
@@ -264,7 +264,7 @@ pub fn median_curves(
 
 /// How many samples a motion needs to reach the reference motion's validation error at its
 /// largest training size, per set.
-#[derive(Clone, Debug, Serialize)]
+#[derive(Clone, Debug, Serialize, serde::Deserialize)]
 pub struct Reach {
     /// The constraint set.
     pub constraints: physid_ident::ConstraintSet,

@@ -103,7 +103,7 @@ pub fn residual_stream<E>(
 
 /// One base parameter: a combination of the model's parameters that the data determine,
 /// `β = θ_lead + Σ c_k θ_k` (the lead parameter's coefficient is 1).
-#[derive(Clone, Debug, Serialize, schemars::JsonSchema)]
+#[derive(Clone, Debug, Serialize, serde::Deserialize, schemars::JsonSchema)]
 pub struct BaseParameter {
     /// The combination as text, e.g. `panda_link2.Izz + 0.0144 panda_link3.m − 0.12 panda_link3.hz`.
     pub expression: String,
@@ -116,7 +116,7 @@ pub struct BaseParameter {
 }
 
 /// One term of a base parameter.
-#[derive(Clone, Debug, Serialize, schemars::JsonSchema)]
+#[derive(Clone, Debug, Serialize, serde::Deserialize, schemars::JsonSchema)]
 pub struct BaseTerm {
     /// The parameter's name, e.g. `panda_link3.hz`.
     pub parameter: String,
@@ -125,7 +125,7 @@ pub struct BaseTerm {
 }
 
 /// What the data determine.
-#[derive(Clone, Debug, Serialize, schemars::JsonSchema)]
+#[derive(Clone, Debug, Serialize, serde::Deserialize, schemars::JsonSchema)]
 pub struct Identifiability {
     /// Numerical rank ([`physid_core::linalg::rank_and_condition`], the same definition).
     pub rank: usize,

@@ -105,7 +105,7 @@ impl ResidualStats {
 }
 
 /// An identification's information matrix over the model's parameters.
-#[derive(Clone, Debug, PartialEq)]
+#[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct Information {
     /// The parameters' names (`Model::parameter_names`), one per row and column.
     pub names: Vec<String>,
@@ -122,7 +122,7 @@ pub struct Information {
 }
 
 /// Why an information matrix could not be formed.
-#[derive(Clone, Debug, PartialEq, thiserror::Error)]
+#[derive(Clone, Debug, PartialEq, thiserror::Error, serde::Serialize, serde::Deserialize)]
 pub enum InformationError {
     /// No residual was counted.
     #[error("no residual to weigh the data by (no samples fitted)")]

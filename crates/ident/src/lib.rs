@@ -245,7 +245,9 @@ physid_core::options::option_error!(IdentError);
 
 /// How the optimum was reached, spelled the same (snake_case) in JSON, tables and text:
 /// `direct`, `solved`, `almost_solved`.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, schemars::JsonSchema)]
+#[derive(
+    Clone, Copy, Debug, PartialEq, Eq, Serialize, serde::Deserialize, schemars::JsonSchema,
+)]
 #[serde(rename_all = "snake_case")]
 pub enum SolveStatus {
     /// Least squares solved directly, without the cone solver.
@@ -365,7 +367,7 @@ pub fn objective(
 }
 
 /// Solver information.
-#[derive(Clone, Debug, Serialize, schemars::JsonSchema)]
+#[derive(Clone, Debug, Serialize, serde::Deserialize, schemars::JsonSchema)]
 pub struct SolverInfo {
     /// How the optimum was reached.
     pub status: SolveStatus,
@@ -378,7 +380,7 @@ pub struct SolverInfo {
 }
 
 /// One identified body.
-#[derive(Clone, Debug, Serialize, schemars::JsonSchema)]
+#[derive(Clone, Debug, Serialize, serde::Deserialize, schemars::JsonSchema)]
 pub struct IdentifiedBody {
     /// Body or rotor name.
     pub name: String,
@@ -389,12 +391,11 @@ pub struct IdentifiedBody {
 }
 
 /// The result of one identification.
-#[derive(Clone, Debug, Serialize)]
+#[derive(Clone, Debug, Serialize, serde::Deserialize)]
 pub struct Identified {
     /// Constraint set used.
     pub constraints: ConstraintSet,
     /// The full parameter vector θ (see [`physid_core::model::ParamLayout`]).
-    #[serde(skip)]
     pub theta: DVector<f64>,
     /// Links then rotors.
     pub bodies: Vec<IdentifiedBody>,

@@ -17,7 +17,7 @@ const CHUNK_SAMPLES: usize = 1024;
 pub use physid_core::dynamics::for_each_regressor;
 
 /// The normal equations of `min Σ_k ‖Y_k θ − τ_k‖²` over the samples added so far.
-#[derive(Clone, Debug)]
+#[derive(Clone, Debug, serde::Serialize, serde::Deserialize)]
 pub struct NormalEquations {
     /// `Σ Y_kᵀ Y_k` (p×p).
     pub yty: DMatrix<f64>,

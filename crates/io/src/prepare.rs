@@ -329,7 +329,7 @@ impl Run {
 }
 
 /// A jump in the time stamps where a run ends and the next begins.
-#[derive(Clone, Debug, PartialEq, Serialize, schemars::JsonSchema)]
+#[derive(Clone, Debug, PartialEq, Serialize, serde::Deserialize, schemars::JsonSchema)]
 pub struct Gap {
     /// The first sample after the jump (index in the log).
     pub sample: usize,
@@ -338,7 +338,9 @@ pub struct Gap {
 }
 
 /// How the samples' times were read.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, schemars::JsonSchema)]
+#[derive(
+    Clone, Copy, Debug, PartialEq, Eq, Serialize, serde::Deserialize, schemars::JsonSchema,
+)]
 #[serde(rename_all = "snake_case")]
 pub enum TimeBase {
     /// The stamps fit a uniform clock (within 1 % of a period, RMS).
@@ -351,7 +353,7 @@ pub enum TimeBase {
 }
 
 /// What the pipeline did, every sample counted.
-#[derive(Clone, Debug, PartialEq, Serialize, schemars::JsonSchema)]
+#[derive(Clone, Debug, PartialEq, Serialize, serde::Deserialize, schemars::JsonSchema)]
 #[schemars(rename = "DataPipeline")]
 pub struct Report {
     /// Samples in the log.

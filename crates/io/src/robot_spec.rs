@@ -11,7 +11,7 @@ use serde::Deserialize;
 use std::path::Path;
 
 /// A frame placement: `xyz` (m) and URDF roll-pitch-yaw `rpy` (rad).
-#[derive(Clone, Debug, Default, Deserialize, PartialEq)]
+#[derive(Clone, Debug, Default, Deserialize, PartialEq, serde::Serialize)]
 #[serde(deny_unknown_fields)]
 pub struct OriginSpec {
     /// Position (m).
@@ -32,7 +32,7 @@ impl OriginSpec {
 }
 
 /// Inertial parameters, see the module docs.
-#[derive(Clone, Debug, Default, Deserialize, PartialEq)]
+#[derive(Clone, Debug, Default, Deserialize, PartialEq, serde::Serialize)]
 #[serde(deny_unknown_fields)]
 pub struct InertialSpec {
     /// The ten parameters in the paper's order.
@@ -74,7 +74,7 @@ impl InertialSpec {
 }
 
 /// An ellipsoid in a body frame.
-#[derive(Clone, Debug, Deserialize, PartialEq)]
+#[derive(Clone, Debug, Deserialize, PartialEq, serde::Serialize)]
 #[serde(deny_unknown_fields)]
 pub struct EllipsoidSpec {
     /// Body or rotor name (sidecar form only).
@@ -117,7 +117,7 @@ impl EllipsoidSpec {
 }
 
 /// A rotor driven by a joint.
-#[derive(Clone, Debug, Deserialize, PartialEq)]
+#[derive(Clone, Debug, Deserialize, PartialEq, serde::Serialize)]
 #[serde(deny_unknown_fields)]
 pub struct RotorSpec {
     /// The driving joint (sidecar form only).
@@ -142,7 +142,7 @@ pub struct RotorSpec {
 }
 
 /// How a rotor moves relative to its parent.
-#[derive(Clone, Copy, Debug, Default, Deserialize, PartialEq, Eq)]
+#[derive(Clone, Copy, Debug, Default, Deserialize, PartialEq, Eq, serde::Serialize)]
 #[serde(rename_all = "lowercase")]
 pub enum RotorJointType {
     /// Spins about its axis (a motor behind a gearbox).
@@ -153,7 +153,7 @@ pub enum RotorJointType {
 }
 
 /// Friction of one joint (sidecar form).
-#[derive(Clone, Debug, Deserialize, PartialEq)]
+#[derive(Clone, Debug, Deserialize, PartialEq, serde::Serialize)]
 #[serde(deny_unknown_fields)]
 pub struct FrictionSpec {
     /// Joint name.

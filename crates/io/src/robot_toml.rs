@@ -44,7 +44,7 @@ use serde::Deserialize;
 use std::path::{Path, PathBuf};
 
 /// One body of an explicit tree.
-#[derive(Clone, Debug, Deserialize, PartialEq)]
+#[derive(Clone, Debug, Deserialize, PartialEq, serde::Serialize)]
 #[serde(deny_unknown_fields)]
 pub struct BodySpec {
     /// Body name.
@@ -74,7 +74,7 @@ pub struct BodySpec {
 }
 
 /// Joint limits; missing entries are unlimited.
-#[derive(Clone, Debug, Default, Deserialize, PartialEq)]
+#[derive(Clone, Debug, Default, Deserialize, PartialEq, serde::Serialize)]
 #[serde(deny_unknown_fields)]
 pub struct LimitsSpec {
     /// Lower position limit (rad or m).
@@ -92,7 +92,7 @@ pub struct LimitsSpec {
 }
 
 /// The `[robot]` table.
-#[derive(Clone, Debug, Default, Deserialize, PartialEq)]
+#[derive(Clone, Debug, Default, Deserialize, PartialEq, serde::Serialize)]
 #[serde(deny_unknown_fields)]
 pub struct RobotSpec {
     /// `"cheetah3"`.

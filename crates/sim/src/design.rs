@@ -93,7 +93,7 @@ pub enum Objective {
 }
 
 /// Design settings; [`DesignOptions::validate`] checks them.
-#[derive(Clone, Debug)]
+#[derive(Clone, Debug, serde::Serialize, serde::Deserialize)]
 pub struct DesignOptions {
     /// Harmonics per joint `L`.
     pub harmonics: usize,
@@ -275,7 +275,7 @@ impl DesignOptions {
 }
 
 /// The limits a design keeps, per joint, margins applied.
-#[derive(Clone, Debug, Serialize, schemars::JsonSchema)]
+#[derive(Clone, Debug, Serialize, serde::Deserialize, schemars::JsonSchema)]
 pub struct Limits {
     /// Lowest angle (rad).
     pub lower: Vec<f64>,
@@ -392,7 +392,7 @@ fn per_joint(v: &[f64], j: usize) -> f64 {
 }
 
 /// How much of each limit a trajectory uses, per joint (peak over one period / limit).
-#[derive(Clone, Debug, Serialize, schemars::JsonSchema)]
+#[derive(Clone, Debug, Serialize, serde::Deserialize, schemars::JsonSchema)]
 pub struct LimitUse {
     /// Joint name.
     pub joint: String,
@@ -411,7 +411,7 @@ pub struct LimitUse {
 }
 
 /// The designed excitation and how good it is.
-#[derive(Clone, Debug, Serialize, schemars::JsonSchema)]
+#[derive(Clone, Debug, Serialize, serde::Deserialize, schemars::JsonSchema)]
 pub struct Design {
     /// The trajectory.
     pub series: FourierSeries,

@@ -99,7 +99,9 @@ impl Shell {
 /// A motion that starts and ends at rest: a deviation `δ(t)` faded in over the first `ramp` s
 /// and out over the last `ramp` s before `end`, `q = o + w(t) δ(t)`, by the septic smoothstep
 /// `s(x) = 35x⁴ − 84x⁵ + 70x⁶ − 20x⁷` (velocity, acceleration and jerk zero at both ends).
-#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, schemars::JsonSchema)]
+#[derive(
+    Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize, schemars::JsonSchema,
+)]
 pub struct RestWindow {
     /// Fade length at each end (s).
     pub ramp: f64,
@@ -139,7 +141,7 @@ impl RestWindow {
 /// what a Fourier excitation tracks and what the excitation design (`super::design`) optimizes;
 /// with a [`RestWindow`], the deviation from `o` fades in and out so the motion starts and ends
 /// at rest.
-#[derive(Clone, Debug, PartialEq, serde::Serialize, schemars::JsonSchema)]
+#[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize, schemars::JsonSchema)]
 pub struct FourierSeries {
     /// Fundamental frequency (Hz).
     pub base_frequency: f64,

@@ -7,7 +7,7 @@ use physid_core::model::Model;
 use physid_core::trajectory::Trajectory;
 
 /// Excitation summary of a trajectory.
-#[derive(Clone, Debug, serde::Serialize, schemars::JsonSchema)]
+#[derive(Clone, Debug, serde::Serialize, serde::Deserialize, schemars::JsonSchema)]
 pub struct Excitation {
     /// Per joint `[min, max]` position (rad).
     pub q_range: Vec<[f64; 2]>,

@@ -281,7 +281,7 @@ pub enum Processing {
 }
 
 /// A whole scenario file.
-#[derive(Clone, Debug, Deserialize, PartialEq)]
+#[derive(Clone, Debug, Deserialize, serde::Serialize, PartialEq)]
 #[serde(deny_unknown_fields)]
 pub struct Scenario {
     /// The robot (see `docs/robot-format.md`).

@@ -6,7 +6,7 @@ use super::*;
 
 /// A change drawn for a case: the slot, its effect (if one of the library's), the payload
 /// (body index, mass, centre in the body frame) and the friction factors.
-#[derive(Clone, Debug, Serialize)]
+#[derive(Clone, Debug, Serialize, serde::Deserialize)]
 pub struct Injection {
     /// The slot.
     pub slot: Slot,

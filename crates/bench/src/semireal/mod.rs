@@ -42,7 +42,7 @@ pub use inject::*;
 pub use score::*;
 
 /// What a slot injects.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, serde::Deserialize)]
 #[serde(rename_all = "snake_case")]
 pub enum Slot {
     /// The real run untouched.
@@ -296,7 +296,7 @@ pub fn bases(robot: &Model, paths: &[PathBuf], opts: &RealOptions) -> Result<Vec
 }
 
 /// One scored case.
-#[derive(Clone, Debug, Serialize)]
+#[derive(Clone, Debug, Serialize, serde::Deserialize)]
 pub struct RealCase {
     /// Case index.
     pub case: usize,

@@ -133,7 +133,7 @@ pub(super) fn relative_error(
 }
 
 /// The semi-real benchmark's scores.
-#[derive(Clone, Debug, Serialize, schemars::JsonSchema)]
+#[derive(Clone, Debug, Serialize, serde::Deserialize, schemars::JsonSchema)]
 pub struct RealScores {
     /// Cases run.
     pub cases: usize,

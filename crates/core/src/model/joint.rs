@@ -4,7 +4,7 @@ use crate::spatial::{rot_axis_angle, Motion, Transform};
 use nalgebra::Vector3;
 
 /// A one-degree-of-freedom joint, its axis given in the joint frame.
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 pub enum Joint {
     /// Rotation by `q` (rad) about a unit axis.
     Revolute {

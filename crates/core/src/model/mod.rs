@@ -74,7 +74,7 @@ pub enum ModelError {
 }
 
 /// A rotor driven by joint `i` through a gearbox, mounted on the parent of body `i`.
-#[derive(Clone, Debug, PartialEq)]
+#[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct Rotor {
     /// Name, e.g. `knee_rotor`.
     pub name: String,
@@ -168,7 +168,7 @@ impl Default for JointLimits {
 }
 
 /// One moving body and the joint that connects it to its parent.
-#[derive(Clone, Debug, PartialEq)]
+#[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct Body {
     /// Body (link) name.
     pub name: String,
@@ -196,7 +196,7 @@ pub struct Body {
 }
 
 /// A shape of a body as the description gives it, placed in the body's frame.
-#[derive(Clone, Debug, PartialEq)]
+#[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct Shape {
     /// The shape's frame: its pose in the body frame (`from_pose` convention).
     pub pose: Transform,
@@ -205,7 +205,7 @@ pub struct Shape {
 }
 
 /// URDF's geometry kinds (m).
-#[derive(Clone, Debug, PartialEq)]
+#[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 pub enum ShapeKind {
     /// A box of full side lengths `size`, centred.
     Box {
@@ -266,7 +266,7 @@ pub enum RotorModel {
 ///
 /// `θ = [π_link_0, …, π_link_{n−1}, π_rotor (in joint order, for joints with a rotor),
 /// B_0 … B_{n−1}, B_c0 … B_c{n−1}]`.
-#[derive(Clone, Debug, PartialEq)]
+#[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct ParamLayout {
     /// First column of each rotor's ten parameters, by joint; `None` for joints without one.
     pub rotor_col: Vec<Option<usize>>,
@@ -280,7 +280,7 @@ pub struct ParamLayout {
 
 /// A validated, immutable robot model. Build it with [`Model::new`]; workspaces live in
 /// [`crate::dynamics::Data`].
-#[derive(Clone, Debug, PartialEq)]
+#[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct Model {
     /// Robot name.
     name: String,

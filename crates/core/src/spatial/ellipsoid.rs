@@ -3,7 +3,7 @@
 use nalgebra::{Matrix3, Matrix4, Vector3};
 
 /// The ellipsoid `S = {x : (x − x_s)ᵀ Q_s⁻¹ (x − x_s) ≤ 1}` in a body frame (m).
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct Ellipsoid {
     /// Centre `x_s` (m).
     pub center: Vector3<f64>,

@@ -9,7 +9,7 @@ use super::{skew, Ellipsoid, Force, Motion, Transform};
 use nalgebra::{Matrix3, Matrix4, Matrix6, SVector, SymmetricEigen, Vector3};
 
 /// The ten inertial parameters of one body, in the paper's order (see the module docs).
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct InertialParams(pub SVector<f64, 10>);
 
 /// A malformed parameter vector, e.g. from a file.
@@ -33,7 +33,7 @@ pub const PARAM_NAMES: [&str; 10] = [
 ];
 
 /// The spatial inertia in its operational form `(m, h, Ī)`, for the dynamics algorithms.
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct RigidInertia {
     /// Mass (kg).
     pub m: f64,
@@ -79,7 +79,7 @@ impl RigidInertia {
 }
 
 /// How well one parameter vector satisfies the nested consistency conditions.
-#[derive(Clone, Debug, PartialEq, serde::Serialize, schemars::JsonSchema)]
+#[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize, schemars::JsonSchema)]
 pub struct ConsistencyReport {
     /// Mass (kg).
     pub mass: f64,

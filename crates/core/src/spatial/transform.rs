@@ -8,7 +8,7 @@ use nalgebra::{Matrix3, Matrix6, Rotation3, Vector3};
 ///
 /// `e` gives B coordinates of a vector given in A coordinates; `r` is the position of B's origin
 /// relative to A's origin, in A coordinates (m). As a matrix, `X = [E 0; -E r× E]`.
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct Transform {
     /// Rotation `E` (B coordinates from A coordinates).
     pub e: Matrix3<f64>,

@@ -106,7 +106,7 @@ impl Explanation {
 }
 
 /// One rung: the held-out error once the explanations so far are in.
-#[derive(Clone, Debug, Serialize, schemars::JsonSchema)]
+#[derive(Clone, Debug, Serialize, serde::Deserialize, schemars::JsonSchema)]
 pub struct Rung {
     /// `"description as given"`, `"description within its uncertainty"`, `"+ payload on
     /// lwr_7_link"`, `"friction re-identified"`, …, `"inertial parameters re-identified"`.
@@ -140,7 +140,7 @@ pub struct Rung {
 }
 
 /// An explanation of another complexity than a step's, tied with it and set aside for it.
-#[derive(Clone, Debug, Serialize, schemars::JsonSchema)]
+#[derive(Clone, Debug, Serialize, serde::Deserialize, schemars::JsonSchema)]
 pub struct AlsoFit {
     /// Its name, as a step would be named (`payload or change on lwr_5_link`, `spring`, …).
     pub name: String,
@@ -184,7 +184,7 @@ impl Rung {
 }
 
 /// A body's parameters freed by the ladder: the change found, in the body's frame.
-#[derive(Clone, Debug, Serialize, schemars::JsonSchema)]
+#[derive(Clone, Debug, Serialize, serde::Deserialize, schemars::JsonSchema)]
 pub struct BodyChange {
     /// Body or rotor name.
     pub body: String,
@@ -213,7 +213,7 @@ pub struct BodyChange {
 }
 
 /// A body change's mass and centre of mass from one fit.
-#[derive(Clone, Copy, Debug, PartialEq, Serialize, schemars::JsonSchema)]
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, serde::Deserialize, schemars::JsonSchema)]
 pub struct Weighing {
     /// Mass change (kg).
     pub mass: f64,
@@ -304,7 +304,7 @@ impl BodyChange {
 pub const MOVED: f64 = 2.0;
 
 /// Why the ladder stopped.
-#[derive(Clone, Debug, PartialEq, Serialize, schemars::JsonSchema)]
+#[derive(Clone, Debug, PartialEq, Serialize, serde::Deserialize, schemars::JsonSchema)]
 #[serde(rename_all = "snake_case")]
 pub enum Stop {
     /// The best remaining candidate did not lower the held-out error enough.
@@ -323,7 +323,7 @@ pub enum Stop {
 }
 
 /// The ladder's outcome.
-#[derive(Clone, Debug, Serialize, schemars::JsonSchema)]
+#[derive(Clone, Debug, Serialize, serde::Deserialize, schemars::JsonSchema)]
 pub struct Ladder {
     /// The stated relative uncertainty `ε` of the description's inertial parameters.
     pub uncertainty: f64,
