@@ -48,6 +48,7 @@ impl ReadArgs {
             cutoff: self.cutoff,
             lock: self.lock.clone(),
             only: self.only.clone(),
+            ..Default::default()
         }
     }
 }

@@ -27,6 +27,7 @@ from .errors import Error, InputError, MissingFileError, PhysidWarning, SolverEr
 from .results import BodyChange
 from ._physid import (  # noqa: E402
     Comparison,
+    Data,
     Diagnosis,
     Excitation,
     Experiment,
@@ -39,17 +40,18 @@ from ._physid import (  # noqa: E402
     excite,
     experiment,
     identify,
-    identify_arrays,
     load,
     score_motion,
     simulate,
     sweep,
     version,
 )
+from .arrays import identify_arrays  # noqa: E402
 
 __all__ = [
     "BodyChange",
     "Comparison",
+    "Data",
     "Diagnosis",
     "Error",
     "Excitation",

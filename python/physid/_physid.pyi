@@ -12,7 +12,8 @@ Array = npt.NDArray[np.float64]
 # frames: (samples, n), or one sample (n,).
 ArrayLike = npt.ArrayLike
 Path = Union[str, os.PathLike[str]]
-Paths = Union[Path, Sequence[Path]]
+# Runs: data files (CSV, MCAP, rosbag2 directories) or physid.Data held in memory.
+Paths = Union[Path, "Data", Sequence[Union[Path, "Data"]]]
 Names = Union[str, Sequence[str]]
 SampleRange = Union[str, tuple[Optional[int], Optional[int]], range]
 
@@ -57,6 +58,29 @@ class Robot:
         """The robot as MJCF (rotors as armature), as `physid export --mjcf`."""
     def write_urdf(self, path: Path) -> None:
         """The robot as URDF with its sidecar, as `physid export --urdf`."""
+
+class Data:
+    """A run held in memory, read through physid's data pipeline as a logged file is, and
+    taken wherever a data file is (identify, diagnose, load)."""
+
+    def __init__(
+        self,
+        q: ArrayLike,
+        tau: ArrayLike,
+        *,
+        qd: Optional[ArrayLike] = None,
+        qdd: Optional[ArrayLike] = None,
+        t: Optional[ArrayLike] = None,
+        rate: Optional[float] = None,
+        name: Optional[str] = None,
+    ) -> None:
+        """q (rad or m) and tau (N m or N) as (samples, n); qd (rad/s), qdd (rad/s²) where
+        logged (else derived as for a file); t the time stamps (s) or rate (Hz), one of
+        them; name what messages call it (default <arrays K>)."""
+    @property
+    def name(self) -> str:
+        """What names the run in options and messages."""
+    def __len__(self) -> int: ...
 
 class Identification:
     """What identify found; to_dict() is `physid identify --json`."""
@@ -366,16 +390,5 @@ def load(
 ) -> list[dict[str, Any]]:
     """Read files through physid's pipeline: per file its runs (t, q, qd, qdd, tau, index),
     pipeline report and notices."""
-
-def identify_arrays(
-    robot: Robot,
-    q: ArrayLike,
-    qd: ArrayLike,
-    qdd: ArrayLike,
-    tau: ArrayLike,
-    constraints: Optional[str] = None,
-    prior_weight: float = 1e-6,
-) -> dict[str, Any]:
-    """Identify theta from arrays under a constraint set (none, semi, consistent, ellipsoid)."""
 
 def version() -> str: ...

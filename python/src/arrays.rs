@@ -17,6 +17,26 @@ pub(crate) struct Joints {
 /// (numpy arrays of any integer or float dtype, nested lists, pandas and polars frames), of
 /// shape `(samples, n)` or one sample `(n,)`.
 pub(crate) fn samples(name: &str, a: &Bound<'_, PyAny>, n: usize) -> PyResult<Joints> {
+    let (values, shape) = real(name, a)?;
+    let (samples, one) = match shape[..] {
+        [m] if m == n => (1, true),
+        [s, m] if m == n => (s, false),
+        _ => {
+            return Err(exception(format!(
+            "{name} has shape {shape:?}: give (samples, {n}) or ({n},) for the robot's {n} joints"
+        )))
+        }
+    };
+    Ok(Joints {
+        values,
+        samples,
+        one,
+    })
+}
+
+/// An array-like of real numbers (anything `numpy.asarray` reads as integers or floats) read
+/// once as float64, in C order, with its shape; other values are a `TypeError` naming `name`.
+fn real(name: &str, a: &Bound<'_, PyAny>) -> PyResult<(Vec<f64>, Vec<usize>)> {
     let array = a.py().import("numpy")?.call_method1("asarray", (a,))?;
     let dtype = array.getattr("dtype")?;
     let kind: String = dtype.getattr("kind")?.extract()?;
@@ -28,21 +48,40 @@ pub(crate) fn samples(name: &str, a: &Bound<'_, PyAny>, n: usize) -> PyResult<Jo
     let array: PyReadonlyArrayDyn<'_, f64> =
         array.call_method1("astype", ("float64",))?.extract()?;
     let view = array.as_array();
-    let shape = view.shape().to_vec();
-    let (samples, one) = match shape[..] {
-        [m] if m == n => (1, true),
-        [s, m] if m == n => (s, false),
-        _ => {
-            return Err(exception(format!(
-            "{name} has shape {shape:?}: give (samples, {n}) or ({n},) for the robot's {n} joints"
-        )))
-        }
-    };
-    Ok(Joints {
-        values: view.iter().copied().collect(),
-        samples,
-        one,
-    })
+    Ok((view.iter().copied().collect(), view.shape().to_vec()))
+}
+
+/// A table of samples of any number of joints: sample-major values, `(samples, joints)`.
+pub(crate) struct Table {
+    pub(crate) values: Vec<f64>,
+    pub(crate) samples: usize,
+    pub(crate) joints: usize,
+}
+
+/// An array-like of shape `(samples, joints)` as a [`Table`] (at least one sample and joint).
+pub(crate) fn table(name: &str, a: &Bound<'_, PyAny>) -> PyResult<Table> {
+    let (values, shape) = real(name, a)?;
+    match shape[..] {
+        [samples, joints] if samples > 0 && joints > 0 => Ok(Table {
+            values,
+            samples,
+            joints,
+        }),
+        _ => Err(exception(format!(
+            "{name} has shape {shape:?}: give (samples, joints), one row per sample"
+        ))),
+    }
+}
+
+/// A one-dimensional array-like of real numbers.
+pub(crate) fn vector(name: &str, a: &Bound<'_, PyAny>) -> PyResult<Vec<f64>> {
+    let (values, shape) = real(name, a)?;
+    match shape[..] {
+        [_] => Ok(values),
+        _ => Err(exception(format!(
+            "{name} has shape {shape:?}: give one value per sample"
+        ))),
+    }
 }
 
 /// Positions, velocities and accelerations as flat sample-major vectors, q's sample count (the

@@ -93,6 +93,7 @@ pub(crate) fn read_options(
         cutoff,
         lock: names(lock)?,
         only: names(only)?,
+        memory: Default::default(),
     })
 }
 

@@ -1,6 +1,7 @@
 //! `physid.diagnose` and its `Diagnosis` (`physid diagnose`).
 
 use crate::convert::*;
+use crate::data::runs;
 use crate::errors::*;
 use crate::robot::Robot;
 use crate::work::*;
@@ -277,10 +278,16 @@ pub(crate) fn diagnose<'py>(
     only: Option<&Bound<'py, PyAny>>,
     description_information: bool,
 ) -> PyResult<Diagnosis> {
-    let mut o = api::diagnose::DiagnoseOptions::new(paths("data", Some(data))?);
-    o.validate = paths("validate", validate)?;
-    o.baseline_data = paths("baseline_data", baseline_data)?;
+    let joints = robot.model.joint_names();
+    let (files, mut memory) = runs("data", Some(data), &joints)?;
+    let mut o = api::diagnose::DiagnoseOptions::new(files);
+    let (validate, more) = runs("validate", validate, &joints)?;
+    memory.extend(more);
+    let (baseline, more) = runs("baseline_data", baseline_data, &joints)?;
+    memory.extend(more);
+    (o.validate, o.baseline_data) = (validate, baseline);
     o.read = read_options(topic, stamp, cutoff, lock, only)?;
+    o.read.memory = memory.into();
     o.holdout = holdout;
     o.diagnosis = physid::diagnose::Options {
         constraints: constraints

@@ -1,93 +1,17 @@
 //! `physid.load`, `physid.identify`, `physid.identify_arrays` and the `Identification` (`physid identify`).
 
-use crate::arrays::*;
 use crate::convert::*;
+use crate::data::runs;
 use crate::errors::*;
 use crate::robot::Robot;
 use crate::work::*;
 use numpy::{IntoPyArray, PyArray1};
 use physid::api;
 use physid::api::identify::IdentifyOptions;
-use physid::ident::{ConstraintSet, NormalEquations, Options};
 use physid::model::Model;
-use physid::trajectory::Trajectory;
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
 use std::path::{Path, PathBuf};
-
-/// Samples given as arrays as a trajectory on a nominal 1 kHz clock, their lengths, sample
-/// counts and finiteness checked (named by array, sample and joint).
-pub(crate) fn array_trajectory(robot: &Robot, x: States, tau: Vec<f64>) -> PyResult<Trajectory> {
-    let m = &robot.model;
-    api::dynamics::samples(m, &x.q, &[("qd", &x.qd), ("qdd", &x.qdd), ("tau", &tau)])
-        .map_err(exception)?;
-    let mut tr = Trajectory::new(robot.model.joint_names(), true);
-    tr.t = (0..x.samples).map(|k| k as f64 * 1e-3).collect();
-    tr.q = x.q;
-    tr.qd = x.qd;
-    tr.qdd = Some(x.qdd);
-    tr.tau = tau;
-    Ok(tr)
-}
-
-/// Identifies `robot`'s parameters θ from samples given as arrays (`(samples, n)` each, N m
-/// for `tau`) under a constraint set (`none`, `semi`, `consistent`, `ellipsoid`; default: the
-/// tightest the description supports), the description as the prior. Returns a dict: `theta`
-/// (an array), `parameter_names`, `constraints`, `constraints_hold`, `objective`, `bodies`,
-/// `friction`, `solver`.
-#[pyfunction]
-#[pyo3(signature = (robot, q, qd, qdd, tau, constraints = None, prior_weight = 1e-6))]
-#[allow(clippy::too_many_arguments)]
-pub(crate) fn identify_arrays<'py>(
-    py: Python<'py>,
-    robot: &Robot,
-    q: &Bound<'py, PyAny>,
-    qd: &Bound<'py, PyAny>,
-    qdd: &Bound<'py, PyAny>,
-    tau: &Bound<'py, PyAny>,
-    constraints: Option<&str>,
-    prior_weight: f64,
-) -> PyResult<Bound<'py, PyDict>> {
-    let m = &robot.model;
-    let n = m.dof();
-    let given = constraints
-        .map(|c| c.parse::<ConstraintSet>())
-        .transpose()
-        .map_err(exception)?;
-    let chosen = api::identify::constraint_set(given, m);
-    let (set, because) = (chosen.set, chosen.because);
-    let mut opts = Options::new(set);
-    opts.prior_weight = prior_weight;
-    opts.validate().map_err(exception)?;
-    let tr = array_trajectory(
-        robot,
-        states(q, qd, qdd, n)?,
-        samples("tau", tau, n)?.values,
-    )?;
-    let s = tr.len();
-    let identified = py
-        .allow_threads(|| {
-            let ne = NormalEquations::from_trajectory(m, &tr, 0..s);
-            physid::ident::identify(m, &ne, &m.parameters(), &opts)
-        })
-        .map_err(exception)?;
-    let out = PyDict::new(py);
-    out.set_item(
-        "theta",
-        identified.theta.as_slice().to_vec().into_pyarray(py),
-    )?;
-    out.set_item("parameter_names", m.parameter_names())?;
-    out.set_item("constraints", set.name())?;
-    out.set_item("constraints_default_because", because)?;
-    out.set_item("constraints_hold", identified.constraints_hold)?;
-    out.set_item("objective", identified.objective)?;
-    out.set_item("samples", s)?;
-    let rest = to_python(py, "identified", &identified)?;
-    for key in ["bodies", "viscous", "coulomb", "solver"] {
-        out.set_item(key, rest.get_item(key)?)?;
-    }
-    Ok(out)
-}
 
 /// Reads data files (CSV, MCAP, rosbag2) for `robot` through physid's pipeline (gaps split into
 /// runs, q̇ and q̈ derived where not logged, one cutoff for all files). Returns per file a dict:
@@ -107,10 +31,10 @@ pub(crate) fn load<'py>(
     only: Option<&Bound<'py, PyAny>>,
 ) -> PyResult<Vec<Bound<'py, PyDict>>> {
     let m = &robot.model;
-    let files = paths("data", Some(data))?;
-    let read = read_options(topic, stamp, cutoff, lock, only)?
-        .resolve(m)
-        .map_err(exception)?;
+    let (files, memory) = runs("data", Some(data), &m.joint_names())?;
+    let mut read = read_options(topic, stamp, cutoff, lock, only)?;
+    read.memory = memory.into();
+    let read = read.resolve(m).map_err(exception)?;
     let refs: Vec<&Path> = files.iter().map(PathBuf::as_path).collect();
     let mut notices = api::data::bag_option_notices(&refs, &read).map_err(exception)?;
     let (model, owned) = (m.clone(), files.clone());
@@ -346,8 +270,12 @@ pub(crate) fn identify<'py>(
     total_mass: Option<(f64, f64)>,
 ) -> PyResult<Identification> {
     let m = &robot.model;
-    let mut o = IdentifyOptions::new(paths("data", Some(data))?);
-    o.validate_data = paths("validate_data", validate_data)?;
+    let joints = m.joint_names();
+    let (files, mut memory) = runs("data", Some(data), &joints)?;
+    let (validate_files, more) = runs("validate_data", validate_data, &joints)?;
+    memory.extend(more);
+    let mut o = IdentifyOptions::new(files);
+    o.validate_data = validate_files;
     o.train = sample_range("--train", train)?;
     o.validate = sample_range("--validate", validate)?;
     set_model_options(&mut o, m, constraints, (friction, effects), &effects_from)?;
@@ -357,6 +285,7 @@ pub(crate) fn identify<'py>(
         .parse()
         .map_err(|e| exception(format!("--regularizer: {e}")))?;
     o.read = read_options(topic, stamp, cutoff, lock, only)?;
+    o.read.memory = memory.into();
     o.allow_few_samples = allow_few_samples;
     o.mass_bounds = mass_bounds.map(|(lo, hi)| api::identify::MassBounds { lo, hi });
     o.total_mass = total_mass.map(|(lo, hi)| api::identify::TotalMass { lo, hi });

@@ -7,6 +7,7 @@
 mod arrays;
 mod compare;
 mod convert;
+mod data;
 mod diagnose;
 mod errors;
 mod excite;
@@ -35,6 +36,7 @@ fn _physid(m: &Bound<'_, PyModule>) -> PyResult<()> {
         .thread_name(|i| format!("physid-rayon-{i}"))
         .build_global();
     m.add_class::<robot::Robot>()?;
+    m.add_class::<data::Data>()?;
     m.add_class::<identify::Identification>()?;
     m.add_class::<diagnose::Diagnosis>()?;
     m.add_class::<simulate::Simulation>()?;
@@ -49,7 +51,6 @@ fn _physid(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(experiment::experiment, m)?)?;
     m.add_function(wrap_pyfunction!(simulate::simulate, m)?)?;
     m.add_function(wrap_pyfunction!(diagnose::diagnose, m)?)?;
-    m.add_function(wrap_pyfunction!(identify::identify_arrays, m)?)?;
     m.add_function(wrap_pyfunction!(identify::identify, m)?)?;
     m.add_function(wrap_pyfunction!(identify::load, m)?)?;
     m.add_function(wrap_pyfunction!(version, m)?)?;

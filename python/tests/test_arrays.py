@@ -98,5 +98,5 @@ def test_identify_arrays_takes_lists_as_arrays(kuka):
     tau = kuka.inverse_dynamics(q, qd, qdd)
     a = physid.identify_arrays(kuka, q, qd, qdd, tau, constraints="consistent")
     b = physid.identify_arrays(kuka, q.tolist(), qd.tolist(), qdd.tolist(), tau.tolist(), constraints="consistent")
-    np.testing.assert_array_equal(a["theta"], b["theta"])
-    assert a["constraints_hold"]
+    np.testing.assert_array_equal(a.theta, b.theta)
+    assert a.constraints_hold

@@ -125,7 +125,7 @@ def test_bad_data_raise_naming_the_file(kuka, tmp_path):
         physid.identify(kuka, str(tmp_path / "nope.csv"))
     # The operating system's reason once (before: twice, as the message and as its cause).
     assert str(e.value).count("No such file or directory") == 1, str(e.value)
-    with pytest.raises(ValueError, match="data: give a path or a list of paths"):
+    with pytest.raises(ValueError, match="data: give a path, a physid.Data or a list of them"):
         physid.identify(kuka, 42)
     with pytest.raises(ValueError, match="data: give at least one run"):
         physid.identify(kuka, [])

@@ -595,6 +595,8 @@ pub struct ReadOptions {
     pub lock: Vec<String>,
     /// Fit only these joints' torques (every other joint locked); not with `lock`.
     pub only: Vec<String>,
+    /// Runs held in memory, each read where its label is given as a data file.
+    pub memory: std::sync::Arc<[crate::io::MemoryLog]>,
 }
 
 impl ReadOptions {
@@ -640,6 +642,7 @@ impl ReadOptions {
                 lock,
                 band_edge: None,
             },
+            memory: self.memory.clone(),
         })
     }
 }

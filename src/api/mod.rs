@@ -25,7 +25,7 @@ use std::path::PathBuf;
 // The error types an entry point's error may carry among its causes, and the trait naming an
 // invalid option, for bindings that tell kinds of failure apart (the Python package).
 pub use crate::ident::IdentError;
-pub use crate::io::IoError;
+pub use crate::io::{IoError, MemoryLog};
 pub use crate::options::OptionError;
 
 /// An error of an entry point, naming what is at fault.

@@ -662,6 +662,19 @@ pub struct DataOptions {
     pub stamp: mcap_log::Stamp,
     /// The pipeline's options (cutoff, locked joints).
     pub prepare: crate::prepare::Options,
+    /// Runs held in memory, each read where its label is given as a data file.
+    pub memory: std::sync::Arc<[MemoryLog]>,
+}
+
+/// A run held in memory (arrays a caller already has): read through the pipeline as a file
+/// is, its `label` standing for the file's path in the options that name runs and in every
+/// message. Labels are not paths (`<arrays 1>`), so no file is taken for one.
+#[derive(Clone, Debug)]
+pub struct MemoryLog {
+    /// What names the run (as a data file's path would).
+    pub label: PathBuf,
+    /// Its samples as logged.
+    pub logged: crate::prepare::Logged,
 }
 
 /// [`load_trajectory_with`] with the default options.
@@ -795,7 +808,10 @@ pub fn load_logged(
 ) -> Result<(crate::prepare::Logged, Vec<String>, usize), IoError> {
     let names: Vec<String> = model.joint_names();
     let is_mcap = path.is_dir() || path.extension().and_then(|e| e.to_str()) == Some("mcap");
-    let (read, mut ignored, skipped) = if is_mcap {
+    let in_memory = opts.memory.iter().find(|m| m.label == path);
+    let (read, mut ignored, skipped) = if let Some(m) = in_memory {
+        (m.logged.clone(), vec![], 0)
+    } else if is_mcap {
         let ropts = mcap_log::ReadOptions {
             topic: opts
                 .topic
