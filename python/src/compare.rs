@@ -20,6 +20,46 @@ impl Comparison {
         crate::pickle::reduce(py, "Comparison", self)
     }
 
+    /// The notebook's view: the verdict counts and every group's test.
+    fn _repr_html_(&self) -> String {
+        use crate::notebook::{card, number, table};
+        let rows: Vec<Vec<String>> = (self.cmp.groups.iter())
+            .map(|g| {
+                vec![
+                    g.point.join(" "),
+                    g.n_s.to_string(),
+                    g.set.clone(),
+                    g.pairs.to_string(),
+                    number(g.reference_median),
+                    number(g.candidate_median),
+                    number(g.median_ratio),
+                    number(g.p_value),
+                    physid::io::serde_name(&g.outcome),
+                ]
+            })
+            .collect();
+        let header = [
+            "point",
+            "n_s",
+            "set",
+            "pairs",
+            "reference median",
+            "candidate median",
+            "ratio",
+            "p",
+            "outcome",
+        ];
+        card(
+            &format!("Comparison: {}", self.cmp.title),
+            &[
+                ("groups", self.cmp.groups.len().to_string()),
+                ("regressions", self.cmp.regressions().to_string()),
+                ("too few pairs", self.cmp.too_few().to_string()),
+            ],
+            &[("groups", table(&header, &rows))],
+        )
+    }
+
     /// Groups that regressed.
     #[getter]
     fn regressions(&self) -> usize {

@@ -29,6 +29,16 @@ impl Diagnosis {
         crate::pickle::reduce(py, "Diagnosis", self)
     }
 
+    /// The notebook's view: the report as one scoped fragment (its style applies to it
+    /// alone), plots inline.
+    fn _repr_html_(&self) -> PyResult<String> {
+        let plots = physid::diagnose::report::plots(&self.diagnosis).map_err(exception)?;
+        Ok(physid::diagnose::report::html_fragment(
+            &self.diagnosis,
+            &plots,
+        ))
+    }
+
     /// The verdict (e.g. `explained`, `partially_explained`, `unexplained`, `no_effect`).
     #[getter]
     fn verdict(&self) -> String {
@@ -228,10 +238,6 @@ impl Diagnosis {
     fn html(&self) -> PyResult<String> {
         let plots = physid::diagnose::report::plots(&self.diagnosis).map_err(exception)?;
         Ok(physid::diagnose::report::html(&self.diagnosis, &plots))
-    }
-
-    fn _repr_html_(&self) -> PyResult<String> {
-        self.html()
     }
 
     /// Writes the report folder (`report.html`, `report.md`, `report.json`, SVG plots), as

@@ -27,6 +27,54 @@ impl Excitation {
         crate::pickle::reduce(py, "Excitation", self)
     }
 
+    /// The notebook's view: the design's objective and identifiability, and per joint the
+    /// simulated peaks against the robot's limits.
+    fn _repr_html_(&self) -> String {
+        use crate::notebook::{card, number, table};
+        let e = &self.inner;
+        let rows: Vec<Vec<String>> = (e.check.iter().flat_map(|c| c.joints.iter()))
+            .map(|u| {
+                vec![
+                    u.joint.clone(),
+                    format!("{} … {}", number(u.q_range[0]), number(u.q_range[1])),
+                    number(u.velocity),
+                    number(u.acceleration),
+                    number(u.torque),
+                    if u.within { "yes" } else { "no" }.into(),
+                ]
+            })
+            .collect();
+        let header = [
+            "joint",
+            "q range (rad)",
+            "speed/limit",
+            "acceleration (rad/s²)",
+            "torque/limit",
+            "within",
+        ];
+        let within = e
+            .within_limits()
+            .map_or("not checked".into(), |w| w.to_string());
+        let objective = physid::io::serde_name(&e.design.objective);
+        card(
+            "Excitation design",
+            &[
+                ("harmonics", e.options.harmonics.to_string()),
+                (
+                    "base frequency",
+                    format!("{} Hz", number(e.options.base_frequency)),
+                ),
+                (objective.as_str(), number(e.design.value)),
+                (
+                    "identifiable",
+                    format!("{} of {}", e.design.identifiable, e.design.parameters),
+                ),
+                ("within limits", within),
+            ],
+            &[("simulated use of the limits", table(&header, &rows))],
+        )
+    }
+
     /// The scenario's text (TOML): the base's tables as they were, the design as its
     /// `[excitation]`; `physid.simulate` and `physid.experiment` run it once written.
     #[getter]
@@ -76,17 +124,40 @@ impl Excitation {
         trajectory_dict(py, &tr)
     }
 
-    /// Per joint, the limits as the simulated robot used them (peak over the run / its own
-    /// limit) as a pandas DataFrame; empty when not checked.
+    /// Per joint, how the simulated run used the robot's limits (a pandas DataFrame; no rows
+    /// when not checked): `joint`, `q_min` and `q_max` (the angles reached, rad), `q_lower` and
+    /// `q_upper` (the position limits, rad; NaN: none), `velocity` and `torque` (peak over the
+    /// run divided by the joint's limit: within it below 1), `acceleration` (peak in the
+    /// motion's band, rad/s²: the true acceleration low-passed at 5 times the highest
+    /// harmonic), `within` (every peak inside its limit).
     #[pyo3(signature = (backend = "pandas"))]
     fn limits<'py>(&self, py: Python<'py>, backend: &str) -> PyResult<Bound<'py, PyAny>> {
-        let rows: Vec<&api::excite::SimulatedUse> = self
-            .inner
-            .check
-            .iter()
-            .flat_map(|c| c.joints.iter())
-            .collect();
-        frame(py, plain(py, &rows)?, backend)
+        let rows = pyo3::types::PyList::empty(py);
+        for u in self.inner.check.iter().flat_map(|c| c.joints.iter()) {
+            let row = PyDict::new(py);
+            row.set_item("joint", &u.joint)?;
+            row.set_item("q_min", u.q_range[0])?;
+            row.set_item("q_max", u.q_range[1])?;
+            row.set_item("q_lower", u.q_limits[0])?;
+            row.set_item("q_upper", u.q_limits[1])?;
+            row.set_item("velocity", u.velocity)?;
+            row.set_item("acceleration", u.acceleration)?;
+            row.set_item("torque", u.torque)?;
+            row.set_item("within", u.within)?;
+            rows.append(row)?;
+        }
+        let columns = [
+            "joint",
+            "q_min",
+            "q_max",
+            "q_lower",
+            "q_upper",
+            "velocity",
+            "acceleration",
+            "torque",
+            "within",
+        ];
+        records(py, rows.into_any(), &columns, backend)
     }
 
     /// The report as `physid excite --json` prints it.

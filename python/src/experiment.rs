@@ -41,6 +41,23 @@ impl Experiment {
         crate::pickle::reduce(py, "Experiment", self)
     }
 
+    /// The notebook's view: the cells run and the summary over seeds (summary.csv).
+    fn _repr_html_(&self) -> PyResult<String> {
+        let summary = self.csv(true).map_err(exception)?;
+        Ok(crate::notebook::card(
+            "Sample-size experiment",
+            &[
+                ("cells", self.rows.len().to_string()),
+                ("constraint sets", self.sets.join(", ")),
+                ("seconds", crate::notebook::number(self.seconds)),
+            ],
+            &[(
+                "median and quartiles over seeds",
+                crate::notebook::csv_table(&summary),
+            )],
+        ))
+    }
+
     /// One row per (seed, n_s, constraint set): validation and training RMS (N m), parameter
     /// errors against the truth, consistency, solver status and time (the CLI's rows.csv).
     #[pyo3(signature = (backend = "pandas"))]

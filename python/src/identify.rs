@@ -86,6 +86,50 @@ impl Identification {
         crate::pickle::reduce(py, "Identification", self)
     }
 
+    /// The notebook's view: the fit's set and errors, each body's π and consistency margins.
+    fn _repr_html_(&self) -> String {
+        use crate::notebook::{card, number, table};
+        let r = &self.report;
+        let rows: Vec<Vec<String>> = (r.identified.bodies.iter())
+            .map(|b| {
+                let c = &b.consistency;
+                let com = |k: usize| number(b.pi[k] / b.pi[0]);
+                vec![
+                    b.name.clone(),
+                    number(b.pi[0]),
+                    format!("({}, {}, {})", com(1), com(2), com(3)),
+                    number(c.min_eig_pseudo),
+                    c.trace_jq.map_or("–".into(), number),
+                    if c.consistent() { "yes" } else { "no" }.into(),
+                ]
+            })
+            .collect();
+        let header = [
+            "body",
+            "m (kg)",
+            "CoM (m)",
+            "min eig J",
+            "tr(JQ)",
+            "consistent",
+        ];
+        let mut facts = vec![
+            ("constraints", r.set.name().to_string()),
+            (
+                "constraints hold",
+                r.identified.constraints_hold.to_string(),
+            ),
+            ("train RMS", format!("{} N m", number(r.train.rms_overall))),
+        ];
+        if let Some(v) = &r.validation {
+            facts.push(("validation RMS", format!("{} N m", number(v.rms_overall))));
+        }
+        card(
+            &format!("Identification of '{}'", self.model.name()),
+            &facts,
+            &[("bodies", table(&header, &rows))],
+        )
+    }
+
     /// θ as identified: the model's parameters, then the effect terms' coefficients.
     #[getter]
     fn theta<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<f64>> {
@@ -162,8 +206,11 @@ impl Identification {
         frame(py, cols.into_any(), backend)
     }
 
-    /// One row per joint: `joint`, `viscous` (N m s/rad), `coulomb` (N m) and the RMS torque
-    /// errors `train_rms` and `validation_rms` (N m; NaN for a locked joint or nothing held out).
+    /// One row per joint: `joint`, `viscous` (N m s/rad), `coulomb` (N m), then one column per
+    /// identified term with a value per joint, named by its kind, in the unit of its magnitude
+    /// (`torque_offset` in N m for `friction="…,offset"`; `to_dict()["effects"]` states the
+    /// units), and the RMS torque errors `train_rms` and `validation_rms` (N m; NaN for a
+    /// locked joint or nothing held out).
     #[pyo3(signature = (backend = "pandas"))]
     fn joints<'py>(&self, py: Python<'py>, backend: &str) -> PyResult<Bound<'py, PyAny>> {
         let r = &self.report;
@@ -173,6 +220,9 @@ impl Identification {
         cols.set_item("joint", names)?;
         cols.set_item("viscous", r.identified.viscous.clone())?;
         cols.set_item("coulomb", r.identified.coulomb.clone())?;
+        for t in r.terms.iter().filter(|t| t.magnitudes.len() == n) {
+            cols.set_item(t.kind.name(), t.magnitudes.clone())?;
+        }
         let rms = |v: Option<&Vec<Option<f64>>>| -> Vec<f64> {
             (0..n)
                 .map(|j| v.and_then(|v| v[j]).unwrap_or(f64::NAN))

@@ -13,6 +13,7 @@ mod errors;
 mod excite;
 mod experiment;
 mod identify;
+mod notebook;
 mod pickle;
 mod robot;
 mod simulate;

@@ -32,6 +32,25 @@ impl Robot {
         crate::pickle::reduce(py, "Robot", self)
     }
 
+    /// The notebook's view: name, joints and parameters, the bodies' masses.
+    fn _repr_html_(&self) -> String {
+        use crate::notebook::{card, number, table};
+        let m = &self.model;
+        let theta = m.parameters();
+        let rows: Vec<Vec<String>> = physid::ident::bodies(m)
+            .into_iter()
+            .map(|(name, first, _)| vec![name, number(theta[first])])
+            .collect();
+        card(
+            &format!("Robot '{}'", m.name()),
+            &[
+                ("joints", m.dof().to_string()),
+                ("parameters", m.layout().len.to_string()),
+            ],
+            &[("bodies and rotors", table(&["body", "m (kg)"], &rows))],
+        )
+    }
+
     /// Loads `robot` (`"cheetah3"`, a URDF or a robot TOML path); `rotor_model` (`"full"` or
     /// `"reflected"`), `no_rotors`, `ellipsoid_margin` (m), `package_dirs` and
     /// `no_geometry_ellipsoids` as the CLI's robot flags. The loader's warnings are issued as

@@ -26,6 +26,20 @@ impl Simulation {
         crate::pickle::reduce(py, "Simulation", self)
     }
 
+    /// The notebook's view: the scenario, its samples and engine, the log written.
+    fn _repr_html_(&self) -> String {
+        crate::notebook::card(
+            &format!("Simulation of {}", self.run.path.display()),
+            &[
+                ("robot", self.run.model.name().to_string()),
+                ("samples", self.run.recording.truth.len().to_string()),
+                ("engine", self.run.engine_name().to_string()),
+                ("log", self.out.display().to_string()),
+            ],
+            &[],
+        )
+    }
+
     /// The true signals: state, accelerations and the torque the actuators delivered (`tau`),
     /// with its parts `friction` (the true friction torque) and `effects` (the injected
     /// physical effects' torque), `(samples, n)` N m each.

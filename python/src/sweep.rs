@@ -29,6 +29,25 @@ impl Sweep {
         crate::pickle::reduce(py, "Sweep", self)
     }
 
+    /// The notebook's view: the cells, and once merged the summary (summary.csv).
+    fn _repr_html_(&self) -> String {
+        let tables = match &self.tables {
+            Some((_, summary, _)) => {
+                vec![("summary over seeds", crate::notebook::csv_table(summary))]
+            }
+            None => vec![],
+        };
+        crate::notebook::card(
+            &format!("Sweep in {}", self.out.display()),
+            &[
+                ("cells", self.cells.to_string()),
+                ("run now", self.ran.to_string()),
+                ("missing (other shards)", self.missing.to_string()),
+            ],
+            &tables,
+        )
+    }
+
     /// The result folder (cells/, and once merged rows.csv, summary.csv/.md/.svg).
     #[getter]
     fn out(&self) -> PathBuf {

@@ -49,8 +49,9 @@ def test_report_files_equal_the_clis(run3, tmp_path):
         assert a == b, name
     assert run3.markdown() == (py_dir / "report.md").read_text()
     assert run3.text() == out.stdout and "\nHOW FAR\n" in out.stdout
-    html = run3._repr_html_()
+    html = run3.html()
     assert html == (py_dir / "report.html").read_text() and html.count("<svg") >= 2
+    assert run3._repr_html_() in html  # the notebook's view is the page's body
 
 
 def test_write_report_never_into_an_input_folder(run3):

@@ -52,6 +52,10 @@ def test_the_written_scenario_runs_and_the_reference_keeps_the_limits(designed, 
     assert len(csv) == 4001
     limits = e.limits()
     assert len(limits) == 3 and limits["within"].all()
+    use = e.to_dict()["simulated"]
+    assert list(limits["q_min"]) == [u["q_range"][0] for u in use]
+    assert list(limits["acceleration"]) == [u["acceleration"] for u in use]
+    assert (limits["velocity"] < 1).all() and (limits["torque"] < 1).all()
 
 
 def test_a_robot_object_and_a_urdf_are_designed_for(kuka):

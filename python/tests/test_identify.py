@@ -64,6 +64,14 @@ def test_tables(kuka):
     assert list(joints["joint"]) == kuka.joint_names
     assert np.allclose(joints["validation_rms"], d["validation"]["rms"], rtol=0, atol=0)
     assert np.allclose(joints["viscous"], d["friction"]["viscous"], rtol=0, atol=0)
+    assert "torque_offset" not in joints
+    offsets = quiet_identify(kuka, kuka_run(1), friction="viscous,coulomb,offset").joints()
+    effects = {e["kind"]: e for e in offsets_report(kuka)}
+    assert np.array_equal(offsets["torque_offset"], effects["torque_offset"]["magnitudes"])
+
+
+def offsets_report(kuka):
+    return quiet_identify(kuka, kuka_run(1), friction="viscous,coulomb,offset").to_dict()["effects"]
 
 
 def test_write_urdf_round_trips_and_never_overwrites_an_input(kuka, tmp_path):

@@ -819,10 +819,20 @@ fn draw(d: &Diagnosis, dir: &Path) -> Result<Vec<(String, String)>, ReportError>
     Ok(plots)
 }
 
-/// A self-contained HTML report, in the order a reader wants it: the verdict and summary, the
-/// `plots` (file name, SVG text) inline, then each section of the report folded under its
-/// title. No script, no external resource.
-pub fn html(d: &Diagnosis, plots: &[(String, String)]) -> String {
+/// The report's style, every rule scoped to the report's own `div.physid-report` so that the
+/// report embedded in a page (a notebook's output) restyles nothing around it.
+const REPORT_CSS: &str = ".physid-report { font-family: sans-serif; color: #222; }
+.physid-report table { border-collapse: collapse; font-size: 13px; margin: 0.5em 0 1.5em; }
+.physid-report th, .physid-report td { border: 1px solid #ccc; padding: 2px 6px; }
+.physid-report th { background: #f2f2f2; }
+.physid-report .verdict { font-size: 1.1em; background: #f6f8fa; border-left: 5px solid #3465a4; padding: 0.6em 1em; }
+.physid-report figure { margin: 1em 0; } .physid-report svg { max-width: 100%; height: auto; } .physid-report figcaption { color: #555; font-size: 12px; }
+.physid-report details { margin: 0.4em 0; } .physid-report summary { cursor: pointer; font-weight: bold; font-size: 1.05em; }
+";
+
+/// The report as one `div.physid-report` with its own scoped style and the plots inline (SVG):
+/// what a notebook shows, and the body of [`html`]'s page.
+pub fn html_fragment(d: &Diagnosis, plots: &[(String, String)]) -> String {
     let verdict = physid_io::serde_name(&d.verdict);
     let doc = document(d);
     let figures: String = plots
@@ -835,11 +845,22 @@ pub fn html(d: &Diagnosis, plots: &[(String, String)]) -> String {
         })
         .collect();
     format!(
-        "<!DOCTYPE html>\n<html lang=\"en\">\n<head>\n<meta charset=\"utf-8\">\n<title>{title}</title>\n<style>\nbody {{ font-family: sans-serif; max-width: 1150px; margin: 2em auto; padding: 0 1em; color: #222; }}\ntable {{ border-collapse: collapse; font-size: 13px; margin: 0.5em 0 1.5em; }}\nth, td {{ border: 1px solid #ccc; padding: 2px 6px; }}\nth {{ background: #f2f2f2; }}\n.verdict {{ font-size: 1.1em; background: #f6f8fa; border-left: 5px solid #3465a4; padding: 0.6em 1em; }}\nfigure {{ margin: 1em 0; }} svg {{ max-width: 100%; height: auto; }} figcaption {{ color: #555; font-size: 12px; }}\ndetails {{ margin: 0.4em 0; }} summary {{ cursor: pointer; font-weight: bold; font-size: 1.05em; }}\n</style>\n</head>\n<body>\n<h1>{title}</h1>\n<p class=\"verdict\">Verdict: <b>{verdict}</b>. {summary}</p>\n<p>{preface}</p>\n<h2>Plots</h2>\n{figures}<h2>Tables</h2>\n{body}</body>\n</html>\n",
+        "<div class=\"physid-report\">\n<style>\n{REPORT_CSS}</style>\n<h1>{title}</h1>\n<p class=\"verdict\">Verdict: <b>{verdict}</b>. {summary}</p>\n<p>{preface}</p>\n<h2>Plots</h2>\n{figures}<h2>Tables</h2>\n{body}</div>\n",
         title = escape_html(&doc.title),
         verdict = escape_html(&verdict),
         summary = escape_html(&d.summary),
         preface = doc.preface.to_html(),
         body = doc.html_sections(),
+    )
+}
+
+/// A self-contained HTML report, in the order a reader wants it: the verdict and summary, the
+/// `plots` (file name, SVG text) inline, then each section of the report folded under its
+/// title. No script, no external resource.
+pub fn html(d: &Diagnosis, plots: &[(String, String)]) -> String {
+    format!(
+        "<!DOCTYPE html>\n<html lang=\"en\">\n<head>\n<meta charset=\"utf-8\">\n<title>{title}</title>\n<style>\nbody {{ max-width: 1150px; margin: 2em auto; padding: 0 1em; }}\n</style>\n</head>\n<body>\n{report}</body>\n</html>\n",
+        title = escape_html(&document(d).title),
+        report = html_fragment(d, plots),
     )
 }
