@@ -134,22 +134,22 @@ pub(crate) fn experiment(
         .map(|s| s.name().to_string())
         .collect();
     let start = std::time::Instant::now();
-    let (rows, failed) = interruptible(py, move || {
-        let failed: std::sync::Mutex<Option<PyErr>> = std::sync::Mutex::new(None);
-        let report = |done: usize, total: usize| {
-            let Some(cb) = &progress else { return };
-            if let Err(e) = Python::with_gil(|py| cb.call1(py, (done, total)).map(|_| ())) {
-                if let Ok(mut f) = failed.lock() {
-                    f.get_or_insert(e);
-                }
-            }
+    let work = move |_: Cancel, progress: Progress<usize>| {
+        let report = |_done: usize, total: usize| {
+            let _ = progress.send(total);
         };
-        let rows = pool.install(|| physid::experiment::run(&model, &sc, &spec, &report));
-        (rows, failed.into_inner().ok().flatten())
+        pool.install(|| physid::experiment::run(&model, &sc, &spec, &report))
+    };
+    // Seeds finish on the pool's threads in any order: counted here, so the callback sees
+    // 1, 2, … of the total in order, on the calling thread.
+    let mut done = 0;
+    let rows = reporting(py, work, |py, total: usize| {
+        done += 1;
+        match &progress {
+            Some(cb) => cb.call1(py, (done, total)).map(drop),
+            None => Ok(()),
+        }
     })?;
-    if let Some(e) = failed {
-        return Err(e);
-    }
     let rows = rows.map_err(|e| exception(format!("running the experiment of {shown}: {e}")))?;
     Ok(Experiment {
         rows,

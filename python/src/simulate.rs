@@ -117,6 +117,7 @@ pub(crate) fn simulate(
     seed: Option<u64>,
     progress: Option<PyObject>,
 ) -> PyResult<Simulation> {
+    let callback = progress;
     let engine = engine_of(engine)?;
     let files = physid::io::scenario_files(&scenario);
     let inputs: Vec<&Path> = files.iter().map(PathBuf::as_path).collect();
@@ -130,21 +131,16 @@ pub(crate) fn simulate(
         seed,
     };
     let (path, log, table) = (scenario.clone(), out.clone(), csv.clone());
-    let (result, callback_error) = cancellable(py, move |cancel| {
+    let work = move |cancel: Cancel, progress: Progress<f64>| {
         let stop = || is_cancelled(&cancel);
         let mut shown = -1.0;
-        let mut failed: Option<PyErr> = None;
         let mut report = |f: f64| {
-            let Some(cb) = &progress else { return };
-            if failed.is_some() || (f - shown < 0.01 && f < 1.0) {
-                return;
-            }
-            shown = f;
-            if let Err(e) = Python::with_gil(|py| cb.call1(py, (f,)).map(|_| ())) {
-                failed = Some(e);
+            if f - shown >= 0.01 || f >= 1.0 {
+                shown = f;
+                let _ = progress.send(f);
             }
         };
-        let run = api::simulate::simulate_until(&path, &opts, &mut report, &stop).and_then(|run| {
+        api::simulate::simulate_until(&path, &opts, &mut report, &stop).and_then(|run| {
             if stop() {
                 return Err(api::ApiError::Cancelled);
             }
@@ -156,12 +152,12 @@ pub(crate) fn simulate(
                 run.write_csv(c)?;
             }
             Ok(run)
-        });
-        (run, failed)
+        })
+    };
+    let result = reporting(py, work, |py, f: f64| match &callback {
+        Some(cb) => cb.call1(py, (f,)).map(drop),
+        None => Ok(()),
     })?;
-    if let Some(e) = callback_error {
-        return Err(e);
-    }
     let run = result.map_err(api_error)?;
     Ok(Simulation { run, out })
 }

@@ -135,20 +135,12 @@ pub(crate) fn sweep(
 ) -> PyResult<Sweep> {
     let opts = api::sweep::SweepOptions { sweep, out, shard };
     let pool = thread_pool(threads)?;
-    let (result, failed) = cancellable(py, move |cancel| {
+    let work = move |cancel: Cancel, progress: Progress<usize>| {
         let stop = || is_cancelled(&cancel);
-        let failed: std::sync::Mutex<Option<PyErr>> = std::sync::Mutex::new(None);
-        let result = api::sweep::plan(&opts).and_then(|plan| {
-            let done = std::sync::atomic::AtomicUsize::new(0);
+        api::sweep::plan(&opts).and_then(|plan| {
             let total = plan.todo.len();
             let report = || {
-                let k = done.fetch_add(1, std::sync::atomic::Ordering::SeqCst) + 1;
-                let Some(cb) = &progress else { return };
-                if let Err(e) = Python::with_gil(|py| cb.call1(py, (k, total)).map(|_| ())) {
-                    if let Ok(mut f) = failed.lock() {
-                        f.get_or_insert(e);
-                    }
-                }
+                let _ = progress.send(total);
             };
             pool.install(|| plan.run_until(&report, &stop))?;
             if stop() {
@@ -156,12 +148,19 @@ pub(crate) fn sweep(
             }
             let merged = plan.merge()?;
             Ok((plan, merged))
-        });
-        (result, failed.into_inner().ok().flatten())
+        })
+    };
+    // Cells finish on the pool's threads in any order: counted here, so the callback sees
+    // 1, 2, … of the total in order, on the calling thread; an exception in it stops the
+    // sweep (no cell written after it, nothing merged) and is raised at once.
+    let mut done = 0;
+    let result = reporting(py, work, |py, total: usize| {
+        done += 1;
+        match &progress {
+            Some(cb) => cb.call1(py, (done, total)).map(drop),
+            None => Ok(()),
+        }
     })?;
-    if let Some(e) = failed {
-        return Err(e);
-    }
     let (plan, merged) = result.map_err(api_error)?;
     let tables = match merged {
         None => None,

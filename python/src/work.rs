@@ -29,26 +29,56 @@ pub(crate) fn cancellable<T: Send + 'static>(
     py: Python<'_>,
     work: impl FnOnce(Cancel) -> T + Send + 'static,
 ) -> PyResult<T> {
+    reporting(
+        py,
+        move |cancel, _: Progress<()>| work(cancel),
+        |_, ()| Ok(()),
+    )
+}
+
+/// Where a work sends its progress (a fraction done, a cell finished), from any of its
+/// threads, for the calling thread.
+pub(crate) type Progress<P> = std::sync::mpsc::Sender<P>;
+
+/// [`cancellable`], the work also handed a [`Progress`] channel: what it sends is handed to
+/// `on_progress` on the calling thread, with the GIL, in the order it was sent, within 50 ms,
+/// and all of it before the result returns. An exception in `on_progress` cancels the work
+/// and is raised at once.
+pub(crate) fn reporting<T: Send + 'static, P: Send + 'static>(
+    py: Python<'_>,
+    work: impl FnOnce(Cancel, Progress<P>) -> T + Send + 'static,
+    mut on_progress: impl FnMut(Python<'_>, P) -> PyResult<()>,
+) -> PyResult<T> {
     let cancel: Cancel = Default::default();
     let flag = cancel.clone();
     let (tx, rx) = std::sync::mpsc::channel();
+    let (progress, reports) = std::sync::mpsc::channel();
     std::thread::Builder::new()
         .name("physid".into())
         .spawn(move || {
-            let _ = tx.send(work(flag));
+            let _ = tx.send(work(flag, progress));
         })
         .map_err(|e| exception(format!("could not start a worker thread: {e}")))?;
+    let stop = |e: PyErr| {
+        cancel.store(true, std::sync::atomic::Ordering::SeqCst);
+        Err(e)
+    };
     let mut rx = rx;
     loop {
         let tick = std::time::Duration::from_millis(50);
         let (got, back) = py.allow_threads(move || (rx.recv_timeout(tick), rx));
         rx = back;
+        // Every report sent before the result is in the channel by now.
+        while let Ok(p) = reports.try_recv() {
+            if let Err(e) = on_progress(py, p) {
+                return stop(e);
+            }
+        }
         match got {
             Ok(out) => return Ok(out),
             Err(std::sync::mpsc::RecvTimeoutError::Timeout) => {
                 if let Err(interrupt) = py.check_signals() {
-                    cancel.store(true, std::sync::atomic::Ordering::SeqCst);
-                    return Err(interrupt);
+                    return stop(interrupt);
                 }
             }
             Err(std::sync::mpsc::RecvTimeoutError::Disconnected) => {

@@ -21,6 +21,11 @@ def ci():
     return e, seen
 
 
+def test_progress_counts_the_seeds_in_order(ci):
+    _, seen = ci
+    assert seen == [(1, 2), (2, 2)]
+
+
 def test_tables_equal_the_clis(ci, tmp_path):
     e, _ = ci
     out = subprocess.run([os.environ["PHYSID_BIN"], "experiment", CI, "--seeds", "2", "--out", str(tmp_path / "r")],

@@ -96,3 +96,41 @@ def test_an_interrupted_sweep_writes_no_cell_after_and_does_not_merge(tmp_path):
     # Run again: the sweep resumes from the cells written, runs the rest and merges.
     done = physid.sweep(s, out=str(out), threads=1)
     assert done.merged and done.cells["ran"] == 4 - written
+
+
+def test_progress_is_reported_in_order_on_the_calling_thread(tmp_path):
+    import threading
+
+    seen = []
+    physid.sweep(sweep_file(tmp_path), out=str(tmp_path / "r"), threads=2,
+                 progress=lambda k, n: seen.append((k, n, threading.get_ident())))
+    assert [(k, n) for k, n, _ in seen] == [(1, 4), (2, 4), (3, 4), (4, 4)]
+    assert {thread for *_, thread in seen} == {threading.get_ident()}
+
+
+def test_a_failing_progress_callback_stops_the_sweep_at_once(tmp_path):
+    import time
+
+    from test_identify import physid_workers
+
+    def boom(k, n):
+        raise RuntimeError("enough")
+
+    # Cells of 40,000 samples (a few seconds each on one thread): the report of the first
+    # reaches the callback long before the last cell would end.
+    p = tmp_path / "long.toml"
+    p.write_text(
+        f'scenario = "{BASE}"\n[grid]\n"sensors.torque_noise" = [0.1, 0.5]\n'
+        "[experiment]\nseeds = 2\nsizes = [30, 20000]\nvalidation = 20000\n"
+        'constraints = ["none", "ellipsoid"]\n'
+    )
+    out = tmp_path / "r"
+    with pytest.raises(RuntimeError, match="enough"):
+        physid.sweep(str(p), out=str(out), threads=1, progress=boom)
+    for _ in range(600):
+        if not physid_workers():
+            break
+        time.sleep(0.05)
+    # The sweep stopped after the cell that reported: the rest not run, nothing merged.
+    assert len(list((out / "cells").glob("*.parquet"))) < 4
+    assert not (out / "rows.csv").exists()
