@@ -36,12 +36,16 @@ export PHYSID_BIN="$CARGO_TARGET_DIR/release/physid"
 py_passed=0; py_failed=0
 main_out=$(mktemp -d)
 trap 'rm -rf "$main_out"' EXIT
-# The Python package (python/): the extension built in the shared target dir, put beside the
-# package's pure part in a temporary folder (what `pip install ./python` installs).
-cargo build --quiet --release -p physid-python
+# The Python package (python/) built as its wheel (maturin, in the shared target dir; the
+# shared libraries it links bundled) and installed from it into a temporary folder: the
+# Python checks and tests run on what `pip install physid-*.whl` installs.
+step "the Python wheel (maturin build --release), installed"
+PATH="$PHYSID_VENV/bin:$PATH" maturin build --quiet --release -m python/Cargo.toml \
+  --auditwheel repair --out "$main_out/wheels"
 export PHYSID_PYTHON="$main_out/python"
-mkdir -p "$PHYSID_PYTHON" && cp -r python/physid "$PHYSID_PYTHON/"
-cp "$CARGO_TARGET_DIR/release/lib_physid.so" "$PHYSID_PYTHON/physid/_physid.abi3.so"
+"$PHYSID_VENV/bin/python" -m pip install -q --disable-pip-version-check --no-deps --no-index \
+  --target "$PHYSID_PYTHON" "$main_out"/wheels/physid-*.whl
+ls -l "$main_out"/wheels/physid-*.whl
 for s in check_pinocchio check_mujoco check_cvxpy check_rosbag check_panda check_schemas check_report_html check_python_package pytest check_main_outputs; do
   if [ "$s" = pytest ]; then
     step "the Python package's tests (pytest python/tests)"
