@@ -4,8 +4,10 @@
   (`Identification.seconds`, measured inside the extension): the real KUKA runs 1 and 2, run 3
   held out, consistent set with a torque offset (median of 9 calls);
 - the regressor of 10,000 KUKA samples: one `Robot.regressor` call on numpy arrays against
-  pinocchio's `computeJointTorqueRegressor` called from Python in a loop over the same samples
-  (the way a Python user writes it), best of 5.
+  pinocchio's `computeJointTorqueRegressor` called from Python in a loop over the same samples,
+  best of 5: written plainly (each sample's configuration assembled in new arrays) and written
+  as fast as a Python loop goes (the samples' rows passed as they are, the joints being in
+  pinocchio's order, into one preallocated array): the fair ratio is the second.
 
 usage: python scripts/bench_python.py [--package DIR]   (DIR holds physid/ with the extension
 built, as scripts/test.sh makes it; default: $PHYSID_PYTHON)
@@ -64,6 +66,15 @@ def pinocchio_regressor():
     return out
 
 
+def pinocchio_regressor_preallocated():
+    assert idx == list(range(model.nv)) and model.nq == model.nv  # rows passed as they are
+    out = np.empty((count, model.nv, 10 * (model.njoints - 1)))
+    regressor = pin.computeJointTorqueRegressor
+    for k in range(count):
+        out[k] = regressor(model, data, q[k], qd[k], qdd[k])
+    return out
+
+
 def best(f, reps=5):
     times = []
     for _ in range(reps):
@@ -73,6 +84,8 @@ def best(f, reps=5):
     return min(times)
 
 
-tp, tq = best(physid_regressor), best(pinocchio_regressor)
-print(f"regressor of {count} samples: physid {tp * 1e3:.1f} ms (one call), pinocchio {tq * 1e3:.1f} ms "
-      f"(Python loop): pinocchio / physid = {tq / tp:.1f}x")
+assert np.allclose(pinocchio_regressor(), pinocchio_regressor_preallocated())
+tp, tq, tf = best(physid_regressor), best(pinocchio_regressor), best(pinocchio_regressor_preallocated)
+print(f"regressor of {count} samples: physid {tp * 1e3:.1f} ms (one call); pinocchio in a Python loop "
+      f"{tq * 1e3:.1f} ms written plainly ({tq / tp:.2f}x physid), {tf * 1e3:.1f} ms into a "
+      f"preallocated array ({tf / tp:.2f}x physid, the fair ratio)")

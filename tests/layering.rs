@@ -940,3 +940,44 @@ fn no_crate_depends_on_one_of_its_own_floor_or_above() {
         "the scan reads the io crate's manifest"
     );
 }
+
+/// The names a Python binding file takes from the library that are not the `api` floor's
+/// (`physid::io::…`, `physid::sim::…`), as `file: name`.
+fn below_the_api(path: &Path, text: &str) -> Vec<String> {
+    let mut out = vec![];
+    for (k, _) in text.match_indices("physid::") {
+        let rest = &text[k + "physid::".len()..];
+        let name: String = rest
+            .chars()
+            .take_while(|c| c.is_alphanumeric() || *c == '_')
+            .collect();
+        let preceded_by_name = text[..k]
+            .chars()
+            .last()
+            .is_some_and(|c| c.is_alphanumeric() || c == '_');
+        if name != "api" && !preceded_by_name {
+            out.push(format!("{}: physid::{name}", path.display()));
+        }
+    }
+    out
+}
+
+#[test]
+fn the_python_package_stands_on_the_api_floor_alone() {
+    // Like the binary, the Python extension is a caller of the library's entry points: what it
+    // needs from a lower floor, the api floor names (re-exports or an entry point).
+    let mut files = vec![];
+    rust_files(&common::root().join("python/src"), &mut files);
+    assert!(files.len() >= 10, "{files:?}");
+    let below: Vec<String> = files
+        .iter()
+        .flat_map(|f| below_the_api(f, &std::fs::read_to_string(f).unwrap()))
+        .collect();
+    assert!(below.is_empty(), "below the api floor: {below:?}");
+    // The scan sees a name below the floor when there is one.
+    let sample = "use physid::api;\nlet x = physid::io::versioned(a, b);\nmy_physid::io::x();";
+    assert_eq!(
+        below_the_api(Path::new("x.rs"), sample),
+        ["x.rs: physid::io"]
+    );
+}

@@ -2,6 +2,7 @@
 
 use crate::convert::*;
 use crate::errors::*;
+use physid::api;
 use pyo3::prelude::*;
 use std::path::PathBuf;
 
@@ -10,7 +11,7 @@ use std::path::PathBuf;
 #[pyclass(frozen, module = "physid")]
 #[derive(serde::Serialize, serde::Deserialize)]
 pub(crate) struct Comparison {
-    cmp: physid::experiment::compare::Comparison,
+    cmp: api::compare::Comparison,
 }
 
 #[pymethods]
@@ -34,7 +35,7 @@ impl Comparison {
                     number(g.candidate_median),
                     number(g.median_ratio),
                     number(g.p_value),
-                    physid::io::serde_name(&g.outcome),
+                    api::files::serde_name(&g.outcome),
                 ]
             })
             .collect();
@@ -125,7 +126,7 @@ pub(crate) fn compare(
     allow_too_few: bool,
     max_n_s: Option<u64>,
 ) -> PyResult<Comparison> {
-    use physid::experiment::compare::{self, CompareOptions};
+    use api::compare::{self, CompareOptions};
     let d = CompareOptions::default();
     let opts = CompareOptions {
         metric: metric.unwrap_or(d.metric),

@@ -1,10 +1,11 @@
 //! Keyword arguments read into the library's options, and results handed to Python (JSON values, DataFrames, dicts of arrays).
 
 use crate::errors::*;
+use api::Trajectory;
 use numpy::{IntoPyArray, PyArrayMethods};
+use physid::api;
 use physid::api::data::ReadOptions;
 use physid::api::identify::SampleRange;
-use physid::trajectory::Trajectory;
 use pyo3::prelude::*;
 use pyo3::types::{PyBytes, PyDict};
 use std::path::PathBuf;
@@ -15,7 +16,7 @@ pub(crate) fn to_python<'py>(
     schema: &str,
     value: &impl serde::Serialize,
 ) -> PyResult<Bound<'py, PyAny>> {
-    let text = serde_json::to_string(&physid::io::versioned(schema, value)).map_err(exception)?;
+    let text = serde_json::to_string(&api::files::versioned(schema, value)).map_err(exception)?;
     py.import("json")?.call_method1("loads", (text,))
 }
 

@@ -3,8 +3,9 @@
 
 use crate::arrays::*;
 use crate::errors::*;
+use api::Logged;
+use physid::api;
 use physid::api::MemoryLog;
-use physid::prepare::Logged;
 use pyo3::prelude::*;
 use std::path::PathBuf;
 use std::sync::atomic::{AtomicUsize, Ordering};

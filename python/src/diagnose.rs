@@ -16,7 +16,7 @@ use std::path::PathBuf;
 #[pyclass(frozen, module = "physid")]
 #[derive(serde::Serialize, serde::Deserialize)]
 pub(crate) struct Diagnosis {
-    diagnosis: physid::diagnose::Diagnosis,
+    diagnosis: api::diagnose::Diagnosis,
     standing: Option<Vec<String>>,
     notices: Vec<Notice>,
     inputs: Vec<PathBuf>,
@@ -32,8 +32,8 @@ impl Diagnosis {
     /// The notebook's view: the report as one scoped fragment (its style applies to it
     /// alone), plots inline.
     fn _repr_html_(&self) -> PyResult<String> {
-        let plots = physid::diagnose::report::plots(&self.diagnosis).map_err(exception)?;
-        Ok(physid::diagnose::report::html_fragment(
+        let plots = api::diagnose::report::plots(&self.diagnosis).map_err(exception)?;
+        Ok(api::diagnose::report::html_fragment(
             &self.diagnosis,
             &plots,
         ))
@@ -42,7 +42,7 @@ impl Diagnosis {
     /// The verdict (e.g. `explained`, `partially_explained`, `unexplained`, `no_effect`).
     #[getter]
     fn verdict(&self) -> String {
-        physid::io::serde_name(&self.diagnosis.verdict)
+        api::files::serde_name(&self.diagnosis.verdict)
     }
 
     /// The summary sentence.
@@ -80,7 +80,7 @@ impl Diagnosis {
             for m in &e.magnitudes {
                 let row = PyDict::new(py);
                 row.set_item("effect", e.kind.name())?;
-                row.set_item("evidence", physid::io::serde_name(&e.evidence))?;
+                row.set_item("evidence", api::files::serde_name(&e.evidence))?;
                 row.set_item("param", e.param)?;
                 row.set_item("magnitude", &e.magnitude_name)?;
                 row.set_item("joint", &m.joint)?;
@@ -226,25 +226,25 @@ impl Diagnosis {
     /// The report as `physid diagnose` prints it on a terminal (the same sections as the
     /// Markdown, condensed, the summary last).
     fn text(&self) -> String {
-        physid::diagnose::report::text(&self.diagnosis)
+        api::diagnose::report::text(&self.diagnosis)
     }
 
     /// The Markdown report (`report.md`).
     fn markdown(&self) -> String {
-        physid::diagnose::report::markdown(&self.diagnosis)
+        api::diagnose::report::markdown(&self.diagnosis)
     }
 
     /// The self-contained HTML report (`report.html`), plots inline.
     fn html(&self) -> PyResult<String> {
-        let plots = physid::diagnose::report::plots(&self.diagnosis).map_err(exception)?;
-        Ok(physid::diagnose::report::html(&self.diagnosis, &plots))
+        let plots = api::diagnose::report::plots(&self.diagnosis).map_err(exception)?;
+        Ok(api::diagnose::report::html(&self.diagnosis, &plots))
     }
 
     /// Writes the report folder (`report.html`, `report.md`, `report.json`, SVG plots), as
     /// `physid diagnose --report`; never into a folder that is or holds an input.
     fn write_report(&self, path: PathBuf) -> PyResult<()> {
-        physid::io::check_result_dir(&path, &self.inputs).map_err(exception)?;
-        physid::diagnose::report::write(&path, &self.diagnosis).map_err(exception)
+        api::files::check_result_dir(&path, &self.inputs).map_err(exception)?;
+        api::diagnose::report::write(&path, &self.diagnosis).map_err(exception)
     }
 
     fn __repr__(&self) -> String {
@@ -295,7 +295,7 @@ pub(crate) fn diagnose<'py>(
     o.read = read_options(topic, stamp, cutoff, lock, only)?;
     o.read.memory = memory.into();
     o.holdout = holdout;
-    o.diagnosis = physid::diagnose::Options {
+    o.diagnosis = api::diagnose::Options {
         constraints: constraints
             .parse()
             .map_err(|e| exception(format!("--constraints: {e}")))?,
@@ -310,7 +310,7 @@ pub(crate) fn diagnose<'py>(
     }
     warn(py, &early)?;
     let mut inputs: Vec<PathBuf> = o.files().iter().map(|p| p.to_path_buf()).collect();
-    inputs.extend(physid::io::robot_files(&robot.source, &[]));
+    inputs.extend(api::files::robot_files(&robot.source, &[]));
     let model = robot.model.clone();
     let (outcome, notices) = interruptible(py, move || {
         let mut notices = vec![];

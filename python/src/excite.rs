@@ -55,7 +55,7 @@ impl Excitation {
         let within = e
             .within_limits()
             .map_or("not checked".into(), |w| w.to_string());
-        let objective = physid::io::serde_name(&e.design.objective);
+        let objective = api::files::serde_name(&e.design.objective);
         card(
             "Excitation design",
             &[
@@ -170,7 +170,7 @@ impl Excitation {
             "Excitation({} harmonics at {} Hz, {} = {:.4}, within limits: {}{})",
             self.inner.options.harmonics,
             self.inner.options.base_frequency,
-            physid::io::serde_name(&self.inner.design.objective),
+            api::files::serde_name(&self.inner.design.objective),
             self.inner.design.value,
             self.inner
                 .within_limits()
@@ -184,8 +184,8 @@ impl Excitation {
 }
 
 /// The design's objective from its CLI spelling.
-pub(crate) fn objective(name: &str) -> PyResult<physid::sim::design::Objective> {
-    use physid::sim::design::Objective;
+pub(crate) fn objective(name: &str) -> PyResult<api::excite::Objective> {
+    use api::excite::Objective;
     match name {
         "d-optimal" => Ok(Objective::DOptimal),
         "e-optimal" => Ok(Objective::EOptimal),

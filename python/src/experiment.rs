@@ -3,6 +3,7 @@
 use crate::convert::*;
 use crate::errors::*;
 use crate::work::*;
+use physid::api;
 use pyo3::prelude::*;
 use std::path::PathBuf;
 
@@ -12,25 +13,14 @@ use std::path::PathBuf;
 #[pyclass(frozen, module = "physid")]
 #[derive(serde::Serialize, serde::Deserialize)]
 pub(crate) struct Experiment {
-    rows: Vec<physid::experiment::Row>,
-    joints: Vec<String>,
-    bodies: Vec<String>,
-    sets: Vec<String>,
+    run: api::experiment::ExperimentRun,
     seconds: f64,
 }
 
 impl Experiment {
     /// The long table (or, with `summary`, its summary over seeds) as CSV text.
     fn csv(&self, summary: bool) -> Result<String, String> {
-        use physid::experiment::tables;
-        let long = tables::long_table_with_bodies(&self.rows, &self.joints, &self.bodies)
-            .map_err(|e| e.to_string())?;
-        let mut table = if summary {
-            tables::summary(&long).map_err(|e| e.to_string())?
-        } else {
-            long
-        };
-        tables::csv_text(&mut table).map_err(|e| e.to_string())
+        self.run.csv(summary).map_err(|e| e.to_string())
     }
 }
 
@@ -47,8 +37,8 @@ impl Experiment {
         Ok(crate::notebook::card(
             "Sample-size experiment",
             &[
-                ("cells", self.rows.len().to_string()),
-                ("constraint sets", self.sets.join(", ")),
+                ("cells", self.run.rows.len().to_string()),
+                ("constraint sets", self.run.sets.join(", ")),
                 ("seconds", crate::notebook::number(self.seconds)),
             ],
             &[(
@@ -74,7 +64,7 @@ impl Experiment {
     /// The constraint sets compared, loosest first.
     #[getter]
     fn constraints(&self) -> Vec<String> {
-        self.sets.clone()
+        self.run.sets.clone()
     }
 
     /// Wall time of the run (s).
@@ -86,8 +76,8 @@ impl Experiment {
     fn __repr__(&self) -> String {
         format!(
             "Experiment({} cells, constraint sets {}, {:.1} s)",
-            self.rows.len(),
-            self.sets.join(", "),
+            self.run.rows.len(),
+            self.run.sets.join(", "),
             self.seconds
         )
     }
@@ -106,56 +96,27 @@ pub(crate) fn experiment(
     threads: Option<usize>,
     progress: Option<PyObject>,
 ) -> PyResult<Experiment> {
-    let shown = scenario.display().to_string();
-    let (sc, model, _) = physid::sim::scenario::load(&scenario).map_err(exception)?;
-    let mut spec = physid::experiment::ExperimentSpec::from_scenario(&sc)
-        .map_err(|e| exception(format!("{shown}: [experiment]: {e}")))?;
-    if let Some(n) = seeds {
-        spec.seeds = n;
-    }
-    spec.validate()
-        .map_err(|e| exception(format!("{shown}: {e}")))?;
-    if !spec.excitations.is_empty() {
-        return Err(exception(format!(
-            "{shown}: an experiment over several excitation motions ([[experiment.excitations]]) is not in the Python package yet: run `physid experiment {shown}`"
-        )));
-    }
     let pool = thread_pool(threads)?;
-    let (joints, bodies) = (
-        model.joint_names(),
-        physid::ident::bodies(&model)
-            .into_iter()
-            .map(|(n, _, _)| n)
-            .collect(),
-    );
-    let sets = spec
-        .constraints
-        .iter()
-        .map(|s| s.name().to_string())
-        .collect();
     let start = std::time::Instant::now();
     let work = move |_: Cancel, progress: Progress<usize>| {
         let report = |_done: usize, total: usize| {
             let _ = progress.send(total);
         };
-        pool.install(|| physid::experiment::run(&model, &sc, &spec, &report))
+        pool.install(|| api::experiment::run_scenario(&scenario, seeds, &report))
     };
     // Seeds finish on the pool's threads in any order: counted here, so the callback sees
     // 1, 2, … of the total in order, on the calling thread.
     let mut done = 0;
-    let rows = reporting(py, work, |py, total: usize| {
+    let run = reporting(py, work, |py, total: usize| {
         done += 1;
         match &progress {
             Some(cb) => cb.call1(py, (done, total)).map(drop),
             None => Ok(()),
         }
-    })?;
-    let rows = rows.map_err(|e| exception(format!("running the experiment of {shown}: {e}")))?;
+    })?
+    .map_err(api_error)?;
     Ok(Experiment {
-        rows,
-        joints,
-        bodies,
-        sets,
+        run,
         seconds: start.elapsed().as_secs_f64(),
     })
 }

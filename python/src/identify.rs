@@ -5,10 +5,11 @@ use crate::data::runs;
 use crate::errors::*;
 use crate::robot::Robot;
 use crate::work::*;
+use api::Model;
 use numpy::{IntoPyArray, PyArray1};
 use physid::api;
+use physid::api::data::ReadOptions;
 use physid::api::identify::IdentifyOptions;
-use physid::model::Model;
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
 use std::path::{Path, PathBuf};
@@ -40,7 +41,7 @@ pub(crate) fn load<'py>(
     let (model, owned) = (m.clone(), files.clone());
     let loaded = interruptible(py, move || {
         let refs: Vec<&Path> = owned.iter().map(PathBuf::as_path).collect();
-        physid::io::load_all(&refs, &model, &read)
+        api::files::load_all(&refs, &model, &read)
     })?
     .map_err(exception)?;
     let mut out = vec![];
@@ -192,10 +193,10 @@ impl Identification {
         let b = &self.report.identified.bodies;
         let cols = PyDict::new(py);
         cols.set_item("name", b.iter().map(|b| b.name.clone()).collect::<Vec<_>>())?;
-        for (k, key) in physid::spatial::PARAM_NAMES.iter().enumerate() {
+        for (k, key) in api::PARAM_NAMES.iter().enumerate() {
             cols.set_item(*key, b.iter().map(|b| b.pi[k]).collect::<Vec<_>>())?;
         }
-        let c = |f: fn(&physid::spatial::ConsistencyReport) -> Option<f64>| {
+        let c = |f: fn(&api::ConsistencyReport) -> Option<f64>| {
             b.iter().map(|b| f(&b.consistency)).collect::<Vec<_>>()
         };
         cols.set_item("min_eig_I", c(|c| Some(c.min_eig_spatial)))?;
@@ -241,11 +242,11 @@ impl Identification {
     /// Writes the identified model as URDF (the robot's own URDF with only `<inertial>` and
     /// `<dynamics>` changed, plus the sidecar `<name>.physid.toml`); never over an input.
     fn write_urdf(&self, py: Python<'_>, path: PathBuf) -> PyResult<()> {
-        let sidecar = physid::io::sidecar_path(&path);
+        let sidecar = api::files::sidecar_path(&path);
         let mut inputs: Vec<PathBuf> = self.inputs.clone();
-        inputs.extend(physid::io::robot_files(&self.source, &[]));
+        inputs.extend(api::files::robot_files(&self.source, &[]));
         let refs: Vec<&Path> = inputs.iter().map(PathBuf::as_path).collect();
-        physid::io::check_outputs(&[&path, &sidecar], &refs).map_err(exception)?;
+        api::files::check_outputs(&[&path, &sidecar], &refs).map_err(exception)?;
         let notices = self
             .report
             .write_urdf(&path, &self.source, &self.model)
@@ -258,7 +259,7 @@ impl Identification {
     fn write_mjcf(&self, py: Python<'_>, path: PathBuf) -> PyResult<()> {
         let identified = self.report.model(&self.model).map_err(api_error)?;
         let mut inputs: Vec<PathBuf> = self.inputs.clone();
-        inputs.extend(physid::io::robot_files(&self.source, &[]));
+        inputs.extend(api::files::robot_files(&self.source, &[]));
         let notices = api::export::write_mjcf(&identified, &path, &inputs).map_err(api_error)?;
         warn(py, &notices)
     }
@@ -320,12 +321,7 @@ pub(crate) fn identify<'py>(
     total_mass: Option<(f64, f64)>,
 ) -> PyResult<Identification> {
     let m = &robot.model;
-    let joints = m.joint_names();
-    let (files, mut memory) = runs("data", Some(data), &joints)?;
-    let (validate_files, more) = runs("validate_data", validate_data, &joints)?;
-    memory.extend(more);
-    let mut o = IdentifyOptions::new(files);
-    o.validate_data = validate_files;
+    let mut o = training_runs(m, data, validate_data)?;
     o.train = sample_range("--train", train)?;
     o.validate = sample_range("--validate", validate)?;
     set_model_options(&mut o, m, constraints, (friction, effects), &effects_from)?;
@@ -334,8 +330,10 @@ pub(crate) fn identify<'py>(
     o.regularizer = regularizer
         .parse()
         .map_err(|e| exception(format!("--regularizer: {e}")))?;
-    o.read = read_options(topic, stamp, cutoff, lock, only)?;
-    o.read.memory = memory.into();
+    o.read = ReadOptions {
+        memory: o.read.memory.clone(),
+        ..read_options(topic, stamp, cutoff, lock, only)?
+    };
     o.allow_few_samples = allow_few_samples;
     o.mass_bounds = mass_bounds.map(|(lo, hi)| api::identify::MassBounds { lo, hi });
     o.total_mass = total_mass.map(|(lo, hi)| api::identify::TotalMass { lo, hi });
@@ -360,11 +358,28 @@ pub(crate) fn identify<'py>(
     })
 }
 
+/// Options naming `identify`'s runs: `data` and `validate_data` (paths or `physid.Data`), the
+/// runs held in memory among them in the reading options.
+fn training_runs(
+    m: &api::Model,
+    data: &Bound<'_, PyAny>,
+    validate_data: Option<&Bound<'_, PyAny>>,
+) -> PyResult<IdentifyOptions> {
+    let joints = m.joint_names();
+    let (files, mut memory) = runs("data", Some(data), &joints)?;
+    let (validate_files, more) = runs("validate_data", validate_data, &joints)?;
+    memory.extend(more);
+    let mut o = IdentifyOptions::new(files);
+    o.validate_data = validate_files;
+    o.read.memory = memory.into();
+    Ok(o)
+}
+
 /// `identify`'s model keywords onto `o`: the constraint set, the friction and effect terms
 /// (`(friction, effects)`), and the effects confirmed in a diagnosis report (`effects_from`).
 pub(crate) fn set_model_options(
     o: &mut IdentifyOptions,
-    m: &physid::model::Model,
+    m: &api::Model,
     constraints: Option<&str>,
     (friction, effects): (Option<&Bound<'_, PyAny>>, Option<&Bound<'_, PyAny>>),
     effects_from: &Option<PathBuf>,

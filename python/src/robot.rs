@@ -3,11 +3,11 @@
 use crate::arrays::*;
 use crate::convert::*;
 use crate::errors::*;
+use api::{Model, RotorModel};
 use numpy::{IntoPyArray, PyArray1, PyArrayDyn};
 use physid::api;
 use physid::api::data::Notice;
 use physid::api::model::RobotOptions;
-use physid::model::{Model, RotorModel};
 use pyo3::prelude::*;
 use std::path::PathBuf;
 
@@ -37,7 +37,7 @@ impl Robot {
         use crate::notebook::{card, number, table};
         let m = &self.model;
         let theta = m.parameters();
-        let rows: Vec<Vec<String>> = physid::ident::bodies(m)
+        let rows: Vec<Vec<String>> = api::bodies(m)
             .into_iter()
             .map(|(name, first, _)| vec![name, number(theta[first])])
             .collect();
@@ -102,7 +102,7 @@ impl Robot {
     /// Writes the robot as MJCF for MuJoCo (rotors as joint armature), never over an input;
     /// meshes MuJoCo cannot read are left out with a `PhysidWarning`.
     fn write_mjcf(&self, py: Python<'_>, path: PathBuf) -> PyResult<()> {
-        let inputs = physid::io::robot_files(&self.source, &[]);
+        let inputs = api::files::robot_files(&self.source, &[]);
         let notices = api::export::write_mjcf(&self.model, &path, &inputs).map_err(api_error)?;
         warn(py, &notices)
     }
@@ -116,7 +116,7 @@ impl Robot {
         } else {
             ""
         };
-        let inputs = physid::io::robot_files(&self.source, &[]);
+        let inputs = api::files::robot_files(&self.source, &[]);
         api::export::write_urdf(&self.model, robot, &path, &inputs).map_err(api_error)
     }
 

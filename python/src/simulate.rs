@@ -119,12 +119,12 @@ pub(crate) fn simulate(
 ) -> PyResult<Simulation> {
     let callback = progress;
     let engine = engine_of(engine)?;
-    let files = physid::io::scenario_files(&scenario);
+    let files = api::files::scenario_files(&scenario);
     let inputs: Vec<&Path> = files.iter().map(PathBuf::as_path).collect();
     let outputs: Vec<&Path> = std::iter::once(out.as_path())
         .chain(csv.as_deref())
         .collect();
-    physid::io::check_outputs(&outputs, &inputs).map_err(exception)?;
+    api::files::check_outputs(&outputs, &inputs).map_err(exception)?;
     let opts = api::simulate::SimulateOptions {
         engine,
         duration,
@@ -163,11 +163,11 @@ pub(crate) fn simulate(
 }
 
 /// `simulate`'s `engine` keyword (`None`: the scenario's own).
-pub(crate) fn engine_of(engine: Option<&str>) -> PyResult<Option<physid::sim::scenario::Engine>> {
+pub(crate) fn engine_of(engine: Option<&str>) -> PyResult<Option<api::simulate::Engine>> {
     match engine {
         None => Ok(None),
-        Some("physid") => Ok(Some(physid::sim::scenario::Engine::Physid)),
-        Some("rapier") => Ok(Some(physid::sim::scenario::Engine::Rapier)),
+        Some("physid") => Ok(Some(api::simulate::Engine::Physid)),
+        Some("rapier") => Ok(Some(api::simulate::Engine::Rapier)),
         Some(other) => Err(exception(format!(
             "--engine: '{other}' is not one of physid, rapier"
         ))),

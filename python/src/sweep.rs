@@ -166,7 +166,7 @@ pub(crate) fn sweep(
         None => None,
         Some(mut m) => {
             let csv = |df: &mut polars::prelude::DataFrame| {
-                physid::experiment::tables::csv_text(df).map_err(exception)
+                api::experiment::csv_text(df).map_err(exception)
             };
             Some((csv(&mut m.rows)?, csv(&mut m.summary)?, m.markdown))
         }

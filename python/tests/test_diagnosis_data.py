@@ -104,3 +104,21 @@ def test_without_a_ladder_the_tables_have_their_columns_and_no_rows(kuka):
     table = d.ladder()
     assert len(table) == 0 and list(table.columns[:3]) == ["step", "kind", "param"]
     assert list(d.ladder(backend="polars").columns) == list(table.columns)
+
+
+def test_the_find_a_payload_example_runs(tmp_path):
+    import os
+    import subprocess
+    import sys
+
+    from conftest import ROOT
+
+    env = dict(os.environ, PYTHONPATH=os.environ.get("PHYSID_PYTHON", ""))
+    out = subprocess.run([sys.executable, "python/examples/find_a_payload.py", str(tmp_path)],
+                         capture_output=True, text=True, cwd=ROOT, env=env, timeout=300)
+    assert out.returncode == 0, out.stderr
+    lines = out.stdout.splitlines()
+    assert "payload=True" in lines[0] and "body='lwr_7_link'" in lines[0]
+    assert lines[-1].startswith("diagnosis: lwr_7_link carries 2.0")
+    assert lines[-2].startswith("identification: validation RMS 0.")
+    assert (tmp_path / "ladder.png").stat().st_size > 1000 and (tmp_path / "identified.physid.toml").exists()

@@ -5,10 +5,13 @@
 use super::data::{bag_option_notices, file_notices, Notice, ReadOptions};
 use super::ApiError;
 use crate::diagnose::baseline::Baseline;
-use crate::diagnose::{self, DiagnoseError, Diagnosis, Options};
+use crate::diagnose::{self, DiagnoseError};
 use crate::model::Model;
 use crate::trajectory::Trajectory;
 use std::path::{Path, PathBuf};
+
+// The diagnosis as its callers hold it, its options and its report (text, Markdown, HTML).
+pub use crate::diagnose::{report, Diagnosis, Options};
 
 /// The runs a diagnosis reads, as prepared by the data pipeline.
 #[derive(Clone, Debug, Default)]

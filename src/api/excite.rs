@@ -7,7 +7,10 @@
 use super::data::Notice;
 use super::ApiError;
 use crate::model::Model;
-use crate::sim::design::{self, Design, DesignOptions, Objective};
+use crate::sim::design::{self, Design, DesignOptions};
+
+/// What a design maximizes.
+pub use crate::sim::design::Objective;
 use crate::sim::scenario::ExcitationSpec;
 use crate::trajectory::Trajectory;
 use std::path::{Path, PathBuf};

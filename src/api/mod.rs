@@ -2,17 +2,25 @@
 //! package stand on: typed options in, a typed report out that is also the command's JSON
 //! contract (docs/schemas/), errors as values naming the file, field or option at fault.
 //!
-//! This floor is being filled command by command (issue 28); `identify`'s contracts, its
-//! default constraint set, its ground-truth errors and the reading of a diagnosis report for
-//! `--effects-from` live here so far (and `api::simulate`: the run, its report and logs; `api::model`: a robot described; `api::provenance`: an experiment's provenance; `api::diagnose`: a diagnosis, or what changed against baseline runs; `api::excite`: a design's contract and its check in simulation; `api::dynamics`: inverse
-//! dynamics, mass matrices and regressors over many samples, shapes checked), with the data it reads (`api::data`: files in memory or streamed, spans of
-//! them) and the fit itself (`api::identify::fit`).
+//! One module per command: [`identify`] (its options, default constraint set, fit, scores,
+//! ground-truth errors, the effects a diagnosis confirmed), [`diagnose`] (a diagnosis, or what
+//! changed against baseline runs, and its report), [`simulate`], [`excite`] (a design and its
+//! check in simulation), [`experiment`] (a scenario's sample-size experiment), [`sweep`],
+//! [`compare`], [`model`] (a robot loaded and described), [`export`], [`dynamics`] (inverse
+//! dynamics, mass matrices and regressors over many samples, shapes checked); with the data
+//! they read ([`data`]: files or runs held in memory, streamed or loaded, spans of them), the
+//! files they read and write ([`files`]), a description's information ([`information`]) and an
+//! experiment's provenance ([`provenance`]). The types these take and return are re-exported
+//! here, so that a caller (the Python package) needs no lower floor.
 
+pub mod compare;
 pub mod data;
 pub mod diagnose;
 pub mod dynamics;
 pub mod excite;
+pub mod experiment;
 pub mod export;
+pub mod files;
 pub mod identify;
 pub mod information;
 pub mod model;
@@ -27,6 +35,14 @@ use std::path::PathBuf;
 pub use crate::ident::IdentError;
 pub use crate::io::{IoError, MemoryLog};
 pub use crate::options::OptionError;
+
+// The types the entry points take and return, for callers that stand on this floor alone (the
+// Python package).
+pub use crate::ident::{bodies, ConstraintSet};
+pub use crate::model::{Model, RotorModel};
+pub use crate::prepare::Logged;
+pub use crate::spatial::{ConsistencyReport, PARAM_NAMES};
+pub use crate::trajectory::Trajectory;
 
 /// An error of an entry point, naming what is at fault.
 #[derive(Debug, thiserror::Error)]

@@ -5,7 +5,10 @@ use super::ApiError;
 use crate::io::{mcap_log, samples};
 use crate::model::Model;
 use crate::sim::report::Excitation;
-use crate::sim::scenario::{Engine, Scenario};
+use crate::sim::scenario::Scenario;
+
+/// The simulator a scenario runs on.
+pub use crate::sim::scenario::Engine;
 use crate::trajectory::Recording;
 use std::path::{Path, PathBuf};
 
