@@ -111,11 +111,11 @@ with tempfile.TemporaryDirectory() as d:
     for constraints, tol in [("none", 1e-9), ("consistent", 1e-5)]:
         fit = physid.identify_arrays(robot, q[train], qd[train], qdd[train], tau[train],
                                       constraints=constraints, prior_weight=1e-10)
-        pred = robot.regressor(q[held], qd[held], qdd[held]) @ fit["theta"]
+        pred = robot.regressor(q[held], qd[held], qdd[held]) @ fit.theta
         rel = np.sqrt(np.mean((pred - tau[held]) ** 2)) / np.sqrt(np.mean(tau[held] ** 2))
         check(f"identify_arrays ({constraints}) predicts the unseen robot's held-out torque",
-              rel < tol and fit["constraints_hold"],
-              f"(relative RMS {rel:.1e} < {tol:.0e}, constraints hold: {fit['constraints_hold']})")
+              rel < tol and fit.constraints_hold,
+              f"(relative RMS {rel:.1e} < {tol:.0e}, constraints hold: {fit.constraints_hold})")
     # The same samples through the CLI.
     csv = os.path.join(d, "samples.csv")
     cols = (["t"] + [f"q{i + 1}" for i in range(n)] + [f"dq{i + 1}" for i in range(n)]
@@ -124,7 +124,7 @@ with tempfile.TemporaryDirectory() as d:
                header=",".join(cols), comments="", fmt="%.17g")
     cli = json.loads(run(binary, "identify", "--robot", KUKA_URDF, "--data", csv, "--constraints", "consistent",
                          "--prior-weight", "1e-10", "--json"))
-    diff = np.abs(np.array(cli["theta"]) - fit["theta"]).max() / np.abs(fit["theta"]).max()
+    diff = np.abs(np.array(cli["theta"]) - fit.theta).max() / np.abs(fit.theta).max()
     check("identify_arrays == physid identify on the same samples", diff < 1e-9, f"(θ differ by {diff:.1e} relative)")
 
 # Bad arrays.
@@ -141,8 +141,9 @@ for name, args, words in [
         check(f"bad input ({name}) raises ValueError naming it", words in str(e), f"({e})")
 z, nan_at = np.zeros((3, n)), np.where(np.arange(3 * n).reshape(3, n) == n + 2, np.nan, 0.0)
 for name, args, words in [
-    ("NaN torque", (z, z, z, nan_at), "tau: sample 1, joint 2 is NaN"),
-    ("sample counts", (z, np.zeros((2, n)), z, z), "qd has 2 samples, q has 3"),
+    # As the data pipeline names a value of a logged file: sample and column (tau3: joint 2 of 0..n-1).
+    ("NaN torque", (z, z, z, nan_at), "sample 1 (t = 0.001 s): tau3 is NaN"),
+    ("sample counts", (z, np.zeros((2, n)), z, z), f"qd has shape (2, {n}): q has shape (3, {n})"),
 ]:
     try:
         physid.identify_arrays(robot, *args)
@@ -152,8 +153,8 @@ for name, args, words in [
 try:
     physid.Robot("/nonexistent/arm.urdf")
     check("a missing robot file raises", False)
-except ValueError as e:
-    check("a missing robot file raises ValueError naming it", "/nonexistent/arm.urdf" in str(e), f"({e})")
+except FileNotFoundError as e:
+    check("a missing robot file raises FileNotFoundError naming it", e.filename == "/nonexistent/arm.urdf", f"({e})")
 
 # The example a user copies runs as shipped.
 example = os.path.join(os.path.dirname(KUKA_URDF), "..", "..", "python", "examples", "identify_from_arrays.py")

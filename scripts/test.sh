@@ -46,7 +46,7 @@ export PHYSID_PYTHON="$main_out/python"
 "$PHYSID_VENV/bin/python" -m pip install -q --disable-pip-version-check --no-deps --no-index \
   --target "$PHYSID_PYTHON" "$main_out"/wheels/physid-*.whl
 ls -l "$main_out"/wheels/physid-*.whl
-for s in check_pinocchio check_mujoco check_cvxpy check_rosbag check_panda check_schemas check_report_html check_python_package pytest check_main_outputs; do
+for s in check_pinocchio check_mujoco check_cvxpy check_rosbag check_panda check_schemas check_report_html check_python_package python_keywords pytest check_main_outputs; do
   if [ "$s" = pytest ]; then
     step "the Python package's tests (pytest python/tests)"
     out=$("$PHYSID_VENV/bin/python" -m pytest -q -p no:cacheprovider python/tests 2>&1) && rc=0 || rc=$?
@@ -60,8 +60,9 @@ for s in check_pinocchio check_mujoco check_cvxpy check_rosbag check_panda check
     out=$("$PHYSID_VENV/bin/python" "scripts/$s.py" 2>&1) && rc=0 || rc=$?
   fi
   echo "$out"
-  p=$(echo "$out" | grep -oE '[0-9]+ passed' | tail -1 | awk '{print $1}')
-  f=$(echo "$out" | grep -oE '[0-9]+ failed' | tail -1 | awk '{print $1}')
+  # A check that crashed before printing its counts counts as failed (and does not end the run).
+  p=$(echo "$out" | { grep -oE '[0-9]+ passed' || true; } | tail -1 | awk '{print $1}')
+  f=$(echo "$out" | { grep -oE '[0-9]+ failed' || true; } | tail -1 | awk '{print $1}')
   py_passed=$((py_passed + ${p:-0})); py_failed=$((py_failed + ${f:-1}))
   [ "$rc" = 0 ] || py_failed=$((py_failed + 1))
 done

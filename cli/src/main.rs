@@ -16,6 +16,7 @@ mod experiment_cmd;
 mod export_cmd;
 mod generalize_cmd;
 mod identify_cmd;
+mod keywords_cmd;
 mod model_cmd;
 mod progress;
 mod robot_args;
@@ -49,6 +50,8 @@ enum Command {
     Compare(compare_cmd::Args),
     Schema(schema_cmd::Args),
     Dynamics(dynamics_cmd::Args),
+    #[command(hide = true)]
+    Keywords(keywords_cmd::Args),
 }
 
 /// A result that failed a requirement the user asked for: exit code 1 (not 2, an error).
@@ -107,6 +110,7 @@ pub fn run(cli: Cli) -> anyhow::Result<()> {
         Command::Compare(a) => compare_cmd::run(a),
         Command::Schema(a) => schema_cmd::run(a),
         Command::Dynamics(a) => dynamics_cmd::run(a),
+        Command::Keywords(a) => keywords_cmd::run(a),
     }
 }
 

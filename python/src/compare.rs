@@ -110,6 +110,7 @@ impl Comparison {
 /// against `baseline` (another), or two constraint sets within it with `variant="A<=B"` ("A is
 /// no worse than B"); `metric`, `tolerance`, `alpha`, `min_pairs`, `allow_too_few`, `max_n_s` as
 /// its flags (defaults: val_rms, 0.05, 0.01, 6).
+#[doc = include_str!("../keywords/compare.txt")]
 #[pyfunction]
 #[pyo3(signature = (result, *, baseline = None, variant = None, metric = None, tolerance = None,
     alpha = None, min_pairs = None, allow_too_few = false, max_n_s = None))]

@@ -261,6 +261,7 @@ impl Diagnosis {
 /// its flags as keyword arguments: `data`, `validate`, `baseline_data` (paths), `constraints`,
 /// `holdout`, `description_uncertainty`, `payload_any_body`, `topic`, `stamp`, `cutoff`, `lock`,
 /// `only`; `description_information=False` is `--no-description-information`. Warnings are raised as `physid.PhysidWarning`; Ctrl-C interrupts it.
+#[doc = include_str!("../keywords/diagnose.txt")]
 #[pyfunction]
 #[pyo3(signature = (robot, data, *, validate = None, baseline_data = None,
     constraints = "consistent", holdout = 0.3, description_uncertainty = None,

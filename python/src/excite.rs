@@ -235,6 +235,7 @@ pub(crate) fn excite_from(
 /// simulated to check the robot's limits (`check=False` skips it); the scenario (`out`) and
 /// the reference trajectory (`csv`, `mcap`) are written only when it stays within them, never
 /// over an input. Ctrl-C stops it: nothing is written after the interrupt.
+#[doc = include_str!("../keywords/excite.txt")]
 #[pyfunction]
 #[pyo3(signature = (robot = None, *, scenario = None, duration = 20.0, harmonics = 5,
     base_frequency = 0.5, objective = "d-optimal", seed = 1, iterations = 1000, starts = 4,
@@ -305,6 +306,7 @@ pub(crate) fn excite(
 /// weighting (`objective`, `margin` and the Fourier keywords as for `excite`). Returns a dict
 /// equal to `excite --score --json`: `d_optimal` (log det F / r), `e_optimal` (log λ_min(F)),
 /// `condition` (κ(F)), `samples`. Ctrl-C interrupts it.
+#[doc = include_str!("../keywords/score_motion.txt")]
 #[pyfunction]
 #[pyo3(signature = (scenario, *, duration = 20.0, harmonics = 5, base_frequency = 0.5,
     objective = "d-optimal", margin = 0.15, samples = 200, rate = 1000.0, threads = None))]

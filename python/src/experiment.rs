@@ -87,6 +87,7 @@ impl Experiment {
 /// `physid experiment` does, seeds in parallel on `threads` workers (default: all cores; the
 /// results do not depend on it); `seeds` overrides the scenario's count. `progress`, if given,
 /// is called with (seeds done, seeds). Ctrl-C interrupts it.
+#[doc = include_str!("../keywords/experiment.txt")]
 #[pyfunction]
 #[pyo3(signature = (scenario, *, seeds = None, threads = None, progress = None))]
 pub(crate) fn experiment(

@@ -18,6 +18,7 @@ use std::path::{Path, PathBuf};
 /// runs, q̇ and q̈ derived where not logged, one cutoff for all files). Returns per file a dict:
 /// `runs` (each with `t`, `q`, `qd`, `qdd`, `tau` arrays and `index`, each sample's index in the
 /// file), `pipeline` (what was done, as `identify --json` reports it) and `notices`.
+#[doc = include_str!("../keywords/load.txt")]
 #[pyfunction]
 #[pyo3(signature = (robot, data, *, topic = None, stamp = "log", cutoff = None, lock = None, only = None))]
 #[allow(clippy::too_many_arguments)]
@@ -290,6 +291,7 @@ impl Identification {
 /// the description's, `0 <= lo <= 1 <= hi`), `total_mass` (`(lo, hi)` kg: the robot's moving
 /// mass, links and rotors). Warnings are raised as `physid.PhysidWarning`;
 /// the GIL is released while it runs.
+#[doc = include_str!("../keywords/identify.txt")]
 #[pyfunction]
 #[pyo3(signature = (robot, data, *, validate_data = None, train = None, validate = None,
     constraints = None, friction = None, effects = None, effects_from = None,

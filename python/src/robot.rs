@@ -12,6 +12,7 @@ use pyo3::prelude::*;
 use std::path::PathBuf;
 
 /// A robot: the built-in leg (`"cheetah3"`), a URDF file, or a robot TOML file.
+#[doc = include_str!("../keywords/Robot.txt")]
 #[pyclass(frozen, module = "physid")]
 #[derive(serde::Serialize, serde::Deserialize)]
 pub(crate) struct Robot {

@@ -103,6 +103,7 @@ impl Simulation {
 /// `"rapier"`), `duration` (s) and `seed` override the scenario's. `progress`, if given, is
 /// called with the fraction done (0 to 1, at most every percent), e.g. to drive a tqdm bar.
 /// Outputs never replace an input (the scenario, its robot's files). Ctrl-C stops the run (within a percent of it) and nothing is written.
+#[doc = include_str!("../keywords/simulate.txt")]
 #[pyfunction]
 #[pyo3(signature = (scenario, out, *, csv = None, engine = None, duration = None, seed = None,
     progress = None))]

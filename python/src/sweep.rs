@@ -123,6 +123,7 @@ impl Sweep {
 /// (finished cells are skipped) and shardable (`shard=(k, n)`: the cells with index ≡ k mod
 /// n); merged once every cell is there. `progress(done, total)` is called after each cell.
 /// Ctrl-C stops it: the cells finished stay, none is written after the interrupt and nothing is merged.
+#[doc = include_str!("../keywords/sweep.txt")]
 #[pyfunction]
 #[pyo3(signature = (sweep, *, out = None, shard = None, threads = None, progress = None))]
 pub(crate) fn sweep(

@@ -1,0 +1,131 @@
+"""The Python package's keyword documentation, generated from the CLI's own help (`physid
+keywords`): one file per function in python/keywords/, included in the function's docstring by
+the extension (`#[doc = include_str!(…)]`). Every keyword of every function is documented: by
+its CLI flag's help (flag: the keyword with dashes), or, for a keyword the CLI has no flag for,
+by the text below (PYTHON_ONLY).
+
+usage: python scripts/python_keywords.py [--write]
+  (default: check that python/keywords/ is current; $PHYSID_BIN the built physid, and
+   $PHYSID_PYTHON a folder holding the built package, as scripts/test.sh makes them)
+"""
+import inspect
+import json
+import os
+import re
+import subprocess
+import sys
+import textwrap
+
+from physid_common import ROOT
+
+# Python function -> the CLI command whose flags it takes.
+COMMANDS = {
+    "identify": "identify",
+    "load": "identify",
+    "diagnose": "diagnose",
+    "simulate": "simulate",
+    "excite": "excite",
+    "score_motion": "excite",
+    "experiment": "experiment",
+    "sweep": "sweep",
+    "compare": "compare",
+    "Robot": "model",
+}
+
+# A keyword whose flag is its negation.
+NEGATED = {"description_information": "no-description-information", "check": "no-check"}
+
+# A keyword whose flag is named otherwise.
+FLAG = {"package_dirs": "package-dir"}
+
+# Keywords that take runs: a path, a physid.Data held in memory, or a list of them.
+RUNS = {"data", "validate_data", "baseline_data"}
+
+# Keywords the CLI has no flag for (Python's own), or whose Python form differs (these come
+# first).
+PYTHON_FIRST = {
+    "robot": "The robot: a physid.Robot (as returned by physid.Robot), or \"cheetah3\" (the built-in leg), a URDF or a robot TOML path.",
+}
+PYTHON_ONLY = {
+    "baseline": "A results folder to compare against.",
+    "scenario": "A scenario TOML file.",
+    "sweep": "A sweep TOML file (docs/sweeps.md).",
+    "result": "A results folder (of physid experiment or physid sweep).",
+    "out": "Where to write (never over an input).",
+    "progress": "A callable told the progress (simulate: the fraction done; experiment, sweep: done, total), on the calling thread, in order; an exception in it stops the work.",
+    "threads": "Worker threads (default: all cores); the results do not depend on it.",
+    "package_dirs": "Folders that package:// mesh paths of a URDF resolve against (a path or a list).",
+}
+
+
+def cli_flags():
+    binary = os.environ.get("PHYSID_BIN") or os.path.join(
+        os.environ.get("CARGO_TARGET_DIR", os.path.join(ROOT, "target")), "release", "physid")
+    out = subprocess.run([binary, "keywords"], capture_output=True, text=True, check=True)
+    return {command: {f["flag"]: f for f in flags} for command, flags in json.loads(out.stdout).items()}
+
+
+def keywords(function):
+    """The keyword arguments of a function (or a class's constructor) of the built package."""
+    sig = inspect.signature(function)
+    return [p.name for p in sig.parameters.values() if p.name not in ("self", "py")]
+
+
+def in_keywords(text):
+    """The CLI's flags in `text` (`--baseline-data`) named as keywords (`baseline_data`)."""
+    return re.sub(r"(?<![\w-])--([a-z][a-z0-9-]*)", lambda m: m.group(1).replace("-", "_"), text)
+
+
+def described(flag, negated=False):
+    """A keyword's text from its CLI flag's help: the help, allowed values, default."""
+    text = " ".join(flag["help"].split())
+    if text and not text.endswith("."):
+        text += "."
+    if negated:
+        return f"True unless: {text[0].lower()}{text[1:]} (False is the CLI's --{flag['flag']}.)"
+    if flag["values"] and flag["values"] != ["true", "false"]:
+        text += f" One of: {', '.join(flag['values'])}."
+    if flag["default"] and flag["default"] != ["false"]:
+        text += f" Default: {', '.join(flag['default'])}."
+    return text
+
+
+def document(name, flags):
+    lines = ["", "Keywords:", ""]
+    for keyword in keywords(getattr(physid, name)):
+        flag = flags.get(NEGATED.get(keyword) or FLAG.get(keyword) or keyword.replace("_", "-"))
+        if keyword in PYTHON_FIRST:
+            text = PYTHON_FIRST[keyword]
+        elif flag:
+            text = in_keywords(described(flag, negated=keyword in NEGATED))
+        elif keyword in PYTHON_ONLY:
+            text = PYTHON_ONLY[keyword]
+        else:
+            sys.exit(f"{name}: keyword '{keyword}' has no CLI flag and no text in PYTHON_ONLY")
+        if keyword in RUNS or (keyword == "validate" and name == "diagnose"):
+            text += " Paths, physid.Data held in memory, or a list of them."
+        lines += textwrap.wrap(f"{keyword}: {text}", width=92, subsequent_indent="    ")
+    return "\n".join(lines) + "\n"
+
+
+if __name__ == "__main__":
+    package = os.environ.get("PHYSID_PYTHON")
+    if package:
+        sys.path.insert(0, package)
+    import physid  # noqa: E402
+
+    flags = cli_flags()
+    folder = os.path.join(ROOT, "python", "keywords")
+    stale = []
+    for name, command in COMMANDS.items():
+        text = document(name, flags[command])
+        path = os.path.join(folder, f"{name}.txt")
+        if "--write" in sys.argv:
+            os.makedirs(folder, exist_ok=True)
+            with open(path, "w") as f:
+                f.write(text)
+        elif not os.path.exists(path) or open(path).read() != text:
+            stale.append(path)
+    if stale:
+        sys.exit(f"stale keyword documentation (python scripts/python_keywords.py --write): {stale}")
+    print(f"python keywords: {len(COMMANDS)} passed, 0 failed")
