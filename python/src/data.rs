@@ -146,6 +146,11 @@ pub(crate) fn runs(
             ))
         })
     };
+    if v.hasattr("shape")? {
+        return Err(exception(format!(
+            "{what}: an array or table is not a run: hold arrays as physid.Data(q, tau, qd=…, qdd=…, t=… or rate=…)"
+        )));
+    }
     let single = v.is_instance_of::<Data>() || v.extract::<PathBuf>().is_ok();
     let items: Vec<Bound<'_, PyAny>> = match single {
         true => vec![v.clone()],

@@ -100,3 +100,9 @@ def test_bad_runs_are_named_by_sample_and_joint(kuka, run1):
         physid.identify(kuka, physid.Data(q, bad, t=t, name="nan"))
     with pytest.raises(physid.InputError, match="data: give a path, a physid.Data or a list of them"):
         physid.identify(kuka, 42)
+    # A table is not read as a list of file names (its columns).
+    pd = pytest.importorskip("pandas")
+    frame = pd.DataFrame(np.column_stack([t, q]), columns=["t", *(f"q{j}" for j in range(1, 8))])
+    for table in (frame, q):
+        with pytest.raises(physid.InputError, match=r"^data: an array or table is not a run: hold arrays as physid.Data"):
+            physid.identify(kuka, table)
