@@ -52,7 +52,7 @@ PYTHON_ONLY = {
     "sweep": "A sweep TOML file (docs/sweeps.md).",
     "result": "A results folder (of physid experiment or physid sweep).",
     "out": "Where to write (never over an input).",
-    "progress": "A callable told the progress (simulate: the fraction done; experiment, sweep: done, total), on the calling thread, in order; an exception in it stops the work.",
+    "progress": "A callable told the progress (simulate: the fraction of the run done; excite: the fraction of the design's evaluations done; experiment, sweep: done, total), on the calling thread, in order; an exception in it stops the work.",
     "threads": "Worker threads (default: all cores); the results do not depend on it.",
     "package_dirs": "Folders that package:// mesh paths of a URDF resolve against (a path or a list).",
 }

@@ -285,6 +285,7 @@ def excite(
     mcap: Optional[Path] = None,
     check: bool = True,
     threads: Optional[int] = None,
+    progress: Optional[Callable[[float], None]] = None,
 ) -> Excitation:
     """Design an excitation within the robot's limits, as `physid excite` does."""
 

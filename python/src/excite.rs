@@ -234,13 +234,16 @@ pub(crate) fn excite_from(
 /// simulation, sensors and processing are kept. Keywords are the CLI's flags. The design is
 /// simulated to check the robot's limits (`check=False` skips it); the scenario (`out`) and
 /// the reference trajectory (`csv`, `mcap`) are written only when it stays within them, never
-/// over an input. Ctrl-C stops it: nothing is written after the interrupt.
+/// over an input. `progress`, if given, is called with the fraction of the design done (0 to 1).
+/// Ctrl-C (or an exception in `progress`) stops it, within one evaluation of the design: nothing
+/// is written after it.
 #[doc = include_str!("../keywords/excite.txt")]
 #[pyfunction]
 #[pyo3(signature = (robot = None, *, scenario = None, duration = 20.0, harmonics = 5,
     base_frequency = 0.5, objective = "d-optimal", seed = 1, iterations = 1000, starts = 4,
     margin = 0.15, max_acceleration = None, max_jerk = None, ramp = None, samples = 200,
-    rate = 1000.0, out = None, csv = None, mcap = None, check = true, threads = None))]
+    rate = 1000.0, out = None, csv = None, mcap = None, check = true, threads = None,
+    progress = None))]
 #[allow(clippy::too_many_arguments)]
 pub(crate) fn excite(
     py: Python<'_>,
@@ -264,7 +267,9 @@ pub(crate) fn excite(
     mcap: Option<PathBuf>,
     check: bool,
     threads: Option<usize>,
+    progress: Option<PyObject>,
 ) -> PyResult<Excitation> {
+    let callback = progress;
     let opts = api::excite::ExciteOptions {
         from: excite_from(robot, scenario)?,
         duration,
@@ -286,12 +291,30 @@ pub(crate) fn excite(
         check,
     };
     let pool = thread_pool(threads)?;
-    let (result, notices) = cancellable(py, move |cancel| {
+    let work = move |cancel: Cancel, progress: Progress<f64>| {
         let mut notices = vec![];
         let stop = || is_cancelled(&cancel);
+        // At most every percent of the design's evaluations (they run on the pool's threads).
+        let evaluated = |done: usize, total: usize| {
+            if (100 * done) % total < 100 || done == total {
+                let _ = progress.send(done as f64 / total as f64);
+            }
+        };
+        let watch = api::excite::Watch {
+            evaluated: &evaluated,
+            stop: &stop,
+        };
         let result =
-            pool.install(|| api::excite::excite_until(&opts, &mut |n| notices.push(n), &stop));
+            pool.install(|| api::excite::excite_until(&opts, &mut |n| notices.push(n), &watch));
         (result, notices)
+    };
+    let mut shown = 0.0;
+    let (result, notices) = reporting(py, work, |py, f: f64| match &callback {
+        Some(cb) if f > shown => {
+            shown = f;
+            cb.call1(py, (f,)).map(drop)
+        }
+        _ => Ok(()),
     })?;
     warn_once(py, &notices)?;
     Ok(Excitation {

@@ -112,3 +112,22 @@ def test_scoring_refuses_bad_input_by_name(tmp_path):
         physid.score_motion(SHELL, duration=-1.0)
     with pytest.raises(ValueError, match="objective"):
         physid.score_motion(SHELL, objective="best")
+
+
+def test_progress_reaches_one_in_order_and_an_exception_stops_the_design(tmp_path):
+    import threading
+
+    seen = []
+    physid.excite("cheetah3", **QUICK, progress=lambda f: seen.append((f, threading.get_ident())))
+    fractions = [f for f, _ in seen]
+    assert fractions == sorted(fractions) and len(set(fractions)) == len(fractions)
+    assert fractions[-1] == 1.0 and 0 < fractions[0] < 0.1
+    assert {thread for _, thread in seen} == {threading.get_ident()}
+
+    def boom(f):
+        raise RuntimeError("enough")
+
+    out = tmp_path / "designed.toml"
+    with pytest.raises(RuntimeError, match="enough"):
+        physid.excite("cheetah3", **QUICK, out=out, progress=boom)
+    assert not out.exists()

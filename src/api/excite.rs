@@ -9,8 +9,8 @@ use super::ApiError;
 use crate::model::Model;
 use crate::sim::design::{self, Design, DesignOptions};
 
-/// What a design maximizes.
-pub use crate::sim::design::Objective;
+/// What a design maximizes, and what it tells its caller as it goes.
+pub use crate::sim::design::{Objective, Watch};
 use crate::sim::scenario::ExcitationSpec;
 use crate::trajectory::Trajectory;
 use std::path::{Path, PathBuf};
@@ -339,16 +339,19 @@ pub fn excite(
     opts: &ExciteOptions,
     notify: &mut dyn FnMut(Notice),
 ) -> Result<Excitation, ApiError> {
-    excite_until(opts, notify, &|| false)
+    excite_until(opts, notify, &design::Watch::NONE)
 }
 
-/// [`excite`], ending with [`ApiError::Cancelled`] and nothing written once `stop` returns
-/// true (asked after the design and after its check in simulation).
+/// [`excite`], the design telling `watch` of its progress (evaluations of the objective done
+/// of their total), ending with [`ApiError::Cancelled`] and nothing written once `watch.stop`
+/// returns true (asked between the design's evaluations, after the design and after its check
+/// in simulation).
 pub fn excite_until(
     opts: &ExciteOptions,
     notify: &mut dyn FnMut(Notice),
-    stop: &dyn Fn() -> bool,
+    watch: &design::Watch<'_>,
 ) -> Result<Excitation, ApiError> {
+    let stop = watch.stop;
     opts.validate()?;
     let base = ExciteBase::load(&opts.from, notify)?;
     let DesignSettings {
@@ -371,7 +374,10 @@ pub fn excite_until(
         .collect();
     let inputs: Vec<&Path> = base.inputs.iter().map(PathBuf::as_path).collect();
     crate::io::check_outputs(&outputs, &inputs)?;
-    let d = design::design(&base.model, base.range.as_deref(), &design_opts)?;
+    let d = design::design_watched(&base.model, base.range.as_deref(), &design_opts, watch)?;
+    if stop() {
+        return Err(ApiError::Cancelled);
+    }
     let scenario = base.scenario_text(&d, &design_opts, opts.out.as_deref())?;
     let check = if opts.check {
         let band = 5.0 * opts.harmonics as f64 * opts.base_frequency;

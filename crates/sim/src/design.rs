@@ -511,6 +511,42 @@ struct Problem<'a> {
     limits: Limits,
     basis: Basis,
     opts: &'a DesignOptions,
+    watch: &'a Watch<'a>,
+    /// Evaluations of the objective so far, over every start.
+    evaluations: std::sync::atomic::AtomicUsize,
+}
+
+/// What a design tells its caller as it goes, and asks it: `evaluated(done, total)` after each
+/// evaluation of the objective (from the pool's threads; `total` over every start), `stop()`
+/// between evaluations (a stopped design ends early with the best found so far).
+pub struct Watch<'a> {
+    /// Called after each evaluation with the evaluations done and their total.
+    pub evaluated: &'a (dyn Fn(usize, usize) + Sync),
+    /// Whether to stop.
+    pub stop: &'a (dyn Fn() -> bool + Sync),
+}
+
+fn unwatched(_: usize, _: usize) {}
+
+fn never() -> bool {
+    false
+}
+
+impl Watch<'static> {
+    /// Nothing told, never stopped.
+    pub const NONE: Watch<'static> = Watch {
+        evaluated: &unwatched,
+        stop: &never,
+    };
+}
+
+impl Problem<'_> {
+    /// Counts one evaluation and tells the watcher.
+    fn evaluated(&self) {
+        let done = 1 + (self.evaluations).fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+        let total = self.opts.starts * (self.opts.iterations + 1);
+        (self.watch.evaluated)(done, total);
+    }
 }
 
 /// The three objectives of an information matrix (−∞ when it is singular).
@@ -678,9 +714,13 @@ impl Problem<'_> {
         let mut data = Data::new(self.model);
         let mut x = self.scaled_into_limits(self.random_start(&mut rng), &mut data);
         let mut fx = self.value(&x, &mut data);
+        self.evaluated();
         let start = fx;
         let mut sigma = 0.3;
         for _ in 0..self.opts.iterations {
+            if (self.watch.stop)() {
+                break;
+            }
             let mut y = x.clone();
             for j in 0..y.offset.len() {
                 let size = coefficient_rms(&x, j).max(1e-6);
@@ -696,6 +736,7 @@ impl Problem<'_> {
             }
             let y = self.scaled_into_limits(y, &mut data);
             let fy = self.value(&y, &mut data);
+            self.evaluated();
             if fy >= fx {
                 (x, fx) = (y, fy);
                 sigma = (sigma * 1.5f64.powf(0.8)).min(2.0);
@@ -720,6 +761,16 @@ pub fn design(
     range: Option<&[(f64, f64)]>,
     opts: &DesignOptions,
 ) -> Result<Design, DesignError> {
+    design_watched(model, range, opts, &Watch::NONE)
+}
+
+/// [`design`], telling `watch` of each evaluation and stopping early when it asks.
+pub fn design_watched(
+    model: &Model,
+    range: Option<&[(f64, f64)]>,
+    opts: &DesignOptions,
+    watch: &Watch<'_>,
+) -> Result<Design, DesignError> {
     opts.validate()?;
     let clock = std::time::Instant::now();
     let limits = Limits::new(model, range, opts)?;
@@ -730,6 +781,8 @@ pub fn design(
         limits,
         basis,
         opts,
+        watch,
+        evaluations: Default::default(),
     };
     let runs: Vec<(f64, f64, FourierSeries, usize)> = (0..opts.starts)
         .into_par_iter()
