@@ -291,10 +291,28 @@ pub(crate) fn excite(
         check,
     };
     let pool = thread_pool(threads)?;
+    let (result, notices) = designed(py, opts, pool, callback)?;
+    warn_once(py, &notices)?;
+    Ok(Excitation {
+        inner: result.map_err(api_error)?,
+        out,
+        notices,
+    })
+}
+
+/// The design of `opts` on `pool`, off the GIL: its fraction done handed to `callback` on the
+/// calling thread (at most every percent, increasing), Ctrl-C or an exception in `callback`
+/// stopping it; the result and the notices that arose.
+fn designed(
+    py: Python<'_>,
+    opts: api::excite::ExciteOptions,
+    pool: rayon::ThreadPool,
+    callback: Option<PyObject>,
+) -> PyResult<(Result<api::excite::Excitation, api::ApiError>, Vec<Notice>)> {
     let work = move |cancel: Cancel, progress: Progress<f64>| {
         let mut notices = vec![];
         let stop = || is_cancelled(&cancel);
-        // At most every percent of the design's evaluations (they run on the pool's threads).
+        // The design's evaluations run on the pool's threads.
         let evaluated = |done: usize, total: usize| {
             if (100 * done) % total < 100 || done == total {
                 let _ = progress.send(done as f64 / total as f64);
@@ -309,18 +327,12 @@ pub(crate) fn excite(
         (result, notices)
     };
     let mut shown = 0.0;
-    let (result, notices) = reporting(py, work, |py, f: f64| match &callback {
+    reporting(py, work, |py, f: f64| match &callback {
         Some(cb) if f > shown => {
             shown = f;
             cb.call1(py, (f,)).map(drop)
         }
         _ => Ok(()),
-    })?;
-    warn_once(py, &notices)?;
-    Ok(Excitation {
-        inner: result.map_err(api_error)?,
-        out,
-        notices,
     })
 }
 

@@ -344,8 +344,8 @@ pub fn excite(
 
 /// [`excite`], the design telling `watch` of its progress (evaluations of the objective done
 /// of their total), ending with [`ApiError::Cancelled`] and nothing written once `watch.stop`
-/// returns true (asked between the design's evaluations, after the design and after its check
-/// in simulation).
+/// returns true (asked between the design's evaluations, which then end, and before anything
+/// is written).
 pub fn excite_until(
     opts: &ExciteOptions,
     notify: &mut dyn FnMut(Notice),
@@ -375,9 +375,6 @@ pub fn excite_until(
     let inputs: Vec<&Path> = base.inputs.iter().map(PathBuf::as_path).collect();
     crate::io::check_outputs(&outputs, &inputs)?;
     let d = design::design_watched(&base.model, base.range.as_deref(), &design_opts, watch)?;
-    if stop() {
-        return Err(ApiError::Cancelled);
-    }
     let scenario = base.scenario_text(&d, &design_opts, opts.out.as_deref())?;
     let check = if opts.check {
         let band = 5.0 * opts.harmonics as f64 * opts.base_frequency;
