@@ -4,8 +4,11 @@ the extension (`#[doc = include_str!(…)]`). Every keyword of every function is
 its CLI flag's help (flag: the keyword with dashes), or, for a keyword the CLI has no flag for,
 by the text below (PYTHON_ONLY).
 
+The same text closes each function's docstring in the type stubs (python/physid/_physid.pyi),
+after a line "Keywords:", for editors that read the stubs.
+
 usage: python scripts/python_keywords.py [--write]
-  (default: check that python/keywords/ is current; $PHYSID_BIN the built physid, and
+  (default: check that python/keywords/ and the stubs are current; $PHYSID_BIN the built physid, and
    $PHYSID_PYTHON a folder holding the built package, as scripts/test.sh makes them)
 """
 import inspect
@@ -108,6 +111,21 @@ def document(name, flags):
     return "\n".join(lines) + "\n"
 
 
+def in_stub(stub, name, text):
+    """`stub` (the .pyi text) with the docstring of function `name` (a class: its __init__)
+    ending in `text`, replacing what followed its "Keywords:" line."""
+    at = stub.index(f"\nclass {name}:") if name[0].isupper() else stub.index(f"\ndef {name}(")
+    if name[0].isupper():
+        at = stub.index("    def __init__(", at)
+    indent = " " * (8 if name[0].isupper() else 4)
+    opening = stub.index(f'{indent}"""', stub.index(":\n", stub.index(") ->", at)))
+    closing = stub.index('"""', opening + len(indent) + 3)
+    body = stub[opening + len(indent) + 3:closing].split(f"\n\n{indent}Keywords:")[0].rstrip()
+    keywords = textwrap.indent(text.strip("\n").split("Keywords:", 1)[1].strip("\n"), indent)
+    doc = f"{body}\n\n{indent}Keywords:\n\n{keywords}\n{indent}"
+    return stub[:opening + len(indent) + 3] + doc + stub[closing:]
+
+
 if __name__ == "__main__":
     package = os.environ.get("PHYSID_PYTHON")
     if package:
@@ -117,8 +135,11 @@ if __name__ == "__main__":
     flags = cli_flags()
     folder = os.path.join(ROOT, "python", "keywords")
     stale = []
+    stub_path = os.path.join(ROOT, "python", "physid", "_physid.pyi")
+    stub = open(stub_path).read()
     for name, command in COMMANDS.items():
         text = document(name, flags[command])
+        stub = in_stub(stub, name, text)
         path = os.path.join(folder, f"{name}.txt")
         if "--write" in sys.argv:
             os.makedirs(folder, exist_ok=True)
@@ -126,6 +147,11 @@ if __name__ == "__main__":
                 f.write(text)
         elif not os.path.exists(path) or open(path).read() != text:
             stale.append(path)
+    if "--write" in sys.argv:
+        with open(stub_path, "w") as f:
+            f.write(stub)
+    elif open(stub_path).read() != stub:
+        stale.append(stub_path)
     if stale:
         sys.exit(f"stale keyword documentation (python scripts/python_keywords.py --write): {stale}")
     print(f"python keywords: {len(COMMANDS)} passed, 0 failed")

@@ -31,7 +31,22 @@ class Robot:
         no_geometry_ellipsoids: bool = False,
     ) -> None:
         """Load the robot; the keyword arguments are the CLI's robot flags. Loader warnings are
-        issued as physid.PhysidWarning, once per file and process."""
+        issued as physid.PhysidWarning, once per file and process.
+
+        Keywords:
+
+        robot: The robot: a physid.Robot (as returned by physid.Robot), or "cheetah3" (the built-in
+            leg), a URDF or a robot TOML path.
+        rotor_model: Override the rotor treatment: full (spinning rotor bodies) or reflected
+            (armature). One of: full, reflected.
+        no_rotors: Drop the rotors (the link-only model).
+        ellipsoid_margin: URDF robots: lengthen every semi-axis of the bounding ellipsoids computed
+            from the geometry by this much (m).
+        package_dirs: URDF robots: a folder holding ROS packages, for `package://` meshes
+            (repeatable; the URDF's own folders and ROS_PACKAGE_PATH are searched first).
+        no_geometry_ellipsoids: URDF robots: take no bounding ellipsoids from the geometry (only a
+            sidecar's).
+        """
     @property
     def name(self) -> str: ...
     @property
@@ -144,7 +159,58 @@ def identify(
     """Identify from data files (CSV, MCAP, rosbag2) as `physid identify` does.
     mass_bounds=(lo, hi) holds each body's mass within lo..hi times the description's
     (0 <= lo <= 1 <= hi), as --mass-bounds; total_mass=(lo, hi) holds the robot's moving
-    mass (links and rotors) within lo..hi kg, as --total-mass."""
+    mass (links and rotors) within lo..hi kg, as --total-mass.
+
+    Keywords:
+
+    robot: The robot: a physid.Robot (as returned by physid.Robot), or "cheetah3" (the built-in
+        leg), a URDF or a robot TOML path.
+    data: Samples, one or more runs: physid MCAP logs (their processed signals), other MCAP
+        files or rosbag2 directories with JointState, or CSV. Runs are joined without
+        differentiating across their seams. Paths, physid.Data held in memory, or a list of
+        them.
+    validate_data: Validate on other runs (all their samples). Paths, physid.Data held in
+        memory, or a list of them.
+    train: Training samples, `a:b` (indices, end exclusive); default all. One data file only.
+    validate: Validation samples of the same file, `a:b`. One data file only.
+    constraints: Constraint set: none, semi, consistent, ellipsoid. Default: the tightest the
+        description supports (ellipsoid when every body has a bounding ellipsoid, else
+        consistent).
+    friction: Friction terms per joint, comma-separated: viscous and coulomb (always; the
+        model's own, paper eq. 9), plus any of offset (a torque offset), direction (direction-
+        dependent Coulomb), stribeck:<v> (Stribeck excess with velocity v rad/s). Default:
+        viscous,coulomb.
+    effects: Effect terms from the diagnosis library, comma-separated: torque_offset,
+        torque_gain, time_delay, spring, stribeck:<Stribeck velocity, rad/s>,
+        asymmetric_coulomb, load_dependent_friction, cogging:<harmonic per rotor revolution>,
+        rotor_inertia, tilt, compliance[:<compliance 1/k of the secant, rad/(N m); 0: the
+        tangent>], backlash[:<width of the secant, rad: 0.01, 0.02 or 0.04; 0: the tangent>],
+        payload[:<body number from 1, default the last>]; see docs/diagnose.md.
+    effects_from: Take the effects a diagnosis confirmed: its report.json (`physid diagnose
+        out`).
+    prior_weight: Weight of the prior term w ‖θ − θ̂‖² (θ̂: the robot description's parameters).
+        Default: 0.000001.
+    eps: Margin ε of the strict matrix inequalities. Default: 0.000001.
+    regularizer: Prior term: euclidean (w ‖θ − θ̂‖², the paper) or logdet (w Σ Bregman
+        divergence of −log det between J and the prior's J; Lee, Wensing & Park). Default:
+        euclidean.
+    topic: The `sensor_msgs/msg/JointState` topic of an MCAP file or rosbag2 directory (default:
+        physid's processed signals if the log has them, else /joint_states).
+    stamp: Which time stamps a joint state: log (the recorder's receive time) or header (the
+        message's header.stamp, when the driver sampled the joints). Default: log.
+    cutoff: Low-pass cutoff (Hz) of the signals derived from the log (q̈, and q̇ when not
+        logged): zero-phase 2nd-order Butterworth. Default: 20 Hz, at most a tenth of the sample
+        rate.
+    lock: Joints to hold at their logged position (q̇ = q̈ = 0; their torque is not fitted),
+        e.g. a gripper that never moves; comma-separated names.
+    only: Fit only these joints' torques; every other joint is locked (comma-separated names).
+    allow_few_samples: Accept fewer equations than parameters (the prior then decides the rest).
+    mass_bounds: Hold each body's mass within LO..HI times the description's (0 <= LO <= 1 <=
+        HI, e.g. 0.5,2): what the data do not determine otherwise goes wherever the constraints
+        allow.
+    total_mass: Hold the robot's total moving mass (links and rotors) within LO..HI kg (e.g.
+        3.5,3.9: the arm weighed on a scale), where the data weigh only some bodies.
+    """
 
 class Diagnosis:
     """A diagnosis of the gap between a description and its runs; to_dict() is
@@ -208,7 +274,42 @@ def diagnose(
 ) -> Diagnosis:
     """Diagnose the gap between the description and its runs as `physid diagnose` does; a
     description written by `Identification.write_urdf` carries its information matrix in its
-    sidecar, read unless `description_information=False`."""
+    sidecar, read unless `description_information=False`.
+
+    Keywords:
+
+    robot: The robot: a physid.Robot (as returned by physid.Robot), or "cheetah3" (the built-in
+        leg), a URDF or a robot TOML path.
+    data: Training data (CSV with ddq, or MCAP); repeat for several runs. Paths, physid.Data
+        held in memory, or a list of them.
+    validate: Validation data; without it the last holdout of the data is held out. Paths,
+        physid.Data held in memory, or a list of them.
+    baseline_data: "What changed": runs of the same robot before the change (a tool change, a
+        repair, a new gripper). The description is calibrated on them with their standing
+        effects, which are taken out of data; only what differs is attributed. Needs
+        description_uncertainty. Paths, physid.Data held in memory, or a list of them.
+    constraints: Constraint set of the nominal model. Default: consistent.
+    holdout: Fraction held out for validation when no validate is given. Default: 0.3.
+    description_uncertainty: How far the description's inertial parameters can be trusted
+        (relative, 0.1 = 10 %): tests the identified parameters against it for effects that
+        identification absorbs (torque gain, tilt, payload). Off without it.
+    payload_any_body: Search a payload over every body, not only the last (with
+        description_uncertainty; inner bodies are found only where the motion separates their
+        parameters).
+    topic: The `sensor_msgs/msg/JointState` topic of an MCAP file or rosbag2 directory (default:
+        physid's processed signals if the log has them, else /joint_states).
+    stamp: Which time stamps a joint state: log (the recorder's receive time) or header (the
+        message's header.stamp, when the driver sampled the joints). Default: log.
+    cutoff: Low-pass cutoff (Hz) of the signals derived from the log (q̈, and q̇ when not
+        logged): zero-phase 2nd-order Butterworth. Default: 20 Hz, at most a tenth of the sample
+        rate.
+    lock: Joints to hold at their logged position (q̇ = q̈ = 0; their torque is not fitted),
+        e.g. a gripper that never moves; comma-separated names.
+    only: Fit only these joints' torques; every other joint is locked (comma-separated names).
+    description_information: True unless: ignore the information matrix in the description's
+        sidecar (`identify out_urdf` writes it; read from a sidecar given as robot, or beside a
+        URDF given as robot). (False is the CLI's no_description_information.)
+    """
 
 class Simulation:
     """A simulated excitation experiment, its log written; to_dict() is `physid simulate --json`."""
@@ -237,7 +338,20 @@ def simulate(
     seed: Optional[int] = None,
     progress: Optional[Callable[[float], None]] = None,
 ) -> Simulation:
-    """Simulate a scenario and log it to MCAP (and CSV), as `physid simulate` does."""
+    """Simulate a scenario and log it to MCAP (and CSV), as `physid simulate` does.
+
+    Keywords:
+
+    scenario: A scenario TOML file.
+    out: Output MCAP file.
+    csv: Also write the processed samples (t, q, dq, ddq, tau) as CSV.
+    engine: Override the engine. One of: physid, rapier.
+    duration: Override the duration (s).
+    seed: Override the seed.
+    progress: A callable told the progress (simulate: the fraction of the run done; excite: the
+        fraction of the design's evaluations done; experiment, sweep: done, total), on the
+        calling thread, in order; an exception in it stops the work.
+    """
 
 class Excitation:
     """A designed excitation; to_dict() is `physid excite --json`."""
@@ -287,7 +401,47 @@ def excite(
     threads: Optional[int] = None,
     progress: Optional[Callable[[float], None]] = None,
 ) -> Excitation:
-    """Design an excitation within the robot's limits, as `physid excite` does."""
+    """Design an excitation within the robot's limits, as `physid excite` does.
+
+    Keywords:
+
+    robot: The robot: a physid.Robot (as returned by physid.Robot), or "cheetah3" (the built-in
+        leg), a URDF or a robot TOML path.
+    scenario: Base scenario: its robot, simulation, sensors, processing and experiment are kept
+        and its excitation replaced; a Fourier excitation's `offset ± amplitude` narrows the
+        joint ranges (the other limits come from the robot).
+    duration: Duration of the written scenario (s). Default: 20.
+    harmonics: Harmonics per joint. Default: 5.
+    base_frequency: Fundamental frequency (Hz): the motion repeats every 1/f s. Default: 0.5.
+    objective: What is maximized. One of: d-optimal, e-optimal, condition. Default: d-optimal.
+    seed: Seed of the random starts and steps. Default: 1.
+    iterations: Optimization steps per start (0: a random excitation scaled into the limits).
+        Default: 1000.
+    starts: Random starts (in parallel; the best is kept). Default: 4.
+    margin: Fraction of every limit left free. Default: 0.15.
+    max_acceleration: Acceleration limit (rad/s²): one for every joint, or one per joint
+        separated by commas. Default: the description's (a URDF `<limit acceleration=…>`, a
+        robot TOML's `limits.acceleration`), else 3 rad/s², below common arms' limits.
+    max_jerk: Jerk limit (rad/s³), as max_acceleration; default the description's, else 30
+        rad/s³; `inf`: no jerk limit (the acceleration limit, which bounds the motor current,
+        has no such value).
+    ramp: Start and end at rest (s): the motion fades in from rest over this long and out to
+        rest at the end (velocity, acceleration and jerk zero at both ends). Default: one period
+        of the fundamental, at most a quarter of the duration; 0 starts mid-motion (periodic).
+    samples: Samples per period at which the information is evaluated. Default: 200.
+    rate: Sample rate of csv and mcap (Hz; default 1000); needs one of them.
+    out: Write the scenario here (TOML); it must not exist as an input of this run.
+    csv: Also write the designed trajectory (t, q, q̇, q̈ per joint, named by joint) as CSV, to
+        send to a controller.
+    mcap: Also write the designed trajectory as MCAP (physid_msgs/msg/JointSample on
+        /physid/excitation: position, velocity, acceleration).
+    check: True unless: do not simulate the design to check its limits. (False is the CLI's
+        no_check.)
+    threads: Worker threads (0 = all cores). Results do not depend on it. Default: 0.
+    progress: A callable told the progress (simulate: the fraction of the run done; excite: the
+        fraction of the design's evaluations done; experiment, sweep: done, total), on the
+        calling thread, in order; an exception in it stops the work.
+    """
 
 def score_motion(
     scenario: Path,
@@ -301,7 +455,22 @@ def score_motion(
     rate: float = 1000.0,
     threads: Optional[int] = None,
 ) -> dict[str, Any]:
-    """A scenario's own motion scored as `physid excite --score --json` scores it."""
+    """A scenario's own motion scored as `physid excite --score --json` scores it.
+
+    Keywords:
+
+    scenario: Base scenario: its robot, simulation, sensors, processing and experiment are kept
+        and its excitation replaced; a Fourier excitation's `offset ± amplitude` narrows the
+        joint ranges (the other limits come from the robot).
+    duration: Duration of the written scenario (s). Default: 20.
+    harmonics: Harmonics per joint. Default: 5.
+    base_frequency: Fundamental frequency (Hz): the motion repeats every 1/f s. Default: 0.5.
+    objective: What is maximized. One of: d-optimal, e-optimal, condition. Default: d-optimal.
+    margin: Fraction of every limit left free. Default: 0.15.
+    samples: Samples per period at which the information is evaluated. Default: 200.
+    rate: Sample rate of csv and mcap (Hz; default 1000); needs one of them.
+    threads: Worker threads (0 = all cores). Results do not depend on it. Default: 0.
+    """
 
 class Sweep:
     """A parameter sweep's result: its folder, what ran, the merged tables once complete."""
@@ -329,7 +498,18 @@ def sweep(
     threads: Optional[int] = None,
     progress: Optional[Callable[[int, int], None]] = None,
 ) -> Sweep:
-    """Run a parameter sweep (resumable, shardable), as `physid sweep` does."""
+    """Run a parameter sweep (resumable, shardable), as `physid sweep` does.
+
+    Keywords:
+
+    sweep: A sweep TOML file (docs/sweeps.md).
+    out: Output directory (default results/<sweep file name>).
+    shard: Run only cells with index ≡ K (mod N), e.g. a job array's task: `shard 3/16`.
+    threads: Worker threads (default: all cores).
+    progress: A callable told the progress (simulate: the fraction of the run done; excite: the
+        fraction of the design's evaluations done; experiment, sweep: done, total), on the
+        calling thread, in order; an exception in it stops the work.
+    """
 
 class Experiment:
     """The sample-size experiment: every (seed, n_s, constraint set) cell."""
@@ -350,7 +530,17 @@ def experiment(
     threads: Optional[int] = None,
     progress: Optional[Callable[[int, int], None]] = None,
 ) -> Experiment:
-    """Run a scenario's sample-size experiment as `physid experiment` does."""
+    """Run a scenario's sample-size experiment as `physid experiment` does.
+
+    Keywords:
+
+    scenario: A scenario TOML file.
+    seeds: Override the number of seeds.
+    threads: Worker threads (default: all cores). Results do not depend on it.
+    progress: A callable told the progress (simulate: the fraction of the run done; excite: the
+        fraction of the design's evaluations done; experiment, sweep: done, total), on the
+        calling thread, in order; an exception in it stops the work.
+    """
 
 class Comparison:
     """A comparison of results (`physid compare`): per group medians, ratio, p-value, outcome."""
@@ -377,7 +567,22 @@ def compare(
     allow_too_few: bool = False,
     max_n_s: Optional[int] = None,
 ) -> Comparison:
-    """Compare results against a baseline folder, or two constraint sets (variant="A<=B")."""
+    """Compare results against a baseline folder, or two constraint sets (variant="A<=B").
+
+    Keywords:
+
+    result: A results folder (of physid experiment or physid sweep).
+    baseline: Baseline result directory to compare against.
+    variant: Two constraint sets within RESULT: `ellipsoid<=consistent` (the first no worse).
+    metric: Metric column, lower is better (default val_rms).
+    tolerance: Relative tolerance of the median ratio (default 0.05).
+    alpha: One-sided level of the signed-rank test (default 0.01).
+    min_pairs: Fewest seed pairs a group needs to be able to fail (default 6; raised to what
+        alpha needs: the exact test's smallest p on n pairs is 2^-n, so 7 at 0.01).
+    allow_too_few: Let groups with too few pairs to reach alpha pass (by default they fail the
+        run with exit 2: a group that cannot fail is not a pass).
+    max_n_s: Only groups with n_s at most this.
+    """
 
 def load(
     robot: Robot,
@@ -390,6 +595,26 @@ def load(
     only: Optional[Names] = None,
 ) -> list[dict[str, Any]]:
     """Read files through physid's pipeline: per file its runs (t, q, qd, qdd, tau, index),
-    pipeline report and notices."""
+    pipeline report and notices.
+
+    Keywords:
+
+    robot: The robot: a physid.Robot (as returned by physid.Robot), or "cheetah3" (the built-in
+        leg), a URDF or a robot TOML path.
+    data: Samples, one or more runs: physid MCAP logs (their processed signals), other MCAP
+        files or rosbag2 directories with JointState, or CSV. Runs are joined without
+        differentiating across their seams. Paths, physid.Data held in memory, or a list of
+        them.
+    topic: The `sensor_msgs/msg/JointState` topic of an MCAP file or rosbag2 directory (default:
+        physid's processed signals if the log has them, else /joint_states).
+    stamp: Which time stamps a joint state: log (the recorder's receive time) or header (the
+        message's header.stamp, when the driver sampled the joints). Default: log.
+    cutoff: Low-pass cutoff (Hz) of the signals derived from the log (q̈, and q̇ when not
+        logged): zero-phase 2nd-order Butterworth. Default: 20 Hz, at most a tenth of the sample
+        rate.
+    lock: Joints to hold at their logged position (q̇ = q̈ = 0; their torque is not fitted),
+        e.g. a gripper that never moves; comma-separated names.
+    only: Fit only these joints' torques; every other joint is locked (comma-separated names).
+    """
 
 def version() -> str: ...
