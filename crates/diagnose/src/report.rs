@@ -833,8 +833,12 @@ const REPORT_CSS: &str = ".physid-report { font-family: sans-serif; color: #222;
 /// The report as one `div.physid-report` with its own scoped style and the plots inline (SVG):
 /// what a notebook shows, and the body of [`html`]'s page.
 pub fn html_fragment(d: &Diagnosis, plots: &[(String, String)]) -> String {
+    fragment(d, &document(d), plots)
+}
+
+/// [`html_fragment`] of the report's document `doc`.
+fn fragment(d: &Diagnosis, doc: &Document, plots: &[(String, String)]) -> String {
     let verdict = physid_io::serde_name(&d.verdict);
-    let doc = document(d);
     let figures: String = plots
         .iter()
         .map(|(name, svg)| {
@@ -858,9 +862,10 @@ pub fn html_fragment(d: &Diagnosis, plots: &[(String, String)]) -> String {
 /// `plots` (file name, SVG text) inline, then each section of the report folded under its
 /// title. No script, no external resource.
 pub fn html(d: &Diagnosis, plots: &[(String, String)]) -> String {
+    let doc = document(d);
     format!(
         "<!DOCTYPE html>\n<html lang=\"en\">\n<head>\n<meta charset=\"utf-8\">\n<title>{title}</title>\n<style>\nbody {{ max-width: 1150px; margin: 2em auto; padding: 0 1em; }}\n</style>\n</head>\n<body>\n{report}</body>\n</html>\n",
-        title = escape_html(&document(d).title),
-        report = html_fragment(d, plots),
+        title = escape_html(&doc.title),
+        report = fragment(d, &doc, plots),
     )
 }
