@@ -28,14 +28,12 @@ pub struct Args {
 /// and `provenance.json`.
 pub fn run(a: Args) -> anyhow::Result<()> {
     let (path, seeds, threads) = (&a.scenario, a.seeds, a.threads);
-    let (sc, model, text) = physid::sim::scenario::load(path)?;
-    let mut spec = experiment::ExperimentSpec::from_scenario(&sc)
-        .map_err(|e| anyhow::anyhow!("{}: [experiment]: {e}", path.display()))?;
-    if let Some(n) = seeds {
-        spec.seeds = n;
-    }
-    spec.validate()
-        .map_err(|e| anyhow::anyhow!("{}: {e}", path.display()))?;
+    let physid::api::experiment::PlannedExperiment {
+        scenario: sc,
+        model,
+        text,
+        spec,
+    } = physid::api::experiment::plan(path, seeds)?;
     let base = path.parent().unwrap_or(std::path::Path::new("."));
     let inputs: Vec<std::path::PathBuf> = physid::io::scenario_files(path)
         .into_iter()

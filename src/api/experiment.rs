@@ -4,6 +4,8 @@
 
 use super::ApiError;
 use crate::experiment::{tables, ExperimentSpec};
+use crate::model::Model;
+use crate::sim::scenario::Scenario;
 use std::path::Path;
 
 pub use crate::experiment::tables::csv_text;
@@ -22,6 +24,38 @@ pub struct ExperimentRun {
     pub sets: Vec<String>,
 }
 
+/// A scenario file's experiment, read and checked: what `physid experiment` and
+/// [`run_scenario`] run.
+pub struct PlannedExperiment {
+    /// The scenario.
+    pub scenario: Scenario,
+    /// Its robot.
+    pub model: Model,
+    /// The scenario file's text (for provenance).
+    pub text: String,
+    /// Its `[experiment]` table, `seeds` applied, validated.
+    pub spec: ExperimentSpec,
+}
+
+/// Reads the scenario at `path` and its `[experiment]` (`seeds` overriding its seed count),
+/// checked; errors name the file.
+pub fn plan(path: &Path, seeds: Option<usize>) -> Result<PlannedExperiment, ApiError> {
+    let (scenario, model, text) = crate::sim::scenario::load(path)?;
+    let invalid = |message: String| ApiError::invalid(path, message);
+    let mut spec = ExperimentSpec::from_scenario(&scenario)
+        .map_err(|e| invalid(format!("[experiment]: {e}")))?;
+    if let Some(n) = seeds {
+        spec.seeds = n;
+    }
+    spec.validate().map_err(|e| invalid(e.to_string()))?;
+    Ok(PlannedExperiment {
+        scenario,
+        model,
+        text,
+        spec,
+    })
+}
+
 /// Runs the `[experiment]` of the scenario at `path` (`seeds` overrides its seed count) on the
 /// current rayon pool, calling `report(done, total)` as seeds finish (from the pool's threads).
 /// Experiments over several excitation motions are the binary's (`physid experiment`).
@@ -30,21 +64,20 @@ pub fn run_scenario(
     seeds: Option<usize>,
     report: &(dyn Fn(usize, usize) + Sync),
 ) -> Result<ExperimentRun, ApiError> {
-    let (sc, model, _) = crate::sim::scenario::load(path)?;
+    let PlannedExperiment {
+        scenario,
+        model,
+        spec,
+        ..
+    } = plan(path, seeds)?;
     let invalid = |message: String| ApiError::invalid(path, message);
-    let mut spec =
-        ExperimentSpec::from_scenario(&sc).map_err(|e| invalid(format!("[experiment]: {e}")))?;
-    if let Some(n) = seeds {
-        spec.seeds = n;
-    }
-    spec.validate().map_err(|e| invalid(e.to_string()))?;
     if !spec.excitations.is_empty() {
         return Err(invalid(format!(
             "an experiment over several excitation motions ([[experiment.excitations]]) is not in the Python package yet: run `physid experiment {}`",
             path.display()
         )));
     }
-    let rows = crate::experiment::run(&model, &sc, &spec, report)
+    let rows = crate::experiment::run(&model, &scenario, &spec, report)
         .map_err(|e| invalid(format!("running the experiment: {e}")))?;
     Ok(ExperimentRun {
         rows,
