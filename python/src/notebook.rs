@@ -1,6 +1,8 @@
 //! What a notebook shows for each result (`_repr_html_`): a fragment, never a page, its style
 //! scoped to its own `div` so that nothing around it is restyled; the numbers with their units.
 
+use physid::api::document::{escape_html, Table};
+
 /// Style of every result but the diagnosis (which carries its report's own): scoped to
 /// `div.physid-result`.
 const CSS: &str = ".physid-result { font-family: sans-serif; font-size: 13px; }
@@ -10,14 +12,6 @@ const CSS: &str = ".physid-result { font-family: sans-serif; font-size: 13px; }
 .physid-result td:first-child, .physid-result th:first-child { text-align: left; }
 .physid-result .facts { color: #333; margin: 0.2em 0 0.4em; }
 ";
-
-/// `text` with `&`, `<`, `>` and `"` escaped for HTML.
-pub(crate) fn escape(text: &str) -> String {
-    text.replace('&', "&amp;")
-        .replace('<', "&lt;")
-        .replace('>', "&gt;")
-        .replace('"', "&quot;")
-}
 
 /// A number as a table shows it: four significant figures, NaN and infinities as words.
 pub(crate) fn number(x: f64) -> String {
@@ -36,23 +30,11 @@ pub(crate) fn number(x: f64) -> String {
     }
 }
 
-/// An HTML table of `header` and `rows` (cells already text; escaped here).
+/// An HTML table of `header` and `rows` (cells escaped).
 pub(crate) fn table(header: &[&str], rows: &[Vec<String>]) -> String {
-    let cells = |tag: &str, row: &mut dyn Iterator<Item = &str>| -> String {
-        row.map(|c| format!("<{tag}>{}</{tag}>", escape(c)))
-            .collect()
-    };
-    let head = cells("th", &mut header.iter().copied());
-    let body: String = rows
-        .iter()
-        .map(|r| {
-            format!(
-                "<tr>{}</tr>\n",
-                cells("td", &mut r.iter().map(String::as_str))
-            )
-        })
-        .collect();
-    format!("<table>\n<thead><tr>{head}</tr></thead>\n<tbody>\n{body}</tbody>\n</table>\n")
+    let mut t = Table::new(header.iter().copied());
+    rows.iter().for_each(|r| t.row(r.iter().cloned()));
+    t.to_html()
 }
 
 /// A result's card: its `title` (the class and what it is about), a line of `facts`
@@ -60,15 +42,15 @@ pub(crate) fn table(header: &[&str], rows: &[Vec<String>]) -> String {
 pub(crate) fn card(title: &str, facts: &[(&str, String)], tables: &[(&str, String)]) -> String {
     let facts: Vec<String> = facts
         .iter()
-        .map(|(k, v)| format!("{}: <b>{}</b>", escape(k), escape(v)))
+        .map(|(k, v)| format!("{}: <b>{}</b>", escape_html(k), escape_html(v)))
         .collect();
     let tables: String = tables
         .iter()
-        .map(|(caption, t)| format!("<div>{}</div>\n{t}", escape(caption)))
+        .map(|(caption, t)| format!("<div>{}</div>\n{t}", escape_html(caption)))
         .collect();
     format!(
         "<div class=\"physid-result\">\n<style>\n{CSS}</style>\n<b>{}</b>\n<div class=\"facts\">{}</div>\n{tables}</div>\n",
-        escape(title),
+        escape_html(title),
         facts.join(" · ")
     )
 }

@@ -39,6 +39,7 @@ pub use crate::options::OptionError;
 // The types the entry points take and return, for callers that stand on this floor alone (the
 // Python package).
 pub use crate::ident::{bodies, ConstraintSet};
+pub use crate::io::document;
 pub use crate::model::{Model, RotorModel};
 pub use crate::prepare::Logged;
 pub use crate::spatial::{ConsistencyReport, PARAM_NAMES};

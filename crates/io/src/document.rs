@@ -145,6 +145,23 @@ impl Table {
         }
     }
 
+    /// The table as HTML, every cell escaped.
+    pub fn to_html(&self) -> String {
+        let cells = |row: &[String], tag: &str| -> String {
+            row.iter()
+                .map(|c| format!("<{tag}>{}</{tag}>", escape_html(c)))
+                .collect()
+        };
+        let mut out = format!(
+            "<table>\n<thead>\n<tr>{}</tr>\n</thead>\n<tbody>\n",
+            cells(&self.header, "th")
+        );
+        for row in &self.rows {
+            let _ = writeln!(out, "<tr>{}</tr>", cells(row, "td"));
+        }
+        out + "</tbody>\n</table>\n"
+    }
+
     /// Appends a row (as wide as the header).
     pub fn row<S: Into<String>>(&mut self, cells: impl IntoIterator<Item = S>) {
         let row: Vec<String> = cells.into_iter().map(Into::into).collect();
@@ -357,21 +374,7 @@ fn html_block(block: &Block) -> String {
     match block {
         Block::Heading(t) => format!("<h3>{}</h3>\n", t.to_html()),
         Block::Paragraph(t) => format!("<p>{}</p>\n", t.to_html()),
-        Block::Table(t) => {
-            let cells = |row: &[String], tag: &str| -> String {
-                row.iter()
-                    .map(|c| format!("<{tag}>{}</{tag}>", escape_html(c)))
-                    .collect()
-            };
-            let mut out = format!(
-                "<table>\n<thead>\n<tr>{}</tr>\n</thead>\n<tbody>\n",
-                cells(&t.header, "th")
-            );
-            for row in &t.rows {
-                let _ = writeln!(out, "<tr>{}</tr>", cells(row, "td"));
-            }
-            out + "</tbody>\n</table>\n"
-        }
+        Block::Table(t) => t.to_html(),
     }
 }
 
