@@ -35,7 +35,8 @@ COMMANDS = {
     "Robot": "model",
 }
 
-# A keyword whose flag is its negation.
+# A keyword whose flag is its negation (python/src/errors.rs, keyword(), names flags as keywords
+# in messages with its own list of exceptions).
 NEGATED = {"description_information": "no-description-information", "check": "no-check"}
 
 # A keyword whose flag is named otherwise.

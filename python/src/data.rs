@@ -172,6 +172,22 @@ pub(crate) fn runs(
     Ok((paths, logs))
 }
 
+/// The runs of several keywords (`(keyword, value)`, as [`runs`]): per keyword its paths, and
+/// every run held in memory among them, for the reading options.
+pub(crate) fn runs_of<const K: usize>(
+    roles: [(&str, Option<&Bound<'_, PyAny>>); K],
+    joint_names: &[String],
+) -> PyResult<([Vec<PathBuf>; K], Vec<MemoryLog>)> {
+    let mut memory = vec![];
+    let mut paths: [Vec<PathBuf>; K] = std::array::from_fn(|_| vec![]);
+    for ((what, v), out) in roles.into_iter().zip(&mut paths) {
+        let (p, m) = runs(what, v, joint_names)?;
+        *out = p;
+        memory.extend(m);
+    }
+    Ok((paths, memory))
+}
+
 /// Time stamps from `t`, or from `rate` (Hz) as `k / rate`: one of them.
 fn stamps(t: Option<&Bound<'_, PyAny>>, rate: Option<f64>, samples: usize) -> PyResult<Vec<f64>> {
     match (t, rate) {

@@ -1,7 +1,7 @@
 //! `physid.diagnose` and its `Diagnosis` (`physid diagnose`).
 
 use crate::convert::*;
-use crate::data::runs;
+use crate::data::runs_of;
 use crate::errors::*;
 use crate::robot::Robot;
 use crate::work::*;
@@ -285,13 +285,13 @@ pub(crate) fn diagnose<'py>(
     only: Option<&Bound<'py, PyAny>>,
     description_information: bool,
 ) -> PyResult<Diagnosis> {
-    let joints = robot.model.joint_names();
-    let (files, mut memory) = runs("data", Some(data), &joints)?;
+    let roles = [
+        ("data", Some(data)),
+        ("validate", validate),
+        ("baseline_data", baseline_data),
+    ];
+    let ([files, validate, baseline], memory) = runs_of(roles, &robot.model.joint_names())?;
     let mut o = api::diagnose::DiagnoseOptions::new(files);
-    let (validate, more) = runs("validate", validate, &joints)?;
-    memory.extend(more);
-    let (baseline, more) = runs("baseline_data", baseline_data, &joints)?;
-    memory.extend(more);
     (o.validate, o.baseline_data) = (validate, baseline);
     o.read = read_options(topic, stamp, cutoff, lock, only)?;
     o.read.memory = memory.into();

@@ -130,7 +130,8 @@ pub(crate) fn in_keywords(message: &str) -> String {
     out
 }
 
-/// The keyword of the CLI's flag `--name`.
+/// The keyword of the CLI's flag `--name` (scripts/python_keywords.py keeps its own exceptions,
+/// NEGATED and FLAG, for the generated keyword documentation).
 fn keyword(name: &str) -> String {
     match name {
         "no-description-information" => "description_information=False".into(),

@@ -1,7 +1,7 @@
 //! `physid.load`, `physid.identify`, `physid.identify_arrays` and the `Identification` (`physid identify`).
 
 use crate::convert::*;
-use crate::data::runs;
+use crate::data::{runs, runs_of};
 use crate::errors::*;
 use crate::robot::Robot;
 use crate::work::*;
@@ -367,10 +367,8 @@ fn training_runs(
     data: &Bound<'_, PyAny>,
     validate_data: Option<&Bound<'_, PyAny>>,
 ) -> PyResult<IdentifyOptions> {
-    let joints = m.joint_names();
-    let (files, mut memory) = runs("data", Some(data), &joints)?;
-    let (validate_files, more) = runs("validate_data", validate_data, &joints)?;
-    memory.extend(more);
+    let roles = [("data", Some(data)), ("validate_data", validate_data)];
+    let ([files, validate_files], memory) = runs_of(roles, &m.joint_names())?;
     let mut o = IdentifyOptions::new(files);
     o.validate_data = validate_files;
     o.read.memory = memory.into();
