@@ -857,3 +857,29 @@ fn data_whose_time_stamps_do_not_advance_are_refused_by_name() {
         "{err}"
     );
 }
+
+#[test]
+fn the_diagnosis_is_the_same_whatever_the_thread_count() {
+    // The candidates' cross-validation, the folds' fits and the blocks' columns run in
+    // parallel; each result is read back in a fixed order, so one thread and two give the same
+    // report to the last digit (a payload case: the ladder from the description runs too).
+    let in_pool = |threads: usize| {
+        rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .build()
+            .unwrap()
+            .install(|| {
+                let payload = EffectSpec::Payload(Payload {
+                    mass: 1.5,
+                    com: [0.0, 0.0, 0.1],
+                    radius: 0.0,
+                    body: None,
+                });
+                let d = diagnosed_against_description(vec![payload], 5, Some(0.05));
+                serde_json::to_string(&d).unwrap()
+            })
+    };
+    let (one, two) = (in_pool(1), in_pool(2));
+    assert!(one.contains("payload"), "the ladder ran");
+    assert_eq!(one, two);
+}

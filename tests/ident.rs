@@ -79,7 +79,10 @@ fn every_constraint_set_recovers_the_identifiable_parameters_from_clean_data() {
             "{set:?}: the truth satisfies the set, so must the estimate"
         );
         assert!(
-            r.solver.status == SolveStatus::Direct || r.solver.status == SolveStatus::Solved,
+            matches!(
+                r.solver.status,
+                SolveStatus::Direct | SolveStatus::Interior | SolveStatus::Solved
+            ),
             "{:?}",
             r.solver
         );
@@ -434,11 +437,14 @@ fn the_joint_by_joint_assembly_matches_dense_sums_on_trees_with_a_joint_left_out
 #[test]
 fn with_its_constraints_inactive_every_set_reaches_the_least_squares_optimum() {
     // Clean data of the leg: the least-squares optimum (with the prior's pull) lies strictly
-    // inside every set, so each constrained solve must end at the direct solution's objective,
-    // to the solver's absolute gap tolerance (1e-8 N² m²). That objective (3.5e-7) is tiny beside
-    // Σ τ² / n_s (26); the cone program is solved about the unconstrained minimizer so that the
-    // solver's tolerances apply to the excess over it (semi: 1.4e-9 above). Solved about the
-    // origin instead, semi stopped 2.8e-8 above it, 8 % of the objective.
+    // inside every set, up to the margin ε of the matrix inequalities. Where it clears the
+    // margin too the set returns it without the cone solver (status `Interior`; the semi set
+    // here, while a rotor's pseudo-inertia has its least eigenvalue inside ε), and every solve,
+    // the cone solver's forced too, must end at its objective to the solver's absolute gap tolerance
+    // (1e-8 N² m²). That objective (3.5e-7) is tiny beside Σ τ² / n_s (26); the cone program is
+    // solved about the unconstrained minimizer so that the solver's tolerances apply to the
+    // excess over it (semi: 1.4e-9 above). Solved about the origin instead, semi stopped 2.8e-8
+    // above it, 8 % of the objective.
     let m = cheetah3::leg();
     let train = exact_data(&m, 2000, 4);
     let ne = NormalEquations::from_trajectory(&m, &train, 0..train.len());
@@ -451,7 +457,18 @@ fn with_its_constraints_inactive_every_set_reaches_the_least_squares_optimum() {
         ConstraintSet::Consistent,
         ConstraintSet::Ellipsoid,
     ] {
-        let r = ident::identify(&m, &ne, &prior, &Options::new(set)).unwrap();
+        let fast = ident::identify(&m, &ne, &prior, &Options::new(set)).unwrap();
+        assert!(fast.constraints_hold, "{set:?}");
+        if set == ConstraintSet::Semi {
+            assert_eq!(fast.solver.status, SolveStatus::Interior);
+        }
+        if fast.solver.status == SolveStatus::Interior {
+            assert_eq!(fast.theta, direct.theta, "{set:?}: not the direct optimum");
+        }
+        assert!((fast.objective - direct.objective).abs() <= 1e-8, "{set:?}");
+        let mut forced = Options::new(set);
+        forced.force_cone_solver = true;
+        let r = ident::identify(&m, &ne, &prior, &forced).unwrap();
         assert_eq!(r.solver.status, SolveStatus::Solved, "{set:?}");
         let excess = r.objective - direct.objective;
         eprintln!(
@@ -463,4 +480,26 @@ fn with_its_constraints_inactive_every_set_reaches_the_least_squares_optimum() {
             "{set:?}: {excess:e} above the direct optimum"
         );
     }
+}
+
+#[test]
+fn an_unconstrained_optimum_outside_the_set_goes_to_the_cone_solver() {
+    // 150 noisy samples: least squares is inconsistent (as in the noisy-data test), so the consistent
+    // set's optimum lies on its boundary and must come from the cone solver, with J ≻ 0 held.
+    let path = common::root().join("scenarios/cheetah3_shell.toml");
+    let (mut sc, m, _) = physid::sim::scenario::load(&path).unwrap();
+    sc.simulation.duration = 1.0;
+    let rec = physid::sim::run(&m, &sc, &mut |_| {}).unwrap();
+    let ne = NormalEquations::from_trajectory(&m, &rec.processed, 0..150);
+    let prior = perturbed_prior(&m);
+    let ls = ident::identify(&m, &ne, &prior, &Options::new(ConstraintSet::None)).unwrap();
+    assert!(!ident::constraints_hold(
+        &m,
+        &ls.theta,
+        ConstraintSet::Consistent
+    ));
+    let r = ident::identify(&m, &ne, &prior, &Options::new(ConstraintSet::Consistent)).unwrap();
+    assert_eq!(r.solver.status, SolveStatus::Solved);
+    assert!(r.constraints_hold);
+    assert!(r.objective > ls.objective);
 }

@@ -20,6 +20,7 @@ use physid_core::model::Model;
 use physid_core::trajectory::Trajectory;
 use physid_effect::library::{slow, Context, Kind, Variant};
 use physid_ident::{identify, IdentError, NormalEquations, Options};
+use rayon::prelude::*;
 use serde::Serialize;
 
 /// Selection settings.
@@ -75,6 +76,44 @@ pub struct Cv {
     pub thetas: Vec<DVector<f64>>,
 }
 
+/// The samples of each of `k` contiguous blocks of `range`: equal parts, or one per run when
+/// `runs` gives the lengths of the runs joined in it.
+fn block_ranges(
+    range: std::ops::Range<usize>,
+    k: usize,
+    runs: Option<&[usize]>,
+) -> Vec<std::ops::Range<usize>> {
+    let (start, len) = (range.start, range.len());
+    let ends: Vec<usize> = runs
+        .unwrap_or_default()
+        .iter()
+        .scan(0, |acc, r| {
+            *acc += r;
+            Some(*acc)
+        })
+        .collect();
+    let block_of = |s: usize| {
+        if runs.is_some() {
+            ends.partition_point(|&e| e <= s - start).min(k - 1)
+        } else {
+            ((s - start) * k / len).min(k - 1)
+        }
+    };
+    (0..k)
+        .map(|b| {
+            let first = range
+                .clone()
+                .find(|&s| block_of(s) >= b)
+                .unwrap_or(range.end);
+            let end = range
+                .clone()
+                .find(|&s| block_of(s) > b)
+                .unwrap_or(range.end);
+            first..end
+        })
+        .collect()
+}
+
 impl Folds {
     /// Accumulates samples `range` of `tr` into `k` contiguous blocks, or, when `runs` (the
     /// lengths of the runs joined in `range`) has two or more entries, one block per run
@@ -90,13 +129,7 @@ impl Folds {
     ) -> Self {
         let by_run = runs.len() >= 2 && runs.iter().sum::<usize>() == range.len();
         let k = if by_run { runs.len() } else { k };
-        let ends: Vec<usize> = runs
-            .iter()
-            .scan(0, |acc, r| {
-                *acc += r;
-                Some(*acc)
-            })
-            .collect();
+        let ranges = block_ranges(range, k, by_run.then_some(runs));
         let model = ctx.model();
         let n = model.dof();
         let p0 = model.layout().len;
@@ -106,24 +139,26 @@ impl Folds {
             offsets.push(c);
             c += v.kind.columns(n);
         }
-        let mut blocks: Vec<NormalEquations> = (0..k).map(|_| NormalEquations::new(n, c)).collect();
-        let (start, len) = (range.start, range.len());
-        let mut rows = vec![0usize; k];
-        ctx.for_each_row(tr, range, &variants, min_speed, &mut |s, z, tau| {
-            let b = if by_run {
-                ends.partition_point(|&e| e <= s - start).min(k - 1)
-            } else {
-                ((s - start) * k / len).min(k - 1)
-            };
-            blocks[b].add(z, tau);
-            rows[b] += tr.qd_at(s).iter().filter(|w| !slow(**w, min_speed)).count();
-        });
+        // Each block is accumulated on its own (in parallel): the same sums, in the same
+        // order, as one pass over the whole range.
+        let (blocks, rows): (Vec<NormalEquations>, Vec<usize>) = ranges
+            .into_par_iter()
+            .map(|r| {
+                let mut block = NormalEquations::new(n, c);
+                let mut rows = 0;
+                ctx.for_each_row(tr, r, &variants, min_speed, &mut |s, z, tau| {
+                    block.add(z, tau);
+                    rows += tr.qd_at(s).iter().filter(|w| !slow(**w, min_speed)).count();
+                });
+                (block.finish(), rows)
+            })
+            .unzip();
         Self {
             p0,
             n,
             variants,
             offsets,
-            blocks: blocks.into_iter().map(|b| b.finish()).collect(),
+            blocks,
             rows,
             by_run,
         }
@@ -183,15 +218,17 @@ impl Folds {
     /// The cross-validated error of the model plus `chosen`.
     pub fn cv(&self, model: &Model, chosen: &[usize], opts: &Options) -> Result<Cv, IdentError> {
         let cols = self.columns(chosen);
-        let mut block_sse = vec![];
-        let mut thetas = vec![];
-        let mut count = 0usize;
-        for f in 0..self.blocks.len() {
-            let theta = self.fit(model, &self.sum_except(f), chosen, opts)?;
-            block_sse.push(self.blocks[f].select(&cols).residual_sum_of_squares(&theta));
-            count += self.rows[f];
-            thetas.push(theta);
-        }
+        // The folds' fits are independent: in parallel, read back in fold order.
+        let thetas = (0..self.blocks.len())
+            .into_par_iter()
+            .map(|f| self.fit(model, &self.sum_except(f), chosen, opts))
+            .collect::<Result<Vec<_>, _>>()?;
+        let block_sse: Vec<f64> = thetas
+            .iter()
+            .zip(&self.blocks)
+            .map(|(theta, block)| block.select(&cols).residual_sum_of_squares(theta))
+            .collect();
+        let count: usize = self.rows.iter().sum();
         Ok(Cv {
             mse: block_sse.iter().sum::<f64>() / count.max(1) as f64,
             block_sse,
@@ -331,22 +368,28 @@ fn best_per_kind(
     chosen: &[usize],
     used: &[Kind],
 ) -> Vec<(usize, Cv)> {
+    let candidates: Vec<(usize, Kind)> = folds
+        .variants
+        .iter()
+        .enumerate()
+        .filter(|(_, v)| !used.contains(&v.kind) && !v.kind.in_model_span())
+        .map(|(vi, v)| (vi, v.kind))
+        .collect();
+    // Every candidate's cross-validation at once (independent fits); the choice below reads
+    // them in the variants' order, so it is the same whatever the thread count.
+    let cvs: Vec<Option<Cv>> = candidates
+        .par_iter()
+        .map(|&(vi, _)| folds.cv(model, &[chosen, &[vi]].concat(), opts).ok())
+        .collect();
     let mut best = vec![];
     for kind in Kind::ALL {
-        if used.contains(&kind) || kind.in_model_span() {
-            continue;
-        }
         let mut top: Option<(usize, Cv)> = None;
-        for (vi, v) in folds.variants.iter().enumerate() {
-            if v.kind != kind {
+        for ((vi, k), cv) in candidates.iter().zip(&cvs) {
+            let Some(cv) = cv.as_ref().filter(|_| *k == kind) else {
                 continue;
-            }
-            let mut with = chosen.to_vec();
-            with.push(vi);
-            if let Ok(cv) = folds.cv(model, &with, opts) {
-                if top.as_ref().is_none_or(|(_, t)| cv.mse < t.mse) {
-                    top = Some((vi, cv));
-                }
+            };
+            if top.as_ref().is_none_or(|(_, t)| cv.mse < t.mse) {
+                top = Some((*vi, cv.clone()));
             }
         }
         best.extend(top);

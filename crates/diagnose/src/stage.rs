@@ -102,16 +102,22 @@ impl<'a> Stage<'a> {
         theta0: DVector<f64>,
     ) -> Self {
         let cutoff = opts.processing_cutoff;
-        let ctx_train = Context::new(model, &theta0, train, cutoff);
-        let ctx_val = Context::new(model, &theta0, validate, cutoff);
-        let folds = select::Folds::build(
-            &ctx_train,
-            train,
-            0..train.len(),
-            offered_variants(opts, model),
-            opts.selection.folds.max(2),
-            train_runs,
-            opts.min_speed,
+        // The validation context is built beside the training columns.
+        let ((ctx_train, folds), ctx_val) = rayon::join(
+            || {
+                let ctx_train = Context::new(model, &theta0, train, cutoff);
+                let folds = select::Folds::build(
+                    &ctx_train,
+                    train,
+                    0..train.len(),
+                    offered_variants(opts, model),
+                    opts.selection.folds.max(2),
+                    train_runs,
+                    opts.min_speed,
+                );
+                (ctx_train, folds)
+            },
+            || Context::new(model, &theta0, validate, cutoff),
         );
         let all = folds.sum_except(usize::MAX);
         Self {

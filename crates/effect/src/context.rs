@@ -5,7 +5,10 @@
 //! ([`Scratch`]). It knows no effect kind: the kinds (`super::kinds`) read it.
 
 use nalgebra::{DMatrix, DVector, Vector3};
-use physid_core::dynamics::{regressor, Data};
+use physid_core::dynamics::{
+    friction_torque, regressor, rnea_from_transforms, update_joint_transform, update_transforms,
+    Data,
+};
 use physid_core::model::Model;
 use physid_core::trajectory::Trajectory;
 
@@ -96,6 +99,25 @@ pub(crate) struct Scratch {
     pub zeros: Vec<f64>,
     /// The nominal model under the two tilted gravities, built on first use.
     pub tilted: Option<Vec<(Model, Data)>>,
+    /// Workspaces of [`Context::predictors`] (θ̂₀, smooth), when it has them.
+    pub predicting: Option<[Data; 2]>,
+}
+
+impl Scratch {
+    /// Workspaces for the columns of `ctx`.
+    pub fn new(ctx: &Context) -> Self {
+        let (n, p0) = (ctx.model.dof(), ctx.model.layout().len);
+        Self {
+            data: Data::new(ctx.model),
+            yg: DMatrix::zeros(n, p0),
+            zeros: vec![0.0; n],
+            tilted: None,
+            predicting: ctx
+                .predictors
+                .as_ref()
+                .map(|m| [Data::new(&m[0]), Data::new(&m[1])]),
+        }
+    }
 }
 
 /// What the columns of one data set need besides the samples: the nominal prediction `Y θ̂₀`
@@ -105,6 +127,10 @@ pub struct Context<'a> {
     pub(crate) theta0: DVector<f64>,
     /// `θ̂₀` without Coulomb friction (smooth in time), for the linearized kinematic effects.
     pub(crate) theta_smooth: DVector<f64>,
+    /// The model with parameters `θ̂₀` and with `θ̂₀` smooth: inverse dynamics with friction on
+    /// them is `Y θ̂₀` (and its smooth part) at the cost of one RNEA instead of a regressor and
+    /// a product. `None` when a parameter is not finite (then the regressor is used).
+    pub(crate) predictors: Option<Box<[Model; 2]>>,
     /// `Y_k θ̂₀`, sample-major.
     pub(crate) pred: Vec<f64>,
     /// The first derivative (N m/s, central differences) of the prediction without Coulomb
@@ -284,6 +310,16 @@ fn derivative(x: &[f64], tr: &Trajectory, n: usize) -> Vec<f64> {
     out
 }
 
+/// `model` carrying each of two parameter vectors (for inverse dynamics that is `Y θ`); `None`
+/// when one of them is not a model's (a parameter not finite).
+fn predictors(model: &Model, a: &DVector<f64>, b: &DVector<f64>) -> Option<Box<[Model; 2]>> {
+    let (a, b) = (
+        model.with_parameters(a).ok()?,
+        model.with_parameters(b).ok()?,
+    );
+    Some(Box::new([a, b]))
+}
+
 /// The torque `Y θ` two parameter vectors predict at every sample of `tr` (sample-major).
 fn predictions(
     model: &Model,
@@ -351,10 +387,12 @@ impl<'a> Context<'a> {
             .iter()
             .map(|b| b.rotor.as_ref().map_or(1.0, |r| r.gear_ratio))
             .collect();
+        let predictors = predictors(model, &theta0, &theta_smooth);
         Self {
             model,
             theta0,
             theta_smooth,
+            predictors,
             pred,
             pred_d,
             defl,
@@ -380,6 +418,37 @@ impl<'a> Context<'a> {
         &nearest.1
     }
 
+    /// `Y θ` (N m) at sample `s` with joint `j`'s angle, velocity and acceleration shifted by
+    /// `−by · shift_j`, for `θ` = θ̂₀ (`which` 0) or its smooth part (1): inverse dynamics with
+    /// friction on [`Context::predictors`] (whose workspace holds the transforms of `s.q`, from
+    /// [`Context::encoder_shift_columns`]: only joint `j`'s is recomputed, then restored), or the
+    /// regressor where there are none.
+    fn shifted(
+        &self,
+        (which, j, by): (usize, usize, f64),
+        shift: &[Vec<f64>; 3],
+        s: &Sample,
+        w: &mut Scratch,
+    ) -> DVector<f64> {
+        let at = s.k * s.n + j;
+        let (mut qd, mut qdd) = (s.qd.to_vec(), s.qdd.to_vec());
+        let q_j = s.q[j] - by * shift[0][at];
+        qd[j] -= by * shift[1][at];
+        qdd[j] -= by * shift[2][at];
+        if let (Some(models), Some(data)) = (&self.predictors, &mut w.predicting) {
+            let (model, data) = (&models[which], &mut data[which]);
+            update_joint_transform(model, data, j, q_j);
+            let tau = rnea_from_transforms(model, data, &qd, &qdd) + friction_torque(model, &qd);
+            update_joint_transform(model, data, j, s.q[j]);
+            return tau;
+        }
+        let mut q = s.q.to_vec();
+        q[j] = q_j;
+        let theta = [&self.theta0, &self.theta_smooth][which];
+        regressor(self.model, &mut w.data, &q, &qd, &qdd, &mut w.yg);
+        &w.yg * theta
+    }
+
     /// The columns `−∂ID/∂ε_j` of inverse dynamics with joint `j`'s encoder signals shifted by
     /// `ε_j · shift_j` (angle, velocity, acceleration of sample `s`), one per joint: how a
     /// motor-side encoder offset (compliance, backlash) enters the prediction. At `secant = 0`
@@ -394,22 +463,12 @@ impl<'a> Context<'a> {
         s: &Sample,
         w: &mut Scratch,
     ) -> DMatrix<f64> {
-        let model = self.model;
         let n = s.n;
-        let (h, theta) = if secant > 0.0 {
-            (secant, &self.theta0)
-        } else {
-            (1e-7, &self.theta_smooth)
-        };
-        let id = |j: usize, by: f64, w: &mut Scratch| {
-            let at = s.k * n + j;
-            let (mut q, mut qd, mut qdd) = (s.q.to_vec(), s.qd.to_vec(), s.qdd.to_vec());
-            q[j] -= by * shift[0][at];
-            qd[j] -= by * shift[1][at];
-            qdd[j] -= by * shift[2][at];
-            regressor(model, &mut w.data, &q, &qd, &qdd, &mut w.yg);
-            &w.yg * theta
-        };
+        let (h, which) = if secant > 0.0 { (secant, 0) } else { (1e-7, 1) };
+        if let (Some(models), Some(data)) = (&self.predictors, &mut w.predicting) {
+            update_transforms(&models[which], &mut data[which], s.q);
+        }
+        let id = |j: usize, by: f64, w: &mut Scratch| self.shifted((which, j, by), shift, s, w);
         let mut out = DMatrix::zeros(n, n);
         let base = (secant > 0.0).then(|| id(0, 0.0, w));
         for j in 0..n {
@@ -560,6 +619,47 @@ mod tests {
         let angle = &ctx.slack(0.02)[0];
         let mut middle = angle.chunks(n).skip(200).take(200);
         assert!(middle.all(|s| s[0].abs() < 0.2), "{angle:?}");
+    }
+
+    #[test]
+    fn the_shifted_predictions_by_inverse_dynamics_equal_the_regressor_times_the_parameters() {
+        // The encoder-shift columns come from inverse dynamics on a model carrying θ̂₀, with only
+        // the shifted joint's transform recomputed; without that model (a non-finite θ̂₀ would
+        // have none) they come from Y θ̂₀. Both, on the leg with its rotors (full model: the
+        // rotor spins with the shifted joint) and without, tangent and secant.
+        for model in [
+            physid_core::model::cheetah3::leg(),
+            physid_core::model::cheetah3::leg().without_rotors(),
+        ] {
+            let n = model.dof();
+            let tr = moving_leg(&model, 400);
+            let theta0 = model.parameters() * 1.1;
+            let fast = Context::new(&model, &theta0, &tr, 20.0);
+            assert!(fast.predictors.is_some());
+            let mut slow = Context::new(&model, &theta0, &tr, 20.0);
+            slow.predictors = None;
+            let (mut wf, mut ws) = (Scratch::new(&fast), Scratch::new(&slow));
+            let mut largest = 0.0_f64;
+            for k in [3, 150, 222, 377] {
+                let sample = Sample {
+                    k,
+                    n,
+                    q: tr.q_at(k),
+                    qd: tr.qd_at(k),
+                    qdd: tr.qdd_at(k).unwrap(),
+                    param: 0.0,
+                };
+                for secant in [0.0, 0.02] {
+                    let a = fast.encoder_shift_columns(&fast.defl, secant, &sample, &mut wf);
+                    let b = slow.encoder_shift_columns(&slow.defl, secant, &sample, &mut ws);
+                    let scale = b.amax().max(1.0);
+                    // Central differences at h = 1e-7 carry round-off of ~1e-9 relative.
+                    assert!((&a - &b).amax() < 1e-6 * scale, "k {k}, secant {secant}");
+                    largest = largest.max(b.amax());
+                }
+            }
+            assert!(largest > 1e-3, "the columns are not all zero: {largest:e}");
+        }
     }
 
     /// The leg moving smoothly for `m` samples at 1 kHz, its torque smooth with a fast ripple.

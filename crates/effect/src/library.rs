@@ -14,7 +14,7 @@ pub use super::context::Context;
 use super::context::{Sample, Scratch};
 pub use super::Kind;
 use nalgebra::DMatrix;
-use physid_core::dynamics::{regressor, Data};
+use physid_core::dynamics::regressor;
 use physid_core::trajectory::Trajectory;
 use serde::Serialize;
 
@@ -66,12 +66,7 @@ impl Context<'_> {
         let p0 = model.layout().len;
         let extra: usize = variants.iter().map(|v| v.kind.columns(n)).sum();
         let mut z = DMatrix::zeros(n, p0 + extra);
-        let mut scratch = Scratch {
-            data: Data::new(model),
-            yg: DMatrix::zeros(n, p0),
-            zeros: vec![0.0; n],
-            tilted: None,
-        };
+        let mut scratch = Scratch::new(self);
         let mut y = DMatrix::zeros(n, p0);
         let mut tau_m = vec![0.0; n];
         for k in range {

@@ -24,6 +24,7 @@
 
 pub mod analysis;
 pub mod information;
+mod interior;
 pub mod lmi;
 pub mod normal;
 
@@ -252,6 +253,9 @@ physid_core::options::option_error!(IdentError);
 pub enum SolveStatus {
     /// Least squares solved directly, without the cone solver.
     Direct,
+    /// The unconstrained optimum satisfies every constraint, so it is the constrained optimum
+    /// (a convex problem, strictly convex objective): found without the cone solver.
+    Interior,
     /// Clarabel: solved to its full tolerances.
     Solved,
     /// Clarabel: solved to its reduced tolerances.
@@ -262,6 +266,7 @@ impl std::fmt::Display for SolveStatus {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         f.write_str(match self {
             SolveStatus::Direct => "direct",
+            SolveStatus::Interior => "interior",
             SolveStatus::Solved => "solved",
             SolveStatus::AlmostSolved => "almost_solved",
         })
@@ -522,6 +527,14 @@ pub fn identify(
             residuals: [0.0; 2],
         };
         (physid_core::linalg::least_squares(&h, &g), info)
+    } else if let Some(theta) = interior::optimum(model, &h, &g, opts) {
+        let info = SolverInfo {
+            status: SolveStatus::Interior,
+            iterations: 0,
+            seconds: 0.0,
+            residuals: [0.0; 2],
+        };
+        (theta, info)
     } else {
         solve_cone(model, &h, &g, prior, opts)?
     };

@@ -136,18 +136,26 @@ pub fn base_acceleration(model: &Model) -> Motion {
 /// `S_rot = N [axis; 0]`; reflected model: `X_rot = X_rot,0` (frozen) and `S_rot = 0`.
 pub fn update_transforms(model: &Model, data: &mut Data, q: &[f64]) {
     debug_assert!(data.fits(model));
-    let full = model.rotor_model() == RotorModel::Full;
-    for (i, b) in model.bodies().iter().enumerate() {
-        data.s[i] = b.joint.motion_subspace();
-        data.x_up[i] = b.joint.transform_after(q[i], &b.x_tree);
-        if let Some(r) = &b.rotor {
-            if full {
-                data.x_rot[i] = r.joint.transform_after(r.gear_ratio * q[i], &r.x_rot);
-                data.s_rot[i] = r.motion_subspace();
-            } else {
-                data.x_rot[i] = r.x_rot;
-                data.s_rot[i] = Motion::zero();
-            }
+    for (i, &q_i) in q.iter().enumerate().take(model.dof()) {
+        update_joint_transform(model, data, i, q_i);
+    }
+}
+
+/// Joint `i`'s part of [`update_transforms`]: its `x_up`, `s` and its rotor's `x_rot`, `s_rot`
+/// at angle `q_i` (rad, or m for a prismatic joint), the other joints' left as they are. With
+/// the transforms of a configuration in `data`, this gives those of the configuration that
+/// differs from it in joint `i` alone, for one joint's sine and cosine instead of all.
+pub fn update_joint_transform(model: &Model, data: &mut Data, i: usize, q_i: f64) {
+    let b = &model.bodies()[i];
+    data.s[i] = b.joint.motion_subspace();
+    data.x_up[i] = b.joint.transform_after(q_i, &b.x_tree);
+    if let Some(r) = &b.rotor {
+        if model.rotor_model() == RotorModel::Full {
+            data.x_rot[i] = r.joint.transform_after(r.gear_ratio * q_i, &r.x_rot);
+            data.s_rot[i] = r.motion_subspace();
+        } else {
+            data.x_rot[i] = r.x_rot;
+            data.s_rot[i] = Motion::zero();
         }
     }
 }

@@ -29,12 +29,20 @@ impl Data {
     ) -> Data {
         let (model, opts) = (stage.model, stage.opts);
         let cutoff = opts.processing_cutoff;
-        let ctx_t = Context::new(model, theta, stage.train, cutoff);
-        let ctx_v = Context::new(model, theta, stage.validate, cutoff);
         let ms = opts.min_speed;
         let (t, v) = (stage.train, stage.validate);
-        let train = Folds::build(&ctx_t, t, 0..t.len(), variants.to_vec(), 2, &[], ms);
-        let held = Folds::build(&ctx_v, v, 0..v.len(), variants.to_vec(), blocks, &[], ms);
+        let vs = variants.to_vec();
+        // Training and held-out columns are independent: built side by side.
+        let (train, held) = rayon::join(
+            || {
+                let ctx = Context::new(model, theta, t, cutoff);
+                Folds::build(&ctx, t, 0..t.len(), vs.clone(), 2, &[], ms)
+            },
+            || {
+                let ctx = Context::new(model, theta, v, cutoff);
+                Folds::build(&ctx, v, 0..v.len(), vs.clone(), blocks, &[], ms)
+            },
+        );
         Data {
             n: model.dof(),
             theta_lin: theta.clone(),
