@@ -32,9 +32,12 @@ pub struct Args {
     /// Harmonics per joint.
     #[arg(allow_negative_numbers = true, long, default_value_t = 5)]
     harmonics: usize,
-    /// Fundamental frequency (Hz): the motion repeats every 1/f s.
-    #[arg(allow_negative_numbers = true, long, default_value_t = 0.5)]
-    base_frequency: f64,
+    /// Fundamental frequency (Hz): the motion repeats every 1/f s. Default: chosen with the
+    /// limits and the duration: the fastest at which each joint's first harmonic alone could
+    /// sweep its whole range within its speed, acceleration and jerk limits, but at least one
+    /// whole period between the ramps.
+    #[arg(allow_negative_numbers = true, long)]
+    base_frequency: Option<f64>,
     /// What is maximized.
     #[arg(long, value_enum, default_value = "d-optimal")]
     objective: ObjectiveArg,
@@ -61,8 +64,9 @@ pub struct Args {
     #[arg(long, value_delimiter = ',', allow_negative_numbers = true)]
     max_jerk: Option<Vec<f64>>,
     /// Start and end at rest (s): the motion fades in from rest over this long and out to rest
-    /// at the end (velocity, acceleration and jerk zero at both ends). Default: one period of
-    /// the fundamental, at most a quarter of the duration; 0 starts mid-motion (periodic).
+    /// at the end (velocity, acceleration and jerk zero at both ends). Default: the shortest
+    /// over which a joint's whole range fades in within half its acceleration and jerk limits,
+    /// at most a quarter of the duration; 0 starts mid-motion (periodic).
     #[arg(long, allow_negative_numbers = true)]
     ramp: Option<f64>,
     /// Also write the designed trajectory (t, q, q̇, q̈ per joint, named by joint) as CSV, to
@@ -216,8 +220,10 @@ fn print_design(d: &Design, simulated: Option<&[SimulatedUse]>, a: &Args) {
         "{} Fourier excitation: {} harmonics at {} Hz (period {:.2} s), objective {} = {:.4} (best random start {:.4}); log det F / r = {:.4}; condition number {:.3e}; {} of {} parameter combinations identifiable; {} evaluations in {:.2} s",
         design_kind(d, a.starts),
         a.harmonics,
-        a.base_frequency,
-        1.0 / a.base_frequency,
+        format!("{:.4}", d.series.base_frequency)
+            .trim_end_matches('0')
+            .trim_end_matches('.'),
+        d.series.period(),
         physid::io::serde_name(&d.objective),
         d.value,
         d.start_value,

@@ -230,7 +230,7 @@ fn the_written_scenario_runs_as_is_and_stays_within_the_limits_on_the_leg_and_th
         "--iterations",
         "60",
         "--duration",
-        "5",
+        "10",
         "--out",
         kout.to_str().unwrap(),
     ]);
@@ -403,7 +403,41 @@ fn a_designed_motion_starts_and_ends_at_rest_within_every_limit() {
             "joint {j} comes back to its start"
         );
     }
-    // The scenario carries the ramp, so `simulate` runs it from rest too.
+    // The scenario carries the ramp, so `simulate` runs it from rest too: long enough to fade
+    // the Panda's ranges in within 3 rad/s², so the quarter of the run it may take at most.
     let text = std::fs::read_to_string(&out).unwrap();
-    assert!(text.contains("ramp = 2"), "{text}");
+    assert!(text.contains("ramp = 2.5\n"), "{text}");
+}
+
+#[test]
+fn a_designed_motion_uses_the_joint_ranges_its_limits_allow() {
+    // The KUKA arm within the safe defaults (3 rad/s², 30 rad/s³) over 30 s. At a fixed 0.5 Hz
+    // fundamental the limits bound at amplitudes of a tenth of a radian: each joint moved within
+    // 1-13 % of its range. The fundamental chosen with the limits lets every joint either
+    // sweep at least half its range or meet one of its limits.
+    let j = excite(&[
+        "--robot",
+        &repo("data/kuka_lwr4/kuka_lwr4.urdf"),
+        "--duration",
+        "30",
+        "--iterations",
+        "100",
+        "--starts",
+        "2",
+        "--no-check",
+    ]);
+    let series = &j["design"]["series"];
+    let f0 = series["base_frequency"].as_f64().unwrap();
+    let ramp = series["window"]["ramp"].as_f64().unwrap();
+    // The first joint binds by its speed: ±2.967 rad × 0.85 at 0.85 × 1.92 rad/s, V/R/2π = 0.103 Hz.
+    assert!((f0 - 0.103).abs() < 1e-3, "{f0}");
+    assert!(ramp > 3.0 && ramp < 4.5, "{ramp}");
+    for u in j["design"]["limit_use"].as_array().unwrap() {
+        let used = |k: &str| u[k].as_f64().unwrap();
+        let bound = ["velocity", "acceleration", "jerk", "torque"]
+            .iter()
+            .any(|k| used(k) > 0.99);
+        assert!(used("position") >= 0.5 || bound, "{u}");
+        assert!(used("position") > 0.25, "{u}");
+    }
 }

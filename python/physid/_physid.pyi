@@ -383,7 +383,7 @@ def excite(
     scenario: Optional[Path] = None,
     duration: float = 20.0,
     harmonics: int = 5,
-    base_frequency: float = 0.5,
+    base_frequency: float | None = None,
     objective: str = "d-optimal",
     seed: int = 1,
     iterations: int = 1000,
@@ -412,7 +412,10 @@ def excite(
         joint ranges (the other limits come from the robot).
     duration: Duration of the written scenario (s). Default: 20.
     harmonics: Harmonics per joint. Default: 5.
-    base_frequency: Fundamental frequency (Hz): the motion repeats every 1/f s. Default: 0.5.
+    base_frequency: Fundamental frequency (Hz): the motion repeats every 1/f s. Default: chosen
+        with the limits and the duration: the fastest at which each joint's first harmonic alone
+        could sweep its whole range within its speed, acceleration and jerk limits, but at least
+        one whole period between the ramps.
     objective: What is maximized. One of: d-optimal, e-optimal, condition. Default: d-optimal.
     seed: Seed of the random starts and steps. Default: 1.
     iterations: Optimization steps per start (0: a random excitation scaled into the limits).
@@ -426,8 +429,9 @@ def excite(
         rad/s³; `inf`: no jerk limit (the acceleration limit, which bounds the motor current,
         has no such value).
     ramp: Start and end at rest (s): the motion fades in from rest over this long and out to
-        rest at the end (velocity, acceleration and jerk zero at both ends). Default: one period
-        of the fundamental, at most a quarter of the duration; 0 starts mid-motion (periodic).
+        rest at the end (velocity, acceleration and jerk zero at both ends). Default: the
+        shortest over which a joint's whole range fades in within half its acceleration and jerk
+        limits, at most a quarter of the duration; 0 starts mid-motion (periodic).
     samples: Samples per period at which the information is evaluated. Default: 200.
     rate: Sample rate of csv and mcap (Hz; default 1000); needs one of them.
     out: Write the scenario here (TOML); it must not exist as an input of this run.
@@ -448,7 +452,7 @@ def score_motion(
     *,
     duration: float = 20.0,
     harmonics: int = 5,
-    base_frequency: float = 0.5,
+    base_frequency: float | None = None,
     objective: str = "d-optimal",
     margin: float = 0.15,
     samples: int = 200,
@@ -464,7 +468,10 @@ def score_motion(
         joint ranges (the other limits come from the robot).
     duration: Duration of the written scenario (s). Default: 20.
     harmonics: Harmonics per joint. Default: 5.
-    base_frequency: Fundamental frequency (Hz): the motion repeats every 1/f s. Default: 0.5.
+    base_frequency: Fundamental frequency (Hz): the motion repeats every 1/f s. Default: chosen
+        with the limits and the duration: the fastest at which each joint's first harmonic alone
+        could sweep its whole range within its speed, acceleration and jerk limits, but at least
+        one whole period between the ramps.
     objective: What is maximized. One of: d-optimal, e-optimal, condition. Default: d-optimal.
     margin: Fraction of every limit left free. Default: 0.15.
     samples: Samples per period at which the information is evaluated. Default: 200.

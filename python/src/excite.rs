@@ -240,7 +240,7 @@ pub(crate) fn excite_from(
 #[doc = include_str!("../keywords/excite.txt")]
 #[pyfunction]
 #[pyo3(signature = (robot = None, *, scenario = None, duration = 20.0, harmonics = 5,
-    base_frequency = 0.5, objective = "d-optimal", seed = 1, iterations = 1000, starts = 4,
+    base_frequency = None, objective = "d-optimal", seed = 1, iterations = 1000, starts = 4,
     margin = 0.15, max_acceleration = None, max_jerk = None, ramp = None, samples = 200,
     rate = 1000.0, out = None, csv = None, mcap = None, check = true, threads = None,
     progress = None))]
@@ -251,7 +251,7 @@ pub(crate) fn excite(
     scenario: Option<PathBuf>,
     duration: f64,
     harmonics: usize,
-    base_frequency: f64,
+    base_frequency: Option<f64>,
     objective: &str,
     seed: u64,
     iterations: usize,
@@ -343,7 +343,7 @@ fn designed(
 /// `condition` (κ(F)), `samples`. Ctrl-C interrupts it.
 #[doc = include_str!("../keywords/score_motion.txt")]
 #[pyfunction]
-#[pyo3(signature = (scenario, *, duration = 20.0, harmonics = 5, base_frequency = 0.5,
+#[pyo3(signature = (scenario, *, duration = 20.0, harmonics = 5, base_frequency = None,
     objective = "d-optimal", margin = 0.15, samples = 200, rate = 1000.0, threads = None))]
 #[allow(clippy::too_many_arguments)]
 pub(crate) fn score_motion<'py>(
@@ -351,7 +351,7 @@ pub(crate) fn score_motion<'py>(
     scenario: PathBuf,
     duration: f64,
     harmonics: usize,
-    base_frequency: f64,
+    base_frequency: Option<f64>,
     objective: &str,
     margin: f64,
     samples: usize,

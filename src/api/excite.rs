@@ -7,7 +7,7 @@
 use super::data::Notice;
 use super::ApiError;
 use crate::model::Model;
-use crate::sim::design::{self, Design, DesignOptions};
+use crate::sim::design::{self, Design, DesignOptions, Timing};
 
 /// What a design maximizes, and what it tells its caller as it goes.
 pub use crate::sim::design::{Objective, Watch};
@@ -146,8 +146,9 @@ pub struct ExciteOptions {
     pub duration: f64,
     /// Harmonics per joint.
     pub harmonics: usize,
-    /// Fundamental frequency (Hz).
-    pub base_frequency: f64,
+    /// Fundamental frequency (Hz); none: chosen with the limits and the duration
+    /// ([`design::Timing::chosen`]).
+    pub base_frequency: Option<f64>,
     /// What is maximized.
     pub objective: Objective,
     /// Seed of the random starts and steps.
@@ -163,7 +164,8 @@ pub struct ExciteOptions {
     pub max_acceleration: Option<Vec<f64>>,
     /// Jerk limits (rad/s³), as `max_acceleration`.
     pub max_jerk: Option<Vec<f64>>,
-    /// Rest ramps at both ends (s); none: one period, at most a quarter of the duration.
+    /// Rest ramps at both ends (s); none: long enough to fade in the joints' whole ranges
+    /// within their limits, at most a quarter of the duration ([`design::Timing::chosen`]).
     pub ramp: Option<f64>,
     /// Samples per period at which the information is evaluated.
     pub samples: usize,
@@ -186,7 +188,7 @@ impl Default for ExciteOptions {
             from: ExciteFrom::Robot("cheetah3".into()),
             duration: d.duration,
             harmonics: d.harmonics,
-            base_frequency: d.base_frequency,
+            base_frequency: None,
             objective: d.objective,
             seed: d.seed,
             iterations: d.iterations,
@@ -254,20 +256,19 @@ impl ExciteOptions {
         }
     }
 
-    /// The design's settings for `model`, its rate limits defaulted from the description
-    /// (the joints defaulted to physid's safe limits are returned, to be told to the user).
-    pub fn design_options(&self, model: &Model) -> DesignSettings {
+    /// The design's settings for `model` within `range` (the base excitation's, per joint
+    /// `(lower, upper)` rad, when it has one), its rate limits defaulted from the description
+    /// (the joints defaulted to physid's safe limits are returned, to be told to the user) and
+    /// its fundamental and ramps, where not given, chosen with the limits and the duration.
+    pub fn design_options(&self, model: &Model, range: Option<&[(f64, f64)]>) -> DesignSettings {
         let (max_acceleration, max_jerk, defaulted) = design::rate_limits(
             model,
             self.max_acceleration.as_deref(),
             self.max_jerk.as_deref(),
         );
-        let ramp = self
-            .ramp
-            .unwrap_or_else(|| (1.0 / self.base_frequency).min(0.25 * self.duration));
-        let opts = DesignOptions {
+        let mut opts = DesignOptions {
             harmonics: self.harmonics,
-            base_frequency: self.base_frequency,
+            base_frequency: self.base_frequency.unwrap_or(FALLBACK_BASE_FREQUENCY),
             objective: self.objective,
             seed: self.seed,
             iterations: self.iterations,
@@ -275,16 +276,31 @@ impl ExciteOptions {
             margin: self.margin,
             max_acceleration,
             max_jerk,
-            ramp,
+            ramp: self.ramp.unwrap_or(0.0),
             duration: self.duration,
             samples: self.samples,
         };
+        // Limits that cannot be built (a bad option, an empty range) are refused by the
+        // design itself, by name; the timing is then the fallback's.
+        let timing = match design::Limits::new(model, range, &opts) {
+            Ok(limits) => Timing::chosen(&limits, self.duration, self.base_frequency, self.ramp),
+            Err(_) => Timing {
+                base_frequency: opts.base_frequency,
+                ramp: self
+                    .ramp
+                    .unwrap_or((1.0 / opts.base_frequency).min(0.25 * self.duration)),
+            },
+        };
+        (opts.base_frequency, opts.ramp) = (timing.base_frequency, timing.ramp);
         DesignSettings {
             options: opts,
             defaulted,
         }
     }
 }
+
+/// The fundamental (Hz) where the limits cannot choose one.
+const FALLBACK_BASE_FREQUENCY: f64 = 0.5;
 
 /// The design's settings for a robot, and which joints' rate limits were defaulted.
 #[derive(Clone, Debug)]
@@ -357,7 +373,7 @@ pub fn excite_until(
     let DesignSettings {
         options: design_opts,
         defaulted,
-    } = opts.design_options(&base.model);
+    } = opts.design_options(&base.model, base.range.as_deref());
     if !defaulted.is_empty() {
         notify(Notice::note(format!(
             "the description gives no acceleration or jerk limit for {}: designing within {} rad/s² and {} rad/s³ (give --max-acceleration and --max-jerk)",
@@ -377,7 +393,7 @@ pub fn excite_until(
     let d = design::design_watched(&base.model, base.range.as_deref(), &design_opts, watch)?;
     let scenario = base.scenario_text(&d, &design_opts, opts.out.as_deref())?;
     let check = if opts.check {
-        let band = 5.0 * opts.harmonics as f64 * opts.base_frequency;
+        let band = 5.0 * opts.harmonics as f64 * design_opts.base_frequency;
         Some(check_in_simulation(
             &base.model,
             &scenario,
@@ -487,7 +503,9 @@ pub fn score_motion(
         ));
     }
     let base = ExciteBase::load(&opts.from, notify)?;
-    let design_opts = opts.design_options(&base.model).options;
+    let design_opts = opts
+        .design_options(&base.model, base.range.as_deref())
+        .options;
     design_opts.validate()?;
     let mut sc: crate::sim::scenario::Scenario =
         toml::from_str(&base.text).map_err(|e| ApiError::Options(e.to_string()))?;

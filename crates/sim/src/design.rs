@@ -365,6 +365,75 @@ impl Limits {
     }
 }
 
+/// A design's timing when the user gives none: the rest ramps and the fundamental chosen with
+/// the limits and the run's length ([`Timing::chosen`]).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Timing {
+    /// Fundamental frequency `f₀` (Hz).
+    pub base_frequency: f64,
+    /// Rest ramp at each end (s).
+    pub ramp: f64,
+}
+
+impl Timing {
+    /// The timing for `limits` (margins applied) over a run of `duration` s, each part kept
+    /// where given:
+    ///
+    /// - the **ramp**, the shortest over which fading a joint's whole half-range `R_j` in by the
+    ///   septic smoothstep `w` keeps within half its acceleration and jerk limits
+    ///   (`R_j max|w''| / r² ≤ A_j / 2`, `R_j max|w'''| / r³ ≤ J_j / 2`), at most a quarter of
+    ///   the run;
+    /// - the **fundamental**, the fastest at which every joint's first harmonic alone could
+    ///   sweep its whole range within its speed, acceleration and jerk limits
+    ///   (`ω₀ = min_j min(V_j / R_j, √(A_j / R_j), ∛(J_j / R_j))`), but at least one whole period
+    ///   in the run between the ramps. A design at a fixed 0.5 Hz over the KUKA's ±2.5 rad and
+    ///   3 rad/s² moved each joint within 1-13 % of its range.
+    pub fn chosen(
+        limits: &Limits,
+        duration: f64,
+        base_frequency: Option<f64>,
+        ramp: Option<f64>,
+    ) -> Timing {
+        let [w2, w3] = smoothstep_peaks();
+        let half: Vec<f64> = (0..limits.lower.len())
+            .map(|j| 0.5 * (limits.upper[j] - limits.lower[j]))
+            .collect();
+        let ramp = ramp.unwrap_or_else(|| {
+            let needed = half.iter().enumerate().fold(0.0_f64, |r, (j, &h)| {
+                let by_acceleration = (2.0 * h * w2 / limits.acceleration[j]).sqrt();
+                let by_jerk = (2.0 * h * w3 / limits.jerk[j]).cbrt();
+                r.max(by_acceleration).max(by_jerk)
+            });
+            needed.min(0.25 * duration)
+        });
+        let base_frequency = base_frequency.unwrap_or_else(|| {
+            let omega = half.iter().enumerate().fold(f64::INFINITY, |w, (j, &h)| {
+                w.min(limits.velocity[j] / h)
+                    .min((limits.acceleration[j] / h).sqrt())
+                    .min((limits.jerk[j] / h).cbrt())
+            });
+            let one_period = 1.0 / (duration - 2.0 * ramp);
+            (omega / (2.0 * std::f64::consts::PI)).max(one_period)
+        });
+        Timing {
+            base_frequency,
+            ramp,
+        }
+    }
+}
+
+/// The septic smoothstep's largest `|w''|` and `|w'''|` over one unit-length ramp.
+fn smoothstep_peaks() -> [f64; 2] {
+    let unit = super::excitation::RestWindow {
+        ramp: 1.0,
+        end: 10.0,
+    };
+    (0..=1000).fold([0.0_f64; 2], |[a, j], k| {
+        let w = unit.at(k as f64 / 1000.0);
+        [a.max(w[2].abs()), j.max(w[3].abs())]
+    })
+}
+
 /// `m` evenly spaced times over one period of `s`.
 fn times(s: &FourierSeries, m: usize) -> impl Iterator<Item = f64> + '_ {
     (0..m).map(move |k| s.period() * k as f64 / m as f64)
@@ -890,4 +959,60 @@ fn gram<S: AsRef<[f64]>>(
         m += 1;
     }
     (a, m)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// One joint of half-range 2 rad about 0 with the given rate limits (margins applied).
+    fn one_joint(velocity: f64, acceleration: f64, jerk: f64) -> Limits {
+        Limits {
+            lower: vec![-2.0],
+            upper: vec![2.0],
+            velocity: vec![velocity],
+            acceleration: vec![acceleration],
+            jerk: vec![jerk],
+            effort: vec![f64::INFINITY],
+        }
+    }
+
+    #[test]
+    fn the_smoothstep_peaks_are_those_of_its_polynomial() {
+        // w'' = 420x² − 1680x³ + 2100x⁴ − 840x⁵ peaks at 7.5132 (x ≈ 0.276); w''' at x = ½,
+        // 840/2 − 5040/4 + 8400/8 − 4200/16 = −52.5.
+        let [w2, w3] = smoothstep_peaks();
+        assert!((w2 - 7.5132).abs() < 1e-3, "{w2}");
+        assert!((w3 - 52.5).abs() < 1e-9, "{w3}");
+    }
+
+    #[test]
+    fn the_timing_sweeps_the_range_within_the_limits_unless_given() {
+        let [w2, w3] = smoothstep_peaks();
+        let pi2 = 2.0 * std::f64::consts::PI;
+        // Speed binds (V/R = 0.5 < √(A/R) = 1.22 < ∛(J/R) = 2.47); the ramp by acceleration.
+        let t = Timing::chosen(&one_joint(1.0, 3.0, 30.0), 100.0, None, None);
+        assert!((t.base_frequency - 0.5 / pi2).abs() < 1e-12, "{t:?}");
+        assert!(
+            (t.ramp - (2.0 * 2.0 * w2 / 3.0).sqrt()).abs() < 1e-12,
+            "{t:?}"
+        );
+        // Acceleration binds the fundamental (√1.5 < ∛2.5), jerk the ramp (∛42 > 3.17 s).
+        let t = Timing::chosen(&one_joint(f64::INFINITY, 3.0, 5.0), 1000.0, None, None);
+        assert!(
+            (t.base_frequency - 1.5f64.sqrt() / pi2).abs() < 1e-12,
+            "{t:?}"
+        );
+        assert!(
+            (t.ramp - (2.0 * 2.0 * w3 / 5.0).cbrt()).abs() < 1e-12,
+            "{t:?}"
+        );
+        // A short run: the ramp at a quarter of it, one whole period between the ramps.
+        let t = Timing::chosen(&one_joint(1.0, 3.0, 30.0), 10.0, None, None);
+        assert_eq!(t.ramp, 2.5);
+        assert!((t.base_frequency - 0.2).abs() < 1e-12, "{t:?}");
+        // What is given is kept.
+        let t = Timing::chosen(&one_joint(1.0, 3.0, 30.0), 10.0, Some(0.7), Some(0.0));
+        assert_eq!((t.base_frequency, t.ramp), (0.7, 0.0));
+    }
 }
