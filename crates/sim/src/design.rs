@@ -653,8 +653,10 @@ impl Problem<'_> {
     fn kinematic_peaks(&self, s: &FourierSeries) -> Vec<[f64; 5]> {
         let n = s.offset.len();
         let mut peaks = vec![[0.0f64; 5]; n];
+        let (mut waves, mut at) = (vec![], Default::default());
         for t in check_times(s, 4 * self.opts.samples) {
-            let [q, qd, qdd, jerk] = s.with_jerk(t);
+            s.with_jerk_into(t, &mut waves, &mut at);
+            let [q, qd, qdd, jerk] = &at;
             for j in 0..n {
                 let e = q[j] - s.offset[j];
                 let pk = &mut peaks[j];
@@ -949,14 +951,30 @@ fn gram<S: AsRef<[f64]>>(
     data: &mut Data,
     states: impl Iterator<Item = [S; 3]>,
 ) -> (DMatrix<f64>, usize) {
+    const BLOCK: usize = 64;
     let (n, p) = (model.dof(), model.layout().len);
     let mut y = DMatrix::zeros(n, p);
+    let mut rows = DMatrix::zeros(BLOCK * n, p);
     let mut a = DMatrix::<f64>::zeros(p, p);
-    let mut m = 0;
+    let (mut m, mut filled) = (0, 0);
+    // `YᵀY` over blocks of samples' rows: one product per block, not one per sample.
+    let flush = |rows: &DMatrix<f64>, filled: usize, a: &mut DMatrix<f64>| {
+        let block = rows.rows(0, filled * n);
+        // (`gemm` on the transpose: nalgebra's `gemm_tr` takes dot products one entry at a
+        // time, `gemm` the blocked kernel.)
+        a.gemm(1.0, &block.transpose(), &block, 1.0);
+    };
     for [q, qd, qdd] in states {
         regressor(model, data, q.as_ref(), qd.as_ref(), qdd.as_ref(), &mut y);
-        a += y.transpose() * &y;
-        m += 1;
+        rows.view_mut((filled * n, 0), (n, p)).copy_from(&y);
+        (filled, m) = (filled + 1, m + 1);
+        if filled == BLOCK {
+            flush(&rows, filled, &mut a);
+            filled = 0;
+        }
+    }
+    if filled > 0 {
+        flush(&rows, filled, &mut a);
     }
     (a, m)
 }

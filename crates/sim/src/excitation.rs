@@ -166,12 +166,26 @@ impl FourierSeries {
     /// `(q, q̇, q̈, q⃛)` at time `t` (s): the periodic deviation `δ` and its derivatives, times
     /// the window by the product rule.
     pub fn with_jerk(&self, t: f64) -> [Vec<f64>; 4] {
+        let mut out: [Vec<f64>; 4] = Default::default();
+        self.with_jerk_into(t, &mut vec![], &mut out);
+        out
+    }
+
+    /// [`FourierSeries::with_jerk`] into `out` (cleared first), `waves` a workspace: the same
+    /// numbers without allocating once the buffers have grown.
+    pub fn with_jerk_into(&self, t: f64, waves: &mut Vec<[f64; 3]>, out: &mut [Vec<f64>; 4]) {
+        // Each harmonic's `(ω_l, sin ω_l t, cos ω_l t)`, shared by every joint.
+        let harmonics = self.sin.iter().map(Vec::len).max().unwrap_or(0);
+        waves.clear();
+        waves.extend((0..harmonics).map(|l| {
+            let w = 2.0 * std::f64::consts::PI * (l + 1) as f64 * self.base_frequency;
+            let (s, c) = (w * t).sin_cos();
+            [w, s, c]
+        }));
         // Per joint, δ and its first three derivatives.
         let deviation = |sin: &[f64], cos: &[f64]| {
             let mut d = [0.0f64; 4];
-            for (l, (a, b)) in sin.iter().zip(cos).enumerate() {
-                let w = 2.0 * std::f64::consts::PI * (l + 1) as f64 * self.base_frequency;
-                let (s, c) = (w * t).sin_cos();
+            for ((a, b), [w, s, c]) in sin.iter().zip(cos).zip(waves.iter()) {
                 d[0] += a * s + b * (c - 1.0);
                 d[1] += w * (a * c - b * s);
                 d[2] -= w * w * (a * s + b * c);
@@ -180,7 +194,7 @@ impl FourierSeries {
             d
         };
         let [w0, w1, w2, w3] = self.window.map_or([1.0, 0.0, 0.0, 0.0], |win| win.at(t));
-        let mut out: [Vec<f64>; 4] = Default::default();
+        out.iter_mut().for_each(Vec::clear);
         for ((o, sin), cos) in self.offset.iter().zip(&self.sin).zip(&self.cos) {
             let d = deviation(sin, cos);
             out[0].push(o + w0 * d[0]);
@@ -188,7 +202,6 @@ impl FourierSeries {
             out[2].push(w2 * d[0] + 2.0 * w1 * d[1] + w0 * d[2]);
             out[3].push(w3 * d[0] + 3.0 * w2 * d[1] + 3.0 * w1 * d[2] + w0 * d[3]);
         }
-        out
     }
 
     /// The period `1/f₀` (s).
