@@ -1,0 +1,108 @@
+"""The commands a user waits on, whole process, and how parallel work scales (issue 58).
+
+Rows (medians of `--rounds` runs, default 5, each a fresh process):
+
+- `diagnose_kuka`: `physid diagnose` of the real KUKA run 3 against the description identified
+  on runs 1 and 2 (`identify --out-urdf`, untimed), report written;
+- `excite_kuka`: `physid excite --robot kuka_lwr4.urdf --duration 30`, checked in simulation;
+- `main_job_T`: the main job (`physid experiment scenarios/sample_size.toml --threads T`) for
+  each T of `--threads` (default 1,2,4,8,16), with its speed-up over one thread and the
+  parallel efficiency (speed-up / min(T, cores)); threads beyond the machine's cores are run
+  and reported, marked as oversubscribed. With `--quick` the main job runs 3 seeds.
+
+No peer is timed here: there is no Python peer of the diagnosis, and an excitation peer (a
+SciPy-optimized Fourier design of the same objective) is not yet written. Timing is reported,
+never asserted.
+
+usage: python scripts/bench_commands.py [--physid PATH] [--rounds N] [--rows a,b,…]
+                                        [--threads 1,2,4] [--quick]
+"""
+import os
+import statistics
+import subprocess
+import sys
+import tempfile
+import time
+
+from physid_common import KUKA_URDF, ROOT, physid_bin, run
+
+ROWS = ["diagnose_kuka", "excite_kuka", "main_job"]
+
+
+def timed(cmd):
+    """Wall time (s) of a whole process."""
+    t0 = time.perf_counter()
+    res = subprocess.run(cmd, capture_output=True, text=True)
+    wall = time.perf_counter() - t0
+    if res.returncode != 0:
+        sys.exit(f"{' '.join(cmd)} failed:\n{res.stderr}")
+    return wall
+
+
+def median_of(cmd, rounds):
+    """Median and spread (min, max) of `rounds` whole-process runs."""
+    times = [timed(cmd) for _ in range(rounds)]
+    return statistics.median(times), min(times), max(times)
+
+
+def main_job_scenario(d, quick):
+    """The main job's scenario, or a copy with 3 seeds (`--quick`), its paths kept."""
+    path = os.path.join(ROOT, "scenarios", "sample_size.toml")
+    if not quick:
+        return path
+    import re
+    with open(path) as f:
+        text = f.read()
+    text = re.sub(r"(?m)^seeds\s*=.*$", "seeds = 3", text)
+    copy = os.path.join(d, "sample_size.toml")
+    with open(copy, "w") as f:
+        f.write(text)
+    return copy
+
+
+def arg(name, default):
+    return sys.argv[sys.argv.index(name) + 1] if name in sys.argv else default
+
+
+def main():
+    binary = physid_bin(sys.argv)
+    rounds = int(arg("--rounds", "5"))
+    chosen = arg("--rows", ",".join(ROWS)).split(",")
+    threads = [int(t) for t in arg("--threads", "1,2,4,8,16").split(",")]
+    unknown = [r for r in chosen if r not in ROWS]
+    if unknown or rounds < 1 or any(t < 1 for t in threads):
+        sys.exit(f"bench_commands: unknown rows {unknown} (choose from {', '.join(ROWS)}), "
+                 "--rounds < 1 or a thread count < 1")
+    cores = os.cpu_count() or 1
+    print(f"whole process, medians of {rounds} runs (min..max), {cores} cores")
+    real = [os.path.join(ROOT, "data", "kuka_lwr4", f"measurements_{i}.csv") for i in (1, 2, 3)]
+    with tempfile.TemporaryDirectory() as d:
+        if "diagnose_kuka" in chosen:
+            described = os.path.join(d, "kuka_identified.urdf")
+            run(binary, "identify", "--robot", KUKA_URDF, "--data", real[0], real[1],
+                "--friction", "viscous,coulomb,offset", "--out-urdf", described)
+            m, lo, hi = median_of([binary, "diagnose", "--robot", described, "--data", real[2],
+                                   "--report", os.path.join(d, "diagnosis")], rounds)
+            print(f"{'diagnose_kuka':<22} {m:7.2f} s ({lo:.2f}..{hi:.2f})", flush=True)
+        if "excite_kuka" in chosen:
+            m, lo, hi = median_of([binary, "excite", "--robot", KUKA_URDF, "--duration", "30",
+                                   "--out", os.path.join(d, "kuka_excitation.toml")], rounds)
+            print(f"{'excite_kuka':<22} {m:7.2f} s ({lo:.2f}..{hi:.2f})", flush=True)
+        if "main_job" in chosen:
+            scenario = main_job_scenario(d, "--quick" in sys.argv)
+            one = None
+            for t in threads:
+                m, lo, hi = median_of([binary, "experiment", scenario, "--out",
+                                       os.path.join(d, f"main_{t}"), "--threads", str(t)], rounds)
+                one = m if t == 1 else one
+                line = f"{f'main_job_{t}':<22} {m:7.2f} s ({lo:.2f}..{hi:.2f})"
+                if one is not None:
+                    speedup = one / m
+                    line += f"  speed-up {speedup:4.2f}x, efficiency {speedup / min(t, cores):4.2f}"
+                if t > cores:
+                    line += "  (oversubscribed)"
+                print(line, flush=True)
+
+
+if __name__ == "__main__":
+    main()
