@@ -35,7 +35,7 @@ pub struct Args {
     /// Fundamental frequency (Hz): the motion repeats every 1/f s. Default: chosen with the
     /// limits and the duration: the fastest at which each joint's first harmonic alone could
     /// sweep its whole range within its speed, acceleration and jerk limits, but at least one
-    /// whole period between the ramps.
+    /// whole period between the ramps (or over half the run, where --ramp leaves less).
     #[arg(allow_negative_numbers = true, long)]
     base_frequency: Option<f64>,
     /// What is maximized.

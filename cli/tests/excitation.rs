@@ -478,3 +478,24 @@ fn the_kukas_design_carries_more_information_than_its_real_trajectory_within_the
         );
     }
 }
+
+#[test]
+fn a_given_ramp_of_half_the_run_leaves_the_fundamental_to_the_limits() {
+    // Nothing between the ramps: before, one period there asked for an infinite fundamental and
+    // the design refused it naming --base-frequency, which was not given.
+    let j = excite(&[
+        "--robot",
+        "cheetah3",
+        "--duration",
+        "10",
+        "--ramp",
+        "5",
+        "--iterations",
+        "5",
+        "--no-check",
+    ]);
+    let series = &j["design"]["series"];
+    let f0 = series["base_frequency"].as_f64().unwrap();
+    assert!(f0.is_finite() && f0 >= 0.2, "{f0}");
+    assert_eq!(series["window"]["ramp"].as_f64(), Some(5.0));
+}

@@ -415,7 +415,7 @@ def excite(
     base_frequency: Fundamental frequency (Hz): the motion repeats every 1/f s. Default: chosen
         with the limits and the duration: the fastest at which each joint's first harmonic alone
         could sweep its whole range within its speed, acceleration and jerk limits, but at least
-        one whole period between the ramps.
+        one whole period between the ramps (or over half the run, where ramp leaves less).
     objective: What is maximized. One of: d-optimal, e-optimal, condition. Default: d-optimal.
     seed: Seed of the random starts and steps. Default: 1.
     iterations: Optimization steps per start (0: a random excitation scaled into the limits).
@@ -471,7 +471,7 @@ def score_motion(
     base_frequency: Fundamental frequency (Hz): the motion repeats every 1/f s. Default: chosen
         with the limits and the duration: the fastest at which each joint's first harmonic alone
         could sweep its whole range within its speed, acceleration and jerk limits, but at least
-        one whole period between the ramps.
+        one whole period between the ramps (or over half the run, where ramp leaves less).
     objective: What is maximized. One of: d-optimal, e-optimal, condition. Default: d-optimal.
     margin: Fraction of every limit left free. Default: 0.15.
     samples: Samples per period at which the information is evaluated. Default: 200.

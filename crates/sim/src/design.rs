@@ -386,7 +386,7 @@ impl Timing {
     /// - the **fundamental**, the fastest at which every joint's first harmonic alone could
     ///   sweep its whole range within its speed, acceleration and jerk limits
     ///   (`ω₀ = min_j min(V_j / R_j, √(A_j / R_j), ∛(J_j / R_j))`), but at least one whole period
-    ///   in the run between the ramps. A design at a fixed 0.5 Hz over the KUKA's ±2.5 rad and
+    ///   in the run between the ramps (or in half the run, where a given ramp leaves less). A design at a fixed 0.5 Hz over the KUKA's ±2.5 rad and
     ///   3 rad/s² moved each joint within 1-13 % of its range.
     pub fn chosen(
         limits: &Limits,
@@ -412,7 +412,9 @@ impl Timing {
                     .min((limits.acceleration[j] / h).sqrt())
                     .min((limits.jerk[j] / h).cbrt())
             });
-            let one_period = 1.0 / (duration - 2.0 * ramp);
+            // (A given ramp may leave little between the ramps: the period then runs into them,
+            // over at least half the run, rather than a fundamental no limit allows.)
+            let one_period = 1.0 / (duration - 2.0 * ramp).max(0.5 * duration);
             (omega / (2.0 * std::f64::consts::PI)).max(one_period)
         });
         Timing {
@@ -1032,5 +1034,10 @@ mod tests {
         // What is given is kept.
         let t = Timing::chosen(&one_joint(1.0, 3.0, 30.0), 10.0, Some(0.7), Some(0.0));
         assert_eq!((t.base_frequency, t.ramp), (0.7, 0.0));
+        // A given ramp of half the run leaves nothing between the ramps: one period over half
+        // the run (before: an infinite fundamental, refused as if the user had given it).
+        let t = Timing::chosen(&one_joint(1.0, 3.0, 30.0), 10.0, None, Some(5.0));
+        assert_eq!(t.ramp, 5.0);
+        assert!((t.base_frequency - 0.2).abs() < 1e-12, "{t:?}");
     }
 }
