@@ -18,30 +18,19 @@ usage: python scripts/bench_commands.py [--physid PATH] [--rounds N] [--rows a,b
                                         [--threads 1,2,4] [--quick]
 """
 import os
+import re
 import statistics
-import subprocess
 import sys
 import tempfile
-import time
 
-from physid_common import KUKA_URDF, ROOT, physid_bin, run
+from physid_common import KUKA_URDF, ROOT, physid_bin, run, timed
 
 ROWS = ["diagnose_kuka", "excite_kuka", "main_job"]
 
 
-def timed(cmd):
-    """Wall time (s) of a whole process."""
-    t0 = time.perf_counter()
-    res = subprocess.run(cmd, capture_output=True, text=True)
-    wall = time.perf_counter() - t0
-    if res.returncode != 0:
-        sys.exit(f"{' '.join(cmd)} failed:\n{res.stderr}")
-    return wall
-
-
 def median_of(cmd, rounds):
     """Median and spread (min, max) of `rounds` whole-process runs."""
-    times = [timed(cmd) for _ in range(rounds)]
+    times = [timed(cmd)[0] for _ in range(rounds)]
     return statistics.median(times), min(times), max(times)
 
 
@@ -50,7 +39,6 @@ def main_job_scenario(d, quick):
     path = os.path.join(ROOT, "scenarios", "sample_size.toml")
     if not quick:
         return path
-    import re
     with open(path) as f:
         text = f.read()
     text = re.sub(r"(?m)^seeds\s*=.*$", "seeds = 3", text)

@@ -28,12 +28,10 @@ usage: python scripts/bench_identify.py [--physid PATH] [--rounds N] [--rows a,b
 import json
 import os
 import statistics
-import subprocess
 import sys
 import tempfile
-import time
 
-from physid_common import KUKA_URDF, ROOT, physid_bin, run
+from physid_common import KUKA_URDF, ROOT, physid_bin, run, timed
 
 ROWS = ["kuka_sim_consistent", "kuka_sim_ellipsoid", "kuka_real_heldout", "leg_shell"]
 
@@ -97,16 +95,6 @@ def solve(problem, y, tau, samples):
     import peer_pinocchio_cvxpy as pp
     return check_cvxpy.solve(pp.rebuilt_problem(problem, y, tau, samples), "CLARABEL",
                              return_theta=True)
-
-
-def timed(cmd):
-    """Wall time (s) and stdout of a whole process."""
-    t0 = time.perf_counter()
-    res = subprocess.run(cmd, capture_output=True, text=True)
-    wall = time.perf_counter() - t0
-    if res.returncode != 0:
-        sys.exit(f"{' '.join(cmd)} failed:\n{res.stderr}")
-    return wall, res.stdout
 
 
 def setup(binary, d):

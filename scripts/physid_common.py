@@ -4,6 +4,7 @@ import os
 import subprocess
 import sys
 import tempfile
+import time
 
 # Paper order [m, hx, hy, hz, Ixx, Ixy, Ixz, Iyy, Iyz, Izz] from pinocchio's
 # [m, hx, hy, hz, Ixx, Ixy, Iyy, Ixz, Iyz, Izz]: paper[k] = pin[PIN_FROM_PAPER[k]].
@@ -21,6 +22,17 @@ def physid_bin(argv):
         return os.environ["PHYSID_BIN"]
     target = os.environ.get("CARGO_TARGET_DIR", os.path.join(ROOT, "target"))
     return os.path.join(target, "release", "physid")
+
+
+def timed(cmd):
+    """Wall time (s) and stdout of a whole process (`cmd` with its arguments); exits naming the
+    command if it fails."""
+    t0 = time.perf_counter()
+    res = subprocess.run(cmd, capture_output=True, text=True)
+    wall = time.perf_counter() - t0
+    if res.returncode != 0:
+        sys.exit(f"{' '.join(cmd)} failed:\n{res.stderr}")
+    return wall, res.stdout
 
 
 def run(binary, *args):
