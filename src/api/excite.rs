@@ -281,17 +281,11 @@ impl ExciteOptions {
             samples: self.samples,
         };
         // Limits that cannot be built (a bad option, an empty range) are refused by the
-        // design itself, by name; the timing is then the fallback's.
-        let timing = match design::Limits::new(model, range, &opts) {
-            Ok(limits) => Timing::chosen(&limits, self.duration, self.base_frequency, self.ramp),
-            Err(_) => Timing {
-                base_frequency: opts.base_frequency,
-                ramp: self
-                    .ramp
-                    .unwrap_or((1.0 / opts.base_frequency).min(0.25 * self.duration)),
-            },
-        };
-        (opts.base_frequency, opts.ramp) = (timing.base_frequency, timing.ramp);
+        // design itself, by name, whatever the timing: the placeholders then stay.
+        if let Ok(limits) = design::Limits::new(model, range, &opts) {
+            let t = Timing::chosen(&limits, self.duration, self.base_frequency, self.ramp);
+            (opts.base_frequency, opts.ramp) = (t.base_frequency, t.ramp);
+        }
         DesignSettings {
             options: opts,
             defaulted,
