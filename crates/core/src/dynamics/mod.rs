@@ -136,7 +136,8 @@ pub fn base_acceleration(model: &Model) -> Motion {
 /// `S_rot = N [axis; 0]`; reflected model: `X_rot = X_rot,0` (frozen) and `S_rot = 0`.
 pub fn update_transforms(model: &Model, data: &mut Data, q: &[f64]) {
     debug_assert!(data.fits(model));
-    for (i, &q_i) in q.iter().enumerate().take(model.dof()) {
+    // (Sliced, not truncated: a `q` shorter than the model is a caller's error, as before.)
+    for (i, &q_i) in q[..model.dof()].iter().enumerate() {
         update_joint_transform(model, data, i, q_i);
     }
 }

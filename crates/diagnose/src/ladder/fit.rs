@@ -31,16 +31,15 @@ impl Data {
         let cutoff = opts.processing_cutoff;
         let ms = opts.min_speed;
         let (t, v) = (stage.train, stage.validate);
-        let vs = variants.to_vec();
         // Training and held-out columns are independent: built side by side.
         let (train, held) = rayon::join(
             || {
                 let ctx = Context::new(model, theta, t, cutoff);
-                Folds::build(&ctx, t, 0..t.len(), vs.clone(), 2, &[], ms)
+                Folds::build(&ctx, t, 0..t.len(), variants.to_vec(), 2, &[], ms)
             },
             || {
                 let ctx = Context::new(model, theta, v, cutoff);
-                Folds::build(&ctx, v, 0..v.len(), vs.clone(), blocks, &[], ms)
+                Folds::build(&ctx, v, 0..v.len(), variants.to_vec(), blocks, &[], ms)
             },
         );
         Data {
