@@ -36,9 +36,11 @@ setup_system() {
   install_debian libopenblas-dev
 }
 
-# The headless browser of the check that renders diagnose's report.html (tests only).
-setup_browser() {
-  install_debian chromium-headless-shell
+# What only the tests use (one apt-get run): the headless browser of the check that renders
+# diagnose's report.html, and Slurm with munge for the check that runs the job-array recipe of
+# docs/sweeps.md on a single-node cluster.
+setup_test_tools() {
+  install_debian chromium-headless-shell slurm-wlm munge
 }
 
 # Installs the Debian packages given that are missing.
@@ -46,7 +48,7 @@ install_debian() {
   local wanted=("$@") missing=() p
   command -v dpkg >/dev/null 2>&1 || {
     # Not Debian: the build script finds OpenBLAS by pkg-config or the usual directories.
-    echo "physid setup: not a Debian system; install the equivalent of ${wanted[*]} (e.g. openblas-devel or brew install openblas; a Chromium for the report check) if asked for"
+    echo "physid setup: not a Debian system; install the equivalent of ${wanted[*]} (e.g. openblas-devel or brew install openblas; a Chromium for the report check, Slurm and munge for the sweep check) if asked for"
     return 0
   }
   for p in "${wanted[@]}"; do
