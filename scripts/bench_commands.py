@@ -10,13 +10,17 @@ Rows (medians of `--rounds` runs, default 5, each a fresh process):
   parallel efficiency (speed-up / min(T, cores)); threads beyond the machine's cores are run
   and reported, marked as oversubscribed. With `--quick` the main job runs 3 seeds.
 
-No peer is timed here: there is no Python peer of the diagnosis, and an excitation peer (a
-SciPy-optimized Fourier design of the same objective) is not yet written. Timing is reported,
-never asserted.
+- `excite_kuka_scipy_peer`: scripts/excite_peer.py, SLSQP over pinocchio's regressor with the
+  same basis, objective, timing and limits as physid's design (from its scenario and JSON),
+  run side by side (`--no-peer` skips it: it takes one to two minutes a run). Both designs are
+  scored on their true motion by `physid excite --score`.
+
+There is no Python peer of the diagnosis. Timing is reported, never asserted.
 
 usage: python scripts/bench_commands.py [--physid PATH] [--rounds N] [--rows a,b,…]
-                                        [--threads 1,2,4] [--quick]
+                                        [--threads 1,2,4] [--quick] [--no-peer]
 """
+import json
 import os
 import re
 import statistics
@@ -48,6 +52,34 @@ def main_job_scenario(d, quick):
     return copy
 
 
+def score(binary, scenario):
+    """`log det F / r` of a written scenario's true motion, by `physid excite --score`."""
+    out = run(binary, "excite", "--scenario", scenario, "--score", "--duration", "30", "--json")
+    return json.loads(out)["d_optimal"]
+
+
+def excite_rows(binary, d, rounds, peer):
+    """physid's 30 s KUKA design, and the SciPy peer's of the same objective from the same
+    timing and limits, each timed whole-process and scored on its true motion by one scorer."""
+    out = os.path.join(d, "kuka_excitation.toml")
+    m, lo, hi = median_of([binary, "excite", "--robot", KUKA_URDF, "--duration", "30",
+                           "--out", out], rounds)
+    design = os.path.join(d, "kuka_excitation.json")
+    os.remove(out)
+    with open(design, "w") as f:
+        f.write(run(binary, "excite", "--robot", KUKA_URDF, "--duration", "30", "--out", out,
+                    "--json"))
+    print(f"{'excite_kuka':<22} {m:7.2f} s ({lo:.2f}..{hi:.2f})  log det F/r {score(binary, out):.3f}",
+          flush=True)
+    if not peer:
+        return
+    theirs = os.path.join(d, "kuka_peer.toml")
+    peer_cmd = [sys.executable, os.path.join(ROOT, "scripts", "excite_peer.py"), out, design, theirs]
+    pm, plo, phi = median_of(peer_cmd, rounds)
+    print(f"{'excite_kuka_scipy_peer':<22} {pm:7.2f} s ({plo:.2f}..{phi:.2f})  "
+          f"log det F/r {score(binary, theirs):.3f}  (physid {pm / m:.1f}x faster)", flush=True)
+
+
 def arg(name, default):
     return sys.argv[sys.argv.index(name) + 1] if name in sys.argv else default
 
@@ -73,9 +105,7 @@ def main():
                                    "--report", os.path.join(d, "diagnosis")], rounds)
             print(f"{'diagnose_kuka':<22} {m:7.2f} s ({lo:.2f}..{hi:.2f})", flush=True)
         if "excite_kuka" in chosen:
-            m, lo, hi = median_of([binary, "excite", "--robot", KUKA_URDF, "--duration", "30",
-                                   "--out", os.path.join(d, "kuka_excitation.toml")], rounds)
-            print(f"{'excite_kuka':<22} {m:7.2f} s ({lo:.2f}..{hi:.2f})", flush=True)
+            excite_rows(binary, d, rounds, "--no-peer" not in sys.argv)
         if "main_job" in chosen:
             scenario = main_job_scenario(d, "--quick" in sys.argv)
             one = None

@@ -7,11 +7,11 @@ and the limits kept, given as the design's JSON) and designs anew, independently
 - the regressor `Y(q, q̇, q̈)` is pinocchio's joint-torque regressor of the URDF, then a
   viscous (q̇) and a Coulomb (sign q̇) column per joint;
 - the identifiable basis from `40 p` random states inside the limits: columns scaled to unit
-  norm (`D`), eigenvectors `V` of `D YᵀY D` above `1e-9` of the largest;
+  norm (`D`; a column zero up to round-off gets no weight), eigenvectors `V` of `D YᵀY D` above `1e-9` of the largest;
 - the objective `log det F / r`, `F = Vᵀ D (Σ_k Y_kᵀ Y_k / K) D V` over `K = 200` samples of one
   period (the periodic motion, as physid's design evaluates it);
 - SLSQP (finite-difference gradients) under the position, speed, acceleration and jerk limits,
-  linear in the coefficients at 50 points of a period, from one random start scaled into them;
+  linear in the coefficients at 100 points of a period, from one random start scaled into them;
   the optimum then scaled per joint into the limits on 4,000 points of a period.
 
 Writes the scenario with its coefficients in place of physid's, for `physid excite --score`
@@ -30,7 +30,7 @@ import numpy as np
 import pinocchio as pin
 import scipy.optimize as so
 
-POINTS = 50  # limit points per period in the optimization
+POINTS = 100  # limit points per period in the optimization
 EPS = 1e-3  # finite-difference step (rad/s² of each coefficient)
 
 
@@ -91,7 +91,9 @@ def basis(model, data, limits, rng):
     k = 40 * p
     q = rng.uniform(lo, hi, (k, len(lo)))
     ys = stacked(model, data, q, rng.uniform(-v, v, q.shape), rng.uniform(-a, a, q.shape))
-    d = 1 / np.maximum(np.linalg.norm(ys, axis=0), 1e-300)
+    norms = np.linalg.norm(ys, axis=0)
+    # A column no state excites (zero up to round-off) gets no weight, as in physid's basis.
+    d = np.where(norms > 1e-9 * norms.max(), 1 / np.maximum(norms, 1e-300), 0.0)
     lam, vec = np.linalg.eigh((ys * d).T @ (ys * d))
     return d, vec[:, lam > 1e-9 * lam.max()]
 

@@ -13,14 +13,15 @@
 //! - **Information** of a trajectory: `F = Vᵀ D⁻¹ (Σ_k Y_kᵀ Y_k / K) D⁻¹ V` over `K` samples of one
 //!   period. Objectives (all maximized): D-optimal `log det F / r`; E-optimal `log λ_min(F)`;
 //!   condition `−log κ(F)^{1/2}` (the regressor's condition number, as most peers optimize).
-//! - **Limits.** Any coefficients are first scaled into the limits: each joint's series by the
-//!   largest factor that keeps its position, speed and acceleration inside the limits (these
-//!   scale linearly), then all joints together, by bisection, until the inverse dynamics'
-//!   torque (with friction) stays inside the effort limits. The optimizer therefore only ever
-//!   scores feasible motions.
-//! - **Optimizer.** `(1+1)` evolution strategy with the one-fifth success rule from `starts`
+//! - **Limits.** A start is scaled into the limits: each joint's series by the largest factor
+//!   that keeps its position, speed, acceleration and jerk inside the limits (these scale
+//!   linearly), then all joints together, by bisection, until the inverse dynamics' torque
+//!   (with friction) stays inside the effort limits.
+//! - **Optimizer.** Sequential quadratic programming in a trust region ([`sqp`]) from `starts`
 //!   random starts (seeded; run in parallel, the best kept, ties to the first start), each for
-//!   `iterations` steps. Deterministic for a seed whatever the thread count.
+//!   at most `iterations` steps. Deterministic for a seed whatever the thread count.
+
+mod sqp;
 
 pub use super::excitation::FourierSeries;
 use nalgebra::{DMatrix, DVector, SymmetricEigen};
@@ -28,7 +29,6 @@ use physid_core::dynamics::{regressor, rnea_with_friction, Data};
 use physid_core::model::Model;
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
-use rand_distr::{Distribution, StandardNormal};
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
@@ -103,7 +103,7 @@ pub struct DesignOptions {
     pub objective: Objective,
     /// Seed of the random starts and steps.
     pub seed: u64,
-    /// Evolution steps per start (0: the random start, scaled into the limits).
+    /// SQP steps per start at most (0: the random start, scaled into the limits).
     pub iterations: usize,
     /// Random starts.
     pub starts: usize,
@@ -505,7 +505,7 @@ pub struct Design {
     pub limits: Limits,
     /// The optimum's use of each limit (evaluated on 4 × `samples` points per period).
     pub limit_use: Vec<LimitUse>,
-    /// Objective evaluations.
+    /// Objective evaluations (a value with its gradient counts as one).
     pub evaluations: usize,
     /// Wall time (s).
     pub seconds: f64,
@@ -541,11 +541,15 @@ impl Basis {
             [q, qd, qdd]
         });
         let (a, _) = gram(model, &mut Data::new(model), states);
+        // A column that no state excites is zero up to round-off (a norm of 1e-14 beside
+        // hundreds, e.g. `lwr_2_link.hy` of the KUKA arm): it gets no weight, instead of a scale
+        // that would blow its round-off up into the information.
+        let largest = (0..p).map(|i| a[(i, i)].sqrt()).fold(0.0, f64::max);
         let inv_scale = DVector::from_iterator(
             p,
             (0..p).map(|i| {
                 let s = a[(i, i)].sqrt();
-                if s > 0.0 {
+                if s > 1e-9 * largest {
                     1.0 / s
                 } else {
                     0.0
@@ -633,21 +637,31 @@ fn objectives(f: &DMatrix<f64>) -> [f64; 3] {
 }
 
 impl Problem<'_> {
-    /// The information matrix of `s` over `samples` points of one period.
+    /// The information matrix of `s`'s steady motion (the periodic series, without the
+    /// ramps) over `samples` points of one period.
     fn information(&self, s: &FourierSeries, data: &mut Data) -> DMatrix<f64> {
-        let states = times(s, self.opts.samples).map(|t| s.at(t));
+        let steady = FourierSeries {
+            window: None,
+            ..s.clone()
+        };
+        let states = times(&steady, self.opts.samples).map(|t| steady.at(t));
         let (a, m) = gram(self.model, data, states);
         self.basis.information(&(a / m as f64))
     }
 
-    /// The objective value of `s` (already inside the limits).
-    fn value(&self, s: &FourierSeries, data: &mut Data) -> f64 {
-        let o = objectives(&self.information(s, data));
+    /// The objective's value at the information matrix `f`.
+    fn objective_of(&self, f: &DMatrix<f64>) -> f64 {
+        let o = objectives(f);
         match self.opts.objective {
             Objective::DOptimal => o[0],
             Objective::EOptimal => o[1],
             Objective::Condition => o[2],
         }
+    }
+
+    /// The objective value of `s` (already inside the limits).
+    fn value(&self, s: &FourierSeries, data: &mut Data) -> f64 {
+        self.objective_of(&self.information(s, data))
     }
 
     /// Peaks over one period and the ramps: per joint `[below centre, above centre, |q̇|, |q̈|,
@@ -691,25 +705,34 @@ impl Problem<'_> {
         r
     }
 
+    /// Per joint, the largest factor by which its series may be scaled within its position,
+    /// speed, acceleration and jerk limits (∞ for a joint that does not move).
+    fn kinematic_factors(&self, s: &FourierSeries) -> Vec<f64> {
+        let l = &self.limits;
+        let peaks = self.kinematic_peaks(s);
+        (0..peaks.len())
+            .map(|j| {
+                let o = s.offset[j];
+                let room = [
+                    o - l.lower[j],
+                    l.upper[j] - o,
+                    l.velocity[j],
+                    l.acceleration[j],
+                    l.jerk[j],
+                ];
+                room.iter()
+                    .zip(&peaks[j])
+                    .filter(|(_, p)| **p > 0.0)
+                    .map(|(r, p)| r / p)
+                    .fold(f64::INFINITY, f64::min)
+            })
+            .collect()
+    }
+
     /// `s` scaled into the limits: each joint by the largest factor its position, speed and
     /// acceleration allow, then all joints by bisection until the torque fits.
     fn scaled_into_limits(&self, mut s: FourierSeries, data: &mut Data) -> FourierSeries {
-        let l = &self.limits;
-        for (j, pk) in self.kinematic_peaks(&s).iter().enumerate() {
-            let o = s.offset[j];
-            let room = [
-                o - l.lower[j],
-                l.upper[j] - o,
-                l.velocity[j],
-                l.acceleration[j],
-                l.jerk[j],
-            ];
-            let f = room
-                .iter()
-                .zip(pk)
-                .filter(|(_, p)| **p > 0.0)
-                .map(|(r, p)| r / p)
-                .fold(f64::INFINITY, f64::min);
+        for (j, f) in self.kinematic_factors(&s).into_iter().enumerate() {
             if f.is_finite() {
                 s.scale_joint(j, f);
             }
@@ -779,52 +802,21 @@ impl Problem<'_> {
         }
     }
 
-    /// One start: a random draw, then `iterations` (1+1)-ES steps. Returns the start's and the
-    /// end's values, the end, and the evaluations made.
+    /// One start: a random draw scaled into the limits, then up to `iterations` SQP steps
+    /// ([`sqp`]). Returns the start's and the end's values, the end, and the evaluations made.
     fn run_start(&self, k: usize) -> (f64, f64, FourierSeries, usize) {
         let mut rng = ChaCha8Rng::seed_from_u64(self.opts.seed);
         rng.set_stream(k as u64);
         let mut data = Data::new(self.model);
-        let mut x = self.scaled_into_limits(self.random_start(&mut rng), &mut data);
-        let mut fx = self.value(&x, &mut data);
+        let x = self.scaled_into_limits(self.random_start(&mut rng), &mut data);
+        let start = self.value(&x, &mut data);
         self.evaluated();
-        let start = fx;
-        let mut sigma = 0.3;
-        for _ in 0..self.opts.iterations {
-            if (self.watch.stop)() {
-                break;
-            }
-            let mut y = x.clone();
-            for j in 0..y.offset.len() {
-                let size = coefficient_rms(&x, j).max(1e-6);
-                for l in 0..self.opts.harmonics {
-                    let step = sigma * size / (l + 1) as f64;
-                    let (a, b): (f64, f64) = (
-                        StandardNormal.sample(&mut rng),
-                        StandardNormal.sample(&mut rng),
-                    );
-                    y.sin[j][l] += step * a;
-                    y.cos[j][l] += step * b;
-                }
-            }
-            let y = self.scaled_into_limits(y, &mut data);
-            let fy = self.value(&y, &mut data);
-            self.evaluated();
-            if fy >= fx {
-                (x, fx) = (y, fy);
-                sigma = (sigma * 1.5f64.powf(0.8)).min(2.0);
-            } else {
-                sigma = (sigma * 1.5f64.powf(-0.2)).max(1e-4);
-            }
+        if self.opts.iterations == 0 {
+            return (start, start, x, 1);
         }
-        (start, fx, x, self.opts.iterations + 1)
+        let (value, end, evaluations) = self.improve(x, &mut data);
+        (start, value, end, evaluations + 1)
     }
-}
-
-/// RMS of joint `j`'s coefficients.
-fn coefficient_rms(s: &FourierSeries, j: usize) -> f64 {
-    let c: Vec<f64> = s.sin[j].iter().chain(&s.cos[j]).copied().collect();
-    (c.iter().map(|x| x * x).sum::<f64>() / c.len() as f64).sqrt()
 }
 
 /// Designs an excitation for `model` within its limits (narrowed to `range`, per joint
@@ -947,6 +939,25 @@ pub fn score_states<'s>(
     Ok(objectives(&basis.information(&(a / m.max(1) as f64))))
 }
 
+/// Speed (rad/s) over which the design's Coulomb columns change sign.
+const COULOMB_SPEED: f64 = 0.01;
+
+/// The regressor at `(q, q̇, q̈)` as the design sees it: the Coulomb columns `tanh(q̇/v_c)`
+/// instead of `sign(q̇)` (the same away from rest), so that the information is a smooth function
+/// of the coefficients.
+fn design_regressor(
+    model: &Model,
+    data: &mut Data,
+    [q, qd, qdd]: [&[f64]; 3],
+    y: &mut DMatrix<f64>,
+) {
+    regressor(model, data, q, qd, qdd, y);
+    let c = model.layout().coulomb_col;
+    for (j, v) in qd.iter().enumerate() {
+        y[(j, c + j)] = (v / COULOMB_SPEED).tanh();
+    }
+}
+
 /// `Σ_k Y_kᵀ Y_k` of the regressors at `states` (`(q, q̇, q̈)` each), and their count.
 fn gram<S: AsRef<[f64]>>(
     model: &Model,
@@ -967,7 +978,7 @@ fn gram<S: AsRef<[f64]>>(
         a.gemm(1.0, &block.transpose(), &block, 1.0);
     };
     for [q, qd, qdd] in states {
-        regressor(model, data, q.as_ref(), qd.as_ref(), qdd.as_ref(), &mut y);
+        design_regressor(model, data, [q.as_ref(), qd.as_ref(), qdd.as_ref()], &mut y);
         rows.view_mut((filled * n, 0), (n, p)).copy_from(&y);
         (filled, m) = (filled + 1, m + 1);
         if filled == BLOCK {
