@@ -50,7 +50,7 @@ def main():
     check("model --json (KUKA URDF)", json.loads(run(binary, "model", "--robot", KUKA_URDF, "--json")), "model")
     check("model --json (Cheetah leg)", json.loads(run(binary, "model", "--json")), "model")
     check("excite --json (KUKA URDF)", json.loads(run(binary, "excite", "--robot", KUKA_URDF, "--iterations", "20",
-                                                       "--duration", "3", "--json")), "excite")
+                                                       "--duration", "10", "--json")), "excite")
     with open(os.path.join(ROOT, "results", "excitation", "provenance.json")) as f:
         check("results/excitation/provenance.json", json.load(f), "provenance")
     diag = json.loads(run(binary, "diagnose", "--robot", KUKA_URDF, "--constraints", "consistent", "--data", m[0], m[1],
