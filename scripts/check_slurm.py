@@ -165,8 +165,10 @@ class Cluster:
         return res.stdout
 
     def submit(self, *args):
-        """`sbatch --parsable ARGS`: the job id."""
-        return self.out(["sbatch", "--parsable", *args]).strip().split(";")[0]
+        """`sbatch --parsable ARGS` run in the cluster's directory (its output files there too,
+        never in the caller's working directory): the job id."""
+        where = [f"--chdir={self.d}"] + ([] if "-o" in args else ["-o", f"{self.d}/slurm-%j.out"])
+        return self.out(["sbatch", "--parsable", *where, *args]).strip().split(";")[0]
 
     def states(self, job):
         """{job id or array task id: state} of a job (an array's tasks each by their id)."""
