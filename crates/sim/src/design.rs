@@ -17,7 +17,7 @@
 //!   that keeps its position, speed, acceleration and jerk inside the limits (these scale
 //!   linearly), then all joints together, by bisection, until the inverse dynamics' torque
 //!   (with friction) stays inside the effort limits.
-//! - **Optimizer.** Sequential quadratic programming in a trust region ([`sqp`]) from `starts`
+//! - **Optimizer.** Sequential quadratic programming in a trust region (`design/sqp.rs`) from `starts`
 //!   random starts (seeded; run in parallel, the best kept, ties to the first start), each for
 //!   at most `iterations` steps. Deterministic for a seed whatever the thread count.
 

@@ -9,17 +9,20 @@
 //!   `dF = Vᵀ D⁻¹ (Σ_k dY_kᵀ Y_k + Y_kᵀ dY_k) D⁻¹ V / K`, so `∂φ/∂s_k = (2/K) ⟨Y_k M, ∂Y_k/∂s_k⟩`
 //!   with `M = D⁻¹ V Φ Vᵀ D⁻¹` for each of a sample's `3n` states `s_k` (`q_j`, `q̇_j`, `q̈_j`;
 //!   `∂Y/∂s` by forward differences, `Y` being linear in `q̈`), then through the Fourier series,
-//!   linear in `x`. `1 + 3n` regressors per sample instead of `2nL + 1` objective evaluations;
-//!   the Coulomb columns' `sign(q̇)` counts as locally constant.
-//! - **Limits.** Position, speed, acceleration and jerk at the check times (one period of the
-//!   steady motion and both ramps) are linear in `x`, windowed or not: each step keeps them
-//!   exactly at those times. The rows near their limit enter the subproblem; any other row its
-//!   solution would break is added and the subproblem solved again. A trial is then scaled into
-//!   the limits as every design is (the torque limit, and the finer grid of the final check).
+//!   linear in `x`. `1 + 3n` regressors per sample instead of `2nL + 1` objective evaluations
+//!   (the design's Coulomb columns are smooth, [`super::design_regressor`]).
+//! - **Limits.** Position, speed, acceleration and jerk at the check times (`K` per period of
+//!   the steady motion and over both ramps) are linear in `x`, windowed or not: each step keeps
+//!   them at those times. The rows near their limit enter the subproblem; any other row its
+//!   solution would break is added and the subproblem solved again. A trial is then shrunk
+//!   (never grown) into the limits on the final check's grid of `4 K` points, and refused where
+//!   its torque leaves the effort limits.
 //! - **Step.** `max gᵀd − ½ dᵀBd` over the box `‖d‖∞ ≤ ρ` within the limits (a convex QP, by
 //!   Clarabel), `B` a damped BFGS model of `−∇²φ`; the step is taken where the objective gains
-//!   at least a tenth of the model's prediction, and `ρ` grows or shrinks with that ratio.
-//!   Deterministic: every sum runs in a fixed order whatever the thread count.
+//!   at least `1e-4` of the model's prediction (far from the optimum `log det` curves faster
+//!   than the model), and `ρ` grows or shrinks with that ratio; the steps end when the predicted
+//!   gain falls below `1e-6` of the objective. Deterministic: every sum runs in a fixed order
+//!   whatever the thread count.
 
 use super::{design_regressor, times, FourierSeries, Problem};
 use clarabel::algebra::CscMatrix;
@@ -246,6 +249,7 @@ fn joint_vars(v: &DVector<f64>, j: usize, n: usize, h: usize) -> impl Iterator<I
         .copied()
 }
 
+/// `coef · y_j`: the row's use of its limit at `y` (1 at the limit).
 fn row_use(r: &Row, y: &DVector<f64>, n: usize, h: usize) -> f64 {
     r.coef
         .iter()
