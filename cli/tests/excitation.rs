@@ -442,17 +442,14 @@ fn a_designed_motion_uses_the_joint_ranges_its_limits_allow() {
     }
 }
 
-#[test]
-fn the_kukas_design_carries_more_information_than_its_real_trajectory_within_the_same_limits() {
-    // The real KUKA runs (data/kuka_lwr4, 200 Hz, ±0.8-1.8 rad at up to 2.8 rad/s²) against a
-    // 30 s design within limits they meet (3.3 rad/s² less the 15 % margin: 2.8). The design's
-    // information per sample, in the same basis of identifiable combinations, is compared with
-    // each real run's (at one rate, information per second compares as per sample).
+/// The KUKA description and the design options of a `duration`-second design within limits
+/// its real runs meet (3.3 rad/s², less the margin: 2.8, their peak).
+fn kuka_design_options(duration: f64) -> (physid::model::Model, DesignOptions) {
     let urdf = root().join("data/kuka_lwr4/kuka_lwr4.urdf");
     let model = physid::io::load_robot(urdf.to_str().unwrap()).unwrap();
     let opts = physid::api::excite::ExciteOptions {
         from: physid::api::excite::ExciteFrom::Robot(urdf.to_str().unwrap().into()),
-        duration: 30.0,
+        duration,
         max_acceleration: Some(vec![3.3]),
         iterations: 300,
         starts: 2,
@@ -460,6 +457,16 @@ fn the_kukas_design_carries_more_information_than_its_real_trajectory_within_the
     }
     .design_options(&model, None)
     .options;
+    (model, opts)
+}
+
+#[test]
+fn the_kukas_design_carries_more_information_than_its_real_trajectory_within_the_same_limits() {
+    // The real KUKA runs (data/kuka_lwr4, 200 Hz, ±0.8-1.8 rad at up to 2.8 rad/s²) against a
+    // 30 s design within limits they meet (3.3 rad/s² less the 15 % margin: 2.8). The design's
+    // information per sample, in the same basis of identifiable combinations, is compared with
+    // each real run's (at one rate, information per second compares as per sample).
+    let (model, opts) = kuka_design_options(30.0);
     let designed = design(&model, None, &opts).unwrap();
     for r in 1..=3 {
         let path = root().join(format!("data/kuka_lwr4/measurements_{r}.csv"));
@@ -540,18 +547,7 @@ fn the_kukas_design_identifies_better_than_the_same_length_of_its_real_trajector
     // information test above): identified under `consistent` from the same CAD-like prior, the
     // design's parameters are closer to the truth (mean relative error of the pseudo-inertias
     // over five noise draws).
-    let urdf = root().join("data/kuka_lwr4/kuka_lwr4.urdf");
-    let model = physid::io::load_robot(urdf.to_str().unwrap()).unwrap();
-    let opts = physid::api::excite::ExciteOptions {
-        from: physid::api::excite::ExciteFrom::Robot(urdf.to_str().unwrap().into()),
-        duration: 25.0,
-        max_acceleration: Some(vec![3.3]),
-        iterations: 300,
-        starts: 2,
-        ..Default::default()
-    }
-    .design_options(&model, None)
-    .options;
+    let (model, opts) = kuka_design_options(25.0);
     let series = design(&model, None, &opts).unwrap().series;
     let samples = 25 * 200;
     let states = (0..samples).map(|k| series.at(k as f64 / 200.0));

@@ -258,74 +258,78 @@ fn row_use(r: &Row, y: &DVector<f64>, n: usize, h: usize) -> f64 {
         .sum()
 }
 
-/// The step `d` maximizing `gᵀd − ½ dᵀBd` over `‖d‖∞ ≤ ρ` with every row kept at `y + d`
-/// (rows added as the solution breaks them); `None` if the solver fails.
-fn step(
-    rows: &[Row],
-    y: &DVector<f64>,
-    g: &DVector<f64>,
-    b: &DMatrix<f64>,
+/// One step's subproblem: the limit rows, the point `y`, the gradient `g` there, the curvature
+/// `B`, the box `ρ`, and the shape `(n, h)` (joints, harmonics).
+struct Subproblem<'a> {
+    rows: &'a [Row],
+    y: &'a DVector<f64>,
+    g: &'a DVector<f64>,
+    b: &'a DMatrix<f64>,
     rho: f64,
-    (n, h): (usize, usize),
-) -> Option<DVector<f64>> {
-    let mut active: Vec<usize> = (0..rows.len())
-        .filter(|&r| row_use(&rows[r], y, n, h) > NEAR)
-        .collect();
-    for _ in 0..6 {
-        let d = solve_qp(rows, &active, y, g, b, rho, (n, h))?;
-        let moved = y + &d;
-        let broken: Vec<usize> = (0..rows.len())
-            .filter(|&r| row_use(&rows[r], &moved, n, h) > 1.0 + 1e-9 && !active.contains(&r))
-            .collect();
-        if broken.is_empty() {
-            return Some(d);
-        }
-        active.extend(broken);
-    }
-    None
+    shape: (usize, usize),
 }
 
-/// `min ½ dᵀBd − gᵀd` s.t. the `active` rows at `y + d` and `‖d‖∞ ≤ ρ`, by Clarabel.
-fn solve_qp(
-    rows: &[Row],
-    active: &[usize],
-    y: &DVector<f64>,
-    g: &DVector<f64>,
-    b: &DMatrix<f64>,
-    rho: f64,
-    (n, h): (usize, usize),
-) -> Option<DVector<f64>> {
-    let m = y.len();
-    let mut a: Vec<(usize, usize, f64)> = vec![];
-    let mut rhs = vec![];
-    for (k, row) in active.iter().map(|&r| &rows[r]).enumerate() {
-        let vars = (0..h)
-            .map(|l| row.joint * h + l)
-            .chain((0..h).map(|l| (n + row.joint) * h + l));
-        a.extend(row.coef.iter().zip(vars).map(|(c, v)| (k, v, *c)));
-        rhs.push((1.0 - row_use(row, y, n, h)).max(0.0));
+impl Subproblem<'_> {
+    /// The step `d` maximizing `gᵀd − ½ dᵀBd` over `‖d‖∞ ≤ ρ` with every row kept at `y + d`
+    /// (rows added as the solution breaks them); `None` if the solver fails.
+    fn step(&self) -> Option<DVector<f64>> {
+        let (n, h) = self.shape;
+        let uses = |at: &DVector<f64>| -> Vec<f64> {
+            self.rows.iter().map(|r| row_use(r, at, n, h)).collect()
+        };
+        let mut active: Vec<bool> = uses(self.y).into_iter().map(|u| u > NEAR).collect();
+        for _ in 0..6 {
+            let d = self.solve(&active)?;
+            let moved = self.y + &d;
+            let mut broken = false;
+            for (a, u) in active.iter_mut().zip(uses(&moved)) {
+                if !*a && u > 1.0 + 1e-9 {
+                    (*a, broken) = (true, true);
+                }
+            }
+            if !broken {
+                return Some(d);
+            }
+        }
+        None
     }
-    for i in 0..m {
-        let k = rhs.len();
-        a.extend([(k, i, 1.0), (k + 1, i, -1.0)]);
-        rhs.extend([rho, rho]);
+
+    /// `min ½ dᵀBd − gᵀd` s.t. the `active` rows at `y + d` and `‖d‖∞ ≤ ρ`, by Clarabel.
+    fn solve(&self, active: &[bool]) -> Option<DVector<f64>> {
+        let ((n, h), m) = (self.shape, self.y.len());
+        let mut a: Vec<(usize, usize, f64)> = vec![];
+        let mut rhs = vec![];
+        let kept = self.rows.iter().zip(active).filter(|(_, on)| **on);
+        for (k, (row, _)) in kept.enumerate() {
+            let vars = (0..h)
+                .map(|l| row.joint * h + l)
+                .chain((0..h).map(|l| (n + row.joint) * h + l));
+            a.extend(row.coef.iter().zip(vars).map(|(c, v)| (k, v, *c)));
+            rhs.push((1.0 - row_use(row, self.y, n, h)).max(0.0));
+        }
+        for i in 0..m {
+            let k = rhs.len();
+            a.extend([(k, i, 1.0), (k + 1, i, -1.0)]);
+            rhs.extend([self.rho, self.rho]);
+        }
+        let b = self.b;
+        let upper = (0..m).flat_map(|j| (0..=j).map(move |i| (i, j, b[(i, j)])));
+        let p = csc(m, m, upper.collect());
+        let a = csc(rhs.len(), m, a);
+        let q: Vec<f64> = self.g.iter().map(|v| -v).collect();
+        let cones = [SupportedConeT::NonnegativeConeT(rhs.len())];
+        let settings = DefaultSettings {
+            verbose: false,
+            ..DefaultSettings::default()
+        };
+        let mut solver = DefaultSolver::new(&p, &q, &a, &rhs, &cones, settings).ok()?;
+        solver.solve();
+        matches!(
+            solver.solution.status,
+            SolverStatus::Solved | SolverStatus::AlmostSolved
+        )
+        .then(|| DVector::from_column_slice(&solver.solution.x))
     }
-    let upper = (0..m).flat_map(|j| (0..=j).map(move |i| (i, j, b[(i, j)])));
-    let p = csc(m, m, upper.collect());
-    let a = csc(rhs.len(), m, a);
-    let q: Vec<f64> = g.iter().map(|v| -v).collect();
-    let cones = [SupportedConeT::NonnegativeConeT(rhs.len())];
-    let settings = DefaultSettings {
-        verbose: false,
-        ..DefaultSettings::default()
-    };
-    let mut solver = DefaultSolver::new(&p, &q, &a, &rhs, &cones, settings).ok()?;
-    solver.solve();
-    matches!(
-        solver.solution.status,
-        SolverStatus::Solved | SolverStatus::AlmostSolved
-    )
-    .then(|| DVector::from_column_slice(&solver.solution.x))
 }
 
 /// A `rows × cols` sparse matrix of `(row, column, value)` triplets.
@@ -370,6 +374,17 @@ impl Problem<'_> {
             }
         }
         s
+    }
+
+    /// A step's end `moved`, shrunk into the kinematic limits, with its slope; `None` where its
+    /// torque leaves the effort limits or its information is singular.
+    fn trial(&self, moved: FourierSeries, data: &mut Data) -> Option<(FourierSeries, Slope)> {
+        let trial = self.shrunk_into_limits(moved);
+        if !self.within_torque(&trial, data) {
+            return None;
+        }
+        let slope = self.slope(&trial)?;
+        Some((trial, slope))
     }
 
     /// Whether `s`'s torque stays within the effort limits.
@@ -417,7 +432,15 @@ impl Problem<'_> {
                 break;
             }
             self.evaluated();
-            let Some(d) = step(&rows, &y, &g, &b, rho, (n, h)) else {
+            let subproblem = Subproblem {
+                rows: &rows,
+                y: &y,
+                g: &g,
+                b: &b,
+                rho,
+                shape: (n, h),
+            };
+            let Some(d) = subproblem.step() else {
                 rho *= 0.25;
                 continue;
             };
@@ -427,13 +450,9 @@ impl Problem<'_> {
             if gain.is_nan() || gain <= 1e-6 {
                 break;
             }
-            let trial = self.shrunk_into_limits(series_of(&(&y + &d).component_mul(&sigma), &s));
             evaluations += 1;
-            let next = self
-                .within_torque(&trial, data)
-                .then(|| self.slope(&trial))
-                .flatten();
-            let Some(next) = next else {
+            let moved = series_of(&(&y + &d).component_mul(&sigma), &s);
+            let Some((trial, next)) = self.trial(moved, data) else {
                 rho *= 0.25;
                 continue;
             };
