@@ -33,9 +33,10 @@ ROWS = ["diagnose_kuka", "excite_kuka", "main_job"]
 
 
 def median_of(cmd, rounds):
-    """Median and spread (min, max) of `rounds` whole-process runs."""
-    times = [timed(cmd)[0] for _ in range(rounds)]
-    return statistics.median(times), min(times), max(times)
+    """Median and spread (min, max) of `rounds` whole-process runs, and the last run's stdout."""
+    runs = [timed(cmd) for _ in range(rounds)]
+    times = [t for t, _ in runs]
+    return statistics.median(times), min(times), max(times), runs[-1][1]
 
 
 def main_job_scenario(d, quick):
@@ -62,20 +63,18 @@ def excite_rows(binary, d, rounds, peer):
     """physid's 30 s KUKA design, and the SciPy peer's of the same objective from the same
     timing and limits, each timed whole-process and scored on its true motion by one scorer."""
     out = os.path.join(d, "kuka_excitation.toml")
-    m, lo, hi = median_of([binary, "excite", "--robot", KUKA_URDF, "--duration", "30",
-                           "--out", out], rounds)
+    m, lo, hi, report = median_of([binary, "excite", "--robot", KUKA_URDF, "--duration", "30",
+                                   "--out", out, "--json"], rounds)
     design = os.path.join(d, "kuka_excitation.json")
-    os.remove(out)
     with open(design, "w") as f:
-        f.write(run(binary, "excite", "--robot", KUKA_URDF, "--duration", "30", "--out", out,
-                    "--json"))
+        f.write(report)
     print(f"{'excite_kuka':<22} {m:7.2f} s ({lo:.2f}..{hi:.2f})  log det F/r {score(binary, out):.3f}",
           flush=True)
     if not peer:
         return
     theirs = os.path.join(d, "kuka_peer.toml")
     peer_cmd = [sys.executable, os.path.join(ROOT, "scripts", "excite_peer.py"), out, design, theirs]
-    pm, plo, phi = median_of(peer_cmd, rounds)
+    pm, plo, phi, _ = median_of(peer_cmd, rounds)
     print(f"{'excite_kuka_scipy_peer':<22} {pm:7.2f} s ({plo:.2f}..{phi:.2f})  "
           f"log det F/r {score(binary, theirs):.3f}  (physid {pm / m:.1f}x faster)", flush=True)
 
@@ -101,7 +100,7 @@ def main():
             described = os.path.join(d, "kuka_identified.urdf")
             run(binary, "identify", "--robot", KUKA_URDF, "--data", real[0], real[1],
                 "--friction", "viscous,coulomb,offset", "--out-urdf", described)
-            m, lo, hi = median_of([binary, "diagnose", "--robot", described, "--data", real[2],
+            m, lo, hi, _ = median_of([binary, "diagnose", "--robot", described, "--data", real[2],
                                    "--report", os.path.join(d, "diagnosis")], rounds)
             print(f"{'diagnose_kuka':<22} {m:7.2f} s ({lo:.2f}..{hi:.2f})", flush=True)
         if "excite_kuka" in chosen:
@@ -110,7 +109,7 @@ def main():
             scenario = main_job_scenario(d, "--quick" in sys.argv)
             one = None
             for t in threads:
-                m, lo, hi = median_of([binary, "experiment", scenario, "--out",
+                m, lo, hi, _ = median_of([binary, "experiment", scenario, "--out",
                                        os.path.join(d, f"main_{t}"), "--threads", str(t)], rounds)
                 one = m if t == 1 else one
                 line = f"{f'main_job_{t}':<22} {m:7.2f} s ({lo:.2f}..{hi:.2f})"

@@ -640,10 +640,7 @@ impl Problem<'_> {
     /// The information matrix of `s`'s steady motion (the periodic series, without the
     /// ramps) over `samples` points of one period.
     fn information(&self, s: &FourierSeries, data: &mut Data) -> DMatrix<f64> {
-        let steady = FourierSeries {
-            window: None,
-            ..s.clone()
-        };
+        let steady = s.steady();
         let states = times(&steady, self.opts.samples).map(|t| steady.at(t));
         let (a, m) = gram(self.model, data, states);
         self.basis.information(&(a / m as f64))
@@ -964,32 +961,66 @@ fn gram<S: AsRef<[f64]>>(
     data: &mut Data,
     states: impl Iterator<Item = [S; 3]>,
 ) -> (DMatrix<f64>, usize) {
-    const BLOCK: usize = 64;
     let (n, p) = (model.dof(), model.layout().len);
     let mut y = DMatrix::zeros(n, p);
-    let mut rows = DMatrix::zeros(BLOCK * n, p);
-    let mut a = DMatrix::<f64>::zeros(p, p);
-    let (mut m, mut filled) = (0, 0);
-    // `YᵀY` over blocks of samples' rows: one product per block, not one per sample.
-    let flush = |rows: &DMatrix<f64>, filled: usize, a: &mut DMatrix<f64>| {
-        let block = rows.rows(0, filled * n);
-        // (`gemm` on the transpose: nalgebra's `gemm_tr` takes dot products one entry at a
-        // time, `gemm` the blocked kernel.)
-        a.gemm(1.0, &block.transpose(), &block, 1.0);
-    };
+    let mut sum = GramSum::new(n, p);
     for [q, qd, qdd] in states {
         design_regressor(model, data, [q.as_ref(), qd.as_ref(), qdd.as_ref()], &mut y);
-        rows.view_mut((filled * n, 0), (n, p)).copy_from(&y);
-        (filled, m) = (filled + 1, m + 1);
-        if filled == BLOCK {
-            flush(&rows, filled, &mut a);
-            filled = 0;
+        sum.add(&y);
+    }
+    sum.finish()
+}
+
+/// `Σ_k Y_kᵀ Y_k` over blocks of samples' rows: one product per block of [`GramSum::BLOCK`]
+/// samples, not one per sample.
+struct GramSum {
+    rows: DMatrix<f64>,
+    filled: usize,
+    count: usize,
+    a: DMatrix<f64>,
+}
+
+impl GramSum {
+    const BLOCK: usize = 64;
+
+    /// Empty, for `n × p` regressors.
+    fn new(n: usize, p: usize) -> Self {
+        Self {
+            rows: DMatrix::zeros(Self::BLOCK * n, p),
+            filled: 0,
+            count: 0,
+            a: DMatrix::zeros(p, p),
         }
     }
-    if filled > 0 {
-        flush(&rows, filled, &mut a);
+
+    /// Adds one sample's regressor `y`.
+    fn add(&mut self, y: &DMatrix<f64>) {
+        let n = y.nrows();
+        self.rows
+            .view_mut((self.filled * n, 0), y.shape())
+            .copy_from(y);
+        (self.filled, self.count) = (self.filled + 1, self.count + 1);
+        if self.filled == Self::BLOCK {
+            self.flush(n);
+        }
     }
-    (a, m)
+
+    fn flush(&mut self, n: usize) {
+        let block = self.rows.rows(0, self.filled * n);
+        // (`gemm` on the transpose: nalgebra's `gemm_tr` takes dot products one entry at a
+        // time, `gemm` the blocked kernel.)
+        self.a.gemm(1.0, &block.transpose(), &block, 1.0);
+        self.filled = 0;
+    }
+
+    /// The sum and the samples' count.
+    fn finish(mut self) -> (DMatrix<f64>, usize) {
+        if self.filled > 0 {
+            let n = self.rows.nrows() / Self::BLOCK;
+            self.flush(n);
+        }
+        (self.a, self.count)
+    }
 }
 
 #[cfg(test)]

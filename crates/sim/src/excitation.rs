@@ -178,7 +178,7 @@ impl FourierSeries {
         let harmonics = self.sin.iter().map(Vec::len).max().unwrap_or(0);
         waves.clear();
         waves.extend((0..harmonics).map(|l| {
-            let w = 2.0 * std::f64::consts::PI * (l + 1) as f64 * self.base_frequency;
+            let w = self.angular_frequency(l);
             let (s, c) = (w * t).sin_cos();
             [w, s, c]
         }));
@@ -201,6 +201,19 @@ impl FourierSeries {
             out[1].push(w1 * d[0] + w0 * d[1]);
             out[2].push(w2 * d[0] + 2.0 * w1 * d[1] + w0 * d[2]);
             out[3].push(w3 * d[0] + 3.0 * w2 * d[1] + 3.0 * w1 * d[2] + w0 * d[3]);
+        }
+    }
+
+    /// `ω_l = 2π (l + 1) f₀` (rad/s) of harmonic `l` (from 0).
+    pub fn angular_frequency(&self, l: usize) -> f64 {
+        2.0 * std::f64::consts::PI * (l + 1) as f64 * self.base_frequency
+    }
+
+    /// The periodic series alone, without the fade in and out (the steady motion).
+    pub fn steady(&self) -> FourierSeries {
+        FourierSeries {
+            window: None,
+            ..self.clone()
         }
     }
 

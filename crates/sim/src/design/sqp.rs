@@ -24,7 +24,7 @@
 //!   gain falls below `1e-6` of the objective. Deterministic: every sum runs in a fixed order
 //!   whatever the thread count.
 
-use super::{design_regressor, times, FourierSeries, Problem};
+use super::{design_regressor, times, FourierSeries, GramSum, Problem};
 use clarabel::algebra::CscMatrix;
 use clarabel::solver::{DefaultSettings, DefaultSolver, IPSolver, SolverStatus, SupportedConeT};
 use nalgebra::{DMatrix, DVector, SymmetricEigen};
@@ -90,10 +90,7 @@ fn objective_slope(f: &DMatrix<f64>, which: super::Objective) -> Option<DMatrix<
 impl Problem<'_> {
     /// The objective of `s`'s steady motion and its gradient in `x`.
     pub(super) fn slope(&self, s: &FourierSeries) -> Option<Slope> {
-        let steady = FourierSeries {
-            window: None,
-            ..s.clone()
-        };
+        let steady = s.steady();
         let (n, p) = (self.model.dof(), self.model.layout().len);
         let ts: Vec<f64> = times(&steady, self.opts.samples).collect();
         let k_count = ts.len() as f64;
@@ -109,11 +106,10 @@ impl Problem<'_> {
                 },
             )
             .collect();
-        let mut a = DMatrix::zeros(p, p);
-        for y in &ys {
-            a.gemm(1.0 / k_count, &y.transpose(), y, 1.0);
-        }
-        let f = self.basis.information(&a);
+        let mut sum = GramSum::new(n, p);
+        ys.iter().for_each(|y| sum.add(y));
+        let (a, _) = sum.finish();
+        let f = self.basis.information(&(a / k_count));
         let value = self.objective_of(&f);
         let phi = objective_slope(&f, self.opts.objective)?;
         let dv = DMatrix::from_fn(p, self.basis.v.ncols(), |i, c| {
@@ -168,7 +164,7 @@ impl Problem<'_> {
         let mut g = DVector::zeros(2 * n * h);
         for (t, slopes) in ts.iter().zip(per_state) {
             for l in 0..h {
-                let w = 2.0 * std::f64::consts::PI * (l + 1) as f64 * s.base_frequency;
+                let w = s.angular_frequency(l);
                 let (sn, cs) = (w * t).sin_cos();
                 for (j, [cq, cqd, cqdd]) in slopes.iter().enumerate() {
                     g[j * h + l] += cq * sn + cqd * w * cs - cqdd * w * w * sn;
@@ -399,7 +395,7 @@ impl Problem<'_> {
         let (n, h) = (s.sin.len(), s.sin[0].len());
         DVector::from_fn(2 * n * h, |i, _| {
             let (j, l) = ((i / h) % n, i % h);
-            let w = 2.0 * std::f64::consts::PI * (l + 1) as f64 * s.base_frequency;
+            let w = s.angular_frequency(l);
             let a = self.limits.acceleration[j];
             if a.is_finite() {
                 a / (w * w)
@@ -409,8 +405,8 @@ impl Problem<'_> {
         })
     }
 
-    /// Up to `iterations` SQP steps from `start` (inside the limits): the end's value, the end, and the
-    /// evaluations made (a value with its gradient counts as one).
+    /// Up to `iterations` SQP steps from `start` (inside the limits): the end's value, the end,
+    /// and the evaluations made (a value with its gradient counts as one).
     pub(super) fn improve(
         &self,
         start: FourierSeries,
