@@ -193,9 +193,9 @@ class Cluster:
         sys.exit(f"job {job} did not finish in {timeout} s: {self.states(job)}")
 
 
-def recipe(binary, sweep, out, shards):
-    """docs/sweeps.md's job-array script and merge command for this sweep, or exits naming what
-    of the recipe was not found."""
+def recipe(binary, sweep, out, shards, path):
+    """docs/sweeps.md's job-array script for this sweep, written to `path`, and its merge
+    command; or exits naming what of the recipe was not found."""
     with open(os.path.join(ROOT, "docs", "sweeps.md")) as f:
         doc = f.read()
     section = doc[doc.index("## On a cluster"):]
@@ -209,7 +209,9 @@ def recipe(binary, sweep, out, shards):
         script = script.replace(old, new)
         merge = merge.replace(old, new)
     call = lambda text: re.sub(r"^physid ", f"'{binary}' ", text, flags=re.M)
-    return call(script), call(merge).strip()
+    with open(path, "w") as f:
+        f.write(call(script))
+    return call(merge).strip()
 
 
 def rows(out):
@@ -225,10 +227,8 @@ def cells(out):
 
 def run_array(cluster, report, binary, sweep, out, reference):
     """Run 1: the recipe's array and its merge job; rows equal the one-process sweep's."""
-    script, merge = recipe(binary, sweep, out, SHARDS)
     path = os.path.join(cluster.d, "array.sh")
-    with open(path, "w") as f:
-        f.write(script)
+    merge = recipe(binary, sweep, out, SHARDS, path)
     logs = os.path.join(cluster.d, "run1_%A_%a.log")
     array = cluster.submit("-o", logs, path)
     merged = cluster.submit(f"--dependency=afterok:{array}", "-o", f"{cluster.d}/merge1.log",
@@ -245,10 +245,8 @@ def run_array(cluster, report, binary, sweep, out, reference):
 
 def run_killed(cluster, report, binary, sweep, out, reference):
     """Run 2: one task cancelled after its first cell, resubmitted alone, then merged."""
-    script, merge = recipe(binary, sweep, out, 2)
     path = os.path.join(cluster.d, "array2.sh")
-    with open(path, "w") as f:
-        f.write(script)
+    merge = recipe(binary, sweep, out, 2, path)
     array = cluster.submit("-o", os.path.join(cluster.d, "run2_%A_%a.log"), path)
     merged = cluster.submit(f"--dependency=afterok:{array}", "--wrap", merge)
     deadline = time.time() + 120
