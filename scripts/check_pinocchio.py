@@ -76,6 +76,66 @@ def check_identified_kuka(report, binary, directory):
     check(report, "identified KUKA (patched URDF + sidecar)", out, dynamics(binary, ["--robot", sidecar]))
 
 
+def check_floating(report, binary, directory, rotors):
+    """The Cheetah-3-like quadruped on a floating trunk (`dynamics --floating-base`): its tree
+    exported as URDF, loaded under pinocchio's free flyer (rotors as mimic joints) with the
+    trunk's inertia set from physid's; RNEA (trunk wrench and joint torques), CRBA, the
+    regressor's inertial columns (link-only) and the feet's Jacobians on random trunk and joint
+    states. pinocchio orders the free flyer's velocity and wrench linear first, physid angular
+    first: swapped here."""
+    import os
+    args = ["--robot", "cheetah3"] + ([] if rotors else ["--no-rotors"])
+    dyn = dynamics(binary, args + ["--floating-base"])
+    path = os.path.join(directory, f"quadruped_{int(rotors)}.urdf")
+    with open(path, "w") as f:
+        f.write(dyn["tree_urdf"])
+    model = pin.buildModelFromUrdf(path, pin.JointModelFreeFlyer(), rotors)
+    pin_pi = np.zeros(10)
+    pin_pi[PIN_FROM_PAPER] = dyn["trunk_pi"]
+    model.inertias[1] = pin.Inertia.FromDynamicParameters(pin_pi)
+    data = model.createData()
+    n = len(dyn["joint_names"])
+    # pinocchio orders sibling links by name; map physid's joints by theirs.
+    jids = [model.getJointId(name) for name in dyn["joint_names"]]
+    if any(j >= model.njoints for j in jids) or model.nv != 6 + n:
+        sys.exit(f"quadruped: pinocchio's joints {list(model.names)} do not match {dyn['joint_names']}")
+    vi = np.array([model.joints[j].idx_v for j in jids])
+    nu = np.r_[3, 4, 5, 0, 1, 2, vi]  # physid's ν entry i is pinocchio's nu[i]
+    label = "quadruped " + ("with rotors (mimic)" if rotors else "link-only")
+    e_tau = e_m = e_y = e_j = 0.0
+    for s in dyn["samples"]:
+        q = np.zeros(model.nq)
+        q[:3] = s["position"]
+        q[3:7] = pin.Quaternion(np.asarray(s["rotation"])).coeffs()
+        q[vi + 1] = s["q"]
+        v, a = np.zeros(model.nv), np.zeros(model.nv)
+        v[nu] = np.r_[s["v"], s["qd"]]
+        a[nu] = np.r_[s["a"], s["qdd"]]
+        ours = np.r_[s["f_trunk"], s["tau"]]
+        e_tau = max(e_tau, rel_err(ours, pin.rnea(model, data, q, v, a)[nu]))
+        m = pin.crba(model, data, q)
+        m = np.triu(m) + np.triu(m, 1).T
+        e_m = max(e_m, rel_err(np.asarray(s["M"]), m[np.ix_(nu, nu)]))
+        if not rotors:
+            y = pin.computeJointTorqueRegressor(model, data, q, v, a)
+            bodies = [1] + jids  # the trunk, then physid's bodies
+            cols = np.concatenate([10 * (j - 1) + np.array(PIN_FROM_PAPER) for j in bodies])
+            e_y = max(e_y, rel_err(np.asarray(s["Y"])[:, : 10 * (n + 1)], y[np.ix_(nu, cols)]))
+        pin.computeJointJacobians(model, data, q)
+        for body, jac in zip(dyn["feet"], s["foot_jacobians"]):
+            jid = jids[body]
+            j6 = pin.getJointJacobian(model, data, jid, pin.LOCAL_WORLD_ALIGNED)
+            r = data.oMi[jid].rotation @ np.asarray(dyn["foot_in_shank"])
+            j_point = j6[:3] - pin.skew(r) @ j6[3:]
+            e_j = max(e_j, rel_err(np.asarray(jac), j_point[:, nu]))
+    count = len(dyn["samples"])
+    report.add(f"{label}: rnea (trunk wrench, joint torques) over {count} random states", e_tau, TOL)
+    report.add(f"{label}: mass matrix", e_m, TOL)
+    if not rotors:
+        report.add(f"{label}: regressor (trunk and link columns)", e_y, TOL)
+    report.add(f"{label}: feet Jacobians", e_j, TOL)
+
+
 def main():
     binary = physid_bin(sys.argv)
     report = Report("check_pinocchio")
@@ -85,6 +145,8 @@ def main():
         check(report, "link-only Cheetah-3 leg", urdf, dynamics(binary, ["--robot", urdf]))
         check_rotors(report, binary, d)
         check_identified_kuka(report, binary, d)
+        check_floating(report, binary, d, rotors=False)
+        check_floating(report, binary, d, rotors=True)
     check(report, "KUKA LWR4+ (data/kuka_lwr4 URDF)", KUKA_URDF, dynamics(binary, ["--robot", KUKA_URDF]))
     report.finish()
 

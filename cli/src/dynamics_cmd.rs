@@ -2,9 +2,15 @@
 
 use super::RobotArgs;
 use nalgebra::DMatrix;
-use physid::dynamics::{crba, regressor, rnea, Data};
+use nalgebra::Vector3;
+use physid::dynamics::{
+    crba, crba_floating, point_jacobian_floating, regressor, regressor_floating, rnea,
+    rnea_floating, BaseState, Data,
+};
+use physid::model::floating::FloatingModel;
 use physid::model::random::random_state;
 use physid::model::Model;
+use physid::spatial::Motion;
 use serde_json::json;
 use std::path::PathBuf;
 
@@ -26,6 +32,12 @@ pub struct Args {
     /// Output JSON file.
     #[arg(long)]
     out: PathBuf,
+    /// The robot on a floating trunk: the built-in `cheetah3` becomes the Cheetah-3-like
+    /// quadruped (trunk and four legs); each state also gets a random trunk pose, twist and
+    /// acceleration, and the JSON the wrench on the trunk, the floating-base regressor, mass
+    /// matrix and the feet's Jacobians, with the tree as URDF (root link = trunk).
+    #[arg(long)]
+    floating_base: bool,
 }
 
 /// `physid dynamics`.
@@ -38,6 +50,16 @@ pub fn run(a: Args) -> anyhow::Result<()> {
     let inputs = a.robot.files();
     let inputs: Vec<&std::path::Path> = inputs.iter().map(|p| p.as_path()).collect();
     physid::io::check_outputs(&[a.out.as_path()], &inputs)?;
+    if a.floating_base {
+        anyhow::ensure!(
+            a.robot.robot == "cheetah3",
+            "--floating-base: only the built-in robot (cheetah3, as the quadruped) floats yet; \
+             '{}' is a fixed-base description",
+            a.robot.robot
+        );
+        let robot = quadruped_from(&a.robot.load()?)?;
+        return floating_json(&robot, a.samples as usize, a.seed, a.scale, &a.out);
+    }
     dynamics_json(
         &a.robot.load()?,
         a.samples as usize,
@@ -45,6 +67,20 @@ pub fn run(a: Args) -> anyhow::Result<()> {
         a.scale,
         &a.out,
     )
+}
+
+/// The quadruped whose legs are the loaded leg `leg` (its rotor model, with or without rotors).
+fn quadruped_from(leg: &Model) -> anyhow::Result<physid::model::floating::FloatingModel> {
+    let options = physid::model::cheetah3::LegOptions {
+        rotors: leg.rotor_count() > 0,
+        ..Default::default()
+    };
+    let robot = physid::model::quadruped::quadruped_with(&options)?;
+    let tree = robot.tree().clone().with_rotor_model(leg.rotor_model());
+    Ok(physid::model::floating::FloatingModel::new(
+        robot.trunk().clone(),
+        tree,
+    )?)
 }
 
 /// Writes random-state dynamics as JSON for the check scripts.
@@ -82,5 +118,97 @@ pub fn dynamics_json(
     let v = physid::io::versioned("dynamics", &v);
     physid::io::write_atomic(out, serde_json::to_string(&v)?.as_bytes())?;
     eprintln!("wrote {} states to {}", samples, out.display());
+    Ok(())
+}
+
+/// A random trunk state for sample `seed`: orientation about a random axis, position, twist
+/// and acceleration within `scale`.
+fn random_base(seed: u64, scale: f64) -> BaseState {
+    let [a, b, c] = random_state(seed, 6, scale);
+    let axis = Vector3::new(a[0], a[1], a[2]);
+    let axis = if axis.norm() > 1e-9 {
+        axis.normalize()
+    } else {
+        Vector3::z()
+    };
+    let rot = physid::spatial::rot_axis_angle(&axis, a[3]);
+    let m = |x: &[f64]| {
+        Motion::new(
+            Vector3::new(x[0], x[1], x[2]),
+            Vector3::new(x[3], x[4], x[5]),
+        )
+    };
+    BaseState {
+        pose: physid::spatial::Transform::from_pose(&rot, &Vector3::new(a[4], a[5], 0.5)),
+        v: m(&b),
+        a: m(&c),
+    }
+}
+
+/// Writes random-state floating-base dynamics as JSON for the check scripts: per state the
+/// trunk's pose (rotation matrix, trunk axes in world coordinates, and position), twist and
+/// acceleration (`[ω; v]`, trunk coordinates), the joint state, the wrench on the trunk and the
+/// joint torques, the regressor, the mass matrix and the four feet's Jacobians.
+fn floating_json(
+    robot: &FloatingModel,
+    samples: usize,
+    seed: u64,
+    scale: f64,
+    out: &std::path::Path,
+) -> anyhow::Result<()> {
+    let tree = robot.tree();
+    let n = tree.dof();
+    let mut d = Data::new(tree);
+    let mut y = DMatrix::zeros(robot.dof(), robot.parameter_count());
+    let rows = |x: &DMatrix<f64>| -> Vec<Vec<f64>> {
+        x.row_iter().map(|r| r.iter().copied().collect()).collect()
+    };
+    let foot = physid::model::cheetah3::foot_in_shank();
+    let shanks: Vec<usize> = (0..n).filter(|i| i % 3 == 2).collect();
+    let mut states = vec![];
+    for s in 0..samples {
+        let k = seed.wrapping_mul(1_000_003).wrapping_add(s as u64);
+        let base = random_base(k.wrapping_add(7), scale);
+        let [q, qd, qdd] = random_state(k, n, scale);
+        let f_b = rnea_floating(robot, &mut d, &base, &q, &qd, &qdd);
+        let tau = d.tau.clone();
+        regressor_floating(robot, &mut d, &base, (&q, &qd, &qdd), &mut y);
+        let m = crba_floating(robot, &mut d, &q);
+        let feet: Vec<_> = shanks
+            .iter()
+            .map(|&b| {
+                rows(&point_jacobian_floating(
+                    robot,
+                    &mut d,
+                    &base,
+                    &q,
+                    (b, &foot),
+                ))
+            })
+            .collect();
+        let (rot, pos) = base.pose.to_pose();
+        states.push(json!({
+            "rotation": rows(&DMatrix::from_column_slice(3, 3, rot.as_slice())),
+            "position": pos.as_slice(), "v": base.v.to_vec6().as_slice(), "a": base.a.to_vec6().as_slice(),
+            "q": q, "qd": qd, "qdd": qdd, "f_trunk": f_b.to_vec6().as_slice(), "tau": tau.as_slice(),
+            "Y": rows(&y), "M": rows(&m), "foot_jacobians": feet,
+        }));
+    }
+    let v = json!({
+        "model": robot.name(), "rotor_model": tree.rotor_model(),
+        "joint_names": tree.joint_names(), "trunk": robot.trunk().name,
+        "trunk_pi": robot.trunk().inertia.0.as_slice(),
+        "parameter_names": robot.parameter_names(), "theta": robot.parameters().as_slice(),
+        "feet": shanks, "foot_in_shank": foot.as_slice(),
+        "tree_urdf": physid::io::urdf::to_string(tree),
+        "samples": states,
+    });
+    let v = physid::io::versioned("dynamics", &v);
+    physid::io::write_atomic(out, serde_json::to_string(&v)?.as_bytes())?;
+    eprintln!(
+        "wrote {} floating-base states to {}",
+        samples,
+        out.display()
+    );
     Ok(())
 }

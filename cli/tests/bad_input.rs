@@ -240,6 +240,21 @@ fn negative_option_values_reach_the_option_check() {
     );
     let (ok, err) = physid(&["dynamics", "--samples", "1000000000000", "--out", "x.json"]);
     assert!(!ok && err.contains("--samples"), "{err}");
+    // A fixed-base description cannot float yet: named, nothing written.
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("floating.json");
+    let kuka = concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/../data/kuka_lwr4/kuka_lwr4.urdf"
+    );
+    let args = ["dynamics", "--floating-base", "--robot", kuka, "--out"];
+    let (ok, err) = physid(&[&args[..], &[out.to_str().unwrap()]].concat());
+    assert!(
+        !ok && err.contains("--floating-base: only the built-in robot")
+            && err.contains("kuka_lwr4.urdf"),
+        "{err}"
+    );
+    assert!(!out.exists());
 }
 
 #[test]

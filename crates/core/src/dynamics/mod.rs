@@ -16,6 +16,7 @@
 mod crba;
 mod energy;
 mod fd;
+mod floating;
 mod gravity;
 pub mod kinematics;
 mod regressor;
@@ -24,6 +25,9 @@ mod rnea;
 pub use crba::crba;
 pub use energy::{kinetic_energy, potential_energy};
 pub use fd::{forward_dynamics, FdError};
+pub use floating::{
+    crba_floating, point_jacobian_floating, regressor_floating, rnea_floating, stacked, BaseState,
+};
 pub use gravity::gravity_from_transforms;
 pub use regressor::{for_each_regressor, inertia_bilinear, regressor, row_columns};
 pub use rnea::{friction_torque, rnea, rnea_from_transforms, rnea_with_friction, sign};
@@ -48,6 +52,10 @@ pub struct Data {
     pub a: Vec<Motion>,
     /// Net spatial force on body `i` (RNEA backward pass).
     pub f: Vec<Force>,
+    /// The wrench the root (the fixed base, or a floating trunk) exerts on the tree, root
+    /// coordinates `[n; f]` (N m, N): the sum the RNEA's backward pass passes up from the bodies
+    /// and rotors mounted on the root.
+    pub f_root: Force,
     /// Parent frame to rotor `i` frame (identity where joint `i` has no rotor).
     pub x_rot: Vec<Transform>,
     /// Rotor motion subspace `S_rot = N [axis; 0]`, rotor coordinates (zero in reflected mode).
@@ -96,6 +104,7 @@ impl Data {
             v: vec![Motion::zero(); n],
             a: vec![Motion::zero(); n],
             f: vec![Force::zero(); n],
+            f_root: Force::zero(),
             x_rot: vec![Transform::identity(); n],
             s_rot: vec![Motion::zero(); n],
             v_rot: vec![Motion::zero(); n],
@@ -194,10 +203,23 @@ pub(crate) fn forward_pass_from_transforms(
     } else {
         Motion::zero()
     };
+    forward_pass_from_root(model, data, qd, qdd, (Motion::zero(), a0));
+}
+
+/// [`forward_pass_from_transforms`] with the root (base) moving: `v0` its spatial velocity and
+/// `a0` its spatial acceleration, fictitious gravity included, both in root coordinates. For a
+/// fixed base `v0 = 0`, `a0 = [0; −g]`; for a floating trunk its own motion.
+pub(crate) fn forward_pass_from_root(
+    model: &Model,
+    data: &mut Data,
+    qd: &[f64],
+    qdd: &[f64],
+    (v0, a0): (Motion, Motion),
+) {
     for (i, b) in model.bodies().iter().enumerate() {
         let (v_p, a_p) = match b.parent {
             Some(p) => (data.v[p], data.a[p]),
-            None => (Motion::zero(), a0),
+            None => (v0, a0),
         };
         let x_up = &data.x_up[i];
         let vj = data.s[i] * qd[i];

@@ -63,18 +63,35 @@ pub fn inertia_bilinear(u: &Motion, w: &Motion) -> [f64; 10] {
 
 /// One row block: `K(s, a) − K(v × s, v)`, the coefficients of `sᵀ (I a + v ×* I v)`.
 #[inline]
-fn row_block(s: &Motion, v: &Motion, a: &Motion) -> [f64; 10] {
+pub(crate) fn row_block(s: &Motion, v: &Motion, a: &Motion) -> [f64; 10] {
     let k1 = inertia_bilinear(s, a);
     let k2 = inertia_bilinear(&v.cross_motion(s), v);
     std::array::from_fn(|c| k1[c] - k2[c])
 }
 
-/// Writes ten coefficients into row `row`, columns `col..col + 10` of a column-major `n × p`
-/// buffer.
-#[inline]
-fn put(y: &mut [f64], n: usize, row: usize, col: usize, vals: &[f64; 10]) {
-    for (c, v) in vals.iter().enumerate() {
-        y[(col + c) * n + row] = *v;
+/// A column-major output matrix of `rows` rows, written at an offset: entry `(r, c)` of a
+/// block goes to `(row0 + r, col0 + c)` (the fixed-base regressor at `(0, 0)`, the joint rows
+/// of the floating-base one below the trunk's six and right of its ten columns).
+pub(crate) struct Block<'a> {
+    pub(crate) y: &'a mut [f64],
+    pub(crate) rows: usize,
+    pub(crate) row0: usize,
+    pub(crate) col0: usize,
+}
+
+impl Block<'_> {
+    /// Writes ten coefficients into row `row`, columns `col..col + 10`.
+    #[inline]
+    pub(crate) fn put(&mut self, row: usize, col: usize, vals: &[f64; 10]) {
+        for (c, v) in vals.iter().enumerate() {
+            self.y[(self.col0 + col + c) * self.rows + self.row0 + row] = *v;
+        }
+    }
+
+    /// Writes one value at `(row, col)`.
+    #[inline]
+    fn set(&mut self, row: usize, col: usize, v: f64) {
+        self.y[(self.col0 + col) * self.rows + self.row0 + row] = v;
     }
 }
 
@@ -92,15 +109,28 @@ pub fn regressor(
     check_len(model, "qd", qd);
     check_len(model, "qdd", qdd);
     let n = model.dof();
-    let layout = model.layout();
     assert_eq!(
         y.shape(),
-        (n, layout.len),
+        (n, model.layout().len),
         "regressor output has the wrong shape"
     );
     forward_pass(model, data, q, qd, qdd, true);
     let y = y.as_mut_slice();
     y.fill(0.0);
+    let mut out = Block {
+        y,
+        rows: n,
+        row0: 0,
+        col0: 0,
+    };
+    joint_rows(model, data, qd, qdd, &mut out);
+}
+
+/// The joint rows of the regressor on the velocities and accelerations in `data` (after a
+/// forward pass), into `out` (zeroed by the caller); also fills `data.s_anc`.
+pub(crate) fn joint_rows(model: &Model, data: &mut Data, qd: &[f64], qdd: &[f64], out: &mut Block) {
+    let n = model.dof();
+    let layout = model.layout();
     let full = model.rotor_model() == RotorModel::Full;
     for i in 0..n {
         let b = &model.bodies()[i];
@@ -113,25 +143,25 @@ pub fn regressor(
         }
         let (v, a) = (data.v[i], data.a[i]);
         for &k in model.support(i) {
-            put(y, n, k, 10 * i, &row_block(&data.s_anc[i * n + k], &v, &a));
+            out.put(k, 10 * i, &row_block(&data.s_anc[i * n + k], &v, &a));
         }
         if let (Some(col), Some(r)) = (layout.rotor_col[i], &b.rotor) {
             let (vr, ar) = (data.v_rot[i], data.a_rot[i]);
             if full {
-                put(y, n, i, col, &row_block(&data.s_rot[i], &vr, &ar));
+                out.put(i, col, &row_block(&data.s_rot[i], &vr, &ar));
             } else {
                 let s = r.motion_subspace();
-                put(y, n, i, col, &inertia_bilinear(&s, &s).map(|c| c * qdd[i]));
+                out.put(i, col, &inertia_bilinear(&s, &s).map(|c| c * qdd[i]));
             }
             if let Some(p) = b.parent {
                 for &k in model.support(p) {
                     let s = data.x_rot[i].apply_motion(&data.s_anc[p * n + k]);
-                    put(y, n, k, col, &row_block(&s, &vr, &ar));
+                    out.put(k, col, &row_block(&s, &vr, &ar));
                 }
             }
         }
-        y[(layout.viscous_col + i) * n + i] = qd[i];
-        y[(layout.coulomb_col + i) * n + i] = sign(qd[i]);
+        out.set(i, layout.viscous_col + i, qd[i]);
+        out.set(i, layout.coulomb_col + i, sign(qd[i]));
     }
 }
 

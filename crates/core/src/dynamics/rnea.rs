@@ -38,13 +38,15 @@ pub fn rnea_from_transforms<'a>(
 }
 
 /// The RNEA's backward pass on the velocities and accelerations in `data` (bodies and rotors):
-/// the joint torques into `data.tau`, `q̈` for the reflected rotors' armature.
+/// the joint torques into `data.tau` (`q̈` for the reflected rotors' armature), and the wrench
+/// on the root into `data.f_root`.
 pub(crate) fn backward_pass<'a>(
     model: &Model,
     data: &'a mut Data,
     qdd: &[f64],
 ) -> &'a DVector<f64> {
     let full = model.rotor_model() == RotorModel::Full;
+    data.f_root = crate::spatial::Force::zero();
     for i in 0..model.dof() {
         let (ii, v) = (&data.inertia[i], data.v[i]);
         data.f[i] = ii.mul_motion(&data.a[i]) + v.cross_force(&ii.mul_motion(&v));
@@ -64,8 +66,9 @@ pub(crate) fn backward_pass<'a>(
             to_parent += data.x_rot[i].inv_apply_force(&f_rot);
         }
         data.tau[i] = tau;
-        if let Some(p) = b.parent {
-            data.f[p] += to_parent;
+        match b.parent {
+            Some(p) => data.f[p] += to_parent,
+            None => data.f_root += to_parent,
         }
     }
     &data.tau

@@ -13,7 +13,9 @@
 //! the classic armature approximation for comparison.
 
 pub mod cheetah3;
+pub mod floating;
 mod joint;
+pub mod quadruped;
 pub mod random;
 
 pub use joint::Joint;
