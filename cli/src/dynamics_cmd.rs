@@ -93,9 +93,6 @@ pub fn dynamics_json(
 ) -> anyhow::Result<()> {
     let mut d = Data::new(m);
     let mut y = DMatrix::zeros(m.dof(), m.layout().len);
-    let rows = |x: &DMatrix<f64>| -> Vec<Vec<f64>> {
-        x.row_iter().map(|r| r.iter().copied().collect()).collect()
-    };
     let mut states = vec![];
     for s in 0..samples {
         let [q, qd, qdd] = random_state(
@@ -145,6 +142,37 @@ fn random_base(seed: u64, scale: f64) -> BaseState {
     }
 }
 
+/// `x` as a list of rows.
+fn rows(x: &DMatrix<f64>) -> Vec<Vec<f64>> {
+    x.row_iter().map(|r| r.iter().copied().collect()).collect()
+}
+
+/// One state's floating-base dynamics as JSON (see [`floating_json`]); the feet are the
+/// shank bodies `shanks` at `foot`.
+fn floating_state(
+    robot: &FloatingModel,
+    d: &mut Data,
+    (base, q, qd, qdd): (&BaseState, &[f64], &[f64], &[f64]),
+    (shanks, foot): (&[usize], &Vector3<f64>),
+) -> serde_json::Value {
+    let f_b = rnea_floating(robot, d, base, q, qd, qdd);
+    let tau = d.tau.clone();
+    let mut y = DMatrix::zeros(robot.dof(), robot.parameter_count());
+    regressor_floating(robot, d, base, (q, qd, qdd), &mut y);
+    let m = crba_floating(robot, d, q);
+    let feet: Vec<_> = shanks
+        .iter()
+        .map(|&b| rows(&point_jacobian_floating(robot, d, base, q, (b, foot))))
+        .collect();
+    let (rot, pos) = base.pose.to_pose();
+    json!({
+        "rotation": rows(&DMatrix::from_column_slice(3, 3, rot.as_slice())),
+        "position": pos.as_slice(), "v": base.v.to_vec6().as_slice(), "a": base.a.to_vec6().as_slice(),
+        "q": q, "qd": qd, "qdd": qdd, "f_trunk": f_b.to_vec6().as_slice(), "tau": tau.as_slice(),
+        "Y": rows(&y), "M": rows(&m), "foot_jacobians": feet,
+    })
+}
+
 /// Writes random-state floating-base dynamics as JSON for the check scripts: per state the
 /// trunk's pose (rotation matrix, trunk axes in world coordinates, and position), twist and
 /// acceleration (`[ω; v]`, trunk coordinates), the joint state, the wrench on the trunk and the
@@ -159,41 +187,16 @@ fn floating_json(
     let tree = robot.tree();
     let n = tree.dof();
     let mut d = Data::new(tree);
-    let mut y = DMatrix::zeros(robot.dof(), robot.parameter_count());
-    let rows = |x: &DMatrix<f64>| -> Vec<Vec<f64>> {
-        x.row_iter().map(|r| r.iter().copied().collect()).collect()
-    };
     let foot = physid::model::cheetah3::foot_in_shank();
     let shanks: Vec<usize> = (0..n).filter(|i| i % 3 == 2).collect();
-    let mut states = vec![];
-    for s in 0..samples {
-        let k = seed.wrapping_mul(1_000_003).wrapping_add(s as u64);
-        let base = random_base(k.wrapping_add(7), scale);
-        let [q, qd, qdd] = random_state(k, n, scale);
-        let f_b = rnea_floating(robot, &mut d, &base, &q, &qd, &qdd);
-        let tau = d.tau.clone();
-        regressor_floating(robot, &mut d, &base, (&q, &qd, &qdd), &mut y);
-        let m = crba_floating(robot, &mut d, &q);
-        let feet: Vec<_> = shanks
-            .iter()
-            .map(|&b| {
-                rows(&point_jacobian_floating(
-                    robot,
-                    &mut d,
-                    &base,
-                    &q,
-                    (b, &foot),
-                ))
-            })
-            .collect();
-        let (rot, pos) = base.pose.to_pose();
-        states.push(json!({
-            "rotation": rows(&DMatrix::from_column_slice(3, 3, rot.as_slice())),
-            "position": pos.as_slice(), "v": base.v.to_vec6().as_slice(), "a": base.a.to_vec6().as_slice(),
-            "q": q, "qd": qd, "qdd": qdd, "f_trunk": f_b.to_vec6().as_slice(), "tau": tau.as_slice(),
-            "Y": rows(&y), "M": rows(&m), "foot_jacobians": feet,
-        }));
-    }
+    let states: Vec<_> = (0..samples)
+        .map(|s| {
+            let k = seed.wrapping_mul(1_000_003).wrapping_add(s as u64);
+            let base = random_base(k.wrapping_add(7), scale);
+            let [q, qd, qdd] = random_state(k, n, scale);
+            floating_state(robot, &mut d, (&base, &q, &qd, &qdd), (&shanks, &foot))
+        })
+        .collect();
     let v = json!({
         "model": robot.name(), "rotor_model": tree.rotor_model(),
         "joint_names": tree.joint_names(), "trunk": robot.trunk().name,

@@ -26,6 +26,7 @@ pub mod motions;
 pub mod plots;
 pub mod sweep;
 pub mod tables;
+pub mod whole_robot;
 use serde::{Deserialize, Serialize};
 
 /// The `[experiment]` table of a scenario file.
@@ -271,12 +272,12 @@ pub struct Row {
 }
 
 /// A "CAD" prior: the truth with relative errors of size `e`, physically consistent.
-pub fn cad_prior(model: &Model, e: f64, seed: u64) -> DVector<f64> {
+pub fn cad_prior<R: ident::Parameterized + ?Sized>(model: &R, e: f64, seed: u64) -> DVector<f64> {
     let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(seed);
     let nrm = Normal::new(0.0, 1.0).expect("unit normal");
     let truth = model.parameters();
     let mut prior = truth.clone();
-    for (_, c, _) in ident::bodies(model) {
+    for (_, c, _) in model.inertial_bodies() {
         let p = InertialParams(truth.fixed_rows::<10>(c).into_owned());
         let (m, com, ic) = (
             p.mass(),
@@ -291,8 +292,7 @@ pub fn cad_prior(model: &Model, e: f64, seed: u64) -> DVector<f64> {
             .rows_mut(c, 10)
             .copy_from(&InertialParams::from_mass_com_inertia(m2, &c2, &ic2).0);
     }
-    let l = model.layout();
-    for c in l.viscous_col..l.len {
+    for c in model.friction_columns().0..model.parameter_count() {
         prior[c] = (truth[c] * (1.0 + e * nrm.sample(&mut rng))).max(0.0);
     }
     prior
@@ -301,9 +301,13 @@ pub fn cad_prior(model: &Model, e: f64, seed: u64) -> DVector<f64> {
 /// Per-body parameter errors of `theta` against the model's truth, links then rotors:
 /// `[|Δm|/m, ‖Δc‖ (m), ‖ΔI_C‖/‖I_C‖, ‖ΔJ‖/‖J‖]` (Frobenius norms; CoM and inertia about the CoM
 /// are NaN when the identified mass is not positive).
-pub fn body_errors(model: &Model, theta: &DVector<f64>) -> Vec<[f64; 4]> {
+pub fn body_errors<R: ident::Parameterized + ?Sized>(
+    model: &R,
+    theta: &DVector<f64>,
+) -> Vec<[f64; 4]> {
     let truth = model.parameters();
-    ident::bodies(model)
+    model
+        .inertial_bodies()
         .iter()
         .map(|(_, c, _)| {
             let t = InertialParams(truth.fixed_rows::<10>(*c).into_owned());
@@ -325,7 +329,10 @@ pub fn body_errors(model: &Model, theta: &DVector<f64>) -> Vec<[f64; 4]> {
 }
 
 /// Mean of [`body_errors`] over bodies: (mass, CoM, inertia, J).
-pub fn parameter_errors(model: &Model, theta: &DVector<f64>) -> [f64; 4] {
+pub fn parameter_errors<R: ident::Parameterized + ?Sized>(
+    model: &R,
+    theta: &DVector<f64>,
+) -> [f64; 4] {
     let per = body_errors(model, theta);
     std::array::from_fn(|k| per.iter().map(|e| e[k]).sum::<f64>() / per.len() as f64)
 }

@@ -6,7 +6,7 @@
 //! mass). [`solve`] hands Clarabel every group; `interior.rs` checks a point against them.
 
 use super::{
-    bodies, lmi, ConstraintSet, IdentError, Options, Regularizer, SolveStatus, SolverInfo,
+    lmi, ConstraintSet, IdentError, Options, Parameterized, Regularizer, SolveStatus, SolverInfo,
 };
 use clarabel::algebra::CscMatrix;
 use clarabel::solver::{
@@ -15,7 +15,6 @@ use clarabel::solver::{
 use lmi::Lmi;
 use nalgebra::{DMatrix, DVector};
 use physid_core::conic::{AffineSym, ConeRows};
-use physid_core::model::Model;
 use physid_core::spatial::{Ellipsoid, InertialParams};
 
 /// An affine form over θ, `Σ v θ_c + constant`, held non-negative.
@@ -40,18 +39,21 @@ pub(crate) enum Group {
 /// friction coefficients (under a constraint set), `opts.nonnegative`, the mass bounds (two
 /// rows each) and the total mass (two rows). Under the ellipsoid set a body without an
 /// ellipsoid is an error.
-pub(crate) fn groups(model: &Model, opts: &Options) -> Result<Vec<Group>, IdentError> {
+pub(crate) fn groups<R: Parameterized + ?Sized>(
+    model: &R,
+    opts: &Options,
+) -> Result<Vec<Group>, IdentError> {
     let set = opts.constraints;
     let mut out = vec![];
     if set != ConstraintSet::None {
-        for (name, col, ellipsoid) in bodies(model) {
+        for (name, col, ellipsoid) in model.inertial_bodies() {
             if set == ConstraintSet::Ellipsoid && ellipsoid.is_none() {
                 return Err(IdentError::MissingEllipsoid(name));
             }
             out.push(Group::Body { col, ellipsoid });
         }
-        let l = model.layout();
-        out.extend((l.viscous_col..l.len).map(|c| Group::Row((vec![(c, 1.0)], 0.0))));
+        let friction = model.friction_columns().0..model.parameter_count();
+        out.extend(friction.map(|c| Group::Row((vec![(c, 1.0)], 0.0))));
     }
     let row = |terms: Vec<(usize, f64)>, constant: f64| Group::Row((terms, constant));
     out.extend(opts.nonnegative.iter().map(|&c| row(vec![(c, 1.0)], 0.0)));
@@ -80,7 +82,7 @@ impl Group {
                     ConstraintSet::Consistent => r.min_eig_pseudo >= opts.eps,
                     ConstraintSet::Ellipsoid => {
                         r.min_eig_pseudo >= opts.eps
-                            && r.trace_jq.is_some_and(|t| t >= 0.0)
+                            && r.trace_jq.is_some_and(|t| t >= opts.eps)
                             && r.min_eig_com.is_some_and(|c| c >= 0.0)
                     }
                 }
@@ -94,8 +96,8 @@ impl Group {
 
 /// The whole cone program of `opts` (every group over every column; the log-det regularizer's
 /// variables and cones after θ's), solved in scaled variables.
-pub(crate) fn solve(
-    model: &Model,
+pub(crate) fn solve<R: Parameterized + ?Sized>(
+    model: &R,
     h: &DMatrix<f64>,
     g: &DVector<f64>,
     prior: &DVector<f64>,
@@ -103,7 +105,7 @@ pub(crate) fn solve(
 ) -> Result<(DVector<f64>, SolverInfo), IdentError> {
     let p = h.nrows();
     let logdet = opts.regularizer == Regularizer::LogDet;
-    let nb = bodies(model).len();
+    let nb = model.inertial_bodies().len();
     // Log-det extra variables per body: 10 entries of a lower-triangular L, then 4 of u.
     let extra = if logdet { 14 * nb } else { 0 };
     let nv = p + extra;
@@ -150,8 +152,11 @@ fn group_rows(
             (ConstraintSet::Ellipsoid, Some(e)) => {
                 lmi_rows(rows, Lmi::Pseudo, *col, eps, d);
                 com_rows(rows, e, *col, d);
+                // `tr(JQ) ≥ ε` (kg): the same margin as `J ⪰ ε 1`, so that a body the data
+                // push onto its ellipsoid's boundary is inside it by more than the solver's
+                // tolerance (without it, `tr(JQ) = −3e-8` on the quadruped's base rows).
                 let form = lmi::trace_jq_form(e);
-                nonneg.push(((0..10).map(|k| (col + k, form[k])).collect(), 0.0));
+                nonneg.push(((0..10).map(|k| (col + k, form[k])).collect(), -eps));
             }
             _ => lmi_rows(rows, Lmi::Pseudo, *col, eps, d),
         }
@@ -204,8 +209,8 @@ fn com_rows(rows: &mut ConeRows, e: &Ellipsoid, col: usize, d: &[f64]) {
 /// body `w (tr(Ĵ⁻¹ J) − Σ u_i)` in the objective `q`, `[[J, L], [Lᵀ, diag L]] ⪰ 0` (8×8) and
 /// `(u_i, 1, L_ii)` in the exponential cone, so that `Σ u_i ≤ log det J`.
 /// The extra variables follow θ's `p` entries, 14 per body (L's ten, then the four `u`).
-fn logdet_rows(
-    model: &Model,
+fn logdet_rows<R: Parameterized + ?Sized>(
+    model: &R,
     prior: &DVector<f64>,
     w: f64,
     d: &[f64],
@@ -228,7 +233,7 @@ fn logdet_rows(
             .position(|&x| x == (i, j))
             .expect("lower-triangular entry")
     };
-    for (bi, (name, col, _)) in bodies(model).iter().enumerate() {
+    for (bi, (name, col, _)) in model.inertial_bodies().iter().enumerate() {
         let j0 = InertialParams(prior.fixed_rows::<10>(*col).into_owned()).pseudo_inertia();
         let j0inv = j0
             .try_inverse()

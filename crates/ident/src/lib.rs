@@ -4,7 +4,7 @@
 //! - `none`: no constraint (ordinary least squares, solved directly);
 //! - `semi`: `I(π) ⪰ ε 1` (6×6);
 //! - `consistent`: `J(π) ⪰ ε 1` (4×4);
-//! - `ellipsoid`: `J(π) ⪰ ε 1`, `tr(J(π) Q) ≥ 0` and `C(π) ⪰ 0` for the body's bounding
+//! - `ellipsoid`: `J(π) ⪰ ε 1`, `tr(J(π) Q) ≥ ε` and `C(π) ⪰ 0` for the body's bounding
 //!   ellipsoid;
 //!
 //! and non-negative friction coefficients in the constrained sets. `θ̂` is the prior (the robot
@@ -24,12 +24,15 @@
 
 pub mod analysis;
 mod cone;
+pub mod floating;
 pub mod information;
 mod interior;
 pub mod lmi;
 pub mod normal;
+mod structure;
 
 pub use normal::NormalEquations;
+pub use structure::Parameterized;
 
 use nalgebra::{DMatrix, DVector};
 use physid_core::model::Model;
@@ -338,8 +341,8 @@ pub struct Objective {
 }
 
 /// The objective's quadratic part for `ne` with `prior` and `opts` (see [`Objective`]).
-pub fn objective(
-    model: &Model,
+pub fn objective<R: Parameterized + ?Sized>(
+    model: &R,
     ne: &NormalEquations,
     prior: &DVector<f64>,
     opts: &Options,
@@ -347,7 +350,7 @@ pub fn objective(
     let m = ne.samples as f64;
     let logdet = opts.regularizer == Regularizer::LogDet;
     // The Euclidean prior weight applies to every parameter, or only to friction under log-det.
-    let first_friction = model.layout().viscous_col;
+    let first_friction = model.friction_columns().0;
     let w = |i: usize| {
         if !logdet || i >= first_friction {
             opts.prior_weight
@@ -413,26 +416,19 @@ pub struct Identified {
 
 /// The bodies of a model in parameter order: `(name, first column, ellipsoid)`.
 pub fn bodies(model: &Model) -> Vec<(String, usize, Option<physid_core::spatial::Ellipsoid>)> {
-    let mut out: Vec<_> = model
-        .bodies()
-        .iter()
-        .enumerate()
-        .map(|(i, b)| (b.name.clone(), 10 * i, b.bounding))
-        .collect();
-    for (i, b) in model.bodies().iter().enumerate() {
-        if let (Some(c), Some(r)) = (model.layout().rotor_col[i], &b.rotor) {
-            out.push((r.name.clone(), c, r.bounding));
-        }
-    }
-    out
+    model.inertial_bodies()
 }
 
 /// Whether `theta` satisfies `set` (with `ε` relaxed to strict positivity and a round-off
 /// tolerance on the linear and CoM conditions).
-pub fn constraints_hold(model: &Model, theta: &DVector<f64>, set: ConstraintSet) -> bool {
-    let l = model.layout();
-    let friction_ok = (l.viscous_col..l.len).all(|c| theta[c] >= -1e-9);
-    bodies(model).iter().all(|(_, c, e)| {
+pub fn constraints_hold<R: Parameterized + ?Sized>(
+    model: &R,
+    theta: &DVector<f64>,
+    set: ConstraintSet,
+) -> bool {
+    let friction = model.friction_columns().0..model.parameter_count();
+    let friction_ok = friction.into_iter().all(|c| theta[c] >= -1e-9);
+    model.inertial_bodies().iter().all(|(_, c, e)| {
         let p = InertialParams(theta.fixed_rows::<10>(*c).into_owned());
         let r = p.consistency(e.as_ref());
         match set {
@@ -453,18 +449,18 @@ pub fn constraints_hold(model: &Model, theta: &DVector<f64>, set: ConstraintSet)
 /// The problem's shapes agree (the normal equations cover the model's parameters, the prior
 /// has one value per column), the options are valid, and there are samples enough (more rows
 /// than parameters unless a prior weighs in).
-fn check_problem(
-    model: &Model,
+fn check_problem<R: Parameterized + ?Sized>(
+    model: &R,
     ne: &NormalEquations,
     prior: &DVector<f64>,
     opts: &Options,
 ) -> Result<(), IdentError> {
     let p = ne.yty.nrows();
-    if p < model.layout().len || prior.len() != p {
+    if p < model.parameter_count() || prior.len() != p {
         return Err(IdentError::Shape {
             columns: p,
             prior: prior.len(),
-            params: model.layout().len,
+            params: model.parameter_count(),
         });
     }
     let summed = opts.total_mass.iter().flat_map(|t| t.0.iter());
@@ -477,10 +473,11 @@ fn check_problem(
     }
     opts.validate()?;
     let ns = ne.samples;
-    if ns == 0 || (opts.prior_weight == 0.0 && ns * model.dof() < p) {
+    let rows = ns * ne.rows_per_sample();
+    if ns == 0 || (opts.prior_weight == 0.0 && rows < p) {
         return Err(IdentError::TooFewSamples {
             samples: ns,
-            rows: ns * model.dof(),
+            rows,
             params: p,
         });
     }
@@ -493,8 +490,8 @@ fn check_problem(
 /// `ne` may carry extra columns after the model's `layout().len` (e.g. the diagnosis's effect
 /// terms): their coefficients are free (no constraint), pulled to `prior` by the same weight `w`,
 /// and returned at the end of `theta`.
-pub fn identify(
-    model: &Model,
+pub fn identify<R: Parameterized + ?Sized>(
+    model: &R,
     ne: &NormalEquations,
     prior: &DVector<f64>,
     opts: &Options,
@@ -514,29 +511,7 @@ pub fn identify(
         ));
     }
     let start = std::time::Instant::now();
-    let (theta, solver) = if opts.solved_directly() {
-        let info = SolverInfo {
-            status: SolveStatus::Direct,
-            iterations: 0,
-            seconds: 0.0,
-            residuals: [0.0; 2],
-        };
-        (physid_core::linalg::least_squares(&h, &g), info)
-    } else {
-        let groups = cone::groups(model, opts)?;
-        match interior::optimum(&groups, &h, &g, opts) {
-            Some(theta) => {
-                let info = SolverInfo {
-                    status: SolveStatus::Interior,
-                    iterations: 0,
-                    seconds: 0.0,
-                    residuals: [0.0; 2],
-                };
-                (theta, info)
-            }
-            None => cone::solve(model, &h, &g, prior, opts)?,
-        }
-    };
+    let (theta, solver) = optimum(model, (&h, &g), prior, opts)?;
     let seconds = start.elapsed().as_secs_f64();
     let mut objective = theta.dot(&(&h * &theta)) - 2.0 * theta.dot(&g) + constant;
     if logdet {
@@ -556,16 +531,42 @@ pub fn identify(
     ))
 }
 
-fn result(
-    model: &Model,
+/// The minimizer of `θᵀ h θ − 2 gᵀ θ` under `opts`: least squares where nothing constrains
+/// it, the unconstrained optimum where it satisfies every constraint, else the cone program's.
+fn optimum<R: Parameterized + ?Sized>(
+    model: &R,
+    (h, g): (&DMatrix<f64>, &DVector<f64>),
+    prior: &DVector<f64>,
+    opts: &Options,
+) -> Result<(DVector<f64>, SolverInfo), IdentError> {
+    let found_without_solver = |status| SolverInfo {
+        status,
+        iterations: 0,
+        seconds: 0.0,
+        residuals: [0.0; 2],
+    };
+    if opts.solved_directly() {
+        let theta = physid_core::linalg::least_squares(h, g);
+        return Ok((theta, found_without_solver(SolveStatus::Direct)));
+    }
+    let groups = cone::groups(model, opts)?;
+    match interior::optimum(&groups, h, g, opts) {
+        Some(theta) => Ok((theta, found_without_solver(SolveStatus::Interior))),
+        None => cone::solve(model, h, g, prior, opts),
+    }
+}
+
+fn result<R: Parameterized + ?Sized>(
+    model: &R,
     theta: DVector<f64>,
     set: ConstraintSet,
     objective: f64,
     solver: SolverInfo,
 ) -> Identified {
-    let l = model.layout();
-    let n = model.dof();
-    let bodies = bodies(model)
+    let (viscous_col, coulomb_col) = model.friction_columns();
+    let n = model.joints();
+    let bodies = model
+        .inertial_bodies()
         .into_iter()
         .map(|(name, c, e)| {
             let pi = InertialParams(theta.fixed_rows::<10>(c).into_owned());
@@ -579,8 +580,8 @@ fn result(
     Identified {
         constraints: set,
         bodies,
-        viscous: (0..n).map(|i| theta[l.viscous_col + i]).collect(),
-        coulomb: (0..n).map(|i| theta[l.coulomb_col + i]).collect(),
+        viscous: (0..n).map(|i| theta[viscous_col + i]).collect(),
+        coulomb: (0..n).map(|i| theta[coulomb_col + i]).collect(),
         objective,
         constraints_hold: constraints_hold(model, &theta, set),
         theta,
@@ -590,9 +591,13 @@ fn result(
 
 /// `Σ_b d(J_b, Ĵ_b)`, the log-det Bregman divergence summed over bodies; `None` if some `J_b`
 /// or `Ĵ_b` is not positive definite.
-pub fn bregman_logdet(model: &Model, theta: &DVector<f64>, prior: &DVector<f64>) -> Option<f64> {
+pub fn bregman_logdet<R: Parameterized + ?Sized>(
+    model: &R,
+    theta: &DVector<f64>,
+    prior: &DVector<f64>,
+) -> Option<f64> {
     let mut total = 0.0;
-    for (_, c, _) in bodies(model) {
+    for (_, c, _) in model.inertial_bodies() {
         let j = InertialParams(theta.fixed_rows::<10>(c).into_owned()).pseudo_inertia();
         let j0 = InertialParams(prior.fixed_rows::<10>(c).into_owned()).pseudo_inertia();
         let ch0 = j0.cholesky()?;

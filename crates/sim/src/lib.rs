@@ -7,6 +7,7 @@
 pub mod design;
 pub mod effects;
 pub mod excitation;
+pub mod floating;
 pub mod rapier;
 pub mod report;
 pub mod scenario;

@@ -1,0 +1,338 @@
+//! The paper's question for the whole robot: which constraint set gives the best model of a
+//! floating quadruped from how much data, in each of the data settings users have
+//! ([`DataSetting`]).
+//!
+//! Per seed the quadruped stands and shifts its weight twice ([`physid_sim::floating`]): a
+//! training run (seed `s`) and a validation run (seed `s + 1000`, other frequencies and
+//! phases). The training run's motor torques and contact forces are measured with Gaussian
+//! noise; a foot is in contact when its measured normal force exceeds `contact_threshold`.
+//! For each setting the normal equations grow along the training samples, and at each size of
+//! the grid every constraint set identifies the robot with a "CAD" prior (the truth with
+//! relative errors `prior_error`, weight `prior_weight`). Each model is scored on the
+//! validation run by the joint torques it predicts from the true motion and contact forces
+//! (`τ = (Y θ)_q − Σ J_c,qᵀ λ_c`) against the true torques, and by its parameter errors against
+//! the truth. Seeds run in parallel; rows come back in (seed, setting, size, set) order.
+
+use super::{cad_prior, parameter_errors};
+use nalgebra::{DMatrix, DVector};
+use physid_core::dynamics::{point_jacobian_floating, regressor_floating, Data};
+use physid_core::model::floating::FloatingModel;
+use physid_ident::floating::{Contact, DataSetting, FloatingRows, FloatingSample};
+use physid_ident::{self as ident, ConstraintSet, NormalEquations, Options};
+use physid_sim::floating::{standing, FloatingRun, FloatingSimError, Standing};
+use rand::SeedableRng;
+use rand_distr::{Distribution, Normal};
+use rayon::prelude::*;
+
+/// The whole-robot experiment.
+#[derive(Clone, Debug)]
+pub struct WholeRobotSpec {
+    /// The experiment each run follows (its seed is replaced per run).
+    pub motion: Standing,
+    /// Training sizes (samples, ascending); the training run lasts as long as the largest.
+    pub sizes: Vec<usize>,
+    /// Validation samples (every tenth step of a run of ten times as many).
+    pub validation: usize,
+    /// Constraint sets to compare.
+    pub sets: Vec<ConstraintSet>,
+    /// Data settings to compare.
+    pub settings: Vec<DataSetting>,
+    /// Seeds.
+    pub seeds: Vec<u64>,
+    /// Standard deviation of the motor torques' noise (N m).
+    pub torque_noise: f64,
+    /// Standard deviation of each contact force component's noise (N).
+    pub force_noise: f64,
+    /// Relative error of the prior's parameters.
+    pub prior_error: f64,
+    /// Prior weight `w`.
+    pub prior_weight: f64,
+}
+
+impl Default for WholeRobotSpec {
+    fn default() -> Self {
+        Self {
+            motion: Standing::default(),
+            sizes: vec![100, 300, 1000, 3000],
+            validation: 500,
+            sets: vec![
+                ConstraintSet::None,
+                ConstraintSet::Semi,
+                ConstraintSet::Consistent,
+                ConstraintSet::Ellipsoid,
+            ],
+            settings: vec![
+                DataSetting::TorquesAndContacts,
+                DataSetting::TorquesOnly,
+                DataSetting::BaseOnly,
+            ],
+            seeds: vec![1],
+            torque_noise: 0.5,
+            force_noise: 2.0,
+            prior_error: 0.1,
+            prior_weight: 1e-4,
+        }
+    }
+}
+
+/// One identification of the experiment.
+#[derive(Clone, Debug, PartialEq, serde::Serialize)]
+pub struct WholeRobotRow {
+    /// Seed.
+    pub seed: u64,
+    /// Data setting.
+    pub setting: DataSetting,
+    /// Training samples.
+    pub samples: usize,
+    /// Constraint set.
+    pub set: ConstraintSet,
+    /// Validation RMS of the predicted joint torques (N m).
+    pub validation_rms: f64,
+    /// The same for the prior's parameters (N m): where identification starts from.
+    pub prior_rms: f64,
+    /// How the solver finished.
+    pub status: ident::SolveStatus,
+    /// Mean over bodies of `[|Δm|/m, ‖Δc‖ (m), ‖ΔI_C‖/‖I_C‖, ‖ΔJ‖/‖J‖]`.
+    pub errors: [f64; 4],
+    /// Whether the identified model satisfies its set.
+    pub constraints_hold: bool,
+}
+
+/// Why the experiment failed.
+#[derive(Debug, thiserror::Error)]
+pub enum WholeRobotError {
+    /// A bad value in the spec.
+    #[error("whole-robot experiment: {0}")]
+    Spec(String),
+    /// A run diverged.
+    #[error("seed {seed}: {source}")]
+    Sim {
+        /// Seed.
+        seed: u64,
+        /// What failed.
+        source: FloatingSimError,
+    },
+    /// An identification failed.
+    #[error("seed {seed}, {samples} samples, {set:?}: {source}")]
+    Ident {
+        /// Seed.
+        seed: u64,
+        /// Training samples.
+        samples: usize,
+        /// Constraint set.
+        set: ConstraintSet,
+        /// What failed.
+        source: ident::IdentError,
+    },
+}
+
+/// Runs `spec` on `robot`, whose feet are `feet` (`(body, point)`).
+pub fn run(
+    robot: &FloatingModel,
+    feet: &[(usize, nalgebra::Vector3<f64>)],
+    spec: &WholeRobotSpec,
+) -> Result<Vec<WholeRobotRow>, WholeRobotError> {
+    check(spec)?;
+    let per_seed: Vec<Vec<WholeRobotRow>> = spec
+        .seeds
+        .par_iter()
+        .map(|&seed| run_seed(robot, feet, spec, seed))
+        .collect::<Result<_, _>>()?;
+    Ok(per_seed.into_iter().flatten().collect())
+}
+
+fn check(spec: &WholeRobotSpec) -> Result<(), WholeRobotError> {
+    let bad = |m: String| Err(WholeRobotError::Spec(m));
+    if spec.sizes.is_empty() || spec.sizes.windows(2).any(|w| w[0] >= w[1]) || spec.sizes[0] == 0 {
+        return bad(format!(
+            "sizes must be positive and ascending, got {:?}",
+            spec.sizes
+        ));
+    }
+    let nonnegative = [
+        ("torque_noise", spec.torque_noise),
+        ("force_noise", spec.force_noise),
+        ("prior_error", spec.prior_error),
+        ("prior_weight", spec.prior_weight),
+    ];
+    if let Some((name, v)) = nonnegative
+        .iter()
+        .find(|(_, v)| !(v.is_finite() && *v >= 0.0))
+    {
+        return bad(format!("{name} must be a number >= 0, got {v}"));
+    }
+    if spec.validation == 0
+        || spec.sets.is_empty()
+        || spec.settings.is_empty()
+        || spec.seeds.is_empty()
+    {
+        return bad("validation, sets, settings and seeds must not be empty".into());
+    }
+    Ok(())
+}
+
+/// One seed: its two runs, then every setting, size and set.
+fn run_seed(
+    robot: &FloatingModel,
+    feet: &[(usize, nalgebra::Vector3<f64>)],
+    spec: &WholeRobotSpec,
+    seed: u64,
+) -> Result<Vec<WholeRobotRow>, WholeRobotError> {
+    let simulate = |s: u64, seconds: f64| {
+        let motion = Standing {
+            seed: s,
+            duration: seconds,
+            ..spec.motion.clone()
+        };
+        standing(robot, feet, &motion).map_err(|source| WholeRobotError::Sim { seed, source })
+    };
+    let rate = spec.motion.rate;
+    let largest = *spec.sizes.last().expect("checked non-empty");
+    let truth = simulate(seed, largest as f64 / rate)?;
+    let train = measured(&truth, spec, seed);
+    let validation = simulate(seed + 1000, 10.0 * spec.validation as f64 / rate)?;
+    let prior = cad_prior(robot, spec.prior_error, seed);
+    let scorer = Scorer::new(robot, &validation, 10);
+    let mut rows = vec![];
+    for &setting in &spec.settings {
+        let mut acc = Accumulator::new(robot, setting);
+        let mut added = 0;
+        for &size in &spec.sizes {
+            for k in added..size.min(train.len()) {
+                let down: Vec<bool> = truth.contact_at(k).iter().map(|f| f.z > 0.0).collect();
+                acc.add(robot, &train, k, &down);
+            }
+            added = size.min(train.len());
+            let ne = acc.ne.clone().finish();
+            for &set in &spec.sets {
+                let opts = Options {
+                    prior_weight: spec.prior_weight,
+                    ..Options::new(set)
+                };
+                let found = ident::identify(robot, &ne, &prior, &opts).map_err(|source| {
+                    WholeRobotError::Ident {
+                        seed,
+                        samples: size,
+                        set,
+                        source,
+                    }
+                })?;
+                rows.push(WholeRobotRow {
+                    seed,
+                    setting,
+                    samples: size,
+                    set,
+                    validation_rms: scorer.rms(&found.theta),
+                    prior_rms: scorer.rms(&prior),
+                    status: found.solver.status,
+                    errors: parameter_errors(robot, &found.theta),
+                    constraints_hold: found.constraints_hold,
+                });
+            }
+        }
+    }
+    Ok(rows)
+}
+
+/// The run as the sensors give it: motor torques and contact forces with Gaussian noise
+/// (seeded), the motion as simulated.
+fn measured(run: &FloatingRun, spec: &WholeRobotSpec, seed: u64) -> FloatingRun {
+    let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(seed.wrapping_mul(7919).wrapping_add(3));
+    let unit = Normal::new(0.0, 1.0).expect("unit normal");
+    let mut out = run.clone();
+    for t in out.tau.iter_mut() {
+        *t += spec.torque_noise * unit.sample(&mut rng);
+    }
+    for f in out.contact.iter_mut() {
+        for c in f.iter_mut() {
+            *c += spec.force_noise * unit.sample(&mut rng);
+        }
+    }
+    out
+}
+
+/// Normal equations of one data setting, grown sample by sample.
+struct Accumulator {
+    rows: FloatingRows,
+    ne: NormalEquations,
+    setting: DataSetting,
+}
+
+impl Accumulator {
+    fn new(robot: &FloatingModel, setting: DataSetting) -> Self {
+        let per_sample = physid_ident::floating::rows_per_sample(robot, setting);
+        Self {
+            rows: FloatingRows::new(robot),
+            ne: NormalEquations::new(per_sample, robot.parameter_count()),
+            setting,
+        }
+    }
+
+    /// Adds step `k` of `run`, the feet marked in `down` in contact.
+    fn add(&mut self, robot: &FloatingModel, run: &FloatingRun, k: usize, down: &[bool]) {
+        let (q, qd, qdd) = run.joints_at(k);
+        let contacts: Vec<Contact> = run
+            .feet
+            .iter()
+            .zip(run.contact_at(k))
+            .zip(down)
+            .filter(|(_, &d)| d)
+            .map(|((&(body, point), &force), _)| Contact { body, point, force })
+            .collect();
+        let sample = FloatingSample {
+            base: &run.base[k],
+            q,
+            qd,
+            qdd,
+            tau: run.tau_at(k),
+            contacts: &contacts,
+        };
+        let (y, target) = self.rows.rows(robot, &sample, self.setting);
+        self.ne.add(&y, target.as_slice());
+    }
+}
+
+/// Predicted joint torques on a validation run: per kept step the joint rows of `Y` and the
+/// true torques plus the contact forces' share, `τ + Σ J_c,qᵀ λ_c`, so that the prediction
+/// error of `θ` is `Y_q θ − target`.
+struct Scorer {
+    y: Vec<DMatrix<f64>>,
+    target: Vec<DVector<f64>>,
+}
+
+impl Scorer {
+    fn new(robot: &FloatingModel, run: &FloatingRun, every: usize) -> Self {
+        let n = robot.joints();
+        let mut data = Data::new(robot.tree());
+        let mut y = DMatrix::zeros(robot.dof(), robot.parameter_count());
+        let (mut ys, mut targets) = (vec![], vec![]);
+        for k in (0..run.len()).step_by(every) {
+            let (q, qd, qdd) = run.joints_at(k);
+            let base = &run.base[k];
+            regressor_floating(robot, &mut data, base, (q, qd, qdd), &mut y);
+            let mut target = DVector::from_column_slice(run.tau_at(k));
+            for (&(body, p), f) in run.feet.iter().zip(run.contact_at(k)) {
+                let jac = point_jacobian_floating(robot, &mut data, base, q, (body, &p));
+                target += jac.columns(6, n).transpose() * DVector::from_column_slice(f.as_slice());
+            }
+            ys.push(y.rows(6, n).into_owned());
+            targets.push(target);
+        }
+        Self {
+            y: ys,
+            target: targets,
+        }
+    }
+
+    /// RMS over steps and joints of the predicted minus the true torques (N m).
+    fn rms(&self, theta: &DVector<f64>) -> f64 {
+        let (sum, count) = self
+            .y
+            .iter()
+            .zip(&self.target)
+            .fold((0.0, 0usize), |(s, c), (y, t)| {
+                (s + (y * theta - t).norm_squared(), c + t.len())
+            });
+        (sum / count.max(1) as f64).sqrt()
+    }
+}
