@@ -32,10 +32,11 @@ run() {
       "$B" blind --real "$runs" --real-robot $K/kuka_lwr4.urdf "${mode[@]}" --cases 55 --seed "$seed" \
         --out results/blind_real/$name ;;
     generalize) "$B" generalize --cases 22 --seeds 1,2 --out results/generalize ;;
+    whole_robot) "$B" whole-robot --out results/whole_robot ;;
     *) echo "unknown result '$1'" >&2; exit 2 ;;
   esac
 }
-[ $# -gt 0 ] || set -- sample_size ci_baseline noise excitation excitation_on_shell excitation_kuka kuka_diagnosis
+[ $# -gt 0 ] || set -- sample_size ci_baseline noise excitation excitation_on_shell excitation_kuka kuka_diagnosis whole_robot
 [ -n "${PHYSID_BIN:-}" ] || cargo build --release --quiet --bin physid
 for r in "$@"; do
   start=$(date +%s)

@@ -23,6 +23,7 @@ mod robot_args;
 mod schema_cmd;
 mod simulate_cmd;
 mod sweep_cmd;
+mod whole_robot_cmd;
 
 use clap::{Parser, Subcommand};
 pub use robot_args::RobotArgs;
@@ -47,6 +48,7 @@ enum Command {
     Experiment(experiment_cmd::Args),
     Excite(excite_cmd::Args),
     Sweep(sweep_cmd::Args),
+    WholeRobot(whole_robot_cmd::Args),
     Compare(compare_cmd::Args),
     Schema(schema_cmd::Args),
     Dynamics(dynamics_cmd::Args),
@@ -107,6 +109,7 @@ pub fn run(cli: Cli) -> anyhow::Result<()> {
         Command::Experiment(a) => experiment_cmd::run(a),
         Command::Excite(a) => excite_cmd::run(a),
         Command::Sweep(a) => sweep_cmd::run(a),
+        Command::WholeRobot(a) => whole_robot_cmd::run(a),
         Command::Compare(a) => compare_cmd::run(a),
         Command::Schema(a) => schema_cmd::run(a),
         Command::Dynamics(a) => dynamics_cmd::run(a),

@@ -240,6 +240,29 @@ fn negative_option_values_reach_the_option_check() {
     );
     let (ok, err) = physid(&["dynamics", "--samples", "1000000000000", "--out", "x.json"]);
     assert!(!ok && err.contains("--samples"), "{err}");
+    for (args, said) in [
+        (
+            &["--sizes", "300,100"][..],
+            "sizes must be positive and ascending",
+        ),
+        (
+            &["--sizes", "0,100"][..],
+            "sizes must be positive and ascending",
+        ),
+        (
+            &["--torque-noise", "-1"][..],
+            "torque_noise must be a number >= 0",
+        ),
+        (
+            &["--prior-weight", "NaN"][..],
+            "prior_weight must be a number >= 0",
+        ),
+        (&["--seeds", "0"][..], "--seeds must be in 1..=1000"),
+    ] {
+        let (ok, err) = physid(&[&["whole-robot", "--out", "never"][..], args].concat());
+        assert!(!ok && err.contains(said), "{args:?}: {err}");
+        assert!(!std::path::Path::new("never").exists());
+    }
     // A fixed-base description cannot float yet: named, nothing written.
     let dir = tempfile::tempdir().unwrap();
     let out = dir.path().join("floating.json");

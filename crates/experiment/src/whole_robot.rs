@@ -141,6 +141,13 @@ pub fn run(
     Ok(per_seed.into_iter().flatten().collect())
 }
 
+impl WholeRobotSpec {
+    /// Checks every value against its range.
+    pub fn validate(&self) -> Result<(), WholeRobotError> {
+        check(self)
+    }
+}
+
 fn check(spec: &WholeRobotSpec) -> Result<(), WholeRobotError> {
     let bad = |m: String| Err(WholeRobotError::Spec(m));
     if spec.sizes.is_empty() || spec.sizes.windows(2).any(|w| w[0] >= w[1]) || spec.sizes[0] == 0 {
@@ -203,35 +210,67 @@ fn run_seed(
                 acc.add(robot, &train, k, &down);
             }
             added = size.min(train.len());
-            let ne = acc.ne.clone().finish();
-            for &set in &spec.sets {
-                let opts = Options {
-                    prior_weight: spec.prior_weight,
-                    ..Options::new(set)
-                };
-                let found = ident::identify(robot, &ne, &prior, &opts).map_err(|source| {
-                    WholeRobotError::Ident {
-                        seed,
-                        samples: size,
-                        set,
-                        source,
-                    }
-                })?;
-                rows.push(WholeRobotRow {
-                    seed,
-                    setting,
-                    samples: size,
-                    set,
-                    validation_rms: scorer.rms(&found.theta),
-                    prior_rms: scorer.rms(&prior),
-                    status: found.solver.status,
-                    errors: parameter_errors(robot, &found.theta),
-                    constraints_hold: found.constraints_hold,
-                });
-            }
+            let cell = Cell {
+                seed,
+                setting,
+                samples: size,
+            };
+            rows.extend(identify_sets(
+                robot,
+                &acc.ne.clone().finish(),
+                (&prior, &scorer),
+                spec,
+                cell,
+            )?);
         }
     }
     Ok(rows)
+}
+
+/// Where in the experiment an identification is.
+#[derive(Clone, Copy)]
+struct Cell {
+    seed: u64,
+    setting: DataSetting,
+    samples: usize,
+}
+
+/// Every constraint set of `spec` on the normal equations `ne` of one cell, scored.
+fn identify_sets(
+    robot: &FloatingModel,
+    ne: &NormalEquations,
+    (prior, scorer): (&DVector<f64>, &Scorer),
+    spec: &WholeRobotSpec,
+    cell: Cell,
+) -> Result<Vec<WholeRobotRow>, WholeRobotError> {
+    spec.sets
+        .iter()
+        .map(|&set| {
+            let opts = Options {
+                prior_weight: spec.prior_weight,
+                ..Options::new(set)
+            };
+            let found = ident::identify(robot, ne, prior, &opts).map_err(|source| {
+                WholeRobotError::Ident {
+                    seed: cell.seed,
+                    samples: cell.samples,
+                    set,
+                    source,
+                }
+            })?;
+            Ok(WholeRobotRow {
+                seed: cell.seed,
+                setting: cell.setting,
+                samples: cell.samples,
+                set,
+                validation_rms: scorer.rms(&found.theta),
+                prior_rms: scorer.rms(prior),
+                status: found.solver.status,
+                errors: parameter_errors(robot, &found.theta),
+                constraints_hold: found.constraints_hold,
+            })
+        })
+        .collect()
 }
 
 /// The run as the sensors give it: motor torques and contact forces with Gaussian noise
@@ -334,5 +373,81 @@ impl Scorer {
                 (s + (y * theta - t).norm_squared(), c + t.len())
             });
         (sum / count.max(1) as f64).sqrt()
+    }
+}
+
+/// The rows as a long table: `setting`, `n_s`, `constraints`, `seed`, `val_rms` and
+/// `prior_rms` (N m), `m_err`, `com_err` (m), `inertia_err`, `j_err`, `consistent`, `status`.
+pub fn long_table(
+    rows: &[WholeRobotRow],
+) -> polars::prelude::PolarsResult<polars::prelude::DataFrame> {
+    use polars::prelude::*;
+    let col_f = |name: &str, f: &dyn Fn(&WholeRobotRow) -> f64| {
+        Column::new(name.into(), rows.iter().map(f).collect::<Vec<f64>>())
+    };
+    let setting: Vec<String> = rows
+        .iter()
+        .map(|r| setting_name(r.setting).to_string())
+        .collect();
+    let set: Vec<String> = rows.iter().map(|r| r.set.name().to_string()).collect();
+    DataFrame::new_infer_height(vec![
+        Column::new("setting".into(), setting),
+        Column::new(
+            "n_s".into(),
+            rows.iter().map(|r| r.samples as u64).collect::<Vec<_>>(),
+        ),
+        Column::new("constraints".into(), set),
+        Column::new(
+            "seed".into(),
+            rows.iter().map(|r| r.seed).collect::<Vec<_>>(),
+        ),
+        col_f("val_rms", &|r| r.validation_rms),
+        col_f("prior_rms", &|r| r.prior_rms),
+        col_f("m_err", &|r| r.errors[0]),
+        col_f("com_err", &|r| r.errors[1]),
+        col_f("inertia_err", &|r| r.errors[2]),
+        col_f("j_err", &|r| r.errors[3]),
+        col_f("consistent", &|r| f64::from(u8::from(r.constraints_hold))),
+        Column::new(
+            "status".into(),
+            rows.iter()
+                .map(|r| r.status.to_string())
+                .collect::<Vec<_>>(),
+        ),
+    ])
+}
+
+/// Median and quartiles over seeds per (setting, n_s, set), in first-appearance order.
+pub fn summary(
+    long: &polars::prelude::DataFrame,
+) -> polars::prelude::PolarsResult<polars::prelude::DataFrame> {
+    use crate::tables::{
+        group_stats,
+        Stat::{Count, Mean, Median, Quantile},
+    };
+    group_stats(
+        long,
+        &["setting", "n_s", "constraints"],
+        &[
+            ("", Count, "seeds"),
+            ("val_rms", Quantile(0.25), "val_rms_q25"),
+            ("val_rms", Median, "val_rms_median"),
+            ("val_rms", Quantile(0.75), "val_rms_q75"),
+            ("prior_rms", Median, "prior_rms_median"),
+            ("j_err", Quantile(0.25), "j_err_q25"),
+            ("j_err", Median, "j_err_median"),
+            ("j_err", Quantile(0.75), "j_err_q75"),
+            ("consistent", Mean, "consistent_fraction"),
+        ],
+    )
+}
+
+/// The data setting's name in tables and files: `torques_and_contacts`, `torques_only`,
+/// `base_only`.
+pub fn setting_name(s: DataSetting) -> &'static str {
+    match s {
+        DataSetting::TorquesAndContacts => "torques_and_contacts",
+        DataSetting::TorquesOnly => "torques_only",
+        DataSetting::BaseOnly => "base_only",
     }
 }

@@ -1,0 +1,144 @@
+//! `physid whole-robot`: the sample-size experiment for the whole quadruped, written to
+//! `results/whole_robot/` (see docs/floating-base.md).
+
+use anyhow::Context;
+use physid::experiment::whole_robot::{self, WholeRobotSpec};
+use physid::experiment::{plots, tables};
+use physid::ident::floating::DataSetting;
+use std::fmt::Write;
+use std::path::PathBuf;
+
+/// Identify the built-in Cheetah-3-like quadruped, floating, standing and shifting its weight:
+/// validation error and parameter error against training size for the four constraint sets in
+/// the three data settings (joint torques and contact forces; joint torques alone; the trunk's
+/// dynamics from contact forces alone).
+#[derive(clap::Args, Debug)]
+pub struct Args {
+    /// Output directory.
+    #[arg(long, default_value = "results/whole_robot")]
+    out: PathBuf,
+    /// Training sizes (samples at 1 kHz), ascending, comma-separated.
+    #[arg(long, value_delimiter = ',', default_value = "100,300,1000,3000,10000")]
+    sizes: Vec<usize>,
+    /// Number of seeds (each one training and one validation run).
+    #[arg(allow_negative_numbers = true, long, default_value_t = 4)]
+    seeds: u64,
+    /// Standard deviation of the motor torques' noise (N m).
+    #[arg(allow_negative_numbers = true, long, default_value_t = 0.5)]
+    torque_noise: f64,
+    /// Standard deviation of each contact force component's noise (N).
+    #[arg(allow_negative_numbers = true, long, default_value_t = 2.0)]
+    force_noise: f64,
+    /// Relative error of the prior ("CAD") parameters.
+    #[arg(allow_negative_numbers = true, long, default_value_t = 0.1)]
+    prior_error: f64,
+    /// Prior weight w.
+    #[arg(allow_negative_numbers = true, long, default_value_t = 1e-4)]
+    prior_weight: f64,
+    /// Worker threads (default: all cores). Results do not depend on it.
+    #[arg(allow_negative_numbers = true, long)]
+    threads: Option<usize>,
+}
+
+const SETTINGS: [DataSetting; 3] = [
+    DataSetting::TorquesAndContacts,
+    DataSetting::TorquesOnly,
+    DataSetting::BaseOnly,
+];
+
+/// `physid whole-robot`: writes `rows.csv`, `summary.csv`, `summary.md`, the three plots and
+/// `provenance.json` (the options, git revision and versions) into `--out`, whole or not at all.
+pub fn run(a: Args) -> anyhow::Result<()> {
+    anyhow::ensure!(
+        a.seeds >= 1 && a.seeds <= 1000,
+        "--seeds must be in 1..=1000, got {}",
+        a.seeds
+    );
+    let spec = WholeRobotSpec {
+        sizes: a.sizes.clone(),
+        seeds: (1..=a.seeds).collect(),
+        torque_noise: a.torque_noise,
+        force_noise: a.force_noise,
+        prior_error: a.prior_error,
+        prior_weight: a.prior_weight,
+        ..Default::default()
+    };
+    spec.validate()?;
+    physid::io::check_result_dir(&a.out, &[])?;
+    let pool = super::thread_pool(a.threads)?;
+    let robot = physid::model::quadruped::quadruped();
+    let feet: Vec<_> = (0..robot.joints())
+        .filter(|i| i % 3 == 2)
+        .map(|i| (i, physid::model::cheetah3::foot_in_shank()))
+        .collect();
+    let start = std::time::Instant::now();
+    let rows = pool
+        .install(|| whole_robot::run(&robot, &feet, &spec))
+        .context("running the whole-robot experiment")?;
+    let wall = start.elapsed().as_secs_f64();
+    let staging = physid::io::StagingDir::new(&a.out)?;
+    let summary_md = write(staging.path(), &rows, &spec)?;
+    let threads = pool.current_num_threads();
+    let provenance = serde_json::json!({
+        "command": "physid whole-robot",
+        "sizes": spec.sizes, "seeds": spec.seeds, "torque_noise": spec.torque_noise,
+        "force_noise": spec.force_noise, "prior_error": spec.prior_error,
+        "prior_weight": spec.prior_weight, "validation": spec.validation,
+        "git_revision": physid::api::provenance::git_revision(),
+        "physid_version": env!("CARGO_PKG_VERSION"),
+        "dependencies": physid::api::provenance::dependency_versions(),
+        "threads": threads, "wall_s": wall,
+    });
+    let text = serde_json::to_string_pretty(&provenance)?;
+    physid::io::write_atomic(&staging.path().join("provenance.json"), text.as_bytes())?;
+    staging.commit()?;
+    println!(
+        "{} identifications in {wall:.1} s on {} threads; wrote {}/\n{summary_md}",
+        rows.len(),
+        threads,
+        a.out.display()
+    );
+    Ok(())
+}
+
+/// `rows.csv`, `summary.csv`, `summary.md` and one `validation_error_<setting>.svg` per data
+/// setting into `out`; returns the summary's text.
+fn write(
+    out: &std::path::Path,
+    rows: &[whole_robot::WholeRobotRow],
+    spec: &WholeRobotSpec,
+) -> anyhow::Result<String> {
+    let mut long = whole_robot::long_table(rows)?;
+    tables::write_csv(&out.join("rows.csv"), &mut long)?;
+    let mut summary = whole_robot::summary(&long)?;
+    tables::write_csv(&out.join("summary.csv"), &mut summary)?;
+    let sets = ["none", "semi", "consistent", "ellipsoid"];
+    let mut md =
+        format!(
+        "# The whole quadruped: median validation RMS of the joint torques (N m) over {} seeds\n\n\
+         Torque noise {} N m, contact-force noise {} N, prior error {}, prior weight {}; the \
+         prior itself predicts with {:.3} N m (median).\n",
+        spec.seeds.len(),
+        spec.torque_noise,
+        spec.force_noise,
+        spec.prior_error,
+        spec.prior_weight,
+        tables::floats(&summary, "prior_rms_median")?.first().copied().unwrap_or(f64::NAN),
+    );
+    for setting in SETTINGS {
+        let name = whole_robot::setting_name(setting);
+        let part = tables::filter_eq(&summary, "setting", name)?;
+        let pivot = tables::pivot(&part, "val_rms_median", &sets)?;
+        write!(md, "\n## {name}\n\n{}", tables::markdown(&pivot))?;
+        plots::plot_vs_ns(
+            &part,
+            "val_rms",
+            &sets,
+            &format!("quadruped, {name}: validation error"),
+            "validation RMS (N m)",
+            &out.join(format!("validation_error_{name}.svg")),
+        )?;
+    }
+    physid::io::write_atomic(&out.join("summary.md"), md.as_bytes())?;
+    Ok(md)
+}
