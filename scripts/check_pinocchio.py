@@ -12,7 +12,7 @@ import tempfile
 import numpy as np
 import pinocchio as pin
 
-from physid_common import KUKA_URDF, PIN_FROM_PAPER, Report, dynamics, export, physid_bin, rel_err, run
+from physid_common import KUKA_URDF, SOLO12_URDF, PIN_FROM_PAPER, Report, dynamics, export, physid_bin, rel_err, run
 
 TOL = 1e-9
 
@@ -76,7 +76,7 @@ def check_identified_kuka(report, binary, directory):
     check(report, "identified KUKA (patched URDF + sidecar)", out, dynamics(binary, ["--robot", sidecar]))
 
 
-def check_floating(report, binary, directory, rotors):
+def check_floating(report, binary, directory, rotors, urdf=None):
     """The Cheetah-3-like quadruped on a floating trunk (`dynamics --floating-base`): its tree
     exported as URDF, loaded under pinocchio's free flyer (rotors as mimic joints) with the
     trunk's inertia set from physid's; RNEA (trunk wrench and joint torques), CRBA, the
@@ -84,15 +84,26 @@ def check_floating(report, binary, directory, rotors):
     states. pinocchio orders the free flyer's velocity and wrench linear first, physid angular
     first: swapped here."""
     import os
-    args = ["--robot", "cheetah3"] + ([] if rotors else ["--no-rotors"])
-    dyn = dynamics(binary, args + ["--floating-base"])
-    path = os.path.join(directory, f"quadruped_{int(rotors)}.urdf")
-    with open(path, "w") as f:
-        f.write(dyn["tree_urdf"])
-    model = pin.buildModelFromUrdf(path, pin.JointModelFreeFlyer(), rotors)
-    pin_pi = np.zeros(10)
-    pin_pi[PIN_FROM_PAPER] = dyn["trunk_pi"]
-    model.inertias[1] = pin.Inertia.FromDynamicParameters(pin_pi)
+    if urdf is None:
+        args = ["--robot", "cheetah3"] + ([] if rotors else ["--no-rotors"])
+        dyn = dynamics(binary, args + ["--floating-base"])
+        path = os.path.join(directory, f"quadruped_{int(rotors)}.urdf")
+        with open(path, "w") as f:
+            f.write(dyn["tree_urdf"])
+        model = pin.buildModelFromUrdf(path, pin.JointModelFreeFlyer(), rotors)
+        # physid's export of the tree has no trunk inertia: set it from physid's.
+        pin_pi = np.zeros(10)
+        pin_pi[PIN_FROM_PAPER] = dyn["trunk_pi"]
+        model.inertias[1] = pin.Inertia.FromDynamicParameters(pin_pi)
+        label = "quadruped " + ("with rotors (mimic)" if rotors else "link-only")
+    else:
+        # Both read the same URDF: pinocchio's free flyer carries the root link and the links
+        # fixed to it, as physid's trunk does.
+        dyn = dynamics(binary, ["--robot", urdf, "--floating-base"])
+        model = pin.buildModelFromUrdf(urdf, pin.JointModelFreeFlyer())
+        label = os.path.basename(urdf) + " (floating URDF)"
+        pin_trunk = model.inertias[1].toDynamicParameters()[PIN_FROM_PAPER]
+        report.add(f"{label}: trunk inertia read from URDF", rel_err(dyn["trunk_pi"], pin_trunk), TOL)
     data = model.createData()
     n = len(dyn["joint_names"])
     # pinocchio orders sibling links by name; map physid's joints by theirs.
@@ -101,7 +112,6 @@ def check_floating(report, binary, directory, rotors):
         sys.exit(f"quadruped: pinocchio's joints {list(model.names)} do not match {dyn['joint_names']}")
     vi = np.array([model.joints[j].idx_v for j in jids])
     nu = np.r_[3, 4, 5, 0, 1, 2, vi]  # physid's ν entry i is pinocchio's nu[i]
-    label = "quadruped " + ("with rotors (mimic)" if rotors else "link-only")
     e_tau = e_m = e_y = e_j = 0.0
     for s in dyn["samples"]:
         q = np.zeros(model.nq)
@@ -122,10 +132,10 @@ def check_floating(report, binary, directory, rotors):
             cols = np.concatenate([10 * (j - 1) + np.array(PIN_FROM_PAPER) for j in bodies])
             e_y = max(e_y, rel_err(np.asarray(s["Y"])[:, : 10 * (n + 1)], y[np.ix_(nu, cols)]))
         pin.computeJointJacobians(model, data, q)
-        for body, jac in zip(dyn["feet"], s["foot_jacobians"]):
+        for body, point, jac in zip(dyn["feet"], dyn["foot_points"], s["foot_jacobians"]):
             jid = jids[body]
             j6 = pin.getJointJacobian(model, data, jid, pin.LOCAL_WORLD_ALIGNED)
-            r = data.oMi[jid].rotation @ np.asarray(dyn["foot_in_shank"])
+            r = data.oMi[jid].rotation @ np.asarray(point)
             j_point = j6[:3] - pin.skew(r) @ j6[3:]
             e_j = max(e_j, rel_err(np.asarray(jac), j_point[:, nu]))
     count = len(dyn["samples"])
@@ -147,6 +157,7 @@ def main():
         check_identified_kuka(report, binary, d)
         check_floating(report, binary, d, rotors=False)
         check_floating(report, binary, d, rotors=True)
+        check_floating(report, binary, d, rotors=False, urdf=SOLO12_URDF)
     check(report, "KUKA LWR4+ (data/kuka_lwr4 URDF)", KUKA_URDF, dynamics(binary, ["--robot", KUKA_URDF]))
     report.finish()
 

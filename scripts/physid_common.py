@@ -12,6 +12,7 @@ PIN_FROM_PAPER = [0, 1, 2, 3, 4, 5, 7, 6, 8, 9]
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 KUKA_URDF = os.path.join(ROOT, "data", "kuka_lwr4", "kuka_lwr4.urdf")
+SOLO12_URDF = os.path.join(ROOT, "data", "solo12", "solo12.urdf")
 
 
 def physid_bin(argv):

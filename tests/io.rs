@@ -420,3 +420,54 @@ fn a_csv_header_with_a_column_twice_or_a_numbered_gap_is_refused_naming_it() {
         assert!(e.to_string().contains("h.csv"), "{e}");
     }
 }
+
+/// A floating robot from URDF: a `floating` joint from a massless "world" link is dropped and
+/// its child becomes the trunk, whose inertia is its own plus the links fixed to it (in its
+/// frame); read as fixed-base the same file is refused, naming the joint.
+#[test]
+fn a_floating_urdf_gives_its_trunk_the_root_and_its_fixed_links() {
+    let xml = robot(&format!(
+        r#"<link name="world"/>
+           <joint name="free" type="floating"><parent link="world"/><child link="body"/></joint>
+           <link name="body">{LINK}</link>
+           <joint name="mount" type="fixed"><parent link="body"/><child link="imu"/><origin xyz="0.2 0 0"/></joint>
+           <link name="imu"><inertial><mass value="0.5"/><inertia ixx="0.001" ixy="0" ixz="0" iyy="0.001" iyz="0" izz="0.001"/></inertial></link>
+           <joint name="hip" type="revolute"><parent link="body"/><child link="leg"/><axis xyz="0 1 0"/><limit lower="-1" upper="1" effort="5" velocity="5"/></joint>
+           <link name="leg">{LINK}</link>"#
+    ));
+    let (robot_, _) =
+        urdf::floating_from_str(&xml, Path::new("free.urdf"), &Default::default()).unwrap();
+    let trunk = robot_.trunk();
+    assert_eq!(trunk.name, "body");
+    assert!((trunk.inertia.mass() - 1.5).abs() < 1e-15);
+    // Σ m c: the imu's 0.5 kg at x = 0.2 m.
+    assert!((trunk.inertia.h() - nalgebra::Vector3::new(0.1, 0.0, 0.0)).norm() < 1e-15);
+    // Its parallel-axis term: Iyy = 0.01 + 0.001 + 0.5 · 0.2².
+    assert!((trunk.inertia.ibar()[(1, 1)] - 0.031).abs() < 1e-15);
+    assert_eq!(robot_.joints(), 1);
+    assert!(trunk.bounding.is_some());
+    let e = urdf_err(&xml);
+    assert!(
+        e.contains("joint 'free' is floating") && e.contains("--floating-base"),
+        "{e}"
+    );
+}
+
+/// Solo12 (data/solo12, not built with physid): its root link is the trunk, its feet merge into
+/// the lower legs, twelve joints.
+#[test]
+fn solo12_floats_with_its_base_link_as_the_trunk() {
+    let path = common::root().join("data/solo12/solo12.urdf");
+    let (solo, warnings) = urdf::load_floating(&path, &Default::default()).unwrap();
+    assert_eq!(solo.trunk().name, "base_link");
+    assert!((solo.trunk().inertia.mass() - 1.16115091).abs() < 1e-12);
+    assert_eq!(solo.joints(), 12);
+    assert_eq!(solo.tree().joint_names()[0], "FL_HAA");
+    // Its meshes are not in the repository: said, not fatal.
+    assert!(
+        warnings.iter().any(|w| w.contains("solo_12_base.stl")),
+        "{warnings:?}"
+    );
+    // Read as fixed-base it is the same tree (no floating joint in this file).
+    assert_eq!(urdf::load(&path, &Default::default()).unwrap().0.dof(), 12);
+}

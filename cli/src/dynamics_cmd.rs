@@ -33,9 +33,10 @@ pub struct Args {
     #[arg(long)]
     out: PathBuf,
     /// The robot on a floating trunk: the built-in `cheetah3` becomes the Cheetah-3-like
-    /// quadruped (trunk and four legs); each state also gets a random trunk pose, twist and
-    /// acceleration, and the JSON the wrench on the trunk, the floating-base regressor, mass
-    /// matrix and the feet's Jacobians, with the tree as URDF (root link = trunk).
+    /// quadruped (trunk and four legs), a URDF's root link (and the links fixed to it) the
+    /// trunk; each state also gets a random trunk pose, twist and acceleration, and the JSON
+    /// the wrench on the trunk, the floating-base regressor, mass matrix and the Jacobians of
+    /// the feet (the quadruped's; a URDF's leaf bodies' centres of mass), with the tree as URDF.
     #[arg(long)]
     floating_base: bool,
 }
@@ -51,13 +52,10 @@ pub fn run(a: Args) -> anyhow::Result<()> {
     let inputs: Vec<&std::path::Path> = inputs.iter().map(|p| p.as_path()).collect();
     physid::io::check_outputs(&[a.out.as_path()], &inputs)?;
     if a.floating_base {
-        anyhow::ensure!(
-            a.robot.robot == "cheetah3",
-            "--floating-base: only the built-in robot (cheetah3, as the quadruped) floats yet; \
-             '{}' is a fixed-base description",
-            a.robot.robot
-        );
-        let robot = quadruped_from(&a.robot.load()?)?;
+        let (robot, notices) = a.robot.options().load_floating()?;
+        for n in notices {
+            eprintln!("{n}");
+        }
         return floating_json(&robot, a.samples as usize, a.seed, a.scale, &a.out);
     }
     dynamics_json(
@@ -67,20 +65,6 @@ pub fn run(a: Args) -> anyhow::Result<()> {
         a.scale,
         &a.out,
     )
-}
-
-/// The quadruped whose legs are the loaded leg `leg` (its rotor model, with or without rotors).
-fn quadruped_from(leg: &Model) -> anyhow::Result<physid::model::floating::FloatingModel> {
-    let options = physid::model::cheetah3::LegOptions {
-        rotors: leg.rotor_count() > 0,
-        ..Default::default()
-    };
-    let robot = physid::model::quadruped::quadruped_with(&options)?;
-    let tree = robot.tree().clone().with_rotor_model(leg.rotor_model());
-    Ok(physid::model::floating::FloatingModel::new(
-        robot.trunk().clone(),
-        tree,
-    )?)
 }
 
 /// Writes random-state dynamics as JSON for the check scripts.
@@ -147,29 +131,47 @@ fn rows(x: &DMatrix<f64>) -> Vec<Vec<f64>> {
     x.row_iter().map(|r| r.iter().copied().collect()).collect()
 }
 
-/// One state's floating-base dynamics as JSON (see [`floating_json`]); the feet are the
-/// shank bodies `shanks` at `foot`.
+/// The points whose Jacobians the JSON gives: the quadruped's feet; for another robot each leaf
+/// body's centre of mass (its origin if massless).
+fn feet_of(robot: &FloatingModel) -> Vec<(usize, Vector3<f64>)> {
+    let tree = robot.tree();
+    if robot.name() == "cheetah3_quadruped" {
+        let foot = physid::model::cheetah3::foot_in_shank();
+        return (0..tree.dof())
+            .filter(|i| i % 3 == 2)
+            .map(|i| (i, foot))
+            .collect();
+    }
+    let bodies = tree.bodies();
+    (0..bodies.len())
+        .filter(|&i| !bodies.iter().any(|b| b.parent == Some(i)))
+        .map(|i| (i, bodies[i].inertia.com().unwrap_or_default()))
+        .collect()
+}
+
+/// One state's floating-base dynamics as JSON (see [`floating_json`]), with the Jacobians of
+/// the points `feet`.
 fn floating_state(
     robot: &FloatingModel,
     d: &mut Data,
     (base, q, qd, qdd): (&BaseState, &[f64], &[f64], &[f64]),
-    (shanks, foot): (&[usize], &Vector3<f64>),
+    feet: &[(usize, Vector3<f64>)],
 ) -> serde_json::Value {
     let f_b = rnea_floating(robot, d, base, q, qd, qdd);
     let tau = d.tau.clone();
     let mut y = DMatrix::zeros(robot.dof(), robot.parameter_count());
     regressor_floating(robot, d, base, (q, qd, qdd), &mut y);
     let m = crba_floating(robot, d, q);
-    let feet: Vec<_> = shanks
+    let jacobians: Vec<_> = feet
         .iter()
-        .map(|&b| rows(&point_jacobian_floating(robot, d, base, q, (b, foot))))
+        .map(|(b, p)| rows(&point_jacobian_floating(robot, d, base, q, (*b, p))))
         .collect();
     let (rot, pos) = base.pose.to_pose();
     json!({
         "rotation": rows(&DMatrix::from_column_slice(3, 3, rot.as_slice())),
         "position": pos.as_slice(), "v": base.v.to_vec6().as_slice(), "a": base.a.to_vec6().as_slice(),
         "q": q, "qd": qd, "qdd": qdd, "f_trunk": f_b.to_vec6().as_slice(), "tau": tau.as_slice(),
-        "Y": rows(&y), "M": rows(&m), "foot_jacobians": feet,
+        "Y": rows(&y), "M": rows(&m), "foot_jacobians": jacobians,
     })
 }
 
@@ -187,14 +189,13 @@ fn floating_json(
     let tree = robot.tree();
     let n = tree.dof();
     let mut d = Data::new(tree);
-    let foot = physid::model::cheetah3::foot_in_shank();
-    let shanks: Vec<usize> = (0..n).filter(|i| i % 3 == 2).collect();
+    let feet = feet_of(robot);
     let states: Vec<_> = (0..samples)
         .map(|s| {
             let k = seed.wrapping_mul(1_000_003).wrapping_add(s as u64);
             let base = random_base(k.wrapping_add(7), scale);
             let [q, qd, qdd] = random_state(k, n, scale);
-            floating_state(robot, &mut d, (&base, &q, &qd, &qdd), (&shanks, &foot))
+            floating_state(robot, &mut d, (&base, &q, &qd, &qdd), &feet)
         })
         .collect();
     let v = json!({
@@ -202,7 +203,8 @@ fn floating_json(
         "joint_names": tree.joint_names(), "trunk": robot.trunk().name,
         "trunk_pi": robot.trunk().inertia.0.as_slice(),
         "parameter_names": robot.parameter_names(), "theta": robot.parameters().as_slice(),
-        "feet": shanks, "foot_in_shank": foot.as_slice(),
+        "feet": feet.iter().map(|f| f.0).collect::<Vec<_>>(),
+        "foot_points": feet.iter().map(|f| f.1.as_slice().to_vec()).collect::<Vec<_>>(),
         "tree_urdf": physid::io::urdf::to_string(tree),
         "samples": states,
     });

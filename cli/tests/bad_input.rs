@@ -263,18 +263,28 @@ fn negative_option_values_reach_the_option_check() {
         assert!(!ok && err.contains(said), "{args:?}: {err}");
         assert!(!std::path::Path::new("never").exists());
     }
-    // A fixed-base description cannot float yet: named, nothing written.
+    // Only the root of a tree may float: a floating joint below a link with mass is named, and
+    // nothing is written.
     let dir = tempfile::tempdir().unwrap();
     let out = dir.path().join("floating.json");
-    let kuka = concat!(
-        env!("CARGO_MANIFEST_DIR"),
-        "/../data/kuka_lwr4/kuka_lwr4.urdf"
-    );
-    let args = ["dynamics", "--floating-base", "--robot", kuka, "--out"];
+    let urdf = dir.path().join("mid_floating.urdf");
+    let heavy_root = ONE_JOINT_URDF
+        .replace("EFFORT", "10")
+        .replace(r#"<link name="base"/>"#, r#"<link name="base"><inertial><mass value="2"/><inertia ixx="0.1" ixy="0" ixz="0" iyy="0.1" iyz="0" izz="0.1"/></inertial></link>"#)
+        .replace(r#"type="revolute""#, r#"type="floating""#);
+    std::fs::write(&urdf, heavy_root).unwrap();
+    let args = [
+        "dynamics",
+        "--floating-base",
+        "--robot",
+        urdf.to_str().unwrap(),
+        "--out",
+    ];
     let (ok, err) = physid(&[&args[..], &[out.to_str().unwrap()]].concat());
     assert!(
-        !ok && err.contains("--floating-base: only the built-in robot")
-            && err.contains("kuka_lwr4.urdf"),
+        !ok && err.contains(
+            "joint 'j1' is floating but does not hang the robot from a massless root link"
+        ) && err.contains("mid_floating.urdf"),
         "{err}"
     );
     assert!(!out.exists());

@@ -213,6 +213,40 @@ impl RobotOptions {
         Ok(LoadedRobot { model: m, notices })
     }
 
+    /// Loads the robot as a floating robot ([`crate::io::load_floating_robot_with`]): the
+    /// built-in leg becomes the quadruped, a URDF's root link its trunk; `no_rotors` and
+    /// `rotor_model` apply to the tree.
+    pub fn load_floating(
+        &self,
+    ) -> Result<
+        (
+            crate::model::floating::FloatingModel,
+            Vec<super::data::Notice>,
+        ),
+        super::ApiError,
+    > {
+        let opts = crate::io::robot_spec::RobotOptions {
+            ellipsoid_margin: self.ellipsoid_margin,
+            package_dirs: self.package_dirs.clone(),
+            geometry_ellipsoids: self.no_geometry_ellipsoids.then_some(false),
+        };
+        let (robot, warnings) = crate::io::load_floating_robot_with(&self.robot, &opts)?;
+        let mut tree = robot.tree().clone();
+        if self.no_rotors {
+            tree = tree.without_rotors();
+        }
+        if let Some(r) = self.rotor_model {
+            tree = tree.with_rotor_model(r);
+        }
+        let robot = crate::model::floating::FloatingModel::new(robot.trunk().clone(), tree)
+            .map_err(|e| super::ApiError::Options(e.to_string()))?;
+        let notices = warnings
+            .into_iter()
+            .map(|w| super::data::Notice::warning(format!("{}: {w}", self.robot)))
+            .collect();
+        Ok((robot, notices))
+    }
+
     /// Every file the robot reads (its URDF, sidecar, meshes): inputs no output may replace.
     pub fn files(&self) -> Vec<std::path::PathBuf> {
         crate::io::robot_files(&self.robot, &self.package_dirs)

@@ -525,6 +525,33 @@ pub fn load_robot_with(
     }
 }
 
+/// Loads a floating robot from a `--robot` argument: the built-in `cheetah3` as the
+/// Cheetah-3-like quadruped (four of its legs on a trunk), or a URDF whose root link (with the
+/// links fixed to it) is the trunk ([`urdf::load_floating`]). Robot TOML files do not float
+/// yet.
+pub fn load_floating_robot_with(
+    arg: &str,
+    opts: &robot_spec::RobotOptions,
+) -> Result<(physid_core::model::floating::FloatingModel, Vec<String>), IoError> {
+    let path = Path::new(arg);
+    opts.validate().map_err(|m| IoError::invalid(path, m))?;
+    match path.extension().and_then(|e| e.to_str()) {
+        _ if arg == "cheetah3" => Ok((physid_core::model::quadruped::quadruped(), vec![])),
+        Some("urdf") => {
+            let extras = robot_spec::RobotExtras {
+                geometry: opts.over(&Default::default()),
+                ..Default::default()
+            };
+            urdf::load_floating(path, &extras)
+        }
+        Some("toml") => Err(IoError::invalid(
+            path,
+            "a robot TOML file cannot describe a floating robot yet: give its URDF".to_string(),
+        )),
+        _ => Err(IoError::UnknownRobot(arg.to_string())),
+    }
+}
+
 /// The URDF file behind a `--robot` argument: the file itself, or a robot TOML's `urdf`; `None`
 /// for the built-in leg and explicit trees.
 pub fn robot_urdf(arg: &str) -> Result<Option<PathBuf>, IoError> {

@@ -1,10 +1,14 @@
-//! URDF import (urdf-rs) for fixed-base robots, and export with inertial tags.
+//! URDF import (urdf-rs) for fixed-base and floating robots, and export with inertial tags.
 //!
 //! Import rules:
-//! - the root link and everything fixed to it form the static base; its inertia is ignored;
+//! - the root link and everything fixed to it form the static base; its inertia is ignored,
+//!   unless the robot is read as floating ([`load_floating`]): then they form the trunk, whose
+//!   inertia is their sum. A `floating` joint from a massless root link with no other joint (the
+//!   "world" of many descriptions) marks a floating robot: that link and joint are dropped and
+//!   the joint's child is the root; reading such a robot as fixed-base is an error;
 //! - `fixed` joints are merged: the child's inertia is added to its parent body, expressed in
 //!   the parent's frame; `revolute`, `continuous` and `prismatic` joints become bodies;
-//!   `floating` and `planar` joints are rejected (physid models fixed-base robots);
+//!   other `floating` and `planar` joints are rejected (one-DoF joints only below the root);
 //! - a joint with `<mimic>` whose child is a leaf link on the parent of the mimicked joint's
 //!   body is a **rotor** of that joint, with gear ratio = multiplier (this is how physid exports
 //!   rotors, so URDF round-trips); rotors can also come from a scenario's sidecar (TOML);
@@ -19,6 +23,7 @@ use super::geometry::{self, Lookup};
 use super::robot_spec::RobotExtras;
 use super::IoError;
 use nalgebra::{Matrix3, Vector3};
+use physid_core::model::floating::{FloatingModel, Trunk};
 use physid_core::model::{Body, Joint, JointFriction, JointLimits, Model, Rotor, STANDARD_GRAVITY};
 use physid_core::spatial::bounding::Piece;
 use physid_core::spatial::{rpy_to_matrix, InertialParams, Transform};
@@ -31,6 +36,32 @@ use std::path::Path;
 pub fn load(path: &Path, extras: &RobotExtras) -> Result<(Model, Vec<String>), IoError> {
     let xml = super::read_to_string(path)?;
     from_str(&xml, path, extras)
+}
+
+/// Loads a URDF file as a floating robot: its root link and the links fixed to it are the
+/// trunk (their inertias summed, bounded by their geometry or, without it, by the points where
+/// the legs attach and the trunk's centre of mass); the rest as [`load`] reads it.
+pub fn load_floating(
+    path: &Path,
+    extras: &RobotExtras,
+) -> Result<(FloatingModel, Vec<String>), IoError> {
+    let xml = super::read_to_string(path)?;
+    floating_from_str(&xml, path, extras)
+}
+
+/// [`load_floating`] of URDF text (`path` names it in errors and locates its meshes).
+pub fn floating_from_str(
+    xml: &str,
+    path: &Path,
+    extras: &RobotExtras,
+) -> Result<(FloatingModel, Vec<String>), IoError> {
+    let (model, warnings, trunk) = parse(xml, path, extras, true)?;
+    let trunk = trunk.expect("a floating parse gives the trunk");
+    let robot = FloatingModel::new(trunk, model).map_err(|source| IoError::Model {
+        path: path.to_path_buf(),
+        source,
+    })?;
+    Ok((robot, warnings))
 }
 
 /// The inertial parameters of a URDF `<inertial>` in its link frame.
@@ -169,6 +200,17 @@ pub fn from_str(
     path: &Path,
     extras: &RobotExtras,
 ) -> Result<(Model, Vec<String>), IoError> {
+    let (model, warnings, _) = parse(xml, path, extras, false)?;
+    Ok((model, warnings))
+}
+
+/// The model of the tree and the warnings, with the trunk when `floating`.
+fn parse(
+    xml: &str,
+    path: &Path,
+    extras: &RobotExtras,
+    floating: bool,
+) -> Result<(Model, Vec<String>, Option<Trunk>), IoError> {
     if let Some(root) = root_element(xml).filter(|r| *r != "robot") {
         return Err(IoError::Parse {
             path: path.to_path_buf(),
@@ -181,10 +223,17 @@ pub fn from_str(
     let rates = doc
         .as_ref()
         .map_or(Ok(HashMap::new()), |d| rate_limits(d, path))?;
-    let robot = urdf_rs::read_from_string(&first_origin_only(xml)).map_err(|e| IoError::Parse {
-        path: path.to_path_buf(),
-        message: format!("not a valid URDF: {e}"),
-    })?;
+    let mut robot =
+        urdf_rs::read_from_string(&first_origin_only(xml)).map_err(|e| IoError::Parse {
+            path: path.to_path_buf(),
+            message: format!("not a valid URDF: {e}"),
+        })?;
+    if let Some(joint) = strip_floating_root(&mut robot, path)?.filter(|_| !floating) {
+        return Err(IoError::invalid(
+            path,
+            format!("joint '{joint}' is floating: the robot's root moves, and this reads fixed-base robots; read it as a floating-base robot (`physid dynamics --floating-base`)"),
+        ));
+    }
     if robot.links.is_empty() {
         return Err(IoError::invalid(path, "the robot has no <link> elements"));
     }
@@ -200,7 +249,9 @@ pub fn from_str(
         shapes,
         base,
         mimics,
-    } = walk(&robot, &link_idx, &children, root, &lookup)?;
+        base_inertia,
+        ..
+    } = walk(&robot, &link_idx, &children, (root, floating), &lookup)?;
     warnings.extend(doc.as_ref().map_or(vec![], empty_ranges));
     for b in &mut bodies {
         if let Some(&(acceleration, jerk)) = rates.get(&b.joint_name) {
@@ -214,9 +265,81 @@ pub fn from_str(
     // The sidecar's ellipsoids come last: they override the geometry's.
     extras.apply(&mut bodies, &body_parent_link_x, path)?;
     check_subtree_masses(&bodies, path)?;
+    let trunk = floating.then(|| Trunk {
+        name: root.to_string(),
+        inertia: base_inertia,
+        bounding: trunk_bound(
+            &bodies,
+            &base,
+            (root, &base_inertia),
+            &lookup,
+            &mut warnings,
+        ),
+    });
     let model = physical_model(robot.name.clone(), bodies, (extras, base.shapes), path)?;
     check_bounds(&model, extras, path, &mut warnings)?;
-    Ok((model, warnings))
+    Ok((model, warnings, trunk))
+}
+
+/// A `floating` joint whose parent is a massless root link with no other joint: the link and
+/// the joint are removed (the joint's child becomes the root) and the joint's name returned.
+/// A floating joint anywhere else is an error naming it.
+fn strip_floating_root(robot: &mut urdf_rs::Robot, path: &Path) -> Result<Option<String>, IoError> {
+    let floating = |jt: &urdf_rs::Joint| matches!(jt.joint_type, urdf_rs::JointType::Floating);
+    let Some(j) = robot.joints.iter().position(floating) else {
+        return Ok(None);
+    };
+    let (name, parent) = (
+        robot.joints[j].name.clone(),
+        robot.joints[j].parent.link.clone(),
+    );
+    let is_root = !robot.joints.iter().any(|o| o.child.link == parent);
+    let alone = robot
+        .joints
+        .iter()
+        .filter(|o| o.parent.link == parent)
+        .count()
+        == 1;
+    let massless = (robot.links.iter()).any(|l| l.name == parent && l.inertial.mass.value == 0.0);
+    if !(is_root && alone && massless) {
+        return Err(IoError::invalid(
+            path,
+            format!("joint '{name}' is floating but does not hang the robot from a massless root link of its own (the world): only the root of the tree may float"),
+        ));
+    }
+    robot.joints.remove(j);
+    robot.links.retain(|l| l.name != parent);
+    Ok(Some(name))
+}
+
+/// The trunk's bounding ellipsoid: its geometry's (the root link's and those fixed to it);
+/// without geometry, the points where the tree attaches and the trunk's centre of mass, as for
+/// a body without geometry ([`kinematic_bound`]); none, with a warning, where meshes are
+/// missing.
+fn trunk_bound(
+    bodies: &[Body],
+    base: &Shapes,
+    (name, inertia): (&str, &InertialParams),
+    lookup: &Lookup,
+    warnings: &mut Vec<String>,
+) -> Option<physid_core::spatial::Ellipsoid> {
+    if base.has_no_geometry() || (base.pieces.is_empty() && base.missing.is_empty()) {
+        let mut points: Vec<Vector3<f64>> = vec![Vector3::zeros()];
+        points.extend(
+            bodies
+                .iter()
+                .filter(|b| b.parent.is_none())
+                .map(|b| b.x_tree.r),
+        );
+        if inertia.mass() > 0.0 {
+            points.push(inertia.h() / inertia.mass());
+        }
+        return Some(grown_to_hold(points, inertia));
+    }
+    base.bound(name, lookup, warnings).unwrap_or_else(|w| {
+        warnings.push(w);
+        None
+    })
 }
 
 /// Each body's shapes and bounding ellipsoid: its geometry's, or the kinematic tree's
@@ -279,13 +402,22 @@ fn kinematic_bound(bodies: &[Body], i: usize) -> physid_core::spatial::Ellipsoid
     if m > 0.0 {
         points.push(b.inertia.h() / m);
     }
+    grown_to_hold(points, &b.inertia)
+}
+
+/// The ellipsoid around `points` with [`KINEMATIC_MARGIN`] plus [`KINEMATIC_SHARE`] of their
+/// reach, scaled until `inertia` lies inside (`tr(JQ) ≥ 0`).
+fn grown_to_hold(
+    points: Vec<Vector3<f64>>,
+    inertia: &InertialParams,
+) -> physid_core::spatial::Ellipsoid {
     let reach = points.iter().map(|p| p.norm()).fold(0.0, f64::max);
     let mut e = physid_core::spatial::Ellipsoid::around_points(
         &points,
         KINEMATIC_MARGIN + KINEMATIC_SHARE * reach,
     );
     for _ in 0..40 {
-        match b.inertia.consistency(Some(&e)).trace_jq_per_mass {
+        match inertia.consistency(Some(&e)).trace_jq_per_mass {
             Some(t) if t < 0.0 => e = e.scaled(1.25),
             _ => break,
         }
@@ -558,6 +690,10 @@ struct Walk<'r> {
     shapes: Vec<Shapes>,
     /// The static base's geometry (the root link and the links fixed to it).
     base: Shapes,
+    /// Their summed inertia in the root link's frame (a floating robot's trunk).
+    base_inertia: InertialParams,
+    /// Whether the base is a floating trunk (its geometry then bounds it).
+    floating: bool,
     mimics: Vec<PendingRotor<'r>>,
 }
 
@@ -568,7 +704,7 @@ fn walk<'r>(
     robot: &'r urdf_rs::Robot,
     link_idx: &HashMap<&str, usize>,
     children: &HashMap<&str, Vec<usize>>,
-    root: &'r str,
+    (root, floating): (&'r str, bool),
     lookup: &Lookup,
 ) -> Result<Walk<'r>, IoError> {
     let path = lookup.urdf;
@@ -578,7 +714,7 @@ fn walk<'r>(
     // for the base, link_X_body).
     let mut attach: HashMap<&str, (Option<usize>, Transform)> = HashMap::new();
     attach.insert(root, (None, Transform::identity()));
-    let mut w = Walk::rooted(&robot.links[link_idx[root]], lookup);
+    let mut w = Walk::rooted(&robot.links[link_idx[root]], floating, lookup);
     let mut done = vec![false; robot.joints.len()];
     let mut progress = true;
     while progress {
@@ -623,15 +759,21 @@ fn walk<'r>(
 }
 
 impl Walk<'_> {
-    /// No body yet; the static base's geometry that of the `root` link.
-    fn rooted(root: &urdf_rs::Link, lookup: &Lookup) -> Self {
+    /// No body yet; the static base's geometry and inertia those of the `root` link.
+    fn rooted(root: &urdf_rs::Link, floating: bool, lookup: &Lookup) -> Self {
         let mut base = Shapes::default();
-        base.add_shapes(root, &Transform::identity(), lookup);
+        if floating {
+            base.add(root, &Transform::identity(), lookup);
+        } else {
+            base.add_shapes(root, &Transform::identity(), lookup);
+        }
         Walk {
             bodies: vec![],
             body_parent_link_x: vec![],
             shapes: vec![],
             base,
+            base_inertia: link_params(root),
+            floating,
             mimics: vec![],
         }
     }
@@ -651,7 +793,13 @@ impl Walk<'_> {
             self.bodies[b].inertia = InertialParams(self.bodies[b].inertia.0 + merged.0);
             self.shapes[b].add(link, x_origin, lookup);
         } else {
-            self.base.add_shapes(link, x_origin, lookup);
+            let merged = params.transformed(&x_origin.inverse());
+            self.base_inertia = InertialParams(self.base_inertia.0 + merged.0);
+            if self.floating {
+                self.base.add(link, x_origin, lookup);
+            } else {
+                self.base.add_shapes(link, x_origin, lookup);
+            }
         }
     }
 }
