@@ -273,9 +273,25 @@ fn identify_sets(
         .collect()
 }
 
-/// The run as the sensors give it: motor torques and contact forces with Gaussian noise
-/// (seeded), the motion as simulated.
-fn measured(run: &FloatingRun, spec: &WholeRobotSpec, seed: u64) -> FloatingRun {
+/// The normal equations of the first `samples` steps of `measured` in `setting`, the feet in
+/// contact where `truth` (the same run before noise) has them loaded.
+pub fn normal_equations(
+    robot: &FloatingModel,
+    (measured, truth): (&FloatingRun, &FloatingRun),
+    setting: DataSetting,
+    samples: usize,
+) -> NormalEquations {
+    let mut acc = Accumulator::new(robot, setting);
+    for k in 0..samples.min(measured.len()) {
+        let down: Vec<bool> = truth.contact_at(k).iter().map(|f| f.z > 0.0).collect();
+        acc.add(robot, measured, k, &down);
+    }
+    acc.ne.finish()
+}
+
+/// The run as the sensors give it: motor torques and contact forces with Gaussian noise of
+/// `spec`'s sizes (seeded), the motion as simulated.
+pub fn measured(run: &FloatingRun, spec: &WholeRobotSpec, seed: u64) -> FloatingRun {
     let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(seed.wrapping_mul(7919).wrapping_add(3));
     let unit = Normal::new(0.0, 1.0).expect("unit normal");
     let mut out = run.clone();

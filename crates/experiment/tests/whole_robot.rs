@@ -138,3 +138,80 @@ fn bad_spec_values_are_named() {
         }
     }
 }
+
+/// Ayusawa, Venture & Nakamura's result on the quadruped: from the trunk's six rows alone
+/// (contact forces and the motion, no joint torque) least squares recovers every base
+/// parameter of those rows within a few of its standard errors, the standard errors coming
+/// from the same data. Their identifiable set is the whole body's but for what only joint
+/// torques see: the joints' friction (two columns per joint) and, with geared rotors, one more
+/// combination per joint (a rotor's spin inertia enters the joint row reflected by `N²`, the
+/// trunk's momentum by `N`). Without rotors the theorem's count is exact.
+#[test]
+fn the_trunk_rows_alone_recover_their_base_parameters_within_their_standard_errors() {
+    let no_rotors = LegOptions {
+        rotors: false,
+        ..Default::default()
+    };
+    for (robot, only_joint_rows_see) in [
+        (quadruped(), 3 * 12),
+        (quadruped_with(&no_rotors).unwrap(), 2 * 12),
+    ] {
+        let (base_rank, whole_rank, z) = trunk_rows_against_the_truth(&robot);
+        let within = |k: f64| z.iter().filter(|v| v.abs() <= k).count() as f64 / z.len() as f64;
+        let worst = z.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+        eprintln!(
+            "{} rotors: {base_rank} base parameters from the trunk rows (whole body {whole_rank}); within 2 σ: {:.0} %, 3 σ: {:.0} %, worst {worst:.1} σ",
+            robot.tree().rotor_count(),
+            100.0 * within(2.0),
+            100.0 * within(3.0)
+        );
+        assert_eq!(whole_rank, base_rank + only_joint_rows_see);
+        assert!(base_rank > 30, "rank {base_rank}");
+        assert!(within(3.0) > 0.95, "{z:?}");
+    }
+}
+
+/// The trunk rows' rank, the whole body's rank on the same run, and each trunk-row base
+/// parameter's error against the truth in units of its standard error (6 s of standing,
+/// contact forces with 2 N of noise, least squares with a negligible prior).
+fn trunk_rows_against_the_truth(robot: &FloatingModel) -> (usize, usize, Vec<f64>) {
+    use physid_experiment::whole_robot::{measured, normal_equations};
+    use physid_ident::analysis::identifiability;
+    use physid_ident::Options;
+    use physid_sim::floating::{standing, Standing};
+    let motion = Standing {
+        duration: 6.0,
+        seed: 11,
+        ..Default::default()
+    };
+    let truth = standing(robot, &feet(robot), &motion).unwrap();
+    let spec = WholeRobotSpec {
+        torque_noise: 0.0,
+        force_noise: 2.0,
+        ..Default::default()
+    };
+    let noisy = measured(&truth, &spec, 11);
+    let data = (&noisy, &truth);
+    let ne = normal_equations(robot, data, DataSetting::BaseOnly, truth.len());
+    let prior = physid_experiment::cad_prior(robot, 0.1, 11);
+    let opts = Options {
+        prior_weight: 1e-9,
+        ..Options::new(ConstraintSet::None)
+    };
+    let found = physid_ident::identify(robot, &ne, &prior, &opts).unwrap();
+    let idf = identifiability(robot, &ne, &found.theta);
+    let whole = normal_equations(robot, data, DataSetting::TorquesAndContacts, truth.len());
+    let whole_rank = identifiability(robot, &whole, &found.theta).rank;
+    let theta_true = robot.parameters();
+    let names = robot.parameter_names();
+    let column = |name: &str| names.iter().position(|n| n == name).unwrap();
+    let z = (idf.base.iter())
+        .map(|b| {
+            let truth: f64 = (b.terms.iter())
+                .map(|t| t.coefficient * theta_true[column(&t.parameter)])
+                .sum();
+            (b.value - truth) / b.standard_error
+        })
+        .collect();
+    (idf.rank, whole_rank, z)
+}

@@ -151,12 +151,12 @@ pub struct Identifiability {
 
 /// Rank, conditioning, base parameters, null space and standard errors of the normal
 /// equations at `theta` (the model's layout).
-pub fn identifiability(
-    model: &Model,
+pub fn identifiability<R: crate::Parameterized + ?Sized>(
+    model: &R,
     ne: &NormalEquations,
     theta: &DVector<f64>,
 ) -> Identifiability {
-    let p = model.layout().len;
+    let p = model.parameter_count();
     let yty = &ne.yty;
     let d = excited_scale(yty);
     let hs = DMatrix::from_fn(p, p, |i, j| d[i] * yty[(i, j)] * d[j]);

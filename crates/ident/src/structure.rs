@@ -24,6 +24,9 @@ pub trait Parameterized {
 
     /// The robot's own `θ` (the truth of a simulation, or a description's values).
     fn parameters(&self) -> DVector<f64>;
+
+    /// A name per column of `θ`, e.g. `thigh.Ixz`, `knee_joint.B`.
+    fn parameter_names(&self) -> Vec<String>;
 }
 
 impl Parameterized for Model {
@@ -57,6 +60,10 @@ impl Parameterized for Model {
     fn parameters(&self) -> DVector<f64> {
         Model::parameters(self)
     }
+
+    fn parameter_names(&self) -> Vec<String> {
+        Model::parameter_names(self)
+    }
 }
 
 impl Parameterized for FloatingModel {
@@ -87,5 +94,9 @@ impl Parameterized for FloatingModel {
 
     fn parameters(&self) -> DVector<f64> {
         FloatingModel::parameters(self)
+    }
+
+    fn parameter_names(&self) -> Vec<String> {
+        FloatingModel::parameter_names(self)
     }
 }
