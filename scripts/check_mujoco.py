@@ -1,6 +1,7 @@
 """Cross-check physid against MuJoCo's mj_inverse and mass matrix on models physid exports to
 MJCF: the Cheetah-3 leg with rotors as armature (compared with physid's reflected-inertia
-model), the link-only leg, and the KUKA LWR4+. Also reports how large the rotor gyroscopic
+model), the link-only leg, the KUKA LWR4+, and two floating robots with a free joint (the
+quadruped with rotors as armature, and Solo12 from its URDF). Also reports how large the rotor gyroscopic
 coupling is that the armature model drops (physid's full model minus MuJoCo). Exits non-zero
 on disagreement.
 
@@ -13,7 +14,7 @@ import tempfile
 import mujoco
 import numpy as np
 
-from physid_common import KUKA_URDF, Report, dynamics, export, physid_bin, rel_err, run
+from physid_common import KUKA_URDF, SOLO12_URDF, Report, dynamics, export, physid_bin, rel_err, run
 
 TOL = 1e-9
 
@@ -58,6 +59,51 @@ def mj_compare(report, label, xml_path, dyn, described=None):
     return np.array(taus)
 
 
+def mj_compare_floating(report, label, binary, robot_args, directory):
+    """A floating robot exported as MJCF with a free joint (rotors as armature) against
+    physid's floating-base dynamics in the reflected rotor model. MuJoCo's free joint moves
+    with qvel = [v_world; ω_body] and pushes with qfrc = [f_world; n_body]; physid uses
+    [ω; v] and [n; f] in the trunk frame. With R the trunk's rotation, physid's ν is P ν_mj
+    (P maps v_world to Rᵀ v_world), so qfrc_mj = Pᵀ [f_B; τ] and M_mj = Pᵀ M P; the
+    free joint's acceleration is d/dt [R v; ω] = [R (v̇ + ω × v); ω̇]."""
+    import os
+    xml = os.path.join(directory, "floating.xml")
+    run(binary, "export", *robot_args, "--floating-base", "--mjcf", xml)
+    dyn = dynamics(binary, robot_args + ["--rotor-model", "reflected", "--floating-base"])
+    model = mujoco.MjModel.from_xml_path(xml)
+    model.dof_damping[:] = 0
+    model.dof_frictionloss[:] = 0
+    model.jnt_limited[:] = 0
+    data = mujoco.MjData(model)
+    n = len(dyn["joint_names"])
+    assert model.nv == 6 + n, f"MuJoCo has {model.nv} velocities"
+    names = [model.joint(j).name for j in range(1, model.njnt)]
+    assert names == dyn["joint_names"], f"joint order differs: {names}"
+    e_tau = e_m = 0.0
+    for s in dyn["samples"]:
+        r = np.asarray(s["rotation"])
+        w, v = np.asarray(s["v"][:3]), np.asarray(s["v"][3:])
+        dw, dv = np.asarray(s["a"][:3]), np.asarray(s["a"][3:])
+        quat = np.zeros(4)
+        mujoco.mju_mat2Quat(quat, r.flatten())
+        data.qpos[:] = np.r_[s["position"], quat, s["q"]]
+        data.qvel[:] = np.r_[r @ v, w, s["qd"]]
+        data.qacc[:] = np.r_[r @ (dv + np.cross(w, v)), dw, s["qdd"]]
+        mujoco.mj_inverse(model, data)
+        f_b = np.asarray(s["f_trunk"])
+        ours = np.r_[r @ f_b[3:], f_b[:3], s["tau"]]
+        e_tau = max(e_tau, rel_err(ours, data.qfrc_inverse))
+        p = np.zeros((6 + n, 6 + n))
+        p[0:3, 3:6] = np.eye(3)
+        p[3:6, 0:3] = r.T
+        p[6:, 6:] = np.eye(n)
+        h = np.zeros((model.nv, model.nv))
+        mujoco.mj_fullM(model, data, h)
+        e_m = max(e_m, rel_err(p.T @ np.asarray(s["M"]) @ p, h))
+    report.add(f"{label}: mj_inverse with a free joint over {len(dyn['samples'])} states", e_tau, TOL)
+    report.add(f"{label}: mass matrix with a free joint (mj_fullM)", e_m, TOL)
+
+
 def main():
     binary = physid_bin(sys.argv)
     report = Report("check_mujoco")
@@ -80,6 +126,8 @@ def main():
                    0.0 if n_geoms >= 17 else 1.0, 0.0)
         mj_compare(report, "KUKA LWR4+ (physid import -> MJCF)", xml, dynamics(binary, ["--robot", KUKA_URDF]),
                    physid_model(binary, ["--robot", KUKA_URDF]))
+        mj_compare_floating(report, "quadruped, rotors as armature", binary, ["--robot", "cheetah3"], d)
+        mj_compare_floating(report, "Solo12 (floating URDF)", binary, ["--robot", SOLO12_URDF], d)
     report.finish()
 
 

@@ -16,6 +16,10 @@ pub struct Args {
     /// rotor model, sidecar rotors).
     #[arg(long)]
     urdf: Option<PathBuf>,
+    /// The robot floating (the built-in `cheetah3` as the quadruped, a URDF's root link as the
+    /// trunk): MJCF with a free joint on the trunk (URDF not yet).
+    #[arg(long)]
+    floating_base: bool,
 }
 
 /// `physid export`.
@@ -31,6 +35,9 @@ pub fn run(a: Args) -> anyhow::Result<()> {
     let inputs = a.robot.files();
     let inputs: Vec<&std::path::Path> = inputs.iter().map(|p| p.as_path()).collect();
     physid::io::check_outputs(&outputs, &inputs)?;
+    if a.floating_base {
+        return export_floating(&a);
+    }
     let m = a.robot.load()?;
     anyhow::ensure!(
         a.mjcf.is_some() || a.urdf.is_some(),
@@ -50,5 +57,25 @@ pub fn run(a: Args) -> anyhow::Result<()> {
             physid::io::sidecar_path(p).display()
         );
     }
+    Ok(())
+}
+
+/// `physid export --floating-base`: MJCF with a free joint (outputs already checked).
+fn export_floating(a: &Args) -> anyhow::Result<()> {
+    anyhow::ensure!(
+        a.urdf.is_none(),
+        "--floating-base exports MJCF only (give --mjcf FILE): a floating robot's URDF is not written yet"
+    );
+    let path = a
+        .mjcf
+        .as_ref()
+        .ok_or_else(|| anyhow::anyhow!("give --mjcf FILE"))?;
+    let (robot, notices) = a.robot.options().load_floating()?;
+    for n in notices {
+        eprintln!("{n}");
+    }
+    let text = physid::io::mjcf::floating_to_string(&robot);
+    physid::io::write_atomic(path, text.as_bytes())?;
+    eprintln!("wrote {}", path.display());
     Ok(())
 }

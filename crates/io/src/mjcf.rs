@@ -229,6 +229,69 @@ fn body(model: &Model, inertias: &[InertialParams], i: usize, depth: usize, s: &
 /// The model as MJCF text (see the module docs).
 pub fn to_string(model: &Model) -> String {
     let inertias = lumped_inertias(model);
+    let mut s = header(model);
+    let _ = writeln!(s, "  <worldbody>");
+    for (k, sh) in model.base_shapes().iter().enumerate() {
+        if let Some(g) = shape_geom("world", k, sh) {
+            let _ = writeln!(s, "    {g}");
+        }
+    }
+    // Rotors on the fixed base: static bodies welded to the world, so that the model's mass
+    // is complete; their spin inertia acts through their joint's armature.
+    for b in model.bodies().iter().filter(|b| b.parent.is_none()) {
+        if let Some(r) = &b.rotor {
+            let _ = writeln!(s, "    <body name=\"{}\" {}>", r.name, pose_attrs(&r.x_rot));
+            let _ = writeln!(s, "      {}", inertial(&r.inertia));
+            let _ = writeln!(s, "    </body>");
+        }
+    }
+    for i in (0..model.dof()).filter(|&i| model.bodies()[i].parent.is_none()) {
+        body(model, &inertias, i, 0, &mut s);
+    }
+    let _ = writeln!(s, "  </worldbody>");
+    let _ = writeln!(s, "</mujoco>");
+    s
+}
+
+/// A floating robot as MJCF: the trunk a body with a `<freejoint>` (at the world origin, axes
+/// aligned), its inertia with the rotors mounted on it lumped in, the tree's shapes on it and
+/// the tree below as [`to_string`] writes it. MuJoCo's free joint orders its velocity as the
+/// trunk origin's linear velocity in world coordinates, then the angular velocity in the trunk
+/// frame; physid's `v_B = [ω; v]` is in the trunk frame throughout.
+pub fn floating_to_string(robot: &physid_core::model::floating::FloatingModel) -> String {
+    let model = robot.tree();
+    let inertias = lumped_inertias(model);
+    let mut trunk = robot.trunk().inertia;
+    for b in model.bodies().iter().filter(|b| b.parent.is_none()) {
+        if let Some(r) = &b.rotor {
+            trunk = InertialParams(trunk.0 + r.inertia.transformed(&r.x_rot.inverse()).0);
+        }
+    }
+    let name = &robot.trunk().name;
+    let mut s = header(model);
+    let _ = writeln!(s, "  <worldbody>");
+    let _ = writeln!(s, "    <body name=\"{name}\" pos=\"0 0 0\">");
+    let _ = writeln!(s, "      <freejoint name=\"{name}_free\"/>");
+    let _ = writeln!(s, "      {}", inertial(&trunk));
+    for (k, sh) in model.base_shapes().iter().enumerate() {
+        if let Some(g) = shape_geom(name, k, sh) {
+            let _ = writeln!(s, "      {g}");
+        }
+    }
+    if let Some(e) = &robot.trunk().bounding {
+        let _ = writeln!(s, "      {}", ellipsoid_geom(e));
+    }
+    for i in (0..model.dof()).filter(|&i| model.bodies()[i].parent.is_none()) {
+        body(model, &inertias, i, 1, &mut s);
+    }
+    let _ = writeln!(s, "    </body>");
+    let _ = writeln!(s, "  </worldbody>");
+    let _ = writeln!(s, "</mujoco>");
+    s
+}
+
+/// The file's opening: the model's name, the compiler, gravity and the mesh assets.
+fn header(model: &Model) -> String {
     let mut s = String::new();
     let _ = writeln!(s, "<mujoco model=\"{}\">", model.name());
     let _ = writeln!(
@@ -252,25 +315,5 @@ pub fn to_string(model: &Model) -> String {
         }
         let _ = writeln!(s, "  </asset>");
     }
-    let _ = writeln!(s, "  <worldbody>");
-    for (k, sh) in model.base_shapes().iter().enumerate() {
-        if let Some(g) = shape_geom("world", k, sh) {
-            let _ = writeln!(s, "    {g}");
-        }
-    }
-    // Rotors on the fixed base: static bodies welded to the world, so that the model's mass
-    // is complete; their spin inertia acts through their joint's armature.
-    for b in model.bodies().iter().filter(|b| b.parent.is_none()) {
-        if let Some(r) = &b.rotor {
-            let _ = writeln!(s, "    <body name=\"{}\" {}>", r.name, pose_attrs(&r.x_rot));
-            let _ = writeln!(s, "      {}", inertial(&r.inertia));
-            let _ = writeln!(s, "    </body>");
-        }
-    }
-    for i in (0..model.dof()).filter(|&i| model.bodies()[i].parent.is_none()) {
-        body(model, &inertias, i, 0, &mut s);
-    }
-    let _ = writeln!(s, "  </worldbody>");
-    let _ = writeln!(s, "</mujoco>");
     s
 }
