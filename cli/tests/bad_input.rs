@@ -264,13 +264,15 @@ fn negative_option_values_reach_the_option_check() {
         assert!(!std::path::Path::new("never").exists());
     }
     // A floating robot exports as MJCF only, and says so before writing anything.
-    let urdf_out = dir_path_placeholder();
-    let (ok, err) = physid(&["export", "--floating-base", "--urdf", &urdf_out]);
+    let export_dir = tempfile::tempdir().unwrap();
+    let urdf_out = export_dir.path().join("never.urdf");
+    let urdf_arg = urdf_out.to_str().unwrap();
+    let (ok, err) = physid(&["export", "--floating-base", "--urdf", urdf_arg]);
     assert!(
         !ok && err.contains("--floating-base exports MJCF only"),
         "{err}"
     );
-    assert!(!std::path::Path::new(&urdf_out).exists());
+    assert!(!urdf_out.exists());
     // Only the root of a tree may float: a floating joint below a link with mass is named, and
     // nothing is written.
     let dir = tempfile::tempdir().unwrap();
