@@ -29,6 +29,7 @@ pub mod calibrate;
 mod described;
 mod diagnosis;
 mod explain;
+pub mod floating;
 mod gap;
 pub mod ladder;
 pub mod magnitude;

@@ -215,3 +215,58 @@ fn trunk_rows_against_the_truth(robot: &FloatingModel) -> (usize, usize, Vec<f64
         .collect();
     (idf.rank, whole_rank, z)
 }
+
+/// A 5 kg payload strapped to the trunk 10 cm forward and 8 cm up: from the unloaded
+/// description and a loaded run (torques and contact forces, with noise), the trunk is named as
+/// the body that changed, with the payload's mass and position; the ab/ad rotors, which the
+/// trunk carries rigidly, are said to fit almost as well. On an unloaded run of another motion
+/// no body is named.
+#[test]
+fn a_payload_on_the_trunk_is_found_from_the_description() {
+    use physid_core::model::floating::Trunk;
+    use physid_core::spatial::InertialParams;
+    use physid_diagnose::floating::{body_changes, name_change};
+    use physid_experiment::whole_robot::{measured, normal_equations};
+    use physid_sim::floating::{standing, Standing};
+    let description = quadruped();
+    let at = nalgebra::Vector3::new(0.10, 0.0, 0.08);
+    let inertia = nalgebra::Matrix3::identity() * 0.01;
+    let payload = InertialParams::from_mass_com_inertia(5.0, &at, &inertia);
+    let trunk = Trunk {
+        inertia: InertialParams(description.trunk().inertia.0 + payload.0),
+        ..description.trunk().clone()
+    };
+    let loaded = FloatingModel::new(trunk, description.tree().clone()).unwrap();
+    let spec = WholeRobotSpec::default();
+    let named_on = |robot: &FloatingModel, seed: u64| {
+        let motion = Standing {
+            duration: 4.0,
+            seed,
+            ..Default::default()
+        };
+        let truth = standing(robot, &feet(robot), &motion).unwrap();
+        let noisy = measured(&truth, &spec, seed);
+        let data = (&noisy, &truth);
+        let ne = normal_equations(robot, data, DataSetting::TorquesAndContacts, truth.len());
+        let changes = body_changes(&description, &ne);
+        eprintln!(
+            "top {} Δm {:.3} kg at {:?}, F {:.1}, reduction {:.4}",
+            changes[0].body, changes[0].mass, changes[0].com, changes[0].f, changes[0].reduction
+        );
+        name_change(&changes, 10.0, 0.01)
+    };
+    let found = named_on(&loaded, 3);
+    let trunk_change = found.changed.expect("a body is named");
+    assert_eq!(trunk_change.body, "trunk");
+    assert!((trunk_change.mass - 5.0).abs() < 0.1, "{trunk_change:?}");
+    assert!(
+        (trunk_change.com.unwrap() - at).norm() < 0.01,
+        "{trunk_change:?}"
+    );
+    assert!(
+        found.also_fit.iter().all(|b| b.ends_with("abad_rotor")),
+        "{:?}",
+        found.also_fit
+    );
+    assert!(named_on(&description, 4).changed.is_none());
+}

@@ -1,0 +1,148 @@
+//! Which body of a floating robot changed: the description's residual on a new run, and how far
+//! freeing one body's ten parameters lowers it.
+//!
+//! For every body `b` (the trunk, links, rotors) the change `Δπ_b` that best explains the new
+//! run's data with everything else at the description `θ_d` is a least-squares fit on the run's
+//! normal equations: with `E_b` the body's ten columns, `g = Yᵀτ − YᵀY θ_d` (the data's pull
+//! away from the description), `Δπ_b = (E_bᵀ YᵀY E_b)⁻¹ E_bᵀ g` and the residual falls by
+//! `ΔRSS_b = gᵀ E_b Δπ_b`. Its evidence is the F statistic
+//! `F_b = (ΔRSS_b / k_b) / (RSS_b / (N − k_b))` over `N` rows, `k_b` the rank of the body's
+//! columns in these data: a body is named only where `F_b` exceeds the threshold (the change
+//! would be noise otherwise), the largest first. A payload rigidly carried by a body is such a
+//! change: its mass `Δm` and centre of mass `Δh / Δm` in the body's frame come with it.
+
+use nalgebra::{DMatrix, DVector, Vector3};
+use physid_ident::{NormalEquations, Parameterized};
+use serde::Serialize;
+
+/// One body's best change on the new run.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct BodyChange {
+    /// Body name.
+    pub body: String,
+    /// First column of its parameters in `θ`.
+    pub column: usize,
+    /// The change of its ten parameters (paper order, its own frame).
+    pub delta: [f64; 10],
+    /// The change of mass (kg).
+    pub mass: f64,
+    /// The changed mass's centre in the body frame, `Δh / Δm` (m); `None` without a mass change.
+    pub com: Option<Vector3<f64>>,
+    /// Relative fall of the residual sum of squares.
+    pub reduction: f64,
+    /// The F statistic of the change.
+    pub f: f64,
+    /// Columns of the body the data determine (`k_b`).
+    pub determined: usize,
+}
+
+/// Every body's change, largest F first, for the robot described by `description` on a run's
+/// normal equations `ne` (the robot's columns, any data setting).
+pub fn body_changes<R: Parameterized + ?Sized>(
+    description: &R,
+    ne: &NormalEquations,
+) -> Vec<BodyChange> {
+    let theta = description.parameters();
+    let g = &ne.ytt - &ne.yty * &theta;
+    let rss0 = ne.residual_sum_of_squares(&theta);
+    let rows = (ne.samples * ne.rows_per_sample()) as f64;
+    let mut changes: Vec<BodyChange> = description
+        .inertial_bodies()
+        .into_iter()
+        .map(|(body, column, _)| body_change(ne, &g, (rss0, rows), body, column))
+        .collect();
+    changes.sort_by(|a, b| b.f.total_cmp(&a.f));
+    changes
+}
+
+/// The body at `column`'s least-squares change (see the module docs).
+fn body_change(
+    ne: &NormalEquations,
+    g: &DVector<f64>,
+    (rss0, rows): (f64, f64),
+    body: String,
+    column: usize,
+) -> BodyChange {
+    let block: DMatrix<f64> = ne.yty.view((column, column), (10, 10)).into_owned();
+    let pull: DVector<f64> = g.rows(column, 10).into_owned();
+    let (delta, determined) = pseudo_solve(&block, &pull);
+    let fall = pull.dot(&delta).max(0.0);
+    let rss = (rss0 - fall).max(0.0);
+    let k = determined.max(1) as f64;
+    let f = if rss > 0.0 {
+        (fall / k) / (rss / (rows - k).max(1.0))
+    } else {
+        f64::INFINITY
+    };
+    let mass = delta[0];
+    let com = (mass.abs() > 1e-9).then(|| Vector3::new(delta[1], delta[2], delta[3]) / mass);
+    BodyChange {
+        body,
+        column,
+        delta: std::array::from_fn(|i| delta[i]),
+        mass,
+        com,
+        reduction: if rss0 > 0.0 { fall / rss0 } else { 0.0 },
+        f,
+        determined,
+    }
+}
+
+/// The minimum-norm solution of `a x = b` for symmetric positive semidefinite `a`, on the
+/// eigen-directions above round-off relative to the largest (after unit-diagonal scaling),
+/// and how many there are.
+fn pseudo_solve(a: &DMatrix<f64>, b: &DVector<f64>) -> (DVector<f64>, usize) {
+    let d = physid_core::linalg::unit_diagonal_scale(a, 0.0);
+    let n = a.nrows();
+    let scaled = DMatrix::from_fn(n, n, |i, j| d[i] * a[(i, j)] * d[j]);
+    let eig = nalgebra::SymmetricEigen::new(scaled);
+    let largest = eig.eigenvalues.max().max(0.0);
+    let bs = DVector::from_iterator(n, (0..n).map(|i| d[i] * b[i]));
+    let mut x = DVector::zeros(n);
+    let mut kept = 0;
+    for k in 0..n {
+        let lambda = eig.eigenvalues[k];
+        if lambda > 1e-10 * largest && largest > 0.0 {
+            let v = eig.eigenvectors.column(k);
+            x += v * (v.dot(&bs) / lambda);
+            kept += 1;
+        }
+    }
+    (DVector::from_iterator(n, (0..n).map(|i| d[i] * x[i])), kept)
+}
+
+/// What the changes name: the body whose change explains the run best, if its evidence is
+/// strong enough, with the bodies that explain it almost as well.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct Named {
+    /// The changed body, if any passes `min_f` and `min_reduction`.
+    pub changed: Option<BodyChange>,
+    /// Bodies whose change leaves at most `1.5` times the named one's unexplained residual:
+    /// the data cannot tell them apart from it (e.g. a rotor carried rigidly by the same body).
+    pub also_fit: Vec<String>,
+}
+
+/// The change [`body_changes`] ranks first, named when its F statistic exceeds `min_f` and it
+/// lowers the residual by at least `min_reduction` (a share of it): a large F alone comes with
+/// any small systematic misfit on long runs, a large reduction alone with few rows.
+pub fn name_change(changes: &[BodyChange], min_f: f64, min_reduction: f64) -> Named {
+    let Some(top) = changes
+        .first()
+        .filter(|c| c.f > min_f && c.reduction >= min_reduction)
+    else {
+        return Named {
+            changed: None,
+            also_fit: vec![],
+        };
+    };
+    let left = 1.0 - top.reduction;
+    let also_fit = changes[1..]
+        .iter()
+        .filter(|c| 1.0 - c.reduction <= 1.5 * left)
+        .map(|c| c.body.clone())
+        .collect();
+    Named {
+        changed: Some(top.clone()),
+        also_fit,
+    }
+}
