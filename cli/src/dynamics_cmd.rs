@@ -52,7 +52,8 @@ pub fn run(a: Args) -> anyhow::Result<()> {
     let inputs: Vec<&std::path::Path> = inputs.iter().map(|p| p.as_path()).collect();
     physid::io::check_outputs(&[a.out.as_path()], &inputs)?;
     if a.floating_base {
-        let (robot, notices) = a.robot.options().load_floating()?;
+        let physid::api::model::LoadedFloatingRobot { robot, notices } =
+            a.robot.options().load_floating()?;
         for n in notices {
             eprintln!("{n}");
         }

@@ -70,7 +70,8 @@ fn export_floating(a: &Args) -> anyhow::Result<()> {
         .mjcf
         .as_ref()
         .ok_or_else(|| anyhow::anyhow!("give --mjcf FILE"))?;
-    let (robot, notices) = a.robot.options().load_floating()?;
+    let physid::api::model::LoadedFloatingRobot { robot, notices } =
+        a.robot.options().load_floating()?;
     for n in notices {
         eprintln!("{n}");
     }

@@ -171,6 +171,15 @@ pub struct LoadedRobot {
     pub notices: Vec<super::data::Notice>,
 }
 
+/// A floating robot as loaded, with what the loader had to say about its description.
+#[derive(Clone, Debug)]
+pub struct LoadedFloatingRobot {
+    /// The robot: trunk and tree.
+    pub robot: crate::model::floating::FloatingModel,
+    /// The loader's warnings, naming the robot file.
+    pub notices: Vec<super::data::Notice>,
+}
+
 impl RobotOptions {
     /// The robot `robot` as described, every option at its default.
     pub fn new(robot: &str) -> Self {
@@ -216,15 +225,7 @@ impl RobotOptions {
     /// Loads the robot as a floating robot ([`crate::io::load_floating_robot_with`]): the
     /// built-in leg becomes the quadruped, a URDF's root link its trunk; `no_rotors` and
     /// `rotor_model` apply to the tree.
-    pub fn load_floating(
-        &self,
-    ) -> Result<
-        (
-            crate::model::floating::FloatingModel,
-            Vec<super::data::Notice>,
-        ),
-        super::ApiError,
-    > {
+    pub fn load_floating(&self) -> Result<LoadedFloatingRobot, super::ApiError> {
         let opts = crate::io::robot_spec::RobotOptions {
             ellipsoid_margin: self.ellipsoid_margin,
             package_dirs: self.package_dirs.clone(),
@@ -244,7 +245,7 @@ impl RobotOptions {
             .into_iter()
             .map(|w| super::data::Notice::warning(format!("{}: {w}", self.robot)))
             .collect();
-        Ok((robot, notices))
+        Ok(LoadedFloatingRobot { robot, notices })
     }
 
     /// Every file the robot reads (its URDF, sidecar, meshes): inputs no output may replace.

@@ -204,6 +204,27 @@ pub fn from_str(
     Ok((model, warnings))
 }
 
+/// The URDF text as urdf-rs reads it (only the first of each repeated element), the XML
+/// document for the attributes urdf-rs does not read, and the repeated elements' warnings.
+fn read_robot<'x>(
+    xml: &'x str,
+    path: &Path,
+) -> Result<(urdf_rs::Robot, Option<roxmltree::Document<'x>>, Vec<String>), IoError> {
+    if let Some(root) = root_element(xml).filter(|r| *r != "robot") {
+        return Err(IoError::Parse {
+            path: path.to_path_buf(),
+            message: format!("not a URDF: the document's root element is <{root}>, not <robot>"),
+        });
+    }
+    let warnings = duplicate_elements(xml);
+    let doc = roxmltree::Document::parse(xml).ok();
+    let robot = urdf_rs::read_from_string(&first_origin_only(xml)).map_err(|e| IoError::Parse {
+        path: path.to_path_buf(),
+        message: format!("not a valid URDF: {e}"),
+    })?;
+    Ok((robot, doc, warnings))
+}
+
 /// The model of the tree and the warnings, with the trunk when `floating`.
 fn parse(
     xml: &str,
@@ -211,23 +232,11 @@ fn parse(
     extras: &RobotExtras,
     floating: bool,
 ) -> Result<(Model, Vec<String>, Option<Trunk>), IoError> {
-    if let Some(root) = root_element(xml).filter(|r| *r != "robot") {
-        return Err(IoError::Parse {
-            path: path.to_path_buf(),
-            message: format!("not a URDF: the document's root element is <{root}>, not <robot>"),
-        });
-    }
-    let mut warnings = duplicate_elements(xml);
-    // The attributes urdf-rs does not read, from one parse of the text.
-    let doc = roxmltree::Document::parse(xml).ok();
+    let (robot, doc, mut warnings) = read_robot(xml, path)?;
+    let mut robot = robot;
     let rates = doc
         .as_ref()
         .map_or(Ok(HashMap::new()), |d| rate_limits(d, path))?;
-    let mut robot =
-        urdf_rs::read_from_string(&first_origin_only(xml)).map_err(|e| IoError::Parse {
-            path: path.to_path_buf(),
-            message: format!("not a valid URDF: {e}"),
-        })?;
     if let Some(joint) = strip_floating_root(&mut robot, path)?.filter(|_| !floating) {
         return Err(IoError::invalid(
             path,
@@ -253,12 +262,7 @@ fn parse(
         ..
     } = walk(&robot, &link_idx, &children, (root, floating), &lookup)?;
     warnings.extend(doc.as_ref().map_or(vec![], empty_ranges));
-    for b in &mut bodies {
-        if let Some(&(acceleration, jerk)) = rates.get(&b.joint_name) {
-            b.limits.acceleration = acceleration.unwrap_or(b.limits.acceleration);
-            b.limits.jerk = jerk.unwrap_or(b.limits.jerk);
-        }
-    }
+    apply_rate_limits(&mut bodies, &rates);
     warnings.extend(lost_meshes(&shapes, &base));
     bound_bodies(&mut bodies, &shapes, &lookup, &mut warnings);
     attach_rotors(&mut bodies, mimics, &lookup, &mut warnings)?;
@@ -279,6 +283,17 @@ fn parse(
     let model = physical_model(robot.name.clone(), bodies, (extras, base.shapes), path)?;
     check_bounds(&model, extras, path, &mut warnings)?;
     Ok((model, warnings, trunk))
+}
+
+/// The acceleration and jerk limits physid reads from the URDF's `<limit>` (urdf-rs does not),
+/// by joint name.
+fn apply_rate_limits(bodies: &mut [Body], rates: &RateLimits) {
+    for b in bodies {
+        if let Some(&(acceleration, jerk)) = rates.get(&b.joint_name) {
+            b.limits.acceleration = acceleration.unwrap_or(b.limits.acceleration);
+            b.limits.jerk = jerk.unwrap_or(b.limits.jerk);
+        }
+    }
 }
 
 /// A `floating` joint whose parent is a massless root link with no other joint: the link and
