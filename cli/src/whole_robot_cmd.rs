@@ -26,9 +26,16 @@ pub struct Args {
     /// Standard deviation of the motor torques' noise (N m).
     #[arg(allow_negative_numbers = true, long, default_value_t = 0.5)]
     torque_noise: f64,
-    /// Standard deviation of each contact force component's noise (N).
-    #[arg(allow_negative_numbers = true, long, default_value_t = 2.0)]
-    force_noise: f64,
+    /// Standard deviation of each contact force component's noise (N); several values
+    /// (comma-separated) sweep it: the experiment runs at each, and the summary tabulates the
+    /// validation error against the noise per training size.
+    #[arg(
+        allow_negative_numbers = true,
+        long,
+        value_delimiter = ',',
+        default_value = "2"
+    )]
+    force_noise: Vec<f64>,
     /// Relative error of the prior ("CAD") parameters.
     #[arg(allow_negative_numbers = true, long, default_value_t = 0.1)]
     prior_error: f64,
@@ -58,12 +65,20 @@ pub fn run(a: Args) -> anyhow::Result<()> {
         sizes: a.sizes.clone(),
         seeds: (1..=a.seeds).collect(),
         torque_noise: a.torque_noise,
-        force_noise: a.force_noise,
+        force_noise: a.force_noise[0],
         prior_error: a.prior_error,
         prior_weight: a.prior_weight,
         ..Default::default()
     };
-    spec.validate()?;
+    let specs: Vec<WholeRobotSpec> = (a.force_noise.iter())
+        .map(|&force_noise| WholeRobotSpec {
+            force_noise,
+            ..spec.clone()
+        })
+        .collect();
+    for s in &specs {
+        s.validate()?;
+    }
     physid::io::check_result_dir(&a.out, &[])?;
     let pool = super::thread_pool(a.threads)?;
     let robot = physid::model::quadruped::quadruped();
@@ -72,17 +87,19 @@ pub fn run(a: Args) -> anyhow::Result<()> {
         .map(|i| (i, physid::model::cheetah3::foot_in_shank()))
         .collect();
     let start = std::time::Instant::now();
-    let rows = pool
-        .install(|| whole_robot::run(&robot, &feet, &spec))
-        .context("running the whole-robot experiment")?;
+    let mut rows = vec![];
+    for s in &specs {
+        let part = pool.install(|| whole_robot::run(&robot, &feet, s));
+        rows.extend(part.context("running the whole-robot experiment")?);
+    }
     let wall = start.elapsed().as_secs_f64();
     let staging = physid::io::StagingDir::new(&a.out)?;
-    let summary_md = write(staging.path(), &rows, &spec)?;
+    let summary_md = write(staging.path(), &rows, (&spec, &a.force_noise))?;
     let threads = pool.current_num_threads();
     let provenance = serde_json::json!({
         "command": "physid whole-robot",
         "sizes": spec.sizes, "seeds": spec.seeds, "torque_noise": spec.torque_noise,
-        "force_noise": spec.force_noise, "prior_error": spec.prior_error,
+        "force_noise": a.force_noise, "prior_error": spec.prior_error,
         "prior_weight": spec.prior_weight, "validation": spec.validation,
         "git_revision": physid::api::provenance::git_revision(),
         "physid_version": env!("CARGO_PKG_VERSION"),
@@ -101,18 +118,23 @@ pub fn run(a: Args) -> anyhow::Result<()> {
     Ok(())
 }
 
-/// `rows.csv`, `summary.csv`, `summary.md` and one `validation_error_<setting>.svg` per data
-/// setting into `out`; returns the summary's text.
+const SETS: [&str; 4] = ["none", "semi", "consistent", "ellipsoid"];
+
+/// `rows.csv`, `summary.csv`, `summary.md` and, for one noise level, one
+/// `validation_error_<setting>.svg` per data setting into `out`; returns the summary's text.
 fn write(
     out: &std::path::Path,
     rows: &[whole_robot::WholeRobotRow],
-    spec: &WholeRobotSpec,
+    (spec, force_noise): (&WholeRobotSpec, &[f64]),
 ) -> anyhow::Result<String> {
     let mut long = whole_robot::long_table(rows)?;
     tables::write_csv(&out.join("rows.csv"), &mut long)?;
     let mut summary = whole_robot::summary(&long)?;
     tables::write_csv(&out.join("summary.csv"), &mut summary)?;
-    let sets = ["none", "semi", "consistent", "ellipsoid"];
+    if force_noise.len() > 1 {
+        return write_sweep(out, &summary, spec, force_noise);
+    }
+    let sets = SETS;
     let mut md =
         format!(
         "# The whole quadruped: median validation RMS of the joint torques (N m) over {} seeds\n\n\
@@ -138,6 +160,34 @@ fn write(
             "validation RMS (N m)",
             &out.join(format!("validation_error_{name}.svg")),
         )?;
+    }
+    physid::io::write_atomic(&out.join("summary.md"), md.as_bytes())?;
+    Ok(md)
+}
+
+/// The summary of a sweep over the contact-force noise: per data setting and training size, the
+/// validation error against the noise (no plots).
+fn write_sweep(
+    out: &std::path::Path,
+    summary: &polars::prelude::DataFrame,
+    spec: &WholeRobotSpec,
+    force_noise: &[f64],
+) -> anyhow::Result<String> {
+    let mut md = format!(
+        "# The whole quadruped against contact-force noise: median validation RMS of the joint \
+         torques (N m) over {} seeds\n\nForce noise {force_noise:?} N (each component), torque \
+         noise {} N m, prior error {}, prior weight {}.\n",
+        spec.seeds.len(),
+        spec.torque_noise,
+        spec.prior_error,
+        spec.prior_weight,
+    );
+    for setting in SETTINGS {
+        let name = whole_robot::setting_name(setting);
+        for &size in &spec.sizes {
+            let table = whole_robot::noise_table(summary, name, size, &SETS)?;
+            write!(md, "\n## {name}, {size} samples\n\n{table}")?;
+        }
     }
     physid::io::write_atomic(&out.join("summary.md"), md.as_bytes())?;
     Ok(md)

@@ -80,6 +80,8 @@ impl Default for WholeRobotSpec {
 pub struct WholeRobotRow {
     /// Seed.
     pub seed: u64,
+    /// The contact forces' noise (N) of the run.
+    pub force_noise: f64,
     /// Data setting.
     pub setting: DataSetting,
     /// Training samples.
@@ -260,6 +262,7 @@ fn identify_sets(
             })?;
             Ok(WholeRobotRow {
                 seed: cell.seed,
+                force_noise: spec.force_noise,
                 setting: cell.setting,
                 samples: cell.samples,
                 set,
@@ -392,7 +395,7 @@ impl Scorer {
     }
 }
 
-/// The rows as a long table: `setting`, `n_s`, `constraints`, `seed`, `val_rms` and
+/// The rows as a long table: `force_noise` (N), `setting`, `n_s`, `constraints`, `seed`, `val_rms` and
 /// `prior_rms` (N m), `m_err`, `com_err` (m), `inertia_err`, `j_err`, `consistent`, `status`.
 pub fn long_table(
     rows: &[WholeRobotRow],
@@ -407,6 +410,7 @@ pub fn long_table(
         .collect();
     let set: Vec<String> = rows.iter().map(|r| r.set.name().to_string()).collect();
     DataFrame::new_infer_height(vec![
+        col_f("force_noise", &|r| r.force_noise),
         Column::new("setting".into(), setting),
         Column::new(
             "n_s".into(),
@@ -433,7 +437,8 @@ pub fn long_table(
     ])
 }
 
-/// Median and quartiles over seeds per (setting, n_s, set), in first-appearance order.
+/// Median and quartiles over seeds per (force noise, setting, n_s, set), in first-appearance
+/// order.
 pub fn summary(
     long: &polars::prelude::DataFrame,
 ) -> polars::prelude::PolarsResult<polars::prelude::DataFrame> {
@@ -443,7 +448,7 @@ pub fn summary(
     };
     group_stats(
         long,
-        &["setting", "n_s", "constraints"],
+        &["force_noise", "setting", "n_s", "constraints"],
         &[
             ("", Count, "seeds"),
             ("val_rms", Quantile(0.25), "val_rms_q25"),
@@ -466,4 +471,46 @@ pub fn setting_name(s: DataSetting) -> &'static str {
         DataSetting::TorquesOnly => "torques_only",
         DataSetting::BaseOnly => "base_only",
     }
+}
+
+/// The sweep's table for one data setting and training size: a row per contact-force noise
+/// (N), a column per set, the median validation RMS (N m) of `summary` ([`summary`]'s columns).
+pub fn noise_table(
+    summary: &polars::prelude::DataFrame,
+    setting: &str,
+    samples: usize,
+    sets: &[&str],
+) -> polars::prelude::PolarsResult<String> {
+    use crate::tables::{floats, strings};
+    let noise = floats(summary, "force_noise")?;
+    let settings = strings(summary, "setting")?;
+    let sizes = floats(summary, "n_s")?;
+    let set_of = strings(summary, "constraints")?;
+    let value = floats(summary, "val_rms_median")?;
+    let mut levels: Vec<f64> = vec![];
+    for &v in &noise {
+        if !levels.contains(&v) {
+            levels.push(v);
+        }
+    }
+    let mut md = format!(
+        "| force noise (N) | {} |\n|---|{}\n",
+        sets.join(" | "),
+        "---|".repeat(sets.len())
+    );
+    for level in levels {
+        let cell = |set: &str| {
+            (0..value.len())
+                .find(|&i| {
+                    noise[i] == level
+                        && settings[i] == setting
+                        && sizes[i] == samples as f64
+                        && set_of[i] == set
+                })
+                .map_or("".to_string(), |i| format!("{:.3}", value[i]))
+        };
+        let cells: Vec<String> = sets.iter().map(|s| cell(s)).collect();
+        md.push_str(&format!("| {level} | {} |\n", cells.join(" | ")));
+    }
+    Ok(md)
 }
