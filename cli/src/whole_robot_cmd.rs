@@ -96,18 +96,7 @@ pub fn run(a: Args) -> anyhow::Result<()> {
     let staging = physid::io::StagingDir::new(&a.out)?;
     let summary_md = write(staging.path(), &rows, (&spec, &a.force_noise))?;
     let threads = pool.current_num_threads();
-    let provenance = serde_json::json!({
-        "command": "physid whole-robot",
-        "sizes": spec.sizes, "seeds": spec.seeds, "torque_noise": spec.torque_noise,
-        "force_noise": a.force_noise, "prior_error": spec.prior_error,
-        "prior_weight": spec.prior_weight, "validation": spec.validation,
-        "git_revision": physid::api::provenance::git_revision(),
-        "physid_version": env!("CARGO_PKG_VERSION"),
-        "dependencies": physid::api::provenance::dependency_versions(),
-        "threads": threads, "wall_s": wall,
-    });
-    let text = serde_json::to_string_pretty(&provenance)?;
-    physid::io::write_atomic(&staging.path().join("provenance.json"), text.as_bytes())?;
+    write_provenance(staging.path(), (&spec, &a.force_noise), threads, wall)?;
     staging.commit()?;
     println!(
         "{} identifications in {wall:.1} s on {} threads; wrote {}/\n{summary_md}",
@@ -191,4 +180,26 @@ fn write_sweep(
     }
     physid::io::write_atomic(&out.join("summary.md"), md.as_bytes())?;
     Ok(md)
+}
+
+/// `provenance.json`: the options, git revision, versions, threads and wall time (s).
+fn write_provenance(
+    out: &std::path::Path,
+    (spec, force_noise): (&WholeRobotSpec, &[f64]),
+    threads: usize,
+    wall: f64,
+) -> anyhow::Result<()> {
+    let provenance = serde_json::json!({
+        "command": "physid whole-robot",
+        "sizes": spec.sizes, "seeds": spec.seeds, "torque_noise": spec.torque_noise,
+        "force_noise": force_noise, "prior_error": spec.prior_error,
+        "prior_weight": spec.prior_weight, "validation": spec.validation,
+        "git_revision": physid::api::provenance::git_revision(),
+        "physid_version": env!("CARGO_PKG_VERSION"),
+        "dependencies": physid::api::provenance::dependency_versions(),
+        "threads": threads, "wall_s": wall,
+    });
+    let text = serde_json::to_string_pretty(&provenance)?;
+    physid::io::write_atomic(&out.join("provenance.json"), text.as_bytes())?;
+    Ok(())
 }

@@ -27,6 +27,8 @@ pub mod plots;
 pub mod sweep;
 pub mod tables;
 pub mod whole_robot;
+#[cfg(test)]
+mod whole_robot_tests;
 use serde::{Deserialize, Serialize};
 
 /// The `[experiment]` table of a scenario file.

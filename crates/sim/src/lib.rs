@@ -8,6 +8,8 @@ pub mod design;
 pub mod effects;
 pub mod excitation;
 pub mod floating;
+#[cfg(test)]
+mod floating_tests;
 pub mod rapier;
 pub mod report;
 pub mod scenario;

@@ -17,6 +17,8 @@ mod crba;
 mod energy;
 mod fd;
 mod floating;
+#[cfg(test)]
+mod floating_tests;
 mod gravity;
 pub mod kinematics;
 mod regressor;

@@ -2,11 +2,11 @@
 //! with the model in every data setting, and the constraint sets behave as the paper says on
 //! little data.
 
+use crate::whole_robot::{run, WholeRobotError, WholeRobotSpec};
 use physid_core::model::cheetah3::{self, LegOptions};
 use physid_core::model::floating::FloatingModel;
 use physid_core::model::quadruped::{quadruped, quadruped_with};
 use physid_core::model::JointFriction;
-use physid_experiment::whole_robot::{run, WholeRobotError, WholeRobotSpec};
 use physid_ident::floating::DataSetting;
 use physid_ident::ConstraintSet;
 
@@ -83,8 +83,6 @@ fn on_little_noisy_data_tighter_sets_predict_better() {
         };
         let none = rms(ConstraintSet::None);
         let ellipsoid = rms(ConstraintSet::Ellipsoid);
-        eprintln!("{setting:?}: none {none:.1}, semi {:.1}, consistent {:.1}, ellipsoid {ellipsoid:.1} N m",
-            rms(ConstraintSet::Semi), rms(ConstraintSet::Consistent));
         assert!(rms(ConstraintSet::Semi) < none / 5.0);
         assert!(rms(ConstraintSet::Consistent) < none / 5.0);
         assert!(ellipsoid < rms(ConstraintSet::Consistent));
@@ -159,15 +157,14 @@ fn the_trunk_rows_alone_recover_their_base_parameters_within_their_standard_erro
         let (base_rank, whole_rank, z) = trunk_rows_against_the_truth(&robot);
         let within = |k: f64| z.iter().filter(|v| v.abs() <= k).count() as f64 / z.len() as f64;
         let worst = z.iter().fold(0.0f64, |m, v| m.max(v.abs()));
-        eprintln!(
-            "{} rotors: {base_rank} base parameters from the trunk rows (whole body {whole_rank}); within 2 σ: {:.0} %, 3 σ: {:.0} %, worst {worst:.1} σ",
-            robot.tree().rotor_count(),
-            100.0 * within(2.0),
-            100.0 * within(3.0)
-        );
         assert_eq!(whole_rank, base_rank + only_joint_rows_see);
         assert!(base_rank > 30, "rank {base_rank}");
-        assert!(within(3.0) > 0.95, "{z:?}");
+        let said = format!(
+            "within 2 σ {:.2}, 3 σ {:.2}, worst {worst:.1} σ",
+            within(2.0),
+            within(3.0)
+        );
+        assert!(within(3.0) > 0.95, "{said}: {z:?}");
     }
 }
 
@@ -175,7 +172,7 @@ fn the_trunk_rows_alone_recover_their_base_parameters_within_their_standard_erro
 /// parameter's error against the truth in units of its standard error (6 s of standing,
 /// contact forces with 2 N of noise, least squares with a negligible prior).
 fn trunk_rows_against_the_truth(robot: &FloatingModel) -> (usize, usize, Vec<f64>) {
-    use physid_experiment::whole_robot::{measured, normal_equations};
+    use crate::whole_robot::{measured, normal_equations};
     use physid_ident::analysis::identifiability;
     use physid_ident::Options;
     use physid_sim::floating::{standing, Standing};
@@ -193,7 +190,7 @@ fn trunk_rows_against_the_truth(robot: &FloatingModel) -> (usize, usize, Vec<f64
     let noisy = measured(&truth, &spec, 11);
     let data = (&noisy, &truth);
     let ne = normal_equations(robot, data, DataSetting::BaseOnly, truth.len());
-    let prior = physid_experiment::cad_prior(robot, 0.1, 11);
+    let prior = crate::cad_prior(robot, 0.1, 11);
     let opts = Options {
         prior_weight: 1e-9,
         ..Options::new(ConstraintSet::None)
@@ -223,10 +220,10 @@ fn trunk_rows_against_the_truth(robot: &FloatingModel) -> (usize, usize, Vec<f64
 /// no body is named.
 #[test]
 fn a_payload_on_the_trunk_is_found_from_the_description() {
+    use crate::whole_robot::{measured, normal_equations};
     use physid_core::model::floating::Trunk;
     use physid_core::spatial::InertialParams;
     use physid_diagnose::floating::{body_changes, name_change};
-    use physid_experiment::whole_robot::{measured, normal_equations};
     use physid_sim::floating::{standing, Standing};
     let description = quadruped();
     let at = nalgebra::Vector3::new(0.10, 0.0, 0.08);
@@ -249,10 +246,6 @@ fn a_payload_on_the_trunk_is_found_from_the_description() {
         let data = (&noisy, &truth);
         let ne = normal_equations(robot, data, DataSetting::TorquesAndContacts, truth.len());
         let changes = body_changes(&description, &ne);
-        eprintln!(
-            "top {} Δm {:.3} kg at {:?}, F {:.1}, reduction {:.4}",
-            changes[0].body, changes[0].mass, changes[0].com, changes[0].f, changes[0].reduction
-        );
         name_change(&changes, 10.0, 0.01)
     };
     let found = named_on(&loaded, 3);

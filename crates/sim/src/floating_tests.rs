@@ -1,13 +1,13 @@
 //! The standing quadruped: it stays up on its feet, the ground carries its weight, and what is
 //! recorded obeys the floating-base equations of motion.
 
+use crate::floating::{standing, FloatingSimError, Standing};
 use nalgebra::{DMatrix, DVector, Vector3};
 use physid_core::dynamics::{point_jacobian_floating, regressor_floating, Data};
 use physid_core::model::cheetah3::{self, LegOptions};
 use physid_core::model::floating::FloatingModel;
 use physid_core::model::quadruped::{quadruped, quadruped_with};
 use physid_core::model::JointFriction;
-use physid_sim::floating::{standing, FloatingSimError, Standing};
 
 fn feet(robot: &FloatingModel) -> Vec<(usize, Vector3<f64>)> {
     (0..robot.joints())
@@ -31,7 +31,6 @@ fn the_quadruped_stands_and_sways_on_its_feet_and_the_ground_carries_its_weight(
         .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &h| {
             (a.min(h), b.max(h))
         });
-    eprintln!("trunk height {lo:.3}..{hi:.3} m");
     assert!(lo > 0.2 && hi < 0.8, "trunk height {lo}..{hi} m");
     assert!(hi - lo > 0.02, "the trunk hardly moves: {lo}..{hi} m");
     // Over the run the ground carries the weight on average (the trunk's mean vertical
@@ -50,7 +49,6 @@ fn the_quadruped_stands_and_sways_on_its_feet_and_the_ground_carries_its_weight(
         .filter(|&k| run.contact_at(k).iter().all(|f| f.z > 0.0))
         .count();
     let share = all_down as f64 / (run.len() - 1000) as f64;
-    eprintln!("all four feet down in {:.1} % of the steps", 100.0 * share);
     assert!(
         share > 0.9,
         "all four feet down in only {share} of the steps"
@@ -119,7 +117,7 @@ fn bad_experiment_values_are_named() {
         (
             "ground.friction",
             Standing {
-                ground: physid_sim::floating::Ground {
+                ground: crate::floating::Ground {
                     friction: -1.0,
                     ..Default::default()
                 },

@@ -4,16 +4,16 @@
 //! joints), the point Jacobian against the feet's finite-difference velocities, and the joint
 //! rows against the fixed-base RNEA when the trunk stands still.
 
-use nalgebra::{DMatrix, DVector, Matrix3, Vector3};
-use physid_core::dynamics::{
+use crate::dynamics::{
     crba_floating, kinematics, point_jacobian_floating, regressor_floating, rnea, rnea_floating,
     stacked, BaseState, Data,
 };
-use physid_core::model::floating::FloatingModel;
-use physid_core::model::quadruped::quadruped;
-use physid_core::model::random::random_state;
-use physid_core::model::{cheetah3, RotorModel};
-use physid_core::spatial::{rot_axis_angle, Force, Motion, Transform};
+use crate::model::floating::FloatingModel;
+use crate::model::quadruped::quadruped;
+use crate::model::random::random_state;
+use crate::model::{cheetah3, RotorModel};
+use crate::spatial::{rot_axis_angle, Force, Motion, Transform};
+use nalgebra::{DMatrix, DVector, Matrix3, Vector3};
 
 fn rel(a: &DVector<f64>, b: &DVector<f64>) -> f64 {
     (a - b).norm() / b.norm().max(1e-300)
@@ -57,7 +57,7 @@ fn the_regressor_times_the_parameters_is_the_inverse_dynamics() {
             let base = random_base(100 + s);
             let [q, qd, qdd] = random_state(s, tree.dof(), 2.0);
             let f_b = rnea_floating(&robot, &mut data, &base, &q, &qd, &qdd);
-            let friction = physid_core::dynamics::friction_torque(tree, &qd);
+            let friction = crate::dynamics::friction_torque(tree, &qd);
             let expected = stacked(&f_b, &(&data.tau + friction));
             regressor_floating(&robot, &mut data, &base, (&q, &qd, &qdd), &mut y);
             let e = rel(&(&y * &theta), &expected);
@@ -180,7 +180,7 @@ fn momentum(
     let i_b = robot.trunk().inertia.rigid();
     let mut h = base.pose.inv_apply_force(&i_b.mul_motion(&base.v));
     let mut mc = base.pose.point_to_a(&(i_b.h / i_b.m.max(1e-300))) * i_b.m;
-    let mut add = |x_w: Transform, i: &physid_core::spatial::RigidInertia, v: &Motion| {
+    let mut add = |x_w: Transform, i: &crate::spatial::RigidInertia, v: &Motion| {
         h += x_w.inv_apply_force(&i.mul_motion(v));
         if i.m > 0.0 {
             mc += x_w.point_to_a(&(i.h / i.m)) * i.m;
