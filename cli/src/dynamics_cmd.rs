@@ -137,11 +137,7 @@ fn rows(x: &DMatrix<f64>) -> Vec<Vec<f64>> {
 fn feet_of(robot: &FloatingModel) -> Vec<(usize, Vector3<f64>)> {
     let tree = robot.tree();
     if robot.name() == "cheetah3_quadruped" {
-        let foot = physid::model::cheetah3::foot_in_shank();
-        return (0..tree.dof())
-            .filter(|i| i % 3 == 2)
-            .map(|i| (i, foot))
-            .collect();
+        return physid::model::quadruped::feet();
     }
     let bodies = tree.bodies();
     (0..bodies.len())

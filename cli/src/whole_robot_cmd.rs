@@ -82,10 +82,7 @@ pub fn run(a: Args) -> anyhow::Result<()> {
     physid::io::check_result_dir(&a.out, &[])?;
     let pool = super::thread_pool(a.threads)?;
     let robot = physid::model::quadruped::quadruped();
-    let feet: Vec<_> = (0..robot.joints())
-        .filter(|i| i % 3 == 2)
-        .map(|i| (i, physid::model::cheetah3::foot_in_shank()))
-        .collect();
+    let feet = physid::model::quadruped::feet();
     let start = std::time::Instant::now();
     let mut rows = vec![];
     for s in &specs {

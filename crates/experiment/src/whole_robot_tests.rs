@@ -3,18 +3,16 @@
 //! little data.
 
 use crate::whole_robot::{run, WholeRobotError, WholeRobotSpec};
-use physid_core::model::cheetah3::{self, LegOptions};
+use physid_core::model::cheetah3::LegOptions;
 use physid_core::model::floating::FloatingModel;
 use physid_core::model::quadruped::{quadruped, quadruped_with};
 use physid_core::model::JointFriction;
 use physid_ident::floating::DataSetting;
 use physid_ident::ConstraintSet;
 
-fn feet(robot: &FloatingModel) -> Vec<(usize, nalgebra::Vector3<f64>)> {
-    (0..robot.joints())
-        .filter(|i| i % 3 == 2)
-        .map(|i| (i, cheetah3::foot_in_shank()))
-        .collect()
+/// The built-in quadruped's feet (every robot these tests build is one).
+fn feet(_: &FloatingModel) -> Vec<(usize, nalgebra::Vector3<f64>)> {
+    physid_core::model::quadruped::feet()
 }
 
 /// Without Coulomb friction (which the simulation smooths and the regressor does not) and

@@ -4,16 +4,14 @@
 use crate::floating::{standing, FloatingSimError, Standing};
 use nalgebra::{DMatrix, DVector, Vector3};
 use physid_core::dynamics::{point_jacobian_floating, regressor_floating, Data};
-use physid_core::model::cheetah3::{self, LegOptions};
+use physid_core::model::cheetah3::LegOptions;
 use physid_core::model::floating::FloatingModel;
 use physid_core::model::quadruped::{quadruped, quadruped_with};
 use physid_core::model::JointFriction;
 
-fn feet(robot: &FloatingModel) -> Vec<(usize, Vector3<f64>)> {
-    (0..robot.joints())
-        .filter(|i| i % 3 == 2)
-        .map(|i| (i, cheetah3::foot_in_shank()))
-        .collect()
+/// The built-in quadruped's feet (every robot these tests build is one).
+fn feet(_: &FloatingModel) -> Vec<(usize, nalgebra::Vector3<f64>)> {
+    physid_core::model::quadruped::feet()
 }
 
 #[test]

@@ -68,6 +68,14 @@ pub fn quadruped_with(o: &LegOptions) -> Result<FloatingModel, ModelError> {
     FloatingModel::new(trunk, tree)
 }
 
+/// The quadruped's feet, as contact points: each leg's shank (tree bodies 2, 5, 8, 11, in
+/// [`LEGS`]' order) at [`cheetah3::foot_in_shank`].
+pub fn feet() -> Vec<(usize, Vector3<f64>)> {
+    (0..LEGS.len())
+        .map(|l| (3 * l + 2, cheetah3::foot_in_shank()))
+        .collect()
+}
+
 /// The trunk: a uniform box of mass `m` (kg) and [`TRUNK_SIZE`] centred at [`TRUNK_COM`].
 fn box_inertia(m: f64) -> InertialParams {
     let [a, b, c] = TRUNK_SIZE;
