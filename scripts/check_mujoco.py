@@ -14,7 +14,8 @@ import tempfile
 import mujoco
 import numpy as np
 
-from physid_common import KUKA_URDF, SOLO12_URDF, Report, dynamics, export, physid_bin, rel_err, run
+from physid_common import (KUKA_URDF, SOLO12_URDF, Report, dynamics, export, identified_quadruped,
+                           physid_bin, rel_err, run)
 
 TOL = 1e-9
 
@@ -104,6 +105,18 @@ def mj_compare_floating(report, label, binary, robot_args, directory):
     report.add(f"{label}: mass matrix with a free joint (mj_fullM)", e_m, TOL)
 
 
+def check_identified_quadruped(report, binary, directory):
+    """The whole robot identified from a log (`identify-floating --out-mjcf`): MuJoCo loads the
+    MJCF with the identified total mass (rotors lumped into their carriers), and the URDF
+    written beside it, exported again, has the dynamics physid gives it."""
+    found, urdf, xml = identified_quadruped(binary, directory, [])
+    model = mujoco.MjModel.from_xml_path(xml)
+    total = found["identified_mass"]
+    report.add("identified quadruped (identify-floating --out-mjcf): total mass",
+               abs(float(model.body_mass.sum()) - total) / total, TOL)
+    mj_compare_floating(report, "identified quadruped (its URDF)", binary, ["--robot", urdf], directory)
+
+
 def main():
     binary = physid_bin(sys.argv)
     report = Report("check_mujoco")
@@ -128,6 +141,7 @@ def main():
                    physid_model(binary, ["--robot", KUKA_URDF]))
         mj_compare_floating(report, "quadruped, rotors as armature", binary, ["--robot", "cheetah3"], d)
         mj_compare_floating(report, "Solo12 (floating URDF)", binary, ["--robot", SOLO12_URDF], d)
+        check_identified_quadruped(report, binary, d)
     report.finish()
 
 

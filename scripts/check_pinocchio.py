@@ -12,7 +12,8 @@ import tempfile
 import numpy as np
 import pinocchio as pin
 
-from physid_common import KUKA_URDF, SOLO12_URDF, PIN_FROM_PAPER, Report, dynamics, export, physid_bin, rel_err, run
+from physid_common import (KUKA_URDF, SOLO12_URDF, PIN_FROM_PAPER, Report, dynamics, export,
+                           identified_quadruped, physid_bin, rel_err, run)
 
 TOL = 1e-9
 
@@ -146,6 +147,20 @@ def check_floating(report, binary, directory, rotors, urdf=None):
     report.add(f"{label}: feet Jacobians", e_j, TOL)
 
 
+def check_identified_quadruped(report, binary, directory):
+    """The whole robot identified from a log (`identify-floating --out-urdf`, link-only):
+    pinocchio reads the URDF under a free flyer with the identified trunk and total mass, and
+    its dynamics equal physid's of the same file (`check_floating`)."""
+    found, urdf, _ = identified_quadruped(binary, directory, ["--no-rotors"])
+    model = pin.buildModelFromUrdf(urdf, pin.JointModelFreeFlyer())
+    label = "identified quadruped (identify-floating --out-urdf)"
+    trunk = model.inertias[1].toDynamicParameters()[PIN_FROM_PAPER]
+    report.add(f"{label}: trunk as identified", rel_err(np.asarray(found["bodies"][0]["pi"]), trunk), TOL)
+    total = found["identified_mass"]
+    report.add(f"{label}: total mass", abs(pin.computeTotalMass(model) - total) / total, TOL)
+    check_floating(report, binary, directory, rotors=False, urdf=urdf)
+
+
 def main():
     binary = physid_bin(sys.argv)
     report = Report("check_pinocchio")
@@ -158,6 +173,7 @@ def main():
         check_floating(report, binary, d, rotors=False)
         check_floating(report, binary, d, rotors=True)
         check_floating(report, binary, d, rotors=False, urdf=SOLO12_URDF)
+        check_identified_quadruped(report, binary, d)
     check(report, "KUKA LWR4+ (data/kuka_lwr4 URDF)", KUKA_URDF, dynamics(binary, ["--robot", KUKA_URDF]))
     report.finish()
 

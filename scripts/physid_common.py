@@ -84,3 +84,16 @@ def rel_err(a, b):
     import numpy as np
     a, b = np.asarray(a, float), np.asarray(b, float)
     return float(np.max(np.abs(a - b)) / (1.0 + np.max(np.abs(b))))
+
+
+def identified_quadruped(binary, directory, robot_args, seconds=3):
+    """The quadruped simulated standing for `seconds` (`simulate-floating`, noisy sensors) and
+    identified from that log (`identify-floating`, ellipsoid set): its JSON, and the identified
+    robot written as URDF (trunk as root link) and MJCF (free joint)."""
+    log = os.path.join(directory, "standing.csv")
+    urdf = os.path.join(directory, "identified_quadruped.urdf")
+    xml = os.path.join(directory, "identified_quadruped.xml")
+    run(binary, "simulate-floating", *robot_args, "--out", log, "--duration", str(seconds))
+    out = run(binary, "identify-floating", *robot_args, "--data", log, "--out-urdf", urdf,
+              "--out-mjcf", xml, "--json")
+    return json.loads(out), urdf, xml

@@ -436,3 +436,134 @@ fn a_nearly_flat_kuka_problem_is_solved_not_almost() {
     );
     assert!(id.constraints_hold);
 }
+
+/// Identification options for the floating log at `data` (the built-in quadruped's
+/// description as the prior, every other option at its CLI default).
+fn floating_options(data: &std::path::Path) -> physid::api::floating::IdentifyFloatingOptions {
+    physid::api::floating::IdentifyFloatingOptions {
+        robot: physid::api::model::RobotOptions::new("cheetah3"),
+        data: data.to_path_buf(),
+        feet: vec![],
+        setting: physid::ident::floating::DataSetting::TorquesAndContacts,
+        constraints: ConstraintSet::Ellipsoid,
+        prior_weight: 1e-4,
+        cutoff: None,
+        contact_force: 10.0,
+        out_urdf: None,
+        out_mjcf: None,
+    }
+}
+
+/// A floating run simulated and logged (`simulate-floating`) for `seconds`, of `robot`.
+fn floating_log(
+    dir: &std::path::Path,
+    robot: &str,
+    seconds: f64,
+    sensors: physid::sim::floating_sensors::Sensors,
+) -> std::path::PathBuf {
+    let out = dir.join(format!("{}.csv", seconds));
+    let opts = physid::api::floating::SimulateFloatingOptions {
+        robot: physid::api::model::RobotOptions::new(robot),
+        duration: seconds,
+        rate: 1000.0,
+        seed: 3,
+        sensors,
+        out: out.clone(),
+    };
+    physid::api::floating::simulate_floating(&opts).unwrap();
+    out
+}
+
+#[test]
+fn a_floating_log_of_exact_sensors_obeys_the_description_that_made_it() {
+    // The trunk's acceleration is differentiated from its logged twist and the joints' from
+    // their positions: what is left is the filter's and the smoothed Coulomb friction's share,
+    // below the default sensors' torque noise (0.5 N m; measured 0.34, 0.24 and 0.28 N m or N)
+    // and a few parts in a thousand of all the rows (3.2e-3).
+    use physid::ident::floating::DataSetting::*;
+    let dir = tempfile::tempdir().unwrap();
+    let exact = physid::sim::floating_sensors::Sensors {
+        velocities: false,
+        ..physid::sim::floating_sensors::Sensors::exact()
+    };
+    let data = floating_log(dir.path(), "cheetah3", 4.0, exact);
+    for setting in [TorquesAndContacts, TorquesOnly, BaseOnly] {
+        let found = physid::api::floating::identify_floating(
+            &physid::api::floating::IdentifyFloatingOptions {
+                setting,
+                ..floating_options(&data)
+            },
+        )
+        .unwrap();
+        let relative = found.description_rms / found.target_rms;
+        let said = format!(
+            "{setting:?}: residual {:.3e} of rows {:.3e} ({relative:.2e}), mass {:.3} kg",
+            found.description_rms, found.target_rms, found.identified_mass
+        );
+        assert!(found.description_rms < 0.4, "{said}");
+        assert!(setting != TorquesAndContacts || relative < 5e-3, "{said}");
+        assert!(
+            found.identified_rms <= found.description_rms * (1.0 + 1e-9),
+            "{said}"
+        );
+        assert!(found.constraints_hold, "{said}");
+        assert!(
+            found.contact_share > 0.9 && found.samples_used > 3000,
+            "{said}"
+        );
+    }
+}
+
+#[test]
+fn a_payload_on_the_trunk_is_weighed_from_a_noisy_log_and_the_outputs_load_back() {
+    // The quadruped with 5 kg strapped on its trunk, written as a floating URDF, simulated and
+    // logged with the default sensors (IMU and estimator noise and bias, torque and force
+    // noise); identified from the unloaded description.
+    use physid::spatial::InertialParams;
+    let dir = tempfile::tempdir().unwrap();
+    let described = physid::model::quadruped::quadruped();
+    let payload = InertialParams::from_mass_com_inertia(
+        5.0,
+        &nalgebra::Vector3::new(0.1, 0.0, 0.08),
+        &(nalgebra::Matrix3::identity() * 0.01),
+    );
+    let mut theta = described.parameters();
+    for (i, p) in payload.0.iter().enumerate() {
+        theta[i] += p;
+    }
+    let loaded = described.with_parameters(&theta).unwrap();
+    let urdf = dir.path().join("loaded.urdf");
+    std::fs::write(&urdf, physid::io::urdf::floating_to_string(&loaded)).unwrap();
+    let sensors = physid::sim::floating_sensors::Sensors::default();
+    let data = floating_log(dir.path(), urdf.to_str().unwrap(), 6.0, sensors);
+    let (out_urdf, out_mjcf) = (dir.path().join("id.urdf"), dir.path().join("id.xml"));
+    let found =
+        physid::api::floating::identify_floating(&physid::api::floating::IdentifyFloatingOptions {
+            out_urdf: Some(out_urdf.clone()),
+            out_mjcf: Some(out_mjcf.clone()),
+            ..floating_options(&data)
+        })
+        .unwrap();
+    let gained = found.identified_mass - found.described_mass;
+    assert!((gained - 5.0).abs() < 0.25, "{gained} kg of 5: {found:?}");
+    assert!(
+        found.identified_rms < found.description_rms * 0.9,
+        "{found:?}"
+    );
+    assert!(found.constraints_hold);
+    // The URDF reads back as the identified robot (the MJCF is MuJoCo's: scripts/check_mujoco.py).
+    let back = physid::io::urdf::load_floating(&out_urdf, &Default::default())
+        .unwrap()
+        .0;
+    let err = (back
+        .parameters()
+        .rows(0, found.theta.len() - 24)
+        .into_owned()
+        - nalgebra::DVector::from_vec(found.theta.clone()).rows(0, found.theta.len() - 24))
+    .abs()
+    .max();
+    assert!(err < 1e-9, "{err}");
+    assert!(std::fs::read_to_string(&out_mjcf)
+        .unwrap()
+        .contains("<freejoint"));
+}

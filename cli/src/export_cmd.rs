@@ -17,7 +17,8 @@ pub struct Args {
     #[arg(long)]
     urdf: Option<PathBuf>,
     /// The robot floating (the built-in `cheetah3` as the quadruped, a URDF's root link as the
-    /// trunk): MJCF with a free joint on the trunk (URDF not yet).
+    /// trunk): MJCF with a free joint on the trunk, URDF with the trunk as its root link (for
+    /// pinocchio's free flyer).
     #[arg(long)]
     floating_base: bool,
 }
@@ -60,23 +61,30 @@ pub fn run(a: Args) -> anyhow::Result<()> {
     Ok(())
 }
 
-/// `physid export --floating-base`: MJCF with a free joint (outputs already checked).
+/// `physid export --floating-base`: MJCF with a free joint, URDF with the trunk as its root
+/// link (outputs already checked).
 fn export_floating(a: &Args) -> anyhow::Result<()> {
     anyhow::ensure!(
-        a.urdf.is_none(),
-        "--floating-base exports MJCF only (give --mjcf FILE): a floating robot's URDF is not written yet"
+        a.mjcf.is_some() || a.urdf.is_some(),
+        "give --mjcf FILE and/or --urdf FILE"
     );
-    let path = a
-        .mjcf
-        .as_ref()
-        .ok_or_else(|| anyhow::anyhow!("give --mjcf FILE"))?;
     let physid::api::model::LoadedFloatingRobot { robot, notices } =
         a.robot.options().load_floating()?;
     for n in notices {
         eprintln!("{n}");
     }
-    let text = physid::io::mjcf::floating_to_string(&robot);
-    physid::io::write_atomic(path, text.as_bytes())?;
-    eprintln!("wrote {}", path.display());
+    if let Some(path) = &a.mjcf {
+        let text = physid::io::mjcf::floating_to_string(&robot);
+        physid::io::write_atomic(path, text.as_bytes())?;
+        eprintln!("wrote {}", path.display());
+    }
+    if let Some(path) = &a.urdf {
+        let text = physid::io::urdf::floating_to_string(&robot);
+        physid::io::write_atomic(path, text.as_bytes())?;
+        eprintln!(
+            "wrote {} (no sidecar: bounding ellipsoids are read back from the kinematic tree)",
+            path.display()
+        );
+    }
     Ok(())
 }

@@ -1,11 +1,10 @@
 //! The `physid` command line: one clap `Args` struct per command in its own file, each over a
 //! library entry point whose options check themselves. Errors are printed once, by `main`.
 //!
-//! Exit codes, for every command: 0 success; 1 the command ran but its result failed a
-//! requirement the user asked for (`identify --require-consistent` with a physically
-//! inconsistent body, `compare` with a regression); 2 an error (bad arguments, unreadable or invalid input, a failed
-//! identification or simulation), with one message on standard error naming the file, field
-//! or sample.
+//! Exit codes, for every command: 0 success; 1 the command ran but its result failed a requirement
+//! the user asked for (`identify --require-consistent` with a physically inconsistent body,
+//! `compare` with a regression); 2 an error (bad arguments, unreadable or invalid input, a failed
+//! identification or simulation), with one message on standard error naming the file or sample.
 
 mod blind_cmd;
 mod compare_cmd;
@@ -14,6 +13,7 @@ mod dynamics_cmd;
 mod excite_cmd;
 mod experiment_cmd;
 mod export_cmd;
+mod floating_cmd;
 mod generalize_cmd;
 mod identify_cmd;
 mod keywords_cmd;
@@ -49,6 +49,8 @@ enum Command {
     Excite(excite_cmd::Args),
     Sweep(sweep_cmd::Args),
     WholeRobot(whole_robot_cmd::Args),
+    SimulateFloating(floating_cmd::SimulateArgs),
+    IdentifyFloating(floating_cmd::IdentifyArgs),
     Compare(compare_cmd::Args),
     Schema(schema_cmd::Args),
     Dynamics(dynamics_cmd::Args),
@@ -110,6 +112,8 @@ pub fn run(cli: Cli) -> anyhow::Result<()> {
         Command::Excite(a) => excite_cmd::run(a),
         Command::Sweep(a) => sweep_cmd::run(a),
         Command::WholeRobot(a) => whole_robot_cmd::run(a),
+        Command::SimulateFloating(a) => floating_cmd::run_simulate(a),
+        Command::IdentifyFloating(a) => floating_cmd::run_identify(a),
         Command::Compare(a) => compare_cmd::run(a),
         Command::Schema(a) => schema_cmd::run(a),
         Command::Dynamics(a) => dynamics_cmd::run(a),
@@ -117,11 +121,8 @@ pub fn run(cli: Cli) -> anyhow::Result<()> {
     }
 }
 
-use std::process::ExitCode;
-
-fn main() -> ExitCode {
-    // Like other Unix tools, end quietly when the reader of our output goes away
-    // (`physid … | head`) instead of panicking on a broken pipe.
+fn main() -> std::process::ExitCode {
+    // End quietly when our reader goes away (`physid … | head`), not panic on a broken pipe.
     #[cfg(unix)]
     // SAFETY: restoring the default action of SIGPIPE before any thread is started.
     unsafe {
@@ -131,14 +132,14 @@ fn main() -> ExitCode {
     physid::spatial::single_threaded_blas_without_workers();
     let args = Cli::parse();
     match run(args) {
-        Ok(()) => ExitCode::SUCCESS,
+        Ok(()) => std::process::ExitCode::SUCCESS,
         Err(e) if e.downcast_ref::<Failed>().is_some() => {
             eprintln!("failed: {}", message(&e));
-            ExitCode::from(1)
+            std::process::ExitCode::from(1)
         }
         Err(e) => {
             eprintln!("error: {}", message(&e));
-            ExitCode::from(2)
+            std::process::ExitCode::from(2)
         }
     }
 }

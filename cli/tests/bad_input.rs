@@ -263,16 +263,12 @@ fn negative_option_values_reach_the_option_check() {
         assert!(!ok && err.contains(said), "{args:?}: {err}");
         assert!(!std::path::Path::new("never").exists());
     }
-    // A floating robot exports as MJCF only, and says so before writing anything.
-    let export_dir = tempfile::tempdir().unwrap();
-    let urdf_out = export_dir.path().join("never.urdf");
-    let urdf_arg = urdf_out.to_str().unwrap();
-    let (ok, err) = physid(&["export", "--floating-base", "--urdf", urdf_arg]);
+    // A floating robot's export needs a file to write, and says so before writing anything.
+    let (ok, err) = physid(&["export", "--floating-base"]);
     assert!(
-        !ok && err.contains("--floating-base exports MJCF only"),
+        !ok && err.contains("give --mjcf FILE and/or --urdf FILE"),
         "{err}"
     );
-    assert!(!urdf_out.exists());
     // Only the root of a tree may float: a floating joint below a link with mass is named, and
     // nothing is written.
     let dir = tempfile::tempdir().unwrap();
@@ -1375,4 +1371,181 @@ fn experiment_sizes_beyond_one_run_are_blamed_on_the_sizes_before_anything_is_ma
         "{err}"
     );
     assert!(!out.exists());
+}
+
+/// `physid <command> <args>` must fail saying `said`, writing nothing at `never`.
+fn refused(command: &[&str], args: &[&str], said: &str, never: &Path) {
+    let (ok, err) = physid(&[command, args].concat());
+    assert!(
+        !ok && err.contains(said),
+        "{args:?}: expected '{said}' in: {err}"
+    );
+    assert!(!never.exists(), "{args:?} wrote {}", never.display());
+}
+
+#[test]
+fn a_floating_log_and_its_options_are_checked_naming_what_is_wrong() {
+    let dir = tempfile::tempdir().unwrap();
+    let log = dir.path().join("standing.csv");
+    let log_arg = log.to_str().unwrap();
+    let never = dir.path().join("never.urdf");
+    let never_arg = never.to_str().unwrap();
+    // The simulation's options.
+    let sim = ["simulate-floating", "--out", never_arg];
+    for (args, said) in [
+        (
+            &["--duration", "0"][..],
+            "duration = 0: expected 0 < s <= 3600",
+        ),
+        (
+            &["--rate", "50"][..],
+            "rate = 50: expected 100 <= Hz <= 10000",
+        ),
+        (
+            &["--sensors", "tilt_noise=1"][..],
+            "tilt_noise = 1 rad is no state estimator's",
+        ),
+        (
+            &["--sensors", "gyro_noise=-1"][..],
+            "gyro_noise = -1 must be finite and >= 0",
+        ),
+        (&["--sensors", "bogus=1"][..], "unknown field `bogus`"),
+        (
+            &["--sensors", "torque_noise"][..],
+            "expected key=value or exact",
+        ),
+        (
+            &["--sensors", "torque_noise=abc"][..],
+            "'abc' is not a number or true/false",
+        ),
+        (
+            &[
+                "--robot",
+                concat!(
+                    env!("CARGO_MANIFEST_DIR"),
+                    "/../data/kuka_lwr4/kuka_lwr4.urdf"
+                ),
+            ][..],
+            "the floating-base simulation is the quadruped's",
+        ),
+    ] {
+        refused(&sim, args, said, &never);
+    }
+    let (ok, err) = physid(&["simulate-floating", "--out", log_arg, "--duration", "2"]);
+    assert!(ok, "{err}");
+    // The identification's options and the log.
+    let id = [
+        "identify-floating",
+        "--data",
+        log_arg,
+        "--out-urdf",
+        never_arg,
+    ];
+    for (args, said) in [
+        (
+            &["--foot", "fr_shank"][..],
+            "--foot 'fr_shank': expected BODY:X,Y,Z",
+        ),
+        (
+            &["--foot", "fr_shank:0,0"][..],
+            "X,Y,Z must be three numbers",
+        ),
+        (
+            &["--foot", "paw:0,0,0"][..],
+            "foot 'paw': the robot has no body of that name",
+        ),
+        (
+            &["--foot", "fr_shank:0,0,1e9"][..],
+            "must be finite, within 10 m of the body",
+        ),
+        (
+            &["--prior-weight", "-1"][..],
+            "prior_weight = -1: expected >= 0",
+        ),
+        (
+            &["--contact-force", "NaN"][..],
+            "contact_force = NaN: expected >= 0 N",
+        ),
+        (&["--cutoff", "0"][..], "cutoff = 0: expected > 0 Hz"),
+        (
+            &[
+                "--robot",
+                concat!(env!("CARGO_MANIFEST_DIR"), "/../data/solo12/solo12.urdf"),
+            ][..],
+            "name the feet (--foot BODY:X,Y,Z for each)",
+        ),
+        (
+            &["--out-mjcf", log_arg][..],
+            "refusing to write over the input",
+        ),
+    ] {
+        refused(&id, args, said, &never);
+    }
+    // A log without the trunk, or without what the setting needs.
+    let text = std::fs::read_to_string(&log).unwrap();
+    let strip = |prefix: &str| -> String {
+        let rows: Vec<Vec<&str>> = text.lines().map(|l| l.split(',').collect()).collect();
+        let keep: Vec<usize> = (0..rows[0].len())
+            .filter(|&i| !rows[0][i].starts_with(prefix))
+            .collect();
+        rows.iter()
+            .map(|r| keep.iter().map(|&i| r[i]).collect::<Vec<_>>().join(",") + "\n")
+            .collect()
+    };
+    let bare = dir.path().join("bare.csv");
+    let bare_arg = bare.to_str().unwrap();
+    std::fs::write(&bare, strip("base_")).unwrap();
+    let id_bare = [
+        "identify-floating",
+        "--data",
+        bare_arg,
+        "--out-urdf",
+        never_arg,
+    ];
+    refused(&id_bare, &[], "bare.csv: no column 'base_x'", &never);
+    let no_feet = strip("force_")
+        .lines()
+        .map(|l| l.to_string() + "\n")
+        .collect::<String>();
+    std::fs::write(&bare, no_feet).unwrap();
+    refused(
+        &id_bare,
+        &[],
+        "the torques_and_contacts setting needs the feet's contact forces",
+        &never,
+    );
+    refused(
+        &id_bare,
+        &["--setting", "base-only"],
+        "the base_only setting needs the feet's contact forces",
+        &never,
+    );
+    let (ok, err) = physid(&[&id_bare[..2], &[bare_arg, "--setting", "torques-only"]].concat());
+    assert!(ok, "contact states are enough for torques-only: {err}");
+    let none = dir.path().join("none.csv");
+    let blind: String = {
+        let rows: Vec<Vec<&str>> = text.lines().map(|l| l.split(',').collect()).collect();
+        let keep: Vec<usize> = (0..rows[0].len())
+            .filter(|&i| !rows[0][i].starts_with("force_") && !rows[0][i].starts_with("contact_"))
+            .collect();
+        rows.iter()
+            .map(|r| keep.iter().map(|&i| r[i]).collect::<Vec<_>>().join(",") + "\n")
+            .collect()
+    };
+    std::fs::write(&none, blind).unwrap();
+    let id_none = [
+        "identify-floating",
+        "--data",
+        none.to_str().unwrap(),
+        "--setting",
+        "torques-only",
+        "--out-urdf",
+        never_arg,
+    ];
+    refused(
+        &id_none,
+        &[],
+        "the torques_only setting needs which feet are down",
+        &never,
+    );
 }

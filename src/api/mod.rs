@@ -21,6 +21,7 @@ pub mod excite;
 pub mod experiment;
 pub mod export;
 pub mod files;
+pub mod floating;
 pub mod identify;
 pub mod information;
 pub mod model;

@@ -10,6 +10,7 @@
 
 pub mod cache;
 pub mod document;
+pub mod floating_log;
 pub mod geometry;
 pub mod mcap_log;
 pub mod mcap_stream;

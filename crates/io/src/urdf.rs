@@ -1131,10 +1131,23 @@ fn rotor_joint(
 /// parent body driven by a `<mimic>` joint with `multiplier = N` (read back by [`from_str`]).
 /// The base link is `base`. Numbers are written with full precision.
 pub fn to_string(model: &Model) -> String {
-    let mut links = vec![link("base", &InertialParams::zero())];
+    rooted_to_string(model, "base", &InertialParams::zero())
+}
+
+/// A floating robot as URDF: its trunk the root link (with the trunk's inertia), the tree
+/// below it as [`to_string`] writes it. pinocchio reads it with a free flyer at the root
+/// (`buildModel(path, JointModelFreeFlyer())`), and [`floating_from_str`] reads it back.
+pub fn floating_to_string(robot: &physid_core::model::floating::FloatingModel) -> String {
+    let trunk = robot.trunk();
+    rooted_to_string(robot.tree(), &trunk.name, &trunk.inertia)
+}
+
+/// `model` as URDF below a root link `root` of inertia `root_inertia`.
+fn rooted_to_string(model: &Model, root: &str, root_inertia: &InertialParams) -> String {
+    let mut links = vec![link(root, root_inertia)];
     let mut joints = vec![];
     let parent_link =
-        |p: Option<usize>| p.map_or("base".to_string(), |p| model.bodies()[p].name.clone());
+        |p: Option<usize>| p.map_or(root.to_string(), |p| model.bodies()[p].name.clone());
     let finite_or = |v: f64, d: f64| if v.is_finite() { v } else { d };
     for b in model.bodies() {
         links.push(link(&b.name, &b.inertia));

@@ -8,6 +8,7 @@ pub mod design;
 pub mod effects;
 pub mod excitation;
 pub mod floating;
+pub mod floating_sensors;
 #[cfg(test)]
 mod floating_tests;
 pub mod rapier;

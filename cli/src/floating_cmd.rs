@@ -1,0 +1,236 @@
+//! `physid simulate-floating` and `physid identify-floating`: the whole robot from its logs
+//! (docs/floating-base.md, "From a log").
+
+use crate::robot_args::RobotArgs;
+use physid::api::floating::{
+    identify_floating, simulate_floating, Foot, IdentifyFloatingOptions, SimulateFloatingOptions,
+};
+use physid::ident::floating::DataSetting;
+use physid::ident::ConstraintSet;
+use physid::sim::floating_sensors::Sensors;
+use std::path::PathBuf;
+
+/// Simulate the built-in quadruped standing and shifting its weight, and log it as its sensors
+/// would: joint encoders and motor torques, the trunk's pose and twist from an IMU and a state
+/// estimator (noise and bias), the feet's contact forces and states (CSV).
+#[derive(clap::Args, Debug)]
+pub struct SimulateArgs {
+    /// The CSV log to write.
+    #[arg(long)]
+    out: PathBuf,
+    #[command(flatten)]
+    robot: RobotArgs,
+    /// Duration (s).
+    #[arg(long, default_value_t = 10.0, allow_negative_numbers = true)]
+    duration: f64,
+    /// Control and logging rate (Hz).
+    #[arg(long, default_value_t = 1000.0, allow_negative_numbers = true)]
+    rate: f64,
+    /// Seeds the motion and the noise.
+    #[arg(long, default_value_t = 1)]
+    seed: u64,
+    /// Sensor noise, `key=value` pairs, comma-separated (keys: torque_noise, force_noise,
+    /// gyro_noise, gyro_bias, velocity_noise, velocity_bias, tilt_noise, position_noise,
+    /// encoder_step; and velocities, forces, contacts = true/false for what is logged);
+    /// `exact` for noise-free sensors logging everything.
+    #[arg(long, value_delimiter = ',')]
+    sensors: Vec<String>,
+    /// Print the summary as JSON.
+    #[arg(long)]
+    json: bool,
+}
+
+/// `physid simulate-floating`.
+pub fn run_simulate(a: SimulateArgs) -> anyhow::Result<()> {
+    let opts = SimulateFloatingOptions {
+        robot: a.robot.options(),
+        duration: a.duration,
+        rate: a.rate,
+        seed: a.seed,
+        sensors: sensors(&a.sensors)?,
+        out: a.out,
+    };
+    let done = simulate_floating(&opts)?;
+    if a.json {
+        println!("{}", serde_json::to_string_pretty(&done)?);
+    } else {
+        println!(
+            "wrote {} samples of {} joints and {} feet to {} (feet down {:.1} % of the time)",
+            done.samples,
+            done.joints.len(),
+            done.feet.len(),
+            done.out.display(),
+            100.0 * done.contact_share
+        );
+    }
+    Ok(())
+}
+
+/// The sensors of `--sensors`: `key=value` pairs over the defaults, or `exact`.
+fn sensors(pairs: &[String]) -> anyhow::Result<Sensors> {
+    let mut table = toml::Table::new();
+    let mut base = Sensors::default();
+    for p in pairs.iter().map(|p| p.trim()).filter(|p| !p.is_empty()) {
+        if p == "exact" {
+            base = Sensors::exact();
+            continue;
+        }
+        let (k, v) = p
+            .split_once('=')
+            .ok_or_else(|| anyhow::anyhow!("--sensors '{p}': expected key=value or exact"))?;
+        let value: toml::Value = v
+            .trim()
+            .parse::<f64>()
+            .map(toml::Value::Float)
+            .or_else(|_| v.trim().parse::<bool>().map(toml::Value::Boolean))
+            .map_err(|_| anyhow::anyhow!("--sensors '{p}': '{v}' is not a number or true/false"))?;
+        table.insert(k.trim().to_string(), value);
+    }
+    let mut merged = toml::Table::try_from(&base)?;
+    merged.extend(table);
+    let s: Sensors = merged
+        .try_into()
+        .map_err(|e: toml::de::Error| anyhow::anyhow!("--sensors: {}", e.message()))?;
+    s.validate()
+        .map_err(|e| anyhow::anyhow!("--sensors: {e}"))?;
+    Ok(s)
+}
+
+/// Identify a floating robot (the built-in quadruped, or a floating URDF) from one log of the
+/// trunk's motion, the joints' and the feet's forces (CSV, docs/floating-base.md "Logs"), its
+/// description the prior.
+#[derive(clap::Args, Debug)]
+pub struct IdentifyArgs {
+    /// The log.
+    #[arg(long)]
+    data: PathBuf,
+    #[command(flatten)]
+    robot: RobotArgs,
+    /// What the log's quantities are used for: torques-and-contacts (every row),
+    /// torques-only (contact forces projected out: needs contact states or forces),
+    /// base-only (the trunk's six rows from the contact forces; no joint torques).
+    #[arg(long, value_enum, default_value = "torques-and-contacts")]
+    setting: SettingArg,
+    /// Constraint set: none, semi, consistent, ellipsoid.
+    #[arg(long, default_value = "ellipsoid")]
+    constraints: ConstraintSet,
+    /// Weight of the pull towards the description.
+    #[arg(long, default_value_t = 1e-4, allow_negative_numbers = true)]
+    prior_weight: f64,
+    /// Low-pass cutoff of the derived signals (Hz); default: chosen from the motion.
+    #[arg(long, allow_negative_numbers = true)]
+    cutoff: Option<f64>,
+    /// A foot, `BODY:X,Y,Z` (the point in the body's frame, m); repeat for each. Default: the
+    /// built-in quadruped's.
+    #[arg(long = "foot", value_name = "BODY:X,Y,Z")]
+    feet: Vec<String>,
+    /// Without contact_<foot> columns, a foot is down where its normal force exceeds this (N).
+    #[arg(long, default_value_t = 10.0, allow_negative_numbers = true)]
+    contact_force: f64,
+    /// Write the identified robot as URDF (the trunk its root link; pinocchio: free flyer).
+    #[arg(long)]
+    out_urdf: Option<PathBuf>,
+    /// Write the identified robot as MJCF (a free joint on the trunk).
+    #[arg(long)]
+    out_mjcf: Option<PathBuf>,
+    /// Print the result as JSON.
+    #[arg(long)]
+    json: bool,
+}
+
+#[derive(clap::ValueEnum, Debug, Clone, Copy)]
+enum SettingArg {
+    TorquesAndContacts,
+    TorquesOnly,
+    BaseOnly,
+}
+
+/// `physid identify-floating`.
+pub fn run_identify(a: IdentifyArgs) -> anyhow::Result<()> {
+    let opts = IdentifyFloatingOptions {
+        robot: a.robot.options(),
+        data: a.data,
+        feet: a
+            .feet
+            .iter()
+            .map(|f| foot(f))
+            .collect::<anyhow::Result<_>>()?,
+        setting: match a.setting {
+            SettingArg::TorquesAndContacts => DataSetting::TorquesAndContacts,
+            SettingArg::TorquesOnly => DataSetting::TorquesOnly,
+            SettingArg::BaseOnly => DataSetting::BaseOnly,
+        },
+        constraints: a.constraints,
+        prior_weight: a.prior_weight,
+        cutoff: a.cutoff,
+        contact_force: a.contact_force,
+        out_urdf: a.out_urdf,
+        out_mjcf: a.out_mjcf,
+    };
+    let found = identify_floating(&opts)?;
+    if a.json {
+        let value = physid::io::versioned("physid.identify_floating/1", &found);
+        println!("{}", serde_json::to_string_pretty(&value)?);
+        return Ok(());
+    }
+    print!("{}", summary(&found));
+    Ok(())
+}
+
+/// The text summary of an identification.
+fn summary(f: &physid::api::floating::FloatingIdentification) -> String {
+    use std::fmt::Write;
+    let mut s = format!(
+        "{} from {} ({} setting, {} constraints): {} of {} samples, cutoff {:.2} Hz, feet down {:.1} %\n",
+        f.robot,
+        f.data.display(),
+        physid::io::serde_name(&f.setting),
+        physid::io::serde_name(&f.constraints),
+        f.samples_used,
+        f.samples_read,
+        f.cutoff,
+        100.0 * f.contact_share
+    );
+    let _ = writeln!(
+        s,
+        "rows' RMS {:.4}, residual RMS {:.4} (description) -> {:.4} (identified); total mass {:.3} -> {:.3} kg; constraints {}",
+        f.target_rms,
+        f.description_rms,
+        f.identified_rms,
+        f.described_mass,
+        f.identified_mass,
+        if f.constraints_hold { "hold" } else { "VIOLATED" }
+    );
+    for b in &f.bodies {
+        let c = &b.consistency;
+        let _ = writeln!(
+            s,
+            "  {:<16} m {:>8.4} kg  min eig J {:>10.3e}  tr(JQ) {}",
+            b.name,
+            b.pi[0],
+            c.min_eig_pseudo,
+            c.trace_jq.map_or("-".into(), |t| format!("{t:.3e}"))
+        );
+    }
+    s
+}
+
+/// `BODY:X,Y,Z` as a foot.
+fn foot(text: &str) -> anyhow::Result<Foot> {
+    let (body, xyz) = text
+        .split_once(':')
+        .ok_or_else(|| anyhow::anyhow!("--foot '{text}': expected BODY:X,Y,Z"))?;
+    let v: Vec<f64> = xyz
+        .split(',')
+        .map(|x| x.trim().parse::<f64>())
+        .collect::<Result<_, _>>()
+        .map_err(|_| anyhow::anyhow!("--foot '{text}': X,Y,Z must be three numbers (m)"))?;
+    anyhow::ensure!(
+        v.len() == 3,
+        "--foot '{text}': X,Y,Z must be three numbers (m)"
+    );
+    Ok(Foot {
+        body: body.trim().to_string(),
+        point: [v[0], v[1], v[2]],
+    })
+}

@@ -1,0 +1,575 @@
+//! The whole robot from its logs: a floating-base run simulated and logged as a robot's sensors
+//! write it ([`simulate_floating`]), and a floating robot identified from such a log
+//! ([`identify_floating`]) in one of the three data settings, under one constraint set, its
+//! description the prior (docs/floating-base.md, "From a log").
+
+use super::model::RobotOptions;
+use super::ApiError;
+use crate::ident::floating::{Contact, DataSetting, FloatingRows, FloatingSample};
+use crate::ident::{ConstraintSet, IdentifiedBody, NormalEquations, SolveStatus};
+use crate::io::floating_log::{self, FloatingLog};
+use crate::model::floating::FloatingModel;
+use crate::sim::floating_sensors::Sensors;
+use nalgebra::{DVector, Vector3};
+use physid_core::dynamics::BaseState;
+use physid_core::spatial::{Motion, Transform};
+use std::path::{Path, PathBuf};
+
+/// A foot: a point fixed in a body, where the ground pushes.
+#[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize, schemars::JsonSchema)]
+pub struct Foot {
+    /// The body's name (its log columns are `force_<body>_x` … and `contact_<body>`).
+    pub body: String,
+    /// The point in the body's frame (m).
+    pub point: [f64; 3],
+}
+
+/// The built-in quadruped's feet (the shanks' ends).
+pub fn quadruped_feet(robot: &FloatingModel) -> Vec<Foot> {
+    crate::model::quadruped::feet()
+        .into_iter()
+        .map(|(b, p)| Foot {
+            body: robot.tree().bodies()[b].name.clone(),
+            point: p.into(),
+        })
+        .collect()
+}
+
+/// `feet` resolved to `(body index, point)` in `robot`'s tree; `Err` names an unknown body.
+fn resolve_feet(
+    robot: &FloatingModel,
+    feet: &[Foot],
+) -> Result<Vec<(usize, Vector3<f64>)>, ApiError> {
+    let bodies = robot.tree().bodies();
+    feet.iter()
+        .map(|f| {
+            let i = bodies
+                .iter()
+                .position(|b| b.name == f.body)
+                .ok_or_else(|| {
+                    ApiError::Options(format!(
+                        "foot '{}': the robot has no body of that name (bodies: {})",
+                        f.body,
+                        bodies
+                            .iter()
+                            .map(|b| b.name.as_str())
+                            .collect::<Vec<_>>()
+                            .join(", ")
+                    ))
+                })?;
+            if !f.point.iter().all(|x| x.is_finite() && x.abs() < 10.0) {
+                return Err(ApiError::Options(format!(
+                    "foot '{}': point {:?} must be finite, within 10 m of the body",
+                    f.body, f.point
+                )));
+            }
+            Ok((i, Vector3::from(f.point)))
+        })
+        .collect()
+}
+
+/// `simulate --floating-base`: the built-in quadruped standing and shifting its weight
+/// ([`crate::sim::floating::standing`]), logged by `sensors`.
+#[derive(Clone, Debug)]
+pub struct SimulateFloatingOptions {
+    /// The robot: the built-in `cheetah3` as the quadruped, or a floating URDF of the quadruped
+    /// (its bodies and joints; its inertial parameters may differ).
+    pub robot: RobotOptions,
+    /// Duration (s), at most an hour.
+    pub duration: f64,
+    /// Control and logging rate (Hz), 100 to 10,000.
+    pub rate: f64,
+    /// Seeds the motion and the sensors' noise.
+    pub seed: u64,
+    /// The sensors.
+    pub sensors: Sensors,
+    /// The CSV log to write (docs/floating-base.md, "Logs").
+    pub out: PathBuf,
+}
+
+impl SimulateFloatingOptions {
+    /// The options checked; `Err` names the one at fault.
+    pub fn validate(&self) -> Result<(), ApiError> {
+        if !(self.duration > 0.0 && self.duration <= 3600.0) {
+            return Err(ApiError::invalid_option(
+                "duration",
+                "0 < s <= 3600",
+                self.duration,
+            ));
+        }
+        if !(100.0..=10_000.0).contains(&self.rate) {
+            return Err(ApiError::invalid_option(
+                "rate",
+                "100 <= Hz <= 10000",
+                self.rate,
+            ));
+        }
+        self.sensors.validate().map_err(ApiError::Options)
+    }
+}
+
+/// What [`simulate_floating`] wrote.
+#[derive(Clone, Debug, serde::Serialize, serde::Deserialize, schemars::JsonSchema)]
+pub struct FloatingSimulated {
+    /// The log.
+    pub out: PathBuf,
+    /// Samples logged.
+    pub samples: usize,
+    /// The joints, in the log's order.
+    pub joints: Vec<String>,
+    /// The feet.
+    pub feet: Vec<Foot>,
+    /// Share of the feet's samples in contact.
+    pub contact_share: f64,
+}
+
+/// Simulates and logs a floating-base run ([`SimulateFloatingOptions`]).
+pub fn simulate_floating(opts: &SimulateFloatingOptions) -> Result<FloatingSimulated, ApiError> {
+    opts.validate()?;
+    let robot = opts.robot.load_floating()?.robot;
+    let files = opts.robot.files();
+    let inputs: Vec<&Path> = files.iter().map(PathBuf::as_path).collect();
+    crate::io::check_outputs(&[&opts.out], &inputs)?;
+    let feet = quadruped_feet(&crate::model::quadruped::quadruped());
+    let points = resolve_feet(&robot, &feet).map_err(|e| {
+        ApiError::Options(format!(
+            "--robot {}: the floating-base simulation is the quadruped's (the built-in, or a URDF of it with its bodies and joints): {e}",
+            opts.robot.robot
+        ))
+    })?;
+    if robot.joints() != 12 {
+        return Err(ApiError::Options(format!(
+            "--robot {}: the floating-base simulation is the quadruped's: 12 joints, not {}",
+            opts.robot.robot,
+            robot.joints()
+        )));
+    }
+    let motion = crate::sim::floating::Standing {
+        duration: opts.duration,
+        rate: opts.rate,
+        seed: opts.seed,
+        ..Default::default()
+    };
+    let run = crate::sim::floating::standing(&robot, &points, &motion)
+        .map_err(|e| ApiError::Options(e.to_string()))?;
+    let joints = robot.tree().joint_names();
+    let names: Vec<String> = feet.iter().map(|f| f.body.clone()).collect();
+    let log = crate::sim::floating_sensors::log(&run, (&joints, &names), &opts.sensors, opts.seed);
+    floating_log::write_csv(&opts.out, &log)?;
+    let down = run.contact.iter().filter(|f| f.z > 0.0).count();
+    Ok(FloatingSimulated {
+        out: opts.out.clone(),
+        samples: run.len(),
+        joints,
+        feet,
+        contact_share: down as f64 / run.contact.len().max(1) as f64,
+    })
+}
+
+/// `identify --floating-base`: a floating robot identified from one log.
+#[derive(Clone, Debug)]
+pub struct IdentifyFloatingOptions {
+    /// The robot (its description is the prior).
+    pub robot: RobotOptions,
+    /// The log (CSV, docs/floating-base.md "Logs").
+    pub data: PathBuf,
+    /// The feet; empty: the built-in quadruped's.
+    pub feet: Vec<Foot>,
+    /// Which of the log's quantities are used.
+    pub setting: DataSetting,
+    /// The constraint set.
+    pub constraints: ConstraintSet,
+    /// Weight of the pull towards the description.
+    pub prior_weight: f64,
+    /// Low-pass cutoff of the derived signals (Hz); `None`: the pipeline's choice.
+    pub cutoff: Option<f64>,
+    /// Without `contact_<foot>` columns, a foot is down where its logged normal force exceeds
+    /// this (N).
+    pub contact_force: f64,
+    /// Write the identified robot as URDF (its trunk the root link).
+    pub out_urdf: Option<PathBuf>,
+    /// Write it as MJCF (a free joint on the trunk).
+    pub out_mjcf: Option<PathBuf>,
+}
+
+impl IdentifyFloatingOptions {
+    /// The options checked; `Err` names the one at fault.
+    pub fn validate(&self) -> Result<(), ApiError> {
+        if !(self.prior_weight.is_finite() && self.prior_weight >= 0.0) {
+            return Err(ApiError::invalid_option(
+                "prior_weight",
+                ">= 0",
+                self.prior_weight,
+            ));
+        }
+        if let Some(c) = self.cutoff.filter(|c| !(c.is_finite() && *c > 0.0)) {
+            return Err(ApiError::invalid_option("cutoff", "> 0 Hz", c));
+        }
+        if !(self.contact_force.is_finite() && self.contact_force >= 0.0) {
+            return Err(ApiError::invalid_option(
+                "contact_force",
+                ">= 0 N",
+                self.contact_force,
+            ));
+        }
+        if self.feet.is_empty() && self.robot.robot != "cheetah3" {
+            return Err(ApiError::Options(format!(
+                "--robot {}: name the feet (--foot BODY:X,Y,Z for each); only the built-in quadruped's are known",
+                self.robot.robot
+            )));
+        }
+        Ok(())
+    }
+}
+
+/// The identified floating robot (`identify --floating-base --json`).
+#[derive(Clone, Debug, serde::Serialize, serde::Deserialize)]
+pub struct FloatingIdentification {
+    /// The robot's name.
+    pub robot: String,
+    /// The log.
+    pub data: PathBuf,
+    /// The data setting.
+    pub setting: DataSetting,
+    /// The constraint set.
+    pub constraints: ConstraintSet,
+    /// Samples in the log.
+    pub samples_read: usize,
+    /// Samples used (after the pipeline's trimming).
+    pub samples_used: usize,
+    /// The derived signals' cutoff (Hz).
+    pub cutoff: f64,
+    /// Share of the used samples' feet in contact.
+    pub contact_share: f64,
+    /// RMS of the rows' targets (N m and N: joint torques, the trunk's wrench).
+    pub target_rms: f64,
+    /// RMS of the rows' residual with the description's parameters.
+    pub description_rms: f64,
+    /// RMS of the rows' residual with the identified parameters.
+    pub identified_rms: f64,
+    /// The trunk, then the tree's links and rotors.
+    pub bodies: Vec<IdentifiedBody>,
+    /// Viscous friction per joint (N m s/rad).
+    pub viscous: Vec<f64>,
+    /// Coulomb friction per joint (N m).
+    pub coulomb: Vec<f64>,
+    /// The whole robot's mass as described (kg).
+    pub described_mass: f64,
+    /// The whole robot's mass as identified (kg).
+    pub identified_mass: f64,
+    /// Whether every constraint of the set holds (checked from the parameters).
+    pub constraints_hold: bool,
+    /// The solver's verdict.
+    pub status: SolveStatus,
+    /// θ, the trunk's ten parameters first.
+    pub theta: Vec<f64>,
+}
+
+/// Identifies a floating robot from a log ([`IdentifyFloatingOptions`]).
+pub fn identify_floating(
+    opts: &IdentifyFloatingOptions,
+) -> Result<FloatingIdentification, ApiError> {
+    opts.validate()?;
+    let robot = opts.robot.load_floating()?.robot;
+    check_outputs(opts)?;
+    let feet = if opts.feet.is_empty() {
+        quadruped_feet(&robot)
+    } else {
+        opts.feet.clone()
+    };
+    let points = resolve_feet(&robot, &feet)?;
+    let names: Vec<String> = feet.iter().map(|f| f.body.clone()).collect();
+    let log = floating_log::read_csv(&opts.data, &robot.tree().joint_names(), &names)?;
+    check_setting(opts, &log)?;
+    let samples = samples_of(&log, opts)?;
+    let ne = normal_equations(&robot, &points, &samples, opts.setting);
+    let prior = robot.parameters();
+    let found = crate::ident::identify(
+        &robot,
+        &ne,
+        &prior,
+        &crate::ident::Options {
+            prior_weight: opts.prior_weight,
+            ..crate::ident::Options::new(opts.constraints)
+        },
+    )?;
+    let identified = robot.with_parameters(&found.theta)?;
+    write_models(opts, &identified)?;
+    let rows = (ne.samples * crate::ident::floating::rows_per_sample(&robot, opts.setting)).max(1);
+    let rms = |theta: &DVector<f64>| (ne.residual_sum_of_squares(theta) / rows as f64).sqrt();
+    let n = robot.joints();
+    let k = found.theta.len() - 2 * n;
+    Ok(FloatingIdentification {
+        robot: robot.name().to_string(),
+        data: opts.data.clone(),
+        setting: opts.setting,
+        constraints: opts.constraints,
+        samples_read: log.len(),
+        samples_used: samples.samples.len(),
+        cutoff: samples.cutoff,
+        contact_share: samples.contact_share(),
+        target_rms: (ne.tt / rows as f64).sqrt(),
+        description_rms: rms(&prior),
+        identified_rms: rms(&found.theta),
+        bodies: found.bodies.clone(),
+        viscous: found.theta.rows(k, n).iter().copied().collect(),
+        coulomb: found.theta.rows(k + n, n).iter().copied().collect(),
+        described_mass: robot.total_mass(),
+        identified_mass: identified.total_mass(),
+        constraints_hold: found.constraints_hold,
+        status: found.solver.status,
+        theta: found.theta.iter().copied().collect(),
+    })
+}
+
+/// Neither output may be an input or the other.
+fn check_outputs(opts: &IdentifyFloatingOptions) -> Result<(), ApiError> {
+    let outputs: Vec<&Path> = [&opts.out_urdf, &opts.out_mjcf]
+        .into_iter()
+        .flatten()
+        .map(PathBuf::as_path)
+        .collect();
+    let mut inputs = opts.robot.files();
+    inputs.push(opts.data.clone());
+    let inputs: Vec<&Path> = inputs.iter().map(PathBuf::as_path).collect();
+    Ok(crate::io::check_outputs(&outputs, &inputs)?)
+}
+
+/// Writes the identified robot where asked.
+fn write_models(
+    opts: &IdentifyFloatingOptions,
+    identified: &FloatingModel,
+) -> Result<(), ApiError> {
+    if let Some(p) = &opts.out_urdf {
+        crate::io::write_atomic(
+            p,
+            crate::io::urdf::floating_to_string(identified).as_bytes(),
+        )?;
+    }
+    if let Some(p) = &opts.out_mjcf {
+        crate::io::write_atomic(
+            p,
+            crate::io::mjcf::floating_to_string(identified).as_bytes(),
+        )?;
+    }
+    Ok(())
+}
+
+/// The log has what the setting needs; `Err` says what is missing.
+fn check_setting(opts: &IdentifyFloatingOptions, log: &FloatingLog) -> Result<(), ApiError> {
+    let missing = |what: &str| {
+        Err(ApiError::invalid(
+            &opts.data,
+            format!(
+                "the {} setting needs {what}",
+                crate::io::serde_name(&opts.setting)
+            ),
+        ))
+    };
+    match opts.setting {
+        DataSetting::TorquesOnly if log.force.is_none() && log.contact.is_none() => {
+            missing("which feet are down: contact_<foot> columns, or force_<foot>_x, _y, _z")
+        }
+        DataSetting::TorquesAndContacts | DataSetting::BaseOnly if log.force.is_none() => {
+            missing("the feet's contact forces: force_<foot>_x, _y, _z columns")
+        }
+        _ => Ok(()),
+    }
+}
+
+/// One sample ready for the rows: the trunk's state, the joints', the feet down.
+struct Sample {
+    base: BaseState,
+    q: Vec<f64>,
+    qd: Vec<f64>,
+    qdd: Vec<f64>,
+    tau: Vec<f64>,
+    down: Vec<bool>,
+    force: Vec<Vector3<f64>>,
+}
+
+/// The samples the pipeline kept, and what it chose.
+struct Samples {
+    samples: Vec<Sample>,
+    cutoff: f64,
+}
+
+impl Samples {
+    fn contact_share(&self) -> f64 {
+        let (down, all) = self.samples.iter().fold((0, 0), |(d, a), s| {
+            (d + s.down.iter().filter(|&&x| x).count(), a + s.down.len())
+        });
+        down as f64 / all.max(1) as f64
+    }
+}
+
+/// The log through the data pipeline ([`crate::prepare`]): the joints' q̇, q̈ derived where not
+/// logged and the runs' ends trimmed. The trunk's acceleration is the derivative of its logged
+/// twist filtered alike (the same zero-phase Butterworth at the same cutoff), and so are the
+/// joint torques and the contact forces: the equations of motion are linear in the
+/// accelerations and the forces, so filtering both sides alike keeps them (a stiff contact's
+/// forces change faster than any cutoff passes; filtered on one side only, the trunk rows
+/// would be off by what the filter takes from them).
+fn samples_of(log: &FloatingLog, opts: &IdentifyFloatingOptions) -> Result<Samples, ApiError> {
+    let prepared = crate::prepare::prepare(
+        &log.joints,
+        &crate::prepare::Options {
+            cutoff: opts.cutoff,
+            ..Default::default()
+        },
+    )
+    .map_err(|e| ApiError::invalid(&opts.data, e.to_string()))?;
+    let report = &prepared.report;
+    let (period, cutoff, settle) = (report.period, report.cutoff, report.settle_samples);
+    let sos = crate::signal::butterworth_lowpass(2, cutoff.min(0.4 / period), 1.0 / period)
+        .map_err(|e| ApiError::invalid(&opts.data, e.to_string()))?;
+    let mut samples = vec![];
+    for run in &prepared.runs {
+        let (first, last) = (run.index[0], *run.index.last().expect("a kept run"));
+        let pad = settle.min(first).min(log.len() - 1 - last);
+        let span = Filtered::new(log, first - pad..last + pad + 1, &sos);
+        let tr = &run.trajectory;
+        for (k, &i) in run.index.iter().enumerate() {
+            samples.push(sample(log, opts, &span, i, (tr, k)));
+        }
+    }
+    Ok(Samples { samples, cutoff })
+}
+
+/// A stretch of the log with its trunk acceleration derived and its joint torques and contact
+/// forces filtered.
+struct Filtered {
+    start: usize,
+    accel: Vec<Motion>,
+    tau: Vec<f64>,
+    force: Option<Vec<Vector3<f64>>>,
+}
+
+impl Filtered {
+    /// Rows `span` of `log`, filtered by `sos`.
+    fn new(log: &FloatingLog, span: std::ops::Range<usize>, sos: &crate::signal::Sos) -> Self {
+        let t = &log.joints.t[span.clone()];
+        let accel = twist_derivative(&log.twist[span.clone()], t, sos);
+        let n = log.joints.dof();
+        let tau = filtered_columns(&log.joints.tau[span.start * n..span.end * n], n, sos);
+        let f = log.feet.len();
+        let force = log.force.as_ref().map(|force| {
+            let flat: Vec<f64> = force[span.start * f..span.end * f]
+                .iter()
+                .flat_map(|v| v.iter().copied())
+                .collect();
+            let out = filtered_columns(&flat, 3 * f, sos);
+            out.chunks(3)
+                .map(|c| Vector3::new(c[0], c[1], c[2]))
+                .collect()
+        });
+        Self {
+            start: span.start,
+            accel,
+            tau,
+            force,
+        }
+    }
+}
+
+/// Each of the `n` columns of sample-major `x` filtered forwards and backwards by `sos`.
+fn filtered_columns(x: &[f64], n: usize, sos: &crate::signal::Sos) -> Vec<f64> {
+    let m = x.len() / n.max(1);
+    let mut out = vec![0.0; x.len()];
+    for j in 0..n {
+        let column: Vec<f64> = (0..m).map(|k| x[k * n + j]).collect();
+        for (k, v) in sos.filtfilt(&column).into_iter().enumerate() {
+            out[k * n + j] = v;
+        }
+    }
+    out
+}
+
+/// Sample `k` of `tr`, log row `i` (in `span`).
+fn sample(
+    log: &FloatingLog,
+    opts: &IdentifyFloatingOptions,
+    span: &Filtered,
+    i: usize,
+    (tr, k): (&crate::trajectory::Trajectory, usize),
+) -> Sample {
+    let (f, n, r) = (log.feet.len(), log.joints.dof(), i - span.start);
+    let down = match (&log.contact, &log.force) {
+        (Some(c), _) => c[i * f..(i + 1) * f].to_vec(),
+        (None, Some(force)) => force[i * f..(i + 1) * f]
+            .iter()
+            .map(|x| x.z > opts.contact_force)
+            .collect(),
+        (None, None) => vec![false; f],
+    };
+    Sample {
+        base: BaseState {
+            pose: Transform::from_pose(&log.rotation[i], &log.position[i]),
+            v: log.twist[i],
+            a: span.accel[r],
+        },
+        q: tr.q_at(k).to_vec(),
+        qd: tr.qd_at(k).to_vec(),
+        qdd: tr.qdd_at(k).expect("the pipeline derives q̈").to_vec(),
+        tau: span.tau[r * n..(r + 1) * n].to_vec(),
+        down,
+        force: match &span.force {
+            Some(v) => v[r * f..(r + 1) * f].to_vec(),
+            None => vec![Vector3::zeros(); f],
+        },
+    }
+}
+
+/// The time derivative of the trunk's twist (trunk coordinates: in a body's own frame the
+/// spatial acceleration is the derivative of the twist's components), by central differences on
+/// the stamps `t`, then `sos` forwards and backwards.
+fn twist_derivative(twist: &[Motion], t: &[f64], sos: &crate::signal::Sos) -> Vec<Motion> {
+    let m = twist.len();
+    let column = |c: usize| -> Vec<f64> {
+        let x: Vec<f64> = twist.iter().map(|v| v.to_vec6()[c]).collect();
+        let d: Vec<f64> = (0..m)
+            .map(|k| {
+                let (a, b) = (k.saturating_sub(1), (k + 1).min(m - 1));
+                if b > a {
+                    (x[b] - x[a]) / (t[b] - t[a])
+                } else {
+                    0.0
+                }
+            })
+            .collect();
+        sos.filtfilt(&d)
+    };
+    let columns: Vec<Vec<f64>> = (0..6).map(column).collect();
+    (0..m)
+        .map(|k| Motion::from_vec6(&nalgebra::Vector6::from_fn(|c, _| columns[c][k])))
+        .collect()
+}
+
+/// The normal equations of `samples` in `setting`.
+fn normal_equations(
+    robot: &FloatingModel,
+    feet: &[(usize, Vector3<f64>)],
+    samples: &Samples,
+    setting: DataSetting,
+) -> NormalEquations {
+    let per_sample = crate::ident::floating::rows_per_sample(robot, setting);
+    let mut ne = NormalEquations::new(per_sample, robot.parameter_count());
+    let mut rows = FloatingRows::new(robot);
+    for s in &samples.samples {
+        let contacts: Vec<Contact> = (feet.iter().zip(&s.force).zip(&s.down))
+            .filter(|(_, &d)| d)
+            .map(|((&(body, point), &force), _)| Contact { body, point, force })
+            .collect();
+        let sample = FloatingSample {
+            base: &s.base,
+            q: &s.q,
+            qd: &s.qd,
+            qdd: &s.qdd,
+            tau: &s.tau,
+            contacts: &contacts,
+        };
+        let (y, target) = rows.rows(robot, &sample, setting);
+        ne.add(&y, target.as_slice());
+    }
+    ne.finish()
+}
