@@ -478,7 +478,7 @@ fn floating_log(
 fn a_floating_log_of_exact_sensors_obeys_the_description_that_made_it() {
     // The trunk's acceleration is differentiated from its logged twist and the joints' from
     // their positions: what is left is the filter's and the smoothed Coulomb friction's share,
-    // below the default sensors' torque noise (0.5 N m; measured 0.34, 0.24 and 0.28 N m or N)
+    // below the default sensors' torque noise (0.5 N m; measured 0.34, 0.24 and 0.08 N m or N)
     // and a few parts in a thousand of all the rows (3.2e-3).
     use physid::ident::floating::DataSetting::*;
     let dir = tempfile::tempdir().unwrap();
