@@ -142,7 +142,12 @@ fn runs_join_as_sums_and_bad_terms_are_named() {
         "{err}"
     );
     // The run cut in two files joins as a sum: the same normal equations per sample (q̇, q̈
-    // logged, nothing derived across the cut), the same optimum.
+    // logged, nothing derived across the cut, summed in another order: equal to round-off),
+    // the same optimum: the same objective to 1e-9, and θ to what the interior-point solver
+    // resolves. Clarabel stops at a relative gap of 1e-8, which fixes the objective, not the
+    // parameters along the directions it is flat in: those move by about its square root, so
+    // 1e-4. (Measured: 6.4e-6 on an AMD EPYC, below 1e-6 on the machine the bound was first
+    // set on; the largest differences are inertia entries of bodies at the J(π) ⪰ ε boundary.)
     let text = std::fs::read_to_string(a).unwrap();
     let (header, rows) = text.split_once('\n').unwrap();
     let rows: Vec<&str> = rows.lines().collect();
@@ -169,7 +174,12 @@ fn runs_join_as_sums_and_bad_terms_are_named() {
             (p - q).abs() / p.abs().max(1e-3)
         })
         .fold(0.0, f64::max);
-    assert!(worst < 1e-6, "θ differs by {worst:e} relative");
+    assert!(worst < 1e-4, "θ differs by {worst:e} relative");
+    let (f, g) = (
+        once["objective"].as_f64().unwrap(),
+        twice["objective"].as_f64().unwrap(),
+    );
+    assert!((f - g).abs() <= 1e-9 * f.abs(), "objective {f} against {g}");
     // Two runs: the training error is over both.
     let both = identify(&["--data", a, b]);
     assert_eq!(both["train"]["runs"].as_array().unwrap().len(), 2);
