@@ -458,15 +458,15 @@ fn floating_options(data: &std::path::Path) -> physid::api::floating::IdentifyFl
 fn floating_log(
     dir: &std::path::Path,
     robot: &str,
-    seconds: f64,
+    (seconds, seed): (f64, u64),
     sensors: physid::sim::floating_sensors::Sensors,
 ) -> std::path::PathBuf {
-    let out = dir.join(format!("{}.csv", seconds));
+    let out = dir.join(format!("{seconds}_{seed}.csv"));
     let opts = physid::api::floating::SimulateFloatingOptions {
         robot: physid::api::model::RobotOptions::new(robot),
         duration: seconds,
         rate: 1000.0,
-        seed: 3,
+        seed,
         sensors,
         out: out.clone(),
     };
@@ -477,40 +477,47 @@ fn floating_log(
 #[test]
 fn a_floating_log_of_exact_sensors_obeys_the_description_that_made_it() {
     // The trunk's acceleration is differentiated from its logged twist and the joints' from
-    // their positions: what is left is the filter's and the smoothed Coulomb friction's share,
-    // below the default sensors' torque noise (0.5 N m; measured 0.34, 0.24 and 0.08 N m or N)
-    // and a few parts in a thousand of all the rows (3.2e-3).
+    // their positions. The trunk rows hold to a tenth of a newton on 180 N (measured 0.038 and
+    // 0.13 on seeds 3 and 2; 0.08 and 10.1 before the force sensors averaged over the two
+    // periods around each sample, as an anti-aliasing filter does: seed 2 lifts its feet, and
+    // a touchdown's force changes within a substep). The joint rows keep the filter's and the
+    // simulation's smoothed Coulomb friction's share, below the default sensors' torque noise
+    // (0.5 N m; measured 0.33-0.39 with the forces, 0.24-0.36 without).
     use physid::ident::floating::DataSetting::*;
     let dir = tempfile::tempdir().unwrap();
     let exact = physid::sim::floating_sensors::Sensors {
         velocities: false,
         ..physid::sim::floating_sensors::Sensors::exact()
     };
-    let data = floating_log(dir.path(), "cheetah3", 4.0, exact);
-    for setting in [TorquesAndContacts, TorquesOnly, BaseOnly] {
-        let found = physid::api::floating::identify_floating(
-            &physid::api::floating::IdentifyFloatingOptions {
-                setting,
-                ..floating_options(&data)
-            },
-        )
-        .unwrap();
-        let relative = found.description_rms / found.target_rms;
-        let said = format!(
-            "{setting:?}: residual {:.3e} of rows {:.3e} ({relative:.2e}), mass {:.3} kg",
-            found.description_rms, found.target_rms, found.identified_mass
-        );
-        assert!(found.description_rms < 0.4, "{said}");
-        assert!(setting != TorquesAndContacts || relative < 5e-3, "{said}");
-        assert!(
-            found.identified_rms <= found.description_rms * (1.0 + 1e-9),
-            "{said}"
-        );
-        assert!(found.constraints_hold, "{said}");
-        assert!(
-            found.contact_share > 0.9 && found.samples_used > 3000,
-            "{said}"
-        );
+    for seed in [2, 3] {
+        let data = floating_log(dir.path(), "cheetah3", (4.0, seed), exact.clone());
+        for (setting, bound) in [
+            (TorquesAndContacts, 0.4),
+            (TorquesOnly, 0.4),
+            (BaseOnly, 0.2),
+        ] {
+            let found = physid::api::floating::identify_floating(
+                &physid::api::floating::IdentifyFloatingOptions {
+                    setting,
+                    ..floating_options(&data)
+                },
+            )
+            .unwrap();
+            let said = format!(
+                "seed {seed}, {setting:?}: residual {:.3e} of rows {:.3e}, mass {:.3} kg",
+                found.description_rms, found.target_rms, found.identified_mass
+            );
+            assert!(found.description_rms < bound, "{said}");
+            assert!(
+                found.identified_rms <= found.description_rms * (1.0 + 1e-9),
+                "{said}"
+            );
+            assert!(found.constraints_hold, "{said}");
+            assert!(
+                found.contact_share > 0.9 && found.samples_used > 3000,
+                "{said}"
+            );
+        }
     }
 }
 
@@ -535,7 +542,7 @@ fn a_payload_on_the_trunk_is_weighed_from_a_noisy_log_and_the_outputs_load_back(
     let urdf = dir.path().join("loaded.urdf");
     std::fs::write(&urdf, physid::io::urdf::floating_to_string(&loaded)).unwrap();
     let sensors = physid::sim::floating_sensors::Sensors::default();
-    let data = floating_log(dir.path(), urdf.to_str().unwrap(), 6.0, sensors);
+    let data = floating_log(dir.path(), urdf.to_str().unwrap(), (6.0, 3), sensors);
     let (out_urdf, out_mjcf) = (dir.path().join("id.urdf"), dir.path().join("id.xml"));
     let found =
         physid::api::floating::identify_floating(&physid::api::floating::IdentifyFloatingOptions {

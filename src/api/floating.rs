@@ -555,9 +555,13 @@ fn normal_equations(
     let per_sample = crate::ident::floating::rows_per_sample(robot, setting);
     let mut ne = NormalEquations::new(per_sample, robot.parameter_count());
     let mut rows = FloatingRows::new(robot);
+    // With forces measured every foot's force enters the targets, down or not: filtered, a
+    // force is smeared across touchdown and lift-off, and a foot in the air pushes nothing (its
+    // sensor's noise aside). Only the projection of `TorquesOnly` needs which feet are down.
+    let projected = setting == DataSetting::TorquesOnly;
     for s in &samples.samples {
         let contacts: Vec<Contact> = (feet.iter().zip(&s.force).zip(&s.down))
-            .filter(|(_, &d)| d)
+            .filter(|(_, &d)| d || !projected)
             .map(|((&(body, point), &force), _)| Contact { body, point, force })
             .collect();
         let sample = FloatingSample {

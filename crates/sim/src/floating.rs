@@ -109,8 +109,15 @@ pub struct FloatingRun {
     pub qdd: Vec<f64>,
     /// Motor torques at the joints (N m).
     pub tau: Vec<f64>,
-    /// Contact force of each foot (world coordinates, N), `feet` per step.
+    /// Contact force of each foot at the step's instant (world coordinates, N), `feet` per
+    /// step.
     pub contact: Vec<Vector3<f64>>,
+    /// Each foot's contact force averaged over the two control periods around the step (the
+    /// integration's substeps from `t − 1/rate` to `t + 1/rate`): what a force sensor read
+    /// through an anti-aliasing filter reports. A stiff contact's force changes within a
+    /// substep; sampled at the instant it aliases, and the twist's central difference over the
+    /// same two periods is the mean acceleration this force produces.
+    pub contact_mean: Vec<Vector3<f64>>,
     /// Joints per step.
     pub joints: usize,
     /// Feet: `(body, point in the body)`, in the order of `contact`.
@@ -199,9 +206,11 @@ pub fn standing(
     };
     let steps = (experiment.duration * experiment.rate).round() as usize;
     let dt = 1.0 / (experiment.rate * experiment.substeps as f64);
+    let mut period_means = Vec::with_capacity(steps * feet.len());
     for k in 0..steps {
         let t = k as f64 / experiment.rate;
         let tau = control(&state, &targets.at(t), experiment.gains);
+        let mut sum = vec![Vector3::zeros(); feet.len()];
         for s in 0..experiment.substeps {
             let (nu_dot, contact) = accelerations(robot, &mut data, &state, &tau, feet, experiment)
                 .ok_or(FloatingSimError::Diverged {
@@ -211,10 +220,24 @@ pub fn standing(
             if s == 0 {
                 record(&mut run, t, &state, &nu_dot, &tau, &contact);
             }
+            sum.iter_mut().zip(&contact).for_each(|(a, f)| *a += f);
             step(&mut state, &nu_dot, dt);
         }
+        period_means.extend(sum.iter().map(|f| f / experiment.substeps as f64));
     }
+    run.contact_mean = around_steps(&period_means, feet.len());
     Ok(run)
+}
+
+/// Per step `k` and foot, the mean of the periods before and after it (`period_means` holds
+/// period `k`'s, which starts at step `k`; before the first step, the first period's).
+fn around_steps(period_means: &[Vector3<f64>], feet: usize) -> Vec<Vector3<f64>> {
+    (0..period_means.len())
+        .map(|i| {
+            let before = if i >= feet { i - feet } else { i };
+            (period_means[before] + period_means[i]) * 0.5
+        })
+        .collect()
 }
 
 fn check(

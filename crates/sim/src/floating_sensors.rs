@@ -1,7 +1,8 @@
 //! A floating-base run as a robot's sensors log it ([`physid_io::floating_log`]): joint
 //! encoders and motor currents, an IMU's gyro and a state estimator's pose and velocity for the
-//! trunk, force sensors or a contact estimator at the feet, each with its own noise and, for
-//! the trunk, a constant bias.
+//! trunk, force sensors (read through an anti-aliasing filter: [`FloatingRun::contact_mean`])
+//! and a contact estimator at the feet, each with its own noise and, for the trunk, a constant
+//! bias.
 //!
 //! Noise is Gaussian, drawn from `seed` in a fixed order, so the same seed gives the same log.
 
@@ -139,12 +140,17 @@ pub fn log(
             base.v.ang + gyro_bias + noise(sensors.gyro_noise, &mut draw),
             base.v.lin + velocity_bias + noise(sensors.velocity_noise, &mut draw),
         ));
-        for f in run.contact_at(k) {
+        let f = run.feet.len();
+        for (now, mean) in run
+            .contact_at(k)
+            .iter()
+            .zip(&run.contact_mean[k * f..(k + 1) * f])
+        {
             if let Some(force) = out.force.as_mut() {
-                force.push(f + noise(sensors.force_noise, &mut draw));
+                force.push(mean + noise(sensors.force_noise, &mut draw));
             }
             if let Some(contact) = out.contact.as_mut() {
-                contact.push(f.z > 0.0);
+                contact.push(now.z > 0.0);
             }
         }
     }
