@@ -33,6 +33,8 @@ COMMANDS = {
     "sweep": "sweep",
     "compare": "compare",
     "Robot": "model",
+    "simulate_floating": "simulate-floating",
+    "identify_floating": "identify-floating",
 }
 
 # A keyword whose flag is its negation (python/src/errors.rs, keyword(), names flags as keywords
@@ -44,10 +46,14 @@ FLAG = {"package_dirs": "package-dir"}
 
 # Keywords that take runs: a path, a physid.Data held in memory, or a list of them.
 RUNS = {"data", "validate_data", "baseline_data"}
+# Functions over a floating robot: its log is one CSV path and its robot a path or "cheetah3"
+# (no physid.Robot, which is a fixed-base robot), so the texts above do not apply.
+FLOATING = {"simulate_floating", "identify_floating"}
 
 # Keywords the CLI has no flag for (Python's own), or whose Python form differs (these come
 # first).
 PYTHON_FIRST = {
+    "sensors": "The sensors' noise and what they log: a dict over the default sensors' fields (torque_noise, force_noise, gyro_noise, gyro_bias, velocity_noise, velocity_bias, tilt_noise, position_noise, encoder_step; velocities, forces, contacts: True/False), or \"exact\" for noise-free sensors logging everything.",
     "robot": "The robot: a physid.Robot (as returned by physid.Robot), or \"cheetah3\" (the built-in leg), a URDF or a robot TOML path.",
 }
 PYTHON_ONLY = {
@@ -98,7 +104,7 @@ def document(name, flags):
     lines = ["", "Keywords:", ""]
     for keyword in keywords(getattr(physid, name)):
         flag = flags.get(NEGATED.get(keyword) or FLAG.get(keyword) or keyword.replace("_", "-"))
-        if keyword in PYTHON_FIRST:
+        if keyword in PYTHON_FIRST and (name not in FLOATING or keyword == "sensors"):
             text = PYTHON_FIRST[keyword]
         elif flag:
             text = in_keywords(described(flag, negated=keyword in NEGATED))
@@ -106,7 +112,7 @@ def document(name, flags):
             text = PYTHON_ONLY[keyword]
         else:
             sys.exit(f"{name}: keyword '{keyword}' has no CLI flag and no text in PYTHON_ONLY")
-        if keyword in RUNS or (keyword == "validate" and name == "diagnose"):
+        if (keyword in RUNS and name not in FLOATING) or (keyword == "validate" and name == "diagnose"):
             text += " Paths, physid.Data held in memory, or a list of them."
         lines += textwrap.wrap(f"{keyword}: {text}", width=92, subsequent_indent="    ")
     return "\n".join(lines) + "\n"

@@ -625,3 +625,83 @@ def load(
     """
 
 def version() -> str: ...
+
+class FloatingIdentification:
+    """A floating robot identified from a log; to_dict() is `physid identify-floating --json`."""
+
+    @property
+    def theta(self) -> Array:
+        """θ: the trunk's ten parameters, the tree's bodies' and rotors', then friction."""
+    @property
+    def constraints_hold(self) -> bool: ...
+    @property
+    def mass(self) -> float:
+        """The whole robot's identified mass (kg)."""
+    def to_dict(self) -> dict[str, Any]: ...
+
+def simulate_floating(
+    out: Path,
+    *,
+    robot: Path = "cheetah3",
+    no_rotors: bool = False,
+    duration: float = 10.0,
+    rate: float = 1000.0,
+    seed: int = 1,
+    sensors: Union[dict[str, Any], str, None] = None,
+) -> dict[str, Any]:
+    """Simulate the quadruped standing and log it as its sensors would (CSV), as `physid
+    simulate-floating` does; returns its --json summary.
+
+    Keywords:
+
+    out: The CSV log to write.
+    robot: `cheetah3` (built-in leg), a .urdf file, or a .toml file with a [robot] table.
+        Default: cheetah3.
+    no_rotors: Drop the rotors (the link-only model).
+    duration: Duration (s). Default: 10.
+    rate: Control and logging rate (Hz). Default: 1000.
+    seed: Seeds the motion and the noise. Default: 1.
+    sensors: The sensors' noise and what they log: a dict over the default sensors' fields
+        (torque_noise, force_noise, gyro_noise, gyro_bias, velocity_noise, velocity_bias,
+        tilt_noise, position_noise, encoder_step; velocities, forces, contacts: True/False), or
+        "exact" for noise-free sensors logging everything.
+    """
+
+def identify_floating(
+    data: Path,
+    *,
+    robot: Path = "cheetah3",
+    no_rotors: bool = False,
+    setting: str = "torques-and-contacts",
+    constraints: str = "ellipsoid",
+    prior_weight: float = 1e-4,
+    cutoff: Optional[float] = None,
+    foot: Optional[Sequence[Union[str, tuple[str, tuple[float, float, float]]]]] = None,
+    contact_force: float = 10.0,
+    out_urdf: Optional[Path] = None,
+    out_mjcf: Optional[Path] = None,
+) -> FloatingIdentification:
+    """Identify a floating robot from one log, its description the prior, as `physid
+    identify-floating` does.
+
+    Keywords:
+
+    data: The log.
+    robot: `cheetah3` (built-in leg), a .urdf file, or a .toml file with a [robot] table.
+        Default: cheetah3.
+    no_rotors: Drop the rotors (the link-only model).
+    setting: What the log's quantities are used for: torques-and-contacts (every row), torques-
+        only (contact forces projected out: needs contact states or forces), base-only (the
+        trunk's six rows from the contact forces; no joint torques). One of: torques-and-
+        contacts, torques-only, base-only. Default: torques-and-contacts.
+    constraints: Constraint set: none, semi, consistent, ellipsoid. Default: ellipsoid.
+    prior_weight: Weight of the pull towards the description. Default: 0.0001.
+    cutoff: Low-pass cutoff of the derived signals (Hz); default: chosen from the motion.
+    foot: A foot, `BODY:X,Y,Z` (the point in the body's frame, m); repeat for each. Default: the
+        built-in quadruped's.
+    contact_force: Without contact_<foot> columns, a foot is down where its normal force exceeds
+        this (N). Default: 10.
+    out_urdf: Write the identified robot as URDF (the trunk its root link; pinocchio: free
+        flyer).
+    out_mjcf: Write the identified robot as MJCF (a free joint on the trunk).
+    """

@@ -12,6 +12,7 @@ mod diagnose;
 mod errors;
 mod excite;
 mod experiment;
+mod floating;
 mod identify;
 mod notebook;
 mod pickle;
@@ -45,6 +46,9 @@ fn _physid(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<compare::Comparison>()?;
     m.add_class::<excite::Excitation>()?;
     m.add_class::<sweep::Sweep>()?;
+    m.add_class::<floating::FloatingIdentification>()?;
+    m.add_function(wrap_pyfunction!(floating::simulate_floating, m)?)?;
+    m.add_function(wrap_pyfunction!(floating::identify_floating, m)?)?;
     m.add_function(wrap_pyfunction!(sweep::sweep, m)?)?;
     m.add_function(wrap_pyfunction!(excite::excite, m)?)?;
     m.add_function(wrap_pyfunction!(excite::score_motion, m)?)?;

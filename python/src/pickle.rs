@@ -8,6 +8,7 @@ use crate::diagnose::Diagnosis;
 use crate::errors::*;
 use crate::excite::Excitation;
 use crate::experiment::Experiment;
+use crate::floating::FloatingIdentification;
 use crate::identify::Identification;
 use crate::robot::Robot;
 use crate::simulate::Simulation;
@@ -69,6 +70,9 @@ pub(crate) fn _restore(
         "Experiment" => Py::new(py, state::<Experiment>(class, bytes)?)?.into_any(),
         "Sweep" => Py::new(py, state::<Sweep>(class, bytes)?)?.into_any(),
         "Comparison" => Py::new(py, state::<Comparison>(class, bytes)?)?.into_any(),
+        "FloatingIdentification" => {
+            Py::new(py, state::<FloatingIdentification>(class, bytes)?)?.into_any()
+        }
         other => {
             return Err(exception(format!(
                 "unpickling: physid has no class '{other}'"

@@ -9,7 +9,8 @@ use crate::ident::floating::{Contact, DataSetting, FloatingRows, FloatingSample}
 use crate::ident::{ConstraintSet, IdentifiedBody, NormalEquations, SolveStatus};
 use crate::io::floating_log::{self, FloatingLog};
 use crate::model::floating::FloatingModel;
-use crate::sim::floating_sensors::Sensors;
+/// The sensors a floating run is logged through.
+pub use crate::sim::floating_sensors::Sensors;
 use nalgebra::{DVector, Vector3};
 use physid_core::dynamics::BaseState;
 use physid_core::spatial::{Motion, Transform};

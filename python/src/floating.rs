@@ -1,0 +1,249 @@
+//! `physid.simulate_floating`, `physid.identify_floating` and `FloatingIdentification`: the
+//! whole robot from its logs (`physid simulate-floating`, `physid identify-floating`).
+
+use crate::convert::*;
+use crate::errors::*;
+use crate::work::*;
+use numpy::{IntoPyArray, PyArray1};
+use physid::api;
+use physid::api::floating::{Foot, IdentifyFloatingOptions, SimulateFloatingOptions};
+use physid::api::model::RobotOptions;
+use pyo3::prelude::*;
+use std::path::PathBuf;
+
+/// A floating robot identified from a log; `to_dict()` is `physid identify-floating --json`.
+#[pyclass(frozen, module = "physid")]
+#[derive(serde::Serialize, serde::Deserialize)]
+pub(crate) struct FloatingIdentification {
+    found: api::floating::FloatingIdentification,
+}
+
+#[pymethods]
+impl FloatingIdentification {
+    /// Pickles (and copies) as its state in physid's binary form.
+    fn __reduce__<'py>(&self, py: Python<'py>) -> PyResult<crate::pickle::Reduced<'py>> {
+        crate::pickle::reduce(py, "FloatingIdentification", self)
+    }
+
+    /// The notebook's view: the fit, the masses, every body's mass and consistency margin.
+    fn _repr_html_(&self) -> String {
+        use crate::notebook::{card, number, table};
+        let f = &self.found;
+        let rows: Vec<Vec<String>> = (f.bodies.iter())
+            .map(|b| {
+                vec![
+                    b.name.clone(),
+                    number(b.pi[0]),
+                    number(b.consistency.min_eig_pseudo),
+                ]
+            })
+            .collect();
+        card(
+            &format!("Floating robot '{}' identified", f.robot),
+            &[
+                ("setting", api::files::serde_name(&f.setting)),
+                ("constraints", api::files::serde_name(&f.constraints)),
+                ("samples used", f.samples_used.to_string()),
+                ("residual RMS", number(f.identified_rms)),
+                ("total mass (kg)", number(f.identified_mass)),
+                ("constraints hold", f.constraints_hold.to_string()),
+            ],
+            &[("bodies", table(&["body", "m (kg)", "min eig J"], &rows))],
+        )
+    }
+
+    /// θ: the trunk's ten parameters, the tree's bodies' and rotors', then viscous and Coulomb
+    /// friction per joint (the paper's order per body: m, h, I about the body frame's origin).
+    #[getter]
+    fn theta<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<f64>> {
+        self.found.theta.clone().into_pyarray(py)
+    }
+
+    /// Whether every constraint of the set holds (checked from the parameters).
+    #[getter]
+    fn constraints_hold(&self) -> bool {
+        self.found.constraints_hold
+    }
+
+    /// The whole robot's identified mass (kg).
+    #[getter]
+    fn mass(&self) -> f64 {
+        self.found.identified_mass
+    }
+
+    /// The result as `physid identify-floating --json` prints it.
+    fn to_dict<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
+        to_python(py, "identify_floating", &self.found)
+    }
+
+    fn __repr__(&self) -> String {
+        let f = &self.found;
+        format!(
+            "FloatingIdentification('{}', {}, {}, {} samples, residual {:.4} from {:.4}, {:.3} kg)",
+            f.robot,
+            api::files::serde_name(&f.setting),
+            api::files::serde_name(&f.constraints),
+            f.samples_used,
+            f.identified_rms,
+            f.description_rms,
+            f.identified_mass
+        )
+    }
+}
+
+/// The robot options of the floating functions' `robot` and `no_rotors`.
+fn robot_options(robot: PathBuf, no_rotors: bool) -> RobotOptions {
+    RobotOptions {
+        no_rotors,
+        ..RobotOptions::new(&robot.to_string_lossy())
+    }
+}
+
+/// Simulates the built-in quadruped (or a floating URDF of it) standing and shifting its
+/// weight and logs it as its sensors would (CSV at `out`), as `physid simulate-floating` does;
+/// `sensors` a dict over the default sensors' fields (`{"force_noise": 5.0, "velocities":
+/// True}`), or `"exact"`. Returns the summary `--json` prints.
+#[doc = include_str!("../keywords/simulate_floating.txt")]
+#[pyfunction]
+#[pyo3(signature = (out, *, robot = PathBuf::from("cheetah3"), no_rotors = false,
+    duration = 10.0, rate = 1000.0, seed = 1, sensors = None))]
+#[allow(clippy::too_many_arguments)]
+pub(crate) fn simulate_floating<'py>(
+    py: Python<'py>,
+    out: PathBuf,
+    robot: PathBuf,
+    no_rotors: bool,
+    duration: f64,
+    rate: f64,
+    seed: u64,
+    sensors: Option<&Bound<'py, PyAny>>,
+) -> PyResult<Bound<'py, PyAny>> {
+    let opts = SimulateFloatingOptions {
+        robot: robot_options(robot, no_rotors),
+        duration,
+        rate,
+        seed,
+        sensors: sensors_of(py, sensors)?,
+        out,
+    };
+    let done =
+        cancellable(py, move |_| api::floating::simulate_floating(&opts))?.map_err(api_error)?;
+    plain(py, &done)
+}
+
+/// The sensors of `simulate_floating`'s `sensors` keyword.
+fn sensors_of(
+    py: Python<'_>,
+    sensors: Option<&Bound<'_, PyAny>>,
+) -> PyResult<api::floating::Sensors> {
+    use api::floating::Sensors;
+    let Some(s) = sensors else {
+        return Ok(Sensors::default());
+    };
+    if let Ok(text) = s.extract::<String>() {
+        return match text.as_str() {
+            "exact" => Ok(Sensors::exact()),
+            other => Err(exception(format!(
+                "sensors: '{other}' is not \"exact\" (give a dict of the sensors' fields)"
+            ))),
+        };
+    }
+    let json: String = py
+        .import("json")?
+        .call_method1("dumps", (s,))
+        .map_err(|_| exception("sensors: give a dict of the sensors' fields, or \"exact\""))?
+        .extract()?;
+    let mut merged = serde_json::to_value(Sensors::default()).map_err(exception)?;
+    let given: serde_json::Map<String, serde_json::Value> = serde_json::from_str(&json)
+        .map_err(|_| exception("sensors: give a dict of the sensors' fields, or \"exact\""))?;
+    for (k, v) in given {
+        merged[k] = v;
+    }
+    let sensors: Sensors =
+        serde_json::from_value(merged).map_err(|e| exception(format!("sensors: {e}")))?;
+    sensors
+        .validate()
+        .map_err(|e| exception(format!("sensors: {e}")))?;
+    Ok(sensors)
+}
+
+/// Identifies a floating robot from one log (CSV), its description the prior, as `physid
+/// identify-floating` does; `foot` the feet as `"BODY:X,Y,Z"` strings or `(body, (x, y, z))`
+/// pairs (default: the built-in quadruped's). `out_urdf` and `out_mjcf` write the identified
+/// robot (never over an input).
+#[doc = include_str!("../keywords/identify_floating.txt")]
+#[pyfunction]
+#[pyo3(signature = (data, *, robot = PathBuf::from("cheetah3"), no_rotors = false,
+    setting = "torques-and-contacts", constraints = "ellipsoid", prior_weight = 1e-4,
+    cutoff = None, foot = None, contact_force = 10.0, out_urdf = None, out_mjcf = None))]
+#[allow(clippy::too_many_arguments)]
+pub(crate) fn identify_floating(
+    py: Python<'_>,
+    data: PathBuf,
+    robot: PathBuf,
+    no_rotors: bool,
+    setting: &str,
+    constraints: &str,
+    prior_weight: f64,
+    cutoff: Option<f64>,
+    foot: Option<Vec<Bound<'_, PyAny>>>,
+    contact_force: f64,
+    out_urdf: Option<PathBuf>,
+    out_mjcf: Option<PathBuf>,
+) -> PyResult<FloatingIdentification> {
+    let opts = IdentifyFloatingOptions {
+        robot: robot_options(robot, no_rotors),
+        data,
+        feet: foot
+            .unwrap_or_default()
+            .iter()
+            .map(foot_of)
+            .collect::<PyResult<_>>()?,
+        setting: serde_json::from_value(serde_json::Value::String(setting.replace('-', "_")))
+            .map_err(|_| {
+                exception(format!(
+                "setting: '{setting}' is not one of torques_and_contacts, torques_only, base_only"
+            ))
+            })?,
+        constraints: constraints_of(constraints)?,
+        prior_weight,
+        cutoff,
+        contact_force,
+        out_urdf,
+        out_mjcf,
+    };
+    let found =
+        cancellable(py, move |_| api::floating::identify_floating(&opts))?.map_err(api_error)?;
+    Ok(FloatingIdentification { found })
+}
+
+/// A foot from `"BODY:X,Y,Z"` or `(body, (x, y, z))`.
+fn foot_of(v: &Bound<'_, PyAny>) -> PyResult<Foot> {
+    if let Ok((body, point)) = v.extract::<(String, [f64; 3])>() {
+        return Ok(Foot { body, point });
+    }
+    let text: String = v
+        .extract()
+        .map_err(|_| exception("foot: give \"BODY:X,Y,Z\" or (body, (x, y, z)) per foot"))?;
+    let bad = || exception(format!("foot '{text}': expected BODY:X,Y,Z (m)"));
+    let (body, xyz) = text.split_once(':').ok_or_else(bad)?;
+    let v: Vec<f64> = xyz
+        .split(',')
+        .map(|x| x.trim().parse::<f64>())
+        .collect::<Result<_, _>>()
+        .map_err(|_| bad())?;
+    let point: [f64; 3] = v.try_into().map_err(|_| bad())?;
+    Ok(Foot {
+        body: body.trim().to_string(),
+        point,
+    })
+}
+
+/// A constraint set from its name.
+fn constraints_of(name: &str) -> PyResult<api::ConstraintSet> {
+    serde_json::from_value(serde_json::Value::String(name.to_string())).map_err(|_| {
+        exception(format!(
+            "constraints: '{name}' is not one of none, semi, consistent, ellipsoid"
+        ))
+    })
+}

@@ -1,0 +1,93 @@
+"""physid.simulate_floating and physid.identify_floating against the CLI, the identified robot
+loaded by pinocchio and MuJoCo, and bad inputs."""
+import json
+import os
+import pickle
+import subprocess
+
+import numpy as np
+import pytest
+
+import physid
+
+
+def cli(*args):
+    out = subprocess.run([os.environ["PHYSID_BIN"], *args], capture_output=True, text=True)
+    assert out.returncode == 0, out.stderr
+    return out.stdout
+
+
+@pytest.fixture(scope="module")
+def log(tmp_path_factory):
+    path = tmp_path_factory.mktemp("floating") / "standing.csv"
+    summary = physid.simulate_floating(path, duration=3.0, seed=2)
+    assert summary["samples"] == 3000 and len(summary["feet"]) == 4
+    return path
+
+
+def test_the_log_is_the_cli_s_byte_for_byte(log, tmp_path):
+    cli("simulate-floating", "--out", str(tmp_path / "cli.csv"), "--duration", "3", "--seed", "2")
+    assert (tmp_path / "cli.csv").read_bytes() == log.read_bytes()
+
+
+def test_identification_equals_the_cli_and_loads_in_pinocchio_and_mujoco(log, tmp_path):
+    urdf, xml = tmp_path / "id.urdf", tmp_path / "id.xml"
+    fit = physid.identify_floating(log, setting="torques_and_contacts", out_urdf=urdf, out_mjcf=xml)
+    ours = fit.to_dict()
+    theirs = json.loads(cli("identify-floating", "--data", str(log), "--json"))
+    assert ours["theta"] == theirs["theta"] and ours["identified_rms"] == theirs["identified_rms"]
+    assert fit.constraints_hold and abs(fit.mass - 45.0) < 0.5
+    np.testing.assert_array_equal(fit.theta, np.asarray(theirs["theta"]))
+    import pinocchio as pin
+    model = pin.buildModelFromUrdf(str(urdf), pin.JointModelFreeFlyer(), True)
+    assert abs(pin.computeTotalMass(model) - fit.mass) < 1e-9 * fit.mass
+    import mujoco
+    assert abs(mujoco.MjModel.from_xml_path(str(xml)).body_mass.sum() - fit.mass) < 1e-9 * fit.mass
+    again = pickle.loads(pickle.dumps(fit))
+    np.testing.assert_array_equal(again.theta, fit.theta)
+    assert "FloatingIdentification" in repr(fit) and "<table" in fit._repr_html_()
+
+
+def test_feet_sensors_and_settings_as_keywords(log, tmp_path):
+    feet = ["fr_shank:0,0,-0.34", ("fl_shank", (0, 0, -0.34)), "hr_shank:0,0,-0.34", "hl_shank:0,0,-0.34"]
+    base = physid.identify_floating(log, setting="base-only", foot=feet, constraints="consistent")
+    assert base.to_dict()["setting"] == "base_only" and base.constraints_hold
+    exact = physid.simulate_floating(tmp_path / "exact.csv", duration=2.0, sensors="exact")
+    assert exact["samples"] == 2000
+    noisy = physid.simulate_floating(tmp_path / "noisy.csv", duration=1.0, sensors={"force_noise": 5.0, "velocities": True})
+    assert noisy["samples"] == 1000
+    assert "dq_fr_hip_joint" in (tmp_path / "noisy.csv").read_text().splitlines()[0]
+
+
+@pytest.mark.parametrize(
+    "kw, message",
+    [
+        (dict(setting="walking"), "setting: 'walking' is not one of"),
+        (dict(constraints="tight"), "constraints: 'tight' is not one of"),
+        (dict(foot=["paw:0,0,0"]), "foot 'paw': the robot has no body of that name"),
+        (dict(foot=["fr_shank"]), "expected BODY:X,Y,Z"),
+        (dict(foot=[3]), "give \"BODY:X,Y,Z\" or (body, (x, y, z))"),
+        (dict(prior_weight=-1.0), "prior_weight"),
+        (dict(contact_force=float("nan")), "contact_force"),
+    ],
+)
+def test_bad_identification_keywords_are_named(log, kw, message):
+    with pytest.raises(physid.InputError, match=message.replace("(", r"\(").replace(")", r"\)")):
+        physid.identify_floating(log, **kw)
+
+
+@pytest.mark.parametrize(
+    "kw, message",
+    [
+        (dict(sensors={"bogus": 1}), "unknown field `bogus`"),
+        (dict(sensors={"tilt_noise": 1.0}), "no state estimator's"),
+        (dict(sensors="noisy"), "is not \"exact\""),
+        (dict(duration=0.0), "duration"),
+        (dict(rate=50.0), "rate"),
+    ],
+)
+def test_bad_simulation_keywords_are_named(tmp_path, kw, message):
+    out = tmp_path / "never.csv"
+    with pytest.raises(physid.InputError, match=message):
+        physid.simulate_floating(out, **kw)
+    assert not out.exists()
