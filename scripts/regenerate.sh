@@ -34,10 +34,11 @@ run() {
     generalize) "$B" generalize --cases 22 --seeds 1,2 --out results/generalize ;;
     whole_robot) "$B" whole-robot --out results/whole_robot ;;
     whole_robot_force_noise) "$B" whole-robot --force-noise 0.5,1,2,5,10,20 --sizes 1000,3000 --out results/whole_robot_force_noise ;;
+    whole_robot_trot) "$B" whole-robot --trot 0.15,2.5 --out results/whole_robot_trot ;;
     *) echo "unknown result '$1'" >&2; exit 2 ;;
   esac
 }
-[ $# -gt 0 ] || set -- sample_size ci_baseline noise excitation excitation_on_shell excitation_kuka kuka_diagnosis whole_robot whole_robot_force_noise
+[ $# -gt 0 ] || set -- sample_size ci_baseline noise excitation excitation_on_shell excitation_kuka kuka_diagnosis whole_robot whole_robot_force_noise whole_robot_trot
 [ -n "${PHYSID_BIN:-}" ] || cargo build --release --quiet --bin physid
 for r in "$@"; do
   start=$(date +%s)

@@ -29,6 +29,15 @@ pub struct SimulateArgs {
     /// Seeds the motion and the noise.
     #[arg(long, default_value_t = 1)]
     seed: u64,
+    /// Trot in place: `CROUCH,HZ`, each diagonal pair of legs in turn crouched by up to CROUCH
+    /// rad of the hip (its feet lift) at HZ steps per second per pair; default: stand.
+    #[arg(
+        long,
+        value_name = "CROUCH,HZ",
+        value_delimiter = ',',
+        allow_negative_numbers = true
+    )]
+    trot: Option<Vec<f64>>,
     /// Sensor noise, `key=value` pairs, comma-separated (keys: torque_noise, force_noise,
     /// gyro_noise, gyro_bias, velocity_noise, velocity_bias, tilt_noise, position_noise,
     /// encoder_step; and velocities, forces, contacts = true/false for what is logged);
@@ -42,11 +51,16 @@ pub struct SimulateArgs {
 
 /// `physid simulate-floating`.
 pub fn run_simulate(a: SimulateArgs) -> anyhow::Result<()> {
+    anyhow::ensure!(
+        a.trot.as_ref().is_none_or(|v| v.len() == 2),
+        "--trot: expected CROUCH,HZ (two numbers)"
+    );
     let opts = SimulateFloatingOptions {
         robot: a.robot.options(),
         duration: a.duration,
         rate: a.rate,
         seed: a.seed,
+        trot: a.trot.map(|v| (v[0], v[1])),
         sensors: sensors(&a.sensors)?,
         out: a.out,
     };

@@ -42,6 +42,15 @@ pub struct Args {
     /// Prior weight w.
     #[arg(allow_negative_numbers = true, long, default_value_t = 1e-4)]
     prior_weight: f64,
+    /// Trot in place instead of standing: `CROUCH,HZ` (each diagonal pair of legs in turn
+    /// crouched by up to CROUCH rad of the hip at HZ steps per second; its feet swing).
+    #[arg(
+        long,
+        value_name = "CROUCH,HZ",
+        value_delimiter = ',',
+        allow_negative_numbers = true
+    )]
+    trot: Option<Vec<f64>>,
     /// Worker threads (default: all cores). Results do not depend on it.
     #[arg(allow_negative_numbers = true, long)]
     threads: Option<usize>,
@@ -61,7 +70,15 @@ pub fn run(a: Args) -> anyhow::Result<()> {
         "--seeds must be in 1..=1000, got {}",
         a.seeds
     );
+    anyhow::ensure!(
+        a.trot.as_ref().is_none_or(|v| v.len() == 2),
+        "--trot: expected CROUCH,HZ (two numbers)"
+    );
     let spec = WholeRobotSpec {
+        motion: physid::sim::floating::Standing {
+            step: a.trot.as_ref().map_or((0.0, 0.0), |v| (v[0], v[1])),
+            ..Default::default()
+        },
         sizes: a.sizes.clone(),
         seeds: (1..=a.seeds).collect(),
         torque_noise: a.torque_noise,
@@ -106,6 +123,14 @@ pub fn run(a: Args) -> anyhow::Result<()> {
 
 const SETS: [&str; 4] = ["none", "semi", "consistent", "ellipsoid"];
 
+/// What the robot does in `spec`'s runs, in words.
+fn motion_text(spec: &WholeRobotSpec) -> String {
+    match spec.motion.step {
+        (0.0, _) | (_, 0.0) => "Standing and shifting its weight".into(),
+        (crouch, hz) => format!("Trotting in place (crouch {crouch} rad, {hz} Hz)"),
+    }
+}
+
 /// `rows.csv`, `summary.csv`, `summary.md` and, for one noise level, one
 /// `validation_error_<setting>.svg` per data setting into `out`; returns the summary's text.
 fn write(
@@ -124,9 +149,10 @@ fn write(
     let mut md =
         format!(
         "# The whole quadruped: median validation RMS of the joint torques (N m) over {} seeds\n\n\
-         Torque noise {} N m, contact-force noise {} N, prior error {}, prior weight {}; the \
-         prior itself predicts with {:.3} N m (median).\n",
+         {}. Torque noise {} N m, contact-force noise {} N, prior error {}, prior weight {}; \
+         the prior itself predicts with {:.3} N m (median).\n",
         spec.seeds.len(),
+        motion_text(spec),
         spec.torque_noise,
         spec.force_noise,
         spec.prior_error,
@@ -191,6 +217,7 @@ fn write_provenance(
         "sizes": spec.sizes, "seeds": spec.seeds, "torque_noise": spec.torque_noise,
         "force_noise": force_noise, "prior_error": spec.prior_error,
         "prior_weight": spec.prior_weight, "validation": spec.validation,
+        "trot": spec.motion.step,
         "git_revision": physid::api::provenance::git_revision(),
         "physid_version": env!("CARGO_PKG_VERSION"),
         "dependencies": physid::api::provenance::dependency_versions(),

@@ -1419,6 +1419,18 @@ fn a_floating_log_and_its_options_are_checked_naming_what_is_wrong() {
             "'abc' is not a number or true/false",
         ),
         (
+            &["--trot", "0.1"][..],
+            "--trot: expected CROUCH,HZ (two numbers)",
+        ),
+        (
+            &["--trot", "1,2"][..],
+            "the crouch must be 0 to 0.5 rad and the frequency 0 to 5 Hz",
+        ),
+        (
+            &["--trot", "0.2,1.5", "--duration", "4"][..],
+            "the robot fell at t = ",
+        ),
+        (
             &[
                 "--robot",
                 concat!(

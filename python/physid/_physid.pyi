@@ -647,6 +647,7 @@ def simulate_floating(
     duration: float = 10.0,
     rate: float = 1000.0,
     seed: int = 1,
+    trot: Optional[tuple[float, float]] = None,
     sensors: Union[dict[str, Any], str, None] = None,
 ) -> dict[str, Any]:
     """Simulate the quadruped standing and log it as its sensors would (CSV), as `physid
@@ -661,6 +662,8 @@ def simulate_floating(
     duration: Duration (s). Default: 10.
     rate: Control and logging rate (Hz). Default: 1000.
     seed: Seeds the motion and the noise. Default: 1.
+    trot: Trot in place: `CROUCH,HZ`, each diagonal pair of legs in turn crouched by up to
+        CROUCH rad of the hip (its feet lift) at HZ steps per second per pair; default: stand.
     sensors: The sensors' noise and what they log: a dict over the default sensors' fields
         (torque_noise, force_noise, gyro_noise, gyro_bias, velocity_noise, velocity_bias,
         tilt_noise, position_noise, encoder_step; velocities, forces, contacts: True/False), or

@@ -54,6 +54,8 @@ def test_feet_sensors_and_settings_as_keywords(log, tmp_path):
     assert base.to_dict()["setting"] == "base_only" and base.constraints_hold
     exact = physid.simulate_floating(tmp_path / "exact.csv", duration=2.0, sensors="exact")
     assert exact["samples"] == 2000
+    trot = physid.simulate_floating(tmp_path / "trot.csv", duration=3.0, trot=(0.15, 2.5))
+    assert trot["contact_share"] < 0.85
     noisy = physid.simulate_floating(tmp_path / "noisy.csv", duration=1.0, sensors={"force_noise": 5.0, "velocities": True})
     assert noisy["samples"] == 1000
     assert "dq_fr_hip_joint" in (tmp_path / "noisy.csv").read_text().splitlines()[0]
@@ -84,6 +86,7 @@ def test_bad_identification_keywords_are_named(log, kw, message):
         (dict(sensors="noisy"), "is not \"exact\""),
         (dict(duration=0.0), "duration"),
         (dict(rate=50.0), "rate"),
+        (dict(trot=(0.2, 1.5), duration=4.0), "the robot fell at t = "),
     ],
 )
 def test_bad_simulation_keywords_are_named(tmp_path, kw, message):

@@ -82,6 +82,9 @@ pub struct SimulateFloatingOptions {
     pub rate: f64,
     /// Seeds the motion and the sensors' noise.
     pub seed: u64,
+    /// Trot in place: `(crouch rad, frequency Hz)` of each diagonal pair's steps
+    /// ([`crate::sim::floating::Standing::step`]); `None`: stand.
+    pub trot: Option<(f64, f64)>,
     /// The sensors.
     pub sensors: Sensors,
     /// The CSV log to write (docs/floating-base.md, "Logs").
@@ -149,6 +152,7 @@ pub fn simulate_floating(opts: &SimulateFloatingOptions) -> Result<FloatingSimul
         duration: opts.duration,
         rate: opts.rate,
         seed: opts.seed,
+        step: opts.trot.unwrap_or((0.0, 0.0)),
         ..Default::default()
     };
     let run = crate::sim::floating::standing(&robot, &points, &motion)
@@ -242,6 +246,9 @@ pub struct FloatingIdentification {
     pub cutoff: f64,
     /// Share of the used samples' feet in contact.
     pub contact_share: f64,
+    /// Samples left out because a foot touched down or lifted off within the filter's settling
+    /// length (`torques_only`: the projection changes there).
+    pub samples_near_contact_changes: usize,
     /// RMS of the rows' targets (N m and N: joint torques, the trunk's wrench).
     pub target_rms: f64,
     /// RMS of the rows' residual with the description's parameters.
@@ -309,6 +316,7 @@ pub fn identify_floating(
         samples_used: samples.samples.len(),
         cutoff: samples.cutoff,
         contact_share: samples.contact_share(),
+        samples_near_contact_changes: samples.dropped,
         target_rms: (ne.tt / rows as f64).sqrt(),
         description_rms: rms(&prior),
         identified_rms: rms(&found.theta),
@@ -393,6 +401,8 @@ struct Sample {
 struct Samples {
     samples: Vec<Sample>,
     cutoff: f64,
+    /// Samples left out near a change of the feet in contact (`TorquesOnly`).
+    dropped: usize,
 }
 
 impl Samples {
@@ -424,17 +434,47 @@ fn samples_of(log: &FloatingLog, opts: &IdentifyFloatingOptions) -> Result<Sampl
     let (period, cutoff, settle) = (report.period, report.cutoff, report.settle_samples);
     let sos = crate::signal::butterworth_lowpass(2, cutoff.min(0.4 / period), 1.0 / period)
         .map_err(|e| ApiError::invalid(&opts.data, e.to_string()))?;
-    let mut samples = vec![];
+    let (mut samples, mut dropped) = (vec![], 0);
     for run in &prepared.runs {
         let (first, last) = (run.index[0], *run.index.last().expect("a kept run"));
         let pad = settle.min(first).min(log.len() - 1 - last);
         let span = Filtered::new(log, first - pad..last + pad + 1, &sos);
         let tr = &run.trajectory;
-        for (k, &i) in run.index.iter().enumerate() {
-            samples.push(sample(log, opts, &span, i, (tr, k)));
+        let run_samples: Vec<Sample> = (run.index.iter().enumerate())
+            .map(|(k, &i)| sample(log, opts, &span, i, (tr, k)))
+            .collect();
+        if opts.setting == DataSetting::TorquesOnly {
+            let kept = away_from_contact_changes(run_samples, settle);
+            dropped += run.index.len() - kept.len();
+            samples.extend(kept);
+        } else {
+            samples.extend(run_samples);
         }
     }
-    Ok(Samples { samples, cutoff })
+    Ok(Samples {
+        samples,
+        cutoff,
+        dropped,
+    })
+}
+
+/// `samples` (one run's, in order) less those within `guard` samples of a change of the feet
+/// in contact. Projecting out the contact forces is exact sample by sample, but the filtered
+/// torques and accelerations mix each sample with its neighbours: across a touchdown or a
+/// lift-off the neighbours obey another projection.
+fn away_from_contact_changes(samples: Vec<Sample>, guard: usize) -> Vec<Sample> {
+    let changes: Vec<usize> = (1..samples.len())
+        .filter(|&k| samples[k].down != samples[k - 1].down)
+        .collect();
+    samples
+        .into_iter()
+        .enumerate()
+        .filter(|(k, _)| {
+            let at = changes.partition_point(|&c| c + guard <= *k);
+            changes.get(at).is_none_or(|&c| c > k + guard)
+        })
+        .map(|(_, s)| s)
+        .collect()
 }
 
 /// A stretch of the log with its trunk acceleration derived and its joint torques and contact

@@ -74,6 +74,11 @@ pub struct Standing {
     pub friction_velocity: f64,
     /// The ground.
     pub ground: Ground,
+    /// Trotting in place: each diagonal pair of legs (front right with hind left, front left
+    /// with hind right) in turn crouched by up to `step.0` rad of the hip (the knee twice
+    /// that: the foot rises under its hip) for half of each cycle of `step.1` Hz, so that its
+    /// feet leave the ground while the other pair carries the robot. `(0, 0)`: standing.
+    pub step: (f64, f64),
     /// Seeds the frequencies and phases of the sinusoids.
     pub seed: u64,
 }
@@ -89,6 +94,7 @@ impl Default for Standing {
             gains: (400.0, 8.0),
             friction_velocity: 0.01,
             ground: Ground::default(),
+            step: (0.0, 0.0),
             seed: 1,
         }
     }
@@ -159,6 +165,16 @@ pub enum FloatingSimError {
     /// An option out of its range.
     #[error("floating-base simulation: {0}")]
     Invalid(String),
+    /// The robot fell over: the run no longer stands for the motion asked.
+    #[error("the robot fell at t = {t:.3} s (trunk tilted {tilt:.0}°, its origin {height:.3} m above the ground): ask for a gentler motion")]
+    Fell {
+        /// Time (s).
+        t: f64,
+        /// The trunk's tilt from upright (degrees).
+        tilt: f64,
+        /// The trunk origin's height (m).
+        height: f64,
+    },
     /// The mass matrix lost positive definiteness or the state became non-finite.
     #[error("floating-base simulation diverged at t = {t:.4} s ({what})")]
     Diverged {
@@ -224,9 +240,23 @@ pub fn standing(
             step(&mut state, &nu_dot, dt);
         }
         period_means.extend(sum.iter().map(|f| f / experiment.substeps as f64));
+        fallen(&state, t)?;
     }
     run.contact_mean = around_steps(&period_means, feet.len());
     Ok(run)
+}
+
+/// `Err` when the robot has fallen: its trunk tilted more than 60° or its origin below 5 cm.
+fn fallen(state: &State, t: f64) -> Result<(), FloatingSimError> {
+    let up = state.rot[(2, 2)];
+    if up < 0.5 || state.pos.z < 0.05 {
+        return Err(FloatingSimError::Fell {
+            t,
+            tilt: up.clamp(-1.0, 1.0).acos().to_degrees(),
+            height: state.pos.z,
+        });
+    }
+    Ok(())
 }
 
 /// Per step `k` and foot, the mean of the periods before and after it (`period_means` holds
@@ -268,6 +298,16 @@ fn check(
     {
         return bad(format!("{name} must be a number >= 0, got {v}"));
     }
+    let (height, hz) = e.step;
+    if !(height.is_finite()
+        && (0.0..=0.5).contains(&height)
+        && hz.is_finite()
+        && (0.0..=5.0).contains(&hz))
+    {
+        return bad(format!(
+            "step ({height}, {hz}): the crouch must be 0 to 0.5 rad and the frequency 0 to 5 Hz"
+        ));
+    }
     if e.substeps == 0 || e.duration * e.rate > 1e7 {
         return bad("substeps must be at least 1 and duration × rate at most 1e7".into());
     }
@@ -298,6 +338,7 @@ struct Targets {
     amplitude: [f64; 3],
     omega: [f64; 3],
     phase: [f64; 3],
+    step: (f64, f64),
 }
 
 /// Leg `l`'s signs in Cheetah-Software order (front right, front left, hind right, hind left):
@@ -319,12 +360,42 @@ impl Targets {
             amplitude: e.amplitude,
             omega: base_hz.map(|f| tau * f * rng.random_range(0.85..1.15)),
             phase: [(); 3].map(|_| rng.random_range(0.0..tau)),
+            step: (e.step.0, tau * e.step.1),
         }
+    }
+
+    /// Leg `l`'s step crouch `(d, ḋ)` at `t` (rad, rad/s): `h sin²(ω t / 2 + φ)` over the half
+    /// cycles where it is positive-going for its diagonal pair, zero otherwise (`φ` puts the
+    /// two pairs half a cycle apart), faded in with the modes.
+    fn step(&self, l: usize, t: f64, fade: (f64, f64)) -> (f64, f64) {
+        let (h, omega) = self.step;
+        if h == 0.0 || omega == 0.0 {
+            return (0.0, 0.0);
+        }
+        let pair = if l == 0 || l == 3 {
+            0.0
+        } else {
+            std::f64::consts::PI
+        };
+        let x = omega * t + pair;
+        let (s, c) = x.sin_cos();
+        if s <= 0.0 {
+            return (0.0, 0.0);
+        }
+        // h s² lifts from and returns to zero with zero slope.
+        let (d, dd) = (h * s * s, 2.0 * h * s * c * omega);
+        (fade.0 * d, fade.0 * dd + fade.1 * d)
     }
 
     /// `(q*, q̇*)` at `t` (s), faded in over the first second.
     fn at(&self, t: f64) -> (Vec<f64>, Vec<f64>) {
-        let fade = (t.min(1.0) * std::f64::consts::FRAC_PI_2).sin().powi(2);
+        let half_pi = std::f64::consts::FRAC_PI_2;
+        let fade = (t.min(1.0) * half_pi).sin().powi(2);
+        let fade_rate = if t < 1.0 {
+            half_pi * (2.0 * t * half_pi).sin()
+        } else {
+            0.0
+        };
         let mode = |m: usize| {
             let x = self.omega[m] * t + self.phase[m];
             (fade * x.sin(), fade * self.omega[m] * x.cos())
@@ -340,10 +411,11 @@ impl Targets {
             // Mirrored ab/ad axes: the same physical turn is +s on the left, −s on the right.
             q[3 * l] += left * a_sway * sway.0;
             qd[3 * l] = left * a_sway * sway.1;
-            q[3 * l + 1] -= crouch(0);
-            qd[3 * l + 1] = -crouch(1);
-            q[3 * l + 2] += 2.0 * crouch(0);
-            qd[3 * l + 2] = 2.0 * crouch(1);
+            let (d, dd) = self.step(l, t, (fade, fade_rate));
+            q[3 * l + 1] -= crouch(0) + d;
+            qd[3 * l + 1] = -crouch(1) - dd;
+            q[3 * l + 2] += 2.0 * (crouch(0) + d);
+            qd[3 * l + 2] = 2.0 * (crouch(1) + dd);
         }
         (q, qd)
     }

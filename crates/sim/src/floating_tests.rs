@@ -67,11 +67,31 @@ fn the_recorded_run_obeys_the_floating_base_equations_of_motion() {
     };
     let robot = quadruped_with(&options).unwrap();
     let feet = feet(&robot);
-    let experiment = Standing {
-        duration: 1.5,
+    let stand = Standing {
+        duration: 2.0,
         ..Default::default()
     };
-    let run = standing(&robot, &feet, &experiment).unwrap();
+    let trot = Standing {
+        step: (0.15, 2.5),
+        ..stand.clone()
+    };
+    for experiment in [stand, trot] {
+        let worst = equations_of_motion_residual(&robot, &feet, &experiment);
+        assert!(
+            worst < 1e-10,
+            "{:?}: relative residual {worst:e}",
+            experiment.step
+        );
+    }
+}
+
+/// The largest relative residual of `Y θ = [0; τ] + Σ J_cᵀ λ_c` over a run of `experiment`.
+fn equations_of_motion_residual(
+    robot: &FloatingModel,
+    feet: &[(usize, Vector3<f64>)],
+    experiment: &Standing,
+) -> f64 {
+    let run = standing(robot, feet, experiment).unwrap();
     let theta = robot.parameters();
     let mut data = Data::new(robot.tree());
     let mut y = DMatrix::zeros(robot.dof(), robot.parameter_count());
@@ -80,18 +100,18 @@ fn the_recorded_run_obeys_the_floating_base_equations_of_motion() {
     for k in (0..run.len()).step_by(37) {
         let (q, qd, qdd) = run.joints_at(k);
         let base = &run.base[k];
-        regressor_floating(&robot, &mut data, base, (q, qd, qdd), &mut y);
+        regressor_floating(robot, &mut data, base, (q, qd, qdd), &mut y);
         let mut rhs = DVector::zeros(6 + n);
         rhs.rows_mut(6, n).copy_from_slice(run.tau_at(k));
         for (&(body, p), f) in feet.iter().zip(run.contact_at(k)) {
-            let jac = point_jacobian_floating(&robot, &mut data, base, q, (body, &p));
+            let jac = point_jacobian_floating(robot, &mut data, base, q, (body, &p));
             rhs += jac.transpose() * DVector::from_column_slice(f.as_slice());
         }
         let lhs = &y * &theta;
         let weight = robot.total_mass() * 9.81;
         worst = worst.max((&lhs - &rhs).norm() / rhs.norm().max(weight));
     }
-    assert!(worst < 1e-10, "relative residual {worst:e}");
+    worst
 }
 
 #[test]
@@ -129,6 +149,20 @@ fn bad_experiment_values_are_named() {
                 ..Default::default()
             },
         ),
+        (
+            "step (0.6, 2)",
+            Standing {
+                step: (0.6, 2.0),
+                ..Default::default()
+            },
+        ),
+        (
+            "step (0.1, NaN)",
+            Standing {
+                step: (0.1, f64::NAN),
+                ..Default::default()
+            },
+        ),
     ] {
         match standing(&robot, &feet(&robot), &e) {
             Err(FloatingSimError::Invalid(m)) => assert!(m.contains(field), "{field}: {m}"),
@@ -138,4 +172,49 @@ fn bad_experiment_values_are_named() {
     let far = vec![(99, Vector3::zeros())];
     let err = standing(&robot, &far, &Standing::default()).unwrap_err();
     assert!(err.to_string().contains("body 99"), "{err}");
+}
+
+/// Trotting in place: each diagonal pair lifts its feet in turn (two feet carry the robot
+/// a good part of the time, each foot is in the air a good part of the time), the trunk stays
+/// upright (the log obeys the equations of motion: the test above runs this gait too);
+/// a step too high for the gait tips the robot over, which is an error, not a log.
+#[test]
+fn the_quadruped_trots_in_place_and_a_gait_that_tips_it_over_is_an_error() {
+    let robot = quadruped();
+    let trot = Standing {
+        duration: 6.0,
+        step: (0.15, 2.5),
+        ..Default::default()
+    };
+    let run = standing(&robot, &feet(&robot), &trot).unwrap();
+    let after_fade = 1000..run.len();
+    let down = |k: usize| run.contact_at(k).iter().filter(|f| f.z > 0.0).count();
+    let two = after_fade.clone().filter(|&k| down(k) == 2).count() as f64;
+    assert!(
+        two > 0.25 * after_fade.len() as f64,
+        "two feet down in {two} steps"
+    );
+    for foot in 0..4 {
+        let air = (after_fade.clone())
+            .filter(|&k| run.contact_at(k)[foot].z == 0.0)
+            .count() as f64;
+        assert!(
+            air > 0.15 * after_fade.len() as f64,
+            "foot {foot} in the air {air} steps"
+        );
+    }
+    let tilt = (run.base.iter())
+        .map(|b| b.pose.e[(2, 2)].acos().to_degrees())
+        .fold(0.0, f64::max);
+    assert!(tilt < 25.0, "the trunk tilted {tilt}°");
+    let high = Standing {
+        step: (0.2, 1.5),
+        ..trot
+    };
+    match standing(&robot, &feet(&robot), &high) {
+        Err(FloatingSimError::Fell { t, tilt, .. }) => {
+            assert!(t > 1.0 && tilt >= 60.0, "{t} {tilt}")
+        }
+        other => panic!("a step of 0.2 rad at 1.5 Hz: {:?}", other.map(|r| r.len())),
+    }
 }
