@@ -32,7 +32,7 @@ run() {
       "$B" blind --real "$runs" --real-robot $K/kuka_lwr4.urdf "${mode[@]}" --cases 55 --seed "$seed" \
         --out results/blind_real/$name ;;
     generalize) "$B" generalize --cases 22 --seeds 1,2 --out results/generalize ;;
-    whole_robot) "$B" whole-robot --out results/whole_robot ;;
+    whole_robot) "$B" experiment scenarios/quadruped.toml --out results/whole_robot ;;
     whole_robot_force_noise) "$B" whole-robot --force-noise 0.5,1,2,5,10,20 --sizes 1000,3000 --out results/whole_robot_force_noise ;;
     whole_robot_trot) "$B" whole-robot --trot 0.15,2.5 --out results/whole_robot_trot ;;
     *) echo "unknown result '$1'" >&2; exit 2 ;;

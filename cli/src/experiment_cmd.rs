@@ -28,6 +28,16 @@ pub struct Args {
 /// and `provenance.json`.
 pub fn run(a: Args) -> anyhow::Result<()> {
     let (path, seeds, threads) = (&a.scenario, a.seeds, a.threads);
+    if let Some(spec) = physid::api::experiment::whole_robot_plan(path, seeds)? {
+        let command = format!("physid experiment {}", path.display());
+        let run = super::whole_robot_cmd::Run {
+            out: &a.out,
+            inputs: std::slice::from_ref(path),
+            command: &command,
+            threads,
+        };
+        return super::whole_robot_cmd::run_spec(&spec, &[spec.force_noise], &run);
+    }
     let physid::api::experiment::PlannedExperiment {
         scenario: sc,
         model,

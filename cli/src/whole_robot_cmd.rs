@@ -87,7 +87,32 @@ pub fn run(a: Args) -> anyhow::Result<()> {
         prior_weight: a.prior_weight,
         ..Default::default()
     };
-    let specs: Vec<WholeRobotSpec> = (a.force_noise.iter())
+    let run = Run {
+        out: &a.out,
+        inputs: &[],
+        command: "physid whole-robot",
+        threads: a.threads,
+    };
+    run_spec(&spec, &a.force_noise, &run)
+}
+
+/// Where and how a whole-robot experiment runs.
+pub struct Run<'a> {
+    /// The results folder.
+    pub out: &'a std::path::Path,
+    /// The files it reads (none may be in the folder's way).
+    pub inputs: &'a [PathBuf],
+    /// The command, for the provenance.
+    pub command: &'a str,
+    /// Worker threads (`None`: all cores).
+    pub threads: Option<usize>,
+}
+
+/// Runs `spec` at each contact-force noise of `force_noise` and writes the results folder
+/// `run.out`, whole or not at all (`physid whole-robot`, and `physid experiment` of a
+/// whole-robot scenario).
+pub fn run_spec(spec: &WholeRobotSpec, force_noise: &[f64], run: &Run) -> anyhow::Result<()> {
+    let specs: Vec<WholeRobotSpec> = (force_noise.iter())
         .map(|&force_noise| WholeRobotSpec {
             force_noise,
             ..spec.clone()
@@ -96,8 +121,8 @@ pub fn run(a: Args) -> anyhow::Result<()> {
     for s in &specs {
         s.validate()?;
     }
-    physid::io::check_result_dir(&a.out, &[])?;
-    let pool = super::thread_pool(a.threads)?;
+    physid::io::check_result_dir(run.out, run.inputs)?;
+    let pool = super::thread_pool(run.threads)?;
     let robot = physid::model::quadruped::quadruped();
     let feet = physid::model::quadruped::feet();
     let start = std::time::Instant::now();
@@ -107,16 +132,17 @@ pub fn run(a: Args) -> anyhow::Result<()> {
         rows.extend(part.context("running the whole-robot experiment")?);
     }
     let wall = start.elapsed().as_secs_f64();
-    let staging = physid::io::StagingDir::new(&a.out)?;
-    let summary_md = write(staging.path(), &rows, (&spec, &a.force_noise))?;
+    let staging = physid::io::StagingDir::new(run.out)?;
+    let summary_md = write(staging.path(), &rows, (spec, force_noise))?;
     let threads = pool.current_num_threads();
-    write_provenance(staging.path(), (&spec, &a.force_noise), threads, wall)?;
+    let provenance = (run.command, threads, wall);
+    write_provenance(staging.path(), (spec, force_noise), provenance)?;
     staging.commit()?;
     println!(
         "{} identifications in {wall:.1} s on {} threads; wrote {}/\n{summary_md}",
         rows.len(),
         threads,
-        a.out.display()
+        run.out.display()
     );
     Ok(())
 }
@@ -209,11 +235,10 @@ fn write_sweep(
 fn write_provenance(
     out: &std::path::Path,
     (spec, force_noise): (&WholeRobotSpec, &[f64]),
-    threads: usize,
-    wall: f64,
+    (command, threads, wall): (&str, usize, f64),
 ) -> anyhow::Result<()> {
     let provenance = serde_json::json!({
-        "command": "physid whole-robot",
+        "command": command,
         "sizes": spec.sizes, "seeds": spec.seeds, "torque_noise": spec.torque_noise,
         "force_noise": force_noise, "prior_error": spec.prior_error,
         "prior_weight": spec.prior_weight, "validation": spec.validation,

@@ -1561,3 +1561,61 @@ fn a_floating_log_and_its_options_are_checked_naming_what_is_wrong() {
         &never,
     );
 }
+
+#[test]
+fn a_whole_robot_scenario_is_the_whole_robot_command_and_its_bad_keys_are_named() {
+    let dir = tempfile::tempdir().unwrap();
+    let scenario = dir.path().join("quadruped.toml");
+    std::fs::write(&scenario, "[whole_robot]\nsizes = [100, 300]\nseeds = 1\n").unwrap();
+    let (from_scenario, from_command) = (dir.path().join("a"), dir.path().join("b"));
+    let (ok, err) = physid(&[
+        "experiment",
+        scenario.to_str().unwrap(),
+        "--out",
+        from_scenario.to_str().unwrap(),
+    ]);
+    assert!(ok, "{err}");
+    let (ok, err) = physid(&[
+        "whole-robot",
+        "--sizes",
+        "100,300",
+        "--seeds",
+        "1",
+        "--out",
+        from_command.to_str().unwrap(),
+    ]);
+    assert!(ok, "{err}");
+    let rows = |d: &Path| std::fs::read_to_string(d.join("rows.csv")).unwrap();
+    assert_eq!(rows(&from_scenario), rows(&from_command));
+    // 2 sizes x 4 sets x 3 data settings, and the header.
+    assert_eq!(rows(&from_scenario).lines().count(), 25);
+    let never = dir.path().join("never");
+    let experiment = [
+        "experiment",
+        scenario.to_str().unwrap(),
+        "--out",
+        never.to_str().unwrap(),
+    ];
+    for (text, said) in [
+        ("[whole_robot]\nbogus = 1\n", "unknown field `bogus`"),
+        (
+            "[whole_robot]\nsizes = [300, 100]\n",
+            "sizes must be positive and ascending",
+        ),
+        (
+            "[whole_robot]\nseeds = 0\n",
+            "[whole_robot] seeds = 0: expected 1 to 1000",
+        ),
+        (
+            "[whole_robot]\nsizes = [100]\nseeds = 1\ntrot = [0.9, 2.0]\n",
+            "the crouch must be 0 to 0.5 rad",
+        ),
+        (
+            "[whole_robot]\ntrot = [0.1]\n",
+            "invalid length 1, expected an array of length 2",
+        ),
+    ] {
+        std::fs::write(&scenario, text).unwrap();
+        refused(&experiment, &[], said, &never);
+    }
+}

@@ -94,3 +94,10 @@ def test_bad_simulation_keywords_are_named(tmp_path, kw, message):
     with pytest.raises(physid.InputError, match=message):
         physid.simulate_floating(out, **kw)
     assert not out.exists()
+
+
+def test_a_whole_robot_scenario_is_the_cli_s_not_experiment_s(tmp_path):
+    scenario = tmp_path / "quadruped.toml"
+    scenario.write_text("[whole_robot]\nsizes = [100]\nseeds = 1\n")
+    with pytest.raises(physid.InputError, match=r"a whole-robot scenario \(\[whole_robot\]\)"):
+        physid.experiment(scenario)

@@ -40,6 +40,12 @@ pub struct PlannedExperiment {
 /// Reads the scenario at `path` and its `[experiment]` (`seeds` overriding its seed count),
 /// checked; errors name the file.
 pub fn plan(path: &Path, seeds: Option<usize>) -> Result<PlannedExperiment, ApiError> {
+    if whole_robot_plan(path, seeds)?.is_some() {
+        return Err(ApiError::invalid(
+            path,
+            "a whole-robot scenario ([whole_robot]): `physid experiment` runs it; this entry point runs fixed-base scenarios",
+        ));
+    }
     let (scenario, model, text) = crate::sim::scenario::load(path)?;
     let invalid = |message: String| ApiError::invalid(path, message);
     let mut spec = ExperimentSpec::from_scenario(&scenario)
@@ -106,4 +112,84 @@ impl ExperimentRun {
         };
         Ok(tables::csv_text(&mut table)?)
     }
+}
+
+/// A whole-robot scenario: a scenario file whose `[whole_robot]` table asks for the floating
+/// quadruped's sample-size experiment ([`crate::experiment::whole_robot`]) instead of a
+/// fixed-base robot's (docs/scenario-format.md, "`[whole_robot]`").
+#[derive(Clone, Debug, serde::Deserialize)]
+#[serde(deny_unknown_fields)]
+struct WholeRobotScenario {
+    whole_robot: WholeRobotTable,
+}
+
+/// The `[whole_robot]` table; every key optional, `physid whole-robot`'s defaults.
+#[derive(Clone, Debug, serde::Deserialize)]
+#[serde(deny_unknown_fields, default)]
+struct WholeRobotTable {
+    sizes: Vec<usize>,
+    seeds: u64,
+    torque_noise: f64,
+    force_noise: f64,
+    prior_error: f64,
+    prior_weight: f64,
+    /// `[crouch rad, frequency Hz]`: trot in place instead of standing.
+    trot: Option<[f64; 2]>,
+}
+
+impl Default for WholeRobotTable {
+    fn default() -> Self {
+        let spec = crate::experiment::whole_robot::WholeRobotSpec::default();
+        Self {
+            sizes: vec![100, 300, 1000, 3000, 10000],
+            seeds: 4,
+            torque_noise: spec.torque_noise,
+            force_noise: spec.force_noise,
+            prior_error: spec.prior_error,
+            prior_weight: spec.prior_weight,
+            trot: None,
+        }
+    }
+}
+
+/// The whole-robot experiment the scenario at `path` asks for (`seeds` overriding its seed
+/// count), checked, or `None` when the file has no `[whole_robot]` table (a fixed-base
+/// scenario: [`plan`]). Errors name the file and the key.
+pub fn whole_robot_plan(
+    path: &Path,
+    seeds: Option<usize>,
+) -> Result<Option<crate::experiment::whole_robot::WholeRobotSpec>, ApiError> {
+    let text = crate::io::read_to_string(path)?;
+    let invalid = |message: String| ApiError::invalid(path, message);
+    let table: toml::Table = text
+        .parse()
+        .map_err(|e: toml::de::Error| invalid(e.to_string()))?;
+    if !table.contains_key("whole_robot") {
+        return Ok(None);
+    }
+    let scenario: WholeRobotScenario =
+        toml::from_str(&text).map_err(|e: toml::de::Error| invalid(e.to_string()))?;
+    let t = scenario.whole_robot;
+    let seed_count = seeds.map_or(t.seeds, |n| n as u64);
+    if !(1..=1000).contains(&seed_count) {
+        return Err(invalid(format!(
+            "[whole_robot] seeds = {seed_count}: expected 1 to 1000"
+        )));
+    }
+    let spec = crate::experiment::whole_robot::WholeRobotSpec {
+        motion: crate::sim::floating::Standing {
+            step: t.trot.map_or((0.0, 0.0), |[h, f]| (h, f)),
+            ..Default::default()
+        },
+        sizes: t.sizes,
+        seeds: (1..=seed_count).collect(),
+        torque_noise: t.torque_noise,
+        force_noise: t.force_noise,
+        prior_error: t.prior_error,
+        prior_weight: t.prior_weight,
+        ..Default::default()
+    };
+    spec.validate()
+        .map_err(|e| invalid(format!("[whole_robot]: {e}")))?;
+    Ok(Some(spec))
 }
