@@ -451,6 +451,7 @@ fn floating_options(data: &std::path::Path) -> physid::api::floating::IdentifyFl
         contact_force: 10.0,
         out_urdf: None,
         out_mjcf: None,
+        truth: None,
     }
 }
 
@@ -554,10 +555,13 @@ fn a_payload_on_the_trunk_is_weighed_from_a_noisy_log_and_the_outputs_load_back(
     let sensors = physid::sim::floating_sensors::Sensors::default();
     let data = floating_log(dir.path(), urdf.to_str().unwrap(), (6.0, 3), sensors);
     let (out_urdf, out_mjcf) = (dir.path().join("id.urdf"), dir.path().join("id.xml"));
+    // The simulation wrote the robot it simulated beside its log: the ground truth.
+    let truth = physid::api::floating::truth_path(&data);
     let found =
         physid::api::floating::identify_floating(&physid::api::floating::IdentifyFloatingOptions {
             out_urdf: Some(out_urdf.clone()),
             out_mjcf: Some(out_mjcf.clone()),
+            truth: Some(truth.clone()),
             ..floating_options(&data)
         })
         .unwrap();
@@ -568,6 +572,11 @@ fn a_payload_on_the_trunk_is_weighed_from_a_noisy_log_and_the_outputs_load_back(
         "{found:?}"
     );
     assert!(found.constraints_hold);
+    let scores = found.truth.as_ref().unwrap();
+    assert!((scores.mass - 50.0).abs() < 1e-9, "{}", scores.mass);
+    assert_eq!(scores.bodies.len(), 25);
+    assert_eq!(scores.bodies[0].name, "trunk");
+    assert!(scores.bodies.iter().all(|b| b.mass_rel.is_finite()));
     // The URDF reads back as the identified robot (the MJCF is MuJoCo's: scripts/check_mujoco.py).
     let back = physid::io::urdf::load_floating(&out_urdf, &Default::default())
         .unwrap()

@@ -69,12 +69,13 @@ pub fn run_simulate(a: SimulateArgs) -> anyhow::Result<()> {
         println!("{}", serde_json::to_string_pretty(&done)?);
     } else {
         println!(
-            "wrote {} samples of {} joints and {} feet to {} (feet down {:.1} % of the time)",
+            "wrote {} samples of {} joints and {} feet to {} (feet down {:.1} % of the time), the ground truth to {}",
             done.samples,
             done.joints.len(),
             done.feet.len(),
             done.out.display(),
-            100.0 * done.contact_share
+            100.0 * done.contact_share,
+            done.truth.display()
         );
     }
     Ok(())
@@ -147,6 +148,10 @@ pub struct IdentifyArgs {
     /// Write the identified robot as MJCF (a free joint on the trunk).
     #[arg(long)]
     out_mjcf: Option<PathBuf>,
+    /// The ground truth, a floating URDF of the same robot (`simulate-floating` writes it
+    /// beside its log as <log>.truth.urdf): every body's errors against it are reported.
+    #[arg(long)]
+    truth: Option<PathBuf>,
     /// Print the result as JSON.
     #[arg(long)]
     json: bool,
@@ -180,6 +185,7 @@ pub fn run_identify(a: IdentifyArgs) -> anyhow::Result<()> {
         contact_force: a.contact_force,
         out_urdf: a.out_urdf,
         out_mjcf: a.out_mjcf,
+        truth: a.truth,
     };
     let found = identify_floating(&opts)?;
     if a.json {
@@ -215,6 +221,20 @@ fn summary(f: &physid::api::floating::FloatingIdentification) -> String {
         f.identified_mass,
         if f.constraints_hold { "hold" } else { "VIOLATED" }
     );
+    if let Some(t) = &f.truth {
+        let worst = (t.bodies.iter()).max_by(|a, b| a.mass_rel.total_cmp(&b.mass_rel));
+        let _ = writeln!(
+            s,
+            "against the truth ({}): total mass {:.3} kg; worst body mass {}",
+            t.file.display(),
+            t.mass,
+            worst.map_or("-".into(), |w| format!(
+                "{} ({:.1} % off)",
+                w.name,
+                100.0 * w.mass_rel
+            ))
+        );
+    }
     for b in &f.bodies {
         let c = &b.consistency;
         let _ = writeln!(

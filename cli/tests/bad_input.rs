@@ -1445,6 +1445,28 @@ fn a_floating_log_and_its_options_are_checked_naming_what_is_wrong() {
     }
     let (ok, err) = physid(&["simulate-floating", "--out", log_arg, "--duration", "2"]);
     assert!(ok, "{err}");
+    // The ground truth written beside a log never replaces the robot simulated.
+    let twin = dir.path().join("twin.truth.urdf");
+    let (ok, err) = physid(&[
+        "export",
+        "--floating-base",
+        "--urdf",
+        twin.to_str().unwrap(),
+    ]);
+    assert!(ok, "{err}");
+    let twin_log = dir.path().join("twin.csv");
+    let twin_args = [
+        "--robot",
+        twin.to_str().unwrap(),
+        "--out",
+        twin_log.to_str().unwrap(),
+    ];
+    refused(
+        &["simulate-floating"],
+        &twin_args,
+        "refusing to write over the input",
+        &twin_log,
+    );
     // The identification's options and the log.
     let id = [
         "identify-floating",
@@ -1488,6 +1510,17 @@ fn a_floating_log_and_its_options_are_checked_naming_what_is_wrong() {
         ),
         (
             &["--out-mjcf", log_arg][..],
+            "refusing to write over the input",
+        ),
+        (
+            &[
+                "--truth",
+                concat!(env!("CARGO_MANIFEST_DIR"), "/../data/solo12/solo12.urdf"),
+            ][..],
+            "the ground truth is not a description of cheetah3_quadruped",
+        ),
+        (
+            &["--truth", never_arg][..],
             "refusing to write over the input",
         ),
     ] {

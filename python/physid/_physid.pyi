@@ -683,6 +683,7 @@ def identify_floating(
     contact_force: float = 10.0,
     out_urdf: Optional[Path] = None,
     out_mjcf: Optional[Path] = None,
+    truth: Optional[Path] = None,
 ) -> FloatingIdentification:
     """Identify a floating robot from one log, its description the prior, as `physid
     identify-floating` does.
@@ -707,4 +708,6 @@ def identify_floating(
     out_urdf: Write the identified robot as URDF (the trunk its root link; pinocchio: free
         flyer).
     out_mjcf: Write the identified robot as MJCF (a free joint on the trunk).
+    truth: The ground truth, a floating URDF of the same robot (`simulate-floating` writes it
+        beside its log as <log>.truth.urdf): every body's errors against it are reported.
     """

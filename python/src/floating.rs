@@ -177,7 +177,8 @@ fn sensors_of(
 #[pyfunction]
 #[pyo3(signature = (data, *, robot = PathBuf::from("cheetah3"), no_rotors = false,
     setting = "torques-and-contacts", constraints = "ellipsoid", prior_weight = 1e-4,
-    cutoff = None, foot = None, contact_force = 10.0, out_urdf = None, out_mjcf = None))]
+    cutoff = None, foot = None, contact_force = 10.0, out_urdf = None, out_mjcf = None,
+    truth = None))]
 #[allow(clippy::too_many_arguments)]
 pub(crate) fn identify_floating(
     py: Python<'_>,
@@ -192,6 +193,7 @@ pub(crate) fn identify_floating(
     contact_force: f64,
     out_urdf: Option<PathBuf>,
     out_mjcf: Option<PathBuf>,
+    truth: Option<PathBuf>,
 ) -> PyResult<FloatingIdentification> {
     let opts = IdentifyFloatingOptions {
         robot: robot_options(robot, no_rotors),
@@ -213,6 +215,7 @@ pub(crate) fn identify_floating(
         contact_force,
         out_urdf,
         out_mjcf,
+        truth,
     };
     let found =
         cancellable(py, move |_| api::floating::identify_floating(&opts))?.map_err(api_error)?;

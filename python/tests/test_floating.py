@@ -22,6 +22,7 @@ def log(tmp_path_factory):
     path = tmp_path_factory.mktemp("floating") / "standing.csv"
     summary = physid.simulate_floating(path, duration=3.0, seed=2)
     assert summary["samples"] == 3000 and len(summary["feet"]) == 4
+    assert summary["truth"] == str(path.with_name("standing.truth.urdf"))
     return path
 
 
@@ -32,9 +33,13 @@ def test_the_log_is_the_cli_s_byte_for_byte(log, tmp_path):
 
 def test_identification_equals_the_cli_and_loads_in_pinocchio_and_mujoco(log, tmp_path):
     urdf, xml = tmp_path / "id.urdf", tmp_path / "id.xml"
-    fit = physid.identify_floating(log, setting="torques_and_contacts", out_urdf=urdf, out_mjcf=xml)
+    truth = log.with_name("standing.truth.urdf")
+    fit = physid.identify_floating(log, setting="torques_and_contacts", out_urdf=urdf, out_mjcf=xml,
+                                   truth=truth)
+    assert fit.to_dict()["truth"]["mass"] == pytest.approx(45.0, abs=1e-9)
     ours = fit.to_dict()
-    theirs = json.loads(cli("identify-floating", "--data", str(log), "--json"))
+    theirs = json.loads(cli("identify-floating", "--data", str(log), "--json", "--truth", str(truth)))
+    assert ours["truth"] == theirs["truth"]
     assert ours["theta"] == theirs["theta"] and ours["identified_rms"] == theirs["identified_rms"]
     assert fit.constraints_hold and abs(fit.mass - 45.0) < 0.5
     np.testing.assert_array_equal(fit.theta, np.asarray(theirs["theta"]))

@@ -87,8 +87,17 @@ pub struct SimulateFloatingOptions {
     pub trot: Option<(f64, f64)>,
     /// The sensors.
     pub sensors: Sensors,
-    /// The CSV log to write (docs/floating-base.md, "Logs").
+    /// The CSV log to write (docs/floating-base.md, "Logs"); the robot simulated, the ground
+    /// truth, is written beside it as a floating URDF ([`truth_path`]).
     pub out: PathBuf,
+}
+
+/// Where the ground truth of the log `out` is written: `<stem>.truth.urdf` beside it.
+pub fn truth_path(out: &Path) -> PathBuf {
+    let stem = out
+        .file_stem()
+        .map_or("log".into(), |s| s.to_string_lossy().into_owned());
+    out.with_file_name(format!("{stem}.truth.urdf"))
 }
 
 impl SimulateFloatingOptions {
@@ -117,6 +126,8 @@ impl SimulateFloatingOptions {
 pub struct FloatingSimulated {
     /// The log.
     pub out: PathBuf,
+    /// The robot simulated (the ground truth), a floating URDF.
+    pub truth: PathBuf,
     /// Samples logged.
     pub samples: usize,
     /// The joints, in the log's order.
@@ -133,7 +144,8 @@ pub fn simulate_floating(opts: &SimulateFloatingOptions) -> Result<FloatingSimul
     let robot = opts.robot.load_floating()?.robot;
     let files = opts.robot.files();
     let inputs: Vec<&Path> = files.iter().map(PathBuf::as_path).collect();
-    crate::io::check_outputs(&[&opts.out], &inputs)?;
+    let truth = truth_path(&opts.out);
+    crate::io::check_outputs(&[&opts.out, &truth], &inputs)?;
     let feet = quadruped_feet(&crate::model::quadruped::quadruped());
     let points = resolve_feet(&robot, &feet).map_err(|e| {
         ApiError::Options(format!(
@@ -161,9 +173,14 @@ pub fn simulate_floating(opts: &SimulateFloatingOptions) -> Result<FloatingSimul
     let names: Vec<String> = feet.iter().map(|f| f.body.clone()).collect();
     let log = crate::sim::floating_sensors::log(&run, (&joints, &names), &opts.sensors, opts.seed);
     floating_log::write_csv(&opts.out, &log)?;
+    crate::io::write_atomic(
+        &truth,
+        crate::io::urdf::floating_to_string(&robot).as_bytes(),
+    )?;
     let down = run.contact.iter().filter(|f| f.z > 0.0).count();
     Ok(FloatingSimulated {
         out: opts.out.clone(),
+        truth,
         samples: run.len(),
         joints,
         feet,
@@ -195,6 +212,9 @@ pub struct IdentifyFloatingOptions {
     pub out_urdf: Option<PathBuf>,
     /// Write it as MJCF (a free joint on the trunk).
     pub out_mjcf: Option<PathBuf>,
+    /// The ground truth, a floating URDF of the same robot (as `simulate-floating` writes
+    /// beside its log): every body's errors against it are reported.
+    pub truth: Option<PathBuf>,
 }
 
 impl IdentifyFloatingOptions {
@@ -271,6 +291,56 @@ pub struct FloatingIdentification {
     pub status: SolveStatus,
     /// θ, the trunk's ten parameters first.
     pub theta: Vec<f64>,
+    /// Against the ground truth (`truth`), when given: its total mass (kg) and every body's
+    /// errors.
+    pub truth: Option<TruthScores>,
+}
+
+/// The identified robot against the ground truth.
+#[derive(Clone, Debug, serde::Serialize, serde::Deserialize)]
+pub struct TruthScores {
+    /// The truth's file.
+    pub file: PathBuf,
+    /// The truth's total mass (kg).
+    pub mass: f64,
+    /// Per body (the trunk first): relative mass, CoM (m), inertia and pseudo-inertia errors.
+    pub bodies: Vec<super::identify::TruthError>,
+}
+
+/// `theta` against the floating URDF at `path`, which must have `robot`'s parameters.
+fn truth_scores(
+    robot: &FloatingModel,
+    path: &Path,
+    theta: &DVector<f64>,
+) -> Result<TruthScores, ApiError> {
+    let (truth, _) = crate::io::urdf::load_floating(path, &Default::default())?;
+    if truth.parameter_names() != robot.parameter_names() {
+        return Err(ApiError::invalid(
+            path,
+            format!(
+                "the ground truth is not a description of {} (its bodies, rotors or joints differ)",
+                robot.name()
+            ),
+        ));
+    }
+    let errors = crate::experiment::body_errors(&truth, theta);
+    let bodies = (crate::ident::Parameterized::inertial_bodies(robot).into_iter())
+        .zip(errors)
+        .map(
+            |((name, _, _), [mass_rel, com_m, inertia_rel, j_rel])| super::identify::TruthError {
+                name,
+                mass_rel,
+                com_m,
+                inertia_rel,
+                j_rel,
+            },
+        )
+        .collect();
+    Ok(TruthScores {
+        file: path.to_path_buf(),
+        mass: truth.total_mass(),
+        bodies,
+    })
 }
 
 /// Identifies a floating robot from a log ([`IdentifyFloatingOptions`]).
@@ -301,6 +371,9 @@ pub fn identify_floating(
             ..crate::ident::Options::new(opts.constraints)
         },
     )?;
+    let truth = (opts.truth.as_deref())
+        .map(|p| truth_scores(&robot, p, &found.theta))
+        .transpose()?;
     let identified = robot.with_parameters(&found.theta)?;
     write_models(opts, &identified)?;
     let rows = (ne.samples * crate::ident::floating::rows_per_sample(&robot, opts.setting)).max(1);
@@ -328,6 +401,7 @@ pub fn identify_floating(
         constraints_hold: found.constraints_hold,
         status: found.solver.status,
         theta: found.theta.iter().copied().collect(),
+        truth,
     })
 }
 
@@ -340,6 +414,7 @@ fn check_outputs(opts: &IdentifyFloatingOptions) -> Result<(), ApiError> {
         .collect();
     let mut inputs = opts.robot.files();
     inputs.push(opts.data.clone());
+    inputs.extend(opts.truth.clone());
     let inputs: Vec<&Path> = inputs.iter().map(PathBuf::as_path).collect();
     Ok(crate::io::check_outputs(&outputs, &inputs)?)
 }

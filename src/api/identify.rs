@@ -28,7 +28,7 @@ pub struct DataJson {
 }
 
 /// One body's errors against the ground truth.
-#[derive(Clone, serde::Serialize, serde::Deserialize, schemars::JsonSchema)]
+#[derive(Clone, Debug, serde::Serialize, serde::Deserialize, schemars::JsonSchema)]
 pub struct TruthError {
     /// Body or rotor name.
     pub name: String,
