@@ -172,7 +172,7 @@ pub fn run_identify(a: IdentifyArgs) -> anyhow::Result<()> {
         feet: a
             .feet
             .iter()
-            .map(|f| foot(f))
+            .map(|f| f.parse::<Foot>().map_err(anyhow::Error::msg))
             .collect::<anyhow::Result<_>>()?,
         setting: match a.setting {
             SettingArg::TorquesAndContacts => DataSetting::TorquesAndContacts,
@@ -247,24 +247,4 @@ fn summary(f: &physid::api::floating::FloatingIdentification) -> String {
         );
     }
     s
-}
-
-/// `BODY:X,Y,Z` as a foot.
-fn foot(text: &str) -> anyhow::Result<Foot> {
-    let (body, xyz) = text
-        .split_once(':')
-        .ok_or_else(|| anyhow::anyhow!("--foot '{text}': expected BODY:X,Y,Z"))?;
-    let v: Vec<f64> = xyz
-        .split(',')
-        .map(|x| x.trim().parse::<f64>())
-        .collect::<Result<_, _>>()
-        .map_err(|_| anyhow::anyhow!("--foot '{text}': X,Y,Z must be three numbers (m)"))?;
-    anyhow::ensure!(
-        v.len() == 3,
-        "--foot '{text}': X,Y,Z must be three numbers (m)"
-    );
-    Ok(Foot {
-        body: body.trim().to_string(),
-        point: [v[0], v[1], v[2]],
-    })
 }

@@ -230,23 +230,12 @@ fn foot_of(v: &Bound<'_, PyAny>) -> PyResult<Foot> {
     let text: String = v
         .extract()
         .map_err(|_| exception("foot: give \"BODY:X,Y,Z\" or (body, (x, y, z)) per foot"))?;
-    let bad = || exception(format!("foot '{text}': expected BODY:X,Y,Z (m)"));
-    let (body, xyz) = text.split_once(':').ok_or_else(bad)?;
-    let v: Vec<f64> = xyz
-        .split(',')
-        .map(|x| x.trim().parse::<f64>())
-        .collect::<Result<_, _>>()
-        .map_err(|_| bad())?;
-    let point: [f64; 3] = v.try_into().map_err(|_| bad())?;
-    Ok(Foot {
-        body: body.trim().to_string(),
-        point,
-    })
+    text.parse().map_err(exception)
 }
 
 /// A constraint set from its name.
 fn constraints_of(name: &str) -> PyResult<api::ConstraintSet> {
-    serde_json::from_value(serde_json::Value::String(name.to_string())).map_err(|_| {
+    name.parse().map_err(|_| {
         exception(format!(
             "constraints: '{name}' is not one of none, semi, consistent, ellipsoid"
         ))

@@ -25,6 +25,25 @@ pub struct Foot {
     pub point: [f64; 3],
 }
 
+impl std::str::FromStr for Foot {
+    type Err = String;
+
+    /// `BODY:X,Y,Z` (the point in the body's frame, m); `Err` says what is wrong, as `--foot`.
+    fn from_str(text: &str) -> Result<Self, String> {
+        let (body, xyz) = (text.split_once(':'))
+            .ok_or_else(|| format!("--foot '{text}': expected BODY:X,Y,Z"))?;
+        let point: Option<[f64; 3]> = (xyz.split(',').map(|x| x.trim().parse::<f64>()))
+            .collect::<Result<Vec<f64>, _>>()
+            .ok()
+            .and_then(|v| v.try_into().ok());
+        Ok(Foot {
+            body: body.trim().to_string(),
+            point: point
+                .ok_or_else(|| format!("--foot '{text}': X,Y,Z must be three numbers (m)"))?,
+        })
+    }
+}
+
 /// The built-in quadruped's feet (the shanks' ends).
 pub fn quadruped_feet(robot: &FloatingModel) -> Vec<Foot> {
     crate::model::quadruped::feet()
