@@ -29,15 +29,8 @@ pub struct SimulateArgs {
     /// Seeds the motion and the noise.
     #[arg(long, default_value_t = 1)]
     seed: u64,
-    /// Trot in place: `CROUCH,HZ`, each diagonal pair of legs in turn crouched by up to CROUCH
-    /// rad of the hip (its feet lift) at HZ steps per second per pair; default: stand.
-    #[arg(
-        long,
-        value_name = "CROUCH,HZ",
-        value_delimiter = ',',
-        allow_negative_numbers = true
-    )]
-    trot: Option<Vec<f64>>,
+    #[command(flatten)]
+    trot: TrotArgs,
     /// Sensor noise, `key=value` pairs, comma-separated (keys: torque_noise, force_noise,
     /// gyro_noise, gyro_bias, velocity_noise, velocity_bias, tilt_noise, position_noise,
     /// encoder_step; and velocities, forces, contacts = true/false for what is logged);
@@ -49,18 +42,39 @@ pub struct SimulateArgs {
     json: bool,
 }
 
+/// `--trot`, shared by `simulate-floating` and `whole-robot`.
+#[derive(clap::Args, Debug)]
+pub struct TrotArgs {
+    /// Trot in place instead of standing: `CROUCH,HZ`, each diagonal pair of legs in turn
+    /// crouched by up to CROUCH rad of the hip (its feet swing) at HZ steps per second.
+    #[arg(
+        long,
+        value_name = "CROUCH,HZ",
+        value_delimiter = ',',
+        allow_negative_numbers = true
+    )]
+    trot: Option<Vec<f64>>,
+}
+
+impl TrotArgs {
+    /// `(crouch rad, frequency Hz)`, or `None` to stand.
+    pub fn step(&self) -> anyhow::Result<Option<(f64, f64)>> {
+        match self.trot.as_deref() {
+            None => Ok(None),
+            Some(&[crouch, hz]) => Ok(Some((crouch, hz))),
+            Some(_) => anyhow::bail!("--trot: expected CROUCH,HZ (two numbers)"),
+        }
+    }
+}
+
 /// `physid simulate-floating`.
 pub fn run_simulate(a: SimulateArgs) -> anyhow::Result<()> {
-    anyhow::ensure!(
-        a.trot.as_ref().is_none_or(|v| v.len() == 2),
-        "--trot: expected CROUCH,HZ (two numbers)"
-    );
     let opts = SimulateFloatingOptions {
         robot: a.robot.options(),
         duration: a.duration,
         rate: a.rate,
         seed: a.seed,
-        trot: a.trot.map(|v| (v[0], v[1])),
+        trot: a.trot.step()?,
         sensors: sensors(&a.sensors)?,
         out: a.out,
     };

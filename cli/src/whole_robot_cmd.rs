@@ -42,15 +42,8 @@ pub struct Args {
     /// Prior weight w.
     #[arg(allow_negative_numbers = true, long, default_value_t = 1e-4)]
     prior_weight: f64,
-    /// Trot in place instead of standing: `CROUCH,HZ` (each diagonal pair of legs in turn
-    /// crouched by up to CROUCH rad of the hip at HZ steps per second; its feet swing).
-    #[arg(
-        long,
-        value_name = "CROUCH,HZ",
-        value_delimiter = ',',
-        allow_negative_numbers = true
-    )]
-    trot: Option<Vec<f64>>,
+    #[command(flatten)]
+    trot: crate::floating_cmd::TrotArgs,
     /// Worker threads (default: all cores). Results do not depend on it.
     #[arg(allow_negative_numbers = true, long)]
     threads: Option<usize>,
@@ -70,13 +63,9 @@ pub fn run(a: Args) -> anyhow::Result<()> {
         "--seeds must be in 1..=1000, got {}",
         a.seeds
     );
-    anyhow::ensure!(
-        a.trot.as_ref().is_none_or(|v| v.len() == 2),
-        "--trot: expected CROUCH,HZ (two numbers)"
-    );
     let spec = WholeRobotSpec {
         motion: physid::sim::floating::Standing {
-            step: a.trot.as_ref().map_or((0.0, 0.0), |v| (v[0], v[1])),
+            step: a.trot.step()?.unwrap_or((0.0, 0.0)),
             ..Default::default()
         },
         sizes: a.sizes.clone(),

@@ -662,8 +662,8 @@ def simulate_floating(
     duration: Duration (s). Default: 10.
     rate: Control and logging rate (Hz). Default: 1000.
     seed: Seeds the motion and the noise. Default: 1.
-    trot: Trot in place: `CROUCH,HZ`, each diagonal pair of legs in turn crouched by up to
-        CROUCH rad of the hip (its feet lift) at HZ steps per second per pair; default: stand.
+    trot: Trot in place instead of standing: `CROUCH,HZ`, each diagonal pair of legs in turn
+        crouched by up to CROUCH rad of the hip (its feet swing) at HZ steps per second.
     sensors: The sensors' noise and what they log: a dict over the default sensors' fields
         (torque_noise, force_noise, gyro_noise, gyro_bias, velocity_noise, velocity_bias,
         tilt_noise, position_noise, encoder_step; velocities, forces, contacts: True/False), or
