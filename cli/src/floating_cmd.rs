@@ -202,12 +202,16 @@ pub fn run_identify(a: IdentifyArgs) -> anyhow::Result<()> {
         truth: a.truth,
     };
     let found = identify_floating(&opts)?;
+    for notice in &found.notices {
+        eprintln!("{notice}");
+    }
     if a.json {
         let value = physid::io::versioned("physid.identify_floating/1", &found);
         println!("{}", serde_json::to_string_pretty(&value)?);
         return Ok(());
     }
     print!("{}", summary(&found));
+    super::identify_cmd::print_identifiability(&found.identifiability);
     Ok(())
 }
 
@@ -249,16 +253,34 @@ fn summary(f: &physid::api::floating::FloatingIdentification) -> String {
             ))
         );
     }
-    for b in &f.bodies {
+    let undetermined = undetermined_masses(f);
+    for (b, &mark) in f.bodies.iter().zip(&undetermined) {
         let c = &b.consistency;
         let _ = writeln!(
             s,
-            "  {:<16} m {:>8.4} kg  min eig J {:>10.3e}  tr(JQ) {}",
+            "{} {:<16} m {:>8.4} kg  min eig J {:>10.3e}  tr(JQ) {}",
+            if mark { '~' } else { ' ' },
             b.name,
             b.pi[0],
             c.min_eig_pseudo,
             c.trace_jq.map_or("-".into(), |t| format!("{t:.3e}"))
         );
     }
+    let count = undetermined.iter().filter(|u| **u).count();
+    if count > 0 {
+        let _ = writeln!(
+            s,
+            "~ {count} of {} masses are not determined by the log on their own (no finite standard error, or one larger than the mass): the prior and the constraints set them; the base parameters below are what the log determines",
+            f.bodies.len()
+        );
+    }
     s
+}
+
+/// Per body, whether the log leaves its mass undetermined (no finite standard error, or one
+/// larger than the mass), as `identify` marks it.
+fn undetermined_masses(f: &physid::api::floating::FloatingIdentification) -> Vec<bool> {
+    (f.bodies.iter().zip(&f.mass_standard_errors))
+        .map(|(b, se)| !se.is_some_and(|e| e < b.pi[0].abs()))
+        .collect()
 }

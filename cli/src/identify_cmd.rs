@@ -437,7 +437,7 @@ fn print_fit(rep: &Identification) {
 }
 
 /// Rank, conditioning, the base parameters with their errors, and the null directions.
-fn print_identifiability(idf: &analysis::Identifiability) {
+pub(crate) fn print_identifiability(idf: &analysis::Identifiability) {
     println!(
         "\nidentifiability on the training samples: the model's {} parameters have rank {} (condition number {:.2e}; unit-norm columns, singular values above 3.2e-5 of the largest), {} unidentifiable directions",
         idf.parameters, idf.rank, idf.condition, idf.unidentifiable_total

@@ -219,6 +219,7 @@ pub(crate) fn identify_floating(
     };
     let found =
         cancellable(py, move |_| api::floating::identify_floating(&opts))?.map_err(api_error)?;
+    warn(py, &found.notices)?;
     Ok(FloatingIdentification { found })
 }
 

@@ -41,6 +41,8 @@ def test_identification_equals_the_cli_and_loads_in_pinocchio_and_mujoco(log, tm
     theirs = json.loads(cli("identify-floating", "--data", str(log), "--json", "--truth", str(truth)))
     assert ours["truth"] == theirs["truth"]
     assert ours["theta"] == theirs["theta"] and ours["identified_rms"] == theirs["identified_rms"]
+    assert ours["identifiability"] == theirs["identifiability"] and ours["notices"] == theirs["notices"]
+    assert ours["identifiability"]["rank"] < ours["identifiability"]["parameters"] == 274
     assert fit.constraints_hold and abs(fit.mass - 45.0) < 0.5
     np.testing.assert_array_equal(fit.theta, np.asarray(theirs["theta"]))
     import pinocchio as pin

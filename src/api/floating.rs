@@ -313,6 +313,16 @@ pub struct FloatingIdentification {
     /// Against the ground truth (`truth`), when given: its total mass (kg) and every body's
     /// errors.
     pub truth: Option<TruthScores>,
+    /// What the log determines, as `identify` reports it: rank and conditioning of the rows,
+    /// the base parameters with their standard errors, the unidentifiable directions, and each
+    /// parameter's standard error (infinite where the log does not determine it).
+    pub identifiability: crate::ident::analysis::Identifiability,
+    /// Per body (as `bodies`), its mass's standard error (kg); `None` (null) where the log
+    /// does not determine the mass on its own.
+    pub mass_standard_errors: Vec<Option<f64>>,
+    /// Warnings about the result: a body's mass far from the description's, saying whether
+    /// the log determines it.
+    pub notices: Vec<super::data::Notice>,
 }
 
 /// The identified robot against the ground truth.
@@ -369,17 +379,7 @@ pub fn identify_floating(
     opts.validate()?;
     let robot = opts.robot.load_floating()?.robot;
     check_outputs(opts)?;
-    let feet = if opts.feet.is_empty() {
-        quadruped_feet(&robot)
-    } else {
-        opts.feet.clone()
-    };
-    let points = resolve_feet(&robot, &feet)?;
-    let names: Vec<String> = feet.iter().map(|f| f.body.clone()).collect();
-    let log = floating_log::read_csv(&opts.data, &robot.tree().joint_names(), &names)?;
-    check_setting(opts, &log)?;
-    let samples = samples_of(&log, opts)?;
-    let ne = normal_equations(&robot, &points, &samples, opts.setting);
+    let (log, samples, ne) = rows_of_log(&robot, opts)?;
     let prior = robot.parameters();
     let found = crate::ident::identify(
         &robot,
@@ -395,6 +395,9 @@ pub fn identify_floating(
         .transpose()?;
     let identified = robot.with_parameters(&found.theta)?;
     write_models(opts, &identified)?;
+    let identifiability = crate::ident::analysis::identifiability(&robot, &ne, &found.theta);
+    let notices = far_masses(&robot, &found.bodies, &prior, &identifiability);
+    let mass_standard_errors = mass_errors(&robot, &found.bodies, &identifiability);
     let rows = (ne.samples * crate::ident::floating::rows_per_sample(&robot, opts.setting)).max(1);
     let rms = |theta: &DVector<f64>| (ne.residual_sum_of_squares(theta) / rows as f64).sqrt();
     let n = robot.joints();
@@ -421,7 +424,65 @@ pub fn identify_floating(
         status: found.solver.status,
         theta: found.theta.iter().copied().collect(),
         truth,
+        identifiability,
+        mass_standard_errors,
+        notices,
     })
+}
+
+/// The log at `opts.data` for `robot`'s feet (`opts.feet`, or the quadruped's), its samples,
+/// and their rows' normal equations in `opts.setting`.
+fn rows_of_log(
+    robot: &FloatingModel,
+    opts: &IdentifyFloatingOptions,
+) -> Result<(FloatingLog, Samples, NormalEquations), ApiError> {
+    let feet = if opts.feet.is_empty() {
+        quadruped_feet(robot)
+    } else {
+        opts.feet.clone()
+    };
+    let points = resolve_feet(robot, &feet)?;
+    let names: Vec<String> = feet.iter().map(|f| f.body.clone()).collect();
+    let log = floating_log::read_csv(&opts.data, &robot.tree().joint_names(), &names)?;
+    check_setting(opts, &log)?;
+    let samples = samples_of(&log, opts)?;
+    let ne = normal_equations(robot, &points, &samples, opts.setting);
+    Ok((log, samples, ne))
+}
+
+/// Each body's mass's standard error (kg), `None` where it is not finite.
+fn mass_errors(
+    robot: &FloatingModel,
+    bodies: &[IdentifiedBody],
+    idf: &crate::ident::analysis::Identifiability,
+) -> Vec<Option<f64>> {
+    let names = robot.parameter_names();
+    (bodies.iter())
+        .map(|b| {
+            let mass = format!("{}.m", b.name);
+            let c = names.iter().position(|n| *n == mass)?;
+            Some(idf.standard_errors[c]).filter(|e| e.is_finite())
+        })
+        .collect()
+}
+
+/// A warning for each body whose identified mass is far from the description's (`prior`),
+/// as `identify` gives them.
+fn far_masses(
+    robot: &FloatingModel,
+    bodies: &[IdentifiedBody],
+    prior: &DVector<f64>,
+    idf: &crate::ident::analysis::Identifiability,
+) -> Vec<super::data::Notice> {
+    let names = robot.parameter_names();
+    let described = |body: &str| {
+        let mass = format!("{body}.m");
+        names.iter().position(|n| *n == mass).map(|c| prior[c])
+    };
+    let masses =
+        (bodies.iter()).filter_map(|b| Some((b.name.as_str(), described(&b.name)?, b.pi[0])));
+    let remedy = "bound it (a stronger prior: --prior-weight) or log a motion that moves this body (swing phases: a trot, steps)";
+    super::identify::far_masses(masses, &names, idf, remedy)
 }
 
 /// Neither output may be an input or the other.

@@ -1012,24 +1012,36 @@ fn far_mass_warnings(
     identified: &ident::Identified,
     idf: &analysis::Identifiability,
 ) -> Vec<Notice> {
-    let names = m.parameter_names();
+    let masses = masses(m, identified).map(|(body, d, f)| (body.name.as_str(), d, f));
+    let remedy = "bound it (a prior: --regularizer logdet --prior-weight, or geometry for the ellipsoid set) or record a motion that moves this body";
+    far_masses(masses, &m.parameter_names(), idf, remedy)
+}
+
+/// [`far_mass_warnings`] for any robot: `masses` gives each body's name, described and
+/// identified mass (kg); `names` the parameters' names (`"<body>.m"` a body's mass); `remedy`
+/// what the user can do about a mass the data do not determine.
+pub(crate) fn far_masses<'a>(
+    masses: impl Iterator<Item = (&'a str, f64, f64)>,
+    names: &[String],
+    idf: &analysis::Identifiability,
+    remedy: &str,
+) -> Vec<Notice> {
     let mut out = vec![];
-    for (body, described, mass) in masses(m, identified) {
+    for (body, described, mass) in masses {
         let ratio = mass / described;
         if described < 1e-3 || (1.0 / FAR_MASS..=FAR_MASS).contains(&ratio) {
             continue;
         }
         let se = (names.iter())
-            .position(|n| *n == format!("{}.m", body.name))
+            .position(|n| *n == format!("{body}.m"))
             .map_or(f64::INFINITY, |c| idf.standard_errors[c]);
         let why = if se.is_finite() && se < mass.abs() {
             format!("the data determine it (standard error {se:.3} kg): the description's mass or the data's torque scale is off")
         } else {
-            "the data do not determine it: the constraints placed it where they allow; bound it (a prior: --regularizer logdet --prior-weight, or geometry for the ellipsoid set) or record a motion that moves this body".to_string()
+            format!("the data do not determine it: the constraints placed it where they allow; {remedy}")
         };
         out.push(Notice::warning(format!(
-            "'{}': identified mass {mass:.3} kg is {ratio:.2} times the description's {described:.3} kg; {why}",
-            body.name
+            "'{body}': identified mass {mass:.3} kg is {ratio:.2} times the description's {described:.3} kg; {why}"
         )));
     }
     out
