@@ -1622,6 +1622,37 @@ fn a_whole_robot_scenario_is_the_whole_robot_command_and_its_bad_keys_are_named(
     assert_eq!(rows(&from_scenario), rows(&from_command));
     // 2 sizes x 4 sets x 3 data settings, and the header.
     assert_eq!(rows(&from_scenario).lines().count(), 25);
+    // Under each setting's table the samples each set needs for least squares' error at the
+    // second size (one row: a crossing, a bound at the first size, or not reached) and the
+    // spread; at the end the ellipsoid set's saving per setting against the paper's.
+    let md = std::fs::read_to_string(from_scenario.join("summary.md")).unwrap();
+    assert_eq!(
+        md.matches("| least squares at | its error |").count(),
+        3,
+        "{md}"
+    );
+    let reach_rows: Vec<&str> = md.lines().filter(|l| l.starts_with("| 300 | ")).collect();
+    assert_eq!(
+        reach_rows.len(),
+        6,
+        "3 medians tables and 3 reach tables: {md}"
+    );
+    assert!(
+        (reach_rows.iter()).any(|l| l.contains("x)") || l.contains("not reached")),
+        "{md}"
+    );
+    assert_eq!(
+        md.matches("spread (largest median error over smallest): ")
+            .count(),
+        3
+    );
+    let paper = md
+        .split("## Against the paper")
+        .nth(1)
+        .expect("the paper's section");
+    for setting in ["torques_and_contacts", "torques_only", "base_only"] {
+        assert!(paper.contains(&format!("- {setting}: ")), "{paper}");
+    }
     let never = dir.path().join("never");
     let experiment = [
         "experiment",

@@ -514,3 +514,102 @@ pub fn noise_table(
     }
     Ok(md)
 }
+
+/// How many samples a constraint set needs to reach least squares' median validation error at
+/// one training size ([`set_reach`]).
+#[derive(Clone, Debug, PartialEq)]
+pub struct SetReach {
+    /// Least squares' training size (samples).
+    pub at: usize,
+    /// Least squares' median validation RMS there (N m).
+    pub target: f64,
+    /// The samples at which the set's median first reaches it, log-log interpolated between
+    /// the grid's sizes; at the grid's first size when it is already below there (then a
+    /// bound: it may need fewer). `None`: not within the grid.
+    pub samples: Option<f64>,
+    /// Whether `samples` is the grid's first size (a bound, not a crossing).
+    pub at_first_size: bool,
+}
+
+impl SetReach {
+    /// How many times fewer samples the set needs (`at / samples`), a lower bound when
+    /// `at_first_size`.
+    pub fn fewer(&self) -> Option<f64> {
+        self.samples.map(|s| self.at as f64 / s)
+    }
+}
+
+/// The median validation RMS per training size (ascending) of `set` in `setting`, from
+/// [`summary`]'s columns, at its first force noise.
+fn median_curve(
+    summary: &polars::prelude::DataFrame,
+    setting: &str,
+    set: &str,
+) -> polars::prelude::PolarsResult<(Vec<usize>, Vec<f64>)> {
+    use crate::tables::{floats, strings};
+    let noise = floats(summary, "force_noise")?;
+    let settings = strings(summary, "setting")?;
+    let sizes = floats(summary, "n_s")?;
+    let sets = strings(summary, "constraints")?;
+    let value = floats(summary, "val_rms_median")?;
+    let mut curve: Vec<(usize, f64)> = (0..value.len())
+        .filter(|&i| noise[i] == noise[0] && settings[i] == setting && sets[i] == set)
+        .map(|i| (sizes[i] as usize, value[i]))
+        .collect();
+    curve.sort_by_key(|c| c.0);
+    Ok(curve.into_iter().unzip())
+}
+
+/// For each training size after the first, the samples `set` needs in `setting` to reach
+/// least squares' (`none`) median validation error at that size: the paper's "tighter
+/// constraints reach a good model with fewer samples", measured.
+pub fn set_reach(
+    summary: &polars::prelude::DataFrame,
+    setting: &str,
+    set: &str,
+) -> polars::prelude::PolarsResult<Vec<SetReach>> {
+    let (ns, least_squares) = median_curve(summary, setting, "none")?;
+    let (set_ns, errors) = median_curve(summary, setting, set)?;
+    if set_ns != ns {
+        return Ok(vec![]);
+    }
+    Ok((1..ns.len())
+        .map(|i| {
+            let target = least_squares[i];
+            let samples = crate::motions::samples_to_reach(&ns, &errors, target);
+            SetReach {
+                at: ns[i],
+                target,
+                samples,
+                at_first_size: samples == Some(ns[0] as f64),
+            }
+        })
+        .collect())
+}
+
+/// Per training size (ascending), the largest over the smallest median validation error of
+/// `sets` in `setting`: how far apart the constraint sets are at that size (1: alike).
+pub fn spread(
+    summary: &polars::prelude::DataFrame,
+    setting: &str,
+    sets: &[&str],
+) -> polars::prelude::PolarsResult<Vec<(usize, f64)>> {
+    let curves: Vec<(Vec<usize>, Vec<f64>)> = (sets.iter())
+        .map(|set| median_curve(summary, setting, set))
+        .collect::<Result<_, _>>()?;
+    let Some((ns, _)) = curves.first() else {
+        return Ok(vec![]);
+    };
+    if curves.iter().any(|(n, _)| n != ns) {
+        return Ok(vec![]);
+    }
+    Ok((0..ns.len())
+        .map(|i| {
+            let at = curves.iter().map(|(_, e)| e[i]);
+            let (lo, hi) = at.fold((f64::INFINITY, 0.0_f64), |(lo, hi), e| {
+                (lo.min(e), hi.max(e))
+            });
+            (ns[i], hi / lo)
+        })
+        .collect())
+}

@@ -261,3 +261,65 @@ fn a_payload_on_the_trunk_is_found_from_the_description() {
     );
     assert!(named_on(&description, 4).changed.is_none());
 }
+
+/// A summary table of one setting with the given medians per set (sizes 100, 300, 1000).
+fn summary_of(curves: &[(&str, [f64; 3])]) -> polars::prelude::DataFrame {
+    use polars::prelude::*;
+    let mut cols: [Vec<f64>; 3] = Default::default();
+    let mut sets = vec![];
+    for (set, values) in curves {
+        for (n, v) in [100.0, 300.0, 1000.0].iter().zip(values) {
+            cols[0].push(*n);
+            cols[1].push(*v);
+            cols[2].push(2.0);
+            sets.push(set.to_string());
+        }
+    }
+    let settings = vec!["torques_only".to_string(); sets.len()];
+    DataFrame::new_infer_height(vec![
+        Column::new("force_noise".into(), &cols[2]),
+        Column::new("setting".into(), settings),
+        Column::new("n_s".into(), &cols[0]),
+        Column::new("constraints".into(), sets),
+        Column::new("val_rms_median".into(), &cols[1]),
+    ])
+    .unwrap()
+}
+
+#[test]
+fn the_samples_a_set_needs_for_least_squares_error_are_interpolated_log_log() {
+    use crate::whole_robot::{set_reach, spread};
+    // Least squares 100, 10, 1 N m at 100, 300, 1000 samples; the ellipsoid set 10, 1, 0.9.
+    let s = summary_of(&[
+        ("none", [100.0, 10.0, 1.0]),
+        ("ellipsoid", [10.0, 1.0, 0.9]),
+    ]);
+    let reach = set_reach(&s, "torques_only", "ellipsoid").unwrap();
+    assert_eq!(reach.len(), 2);
+    // At 300 samples least squares has 10, which the ellipsoid set has at 100 already.
+    assert_eq!((reach[0].at, reach[0].target), (300, 10.0));
+    assert_eq!(reach[0].samples, Some(100.0));
+    assert!(reach[0].at_first_size);
+    assert!((reach[0].fewer().unwrap() - 3.0).abs() < 1e-12);
+    // At 1000 least squares has 1, which the ellipsoid set reaches at 300.
+    assert!(
+        (reach[1].samples.unwrap() - 300.0).abs() < 1e-9,
+        "{:?}",
+        reach[1]
+    );
+    assert!(!reach[1].at_first_size);
+    // A target below the set's floor (least squares 0.5 at 1000, the set 0.9) is never reached.
+    let s = summary_of(&[
+        ("none", [100.0, 10.0, 0.5]),
+        ("ellipsoid", [10.0, 1.0, 0.9]),
+    ]);
+    let reach = set_reach(&s, "torques_only", "ellipsoid").unwrap();
+    assert_eq!(reach[1].samples, None);
+    assert_eq!(reach[1].fewer(), None);
+    // The spread: 100/10, 10/1, 0.9/0.5 at the three sizes.
+    let spread = spread(&s, "torques_only", &["none", "ellipsoid"]).unwrap();
+    let expected = [(100, 10.0), (300, 10.0), (1000, 1.8)];
+    for ((n, k), (m, l)) in spread.iter().zip(expected) {
+        assert!(*n == m && (k - l).abs() < 1e-12, "{spread:?}");
+    }
+}
