@@ -253,6 +253,7 @@ fn summary(f: &physid::api::floating::FloatingIdentification) -> String {
             ))
         );
     }
+    s.push_str(&change_text(&f.change));
     let undetermined = undetermined_masses(f);
     for (b, &mark) in f.bodies.iter().zip(&undetermined) {
         let c = &b.consistency;
@@ -275,6 +276,38 @@ fn summary(f: &physid::api::floating::FloatingIdentification) -> String {
         );
     }
     s
+}
+
+/// The body the log says changed against the description, or that none did.
+fn change_text(c: &physid::api::floating::DescriptionCheck) -> String {
+    let line = |b: &physid::diagnose::floating::BodyChange| {
+        let at = b.com.map_or(String::new(), |p| {
+            format!(" at ({:.3}, {:.3}, {:.3}) m in its frame", p.x, p.y, p.z)
+        });
+        format!(
+            "{} {:+.3} kg{at} (F {:.1}, residual -{:.1} %)",
+            b.body,
+            b.mass,
+            b.f,
+            100.0 * b.reduction
+        )
+    };
+    match &c.changed {
+        Some(b) if c.also_fit.is_empty() => {
+            format!("against the description: {} changed\n", line(b))
+        }
+        Some(b) => format!(
+            "against the description: {} changed; fitting almost as well: {}\n",
+            line(b),
+            c.also_fit.join(", ")
+        ),
+        None => format!(
+            "against the description: no body changed (F above {} and residual -{} % needed; best {})\n",
+            c.min_f,
+            100.0 * c.min_reduction,
+            c.candidates.first().map_or("-".into(), line)
+        ),
+    }
 }
 
 /// Per body, whether the log leaves its mass undetermined (no finite standard error, or one

@@ -42,6 +42,7 @@ def test_identification_equals_the_cli_and_loads_in_pinocchio_and_mujoco(log, tm
     assert ours["truth"] == theirs["truth"]
     assert ours["theta"] == theirs["theta"] and ours["identified_rms"] == theirs["identified_rms"]
     assert ours["identifiability"] == theirs["identifiability"] and ours["notices"] == theirs["notices"]
+    assert ours["change"] == theirs["change"] and ours["change"]["changed"] is None
     assert ours["identifiability"]["rank"] < ours["identifiability"]["parameters"] == 274
     assert fit.constraints_hold and abs(fit.mass - 45.0) < 0.5
     np.testing.assert_array_equal(fit.theta, np.asarray(theirs["theta"]))

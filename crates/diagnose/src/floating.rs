@@ -16,7 +16,7 @@ use physid_ident::{NormalEquations, Parameterized};
 use serde::Serialize;
 
 /// One body's best change on the new run.
-#[derive(Clone, Debug, PartialEq, Serialize)]
+#[derive(Clone, Debug, PartialEq, Serialize, serde::Deserialize)]
 pub struct BodyChange {
     /// Body name.
     pub body: String,
@@ -113,12 +113,14 @@ fn pseudo_solve(a: &DMatrix<f64>, b: &DVector<f64>) -> (DVector<f64>, usize) {
 
 /// What the changes name: the body whose change explains the run best, if its evidence is
 /// strong enough, with the bodies that explain it almost as well.
-#[derive(Clone, Debug, PartialEq, Serialize)]
+#[derive(Clone, Debug, PartialEq, Serialize, serde::Deserialize)]
 pub struct Named {
     /// The changed body, if any passes `min_f` and `min_reduction`.
     pub changed: Option<BodyChange>,
-    /// Bodies whose change leaves at most `1.5` times the named one's unexplained residual:
-    /// the data cannot tell them apart from it (e.g. a rotor carried rigidly by the same body).
+    /// Bodies whose change leaves at most `1.5` times the named one's unexplained residual and
+    /// removes at least `0.8` of what it removes: the data cannot tell them apart from it (e.g.
+    /// a rotor carried rigidly by the same body). Both: where the named change removes a small
+    /// share, the first alone admits every body.
     pub also_fit: Vec<String>,
 }
 
@@ -138,7 +140,7 @@ pub fn name_change(changes: &[BodyChange], min_f: f64, min_reduction: f64) -> Na
     let left = 1.0 - top.reduction;
     let also_fit = changes[1..]
         .iter()
-        .filter(|c| 1.0 - c.reduction <= 1.5 * left)
+        .filter(|c| 1.0 - c.reduction <= 1.5 * left && c.reduction >= 0.8 * top.reduction)
         .map(|c| c.body.clone())
         .collect();
     Named {
