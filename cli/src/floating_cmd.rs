@@ -254,6 +254,14 @@ fn summary(f: &physid::api::floating::FloatingIdentification) -> String {
         );
     }
     s.push_str(&change_text(&f.change));
+    s.push_str(&bodies_text(f));
+    s
+}
+
+/// Each body's mass and consistency margins, `~` where the log does not determine the mass.
+fn bodies_text(f: &physid::api::floating::FloatingIdentification) -> String {
+    use std::fmt::Write;
+    let mut s = String::new();
     let undetermined = undetermined_masses(f);
     for (b, &mark) in f.bodies.iter().zip(&undetermined) {
         let c = &b.consistency;

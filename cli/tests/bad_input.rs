@@ -1445,6 +1445,19 @@ fn a_floating_log_and_its_options_are_checked_naming_what_is_wrong() {
     }
     let (ok, err) = physid(&["simulate-floating", "--out", log_arg, "--duration", "2"]);
     assert!(ok, "{err}");
+    // The text report: which body changed against the description (none: the log is of the
+    // description), the bodies with the masses the log does not determine marked, the base
+    // parameters.
+    let (code, out, err) = common::physid(&["identify-floating", "--data", log_arg]);
+    assert_eq!(code, 0, "{err}");
+    for said in [
+        "against the description: no body changed",
+        "masses are not determined by the log on their own",
+        "base parameters (what the data determine)",
+        "\n  β1 ",
+    ] {
+        assert!(out.contains(said), "{said}: {out}");
+    }
     // The ground truth written beside a log never replaces the robot simulated.
     let twin = dir.path().join("twin.truth.urdf");
     let (ok, err) = physid(&[
