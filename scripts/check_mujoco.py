@@ -2,12 +2,15 @@
 MJCF: the Cheetah-3 leg with rotors as armature (compared with physid's reflected-inertia
 model), the link-only leg, the KUKA LWR4+, and two floating robots with a free joint (the
 quadruped with rotors as armature, and Solo12 from its URDF). Also reports how large the rotor gyroscopic
-coupling is that the armature model drops (physid's full model minus MuJoCo). Exits non-zero
-on disagreement.
+coupling is that the armature model drops (physid's full model minus MuJoCo), and checks
+physid's contact model against MuJoCo's on the quadruped standing still (the feet's forces, the
+trunk's height and the joints at rest). Exits non-zero on disagreement.
 
 usage: python scripts/check_mujoco.py [--physid PATH]
 """
+import csv
 import json
+import os
 import sys
 import tempfile
 
@@ -117,6 +120,88 @@ def check_identified_quadruped(report, binary, directory):
     mj_compare_floating(report, "identified quadruped (its URDF)", binary, ["--robot", urdf], directory)
 
 
+def mj_standing_quadruped(sim, xml, radius):
+    """The exported quadruped in MuJoCo with a floor and a sphere of `radius` at each foot
+    point (the only geoms that collide), friction μ of physid's ground, joint friction off
+    (physid's smoothed Coulomb friction vanishes at rest), at 0.1 ms steps."""
+    text = open(xml).read()
+    mu = sim["ground"][2]
+    for f in sim["feet"]:
+        i = text.index(f'<body name="{f["body"]}"')
+        j = text.index("</body>", i)  # a shank carries no other body
+        p = " ".join(str(v) for v in f["point"])
+        text = (text[:j] + f'<geom name="foot_{f["body"]}" type="sphere" size="{radius}" pos="{p}" '
+                f'contype="1" conaffinity="1" friction="{mu} 0.005 0.0001"/>' + text[j:])
+    text = text.replace("<worldbody>", '<worldbody><geom name="floor" type="plane" size="10 10 0.1" '
+                        f'contype="1" conaffinity="1" friction="{mu} 0.005 0.0001"/>', 1)
+    text = text.replace('timestep="0.001" integrator="RK4"', 'timestep="0.0001" integrator="implicitfast"')
+    model = mujoco.MjModel.from_xml_string(text)
+    model.dof_frictionloss[:] = 0
+    model.jnt_limited[:] = 0
+    return model
+
+
+def mj_feet_forces(model, data):
+    """The ground's force on each foot (world frame), by foot body name."""
+    out = {}
+    for c in range(data.ncon):
+        con = data.contact[c]
+        f6 = np.zeros(6)
+        mujoco.mj_contactForce(model, data, c, f6)
+        names = {model.geom(con.geom1).name, model.geom(con.geom2).name} - {"floor"}
+        out[names.pop().removeprefix("foot_")] = con.frame.reshape(3, 3).T @ f6[:3]
+    return out
+
+
+def check_contact_standing_still(report, binary, directory, seconds=4.0):
+    """physid's ground (a spring-damper under each point foot, regularized Coulomb friction)
+    against MuJoCo's soft contacts: the quadruped standing still under the same PD law from the
+    same initial state (`simulate-floating --still --sensors exact`). The robot is symmetric left
+    to right, so statics fix how its feet share the weight from where the feet and the centre of
+    mass are: this tests the ground's equilibrium and the loaded legs, not the contact's
+    dynamics. After `seconds` the feet's normal forces must agree within 0.5 % of the weight. The trunk's height above its feet must
+    agree within 1 mm (each engine's own penetration removed: physid's foot sinks F/k, MuJoCo's
+    sphere centre is read). The joints agree within 0.01 rad: the feet's small tangential forces
+    (a few N, set by how each engine's friction sticks during the settling) bend the legs by
+    parts of a hundredth of a radian through the PD gains."""
+    log = os.path.join(directory, "still.csv")
+    sim = json.loads(run(binary, "simulate-floating", "--still", "--sensors", "exact", "--duration",
+                         str(seconds), "--out", log, "--json"))
+    xml = os.path.join(directory, "still.xml")
+    run(binary, "export", "--floating-base", "--robot", sim["truth"], "--mjcf", xml)
+    radius = 0.001
+    model = mj_standing_quadruped(sim, xml, radius)
+    data = mujoco.MjData(model)
+    names = [model.joint(j).name for j in range(1, model.njnt)]
+    assert names == sim["joints"], f"joint order differs: {names}"
+    with open(log) as f:
+        rows = list(csv.DictReader(f))
+    base = ["base_x", "base_y", "base_z", "base_qw", "base_qx", "base_qy", "base_qz"]
+    data.qpos[:] = [float(rows[0][k]) for k in base] + [float(rows[0]["q_" + n]) for n in names]
+    data.qpos[2] += radius  # the sphere's bottom where physid's point foot is
+    (kp, kd), q_star = sim["gains"], np.tile(sim["posture"], 4)
+    for _ in range(int(round(float(rows[-1]["t"]) / model.opt.timestep))):
+        data.qfrc_applied[6:] = kp * (q_star - data.qpos[7:]) - kd * data.qvel[6:]
+        mujoco.mj_step(model, data)
+    mujoco.mj_kinematics(model, data)
+    theirs, last = mj_feet_forces(model, data), rows[-1]
+    weight = float(model.body_mass.sum()) * 9.81
+    ours = {f["body"]: np.array([float(last[f"force_{f['body']}_{a}"]) for a in "xyz"]) for f in sim["feet"]}
+    report.add("quadruped standing still: each foot's normal force against MuJoCo, share of the weight",
+               max(abs(ours[b][2] - theirs.get(b, np.zeros(3))[2]) for b in ours) / weight, 5e-3)
+    k = sim["ground"][0]
+    our_feet_z = np.mean([-ours[b][2] / k for b in ours])
+    their_feet_z = np.mean([data.geom_xpos[model.geom("foot_" + b).id][2] for b in ours])
+    report.add("quadruped standing still: the trunk's height above its feet against MuJoCo (m)",
+               abs((float(last["base_z"]) - our_feet_z) - (data.qpos[2] - their_feet_z)), 1e-3)
+    q_ours = np.array([float(last["q_" + n]) for n in names])
+    report.add("quadruped standing still: joint angles at rest against MuJoCo (rad)",
+               float(np.abs(q_ours - data.qpos[7:]).max()), 1e-2)
+    tangential = max(np.linalg.norm(f[:2]) / f[2] for f in list(ours.values()) + list(theirs.values()))
+    report.add("quadruped standing still: the feet stick (tangential / normal force, both engines, "
+               f"below μ = {sim['ground'][2]})", tangential, sim["ground"][2])
+
+
 def main():
     binary = physid_bin(sys.argv)
     report = Report("check_mujoco")
@@ -142,6 +227,7 @@ def main():
         mj_compare_floating(report, "quadruped, rotors as armature", binary, ["--robot", "cheetah3"], d)
         mj_compare_floating(report, "Solo12 (floating URDF)", binary, ["--robot", SOLO12_URDF], d)
         check_identified_quadruped(report, binary, d)
+        check_contact_standing_still(report, binary, d)
     report.finish()
 
 

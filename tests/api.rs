@@ -469,6 +469,7 @@ fn floating_log(
         rate: 1000.0,
         seed,
         trot: None,
+        still: false,
         sensors,
         out: out.clone(),
     };
@@ -637,6 +638,64 @@ fn loaded_quadruped(
 }
 
 #[test]
+fn standing_still_the_feet_carry_the_robot_s_weight_and_the_trunk_rests() {
+    // `still`: the posture held, no weight shifting. After the first second the four feet's
+    // normal forces sum to the weight (45 kg) and the trunk does not move.
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("still.csv");
+    physid::api::floating::simulate_floating(&physid::api::floating::SimulateFloatingOptions {
+        robot: physid::api::model::RobotOptions::new("cheetah3"),
+        duration: 2.0,
+        rate: 1000.0,
+        seed: 1,
+        trot: None,
+        still: true,
+        sensors: physid::sim::floating_sensors::Sensors::exact(),
+        out: out.clone(),
+    })
+    .unwrap();
+    let text = std::fs::read_to_string(&out).unwrap();
+    let header: Vec<&str> = text.lines().next().unwrap().split(',').collect();
+    let col = |name: &str| header.iter().position(|h| *h == name).unwrap();
+    let last: Vec<f64> = (text.lines().last().unwrap().split(','))
+        .map(|v| v.parse().unwrap())
+        .collect();
+    let feet = ["fr_shank", "fl_shank", "hr_shank", "hl_shank"];
+    let normal: f64 = feet
+        .iter()
+        .map(|f| last[col(&format!("force_{f}_z"))])
+        .sum();
+    let weight = 45.0 * physid::model::STANDARD_GRAVITY;
+    assert!(
+        (normal / weight - 1.0).abs() < 1e-3,
+        "{normal} N of {weight}"
+    );
+    for f in feet {
+        let share = last[col(&format!("force_{f}_z"))] / weight;
+        assert!((0.15..0.35).contains(&share), "{f}: {share}");
+    }
+    for v in [
+        "base_vx", "base_vy", "base_vz", "base_wx", "base_wy", "base_wz",
+    ] {
+        assert!(last[col(v)].abs() < 1e-3, "{v} = {}", last[col(v)]);
+    }
+    // Standing still and trotting are two different runs.
+    let both = physid::api::floating::SimulateFloatingOptions {
+        robot: physid::api::model::RobotOptions::new("cheetah3"),
+        duration: 2.0,
+        rate: 1000.0,
+        seed: 1,
+        trot: Some((0.15, 2.5)),
+        still: true,
+        sensors: Default::default(),
+        out: dir.path().join("never.csv"),
+    };
+    let err = physid::api::floating::simulate_floating(&both).unwrap_err();
+    assert!(err.to_string().contains("still and trot"), "{err}");
+    assert!(!dir.path().join("never.csv").exists());
+}
+
+#[test]
 fn a_trotting_log_names_the_shank_that_carries_half_a_kilogram_and_no_body_when_unchanged() {
     // Trotting in place, default sensors, 6 s, identified from the unloaded description. On
     // unchanged logs the best body's change removes about 1 % of the residual (the filter's,
@@ -651,6 +710,7 @@ fn a_trotting_log_names_the_shank_that_carries_half_a_kilogram_and_no_body_when_
             rate: 1000.0,
             seed,
             trot: Some((0.15, 2.5)),
+            still: false,
             sensors: Default::default(),
             out: out.clone(),
         })

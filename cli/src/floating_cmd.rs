@@ -31,6 +31,10 @@ pub struct SimulateArgs {
     seed: u64,
     #[command(flatten)]
     trot: TrotArgs,
+    /// Stand still, holding the standing posture (no weight shifting): how the feet share the
+    /// robot's weight.
+    #[arg(long)]
+    still: bool,
     /// Sensor noise, `key=value` pairs, comma-separated (keys: torque_noise, force_noise,
     /// gyro_noise, gyro_bias, velocity_noise, velocity_bias, tilt_noise, position_noise,
     /// encoder_step; and velocities, forces, contacts = true/false for what is logged);
@@ -75,6 +79,7 @@ pub fn run_simulate(a: SimulateArgs) -> anyhow::Result<()> {
         rate: a.rate,
         seed: a.seed,
         trot: a.trot.step()?,
+        still: a.still,
         sensors: sensors(&a.sensors)?,
         out: a.out,
     };

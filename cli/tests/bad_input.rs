@@ -1430,6 +1430,7 @@ fn a_floating_log_and_its_options_are_checked_naming_what_is_wrong() {
             &["--trot", "0.2,1.5", "--duration", "4"][..],
             "the robot fell at t = ",
         ),
+        (&["--trot", "0.15,2.5", "--still"][..], "still and trot"),
         (
             &[
                 "--robot",

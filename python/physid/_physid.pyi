@@ -648,6 +648,7 @@ def simulate_floating(
     rate: float = 1000.0,
     seed: int = 1,
     trot: Optional[tuple[float, float]] = None,
+    still: bool = False,
     sensors: Union[dict[str, Any], str, None] = None,
 ) -> dict[str, Any]:
     """Simulate the quadruped standing and log it as its sensors would (CSV), as `physid
@@ -664,6 +665,8 @@ def simulate_floating(
     seed: Seeds the motion and the noise. Default: 1.
     trot: Trot in place instead of standing: `CROUCH,HZ`, each diagonal pair of legs in turn
         crouched by up to CROUCH rad of the hip (its feet swing) at HZ steps per second.
+    still: Stand still, holding the standing posture (no weight shifting): how the feet share
+        the robot's weight.
     sensors: The sensors' noise and what they log: a dict over the default sensors' fields
         (torque_noise, force_noise, gyro_noise, gyro_bias, velocity_noise, velocity_bias,
         tilt_noise, position_noise, encoder_step; velocities, forces, contacts: True/False), or

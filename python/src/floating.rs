@@ -106,7 +106,7 @@ fn robot_options(robot: PathBuf, no_rotors: bool) -> RobotOptions {
 #[doc = include_str!("../keywords/simulate_floating.txt")]
 #[pyfunction]
 #[pyo3(signature = (out, *, robot = PathBuf::from("cheetah3"), no_rotors = false,
-    duration = 10.0, rate = 1000.0, seed = 1, trot = None, sensors = None))]
+    duration = 10.0, rate = 1000.0, seed = 1, trot = None, still = false, sensors = None))]
 #[allow(clippy::too_many_arguments)]
 pub(crate) fn simulate_floating<'py>(
     py: Python<'py>,
@@ -117,6 +117,7 @@ pub(crate) fn simulate_floating<'py>(
     rate: f64,
     seed: u64,
     trot: Option<(f64, f64)>,
+    still: bool,
     sensors: Option<&Bound<'py, PyAny>>,
 ) -> PyResult<Bound<'py, PyAny>> {
     let opts = SimulateFloatingOptions {
@@ -125,6 +126,7 @@ pub(crate) fn simulate_floating<'py>(
         rate,
         seed,
         trot,
+        still,
         sensors: sensors_of(py, sensors)?,
         out,
     };

@@ -95,12 +95,16 @@ def test_bad_identification_keywords_are_named(log, kw, message):
         (dict(duration=0.0), "duration"),
         (dict(rate=50.0), "rate"),
         (dict(trot=(0.2, 1.5), duration=4.0), "the robot fell at t = "),
+        (dict(trot=(0.15, 2.5), still=True), "still and trot"),
     ],
 )
 def test_bad_simulation_keywords_are_named(tmp_path, kw, message):
     out = tmp_path / "never.csv"
     with pytest.raises(physid.InputError, match=message):
         physid.simulate_floating(out, **kw)
+    assert not out.exists()
+    with pytest.raises(TypeError, match="'still'"):
+        physid.simulate_floating(out, still="yes")
     assert not out.exists()
 
 

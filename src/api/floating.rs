@@ -104,6 +104,9 @@ pub struct SimulateFloatingOptions {
     /// Trot in place: `(crouch rad, frequency Hz)` of each diagonal pair's steps
     /// ([`crate::sim::floating::Standing::step`]); `None`: stand.
     pub trot: Option<(f64, f64)>,
+    /// Stand still holding the standing posture (no weight shifting, no steps): the robot's
+    /// weight and how its feet share it, as a check of the contact model.
+    pub still: bool,
     /// The sensors.
     pub sensors: Sensors,
     /// The CSV log to write (docs/floating-base.md, "Logs"); the robot simulated, the ground
@@ -136,6 +139,11 @@ impl SimulateFloatingOptions {
                 self.rate,
             ));
         }
+        if self.still && self.trot.is_some() {
+            return Err(ApiError::Options(
+                "still and trot: a robot standing still does not trot; give one".into(),
+            ));
+        }
         self.sensors.validate().map_err(ApiError::Options)
     }
 }
@@ -155,6 +163,12 @@ pub struct FloatingSimulated {
     pub feet: Vec<Foot>,
     /// Share of the feet's samples in contact.
     pub contact_share: f64,
+    /// The joints' PD law, `τ = k_p (q* − q) + k_d (q̇* − q̇)`: `[k_p N m/rad, k_d N m s/rad]`.
+    pub gains: [f64; 2],
+    /// The standing posture `q*` of every leg, `[ab/ad, hip, knee]` (rad).
+    pub posture: [f64; 3],
+    /// The ground: `[k N/m, c N s/m, μ, slip speed m/s]` (docs/floating-base.md).
+    pub ground: [f64; 4],
 }
 
 /// Simulates and logs a floating-base run ([`SimulateFloatingOptions`]).
@@ -186,6 +200,14 @@ pub fn simulate_floating(opts: &SimulateFloatingOptions) -> Result<FloatingSimul
         step: opts.trot.unwrap_or((0.0, 0.0)),
         ..Default::default()
     };
+    let motion = crate::sim::floating::Standing {
+        amplitude: if opts.still {
+            [0.0; 3]
+        } else {
+            motion.amplitude
+        },
+        ..motion
+    };
     let run = crate::sim::floating::standing(&robot, &points, &motion)
         .map_err(|e| ApiError::Options(e.to_string()))?;
     let joints = robot.tree().joint_names();
@@ -197,6 +219,7 @@ pub fn simulate_floating(opts: &SimulateFloatingOptions) -> Result<FloatingSimul
         crate::io::urdf::floating_to_string(&robot).as_bytes(),
     )?;
     let down = run.contact.iter().filter(|f| f.z > 0.0).count();
+    let g = &motion.ground;
     Ok(FloatingSimulated {
         out: opts.out.clone(),
         truth,
@@ -204,6 +227,9 @@ pub fn simulate_floating(opts: &SimulateFloatingOptions) -> Result<FloatingSimul
         joints,
         feet,
         contact_share: down as f64 / run.contact.len().max(1) as f64,
+        gains: [motion.gains.0, motion.gains.1],
+        posture: motion.posture,
+        ground: [g.stiffness, g.damping, g.friction, g.slip_speed],
     })
 }
 
