@@ -288,12 +288,13 @@ fn paper_comparison(
             md,
             "\nWhy fewer in {}: each training set is the first n_s samples of one run, so a \
              smaller set is also a shorter stretch of the motion ({first} samples are {:.2} s). \
-             The sets differ while the stretch is too short to determine the robot and come \
-             together once it is long enough (the spread under the table); where the rows \
-             determine the robot early, that leaves few sizes in which constraints save \
+             The sets differ while the stretch is too short to pin what the validation run \
+             needs and come together once it is long enough (the spread under the table); \
+             where the rows pin it early, that leaves few sizes in which constraints save \
              samples, and the grid's first size bounds the saving there. Least squares here is \
              also not the paper's: every set carries the description as a prior of weight {}, \
-             without which least squares has no unique answer on a short stretch.\n",
+             without which least squares has no unique answer (the directions the rows never \
+             see, which `identify-floating` lists as unidentifiable, are the prior's alone).\n",
             short.join(", "),
             first as f64 / spec.motion.rate,
             spec.prior_weight
