@@ -452,6 +452,7 @@ fn floating_options(data: &std::path::Path) -> physid::api::floating::IdentifyFl
         out_urdf: None,
         out_mjcf: None,
         truth: None,
+        baseline: None,
     }
 }
 
@@ -693,6 +694,86 @@ fn standing_still_the_feet_carry_the_robot_s_weight_and_the_trunk_rests() {
     let err = physid::api::floating::simulate_floating(&both).unwrap_err();
     assert!(err.to_string().contains("still and trot"), "{err}");
     assert!(!dir.path().join("never.csv").exists());
+}
+
+#[test]
+fn against_a_baseline_log_a_description_with_errors_names_the_payload_and_not_its_own_errors() {
+    // A description with 10 % errors on every body's mass and inertia. Against it, an
+    // unchanged robot's log differs (its own errors); against its fit to a baseline log of the
+    // unchanged robot standing, the same robot standing again differs in nothing, 5 kg on the
+    // trunk is named and weighed, and a trot (which the standing baseline hardly excites in the
+    // directions it differs in) is set aside unnamed.
+    use physid::api::floating::{identify_floating, quadruped_feet, IdentifyFloatingOptions};
+    let dir = tempfile::tempdir().unwrap();
+    let truth = physid::model::quadruped::quadruped();
+    let mut theta = truth.parameters();
+    for (b, (_, column, _)) in physid::ident::Parameterized::inertial_bodies(&truth)
+        .into_iter()
+        .enumerate()
+    {
+        let factor = if b % 2 == 0 { 1.1 } else { 0.9 };
+        for k in [0, 4, 5, 6, 7, 8, 9] {
+            theta[column + k] *= factor;
+        }
+        for k in 1..4 {
+            theta[column + k] *= factor;
+        }
+    }
+    let described = dir.path().join("cad.urdf");
+    let cad = truth.with_parameters(&theta).unwrap();
+    std::fs::write(&described, physid::io::urdf::floating_to_string(&cad)).unwrap();
+    let log = |robot: &str, seed: u64, trot: Option<(f64, f64)>| {
+        let out = dir
+            .path()
+            .join(format!("{seed}_{}_{}.csv", robot.len(), trot.is_some()));
+        physid::api::floating::simulate_floating(&physid::api::floating::SimulateFloatingOptions {
+            robot: physid::api::model::RobotOptions::new(robot),
+            duration: 6.0,
+            rate: 1000.0,
+            seed,
+            trot,
+            still: false,
+            sensors: Default::default(),
+            out: out.clone(),
+        })
+        .unwrap();
+        out
+    };
+    let baseline = log("cheetah3", 1, None);
+    let check = |data: &std::path::Path, baseline: Option<&std::path::Path>| {
+        identify_floating(&IdentifyFloatingOptions {
+            robot: physid::api::model::RobotOptions::new(described.to_str().unwrap()),
+            feet: quadruped_feet(&truth),
+            constraints: ConstraintSet::Consistent,
+            baseline: baseline.map(|b| b.to_path_buf()),
+            ..floating_options(data)
+        })
+        .unwrap()
+        .change
+    };
+    let unchanged = log("cheetah3", 2, None);
+    let against_description = check(&unchanged, None);
+    assert!(
+        against_description.changed.is_some(),
+        "{against_description:?}"
+    );
+    let against_baseline = check(&unchanged, Some(&baseline));
+    assert!(against_baseline.changed.is_none(), "{against_baseline:?}");
+    assert!(against_baseline.unseen_by_baseline.is_none());
+    let loaded = loaded_quadruped(dir.path(), "trunk", 5.0, [0.1, 0.0, 0.08]);
+    let payload = check(&log(loaded.to_str().unwrap(), 2, None), Some(&baseline));
+    let named = payload.changed.as_ref().expect("the trunk named");
+    assert_eq!(named.body, "trunk");
+    assert!((named.mass - 5.0).abs() < 0.15, "{named:?}");
+    assert!(payload.baseline_visibility.unwrap() > 0.5, "{payload:?}");
+    let trot = check(&log("cheetah3", 2, Some((0.15, 2.5))), Some(&baseline));
+    assert!(trot.changed.is_none(), "{trot:?}");
+    let seen = trot.baseline_visibility.unwrap();
+    assert!(
+        seen < physid::api::floating::MIN_BASELINE_VISIBILITY,
+        "{seen}"
+    );
+    assert!(trot.unseen_by_baseline.is_some());
 }
 
 #[test]

@@ -161,6 +161,11 @@ pub struct IdentifyArgs {
     /// Without contact_<foot> columns, a foot is down where its normal force exceeds this (N).
     #[arg(long, default_value_t = 10.0, allow_negative_numbers = true)]
     contact_force: f64,
+    /// A log of the robot before a change: which body changed is asked against the
+    /// description fitted to it (without it, against the description, whose own errors show
+    /// as differences).
+    #[arg(long = "baseline-data", value_name = "CSV")]
+    baseline: Option<PathBuf>,
     /// Write the identified robot as URDF (the trunk its root link; pinocchio: free flyer).
     #[arg(long)]
     out_urdf: Option<PathBuf>,
@@ -205,6 +210,7 @@ pub fn run_identify(a: IdentifyArgs) -> anyhow::Result<()> {
         out_urdf: a.out_urdf,
         out_mjcf: a.out_mjcf,
         truth: a.truth,
+        baseline: a.baseline,
     };
     let found = identify_floating(&opts)?;
     for notice in &found.notices {
@@ -291,7 +297,8 @@ fn bodies_text(f: &physid::api::floating::FloatingIdentification) -> String {
     s
 }
 
-/// The body the log says changed against the description, or that none did.
+/// The body the log shows differing from the reference (the description, or its fit to the
+/// baseline log), or that none does.
 fn change_text(c: &physid::api::floating::DescriptionCheck) -> String {
     let line = |b: &physid::diagnose::floating::BodyChange| {
         let at = b.com.map_or(String::new(), |p| {
@@ -305,17 +312,34 @@ fn change_text(c: &physid::api::floating::DescriptionCheck) -> String {
             100.0 * b.reduction
         )
     };
-    match &c.changed {
-        Some(b) if c.also_fit.is_empty() => {
-            format!("against the description: {} changed\n", line(b))
-        }
-        Some(b) => format!(
-            "against the description: {} changed; fitting almost as well: {}\n",
+    let also = if c.also_fit.is_empty() {
+        String::new()
+    } else {
+        format!("; fitting almost as well: {}", c.also_fit.join(", "))
+    };
+    if let (Some(b), Some(base), Some(seen)) =
+        (&c.unseen_by_baseline, &c.baseline, c.baseline_visibility)
+    {
+        return format!(
+            "against the baseline log {}: the log differs most in {}, which the baseline's motion hardly excites ({:.1} % of this log's): there the baseline cannot tell a change from the description's own error; no change is named (record the baseline with this log's motion)\n",
+            base.display(),
             line(b),
-            c.also_fit.join(", ")
+            100.0 * seen
+        );
+    }
+    match (&c.changed, &c.baseline) {
+        (Some(b), Some(base)) => format!(
+            "against the baseline log {}: {} changed{also}\n",
+            base.display(),
+            line(b)
         ),
-        None => format!(
-            "against the description: no body changed (F above {} and residual -{} % needed; best {})\n",
+        (Some(b), None) => format!(
+            "against the description: the log differs most in {}{also}; a change of the robot or the description's own error (--baseline-data, a log of the robot before the change, tells them apart)\n",
+            line(b)
+        ),
+        (None, base) => format!(
+            "against the {}: no body differs (F above {} and residual -{} % needed; best {})\n",
+            base.as_ref().map_or("description".into(), |b| format!("baseline log {}", b.display())),
             c.min_f,
             100.0 * c.min_reduction,
             c.candidates.first().map_or("-".into(), line)

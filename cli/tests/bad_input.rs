@@ -1452,7 +1452,7 @@ fn a_floating_log_and_its_options_are_checked_naming_what_is_wrong() {
     let (code, out, err) = common::physid(&["identify-floating", "--data", log_arg]);
     assert_eq!(code, 0, "{err}");
     for said in [
-        "against the description: no body changed",
+        "against the description: no body differs",
         "masses are not determined by the log on their own",
         "base parameters (what the data determine)",
         "\n  β1 ",
@@ -1490,6 +1490,11 @@ fn a_floating_log_and_its_options_are_checked_naming_what_is_wrong() {
         never_arg,
     ];
     for (args, said) in [
+        (&["--baseline-data", log_arg][..], "the log itself"),
+        (
+            &["--baseline-data", "/nonexistent/before.csv"][..],
+            "/nonexistent/before.csv",
+        ),
         (
             &["--foot", "fr_shank"][..],
             "--foot 'fr_shank': expected BODY:X,Y,Z",

@@ -687,6 +687,7 @@ def identify_floating(
     out_urdf: Optional[Path] = None,
     out_mjcf: Optional[Path] = None,
     truth: Optional[Path] = None,
+    baseline: Optional[Path] = None,
 ) -> FloatingIdentification:
     """Identify a floating robot from one log, its description the prior, as `physid
     identify-floating` does.
@@ -713,4 +714,5 @@ def identify_floating(
     out_mjcf: Write the identified robot as MJCF (a free joint on the trunk).
     truth: The ground truth, a floating URDF of the same robot (`simulate-floating` writes it
         beside its log as <log>.truth.urdf): every body's errors against it are reported.
+    baseline: A results folder to compare against.
     """

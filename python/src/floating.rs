@@ -180,7 +180,7 @@ fn sensors_of(
 #[pyo3(signature = (data, *, robot = PathBuf::from("cheetah3"), no_rotors = false,
     setting = "torques-and-contacts", constraints = "ellipsoid", prior_weight = 1e-4,
     cutoff = None, foot = None, contact_force = 10.0, out_urdf = None, out_mjcf = None,
-    truth = None))]
+    truth = None, baseline = None))]
 #[allow(clippy::too_many_arguments)]
 pub(crate) fn identify_floating(
     py: Python<'_>,
@@ -196,6 +196,7 @@ pub(crate) fn identify_floating(
     out_urdf: Option<PathBuf>,
     out_mjcf: Option<PathBuf>,
     truth: Option<PathBuf>,
+    baseline: Option<PathBuf>,
 ) -> PyResult<FloatingIdentification> {
     let opts = IdentifyFloatingOptions {
         robot: robot_options(robot, no_rotors),
@@ -218,6 +219,7 @@ pub(crate) fn identify_floating(
         out_urdf,
         out_mjcf,
         truth,
+        baseline,
     };
     let found =
         cancellable(py, move |_| api::floating::identify_floating(&opts))?.map_err(api_error)?;

@@ -56,6 +56,19 @@ def test_identification_equals_the_cli_and_loads_in_pinocchio_and_mujoco(log, tm
     assert "FloatingIdentification" in repr(fit) and "<table" in fit._repr_html_()
 
 
+def test_a_baseline_log_is_the_cli_s(log, tmp_path):
+    before = tmp_path / "before.csv"
+    physid.simulate_floating(before, duration=3.0, seed=5)
+    fit = physid.identify_floating(log, baseline=before)
+    change = fit.to_dict()["change"]
+    assert change["baseline"] == str(before) and change["changed"] is None
+    assert 0.0 < change["baseline_visibility"]
+    theirs = cli("identify-floating", "--data", str(log), "--baseline-data", str(before), "--json")
+    assert json.loads(theirs)["change"] == change
+    with pytest.raises(physid.InputError, match="the log itself"):
+        physid.identify_floating(log, baseline=log)
+
+
 def test_feet_sensors_and_settings_as_keywords(log, tmp_path):
     feet = ["fr_shank:0,0,-0.34", ("fl_shank", (0, 0, -0.34)), "hr_shank:0,0,-0.34", "hl_shank:0,0,-0.34"]
     base = physid.identify_floating(log, setting="base-only", foot=feet, constraints="consistent")
