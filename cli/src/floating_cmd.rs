@@ -351,6 +351,6 @@ fn change_text(c: &physid::api::floating::DescriptionCheck) -> String {
 /// larger than the mass), as `identify` marks it.
 fn undetermined_masses(f: &physid::api::floating::FloatingIdentification) -> Vec<bool> {
     (f.bodies.iter().zip(&f.mass_standard_errors))
-        .map(|(b, se)| !se.is_some_and(|e| e < b.pi[0].abs()))
+        .map(|(b, se)| !se.is_some_and(|e| physid::api::identify::mass_determined(e, b.pi[0])))
         .collect()
 }

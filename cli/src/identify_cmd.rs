@@ -336,7 +336,7 @@ fn print_identified_bodies(m: &Model, rep: &Identification) {
             let pi = physid::spatial::InertialParams(nalgebra::SVector::from(b.pi));
             let col = names.iter().position(|n| *n == format!("{}.m", b.name));
             let mark = match col.map(|c| se[c]) {
-                Some(e) if e.is_finite() && e < pi.mass().abs() => ' ',
+                Some(e) if physid::api::identify::mass_determined(e, pi.mass()) => ' ',
                 _ => {
                     undetermined += 1;
                     '~'

@@ -193,21 +193,16 @@ pub fn simulate_floating(opts: &SimulateFloatingOptions) -> Result<FloatingSimul
             robot.joints()
         )));
     }
-    let motion = crate::sim::floating::Standing {
+    let mut motion = crate::sim::floating::Standing {
         duration: opts.duration,
         rate: opts.rate,
         seed: opts.seed,
         step: opts.trot.unwrap_or((0.0, 0.0)),
         ..Default::default()
     };
-    let motion = crate::sim::floating::Standing {
-        amplitude: if opts.still {
-            [0.0; 3]
-        } else {
-            motion.amplitude
-        },
-        ..motion
-    };
+    if opts.still {
+        motion.amplitude = [0.0; 3];
+    }
     let run = crate::sim::floating::standing(&robot, &points, &motion)
         .map_err(|e| ApiError::Options(e.to_string()))?;
     let joints = robot.tree().joint_names();
@@ -501,15 +496,7 @@ pub fn identify_floating(
     check_outputs(opts)?;
     let (log, samples, ne) = rows_of_log(&robot, opts)?;
     let prior = robot.parameters();
-    let found = crate::ident::identify(
-        &robot,
-        &ne,
-        &prior,
-        &crate::ident::Options {
-            prior_weight: opts.prior_weight,
-            ..crate::ident::Options::new(opts.constraints)
-        },
-    )?;
+    let found = fit_description(&robot, &ne, opts)?;
     let truth = (opts.truth.as_deref())
         .map(|p| truth_scores(&robot, p, &found.theta))
         .transpose()?;
@@ -518,8 +505,9 @@ pub fn identify_floating(
     let identified = robot.with_parameters(&found.theta)?;
     write_models(opts, &identified)?;
     let identifiability = crate::ident::analysis::identifiability(&robot, &ne, &found.theta);
-    let notices = far_masses(&robot, &found.bodies, &prior, &identifiability);
-    let mass_standard_errors = mass_errors(&robot, &found.bodies, &identifiability);
+    let columns = mass_columns(&robot, &found.bodies);
+    let mass_standard_errors = mass_errors(&columns, &identifiability);
+    let notices = far_masses(&found.bodies, &columns, &prior, &mass_standard_errors);
     let rows = (ne.samples * crate::ident::floating::rows_per_sample(&robot, opts.setting)).max(1);
     let rms = |theta: &DVector<f64>| (ne.residual_sum_of_squares(theta) / rows as f64).sqrt();
     let n = robot.joints();
@@ -581,16 +569,27 @@ fn baseline_fit(
         ..opts.clone()
     };
     let (_, _, ne) = rows_of_log(robot, &at_baseline)?;
-    let found = crate::ident::identify(
-        robot,
-        &ne,
-        &robot.parameters(),
-        &crate::ident::Options {
-            prior_weight: opts.prior_weight,
-            ..crate::ident::Options::new(opts.constraints)
-        },
-    )?;
+    let found = fit_description(robot, &ne, opts)?;
     Ok((robot.with_parameters(&found.theta)?, ne))
+}
+
+/// `robot` identified on the rows `ne` under `opts`' constraint set, its description the
+/// prior of weight `opts.prior_weight`.
+fn fit_description(
+    robot: &FloatingModel,
+    ne: &NormalEquations,
+    opts: &IdentifyFloatingOptions,
+) -> Result<crate::ident::Identified, ApiError> {
+    let options = crate::ident::Options {
+        prior_weight: opts.prior_weight,
+        ..crate::ident::Options::new(opts.constraints)
+    };
+    Ok(crate::ident::identify(
+        robot,
+        ne,
+        &robot.parameters(),
+        &options,
+    )?)
 }
 
 /// How much the baseline log's rows see the change `named` per sample, as a share of how much
@@ -633,39 +632,38 @@ fn rows_of_log(
     Ok((log, samples, ne))
 }
 
-/// Each body's mass's standard error (kg), `None` where it is not finite.
-fn mass_errors(
-    robot: &FloatingModel,
-    bodies: &[IdentifiedBody],
-    idf: &crate::ident::analysis::Identifiability,
-) -> Vec<Option<f64>> {
+/// Per body, the column of its mass in `θ`.
+fn mass_columns(robot: &FloatingModel, bodies: &[IdentifiedBody]) -> Vec<Option<usize>> {
     let names = robot.parameter_names();
     (bodies.iter())
-        .map(|b| {
-            let mass = format!("{}.m", b.name);
-            let c = names.iter().position(|n| *n == mass)?;
-            Some(idf.standard_errors[c]).filter(|e| e.is_finite())
-        })
+        .map(|b| names.iter().position(|n| *n == format!("{}.m", b.name)))
+        .collect()
+}
+
+/// Each body's mass's standard error (kg), `None` where it is not finite.
+fn mass_errors(
+    columns: &[Option<usize>],
+    idf: &crate::ident::analysis::Identifiability,
+) -> Vec<Option<f64>> {
+    (columns.iter())
+        .map(|c| Some(idf.standard_errors[(*c)?]).filter(|e| e.is_finite()))
         .collect()
 }
 
 /// A warning for each body whose identified mass is far from the description's (`prior`),
-/// as `identify` gives them.
+/// as `identify` gives them (`columns` each body's mass column, `errors` its standard error).
 fn far_masses(
-    robot: &FloatingModel,
     bodies: &[IdentifiedBody],
+    columns: &[Option<usize>],
     prior: &DVector<f64>,
-    idf: &crate::ident::analysis::Identifiability,
+    errors: &[Option<f64>],
 ) -> Vec<super::data::Notice> {
-    let names = robot.parameter_names();
-    let described = |body: &str| {
-        let mass = format!("{body}.m");
-        names.iter().position(|n| *n == mass).map(|c| prior[c])
-    };
-    let masses =
-        (bodies.iter()).filter_map(|b| Some((b.name.as_str(), described(&b.name)?, b.pi[0])));
+    let masses = (bodies.iter().zip(columns).zip(errors)).filter_map(|((b, c), se)| {
+        let se = se.unwrap_or(f64::INFINITY);
+        Some((b.name.as_str(), prior[(*c)?], b.pi[0], se))
+    });
     let remedy = "bound it (a stronger prior: --prior-weight) or log a motion that moves this body (swing phases: a trot, steps)";
-    super::identify::far_masses(masses, &names, idf, remedy)
+    super::identify::far_masses(masses, remedy)
 }
 
 /// Neither output may be an input or the other.

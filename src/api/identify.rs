@@ -1012,30 +1012,37 @@ fn far_mass_warnings(
     identified: &ident::Identified,
     idf: &analysis::Identifiability,
 ) -> Vec<Notice> {
-    let masses = masses(m, identified).map(|(body, d, f)| (body.name.as_str(), d, f));
+    let names = m.parameter_names();
+    let masses = masses(m, identified).map(|(body, described, mass)| {
+        let se = (names.iter())
+            .position(|n| *n == format!("{}.m", body.name))
+            .map_or(f64::INFINITY, |c| idf.standard_errors[c]);
+        (body.name.as_str(), described, mass, se)
+    });
     let remedy = "bound it (a prior: --regularizer logdet --prior-weight, or geometry for the ellipsoid set) or record a motion that moves this body";
-    far_masses(masses, &m.parameter_names(), idf, remedy)
+    far_masses(masses, remedy)
+}
+
+/// Whether the data determine a body's `mass` (kg) on their own: its standard error `se` is
+/// finite and smaller than the mass.
+pub fn mass_determined(se: f64, mass: f64) -> bool {
+    se.is_finite() && se < mass.abs()
 }
 
 /// [`far_mass_warnings`] for any robot: `masses` gives each body's name, described and
-/// identified mass (kg); `names` the parameters' names (`"<body>.m"` a body's mass); `remedy`
-/// what the user can do about a mass the data do not determine.
+/// identified mass and the identified mass's standard error (kg, infinite where the data do
+/// not determine it); `remedy` what the user can do about a mass the data do not determine.
 pub(crate) fn far_masses<'a>(
-    masses: impl Iterator<Item = (&'a str, f64, f64)>,
-    names: &[String],
-    idf: &analysis::Identifiability,
+    masses: impl Iterator<Item = (&'a str, f64, f64, f64)>,
     remedy: &str,
 ) -> Vec<Notice> {
     let mut out = vec![];
-    for (body, described, mass) in masses {
+    for (body, described, mass, se) in masses {
         let ratio = mass / described;
         if described < 1e-3 || (1.0 / FAR_MASS..=FAR_MASS).contains(&ratio) {
             continue;
         }
-        let se = (names.iter())
-            .position(|n| *n == format!("{body}.m"))
-            .map_or(f64::INFINITY, |c| idf.standard_errors[c]);
-        let why = if se.is_finite() && se < mass.abs() {
+        let why = if mass_determined(se, mass) {
             format!("the data determine it (standard error {se:.3} kg): the description's mass or the data's torque scale is off")
         } else {
             format!("the data do not determine it: the constraints placed it where they allow; {remedy}")
