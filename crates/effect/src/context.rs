@@ -6,8 +6,7 @@
 
 use nalgebra::{DMatrix, DVector, Vector3};
 use physid_core::dynamics::{
-    friction_torque, regressor, rnea_from_transforms, update_joint_transform, update_transforms,
-    Data,
+    friction_torque, regressor, rnea_after_joint, update_joint_transform, update_transforms, Data,
 };
 use physid_core::model::Model;
 use physid_core::trajectory::Trajectory;
@@ -344,17 +343,6 @@ impl<'a> Context<'a> {
     /// Butterworth of q and of each derivative, as `physid simulate` and `load_trajectory` do),
     /// applied to the predicted torque for the compliance columns; capped at 0.4 × the rate.
     pub fn new(model: &'a Model, theta0: &DVector<f64>, tr: &Trajectory, cutoff: f64) -> Self {
-        let n = model.dof();
-        let l = model.layout();
-        let theta0 = theta0.rows(0, l.len).into_owned();
-        let mut theta_smooth = theta0.clone();
-        for j in 0..n {
-            theta_smooth[l.coulomb_col + j] = 0.0;
-        }
-        let (pred, smooth) = predictions(model, tr, (&theta0, &theta_smooth));
-        // Without the Coulomb jumps: a delayed jump only matters within the masked slow rows,
-        // and differencing it would put spikes into every fitted row next to a reversal.
-        let pred_d = derivative(&smooth, tr, n);
         // The deflection follows the torque actually delivered, jumps of friction at the
         // reversals included: the logged torque, processed like the encoder. Its noise,
         // differentiated twice through the 20 Hz filter, adds ~0.05 N m on the blind scenario;
@@ -387,6 +375,37 @@ impl<'a> Context<'a> {
             .iter()
             .map(|b| b.rotor.as_ref().map_or(1.0, |r| r.gear_ratio))
             .collect();
+        let unset = DVector::zeros(0);
+        let measured = Self {
+            model,
+            theta0: unset.clone(),
+            theta_smooth: unset,
+            predictors: None,
+            pred: vec![],
+            pred_d: vec![],
+            defl,
+            slack,
+            perp: perpendiculars(&model.gravity()),
+            gear,
+        };
+        measured.about(theta0, tr)
+    }
+
+    /// The context of the same trajectory `tr` about other nominal parameters `theta0`: the
+    /// predictions recomputed, the logged torque's processing (deflection, backlash offsets)
+    /// kept, as it does not depend on the parameters.
+    pub fn about(&self, theta0: &DVector<f64>, tr: &Trajectory) -> Self {
+        let (model, n) = (self.model, self.model.dof());
+        let l = model.layout();
+        let theta0 = theta0.rows(0, l.len).into_owned();
+        let mut theta_smooth = theta0.clone();
+        for j in 0..n {
+            theta_smooth[l.coulomb_col + j] = 0.0;
+        }
+        let (pred, smooth) = predictions(model, tr, (&theta0, &theta_smooth));
+        // Without the Coulomb jumps: a delayed jump only matters within the masked slow rows,
+        // and differencing it would put spikes into every fitted row next to a reversal.
+        let pred_d = derivative(&smooth, tr, n);
         let predictors = predictors(model, &theta0, &theta_smooth);
         Self {
             model,
@@ -395,10 +414,10 @@ impl<'a> Context<'a> {
             predictors,
             pred,
             pred_d,
-            defl,
-            slack,
-            perp: perpendiculars(&model.gravity()),
-            gear,
+            defl: self.defl.clone(),
+            slack: self.slack.clone(),
+            perp: self.perp,
+            gear: self.gear.clone(),
         }
     }
 
@@ -421,8 +440,9 @@ impl<'a> Context<'a> {
     /// `Y θ` (N m) at sample `s` with joint `j`'s angle, velocity and acceleration shifted by
     /// `−by · shift_j`, for `θ` = θ̂₀ (`which` 0) or its smooth part (1): inverse dynamics with
     /// friction on [`Context::predictors`] (whose workspace holds the transforms of `s.q`, from
-    /// [`Context::encoder_shift_columns`]: only joint `j`'s is recomputed, then restored), or the
-    /// regressor where there are none.
+    /// [`Context::encoder_shift_columns`]: only joint `j`'s is recomputed, then restored, and
+    /// the bodies before `j` the velocities of sample `s` or of a shift of a later joint:
+    /// [`rnea_after_joint`]), or the regressor where there are none.
     fn shifted(
         &self,
         (which, j, by): (usize, usize, f64),
@@ -437,9 +457,10 @@ impl<'a> Context<'a> {
         qdd[j] -= by * shift[2][at];
         if let (Some(models), Some(data)) = (&self.predictors, &mut w.predicting) {
             let (model, data) = (&models[which], &mut data[which]);
+            let frame = (data.x_up[j], data.s[j], data.x_rot[j], data.s_rot[j]);
             update_joint_transform(model, data, j, q_j);
-            let tau = rnea_from_transforms(model, data, &qd, &qdd) + friction_torque(model, &qd);
-            update_joint_transform(model, data, j, s.q[j]);
+            let tau = rnea_after_joint(model, data, j, &qd, &qdd) + friction_torque(model, &qd);
+            (data.x_up[j], data.s[j], data.x_rot[j], data.s_rot[j]) = frame;
             return tau;
         }
         let mut q = s.q.to_vec();
@@ -470,10 +491,12 @@ impl<'a> Context<'a> {
         }
         let id = |j: usize, by: f64, w: &mut Scratch| self.shifted((which, j, by), shift, s, w);
         let mut out = DMatrix::zeros(n, n);
-        let base = (secant > 0.0).then(|| id(0, 0.0, w));
-        for j in 0..n {
-            let d = if let Some(base) = &base {
-                (id(j, h, w) - base) / h
+        // The unshifted state first (every body's velocity), then the joints from the last to
+        // the first: each shifted pass leaves the bodies before its joint as they were.
+        let base = id(0, 0.0, w);
+        for j in (0..n).rev() {
+            let d = if secant > 0.0 {
+                (id(j, h, w) - &base) / h
             } else {
                 (id(j, h, w) - id(j, -h, w)) / (2.0 * h)
             };

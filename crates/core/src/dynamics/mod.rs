@@ -32,7 +32,9 @@ pub use floating::{
 };
 pub use gravity::gravity_from_transforms;
 pub use regressor::{for_each_regressor, inertia_bilinear, regressor, row_columns};
-pub use rnea::{friction_torque, rnea, rnea_from_transforms, rnea_with_friction, sign};
+pub use rnea::{
+    friction_torque, rnea, rnea_after_joint, rnea_from_transforms, rnea_with_friction, sign,
+};
 
 use crate::model::{Model, Rotor, RotorModel};
 use crate::spatial::{Force, Motion, RigidInertia, Transform};
@@ -216,9 +218,23 @@ pub(crate) fn forward_pass_from_root(
     data: &mut Data,
     qd: &[f64],
     qdd: &[f64],
-    (v0, a0): (Motion, Motion),
+    root: (Motion, Motion),
 ) {
-    for (i, b) in model.bodies().iter().enumerate() {
+    forward_pass_from_body(model, data, qd, qdd, root, 0);
+}
+
+/// [`forward_pass_from_root`] over bodies `first..` only: the bodies before `first` keep the
+/// velocities and accelerations in `data` (none of them descends from `first`, as a parent
+/// always precedes its children).
+pub(crate) fn forward_pass_from_body(
+    model: &Model,
+    data: &mut Data,
+    qd: &[f64],
+    qdd: &[f64],
+    (v0, a0): (Motion, Motion),
+    first: usize,
+) {
+    for (i, b) in model.bodies().iter().enumerate().skip(first) {
         let (v_p, a_p) = match b.parent {
             Some(p) => (data.v[p], data.a[p]),
             None => (v0, a0),

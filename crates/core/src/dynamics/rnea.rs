@@ -1,7 +1,11 @@
 //! Recursive Newton–Euler inverse dynamics with geared rotors (RBDA Table 5.1; architecture.md §2).
 
-use super::{armature, check_len, forward_pass_from_transforms, update_transforms, Data};
+use super::{
+    armature, base_acceleration, check_len, forward_pass_from_body, forward_pass_from_transforms,
+    update_transforms, Data,
+};
 use crate::model::{Model, RotorModel};
+use crate::spatial::Motion;
 use nalgebra::DVector;
 
 /// Inverse dynamics `τ = H(q) q̈ + C(q, q̇) q̇ + g(q)` of links and rotors, at the joints
@@ -34,6 +38,27 @@ pub fn rnea_from_transforms<'a>(
     check_len(model, "qd", qd);
     check_len(model, "qdd", qdd);
     forward_pass_from_transforms(model, data, qd, qdd, true);
+    backward_pass(model, data, qdd)
+}
+
+/// [`rnea_from_transforms`] of a state that differs from the one `data` last held in joint
+/// `j`'s angle (its transform already updated in `data`), rate and acceleration alone: the
+/// forward pass from body `j` on (no body before `j` descends from it, so their velocities and
+/// accelerations in `data` stand), the backward pass whole. The same numbers as
+/// [`rnea_from_transforms`], bit for bit, when the bodies before `j` hold those of `qd`, `qdd`:
+/// after a whole pass at the unchanged state, evaluate changed joints from the last to the
+/// first. Returns `&data.tau`.
+pub fn rnea_after_joint<'a>(
+    model: &Model,
+    data: &'a mut Data,
+    j: usize,
+    qd: &[f64],
+    qdd: &[f64],
+) -> &'a DVector<f64> {
+    check_len(model, "qd", qd);
+    check_len(model, "qdd", qdd);
+    let root = (Motion::zero(), base_acceleration(model));
+    forward_pass_from_body(model, data, qd, qdd, root, j);
     backward_pass(model, data, qdd)
 }
 
@@ -107,5 +132,45 @@ pub fn sign(x: f64) -> f64 {
         -1.0
     } else {
         0.0
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::dynamics::update_joint_transform;
+    use crate::model::quadruped::quadruped;
+    use crate::model::random::{random_state, random_tree};
+
+    /// Each joint shifted in turn, from the last to the first, by [`rnea_after_joint`] after one
+    /// whole pass: the torques of a whole [`rnea`] at the shifted state, bit for bit; and
+    /// different from the unshifted torques (the shift is seen).
+    fn shifts_match_whole_passes(model: &Model, seed: u64) {
+        let n = model.dof();
+        let [q, qd, qdd] = random_state(seed, n, 1.5);
+        let mut data = Data::new(model);
+        let mut whole = Data::new(model);
+        let unshifted = rnea(model, &mut data, &q, &qd, &qdd).clone();
+        for j in (0..n).rev() {
+            let (mut q_s, mut qd_s, mut qdd_s) = (q.clone(), qd.clone(), qdd.clone());
+            q_s[j] += 0.3;
+            qd_s[j] -= 0.7;
+            qdd_s[j] += 1.1;
+            let frame = (data.x_up[j], data.s[j], data.x_rot[j], data.s_rot[j]);
+            update_joint_transform(model, &mut data, j, q_s[j]);
+            let after = rnea_after_joint(model, &mut data, j, &qd_s, &qdd_s).clone();
+            (data.x_up[j], data.s[j], data.x_rot[j], data.s_rot[j]) = frame;
+            let expected = rnea(model, &mut whole, &q_s, &qd_s, &qdd_s);
+            assert_eq!(&after, expected, "joint {j} of {}", model.name());
+            assert!((&after - &unshifted).amax() > 1e-6, "joint {j}");
+        }
+    }
+
+    #[test]
+    fn a_pass_after_one_joint_equals_the_whole_pass_on_a_branched_tree_and_the_quadruped() {
+        for seed in 1..4 {
+            shifts_match_whole_passes(&random_tree(seed, 7), seed);
+        }
+        shifts_match_whole_passes(quadruped().tree(), 9);
     }
 }

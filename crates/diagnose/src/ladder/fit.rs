@@ -27,18 +27,18 @@ impl Data {
         theta: &DVector<f64>,
         blocks: usize,
     ) -> Data {
-        let (model, opts) = (stage.model, stage.opts);
-        let cutoff = opts.processing_cutoff;
-        let ms = opts.min_speed;
+        let model = stage.model;
+        let ms = stage.opts.min_speed;
         let (t, v) = (stage.train, stage.validate);
-        // Training and held-out columns are independent: built side by side.
+        // Training and held-out columns are independent: built side by side, each about
+        // `theta` on the stage's processing of its logged torques.
         let (train, held) = rayon::join(
             || {
-                let ctx = Context::new(model, theta, t, cutoff);
+                let ctx = stage.ctx_train.about(theta, t);
                 Folds::build(&ctx, t, 0..t.len(), variants.to_vec(), 2, &[], ms)
             },
             || {
-                let ctx = Context::new(model, theta, v, cutoff);
+                let ctx = stage.ctx_val.about(theta, v);
                 Folds::build(&ctx, v, 0..v.len(), variants.to_vec(), blocks, &[], ms)
             },
         );

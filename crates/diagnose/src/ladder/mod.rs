@@ -38,7 +38,7 @@ use nalgebra::{DMatrix, DVector};
 use physid_core::linalg::least_squares_nonneg;
 use physid_core::model::Model;
 use physid_core::spatial::InertialParams;
-use physid_effect::library::{Context, Kind, Variant};
+use physid_effect::library::{Kind, Variant};
 use serde::Serialize;
 
 pub use super::options::LadderSettings as Settings;

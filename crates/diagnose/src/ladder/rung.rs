@@ -103,12 +103,7 @@ pub(super) fn held_out_rms(stage: &Stage, at: At) -> Vec<f64> {
         }
     }
     // At the fit's own linearization point: the same columns the held-out score saw.
-    let ctx = Context::new(
-        stage.model,
-        &data.theta_lin,
-        stage.validate,
-        stage.opts.processing_cutoff,
-    );
+    let ctx = stage.ctx_val.about(&data.theta_lin, stage.validate);
     let (rms, _) = residual_rms(
         &ctx,
         stage.validate,
