@@ -9,6 +9,7 @@
 //! on a periodic excitation the neighbours are the same phase of other periods.
 
 use physid_core::trajectory::Trajectory;
+use rayon::prelude::*;
 
 /// At most this many samples enter the test (evenly spaced).
 const MAX_POINTS: usize = 2500;
@@ -35,8 +36,13 @@ pub fn gamma_test(
     let mut gamma = vec![[0.0; NEIGHBOURS]; n];
     let mut pairs = vec![[0usize; NEIGHBOURS]; n];
     let mut counted = 0usize;
-    for i in 0..np {
-        let near = nearest(&x, dim, &idx, i, exclude);
+    // The neighbour searches are independent (in parallel); the sums below run in sample
+    // order, so they are the same whatever the thread count.
+    let neighbours: Vec<_> = (0..np)
+        .into_par_iter()
+        .map(|i| nearest(&x, dim, &idx, i, exclude))
+        .collect();
+    for (i, near) in neighbours.iter().enumerate() {
         if near.len() < NEIGHBOURS {
             continue;
         }
