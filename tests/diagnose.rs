@@ -883,3 +883,67 @@ fn the_diagnosis_is_the_same_whatever_the_thread_count() {
     assert!(one.contains("payload"), "the ladder ran");
     assert_eq!(one, two);
 }
+
+#[test]
+fn the_grid_point_screened_without_constraints_scores_as_the_best_under_them() {
+    // Stribeck friction at 0.16 rad/s (a grid point) on the blind scenario's leg: the
+    // selection ranks a kind's grid points without the constraint set and scores the best of
+    // them under it. Every grid point scored under the constraints, the one it reports must
+    // be the best, or within 0.5 % of the nominal cross-validated mean square of it.
+    use physid::diagnose::context::Context;
+    use physid::diagnose::library::variants;
+    use physid::diagnose::select::{forward_select, Folds, Settings};
+    let path = common::root().join("scenarios/blind.toml");
+    let (mut sc, m, _) = physid::sim::scenario::load(&path).unwrap();
+    sc.effects = vec![EffectSpec::Stribeck(Stribeck {
+        static_extra: vec![0.8, 0.6, 0.5],
+        velocity: vec![0.16; 3],
+    })];
+    let tr = physid::sim::run(&m, &sc, &mut |_| {}).unwrap().processed;
+    let train = tr.slice(0..14000);
+    let opts = Options::new(ConstraintSet::Consistent);
+    let ne = NormalEquations::from_trajectory(&m, &train, 0..train.len());
+    let theta0 = ident::identify(&m, &ne, &m.parameters(), &opts)
+        .unwrap()
+        .theta;
+    let ctx = Context::new(&m, &theta0, &train, 20.0);
+    let kinds = [
+        Kind::TorqueOffset,
+        Kind::Stribeck,
+        Kind::Compliance,
+        Kind::Backlash,
+    ];
+    let folds = Folds::build(
+        &ctx,
+        &train,
+        0..train.len(),
+        variants(&kinds, 3),
+        5,
+        &[],
+        0.05,
+    );
+    let selection = forward_select(&folds, &m, &opts, &Settings::default()).unwrap();
+    let Some(first) = selection.steps.first() else {
+        panic!("no step: {}", selection.stop);
+    };
+    // 0.16 rad/s or a neighbour on the √2 grid.
+    assert_eq!(first.kind, Kind::Stribeck, "{first:?}");
+    assert!((0.11..0.23).contains(&first.param), "{first:?}");
+    let nominal = folds.cv(&m, &[], &opts).unwrap().mse;
+    for score in &first.scores {
+        let of_kind: Vec<usize> = (0..folds.variants.len())
+            .filter(|&v| folds.variants[v].kind == score.kind)
+            .collect();
+        let best = of_kind
+            .iter()
+            .map(|&v| folds.cv(&m, &[v], &opts).unwrap().mse)
+            .fold(f64::INFINITY, f64::min);
+        let reported = score.cv_rms.powi(2);
+        assert!(
+            reported - best <= 0.005 * nominal,
+            "{:?} at {}: {reported} against the grid's best {best} (nominal {nominal})",
+            score.kind,
+            score.param
+        );
+    }
+}
