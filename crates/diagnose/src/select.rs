@@ -194,18 +194,6 @@ impl Folds {
         chosen: &[usize],
         opts: &Options,
     ) -> Result<DVector<f64>, IdentError> {
-        self.fit_signed(model, ne, chosen, opts, true)
-    }
-
-    /// [`Folds::fit`], the effects' physical signs kept (`signed`) or left free.
-    fn fit_signed(
-        &self,
-        model: &Model,
-        ne: &NormalEquations,
-        chosen: &[usize],
-        opts: &Options,
-        signed: bool,
-    ) -> Result<DVector<f64>, IdentError> {
         let cols = self.columns(chosen);
         let mut sub = ne.select(&cols);
         let mut prior = DVector::zeros(cols.len());
@@ -216,7 +204,7 @@ impl Folds {
         for &v in chosen {
             let kind = self.variants[v].kind;
             let nc = kind.columns(self.n);
-            if signed && kind.non_negative() {
+            if kind.non_negative() {
                 opts.nonnegative.extend(c..c + nc);
             }
             if kind.common_mode_in_span() {
@@ -229,43 +217,23 @@ impl Folds {
 
     /// The cross-validated error of the model plus `chosen`.
     pub fn cv(&self, model: &Model, chosen: &[usize], opts: &Options) -> Result<Cv, IdentError> {
+        let cols = self.columns(chosen);
         // The folds' fits are independent: in parallel, read back in fold order.
         let thetas = (0..self.blocks.len())
             .into_par_iter()
             .map(|f| self.fit(model, &self.sum_except(f), chosen, opts))
             .collect::<Result<Vec<_>, _>>()?;
-        Ok(self.scored(chosen, thetas))
-    }
-
-    /// The cross-validated error of the model plus `chosen` with every fit unconstrained
-    /// (least squares with the description's prior: no cone program), to rank the grid
-    /// points of one kind before [`Folds::cv`] scores the best of them.
-    fn screening_cv(&self, model: &Model, chosen: &[usize], opts: &Options) -> Option<f64> {
-        let free = Options {
-            constraints: physid_ident::ConstraintSet::None,
-            ..opts.clone()
-        };
-        let thetas = (0..self.blocks.len())
-            .map(|f| self.fit_signed(model, &self.sum_except(f), chosen, &free, false))
-            .collect::<Result<Vec<_>, _>>()
-            .ok()?;
-        Some(self.scored(chosen, thetas).mse)
-    }
-
-    /// Held-out scores of the folds' fits `thetas` of the model plus `chosen`.
-    fn scored(&self, chosen: &[usize], thetas: Vec<DVector<f64>>) -> Cv {
-        let cols = self.columns(chosen);
         let block_sse: Vec<f64> = thetas
             .iter()
             .zip(&self.blocks)
             .map(|(theta, block)| block.select(&cols).residual_sum_of_squares(theta))
             .collect();
         let count: usize = self.rows.iter().sum();
-        Cv {
+        Ok(Cv {
             mse: block_sse.iter().sum::<f64>() / count.max(1) as f64,
             block_sse,
             thetas,
-        }
+        })
     }
 }
 
@@ -392,11 +360,7 @@ impl<'de> serde::Deserialize<'de> for SelectionStop {
 }
 
 /// Per kind not `used` (nor in the model's span), its variant of the least cross-validated
-/// error added to `chosen`; a fit that fails or is infeasible does not compete. A kind with a
-/// grid (Stribeck velocities, compliances, backlash widths, harmonics, bodies) has its points
-/// ranked by their cross-validated error without constraints ([`Folds::screening_cv`]), and
-/// the best of them that fits is scored under the constraint set: one cone program per fold
-/// and kind instead of per fold and grid point.
+/// error added to `chosen`; a fit that fails or is infeasible does not compete.
 fn best_per_kind(
     folds: &Folds,
     model: &Model,
@@ -404,54 +368,33 @@ fn best_per_kind(
     chosen: &[usize],
     used: &[Kind],
 ) -> Vec<(usize, Cv)> {
-    let with = |vi: usize| [chosen, &[vi]].concat();
-    let kinds: Vec<Vec<usize>> = Kind::ALL
+    let candidates: Vec<(usize, Kind)> = folds
+        .variants
         .iter()
-        .map(|&kind| {
-            (0..folds.variants.len())
-                .filter(|&vi| folds.variants[vi].kind == kind)
-                .filter(|_| !used.contains(&kind) && !kind.in_model_span())
-                .collect::<Vec<_>>()
-        })
-        .filter(|points| !points.is_empty())
+        .enumerate()
+        .filter(|(_, v)| !used.contains(&v.kind) && !v.kind.in_model_span())
+        .map(|(vi, v)| (vi, v.kind))
         .collect();
-    // Every screening and every kind's cross-validation at once (independent fits); the
-    // results are read in the variants' order, so they are the same whatever the thread count.
-    let ranked: Vec<Vec<usize>> = kinds
+    // Every candidate's cross-validation at once (independent fits); the choice below reads
+    // them in the variants' order, so it is the same whatever the thread count.
+    let cvs: Vec<Option<Cv>> = candidates
         .par_iter()
-        .map(|points| ranked_points(folds, model, opts, points, &with))
+        .map(|&(vi, _)| folds.cv(model, &[chosen, &[vi]].concat(), opts).ok())
         .collect();
-    ranked
-        .par_iter()
-        .filter_map(|points| {
-            points
-                .iter()
-                .find_map(|&vi| folds.cv(model, &with(vi), opts).ok().map(|cv| (vi, cv)))
-        })
-        .collect()
-}
-
-/// A kind's grid `points` best first by their unconstrained cross-validated error (points
-/// whose fit fails last, in grid order); a kind without a grid as it is.
-fn ranked_points(
-    folds: &Folds,
-    model: &Model,
-    opts: &Options,
-    points: &[usize],
-    with: &dyn Fn(usize) -> Vec<usize>,
-) -> Vec<usize> {
-    if points.len() < 2 {
-        return points.to_vec();
+    let mut best = vec![];
+    for kind in Kind::ALL {
+        let mut top: Option<(usize, Cv)> = None;
+        for ((vi, k), cv) in candidates.iter().zip(&cvs) {
+            let Some(cv) = cv.as_ref().filter(|_| *k == kind) else {
+                continue;
+            };
+            if top.as_ref().is_none_or(|(_, t)| cv.mse < t.mse) {
+                top = Some((*vi, cv.clone()));
+            }
+        }
+        best.extend(top);
     }
-    let mut scored: Vec<(usize, f64)> = points
-        .iter()
-        .map(|&vi| {
-            let mse = folds.screening_cv(model, &with(vi), opts);
-            (vi, mse.filter(|m| m.is_finite()).unwrap_or(f64::INFINITY))
-        })
-        .collect();
-    scored.sort_by(|a, b| a.1.total_cmp(&b.1));
-    scored.into_iter().map(|(vi, _)| vi).collect()
+    best
 }
 
 /// Of the candidates `best` (scored as `scores`, best first), those within `tie` of the
