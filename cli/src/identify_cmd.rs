@@ -334,7 +334,7 @@ fn print_identified_bodies(m: &Model, rep: &Identification) {
         .iter()
         .map(|b| {
             let pi = physid::spatial::InertialParams(nalgebra::SVector::from(b.pi));
-            let col = names.iter().position(|n| *n == format!("{}.m", b.name));
+            let col = physid::api::identify::mass_column(&names, &b.name);
             let mark = match col.map(|c| se[c]) {
                 Some(e) if physid::api::identify::mass_determined(e, pi.mass()) => ' ',
                 _ => {

@@ -636,7 +636,7 @@ fn rows_of_log(
 fn mass_columns(robot: &FloatingModel, bodies: &[IdentifiedBody]) -> Vec<Option<usize>> {
     let names = robot.parameter_names();
     (bodies.iter())
-        .map(|b| names.iter().position(|n| *n == format!("{}.m", b.name)))
+        .map(|b| super::identify::mass_column(&names, &b.name))
         .collect()
 }
 

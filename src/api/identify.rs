@@ -1014,13 +1014,16 @@ fn far_mass_warnings(
 ) -> Vec<Notice> {
     let names = m.parameter_names();
     let masses = masses(m, identified).map(|(body, described, mass)| {
-        let se = (names.iter())
-            .position(|n| *n == format!("{}.m", body.name))
-            .map_or(f64::INFINITY, |c| idf.standard_errors[c]);
+        let se = mass_column(&names, &body.name).map_or(f64::INFINITY, |c| idf.standard_errors[c]);
         (body.name.as_str(), described, mass, se)
     });
     let remedy = "bound it (a prior: --regularizer logdet --prior-weight, or geometry for the ellipsoid set) or record a motion that moves this body";
     far_masses(masses, remedy)
+}
+
+/// The column of `body`'s mass (`"<body>.m"`) among the parameters' `names`.
+pub fn mass_column(names: &[String], body: &str) -> Option<usize> {
+    names.iter().position(|n| *n == format!("{body}.m"))
 }
 
 /// Whether the data determine a body's `mass` (kg) on their own: its standard error `se` is

@@ -6,7 +6,7 @@
 
 use nalgebra::{DMatrix, DVector, Vector3};
 use physid_core::dynamics::{
-    friction_torque, regressor, rnea_after_joint, update_joint_transform, update_transforms, Data,
+    friction_torque, regressor, rnea_after_joint, update_transforms, Data,
 };
 use physid_core::model::Model;
 use physid_core::trajectory::Trajectory;
@@ -335,6 +335,40 @@ fn predictions(
     (a, b)
 }
 
+/// What a [`Context`] takes from its nominal parameters: `θ̂₀`, its smooth part, the models
+/// carrying them, and the prediction with its derivative over the trajectory.
+struct Predicted {
+    theta0: DVector<f64>,
+    theta_smooth: DVector<f64>,
+    predictors: Option<Box<[Model; 2]>>,
+    pred: Vec<f64>,
+    pred_d: Vec<f64>,
+}
+
+impl Predicted {
+    /// The predictions of `model` with parameters `theta0` over `tr`.
+    fn of(model: &Model, theta0: &DVector<f64>, tr: &Trajectory) -> Self {
+        let (n, l) = (model.dof(), model.layout());
+        let theta0 = theta0.rows(0, l.len).into_owned();
+        let mut theta_smooth = theta0.clone();
+        for j in 0..n {
+            theta_smooth[l.coulomb_col + j] = 0.0;
+        }
+        let (pred, smooth) = predictions(model, tr, (&theta0, &theta_smooth));
+        // Without the Coulomb jumps: a delayed jump only matters within the masked slow rows,
+        // and differencing it would put spikes into every fitted row next to a reversal.
+        let pred_d = derivative(&smooth, tr, n);
+        let predictors = predictors(model, &theta0, &theta_smooth);
+        Self {
+            theta0,
+            theta_smooth,
+            predictors,
+            pred,
+            pred_d,
+        }
+    }
+}
+
 impl<'a> Context<'a> {
     /// The context of trajectory `tr` (with q̈) for nominal parameters `theta0` (the model's
     /// layout, no extra columns).
@@ -375,45 +409,33 @@ impl<'a> Context<'a> {
             .iter()
             .map(|b| b.rotor.as_ref().map_or(1.0, |r| r.gear_ratio))
             .collect();
-        let unset = DVector::zeros(0);
-        let measured = Self {
+        let p = Predicted::of(model, theta0, tr);
+        Self {
             model,
-            theta0: unset.clone(),
-            theta_smooth: unset,
-            predictors: None,
-            pred: vec![],
-            pred_d: vec![],
+            theta0: p.theta0,
+            theta_smooth: p.theta_smooth,
+            predictors: p.predictors,
+            pred: p.pred,
+            pred_d: p.pred_d,
             defl,
             slack,
             perp: perpendiculars(&model.gravity()),
             gear,
-        };
-        measured.about(theta0, tr)
+        }
     }
 
     /// The context of the same trajectory `tr` about other nominal parameters `theta0`: the
     /// predictions recomputed, the logged torque's processing (deflection, backlash offsets)
     /// kept, as it does not depend on the parameters.
     pub fn about(&self, theta0: &DVector<f64>, tr: &Trajectory) -> Self {
-        let (model, n) = (self.model, self.model.dof());
-        let l = model.layout();
-        let theta0 = theta0.rows(0, l.len).into_owned();
-        let mut theta_smooth = theta0.clone();
-        for j in 0..n {
-            theta_smooth[l.coulomb_col + j] = 0.0;
-        }
-        let (pred, smooth) = predictions(model, tr, (&theta0, &theta_smooth));
-        // Without the Coulomb jumps: a delayed jump only matters within the masked slow rows,
-        // and differencing it would put spikes into every fitted row next to a reversal.
-        let pred_d = derivative(&smooth, tr, n);
-        let predictors = predictors(model, &theta0, &theta_smooth);
+        let p = Predicted::of(self.model, theta0, tr);
         Self {
-            model,
-            theta0,
-            theta_smooth,
-            predictors,
-            pred,
-            pred_d,
+            model: self.model,
+            theta0: p.theta0,
+            theta_smooth: p.theta_smooth,
+            predictors: p.predictors,
+            pred: p.pred,
+            pred_d: p.pred_d,
             defl: self.defl.clone(),
             slack: self.slack.clone(),
             perp: self.perp,
@@ -457,11 +479,8 @@ impl<'a> Context<'a> {
         qdd[j] -= by * shift[2][at];
         if let (Some(models), Some(data)) = (&self.predictors, &mut w.predicting) {
             let (model, data) = (&models[which], &mut data[which]);
-            let frame = (data.x_up[j], data.s[j], data.x_rot[j], data.s_rot[j]);
-            update_joint_transform(model, data, j, q_j);
-            let tau = rnea_after_joint(model, data, j, &qd, &qdd) + friction_torque(model, &qd);
-            (data.x_up[j], data.s[j], data.x_rot[j], data.s_rot[j]) = frame;
-            return tau;
+            return rnea_after_joint(model, data, (j, q_j), &qd, &qdd)
+                + friction_torque(model, &qd);
         }
         let mut q = s.q.to_vec();
         q[j] = q_j;

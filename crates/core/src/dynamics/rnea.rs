@@ -2,7 +2,7 @@
 
 use super::{
     armature, base_acceleration, check_len, forward_pass_from_body, forward_pass_from_transforms,
-    update_transforms, Data,
+    update_joint_transform, update_transforms, Data,
 };
 use crate::model::{Model, RotorModel};
 use crate::spatial::Motion;
@@ -41,25 +41,29 @@ pub fn rnea_from_transforms<'a>(
     backward_pass(model, data, qdd)
 }
 
-/// [`rnea_from_transforms`] of a state that differs from the one `data` last held in joint
-/// `j`'s angle (its transform already updated in `data`), rate and acceleration alone: the
-/// forward pass from body `j` on (no body before `j` descends from it, so their velocities and
-/// accelerations in `data` stand), the backward pass whole. The same numbers as
-/// [`rnea_from_transforms`], bit for bit, when the bodies before `j` hold those of `qd`, `qdd`:
-/// after a whole pass at the unchanged state, evaluate changed joints from the last to the
-/// first. Returns `&data.tau`.
+/// [`rnea_from_transforms`] of a state that differs from the one `data` holds in joint `j`
+/// alone: its angle `q_j` (the joint's transform set for the pass and restored after), rate
+/// and acceleration in `qd`, `qdd`. The forward pass starts at body `j` (no body before it
+/// descends from it, so their velocities and accelerations in `data` stand), the backward pass
+/// is whole. The same numbers as a whole [`rnea`], bit for bit, when the bodies before `j`
+/// hold those of `qd`, `qdd`: after a whole pass at the unchanged state, evaluate changed
+/// joints from the last to the first. Returns `&data.tau`.
 pub fn rnea_after_joint<'a>(
     model: &Model,
     data: &'a mut Data,
-    j: usize,
+    (j, q_j): (usize, f64),
     qd: &[f64],
     qdd: &[f64],
 ) -> &'a DVector<f64> {
     check_len(model, "qd", qd);
     check_len(model, "qdd", qdd);
+    let frame = (data.x_up[j], data.s[j], data.x_rot[j], data.s_rot[j]);
+    update_joint_transform(model, data, j, q_j);
     let root = (Motion::zero(), base_acceleration(model));
     forward_pass_from_body(model, data, qd, qdd, root, j);
-    backward_pass(model, data, qdd)
+    backward_pass(model, data, qdd);
+    (data.x_up[j], data.s[j], data.x_rot[j], data.s_rot[j]) = frame;
+    &data.tau
 }
 
 /// The RNEA's backward pass on the velocities and accelerations in `data` (bodies and rotors):
@@ -138,7 +142,6 @@ pub fn sign(x: f64) -> f64 {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::dynamics::update_joint_transform;
     use crate::model::quadruped::quadruped;
     use crate::model::random::{random_state, random_tree};
 
@@ -156,10 +159,7 @@ mod tests {
             q_s[j] += 0.3;
             qd_s[j] -= 0.7;
             qdd_s[j] += 1.1;
-            let frame = (data.x_up[j], data.s[j], data.x_rot[j], data.s_rot[j]);
-            update_joint_transform(model, &mut data, j, q_s[j]);
-            let after = rnea_after_joint(model, &mut data, j, &qd_s, &qdd_s).clone();
-            (data.x_up[j], data.s[j], data.x_rot[j], data.s_rot[j]) = frame;
+            let after = rnea_after_joint(model, &mut data, (j, q_s[j]), &qd_s, &qdd_s).clone();
             let expected = rnea(model, &mut whole, &q_s, &qd_s, &qdd_s);
             assert_eq!(&after, expected, "joint {j} of {}", model.name());
             assert!((&after - &unshifted).amax() > 1e-6, "joint {j}");
