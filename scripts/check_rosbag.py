@@ -6,7 +6,15 @@ directory whose sensor_msgs/JointState messages list the joints in a shuffled or
 gripper joint the URDF does not have, and carry absolute header stamps (2025, in nanoseconds;
 a float64 of seconds would lose a microsecond there). `physid identify --stamp header` on the
 bag must give the CSV's parameters to 1e-9 relative. A bag without one of the URDF's joints
-must fail with an error naming that joint. Exits non-zero on disagreement.
+must fail with an error naming that joint.
+
+A floating robot's log likewise: a trotting quadruped's CSV from `physid simulate-floating`
+written as rosbag2 directories (MCAP and SQLite storage) with sensor_msgs/JointState,
+nav_msgs/Odometry (pose in the world, twist in the trunk frame) and physid_msgs/FootForces,
+absolute header stamps and jittered log times; `physid identify-floating --stamp header` must
+give the CSV's parameters to 1e-9 relative, and with the odometry at half the rate, starting
+later, the left-out samples must be noted and the identified mass stay within 1 % of the CSV's.
+Exits non-zero on disagreement.
 
 usage: python scripts/check_rosbag.py [--physid PATH]
 """
@@ -84,6 +92,120 @@ def identify(binary, data, extra=()):
     return out.returncode, out.stdout, out.stderr
 
 
+FOOT_FORCES = """# the ground's force on each foot (N, world: x, y, z of each foot in turn), contact states
+std_msgs/Header header
+string[] name
+float64[] force
+bool[] contact
+"""
+
+
+def read_floating_csv(path):
+    with open(path) as f:
+        rows = list(csv.DictReader(f))
+    header = list(rows[0].keys())
+    cols = lambda prefix: [h for h in header if h.startswith(prefix)]
+    arr = lambda names: np.array([[float(r[n]) for n in names] for r in rows])
+    joints = [h[2:] for h in cols("q_")]
+    feet = [h[len("contact_"):] for h in cols("contact_")]
+    force_cols = [f"force_{f}_{c}" for f in feet for c in "xyz"]
+    return {
+        "t": arr(["t"])[:, 0], "joints": joints, "feet": feet,
+        "q": arr([f"q_{j}" for j in joints]), "tau": arr([f"tau_{j}" for j in joints]),
+        "dq": arr([f"dq_{j}" for j in joints]) if cols("dq_") else None,
+        "base": arr(["base_x", "base_y", "base_z", "base_qw", "base_qx", "base_qy", "base_qz",
+                     "base_wx", "base_wy", "base_wz", "base_vx", "base_vy", "base_vz"]),
+        "force": arr(force_cols), "contact": arr([f"contact_{f}" for f in feet]) > 0.5,
+    }
+
+
+def write_floating_bag(path, log, storage, odometry_every=1, odometry_from=0, seed=5):
+    """The log as a rosbag2 directory: absolute header stamps, log times a jittered delay
+    later; the odometry every `odometry_every`-th sample from `odometry_from`."""
+    from rosbags.typesys import get_types_from_msg
+    store = get_typestore(Stores.ROS2_HUMBLE)
+    store.register(get_types_from_msg(FOOT_FORCES, "physid_msgs/msg/FootForces"))
+    T = store.types
+    rng = np.random.default_rng(seed)
+    plugin = {"mcap": StoragePlugin.MCAP, "sqlite3": StoragePlugin.SQLITE3}[storage]
+    t_ns = T0_NS + np.round((log["t"] - log["t"][0]) * 1e9).astype(np.int64)
+    with Writer(path, version=8, storage_plugin=plugin) as w:
+        conns = {name: w.add_connection(topic, kind, typestore=store) for name, topic, kind in [
+            ("js", "/joint_states", "sensor_msgs/msg/JointState"),
+            ("odom", "/odometry", "nav_msgs/msg/Odometry"),
+            ("feet", "/foot_forces", "physid_msgs/msg/FootForces")]}
+        for k in range(len(t_ns)):
+            stamp = int(t_ns[k])
+            header = lambda frame: T["std_msgs/msg/Header"](
+                stamp=T["builtin_interfaces/msg/Time"](sec=stamp // 10**9, nanosec=stamp % 10**9), frame_id=frame)
+            msgs = [("js", T["sensor_msgs/msg/JointState"](
+                header=header(""), name=log["joints"], position=log["q"][k].copy(),
+                velocity=log["dq"][k].copy() if log["dq"] is not None else np.zeros(0), effort=log["tau"][k].copy()))]
+            if k >= odometry_from and (k - odometry_from) % odometry_every == 0:
+                b = log["base"][k]
+                v3 = lambda x: T["geometry_msgs/msg/Vector3"](x=x[0], y=x[1], z=x[2])
+                pose = T["geometry_msgs/msg/Pose"](
+                    position=T["geometry_msgs/msg/Point"](x=b[0], y=b[1], z=b[2]),
+                    orientation=T["geometry_msgs/msg/Quaternion"](x=b[4], y=b[5], z=b[6], w=b[3]))
+                twist = T["geometry_msgs/msg/Twist"](linear=v3(b[10:13]), angular=v3(b[7:10]))
+                msgs.append(("odom", T["nav_msgs/msg/Odometry"](
+                    header=header("odom"), child_frame_id="trunk",
+                    pose=T["geometry_msgs/msg/PoseWithCovariance"](pose=pose, covariance=np.zeros(36)),
+                    twist=T["geometry_msgs/msg/TwistWithCovariance"](twist=twist, covariance=np.zeros(36)))))
+            # The feet listed in reverse: matched by name.
+            rev = list(range(len(log["feet"])))[::-1]
+            msgs.append(("feet", T["physid_msgs/msg/FootForces"](
+                header=header("world"), name=[log["feet"][i] for i in rev],
+                force=np.concatenate([log["force"][k][3 * i:3 * i + 3] for i in rev]),
+                contact=np.array([log["contact"][k][i] for i in rev], dtype=bool))))
+            for name, msg in msgs:
+                log_time = stamp + int(rng.integers(100_000, 900_000))
+                w.write(conns[name], log_time, store.serialize_cdr(msg, msg.__msgtype__))
+
+
+def identify_floating(binary, data, extra=()):
+    out = subprocess.run([binary, "identify-floating", "--data", data, "--json", *extra],
+                         capture_output=True, text=True)
+    return out.returncode, out.stdout, out.stderr
+
+
+def check_floating(binary, report, d):
+    csv_path = os.path.join(d, "trot.csv")
+    subprocess.run([binary, "simulate-floating", "--out", csv_path, "--duration", "3", "--seed", "5",
+                    "--trot", "0.15,2.5"], check=True, capture_output=True)
+    log = read_floating_csv(csv_path)
+    rc, out, err = identify_floating(binary, csv_path)
+    if rc:
+        print(err)
+        report.add("identify-floating ran on the CSV", 1.0, 0.0)
+        return
+    want = json.loads(out)
+    theta = np.array(want["theta"])
+    for storage in ["mcap", "sqlite3"]:
+        bag = os.path.join(d, f"trot_{storage}")
+        write_floating_bag(bag, log, storage)
+        rc, out, err = identify_floating(binary, bag, ["--stamp", "header"])
+        if rc:
+            print(err)
+            report.add(f"identify-floating ran on the {storage} bag", 1.0, 0.0)
+            continue
+        got = np.array(json.loads(out)["theta"])
+        report.add(f"floating bag ({storage}: JointState, Odometry, FootForces) = CSV, {len(log['t'])} samples",
+                   float(np.abs(got - theta).max() / np.abs(theta).max()), 1e-9)
+    bag = os.path.join(d, "trot_half_rate")
+    write_floating_bag(bag, log, "mcap", odometry_every=2, odometry_from=7)
+    rc, out, err = identify_floating(binary, bag, ["--stamp", "header"])
+    if rc:
+        print(err)
+        report.add("identify-floating ran on the half-rate odometry", 1.0, 0.0)
+        return
+    got = json.loads(out)
+    report.check("half-rate odometry: the 7 samples before it noted as left out",
+                  "7 joint samples before" in err)
+    report.add("half-rate odometry: identified mass against the CSV's (relative)",
+               abs(got["identified_mass"] / want["identified_mass"] - 1.0), 1e-2)
+
+
 def main():
     binary = physid_bin(sys.argv)
     report = Report("check_rosbag")
@@ -112,6 +234,7 @@ def main():
         named = rc != 0 and "lwr_3_joint" in err
         print(f"     missing joint: exit {rc}, {err.strip().splitlines()[-1] if err.strip() else ''}")
         report.add("a bag without lwr_3_joint fails naming it", 0.0 if named else 1.0, 0.0)
+        check_floating(binary, report, d)
     report.finish()
 
 

@@ -443,6 +443,7 @@ fn floating_options(data: &std::path::Path) -> physid::api::floating::IdentifyFl
     physid::api::floating::IdentifyFloatingOptions {
         robot: physid::api::model::RobotOptions::new("cheetah3"),
         data: data.to_path_buf(),
+        topics: Default::default(),
         feet: vec![],
         setting: physid::ident::floating::DataSetting::TorquesAndContacts,
         constraints: ConstraintSet::Ellipsoid,
@@ -476,6 +477,84 @@ fn floating_log(
     };
     physid::api::floating::simulate_floating(&opts).unwrap();
     out
+}
+
+#[test]
+fn a_floating_run_logged_as_mcap_identifies_as_its_csv_does() {
+    // The same run (seed, sensors, noise) written both ways: MCAP stamps in integer
+    // nanoseconds and carries the orientation as a quaternion, as the CSV does; the two
+    // identifications agree to rounding.
+    use physid::api::floating::{identify_floating, simulate_floating, FloatingReadOptions};
+    let dir = tempfile::tempdir().unwrap();
+    let csv = floating_log(dir.path(), "cheetah3", (2.0, 4), Default::default());
+    let mcap = dir.path().join("run.mcap");
+    let opts = physid::api::floating::SimulateFloatingOptions {
+        robot: physid::api::model::RobotOptions::new("cheetah3"),
+        duration: 2.0,
+        rate: 1000.0,
+        seed: 4,
+        trot: None,
+        still: false,
+        sensors: Default::default(),
+        out: mcap.clone(),
+    };
+    let wrote = simulate_floating(&opts).unwrap();
+    assert!(wrote.truth.ends_with("run.truth.urdf"), "{:?}", wrote.truth);
+    let from_csv = identify_floating(&floating_options(&csv)).unwrap();
+    let from_mcap = identify_floating(&floating_options(&mcap)).unwrap();
+    assert_eq!(from_mcap.samples_read, from_csv.samples_read);
+    assert_eq!(from_mcap.samples_used, from_csv.samples_used);
+    assert!(from_mcap
+        .notices
+        .iter()
+        .all(|n| !n.text.contains("left out")));
+    let scale = from_csv.theta.iter().fold(0.0f64, |m, x| m.max(x.abs()));
+    for (i, (a, b)) in from_mcap.theta.iter().zip(&from_csv.theta).enumerate() {
+        assert!(
+            (a - b).abs() <= 1e-8 * scale,
+            "θ[{i}]: {a} from MCAP, {b} from CSV"
+        );
+    }
+    // Topics other than the log's are named; topics apply to MCAP only; three distinct topics.
+    let with = |data: &std::path::Path, topics: FloatingReadOptions| {
+        let opts = physid::api::floating::IdentifyFloatingOptions {
+            topics,
+            ..floating_options(data)
+        };
+        identify_floating(&opts).unwrap_err().to_string()
+    };
+    let odometry = |t: &str| FloatingReadOptions {
+        odometry_topic: t.into(),
+        ..Default::default()
+    };
+    let err = with(&mcap, odometry("/state_estimator/odom"));
+    assert!(
+        err.contains("run.mcap: no /state_estimator/odom messages (nav_msgs/msg/Odometry)")
+            && err.contains("/odometry (nav_msgs/msg/Odometry)"),
+        "{err}"
+    );
+    let err = with(&csv, odometry("/odom"));
+    assert!(
+        err.contains("apply to MCAP files and rosbag2 directories only"),
+        "{err}"
+    );
+    let err = with(&mcap, odometry("/joint_states"));
+    assert!(
+        err.contains("topic and odometry_topic are both /joint_states"),
+        "{err}"
+    );
+    let err = with(&mcap, odometry(" "));
+    assert!(err.contains("odometry_topic: empty"), "{err}");
+    let feet = FloatingReadOptions {
+        foot_forces_topic: "/contacts".into(),
+        ..Default::default()
+    };
+    // Without the feet's topic, the setting that needs the forces says so.
+    let err = with(&mcap, feet);
+    assert!(
+        err.contains("the torques_and_contacts setting needs the feet's contact forces"),
+        "{err}"
+    );
 }
 
 #[test]

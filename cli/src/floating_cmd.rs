@@ -7,6 +7,7 @@ use physid::api::floating::{
 };
 use physid::ident::floating::DataSetting;
 use physid::ident::ConstraintSet;
+use physid::io::floating_mcap::FloatingReadOptions;
 use physid::sim::floating_sensors::Sensors;
 use std::path::PathBuf;
 
@@ -15,7 +16,7 @@ use std::path::PathBuf;
 /// estimator (noise and bias), the feet's contact forces and states (CSV).
 #[derive(clap::Args, Debug)]
 pub struct SimulateArgs {
-    /// The CSV log to write.
+    /// The log to write: CSV, or MCAP (`.mcap`: /joint_states, /odometry, /foot_forces).
     #[arg(long)]
     out: PathBuf,
     #[command(flatten)]
@@ -131,13 +132,28 @@ fn sensors(pairs: &[String]) -> anyhow::Result<Sensors> {
 }
 
 /// Identify a floating robot (the built-in quadruped, or a floating URDF) from one log of the
-/// trunk's motion, the joints' and the feet's forces (CSV, docs/floating-base.md "Logs"), its
-/// description the prior.
+/// trunk's motion, the joints' and the feet's forces (CSV, MCAP or a rosbag2 directory,
+/// docs/floating-base.md "Logs"), its description the prior.
 #[derive(clap::Args, Debug)]
 pub struct IdentifyArgs {
-    /// The log.
+    /// The log: CSV, MCAP or a rosbag2 directory.
     #[arg(long)]
     data: PathBuf,
+    /// MCAP and rosbag2 logs: the joint states' topic (sensor_msgs/msg/JointState).
+    #[arg(long, default_value = "/joint_states")]
+    topic: String,
+    /// MCAP and rosbag2 logs: the trunk's topic (nav_msgs/msg/Odometry: pose in the world,
+    /// twist in trunk coordinates), interpolated to the joint states' times.
+    #[arg(long, default_value = "/odometry")]
+    odometry_topic: String,
+    /// MCAP and rosbag2 logs: the feet's topic (physid_msgs/msg/FootForces: per foot, the
+    /// ground's force in world coordinates and the contact state).
+    #[arg(long, default_value = "/foot_forces")]
+    foot_forces_topic: String,
+    /// MCAP and rosbag2 logs: which time stamps a message, log (the recorder's receive time)
+    /// or header (its header.stamp); every topic alike.
+    #[arg(long, default_value = "log")]
+    stamp: physid::io::mcap_log::Stamp,
     #[command(flatten)]
     robot: RobotArgs,
     /// What the log's quantities are used for: torques-and-contacts (every row),
@@ -164,7 +180,7 @@ pub struct IdentifyArgs {
     /// A log of the robot before a change: which body changed is asked against the
     /// description fitted to it (without it, against the description, whose own errors show
     /// as differences).
-    #[arg(long = "baseline-data", value_name = "CSV")]
+    #[arg(long = "baseline-data", value_name = "LOG")]
     baseline: Option<PathBuf>,
     /// Write the identified robot as URDF (the trunk its root link; pinocchio: free flyer).
     #[arg(long)]
@@ -193,6 +209,12 @@ pub fn run_identify(a: IdentifyArgs) -> anyhow::Result<()> {
     let opts = IdentifyFloatingOptions {
         robot: a.robot.options(),
         data: a.data,
+        topics: FloatingReadOptions {
+            topic: a.topic,
+            stamp: a.stamp,
+            odometry_topic: a.odometry_topic,
+            foot_forces_topic: a.foot_forces_topic,
+        },
         feet: a
             .feet
             .iter()

@@ -1,4 +1,5 @@
-//! A bounded mutation fuzz of every reader (CSV, URDF, robot TOML, scenario TOML, MCAP, sweep
+//! A bounded mutation fuzz of every reader (CSV, URDF, robot TOML, scenario TOML, MCAP (joint and
+//! floating-base logs), sweep
 //! TOML, rosbag2 metadata, STL meshes, diagnosis reports for --effects-from): valid files are mutated (bytes flipped, inserted, deleted and duplicated; numbers
 //! replaced by extreme values) from a fixed seed, and each reader must answer with a value or an
 //! error, never a panic (or an abort: a failed allocation ends the whole test binary).
@@ -177,6 +178,35 @@ fn the_mcap_reader_never_panics_on_mutated_logs() {
         read && streamed
     });
     eprintln!("mcap: {runs} mutated inputs, {rejected} rejected with an error, 0 panics");
+    assert!(rejected > runs / 10, "only {rejected} of {runs} rejected");
+}
+
+#[test]
+fn the_floating_mcap_reader_never_panics_on_mutated_logs() {
+    // A short quadruped log (joint states, odometry, feet), its three topics interpolated to
+    // the joint states' times by the reader.
+    let dir = tempfile::tempdir().unwrap();
+    let log = dir.path().join("seed.mcap");
+    let opts = physid::api::floating::SimulateFloatingOptions {
+        robot: physid::api::model::RobotOptions::new("cheetah3"),
+        duration: 0.05,
+        rate: 1000.0,
+        seed: 1,
+        trot: None,
+        still: false,
+        sensors: Default::default(),
+        out: log.clone(),
+    };
+    let wrote = physid::api::floating::simulate_floating(&opts).unwrap();
+    let feet: Vec<String> = wrote.feet.iter().map(|f| f.body.clone()).collect();
+    let read = |p: &Path| {
+        let topics = io::floating_mcap::FloatingReadOptions::default();
+        io::floating_mcap::read(p, &wrote.joints, &feet, &topics).is_ok()
+    };
+    assert!(read(&log));
+    let seed = std::fs::read(&log).unwrap();
+    let (runs, rejected) = fuzz("floating mcap", &seed, &dir.path().join("a.mcap"), &read);
+    eprintln!("floating mcap: {runs} mutated inputs, {rejected} rejected with an error, 0 panics");
     assert!(rejected > runs / 10, "only {rejected} of {runs} rejected");
 }
 

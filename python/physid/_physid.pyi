@@ -656,7 +656,7 @@ def simulate_floating(
 
     Keywords:
 
-    out: The CSV log to write.
+    out: The log to write: CSV, or MCAP (`.mcap`: /joint_states, /odometry, /foot_forces).
     robot: `cheetah3` (built-in leg), a .urdf file, or a .toml file with a [robot] table.
         Default: cheetah3.
     no_rotors: Drop the rotors (the link-only model).
@@ -688,13 +688,17 @@ def identify_floating(
     out_mjcf: Optional[Path] = None,
     truth: Optional[Path] = None,
     baseline: Optional[Path] = None,
+    topic: str = "/joint_states",
+    odometry_topic: str = "/odometry",
+    foot_forces_topic: str = "/foot_forces",
+    stamp: str = "log",
 ) -> FloatingIdentification:
     """Identify a floating robot from one log, its description the prior, as `physid
     identify-floating` does.
 
     Keywords:
 
-    data: The log.
+    data: The log: CSV, MCAP or a rosbag2 directory.
     robot: `cheetah3` (built-in leg), a .urdf file, or a .toml file with a [robot] table.
         Default: cheetah3.
     no_rotors: Drop the rotors (the link-only model).
@@ -715,4 +719,14 @@ def identify_floating(
     truth: The ground truth, a floating URDF of the same robot (`simulate-floating` writes it
         beside its log as <log>.truth.urdf): every body's errors against it are reported.
     baseline: A results folder to compare against.
+    topic: MCAP and rosbag2 logs: the joint states' topic (sensor_msgs/msg/JointState). Default:
+        /joint_states.
+    odometry_topic: MCAP and rosbag2 logs: the trunk's topic (nav_msgs/msg/Odometry: pose in the
+        world, twist in trunk coordinates), interpolated to the joint states' times. Default:
+        /odometry.
+    foot_forces_topic: MCAP and rosbag2 logs: the feet's topic (physid_msgs/msg/FootForces: per
+        foot, the ground's force in world coordinates and the contact state). Default:
+        /foot_forces.
+    stamp: MCAP and rosbag2 logs: which time stamps a message, log (the recorder's receive time)
+        or header (its header.stamp); every topic alike. Default: log.
     """

@@ -6,7 +6,9 @@ use crate::errors::*;
 use crate::work::*;
 use numpy::{IntoPyArray, PyArray1};
 use physid::api;
-use physid::api::floating::{Foot, IdentifyFloatingOptions, SimulateFloatingOptions};
+use physid::api::floating::{
+    FloatingReadOptions, Foot, IdentifyFloatingOptions, SimulateFloatingOptions,
+};
 use physid::api::model::RobotOptions;
 use pyo3::prelude::*;
 use std::path::PathBuf;
@@ -171,7 +173,8 @@ fn sensors_of(
     Ok(sensors)
 }
 
-/// Identifies a floating robot from one log (CSV), its description the prior, as `physid
+/// Identifies a floating robot from one log (CSV, MCAP or a rosbag2 directory), its
+/// description the prior, as `physid
 /// identify-floating` does; `foot` the feet as `"BODY:X,Y,Z"` strings or `(body, (x, y, z))`
 /// pairs (default: the built-in quadruped's). `out_urdf` and `out_mjcf` write the identified
 /// robot (never over an input).
@@ -180,7 +183,9 @@ fn sensors_of(
 #[pyo3(signature = (data, *, robot = PathBuf::from("cheetah3"), no_rotors = false,
     setting = "torques-and-contacts", constraints = "ellipsoid", prior_weight = 1e-4,
     cutoff = None, foot = None, contact_force = 10.0, out_urdf = None, out_mjcf = None,
-    truth = None, baseline = None))]
+    truth = None, baseline = None, topic = String::from("/joint_states"),
+    odometry_topic = String::from("/odometry"), foot_forces_topic = String::from("/foot_forces"),
+    stamp = "log"))]
 #[allow(clippy::too_many_arguments)]
 pub(crate) fn identify_floating(
     py: Python<'_>,
@@ -197,10 +202,22 @@ pub(crate) fn identify_floating(
     out_mjcf: Option<PathBuf>,
     truth: Option<PathBuf>,
     baseline: Option<PathBuf>,
+    topic: String,
+    odometry_topic: String,
+    foot_forces_topic: String,
+    stamp: &str,
 ) -> PyResult<FloatingIdentification> {
     let opts = IdentifyFloatingOptions {
         robot: robot_options(robot, no_rotors),
         data,
+        topics: FloatingReadOptions {
+            topic,
+            stamp: stamp
+                .parse()
+                .map_err(|e| exception(format!("stamp: {e}")))?,
+            odometry_topic,
+            foot_forces_topic,
+        },
         feet: foot
             .unwrap_or_default()
             .iter()

@@ -82,6 +82,19 @@ def test_feet_sensors_and_settings_as_keywords(log, tmp_path):
     assert "dq_fr_hip_joint" in (tmp_path / "noisy.csv").read_text().splitlines()[0]
 
 
+def test_an_mcap_log_and_its_topics_are_the_cli_s(tmp_path):
+    path = tmp_path / "standing.mcap"
+    physid.simulate_floating(path, duration=2.0, seed=3)
+    cli("simulate-floating", "--out", str(tmp_path / "cli.mcap"), "--duration", "2", "--seed", "3")
+    ours = physid.identify_floating(path, stamp="header").to_dict()
+    theirs = json.loads(cli("identify-floating", "--data", str(tmp_path / "cli.mcap"), "--stamp", "header", "--json"))
+    assert ours["theta"] == theirs["theta"] and ours["samples_used"] == theirs["samples_used"]
+    with pytest.raises(physid.InputError, match="no /odom messages"):
+        physid.identify_floating(path, odometry_topic="/odom")
+    with pytest.raises(physid.InputError, match="stamp: unknown stamp 'gps'"):
+        physid.identify_floating(path, stamp="gps")
+
+
 @pytest.mark.parametrize(
     "kw, message",
     [
@@ -92,6 +105,8 @@ def test_feet_sensors_and_settings_as_keywords(log, tmp_path):
         (dict(foot=[3]), "give \"BODY:X,Y,Z\" or (body, (x, y, z))"),
         (dict(prior_weight=-1.0), "prior_weight"),
         (dict(contact_force=float("nan")), "contact_force"),
+        (dict(odometry_topic="/odom"), "apply to MCAP files and rosbag2 directories only"),
+        (dict(topic="/odometry"), "topic and odometry_topic are both /odometry"),
     ],
 )
 def test_bad_identification_keywords_are_named(log, kw, message):

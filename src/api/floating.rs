@@ -8,6 +8,8 @@ use super::ApiError;
 use crate::ident::floating::{Contact, DataSetting, FloatingRows, FloatingSample};
 use crate::ident::{ConstraintSet, IdentifiedBody, NormalEquations, SolveStatus};
 use crate::io::floating_log::{self, FloatingLog};
+use crate::io::floating_mcap;
+pub use crate::io::floating_mcap::FloatingReadOptions;
 use crate::model::floating::FloatingModel;
 /// The sensors a floating run is logged through.
 pub use crate::sim::floating_sensors::Sensors;
@@ -109,8 +111,8 @@ pub struct SimulateFloatingOptions {
     pub still: bool,
     /// The sensors.
     pub sensors: Sensors,
-    /// The CSV log to write (docs/floating-base.md, "Logs"); the robot simulated, the ground
-    /// truth, is written beside it as a floating URDF ([`truth_path`]).
+    /// The log to write, CSV or MCAP (`.mcap`; docs/floating-base.md, "Logs"); the robot
+    /// simulated, the ground truth, is written beside it as a floating URDF ([`truth_path`]).
     pub out: PathBuf,
 }
 
@@ -208,7 +210,11 @@ pub fn simulate_floating(opts: &SimulateFloatingOptions) -> Result<FloatingSimul
     let joints = robot.tree().joint_names();
     let names: Vec<String> = feet.iter().map(|f| f.body.clone()).collect();
     let log = crate::sim::floating_sensors::log(&run, (&joints, &names), &opts.sensors, opts.seed);
-    floating_log::write_csv(&opts.out, &log)?;
+    if is_bag(&opts.out) {
+        floating_mcap::write(&opts.out, &log, &robot.trunk().name)?;
+    } else {
+        floating_log::write_csv(&opts.out, &log)?;
+    }
     crate::io::write_atomic(
         &truth,
         crate::io::urdf::floating_to_string(&robot).as_bytes(),
@@ -233,8 +239,10 @@ pub fn simulate_floating(opts: &SimulateFloatingOptions) -> Result<FloatingSimul
 pub struct IdentifyFloatingOptions {
     /// The robot (its description is the prior).
     pub robot: RobotOptions,
-    /// The log (CSV, docs/floating-base.md "Logs").
+    /// The log: CSV, MCAP or a rosbag2 directory (docs/floating-base.md "Logs").
     pub data: PathBuf,
+    /// The topics and clock of an MCAP or rosbag2 log (none may be changed for a CSV).
+    pub topics: FloatingReadOptions,
     /// The feet; empty: the built-in quadruped's.
     pub feet: Vec<Foot>,
     /// Which of the log's quantities are used.
@@ -287,6 +295,7 @@ impl IdentifyFloatingOptions {
                 self.data.display()
             )));
         }
+        self.check_topics()?;
         if self.feet.is_empty() && self.robot.robot != "cheetah3" {
             return Err(ApiError::Options(format!(
                 "--robot {}: name the feet (--foot BODY:X,Y,Z for each); only the built-in quadruped's are known",
@@ -295,6 +304,72 @@ impl IdentifyFloatingOptions {
         }
         Ok(())
     }
+}
+
+impl IdentifyFloatingOptions {
+    /// The topics named, distinct, and changed only where a log (or the baseline) is MCAP or a
+    /// rosbag2 directory.
+    fn check_topics(&self) -> Result<(), ApiError> {
+        let t = &self.topics;
+        let named = [
+            ("topic", &t.topic),
+            ("odometry_topic", &t.odometry_topic),
+            ("foot_forces_topic", &t.foot_forces_topic),
+        ];
+        if let Some((name, _)) = named.iter().find(|(_, v)| v.trim().is_empty()) {
+            return Err(ApiError::Options(format!(
+                "{name}: empty; give a topic name (e.g. /odometry)"
+            )));
+        }
+        if let Some((i, j)) = crate::io::first_repeat_by(&named, |a, b| a.1 == b.1) {
+            return Err(ApiError::Options(format!(
+                "{} and {} are both {}: the joint states, the trunk and the feet come on three topics",
+                named[i].0, named[j].0, named[i].1
+            )));
+        }
+        let csv = |p: &Path| !is_bag(p);
+        let all_csv = csv(&self.data) && self.baseline.as_deref().is_none_or(csv);
+        if all_csv && *t != FloatingReadOptions::default() {
+            return Err(ApiError::Options(format!(
+                "{}: the topics and the stamp apply to MCAP files and rosbag2 directories only",
+                self.data.display()
+            )));
+        }
+        Ok(())
+    }
+}
+
+/// Whether `path` is read as MCAP (a `.mcap` file or a rosbag2 directory) rather than CSV.
+fn is_bag(path: &Path) -> bool {
+    path.is_dir() || path.extension().is_some_and(|e| e == "mcap")
+}
+
+/// Reads the floating log `path` (CSV, MCAP or a rosbag2 directory) for the robot's `joints`
+/// and `feet`; the note says which joint samples the other topics did not cover.
+fn read_floating_log(
+    path: &Path,
+    joints: &[String],
+    feet: &[String],
+    topics: &FloatingReadOptions,
+) -> Result<(FloatingLog, Option<String>), ApiError> {
+    if !is_bag(path) {
+        return Ok((floating_log::read_csv(path, joints, feet)?, None));
+    }
+    let read = floating_mcap::read(path, joints, feet, topics)?;
+    let note = match read.left_out {
+        (0, 0) => None,
+        (before, after) => Some(format!(
+            "{}: {before} joint samples before and {after} after the span of {}{} left out (nothing to interpolate the trunk from)",
+            path.display(),
+            topics.odometry_topic,
+            if read.log.force.is_some() || read.log.contact.is_some() {
+                format!(" and {}", topics.foot_forces_topic)
+            } else {
+                String::new()
+            }
+        )),
+    };
+    Ok((read.log, note))
 }
 
 /// The identified floating robot (`identify --floating-base --json`).
@@ -507,7 +582,14 @@ pub fn identify_floating(
     let identifiability = crate::ident::analysis::identifiability(&robot, &ne, &found.theta);
     let columns = mass_columns(&robot, &found.bodies);
     let mass_standard_errors = mass_errors(&columns, &identifiability);
-    let notices = far_masses(&found.bodies, &columns, &prior, &mass_standard_errors);
+    let notices = (samples.read_note.iter().map(super::data::Notice::note))
+        .chain(far_masses(
+            &found.bodies,
+            &columns,
+            &prior,
+            &mass_standard_errors,
+        ))
+        .collect();
     let rows = (ne.samples * crate::ident::floating::rows_per_sample(&robot, opts.setting)).max(1);
     let rms = |theta: &DVector<f64>| (ne.residual_sum_of_squares(theta) / rows as f64).sqrt();
     let n = robot.joints();
@@ -625,9 +707,13 @@ fn rows_of_log(
     };
     let points = resolve_feet(robot, &feet)?;
     let names: Vec<String> = feet.iter().map(|f| f.body.clone()).collect();
-    let log = floating_log::read_csv(&opts.data, &robot.tree().joint_names(), &names)?;
+    let joints = robot.tree().joint_names();
+    let (log, note) = read_floating_log(&opts.data, &joints, &names, &opts.topics)?;
     check_setting(opts, &log)?;
-    let samples = samples_of(&log, opts)?;
+    let samples = Samples {
+        read_note: note,
+        ..samples_of(&log, opts)?
+    };
     let ne = normal_equations(robot, &points, &samples, opts.setting);
     Ok((log, samples, ne))
 }
@@ -714,10 +800,10 @@ fn check_setting(opts: &IdentifyFloatingOptions, log: &FloatingLog) -> Result<()
     };
     match opts.setting {
         DataSetting::TorquesOnly if log.force.is_none() && log.contact.is_none() => {
-            missing("which feet are down: contact_<foot> columns, or force_<foot>_x, _y, _z")
+            missing("which feet are down: contact_<foot> columns, or force_<foot>_x, _y, _z (MCAP: the feet's topic)")
         }
         DataSetting::TorquesAndContacts | DataSetting::BaseOnly if log.force.is_none() => {
-            missing("the feet's contact forces: force_<foot>_x, _y, _z columns")
+            missing("the feet's contact forces: force_<foot>_x, _y, _z columns (MCAP: the force array of the feet's topic)")
         }
         _ => Ok(()),
     }
@@ -740,6 +826,8 @@ struct Samples {
     cutoff: f64,
     /// Samples left out near a change of the feet in contact (`TorquesOnly`).
     dropped: usize,
+    /// What reading the log left out (joint samples the trunk's topic did not cover).
+    read_note: Option<String>,
 }
 
 impl Samples {
@@ -792,6 +880,7 @@ fn samples_of(log: &FloatingLog, opts: &IdentifyFloatingOptions) -> Result<Sampl
         samples,
         cutoff,
         dropped,
+        read_note: None,
     })
 }
 

@@ -11,6 +11,7 @@
 pub mod cache;
 pub mod document;
 pub mod floating_log;
+pub mod floating_mcap;
 pub mod geometry;
 pub mod mcap_log;
 pub mod mcap_stream;
@@ -807,12 +808,19 @@ fn check_distinct_samples(
 /// message ([`mcap_log::read_with`] for one file). Errors name the file, the topic and the
 /// message.
 pub fn read_joint_log(path: &Path, opts: &mcap_log::ReadOptions) -> Result<mcap_log::Log, IoError> {
+    read_log(path, mcap_log::Reader::new(opts))
+}
+
+/// [`read_joint_log`] with `reader`, which may pass other topics' messages on.
+pub(crate) fn read_log(
+    path: &Path,
+    mut reader: mcap_log::Reader,
+) -> Result<mcap_log::Log, IoError> {
     let bag = path.is_dir().then(|| rosbag2::open(path)).transpose()?;
     let (files, storage) = match &bag {
         Some(b) => (b.files.clone(), b.storage),
         None => (vec![path.to_path_buf()], rosbag2::Storage::Mcap),
     };
-    let mut reader = mcap_log::Reader::new(opts);
     for file in &files {
         match storage {
             rosbag2::Storage::Mcap => reader.mcap_file(file)?,
@@ -909,7 +917,7 @@ fn check_angle_unit(logged: &crate::prepare::Logged, model: &Model) -> Result<()
 /// The data's joints matched to the robot's `names` by name (reordered; joints the robot does
 /// not have are dropped and returned); data that name no joints are taken in the robot's order
 /// when the counts agree. An error names a robot joint the data lack.
-fn match_joints(
+pub(crate) fn match_joints(
     tr: crate::prepare::Logged,
     names: &[String],
 ) -> Result<(crate::prepare::Logged, Vec<String>), String> {

@@ -21,16 +21,16 @@ use std::path::Path;
 
 /// `builtin_interfaces/msg/Time`.
 #[derive(Serialize, Deserialize, Debug, Clone, PartialEq)]
-struct Time {
-    sec: i32,
-    nanosec: u32,
+pub(crate) struct Time {
+    pub(crate) sec: i32,
+    pub(crate) nanosec: u32,
 }
 
 /// `std_msgs/msg/Header`.
 #[derive(Serialize, Deserialize, Debug, Clone, PartialEq)]
-struct Header {
-    stamp: Time,
-    frame_id: String,
+pub(crate) struct Header {
+    pub(crate) stamp: Time,
+    pub(crate) frame_id: String,
 }
 
 /// `sensor_msgs/msg/JointState`.
@@ -59,12 +59,12 @@ pub(super) struct JointSample {
 /// A `sensor_msgs/msg/JointState` to write, borrowing its arrays: the same CDR as
 /// [`JointState`] (serde writes a slice as the sequence a `Vec` is), without copying a sample.
 #[derive(Serialize)]
-struct JointStateView<'a> {
-    header: &'a Header,
-    name: &'a [String],
-    position: &'a [f64],
-    velocity: &'a [f64],
-    effort: &'a [f64],
+pub(crate) struct JointStateView<'a> {
+    pub(crate) header: &'a Header,
+    pub(crate) name: &'a [String],
+    pub(crate) position: &'a [f64],
+    pub(crate) velocity: &'a [f64],
+    pub(crate) effort: &'a [f64],
 }
 
 /// A `physid_msgs/msg/JointSample` to write, borrowing its arrays (the same CDR as
@@ -161,14 +161,14 @@ pub(super) fn check_cdr_lengths(data: &[u8], float_sequences: usize) -> Result<(
     Ok(())
 }
 
-const SEP: &str =
+pub(crate) const SEP: &str =
     "================================================================================";
 
-fn header_defs() -> String {
+pub(crate) fn header_defs() -> String {
     format!("{SEP}\nMSG: std_msgs/Header\nbuiltin_interfaces/Time stamp\nstring frame_id\n{SEP}\nMSG: builtin_interfaces/Time\nint32 sec\nuint32 nanosec\n")
 }
 
-fn joint_state_schema() -> String {
+pub(crate) fn joint_state_schema() -> String {
     format!("std_msgs/Header header\nstring[] name\nfloat64[] position\nfloat64[] velocity\nfloat64[] effort\n{}", header_defs())
 }
 
@@ -188,7 +188,7 @@ pub const TOPIC_TRUTH: &str = "/physid/ground_truth";
 /// Format version in the `physid` metadata record.
 pub const FORMAT: &str = "physid-mcap-1";
 
-fn stamp(t: f64) -> (Header, u64) {
+pub(crate) fn stamp(t: f64) -> (Header, u64) {
     let ns = (t * 1e9).round().max(0.0) as u64;
     (
         Header {
@@ -204,7 +204,7 @@ fn stamp(t: f64) -> (Header, u64) {
 
 /// `m` as little-endian CDR with its encapsulation header, written into `buf` (emptied first)
 /// so that one buffer serves every message.
-fn cdr_into<'b, T: Serialize>(buf: &'b mut Vec<u8>, m: &T) -> &'b [u8] {
+pub(crate) fn cdr_into<'b, T: Serialize>(buf: &'b mut Vec<u8>, m: &T) -> &'b [u8] {
     buf.clear();
     cdr::serialize_into::<_, _, _, cdr::CdrLe>(&mut *buf, m, cdr::Infinite)
         .expect("CDR of plain structs into memory cannot fail");
@@ -479,6 +479,9 @@ pub struct Log {
     pub skipped_messages: usize,
     /// The files read, in order (one, or those of a rosbag2 directory).
     pub files: Vec<std::path::PathBuf>,
+    /// The time on the clock read (ns: the log time, or the header stamps) that `t = 0` of the
+    /// joint states stands for.
+    pub clock_origin_ns: Option<u64>,
 }
 
 impl Log {
@@ -528,7 +531,14 @@ pub(crate) struct Reader<'a> {
     skipped: usize,
     /// Every topic seen, with its message type.
     topics: BTreeMap<String, String>,
+    /// Where the messages of other topics go (a floating robot's trunk and feet), if anywhere.
+    others: Option<&'a mut OtherMessages<'a>>,
 }
+
+/// A sink for the messages of topics the joint reader does not decode: `(topic, message type,
+/// CDR bytes, log time ns, sequence)`; `Err` says what is wrong with the message.
+pub(crate) type OtherMessages<'a> =
+    dyn FnMut(&str, &str, &[u8], u64, u64) -> Result<(), String> + 'a;
 
 impl<'a> Reader<'a> {
     /// A reader that has seen nothing yet.
@@ -542,6 +552,15 @@ impl<'a> Reader<'a> {
             metadata: BTreeMap::new(),
             skipped: 0,
             topics: BTreeMap::new(),
+            others: None,
+        }
+    }
+
+    /// A reader that passes the messages of every other topic to `others`.
+    pub(crate) fn with_others(opts: &'a ReadOptions, others: &'a mut OtherMessages<'a>) -> Self {
+        Self {
+            others: Some(others),
+            ..Self::new(opts)
         }
     }
 
@@ -584,6 +603,8 @@ impl<'a> Reader<'a> {
             } else {
                 self.seconds(Stamp::Log, log_time).map_err(at)?;
             }
+        } else if let Some(others) = self.others.as_mut() {
+            others(topic, kind, data, log_time, sequence).map_err(at)?;
         }
         Ok(())
     }
@@ -593,25 +614,28 @@ impl<'a> Reader<'a> {
         &self.topics
     }
 
-    /// The log read, or an error naming what the topic asked for is and which topics carry
-    /// joint states.
-    pub(crate) fn finish(self, path: &Path) -> Result<Log, IoError> {
-        let bad = |m: String| IoError::invalid(path, m);
-        let topic = &self.opts.topic;
-        let states: Vec<&str> = self
-            .topics
-            .iter()
+    /// Which topics carry joint states, for an error.
+    fn joint_state_topics(&self) -> String {
+        let states: Vec<&str> = (self.topics.iter())
             .filter(|(_, k)| JOINT_STATE_TYPES.contains(&k.as_str()))
             .map(|(t, _)| t.as_str())
             .collect();
-        let offer = if states.is_empty() {
+        if states.is_empty() {
             "no topic carries sensor_msgs/msg/JointState".to_string()
         } else {
             format!(
                 "topics with sensor_msgs/msg/JointState: {} (give one with --topic)",
                 states.join(", ")
             )
-        };
+        }
+    }
+
+    /// The log read, or an error naming what the topic asked for is and which topics carry
+    /// joint states.
+    pub(crate) fn finish(self, path: &Path) -> Result<Log, IoError> {
+        let bad = |m: String| IoError::invalid(path, m);
+        let topic = &self.opts.topic;
+        let offer = self.joint_state_topics();
         if let Some(kind) = self
             .topics
             .get(topic)
@@ -653,6 +677,7 @@ impl<'a> Reader<'a> {
             metadata: self.metadata,
             skipped_messages: self.skipped,
             files: vec![],
+            clock_origin_ns: self.t0[self.opts.stamp as usize],
         })
     }
 
@@ -821,7 +846,7 @@ fn check_arrays(js: &JointState) -> Result<bool, String> {
 }
 
 /// `header.stamp` in nanoseconds; negative seconds or nanoseconds ≥ 1e9 are refused.
-fn header_ns(h: &Header) -> Result<u64, String> {
+pub(crate) fn header_ns(h: &Header) -> Result<u64, String> {
     if h.stamp.sec < 0 || h.stamp.nanosec >= 1_000_000_000 {
         return Err(format!(
             "header.stamp {} s {} ns is not a valid time",
