@@ -558,6 +558,72 @@ fn a_floating_run_logged_as_mcap_identifies_as_its_csv_does() {
 }
 
 #[test]
+fn a_floating_export_carries_its_ellipsoids_in_a_sidecar_and_reads_back_whole() {
+    // The truth simulate-floating writes (and an identified robot) is a URDF without geometry
+    // plus its sidecar: read through the sidecar, every body keeps its ellipsoid (the trunk's
+    // and the rotors' too), so the ellipsoid set runs on it as on the built-in quadruped.
+    use physid::api::floating::{identify_floating, quadruped_feet, IdentifyFloatingOptions};
+    let dir = tempfile::tempdir().unwrap();
+    let data = floating_log(dir.path(), "cheetah3", (1.0, 6), Default::default());
+    let truth = physid::api::floating::truth_path(&data);
+    let sidecar = physid::io::sidecar_path(&truth);
+    assert!(sidecar.is_file(), "{}", sidecar.display());
+    let built_in = physid::model::quadruped::quadruped();
+    let arg = sidecar.to_str().unwrap();
+    let (read, _) = physid::io::load_floating_robot_with(arg, &Default::default()).unwrap();
+    let pairs = |m: &physid::model::floating::FloatingModel| {
+        let mut v = vec![(m.trunk().name.clone(), m.trunk().bounding.unwrap())];
+        for b in m.tree().bodies() {
+            v.push((b.name.clone(), b.bounding.unwrap()));
+            if let Some(r) = &b.rotor {
+                v.push((r.name.clone(), r.bounding.unwrap()));
+            }
+        }
+        v
+    };
+    let (want, got) = (pairs(&built_in), pairs(&read));
+    assert_eq!(want.len(), got.len());
+    for ((name, a), (other, b)) in want.iter().zip(&got) {
+        assert_eq!(name, other);
+        let gap = (a.qs - b.qs).abs().max() + (a.center - b.center).abs().max();
+        assert!(gap < 1e-12 * a.qs.abs().max(), "{name}: {gap:e}");
+    }
+    let feet = quadruped_feet(&built_in);
+    let identify = |robot: &str, out: Option<std::path::PathBuf>| {
+        identify_floating(&IdentifyFloatingOptions {
+            robot: physid::api::model::RobotOptions::new(robot),
+            feet: feet.clone(),
+            out_urdf: out,
+            ..floating_options(&data)
+        })
+    };
+    let from_builtin = identify("cheetah3", Some(dir.path().join("id.urdf"))).unwrap();
+    let from_sidecar = identify(arg, None).unwrap();
+    assert!(from_sidecar.constraints_hold);
+    let gap = (from_sidecar.description_rms - from_builtin.description_rms).abs();
+    assert!(gap < 1e-9 * from_builtin.description_rms, "{gap:e}");
+    // The identified robot's sidecar reads back, and identifies again under the ellipsoids.
+    let id_sidecar = dir.path().join("id.physid.toml");
+    let again = identify(id_sidecar.to_str().unwrap(), None).unwrap();
+    assert!(again.constraints_hold);
+    // Its URDF alone, without geometry, gets the kinematic tree's ellipsoids (rotors included).
+    let urdf_only = identify(dir.path().join("id.urdf").to_str().unwrap(), None).unwrap();
+    assert!(urdf_only.constraints_hold);
+    // The export never writes over an input; a sidecar that does not name a URDF is refused.
+    let err = identify(arg, Some(truth.clone())).unwrap_err().to_string();
+    assert!(err.contains("truth.urdf"), "{err}");
+    let bare = dir.path().join("bare.toml");
+    std::fs::write(&bare, "[robot]\nbuiltin = \"cheetah3\"\n").unwrap();
+    let err = identify(bare.to_str().unwrap(), None)
+        .unwrap_err()
+        .to_string();
+    assert!(
+        err.contains("bare.toml") && err.contains("names its URDF"),
+        "{err}"
+    );
+}
+
+#[test]
 fn a_floating_log_of_exact_sensors_obeys_the_description_that_made_it() {
     // The trunk's acceleration is differentiated from its logged twist and the joints' from
     // their positions. The trunk rows hold to a tenth of a newton on 180 N (measured 0.038 and

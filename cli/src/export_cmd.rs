@@ -62,7 +62,7 @@ pub fn run(a: Args) -> anyhow::Result<()> {
 }
 
 /// `physid export --floating-base`: MJCF with a free joint, URDF with the trunk as its root
-/// link (outputs already checked).
+/// link and its sidecar (outputs already checked).
 fn export_floating(a: &Args) -> anyhow::Result<()> {
     anyhow::ensure!(
         a.mjcf.is_some() || a.urdf.is_some(),
@@ -79,11 +79,13 @@ fn export_floating(a: &Args) -> anyhow::Result<()> {
         eprintln!("wrote {}", path.display());
     }
     if let Some(path) = &a.urdf {
-        let text = physid::io::urdf::floating_to_string(&robot);
-        physid::io::write_atomic(path, text.as_bytes())?;
+        let inputs = a.robot.files();
+        let inputs: Vec<&std::path::Path> = inputs.iter().map(|p| p.as_path()).collect();
+        physid::io::export_floating_urdf(path, &robot, &inputs)?;
         eprintln!(
-            "wrote {} (no sidecar: bounding ellipsoids are read back from the kinematic tree)",
-            path.display()
+            "wrote {} and {} (its bounding ellipsoids: --robot the sidecar)",
+            path.display(),
+            physid::io::sidecar_path(path).display()
         );
     }
     Ok(())

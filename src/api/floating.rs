@@ -180,7 +180,8 @@ pub fn simulate_floating(opts: &SimulateFloatingOptions) -> Result<FloatingSimul
     let files = opts.robot.files();
     let inputs: Vec<&Path> = files.iter().map(PathBuf::as_path).collect();
     let truth = truth_path(&opts.out);
-    crate::io::check_outputs(&[&opts.out, &truth], &inputs)?;
+    let truth_sidecar = crate::io::sidecar_path(&truth);
+    crate::io::check_outputs(&[&opts.out, &truth, &truth_sidecar], &inputs)?;
     let feet = quadruped_feet(&crate::model::quadruped::quadruped());
     let points = resolve_feet(&robot, &feet).map_err(|e| {
         ApiError::Options(format!(
@@ -215,10 +216,7 @@ pub fn simulate_floating(opts: &SimulateFloatingOptions) -> Result<FloatingSimul
     } else {
         floating_log::write_csv(&opts.out, &log)?;
     }
-    crate::io::write_atomic(
-        &truth,
-        crate::io::urdf::floating_to_string(&robot).as_bytes(),
-    )?;
+    crate::io::export_floating_urdf(&truth, &robot, &inputs)?;
     let down = run.contact.iter().filter(|f| f.z > 0.0).count();
     let g = &motion.ground;
     Ok(FloatingSimulated {
@@ -754,17 +752,24 @@ fn far_masses(
 
 /// Neither output may be an input or the other.
 fn check_outputs(opts: &IdentifyFloatingOptions) -> Result<(), ApiError> {
-    let outputs: Vec<&Path> = [&opts.out_urdf, &opts.out_mjcf]
+    let sidecar = opts.out_urdf.as_deref().map(crate::io::sidecar_path);
+    let outputs: Vec<&Path> = [&opts.out_urdf, &sidecar, &opts.out_mjcf]
         .into_iter()
         .flatten()
         .map(PathBuf::as_path)
         .collect();
+    let inputs = input_files(opts);
+    let inputs: Vec<&Path> = inputs.iter().map(PathBuf::as_path).collect();
+    Ok(crate::io::check_outputs(&outputs, &inputs)?)
+}
+
+/// Every file `opts` reads.
+fn input_files(opts: &IdentifyFloatingOptions) -> Vec<PathBuf> {
     let mut inputs = opts.robot.files();
     inputs.push(opts.data.clone());
     inputs.extend(opts.truth.clone());
     inputs.extend(opts.baseline.clone());
-    let inputs: Vec<&Path> = inputs.iter().map(PathBuf::as_path).collect();
-    Ok(crate::io::check_outputs(&outputs, &inputs)?)
+    inputs
 }
 
 /// Writes the identified robot where asked.
@@ -773,10 +778,9 @@ fn write_models(
     identified: &FloatingModel,
 ) -> Result<(), ApiError> {
     if let Some(p) = &opts.out_urdf {
-        crate::io::write_atomic(
-            p,
-            crate::io::urdf::floating_to_string(identified).as_bytes(),
-        )?;
+        let inputs = input_files(opts);
+        let inputs: Vec<&Path> = inputs.iter().map(PathBuf::as_path).collect();
+        crate::io::export_floating_urdf(p, identified, &inputs)?;
     }
     if let Some(p) = &opts.out_mjcf {
         crate::io::write_atomic(

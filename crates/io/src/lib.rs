@@ -529,8 +529,8 @@ pub fn load_robot_with(
 
 /// Loads a floating robot from a `--robot` argument: the built-in `cheetah3` as the
 /// Cheetah-3-like quadruped (four of its legs on a trunk), or a URDF whose root link (with the
-/// links fixed to it) is the trunk ([`urdf::load_floating`]). Robot TOML files do not float
-/// yet.
+/// links fixed to it) is the trunk ([`urdf::load_floating`]), or a robot TOML naming such a
+/// URDF ([`robot_toml::load_floating_with`]: the sidecar of a floating export).
 pub fn load_floating_robot_with(
     arg: &str,
     opts: &robot_spec::RobotOptions,
@@ -546,12 +546,42 @@ pub fn load_floating_robot_with(
             };
             urdf::load_floating(path, &extras)
         }
-        Some("toml") => Err(IoError::invalid(
-            path,
-            "a robot TOML file cannot describe a floating robot yet: give its URDF".to_string(),
-        )),
+        Some("toml") => robot_toml::load_floating_with(path, opts),
         _ => Err(IoError::UnknownRobot(arg.to_string())),
     }
+}
+
+/// Writes the floating robot `robot` as URDF at `out` ([`urdf::floating_to_string`]: the
+/// trunk its root link, rotors as mimic joints) and beside it the sidecar ([`sidecar_path`])
+/// carrying what URDF cannot: every body's bounding ellipsoid, the trunk's and the rotors'
+/// among them, gravity and the rotor model (`--robot` the sidecar to read it back whole).
+/// Neither output may be one of `inputs`.
+pub fn export_floating_urdf(
+    out: &Path,
+    robot: &physid_core::model::floating::FloatingModel,
+    inputs: &[&Path],
+) -> Result<(), IoError> {
+    let side = sidecar_path(out);
+    check_outputs(&[out, side.as_path()], inputs)?;
+    let text = urdf::floating_to_string(robot);
+    let name = out
+        .file_name()
+        .map_or("robot.urdf".into(), |n| n.to_string_lossy().into_owned());
+    let trunk = robot.trunk();
+    let trunk_ellipsoid = (trunk.bounding.as_ref()).map(|e| {
+        format!(
+            "\n{}",
+            urdf_patch::ellipsoid_toml(&trunk.name, e, &trunk.inertia)
+        )
+    });
+    let side_text = urdf_patch::sidecar(
+        robot.tree(),
+        &name,
+        &urdf_patch::mimic_links(&text),
+        trunk_ellipsoid.as_deref(),
+    );
+    write_atomic(out, text.as_bytes())?;
+    write_atomic(&side, side_text.as_bytes())
 }
 
 /// The URDF file behind a `--robot` argument: the file itself, or a robot TOML's `urdf`; `None`

@@ -261,6 +261,28 @@ pub(crate) fn rotor_from_spec(
 }
 
 impl RobotExtras {
+    /// The sidecar ellipsoid of the body `name` (a floating robot's trunk, which is not among
+    /// the tree's bodies), and these extras without it.
+    pub fn split_ellipsoid(
+        &self,
+        name: Option<&str>,
+        path: &Path,
+    ) -> Result<(Option<Ellipsoid>, RobotExtras), IoError> {
+        let mut rest = self.clone();
+        let Some(name) = name else {
+            return Ok((None, rest));
+        };
+        let (own, others): (Vec<EllipsoidSpec>, Vec<EllipsoidSpec>) = (self.ellipsoid.iter())
+            .cloned()
+            .partition(|e| e.body.as_deref() == Some(name));
+        rest.ellipsoid = others;
+        let ellipsoid = (own.last())
+            .map(|e| e.ellipsoid(&format!("ellipsoid of '{name}'")))
+            .transpose()
+            .map_err(|m| IoError::invalid(path, m))?;
+        Ok((ellipsoid, rest))
+    }
+
     /// Applies sidecar rotors, friction and ellipsoids to `bodies`. `x_parent_link[i]` is the
     /// transform from body `i`'s parent body frame to its URDF parent link frame (identity for
     /// explicit trees), so sidecar rotor origins are given relative to the parent link.

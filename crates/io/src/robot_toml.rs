@@ -247,6 +247,37 @@ pub fn from_spec_with(
     Ok((scaled(model, spec.ellipsoid_scale, path)?, vec![]))
 }
 
+/// Loads a floating robot from a TOML file's `[robot]` table, which names its URDF (`urdf`, as
+/// the sidecar of `identify-floating --out-urdf` does) and adds what URDF cannot carry
+/// (ellipsoids, the trunk's among them; gravity; the rotor model); command-line options over
+/// the file's keys.
+pub fn load_floating_with(
+    path: &Path,
+    opts: &RobotOptions,
+) -> Result<(physid_core::model::floating::FloatingModel, Vec<String>), IoError> {
+    let spec = read_spec(path)?;
+    check_ways(&spec, path)?;
+    let Some(u) = &spec.urdf else {
+        return Err(IoError::invalid(
+            path,
+            "robot: a floating robot's table names its URDF (`urdf`); built-in legs and [[robot.body]] trees do not float",
+        ));
+    };
+    if spec.ellipsoid_scale.is_some() {
+        return Err(IoError::invalid(
+            path,
+            "robot.ellipsoid_scale: not read for floating robots",
+        ));
+    }
+    let dir = path.parent().unwrap_or(Path::new("."));
+    let mut extras = spec.extras();
+    extras.geometry.package_dirs = (extras.geometry.package_dirs.iter())
+        .map(|d| dir.join(d))
+        .collect();
+    extras.geometry = opts.over(&extras.geometry);
+    super::urdf::load_floating(&dir.join(u), &extras)
+}
+
 /// `model` with its ellipsoids scaled by `scale` (`robot.ellipsoid_scale`), if given.
 fn scaled(model: Model, scale: Option<f64>, path: &Path) -> Result<Model, IoError> {
     match scale {

@@ -233,19 +233,10 @@ fn parse(
     floating: bool,
 ) -> Result<(Model, Vec<String>, Option<Trunk>), IoError> {
     let (robot, doc, mut warnings) = read_robot(xml, path)?;
-    let mut robot = robot;
+    let robot = rooted(robot, path, floating)?;
     let rates = doc
         .as_ref()
         .map_or(Ok(HashMap::new()), |d| rate_limits(d, path))?;
-    if let Some(joint) = strip_floating_root(&mut robot, path)?.filter(|_| !floating) {
-        return Err(IoError::invalid(
-            path,
-            format!("joint '{joint}' is floating: the robot's root moves, and this reads fixed-base robots; read it as a floating-base robot (`physid dynamics --floating-base`)"),
-        ));
-    }
-    if robot.links.is_empty() {
-        return Err(IoError::invalid(path, "the robot has no <link> elements"));
-    }
     let link_idx = link_index(&robot, path)?;
     let (children, root) = tree(&robot, &link_idx, path)?;
     let lookup = Lookup {
@@ -266,23 +257,46 @@ fn parse(
     warnings.extend(lost_meshes(&shapes, &base));
     bound_bodies(&mut bodies, &shapes, &lookup, &mut warnings);
     attach_rotors(&mut bodies, mimics, &lookup, &mut warnings)?;
-    // The sidecar's ellipsoids come last: they override the geometry's.
+    // The sidecar's ellipsoids come last: they override the geometry's (the trunk's, of a
+    // floating robot, is its own).
+    let (trunk_sidecar, extras) = extras.split_ellipsoid(floating.then_some(root), path)?;
     extras.apply(&mut bodies, &body_parent_link_x, path)?;
     check_subtree_masses(&bodies, path)?;
     let trunk = floating.then(|| Trunk {
         name: root.to_string(),
         inertia: base_inertia,
-        bounding: trunk_bound(
-            &bodies,
-            &base,
-            (root, &base_inertia),
-            &lookup,
-            &mut warnings,
-        ),
+        bounding: trunk_sidecar.or_else(|| {
+            trunk_bound(
+                &bodies,
+                &base,
+                (root, &base_inertia),
+                &lookup,
+                &mut warnings,
+            )
+        }),
     });
-    let model = physical_model(robot.name.clone(), bodies, (extras, base.shapes), path)?;
-    check_bounds(&model, extras, path, &mut warnings)?;
+    let model = physical_model(robot.name.clone(), bodies, (&extras, base.shapes), path)?;
+    check_bounds(&model, &extras, path, &mut warnings)?;
     Ok((model, warnings, trunk))
+}
+
+/// `robot` with a floating joint from a massless world link removed ([`strip_floating_root`]),
+/// which only a `floating` read accepts; `Err` for a robot without links.
+fn rooted(
+    mut robot: urdf_rs::Robot,
+    path: &Path,
+    floating: bool,
+) -> Result<urdf_rs::Robot, IoError> {
+    if let Some(joint) = strip_floating_root(&mut robot, path)?.filter(|_| !floating) {
+        return Err(IoError::invalid(
+            path,
+            format!("joint '{joint}' is floating: the robot's root moves, and this reads fixed-base robots; read it as a floating-base robot (`physid dynamics --floating-base`)"),
+        ));
+    }
+    if robot.links.is_empty() {
+        return Err(IoError::invalid(path, "the robot has no <link> elements"));
+    }
+    Ok(robot)
 }
 
 /// The acceleration and jerk limits physid reads from the URDF's `<limit>` (urdf-rs does not),
@@ -920,32 +934,9 @@ fn attach_rotors(
     lookup: &Lookup,
     warnings: &mut Vec<String>,
 ) -> Result<(), IoError> {
-    let bad = |m: String| IoError::invalid(lookup.urdf, m);
+    let mut from_tree = vec![];
     for (jt, mimic, pb, x_rot, params, shapes) in mimics {
-        let k = bodies
-            .iter()
-            .position(|b| b.joint_name == mimic.joint)
-            .ok_or_else(|| {
-                bad(format!(
-                    "joint '{}' mimics '{}', which is not a moving joint",
-                    jt.name, mimic.joint
-                ))
-            })?;
-        if bodies[k].parent != pb {
-            return Err(bad(format!(
-                "joint '{}' mimics '{}' but is not mounted on that joint's parent body: not a rotor",
-                jt.name, mimic.joint
-            )));
-        }
-        if mimic.offset.unwrap_or(0.0) != 0.0 {
-            return Err(bad(format!(
-                "joint '{}': a rotor's mimic offset must be 0",
-                jt.name
-            )));
-        }
-        if bodies[k].rotor.is_some() {
-            return Err(bad(format!("joint '{}' drives two rotors", mimic.joint)));
-        }
+        let k = rotor_host(bodies, jt, mimic, pb, lookup.urdf)?;
         bodies[k].rotor = Some(Rotor {
             name: jt.child.link.clone(),
             x_rot,
@@ -961,16 +952,88 @@ fn attach_rotors(
             },
             gear_ratio: mimic.multiplier.unwrap_or(1.0),
             inertia: params,
-            bounding: shapes
-                .bound(&jt.child.link, lookup, warnings)
-                .unwrap_or_else(|w| {
-                    warnings.push(w);
-                    None
-                }),
+            bounding: rotor_bounding(&shapes, (&jt.child.link, &params), lookup, warnings)
+                .inspect(|(_, kinematic)| {
+                    if *kinematic {
+                        from_tree.push(format!("'{}'", jt.child.link));
+                    }
+                })
+                .map(|(e, _)| e),
         });
     }
-
+    if !from_tree.is_empty() {
+        warnings.push(format!(
+            "no geometry for the rotors {}: their bounding ellipsoids are about each rotor's frame and centre of mass ({KINEMATIC_MARGIN} m), grown to hold the description's own inertia; give geometry or sidecar ellipsoids for surer bounds",
+            from_tree.join(", ")
+        ));
+    }
     Ok(())
+}
+
+/// The body whose joint the mimic joint `jt` drives as its rotor; `Err` where it is not a
+/// rotor (no such moving joint, on another body, with an offset, or a second rotor).
+fn rotor_host(
+    bodies: &[Body],
+    jt: &urdf_rs::Joint,
+    mimic: &urdf_rs::Mimic,
+    pb: Option<usize>,
+    path: &Path,
+) -> Result<usize, IoError> {
+    let bad = |m: String| IoError::invalid(path, m);
+    let k = bodies
+        .iter()
+        .position(|b| b.joint_name == mimic.joint)
+        .ok_or_else(|| {
+            bad(format!(
+                "joint '{}' mimics '{}', which is not a moving joint",
+                jt.name, mimic.joint
+            ))
+        })?;
+    if bodies[k].parent != pb {
+        return Err(bad(format!(
+            "joint '{}' mimics '{}' but is not mounted on that joint's parent body: not a rotor",
+            jt.name, mimic.joint
+        )));
+    }
+    if mimic.offset.unwrap_or(0.0) != 0.0 {
+        return Err(bad(format!(
+            "joint '{}': a rotor's mimic offset must be 0",
+            jt.name
+        )));
+    }
+    if bodies[k].rotor.is_some() {
+        return Err(bad(format!("joint '{}' drives two rotors", mimic.joint)));
+    }
+    Ok(k)
+}
+
+/// A rotor's bounding ellipsoid and whether it is [`rotor_bound`]'s (the rotor has no
+/// geometry): its geometry's, or none with a warning saying why.
+fn rotor_bounding(
+    shapes: &Shapes,
+    (link, inertia): (&str, &InertialParams),
+    lookup: &Lookup,
+    warnings: &mut Vec<String>,
+) -> Option<(physid_core::spatial::Ellipsoid, bool)> {
+    if shapes.has_no_geometry() && !lookup.opts.ignore_geometry {
+        return Some((rotor_bound(inertia), true));
+    }
+    let bound = shapes.bound(link, lookup, warnings).unwrap_or_else(|w| {
+        warnings.push(w);
+        None
+    });
+    bound.map(|e| (e, false))
+}
+
+/// A rotor's ellipsoid without geometry: its frame's origin and its centre of mass, enlarged by
+/// [`KINEMATIC_MARGIN`], scaled until its own inertia lies inside.
+fn rotor_bound(inertia: &InertialParams) -> physid_core::spatial::Ellipsoid {
+    let m = inertia.mass();
+    let mut points = vec![Vector3::zeros()];
+    if m > 0.0 {
+        points.push(inertia.h() / m);
+    }
+    grown_to_hold(points, inertia)
 }
 
 /// The description's inertia of each body and rotor against its bounding ellipsoid: outside a

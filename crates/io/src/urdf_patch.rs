@@ -198,7 +198,11 @@ fn fixed_descendants<'a, 'i>(
 
 /// An ellipsoid as a sidecar `[[robot.ellipsoid]]` entry: centre, semi-axes and the
 /// roll-pitch-yaw of its principal axes.
-fn ellipsoid_toml(name: &str, e: &physid_core::spatial::Ellipsoid, p: &InertialParams) -> String {
+pub(crate) fn ellipsoid_toml(
+    name: &str,
+    e: &physid_core::spatial::Ellipsoid,
+    p: &InertialParams,
+) -> String {
     let eig = nalgebra::SymmetricEigen::new(e.qs);
     let mut r = eig.eigenvectors;
     if r.determinant() < 0.0 {
