@@ -35,6 +35,7 @@ COMMANDS = {
     "Robot": "model",
     "simulate_floating": "simulate-floating",
     "identify_floating": "identify-floating",
+    "FloatingRobot": "identify-floating",
 }
 
 # A keyword whose flag is its negation (python/src/errors.rs, keyword(), names flags as keywords
@@ -48,7 +49,7 @@ FLAG = {"package_dirs": "package-dir"}
 RUNS = {"data", "validate_data", "baseline_data"}
 # Functions over a floating robot: its log is one CSV path and its robot a path or "cheetah3"
 # (no physid.Robot, which is a fixed-base robot), so the texts above do not apply.
-FLOATING = {"simulate_floating", "identify_floating"}
+FLOATING = {"simulate_floating", "identify_floating", "FloatingRobot"}
 
 # Keywords the CLI has no flag for (Python's own), or whose Python form differs (these come
 # first).

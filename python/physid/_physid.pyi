@@ -673,6 +673,39 @@ def simulate_floating(
         "exact" for noise-free sensors logging everything.
     """
 
+class FloatingRobot:
+    """A floating robot (the built-in quadruped "cheetah3", a floating URDF, or its sidecar
+    TOML) and its dynamics on arrays in pinocchio's free-flyer layout: q = [x, y, z, qx, qy,
+    qz, qw, joints...] (nq = 7 + n), velocities and accelerations [v, w, joints...] (nv = 6 + n,
+    trunk axes), generalized forces [f, tau_trunk, joints...]; joints in the robot's order."""
+
+    def __init__(self, robot: Path = "cheetah3", *, no_rotors: bool = False) -> None:
+        """Load the floating robot; loader warnings are issued as physid.PhysidWarning.
+
+        Keywords:
+
+        robot: `cheetah3` (built-in leg), a .urdf file, or a .toml file with a [robot] table.
+            Default: cheetah3.
+        no_rotors: Drop the rotors (the link-only model).
+        """
+    @property
+    def name(self) -> str: ...
+    @property
+    def trunk(self) -> str: ...
+    @property
+    def sizes(self) -> tuple[int, int]: ...
+    @property
+    def joint_names(self) -> list[str]: ...
+    @property
+    def parameter_names(self) -> list[str]: ...
+    @property
+    def mass(self) -> float: ...
+    def parameters(self) -> Array: ...
+    def inverse_dynamics(self, q: ArrayLike, v: ArrayLike, a: ArrayLike) -> Array: ...
+    def mass_matrix(self, q: ArrayLike) -> Array: ...
+    def regressor(self, q: ArrayLike, v: ArrayLike, a: ArrayLike) -> Array: ...
+
+
 def identify_floating(
     data: Path,
     *,

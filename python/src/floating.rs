@@ -4,7 +4,7 @@
 use crate::convert::*;
 use crate::errors::*;
 use crate::work::*;
-use numpy::{IntoPyArray, PyArray1};
+use numpy::{IntoPyArray, PyArray1, PyArrayDyn};
 use physid::api;
 use physid::api::floating::{
     FloatingReadOptions, Foot, IdentifyFloatingOptions, SimulateFloatingOptions,
@@ -261,5 +261,165 @@ fn constraints_of(name: &str) -> PyResult<api::ConstraintSet> {
         exception(format!(
             "constraints: '{name}' is not one of none, semi, consistent, ellipsoid"
         ))
+    })
+}
+
+/// A floating robot (a free trunk carrying a tree: the built-in quadruped `"cheetah3"`, a
+/// floating URDF, or its sidecar TOML) and its dynamics on arrays in pinocchio's free-flyer
+/// layout: `q = [x, y, z, qx, qy, qz, qw, joints…]` (`nq = 7 + n`), velocities and
+/// accelerations `[v, ω, joints…]` (`nv = 6 + n`, the trunk origin's velocity and the angular
+/// velocity in trunk axes), generalized forces `[f, τ_trunk, joints…]` (N, N m, trunk axes).
+/// The joints are in the robot's order (`joint_names`), not necessarily pinocchio's.
+#[doc = include_str!("../keywords/FloatingRobot.txt")]
+#[pyclass(frozen, module = "physid")]
+pub(crate) struct FloatingRobot {
+    robot: api::FloatingModel,
+}
+
+#[pymethods]
+impl FloatingRobot {
+    /// Loads `robot`; `no_rotors` drops the rotors (the link-only model). The loader's
+    /// warnings are issued as `PhysidWarning`.
+    #[new]
+    #[pyo3(signature = (robot = PathBuf::from("cheetah3"), *, no_rotors = false))]
+    fn new(py: Python<'_>, robot: PathBuf, no_rotors: bool) -> PyResult<Self> {
+        let loaded = robot_options(robot, no_rotors)
+            .load_floating()
+            .map_err(api_error)?;
+        warn(py, &loaded.notices)?;
+        Ok(Self {
+            robot: loaded.robot,
+        })
+    }
+
+    /// The robot's name.
+    #[getter]
+    fn name(&self) -> String {
+        self.robot.name().to_string()
+    }
+
+    /// The trunk's (root body's) name.
+    #[getter]
+    fn trunk(&self) -> String {
+        self.robot.trunk().name.clone()
+    }
+
+    /// Sizes `(nq, nv)`: `7 + n` and `6 + n`.
+    #[getter]
+    fn sizes(&self) -> (usize, usize) {
+        (7 + self.robot.joints(), 6 + self.robot.joints())
+    }
+
+    /// Joint names, in the robot's order (entries 7… of `q`, 6… of velocities).
+    #[getter]
+    fn joint_names(&self) -> Vec<String> {
+        self.robot.tree().joint_names()
+    }
+
+    /// The names of θ's entries (the trunk's `m, hx, …, Izz`, then the tree's).
+    #[getter]
+    fn parameter_names(&self) -> Vec<String> {
+        self.robot.parameter_names()
+    }
+
+    /// The description's parameter vector θ.
+    fn parameters<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<f64>> {
+        self.robot.parameters().as_slice().to_vec().into_pyarray(py)
+    }
+
+    /// The total mass (kg).
+    #[getter]
+    fn mass(&self) -> f64 {
+        self.robot.total_mass()
+    }
+
+    /// pinocchio's `rnea` of the free flyer: `[f, τ_trunk, joint torques]` (friction not
+    /// included), `(samples, nv)` or `(nv,)` for one sample given as `(nq,)`.
+    fn inverse_dynamics<'py>(
+        &self,
+        py: Python<'py>,
+        q: &Bound<'py, PyAny>,
+        v: &Bound<'py, PyAny>,
+        a: &Bound<'py, PyAny>,
+    ) -> PyResult<Bound<'py, PyArrayDyn<f64>>> {
+        let (nq, nv) = self.sizes();
+        let x = floating_states(q, v, a, (nq, nv))?;
+        let tau = py
+            .allow_threads(|| {
+                api::dynamics::floating_inverse_dynamics(&self.robot, &x.q, &x.qd, &x.qdd)
+            })
+            .map_err(api_error)?;
+        crate::arrays::shaped(py, tau, x.samples, x.one, &[nv])
+    }
+
+    /// pinocchio's `crba` of the free flyer (both triangles): `(samples, nv, nv)`, or `(nv, nv)`
+    /// for one configuration given as `(nq,)`.
+    fn mass_matrix<'py>(
+        &self,
+        py: Python<'py>,
+        q: &Bound<'py, PyAny>,
+    ) -> PyResult<Bound<'py, PyArrayDyn<f64>>> {
+        let (nq, nv) = self.sizes();
+        let q = crate::arrays::samples("q", q, nq)?;
+        let m = py
+            .allow_threads(|| api::dynamics::floating_mass_matrices(&self.robot, &q.values))
+            .map_err(api_error)?;
+        crate::arrays::shaped(py, m, q.samples, q.one, &[nv, nv])
+    }
+
+    /// The regressor, `Y θ` = `inverse_dynamics` plus the joints' friction with θ =
+    /// `parameters()` (its last `2 n` columns the viscous and Coulomb friction's, `q̇` and
+    /// `sign(q̇)` of each joint): `(samples, nv, p)`, or `(nv, p)` for one sample given as `(nq,)`.
+    fn regressor<'py>(
+        &self,
+        py: Python<'py>,
+        q: &Bound<'py, PyAny>,
+        v: &Bound<'py, PyAny>,
+        a: &Bound<'py, PyAny>,
+    ) -> PyResult<Bound<'py, PyArrayDyn<f64>>> {
+        let (nq, nv) = self.sizes();
+        let p = self.robot.parameter_count();
+        let x = floating_states(q, v, a, (nq, nv))?;
+        let y = py
+            .allow_threads(|| api::dynamics::floating_regressors(&self.robot, &x.q, &x.qd, &x.qdd))
+            .map_err(api_error)?;
+        crate::arrays::shaped(py, y, x.samples, x.one, &[nv, p])
+    }
+
+    fn __repr__(&self) -> String {
+        format!(
+            "FloatingRobot('{}', nq {}, nv {}, {} parameters)",
+            self.robot.name(),
+            7 + self.robot.joints(),
+            6 + self.robot.joints(),
+            self.robot.parameter_count()
+        )
+    }
+}
+
+/// `q` (`nq` per sample), `v` and `a` (`nv` per sample), as many samples each.
+fn floating_states(
+    q: &Bound<'_, PyAny>,
+    v: &Bound<'_, PyAny>,
+    a: &Bound<'_, PyAny>,
+    (nq, nv): (usize, usize),
+) -> PyResult<crate::arrays::States> {
+    let q = crate::arrays::samples("q", q, nq)?;
+    let (v, a) = (
+        crate::arrays::samples("v", v, nv)?,
+        crate::arrays::samples("a", a, nv)?,
+    );
+    if v.samples != q.samples || a.samples != q.samples {
+        return Err(exception(format!(
+            "q has {} samples, v {} and a {}: give as many of each",
+            q.samples, v.samples, a.samples
+        )));
+    }
+    Ok(crate::arrays::States {
+        q: q.values,
+        qd: v.values,
+        qdd: a.values,
+        samples: q.samples,
+        one: q.one,
     })
 }

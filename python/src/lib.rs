@@ -47,6 +47,7 @@ fn _physid(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<excite::Excitation>()?;
     m.add_class::<sweep::Sweep>()?;
     m.add_class::<floating::FloatingIdentification>()?;
+    m.add_class::<floating::FloatingRobot>()?;
     m.add_function(wrap_pyfunction!(floating::simulate_floating, m)?)?;
     m.add_function(wrap_pyfunction!(floating::identify_floating, m)?)?;
     m.add_function(wrap_pyfunction!(sweep::sweep, m)?)?;

@@ -141,3 +141,59 @@ def test_a_whole_robot_scenario_is_the_cli_s_not_experiment_s(tmp_path):
     scenario.write_text("[whole_robot]\nsizes = [100]\nseeds = 1\n")
     with pytest.raises(physid.InputError, match=r"a whole-robot scenario \(\[whole_robot\]\)"):
         physid.experiment(scenario)
+
+
+@pytest.mark.parametrize("rotors", [False, True])
+def test_floating_robot_dynamics_are_pinocchio_s_free_flyer(tmp_path, rotors):
+    # The quadruped exported as a floating URDF (rotors as mimic joints), read by pinocchio under
+    # its free flyer; q, v, a in pinocchio's layout, the joints in physid's order.
+    import pinocchio as pin
+    urdf = tmp_path / "quadruped.urdf"
+    cli("export", "--robot", "cheetah3", "--floating-base", "--urdf", str(urdf), *([] if rotors else ["--no-rotors"]))
+    robot = physid.FloatingRobot("cheetah3", no_rotors=not rotors)
+    model = pin.buildModelFromUrdf(str(urdf), pin.JointModelFreeFlyer(), rotors)
+    data = model.createData()
+    nq, nv = robot.sizes
+    assert (nq, nv) == (model.nq, model.nv) == (19, 18)
+    jids = [model.getJointId(name) for name in robot.joint_names]
+    iq = np.r_[0:7, [model.joints[j].idx_q for j in jids]]
+    iv = np.r_[0:6, [model.joints[j].idx_v for j in jids]]
+    rng = np.random.default_rng(3)
+    qs, vs, as_ = [], [], []
+    for _ in range(5):
+        quat = rng.normal(size=4)
+        qs.append(np.r_[rng.normal(size=3), quat / np.linalg.norm(quat), rng.uniform(-1, 1, nq - 7)])
+        vs.append(rng.normal(size=nv))
+        as_.append(rng.normal(size=nv))
+    tau = robot.inverse_dynamics(np.array(qs), np.array(vs), np.array(as_))
+    m = robot.mass_matrix(np.array(qs))
+    y = robot.regressor(np.array(qs), np.array(vs), np.array(as_))
+    assert tau.shape == (5, nv) and m.shape == (5, nv, nv) and y.shape == (5, nv, len(robot.parameter_names))
+    for k, (q, v, a) in enumerate(zip(qs, vs, as_)):
+        qp, vp, ap = np.zeros(nq), np.zeros(nv), np.zeros(nv)
+        qp[iq], vp[iv], ap[iv] = q, v, a
+        theirs = pin.rnea(model, data, qp, vp, ap)[iv]
+        scale = np.abs(theirs).max()
+        assert np.abs(tau[k] - theirs).max() < 1e-10 * scale
+        mp = pin.crba(model, data, qp)
+        mp = (np.triu(mp) + np.triu(mp, 1).T)[np.ix_(iv, iv)]
+        assert np.abs(m[k] - mp).max() < 1e-10 * np.abs(mp).max()
+        # The last 2n columns are the joints' viscous and Coulomb friction, which rnea leaves out.
+        inertial = len(robot.parameter_names) - 2 * (nv - 6)
+        assert np.abs(y[k][:, :inertial] @ robot.parameters()[:inertial] - theirs).max() < 1e-10 * scale
+    one = robot.inverse_dynamics(qs[0], vs[0], as_[0])
+    assert one.shape == (nv,) and np.array_equal(one, tau[0])
+
+
+@pytest.mark.parametrize(
+    "args, message",
+    [
+        ((np.zeros(19), np.zeros(18), np.zeros(18)), "q: sample 0: the quaternion .* has norm 0.000000000, not 1"),
+        ((np.r_[np.zeros(6), 1.0, np.zeros(12)], np.zeros(17), np.zeros(18)), "v has shape \\[17\\]: give \\(samples, 18\\)"),
+        ((np.r_[np.zeros(6), 1.0, np.zeros(12)], np.zeros((2, 18)), np.zeros(18)), "q has 1 samples, v 2 and a 1"),
+        ((np.r_[np.zeros(6), np.nan, np.zeros(12)], np.zeros(18), np.zeros(18)), "q: sample 0, joint 6 is NaN"),
+    ],
+)
+def test_bad_floating_states_are_named(args, message):
+    with pytest.raises(physid.InputError, match=message):
+        physid.FloatingRobot().inverse_dynamics(*args)

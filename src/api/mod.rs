@@ -41,6 +41,7 @@ pub use crate::options::OptionError;
 // Python package).
 pub use crate::ident::{bodies, ConstraintSet};
 pub use crate::io::document;
+pub use crate::model::floating::FloatingModel;
 pub use crate::model::{Model, RotorModel};
 pub use crate::prepare::Logged;
 pub use crate::spatial::{ConsistencyReport, PARAM_NAMES};
