@@ -101,17 +101,9 @@ fn foot_forces_schema() -> String {
 /// Writes `log` as MCAP (see the module docs), its odometry's `child_frame_id` `trunk`,
 /// atomically.
 pub fn write(path: &Path, log: &FloatingLog, trunk: &str) -> Result<(), IoError> {
-    let mcap_err = |e: mcap::McapError| IoError::invalid(path, format!("MCAP: {e}"));
-    let tmp = super::new_temp_beside(path)?;
-    {
-        let file = std::io::BufWriter::new(tmp.as_file());
-        let mut w = mcap::WriteOptions::new()
-            .compression(Some(mcap::Compression::Zstd))
-            .profile("ros2")
-            .create(file)
-            .map_err(mcap_err)?;
-        let channels = add_channels(&mut w, log).map_err(mcap_err)?;
-        write_messages(&mut w, log, trunk, channels).map_err(mcap_err)?;
+    mcap_log::write_atomic_mcap(path, |w| {
+        let channels = add_channels(w, log)?;
+        write_messages(w, log, trunk, channels)?;
         let physid = mcap::records::Metadata {
             name: "physid".into(),
             metadata: [
@@ -122,14 +114,8 @@ pub fn write(path: &Path, log: &FloatingLog, trunk: &str) -> Result<(), IoError>
             .map(|(k, v)| (k.to_string(), v))
             .collect(),
         };
-        w.write_metadata(&physid).map_err(mcap_err)?;
-        w.finish().map_err(mcap_err)?;
-    }
-    tmp.persist(path).map_err(|e| IoError::Fs {
-        path: path.to_path_buf(),
-        source: e.error,
-    })?;
-    Ok(())
+        w.write_metadata(&physid)
+    })
 }
 
 /// The channels of `log`: joint states, odometry, and the feet's if it logs forces or contacts.
@@ -363,14 +349,7 @@ fn vector(what: &str, a: Xyz) -> Result<Vector3<f64>, String> {
 /// Checks the two strings' lengths (the header's frame and the child frame) against the bytes
 /// that remain before the decoder allocates them.
 fn check_odometry_lengths(data: &[u8]) -> Result<(), String> {
-    let payload = data
-        .get(4..)
-        .ok_or("shorter than its CDR encapsulation header")?;
-    let little = match data[..2] {
-        [0, 1] | [0, 3] => true,
-        [0, 0] | [0, 2] => false,
-        _ => return Err(format!("unknown CDR encapsulation {:02x?}", &data[..2])),
-    };
+    let (payload, little) = mcap_log::cdr_payload(data)?;
     let mut pos = 8usize;
     for what in ["header.frame_id", "child_frame_id"] {
         pos = pos.next_multiple_of(4);

@@ -98,12 +98,9 @@ impl<'a> JointSampleView<'a> {
     }
 }
 
-/// Checks every length of a CDR-encoded `JointState`-like message (header, names, then
-/// `float_sequences` sequences of `float64`) against the bytes that remain, before the decoder
-/// allocates anything: a corrupt length would otherwise make it reserve up to 4 GB for one
-/// string. Alignment follows CDR: each primitive at a multiple of its size from the start of
-/// the payload (after the 4-byte encapsulation header).
-pub(super) fn check_cdr_lengths(data: &[u8], float_sequences: usize) -> Result<(), String> {
+/// A CDR message's payload (after its 4-byte encapsulation header) and whether it is
+/// little-endian.
+pub(super) fn cdr_payload(data: &[u8]) -> Result<(&[u8], bool), String> {
     let payload = data
         .get(4..)
         .ok_or("shorter than its CDR encapsulation header")?;
@@ -112,6 +109,16 @@ pub(super) fn check_cdr_lengths(data: &[u8], float_sequences: usize) -> Result<(
         [0, 0] | [0, 2] => false,
         _ => return Err(format!("unknown CDR encapsulation {:02x?}", &data[..2])),
     };
+    Ok((payload, little))
+}
+
+/// Checks every length of a CDR-encoded `JointState`-like message (header, names, then
+/// `float_sequences` sequences of `float64`) against the bytes that remain, before the decoder
+/// allocates anything: a corrupt length would otherwise make it reserve up to 4 GB for one
+/// string. Alignment follows CDR: each primitive at a multiple of its size from the start of
+/// the payload (after the 4-byte encapsulation header).
+pub(super) fn check_cdr_lengths(data: &[u8], float_sequences: usize) -> Result<(), String> {
+    let (payload, little) = cdr_payload(data)?;
     let mut pos = 0usize;
     let u32_at = |pos: &mut usize, what: &str| -> Result<usize, String> {
         *pos = pos.next_multiple_of(4);
@@ -223,14 +230,37 @@ pub struct LogMeta<'a> {
 
 /// Writes a recording as MCAP (see the module docs), atomically.
 pub fn write(path: &Path, rec: &Recording, meta: &LogMeta) -> Result<(), IoError> {
-    let fs_err = |source| IoError::Fs {
-        path: path.to_path_buf(),
-        source,
-    };
-    let mcap_err = |e: mcap::McapError| IoError::Invalid {
-        path: path.to_path_buf(),
-        message: format!("MCAP: {e}"),
-    };
+    write_atomic_mcap(path, |w| {
+        let js = w.add_schema(
+            "sensor_msgs/msg/JointState",
+            "ros2msg",
+            joint_state_schema().as_bytes(),
+        )?;
+        let sample = w.add_schema(
+            "physid_msgs/msg/JointSample",
+            "ros2msg",
+            joint_sample_schema().as_bytes(),
+        )?;
+        let none = BTreeMap::new();
+        let c_meas = w.add_channel(js, TOPIC_MEASURED, "cdr", &none)?;
+        let c_proc = w.add_channel(sample, TOPIC_PROCESSED, "cdr", &none)?;
+        let c_true = w.add_channel(sample, TOPIC_TRUTH, "cdr", &none)?;
+        write_samples(w, rec, [c_meas, c_proc, c_true])?;
+        write_log_metadata(w, meta)
+    })
+}
+
+/// The MCAP writer physid's logs are written with (zstd chunks, the `ros2` profile).
+pub(crate) type McapWriter<'f> = mcap::Writer<std::io::BufWriter<&'f std::fs::File>>;
+
+/// Writes an MCAP file at `path` atomically: `body` adds its schemas, channels, messages and
+/// metadata to a writer on a temporary file beside `path`, which is renamed over `path` once
+/// finished; on any error nothing is left at `path`.
+pub(crate) fn write_atomic_mcap(
+    path: &Path,
+    body: impl FnOnce(&mut McapWriter) -> Result<(), mcap::McapError>,
+) -> Result<(), IoError> {
+    let mcap_err = |e: mcap::McapError| IoError::invalid(path, format!("MCAP: {e}"));
     let tmp = super::new_temp_beside(path)?;
     {
         let file = std::io::BufWriter::new(tmp.as_file());
@@ -239,35 +269,13 @@ pub fn write(path: &Path, rec: &Recording, meta: &LogMeta) -> Result<(), IoError
             .profile("ros2")
             .create(file)
             .map_err(mcap_err)?;
-        let js = w
-            .add_schema(
-                "sensor_msgs/msg/JointState",
-                "ros2msg",
-                joint_state_schema().as_bytes(),
-            )
-            .map_err(mcap_err)?;
-        let sample = w
-            .add_schema(
-                "physid_msgs/msg/JointSample",
-                "ros2msg",
-                joint_sample_schema().as_bytes(),
-            )
-            .map_err(mcap_err)?;
-        let none = BTreeMap::new();
-        let c_meas = w
-            .add_channel(js, TOPIC_MEASURED, "cdr", &none)
-            .map_err(mcap_err)?;
-        let c_proc = w
-            .add_channel(sample, TOPIC_PROCESSED, "cdr", &none)
-            .map_err(mcap_err)?;
-        let c_true = w
-            .add_channel(sample, TOPIC_TRUTH, "cdr", &none)
-            .map_err(mcap_err)?;
-        write_samples(&mut w, rec, [c_meas, c_proc, c_true]).map_err(mcap_err)?;
-        write_log_metadata(&mut w, meta).map_err(mcap_err)?;
+        body(&mut w).map_err(mcap_err)?;
         w.finish().map_err(mcap_err)?;
     }
-    tmp.persist(path).map_err(|e| fs_err(e.error))?;
+    tmp.persist(path).map_err(|e| IoError::Fs {
+        path: path.to_path_buf(),
+        source: e.error,
+    })?;
     Ok(())
 }
 
@@ -347,29 +355,13 @@ pub const TOPIC_REFERENCE: &str = "/physid/excitation";
 /// `physid_msgs/msg/JointSample` on [`TOPIC_REFERENCE`], log time = the trajectory's time,
 /// atomically.
 pub fn write_reference(path: &Path, tr: &Trajectory) -> Result<(), IoError> {
-    let fs_err = |source| IoError::Fs {
-        path: path.to_path_buf(),
-        source,
-    };
-    let mcap_err = |e: mcap::McapError| IoError::invalid(path, format!("MCAP: {e}"));
-    let tmp = super::new_temp_beside(path)?;
-    {
-        let file = std::io::BufWriter::new(tmp.as_file());
-        let mut w = mcap::WriteOptions::new()
-            .compression(Some(mcap::Compression::Zstd))
-            .profile("ros2")
-            .create(file)
-            .map_err(mcap_err)?;
-        let schema = w
-            .add_schema(
-                JOINT_SAMPLE_TYPE,
-                "ros2msg",
-                joint_sample_schema().as_bytes(),
-            )
-            .map_err(mcap_err)?;
-        let channel = w
-            .add_channel(schema, TOPIC_REFERENCE, "cdr", &BTreeMap::new())
-            .map_err(mcap_err)?;
+    write_atomic_mcap(path, |w| {
+        let schema = w.add_schema(
+            JOINT_SAMPLE_TYPE,
+            "ros2msg",
+            joint_sample_schema().as_bytes(),
+        )?;
+        let channel = w.add_channel(schema, TOPIC_REFERENCE, "cdr", &BTreeMap::new())?;
         let mut buf = Vec::new();
         for k in 0..tr.len() {
             let (header, ns) = stamp(tr.t[k]);
@@ -383,13 +375,10 @@ pub fn write_reference(path: &Path, tr: &Trajectory) -> Result<(), IoError> {
                 log_time: ns,
                 publish_time: ns,
             };
-            w.write_to_known_channel(&mh, cdr_into(&mut buf, &msg))
-                .map_err(mcap_err)?;
+            w.write_to_known_channel(&mh, cdr_into(&mut buf, &msg))?;
         }
-        w.finish().map_err(mcap_err)?;
-    }
-    tmp.persist(path).map_err(|e| fs_err(e.error))?;
-    Ok(())
+        Ok(())
+    })
 }
 
 /// Which time a joint-state sample gets.
