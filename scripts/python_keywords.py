@@ -57,6 +57,7 @@ PYTHON_FIRST = {
     "sensors": "The sensors' noise and what they log: a dict over the default sensors' fields (torque_noise, force_noise, gyro_noise, gyro_bias, velocity_noise, velocity_bias, tilt_noise, position_noise, encoder_step; velocities, forces, contacts: True/False), or \"exact\" for noise-free sensors logging everything.",
     "robot": "The robot: a physid.Robot (as returned by physid.Robot), or \"cheetah3\" (the built-in leg), a URDF or a robot TOML path.",
 }
+FLOATING_ROBOT = "The robot: a physid.FloatingRobot (as loaded, rotors and all), or \"cheetah3\" (the built-in quadruped), a floating URDF or its sidecar TOML path. Default: cheetah3."
 PYTHON_ONLY = {
     "baseline": "A results folder to compare against.",
     "scenario": "A scenario TOML file.",
@@ -107,6 +108,8 @@ def document(name, flags):
         flag = flags.get(NEGATED.get(keyword) or FLAG.get(keyword) or keyword.replace("_", "-"))
         if keyword in PYTHON_FIRST and (name not in FLOATING or keyword == "sensors"):
             text = PYTHON_FIRST[keyword]
+        elif keyword == "robot" and name in FLOATING and name != "FloatingRobot":
+            text = FLOATING_ROBOT
         elif flag:
             text = in_keywords(described(flag, negated=keyword in NEGATED))
         elif keyword in PYTHON_ONLY:

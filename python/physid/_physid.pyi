@@ -642,7 +642,7 @@ class FloatingIdentification:
 def simulate_floating(
     out: Path,
     *,
-    robot: Path = "cheetah3",
+    robot: Optional[Union[Path, "FloatingRobot"]] = None,
     no_rotors: bool = False,
     duration: float = 10.0,
     rate: float = 1000.0,
@@ -657,8 +657,8 @@ def simulate_floating(
     Keywords:
 
     out: The log to write: CSV, or MCAP (`.mcap`: /joint_states, /odometry, /foot_forces).
-    robot: `cheetah3` (built-in leg), a .urdf file, or a .toml file with a [robot] table.
-        Default: cheetah3.
+    robot: The robot: a physid.FloatingRobot (as loaded, rotors and all), or "cheetah3" (the
+        built-in quadruped), a floating URDF or its sidecar TOML path. Default: cheetah3.
     no_rotors: Drop the rotors (the link-only model).
     duration: Duration (s). Default: 10.
     rate: Control and logging rate (Hz). Default: 1000.
@@ -709,7 +709,7 @@ class FloatingRobot:
 def identify_floating(
     data: Path,
     *,
-    robot: Path = "cheetah3",
+    robot: Optional[Union[Path, "FloatingRobot"]] = None,
     no_rotors: bool = False,
     setting: str = "torques-and-contacts",
     constraints: str = "ellipsoid",
@@ -732,8 +732,8 @@ def identify_floating(
     Keywords:
 
     data: The log: CSV, MCAP or a rosbag2 directory.
-    robot: `cheetah3` (built-in leg), a .urdf file, or a .toml file with a [robot] table.
-        Default: cheetah3.
+    robot: The robot: a physid.FloatingRobot (as loaded, rotors and all), or "cheetah3" (the
+        built-in quadruped), a floating URDF or its sidecar TOML path. Default: cheetah3.
     no_rotors: Drop the rotors (the link-only model).
     setting: What the log's quantities are used for: torques-and-contacts (every row), torques-
         only (contact forces projected out: needs contact states or forces), base-only (the

@@ -94,6 +94,29 @@ impl FloatingIdentification {
 }
 
 /// The robot options of the floating functions' `robot` and `no_rotors`.
+/// The robot a floating function is given: a [`FloatingRobot`] (as it was loaded: `no_rotors`
+/// then belongs to it), a path, or `"cheetah3"` (the default).
+fn floating_robot_options(
+    robot: Option<&Bound<'_, PyAny>>,
+    no_rotors: bool,
+) -> PyResult<RobotOptions> {
+    let Some(robot) = robot else {
+        return Ok(robot_options(PathBuf::from("cheetah3"), no_rotors));
+    };
+    if let Ok(loaded) = robot.downcast::<FloatingRobot>() {
+        if no_rotors {
+            return Err(exception(
+                "no_rotors: give it when loading the FloatingRobot (FloatingRobot(..., no_rotors=True))",
+            ));
+        }
+        return Ok(loaded.get().options.clone());
+    }
+    let path: PathBuf = robot.extract().map_err(|_| {
+        exception("robot: give a physid.FloatingRobot, \"cheetah3\" or the path of a floating URDF or its sidecar TOML")
+    })?;
+    Ok(robot_options(path, no_rotors))
+}
+
 fn robot_options(robot: PathBuf, no_rotors: bool) -> RobotOptions {
     RobotOptions {
         no_rotors,
@@ -107,13 +130,13 @@ fn robot_options(robot: PathBuf, no_rotors: bool) -> RobotOptions {
 /// True}`), or `"exact"`. Returns the summary `--json` prints.
 #[doc = include_str!("../keywords/simulate_floating.txt")]
 #[pyfunction]
-#[pyo3(signature = (out, *, robot = PathBuf::from("cheetah3"), no_rotors = false,
+#[pyo3(signature = (out, *, robot = None, no_rotors = false,
     duration = 10.0, rate = 1000.0, seed = 1, trot = None, still = false, sensors = None))]
 #[allow(clippy::too_many_arguments)]
 pub(crate) fn simulate_floating<'py>(
     py: Python<'py>,
     out: PathBuf,
-    robot: PathBuf,
+    robot: Option<&Bound<'py, PyAny>>,
     no_rotors: bool,
     duration: f64,
     rate: f64,
@@ -123,7 +146,7 @@ pub(crate) fn simulate_floating<'py>(
     sensors: Option<&Bound<'py, PyAny>>,
 ) -> PyResult<Bound<'py, PyAny>> {
     let opts = SimulateFloatingOptions {
-        robot: robot_options(robot, no_rotors),
+        robot: floating_robot_options(robot, no_rotors)?,
         duration,
         rate,
         seed,
@@ -180,7 +203,7 @@ fn sensors_of(
 /// robot (never over an input).
 #[doc = include_str!("../keywords/identify_floating.txt")]
 #[pyfunction]
-#[pyo3(signature = (data, *, robot = PathBuf::from("cheetah3"), no_rotors = false,
+#[pyo3(signature = (data, *, robot = None, no_rotors = false,
     setting = "torques-and-contacts", constraints = "ellipsoid", prior_weight = 1e-4,
     cutoff = None, foot = None, contact_force = 10.0, out_urdf = None, out_mjcf = None,
     truth = None, baseline = None, topic = String::from("/joint_states"),
@@ -190,7 +213,7 @@ fn sensors_of(
 pub(crate) fn identify_floating(
     py: Python<'_>,
     data: PathBuf,
-    robot: PathBuf,
+    robot: Option<&Bound<'_, PyAny>>,
     no_rotors: bool,
     setting: &str,
     constraints: &str,
@@ -208,7 +231,7 @@ pub(crate) fn identify_floating(
     stamp: &str,
 ) -> PyResult<FloatingIdentification> {
     let opts = IdentifyFloatingOptions {
-        robot: robot_options(robot, no_rotors),
+        robot: floating_robot_options(robot, no_rotors)?,
         data,
         topics: FloatingReadOptions {
             topic,
@@ -274,6 +297,8 @@ fn constraints_of(name: &str) -> PyResult<api::ConstraintSet> {
 #[pyclass(frozen, module = "physid")]
 pub(crate) struct FloatingRobot {
     robot: api::FloatingModel,
+    /// How it was loaded (functions that take a robot load it so again).
+    options: RobotOptions,
 }
 
 #[pymethods]
@@ -283,12 +308,12 @@ impl FloatingRobot {
     #[new]
     #[pyo3(signature = (robot = PathBuf::from("cheetah3"), *, no_rotors = false))]
     fn new(py: Python<'_>, robot: PathBuf, no_rotors: bool) -> PyResult<Self> {
-        let loaded = robot_options(robot, no_rotors)
-            .load_floating()
-            .map_err(api_error)?;
+        let options = robot_options(robot, no_rotors);
+        let loaded = options.load_floating().map_err(api_error)?;
         warn(py, &loaded.notices)?;
         Ok(Self {
             robot: loaded.robot,
+            options,
         })
     }
 

@@ -197,3 +197,16 @@ def test_floating_robot_dynamics_are_pinocchio_s_free_flyer(tmp_path, rotors):
 def test_bad_floating_states_are_named(args, message):
     with pytest.raises(physid.InputError, match=message):
         physid.FloatingRobot().inverse_dynamics(*args)
+
+
+def test_a_floating_robot_is_taken_where_a_robot_is(log, tmp_path):
+    robot = physid.FloatingRobot("cheetah3", no_rotors=True)
+    by_object = physid.identify_floating(log, robot=robot, constraints="consistent")
+    by_path = physid.identify_floating(log, no_rotors=True, constraints="consistent")
+    np.testing.assert_array_equal(by_object.theta, by_path.theta)
+    assert len(by_object.theta) == len(robot.parameter_names)
+    with pytest.raises(physid.InputError, match="no_rotors: give it when loading the FloatingRobot"):
+        physid.identify_floating(log, robot=robot, no_rotors=True)
+    with pytest.raises(physid.InputError, match="robot: give a physid.FloatingRobot"):
+        physid.simulate_floating(tmp_path / "never.csv", robot=3)
+    assert not (tmp_path / "never.csv").exists()
