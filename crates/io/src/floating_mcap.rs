@@ -542,14 +542,15 @@ impl Aligned {
         let trunk_times: Vec<(f64, u64)> = (c.trunk.iter())
             .map(|m| (seconds(m.ns[clock]), m.sequence))
             .collect();
-        let (trunk_order, trunk) = brackets(t, &trunk_times, &opts.odometry_topic)?;
+        let hint = |e: String| stamp_hint(e, opts.stamp);
+        let (trunk_order, trunk) = brackets(t, &trunk_times, &opts.odometry_topic).map_err(hint)?;
         let feet = if c.feet_messages.is_empty() {
             None
         } else {
             let times: Vec<(f64, u64)> = (c.feet_messages.iter())
                 .map(|m| (seconds(m.ns[clock]), m.sequence))
                 .collect();
-            let (order, b) = brackets(t, &times, &opts.foot_forces_topic)?;
+            let (order, b) = brackets(t, &times, &opts.foot_forces_topic).map_err(hint)?;
             Some((b, order))
         };
         let inside =
@@ -651,6 +652,16 @@ fn nlerp(a: &UnitQuaternion<f64>, b: &UnitQuaternion<f64>, s: f64) -> UnitQuater
         qb = -qb;
     }
     UnitQuaternion::from_quaternion(qa * (1.0 - s) + qb * s)
+}
+
+/// `error` (of [`brackets`]) with, where messages share a time under header stamps, what
+/// usually causes it.
+fn stamp_hint(error: String, stamp: Stamp) -> String {
+    if stamp == Stamp::Header && error.starts_with("two ") {
+        format!("{error}: with --stamp header a message's time is its header.stamp, and a publisher that leaves it unset stamps every message alike (--stamp log takes the recorder's times)")
+    } else {
+        error
+    }
 }
 
 /// The messages' order by time and each sample's bracket among them (`times`: each message's

@@ -399,3 +399,39 @@ fn messages_that_cannot_be_interpolated_are_refused() {
         "{err}"
     );
 }
+
+#[test]
+fn unset_header_stamps_are_named_as_the_likely_cause() {
+    // Every odometry message stamped 0: under --stamp header the error says why.
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("unset.mcap");
+    let unset: Vec<Raw> = (good().into_iter())
+        .map(|(topic, kind, ns, data)| match topic {
+            TOPIC_ODOMETRY => (
+                topic,
+                kind,
+                ns,
+                odometry_at_4(&|o| o.header.stamp.nanosec = 0),
+            ),
+            _ => (topic, kind, ns, data),
+        })
+        .collect();
+    write_raw(&path, &unset);
+    let opts = FloatingReadOptions {
+        stamp: Stamp::Header,
+        ..Default::default()
+    };
+    let err = read(
+        &path,
+        &names(&["a", "b"]),
+        &names(&["left", "right"]),
+        &opts,
+    )
+    .unwrap_err()
+    .to_string();
+    assert!(
+        err.contains("two /odometry messages at the same time")
+            && err.contains("a publisher that leaves it unset stamps every message alike"),
+        "{err}"
+    );
+}
