@@ -295,6 +295,7 @@ fn constraints_of(name: &str) -> PyResult<api::ConstraintSet> {
 /// The joints are in the robot's order (`joint_names`), not necessarily pinocchio's.
 #[doc = include_str!("../keywords/FloatingRobot.txt")]
 #[pyclass(frozen, module = "physid")]
+#[derive(serde::Serialize, serde::Deserialize)]
 pub(crate) struct FloatingRobot {
     robot: api::FloatingModel,
     /// How it was loaded (functions that take a robot load it so again).
@@ -315,6 +316,11 @@ impl FloatingRobot {
             robot: loaded.robot,
             options,
         })
+    }
+
+    /// Pickles (and copies) as its state in physid's binary form.
+    fn __reduce__<'py>(&self, py: Python<'py>) -> PyResult<crate::pickle::Reduced<'py>> {
+        crate::pickle::reduce(py, "FloatingRobot", self)
     }
 
     /// The robot's name.

@@ -8,7 +8,7 @@ use crate::diagnose::Diagnosis;
 use crate::errors::*;
 use crate::excite::Excitation;
 use crate::experiment::Experiment;
-use crate::floating::FloatingIdentification;
+use crate::floating::{FloatingIdentification, FloatingRobot};
 use crate::identify::Identification;
 use crate::robot::Robot;
 use crate::simulate::Simulation;
@@ -73,6 +73,7 @@ pub(crate) fn _restore(
         "FloatingIdentification" => {
             Py::new(py, state::<FloatingIdentification>(class, bytes)?)?.into_any()
         }
+        "FloatingRobot" => Py::new(py, state::<FloatingRobot>(class, bytes)?)?.into_any(),
         other => {
             return Err(exception(format!(
                 "unpickling: physid has no class '{other}'"

@@ -183,6 +183,9 @@ def test_floating_robot_dynamics_are_pinocchio_s_free_flyer(tmp_path, rotors):
         assert np.abs(y[k][:, :inertial] @ robot.parameters()[:inertial] - theirs).max() < 1e-10 * scale
     one = robot.inverse_dynamics(qs[0], vs[0], as_[0])
     assert one.shape == (nv,) and np.array_equal(one, tau[0])
+    again = pickle.loads(pickle.dumps(robot))
+    assert again.parameter_names == robot.parameter_names and repr(again) == repr(robot)
+    np.testing.assert_array_equal(again.inverse_dynamics(np.array(qs), np.array(vs), np.array(as_)), tau)
 
 
 @pytest.mark.parametrize(

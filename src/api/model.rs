@@ -146,7 +146,7 @@ pub fn describe(m: &Model) -> ModelJson {
 }
 
 /// Which robot and how it is built: what every command that loads a robot is given.
-#[derive(Clone, Debug, Default)]
+#[derive(Clone, Debug, Default, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct RobotOptions {
     /// `cheetah3` (the built-in leg), a `.urdf` file, or a `.toml` file with a `[robot]` table.
     pub robot: String,
