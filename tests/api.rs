@@ -465,6 +465,16 @@ fn floating_log(
     sensors: physid::sim::floating_sensors::Sensors,
 ) -> std::path::PathBuf {
     let out = dir.join(format!("{seconds}_{seed}.csv"));
+    floating_log_at(out, robot, (seconds, seed), sensors)
+}
+
+/// [`floating_log`] written at `out` (CSV, or MCAP for a `.mcap` name).
+fn floating_log_at(
+    out: std::path::PathBuf,
+    robot: &str,
+    (seconds, seed): (f64, u64),
+    sensors: physid::sim::floating_sensors::Sensors,
+) -> std::path::PathBuf {
     let opts = physid::api::floating::SimulateFloatingOptions {
         robot: physid::api::model::RobotOptions::new(robot),
         duration: seconds,
@@ -484,22 +494,16 @@ fn a_floating_run_logged_as_mcap_identifies_as_its_csv_does() {
     // The same run (seed, sensors, noise) written both ways: MCAP stamps in integer
     // nanoseconds and carries the orientation as a quaternion, as the CSV does; the two
     // identifications agree to rounding.
-    use physid::api::floating::{identify_floating, simulate_floating, FloatingReadOptions};
+    use physid::api::floating::{identify_floating, FloatingReadOptions};
     let dir = tempfile::tempdir().unwrap();
     let csv = floating_log(dir.path(), "cheetah3", (2.0, 4), Default::default());
     let mcap = dir.path().join("run.mcap");
-    let opts = physid::api::floating::SimulateFloatingOptions {
-        robot: physid::api::model::RobotOptions::new("cheetah3"),
-        duration: 2.0,
-        rate: 1000.0,
-        seed: 4,
-        trot: None,
-        still: false,
-        sensors: Default::default(),
-        out: mcap.clone(),
-    };
-    let wrote = simulate_floating(&opts).unwrap();
-    assert!(wrote.truth.ends_with("run.truth.urdf"), "{:?}", wrote.truth);
+    floating_log_at(mcap.clone(), "cheetah3", (2.0, 4), Default::default());
+    let truth = physid::api::floating::truth_path(&mcap);
+    assert!(
+        truth.ends_with("run.truth.urdf") && truth.is_file(),
+        "{truth:?}"
+    );
     let from_csv = identify_floating(&floating_options(&csv)).unwrap();
     let from_mcap = identify_floating(&floating_options(&mcap)).unwrap();
     assert_eq!(from_mcap.samples_read, from_csv.samples_read);

@@ -373,14 +373,13 @@ impl FloatingRobot {
         v: &Bound<'py, PyAny>,
         a: &Bound<'py, PyAny>,
     ) -> PyResult<Bound<'py, PyArrayDyn<f64>>> {
-        let (nq, nv) = self.sizes();
-        let x = floating_states(q, v, a, (nq, nv))?;
-        let tau = py
-            .allow_threads(|| {
-                api::dynamics::floating_inverse_dynamics(&self.robot, &x.q, &x.qd, &x.qdd)
-            })
-            .map_err(api_error)?;
-        crate::arrays::shaped(py, tau, x.samples, x.one, &[nv])
+        let nv = self.sizes().1;
+        self.on_states(
+            py,
+            (q, v, a),
+            api::dynamics::floating_inverse_dynamics,
+            &[nv],
+        )
     }
 
     /// pinocchio's `crba` of the free flyer (both triangles): `(samples, nv, nv)`, or `(nv, nv)`
@@ -408,13 +407,8 @@ impl FloatingRobot {
         v: &Bound<'py, PyAny>,
         a: &Bound<'py, PyAny>,
     ) -> PyResult<Bound<'py, PyArrayDyn<f64>>> {
-        let (nq, nv) = self.sizes();
-        let p = self.robot.parameter_count();
-        let x = floating_states(q, v, a, (nq, nv))?;
-        let y = py
-            .allow_threads(|| api::dynamics::floating_regressors(&self.robot, &x.q, &x.qd, &x.qdd))
-            .map_err(api_error)?;
-        crate::arrays::shaped(py, y, x.samples, x.one, &[nv, p])
+        let (nv, p) = (self.sizes().1, self.robot.parameter_count());
+        self.on_states(py, (q, v, a), api::dynamics::floating_regressors, &[nv, p])
     }
 
     fn __repr__(&self) -> String {
@@ -427,6 +421,28 @@ impl FloatingRobot {
         )
     }
 }
+
+impl FloatingRobot {
+    /// `batch` of the states `(q, v, a)` (checked, then computed without the GIL), shaped
+    /// `(samples, rest…)` or `rest` for one sample.
+    fn on_states<'py>(
+        &self,
+        py: Python<'py>,
+        (q, v, a): (&Bound<'py, PyAny>, &Bound<'py, PyAny>, &Bound<'py, PyAny>),
+        batch: FloatingBatch,
+        rest: &[usize],
+    ) -> PyResult<Bound<'py, PyArrayDyn<f64>>> {
+        let x = floating_states(q, v, a, self.sizes())?;
+        let values = py
+            .allow_threads(|| batch(&self.robot, &x.q, &x.qd, &x.qdd))
+            .map_err(api_error)?;
+        crate::arrays::shaped(py, values, x.samples, x.one, rest)
+    }
+}
+
+/// A batch routine over a floating robot's states (`api::dynamics::floating_*`).
+type FloatingBatch =
+    fn(&api::FloatingModel, &[f64], &[f64], &[f64]) -> Result<Vec<f64>, api::ApiError>;
 
 /// `q` (`nq` per sample), `v` and `a` (`nv` per sample), as many samples each.
 fn floating_states(

@@ -385,11 +385,6 @@ impl std::fmt::Display for Notice {
     }
 }
 
-/// Whether `path` is read as a bag (an MCAP file or a rosbag2 directory).
-fn is_bag(path: &Path) -> bool {
-    path.is_dir() || path.extension().and_then(|e| e.to_str()) == Some("mcap")
-}
-
 /// `--cutoff` given to an identification without effect terms where no file has a signal to
 /// derive (each logs q̇ and q̈): the filter it sets is applied to nothing, which the user should
 /// know. (The diagnosis and effect terms process their columns at the cutoff.)
@@ -412,7 +407,10 @@ pub fn bag_option_notices(paths: &[&Path], read: &DataOptions) -> Result<Vec<Not
     if read.topic.is_none() && read.stamp == crate::io::mcap_log::Stamp::Log {
         return Ok(vec![]);
     }
-    if let Some(first) = paths.first().filter(|_| !paths.iter().any(|p| is_bag(p))) {
+    if let Some(first) = paths
+        .first()
+        .filter(|_| !paths.iter().any(|p| crate::io::is_bag(p)))
+    {
         return Err(ApiError::invalid(
             first,
             "--topic and --stamp apply to MCAP files and rosbag2 directories only, and no data file given is one",
@@ -420,7 +418,7 @@ pub fn bag_option_notices(paths: &[&Path], read: &DataOptions) -> Result<Vec<Not
     }
     Ok(paths
         .iter()
-        .filter(|p| !is_bag(p))
+        .filter(|p| !crate::io::is_bag(p))
         .map(|p| {
             Notice::warning(format!(
                 "{}: --topic and --stamp apply to MCAP files and rosbag2 directories only",

@@ -187,19 +187,7 @@ impl<'a> FloatingStates<'a> {
         a: &'a [f64],
     ) -> Result<Self, ApiError> {
         let n = robot.joints();
-        let count = samples_of_widths(("q", q, 7 + n), &[("v", v, 6 + n), ("a", a, 6 + n)])?;
-        for k in 0..count {
-            let norm = q[k * (7 + n) + 3..k * (7 + n) + 7]
-                .iter()
-                .map(|x| x * x)
-                .sum::<f64>()
-                .sqrt();
-            if (norm - 1.0).abs() > 1e-6 {
-                return Err(ApiError::Options(format!(
-                    "q: sample {k}: the quaternion (entries 3..7: qx, qy, qz, qw) has norm {norm:.9}, not 1"
-                )));
-            }
-        }
+        let count = configurations(q, n, &[("v", v, 6 + n), ("a", a, 6 + n)])?;
         Ok(Self { q, v, a, count, n })
     }
 
@@ -230,6 +218,25 @@ impl<'a> FloatingStates<'a> {
     }
 }
 
+/// The samples of the configurations `q` (`7 + n` each) and of `others` (as many each), every
+/// value finite and every quaternion of unit norm (within 1e-6).
+fn configurations(
+    q: &[f64],
+    n: usize,
+    others: &[(&'static str, &[f64], usize)],
+) -> Result<usize, ApiError> {
+    let count = samples_of_widths(("q", q, 7 + n), others)?;
+    for (k, x) in q.chunks_exact(7 + n).enumerate() {
+        let norm = x[3..7].iter().map(|c| c * c).sum::<f64>().sqrt();
+        if (norm - 1.0).abs() > 1e-6 {
+            return Err(ApiError::Options(format!(
+                "q: sample {k}: the quaternion (entries 3..7: qx, qy, qz, qw) has norm {norm:.9}, not 1"
+            )));
+        }
+    }
+    Ok(count)
+}
+
 /// physid's floating row order `[ω-row (moment), v-row (force), joints]` to pinocchio's
 /// `[force, moment, joints]`: row `i` of the result is physid's row `pinocchio_row(i)`.
 fn pinocchio_row(i: usize) -> usize {
@@ -238,16 +245,6 @@ fn pinocchio_row(i: usize) -> usize {
         3..6 => i - 3,
         _ => i,
     }
-}
-
-/// Runs `f` on every sample of a floating robot in parallel, each with its own workspace.
-fn per_floating_sample(
-    robot: &FloatingModel,
-    count: usize,
-    out: usize,
-    f: impl Fn(&mut Data, usize, &mut [f64]) + Sync,
-) -> Vec<f64> {
-    per_sample(robot.tree(), count, out, f)
 }
 
 /// A floating robot's inverse dynamics per sample, pinocchio's `rnea` of the free flyer: the
@@ -261,7 +258,7 @@ pub fn floating_inverse_dynamics(
 ) -> Result<Vec<f64>, ApiError> {
     let x = FloatingStates::new(robot, q, v, a)?;
     let nv = 6 + x.n;
-    Ok(per_floating_sample(robot, x.count, nv, |data, k, out| {
+    Ok(per_sample(robot.tree(), x.count, nv, |data, k, out| {
         let (base, [q, qd, qdd]) = x.at(k);
         let f_b = rnea_floating(robot, data, &base, q, qd, qdd);
         let tau = stacked(&f_b, &data.tau);
@@ -276,24 +273,17 @@ pub fn floating_inverse_dynamics(
 /// `q` as [`FloatingStates`] describes (the configuration alone).
 pub fn floating_mass_matrices(robot: &FloatingModel, q: &[f64]) -> Result<Vec<f64>, ApiError> {
     let n = robot.joints();
-    let count = samples_of_widths(("q", q, 7 + n), &[])?;
-    let zeros = vec![0.0; count * (6 + n)];
-    let x = FloatingStates::new(robot, q, &zeros, &zeros)?;
-    let nv = 6 + n;
-    Ok(per_floating_sample(
-        robot,
-        count,
-        nv * nv,
-        |data, k, out| {
-            let (_, [q, _, _]) = x.at(k);
-            let m = crba_floating(robot, data, q);
-            for i in 0..nv {
-                for j in 0..nv {
-                    out[i * nv + j] = m[(pinocchio_row(i), pinocchio_row(j))];
-                }
+    let count = configurations(q, n, &[])?;
+    let (nq, nv) = (7 + n, 6 + n);
+    Ok(per_sample(robot.tree(), count, nv * nv, |data, k, out| {
+        // The mass matrix depends on the joints alone, not on the trunk's pose.
+        let m = crba_floating(robot, data, &q[k * nq + 7..(k + 1) * nq]);
+        for i in 0..nv {
+            for j in 0..nv {
+                out[i * nv + j] = m[(pinocchio_row(i), pinocchio_row(j))];
             }
-        },
-    ))
+        }
+    }))
 }
 
 /// A floating robot's regressor per sample, `Y θ` = [`floating_inverse_dynamics`] plus the
@@ -308,19 +298,14 @@ pub fn floating_regressors(
 ) -> Result<Vec<f64>, ApiError> {
     let x = FloatingStates::new(robot, q, v, a)?;
     let (nv, p) = (6 + x.n, robot.parameter_count());
-    Ok(per_floating_sample(
-        robot,
-        x.count,
-        nv * p,
-        |data, k, out| {
-            let (base, [q, qd, qdd]) = x.at(k);
-            let mut y = DMatrix::zeros(nv, p);
-            regressor_floating(robot, data, &base, (q, qd, qdd), &mut y);
-            for i in 0..nv {
-                for j in 0..p {
-                    out[i * p + j] = y[(pinocchio_row(i), j)];
-                }
+    Ok(per_sample(robot.tree(), x.count, nv * p, |data, k, out| {
+        let (base, [q, qd, qdd]) = x.at(k);
+        let mut y = DMatrix::zeros(nv, p);
+        regressor_floating(robot, data, &base, (q, qd, qdd), &mut y);
+        for i in 0..nv {
+            for j in 0..p {
+                out[i * p + j] = y[(pinocchio_row(i), j)];
             }
-        },
-    ))
+        }
+    }))
 }

@@ -211,7 +211,7 @@ pub fn simulate_floating(opts: &SimulateFloatingOptions) -> Result<FloatingSimul
     let joints = robot.tree().joint_names();
     let names: Vec<String> = feet.iter().map(|f| f.body.clone()).collect();
     let log = crate::sim::floating_sensors::log(&run, (&joints, &names), &opts.sensors, opts.seed);
-    if is_bag(&opts.out) {
+    if crate::io::is_bag(&opts.out) {
         floating_mcap::write(&opts.out, &log, &robot.trunk().name)?;
     } else {
         floating_log::write_csv(&opts.out, &log)?;
@@ -302,9 +302,7 @@ impl IdentifyFloatingOptions {
         }
         Ok(())
     }
-}
 
-impl IdentifyFloatingOptions {
     /// The topics named, distinct, and changed only where a log (or the baseline) is MCAP or a
     /// rosbag2 directory.
     fn check_topics(&self) -> Result<(), ApiError> {
@@ -325,7 +323,7 @@ impl IdentifyFloatingOptions {
                 named[i].0, named[j].0, named[i].1
             )));
         }
-        let csv = |p: &Path| !is_bag(p);
+        let csv = |p: &Path| !crate::io::is_bag(p);
         let all_csv = csv(&self.data) && self.baseline.as_deref().is_none_or(csv);
         if all_csv && *t != FloatingReadOptions::default() {
             return Err(ApiError::Options(format!(
@@ -337,11 +335,6 @@ impl IdentifyFloatingOptions {
     }
 }
 
-/// Whether `path` is read as MCAP (a `.mcap` file or a rosbag2 directory) rather than CSV.
-fn is_bag(path: &Path) -> bool {
-    path.is_dir() || path.extension().is_some_and(|e| e == "mcap")
-}
-
 /// Reads the floating log `path` (CSV, MCAP or a rosbag2 directory) for the robot's `joints`
 /// and `feet`; the note says which joint samples the other topics did not cover.
 fn read_floating_log(
@@ -350,7 +343,7 @@ fn read_floating_log(
     feet: &[String],
     topics: &FloatingReadOptions,
 ) -> Result<(FloatingLog, Option<String>), ApiError> {
-    if !is_bag(path) {
+    if !crate::io::is_bag(path) {
         return Ok((floating_log::read_csv(path, joints, feet)?, None));
     }
     let read = floating_mcap::read(path, joints, feet, topics)?;

@@ -119,10 +119,17 @@ pub fn write(path: &Path, log: &FloatingLog, trunk: &str) -> Result<(), IoError>
 }
 
 /// The channels of `log`: joint states, odometry, and the feet's if it logs forces or contacts.
+struct Channels {
+    joints: u16,
+    odometry: u16,
+    feet: Option<u16>,
+}
+
+/// Adds [`Channels`] for `log` to `w`.
 fn add_channels<W: std::io::Write + std::io::Seek>(
     w: &mut mcap::Writer<W>,
     log: &FloatingLog,
-) -> Result<[Option<u16>; 3], mcap::McapError> {
+) -> Result<Channels, mcap::McapError> {
     let none = BTreeMap::new();
     let mut channel = |kind: &str, schema: String, topic: &str| -> Result<u16, mcap::McapError> {
         let s = w.add_schema(kind, "ros2msg", schema.as_bytes())?;
@@ -143,7 +150,11 @@ fn add_channels<W: std::io::Write + std::io::Seek>(
     } else {
         None
     };
-    Ok([Some(joints), Some(odometry), feet])
+    Ok(Channels {
+        joints,
+        odometry,
+        feet,
+    })
 }
 
 /// One message per sample on each channel, log time = the sample's time.
@@ -151,7 +162,7 @@ fn write_messages<W: std::io::Write + std::io::Seek>(
     w: &mut mcap::Writer<W>,
     log: &FloatingLog,
     trunk: &str,
-    channels: [Option<u16>; 3],
+    channels: Channels,
 ) -> Result<(), mcap::McapError> {
     let j = &log.joints;
     let (n, f) = (j.dof(), log.feet.len());
@@ -165,9 +176,6 @@ fn write_messages<W: std::io::Write + std::io::Seek>(
             log_time: ns,
             publish_time: ns,
         };
-        let [Some(c_joints), Some(c_odometry), c_feet] = channels else {
-            unreachable!("joint and odometry channels are always added")
-        };
         let msg = mcap_log::JointStateView {
             header: &header,
             name: &j.joint_names,
@@ -175,10 +183,10 @@ fn write_messages<W: std::io::Write + std::io::Seek>(
             velocity: j.qd.as_ref().map_or(&[][..], |v| &v[k * n..(k + 1) * n]),
             effort: &j.tau[k * n..(k + 1) * n],
         };
-        w.write_to_known_channel(&mh(c_joints), cdr_into(&mut buf, &msg))?;
+        w.write_to_known_channel(&mh(channels.joints), cdr_into(&mut buf, &msg))?;
         let msg = odometry_of(log, k, &header, trunk, zero);
-        w.write_to_known_channel(&mh(c_odometry), cdr_into(&mut buf, &msg))?;
-        if let Some(c) = c_feet {
+        w.write_to_known_channel(&mh(channels.odometry), cdr_into(&mut buf, &msg))?;
+        if let Some(c) = channels.feet {
             let msg = FootForces {
                 header: Header {
                     frame_id: "world".into(),

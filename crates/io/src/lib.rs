@@ -865,6 +865,11 @@ pub(crate) fn read_log(
     Ok(log)
 }
 
+/// Whether `path` is read as a bag (an MCAP file or a rosbag2 directory) rather than CSV.
+pub fn is_bag(path: &Path) -> bool {
+    path.is_dir() || path.extension().and_then(|e| e.to_str()) == Some("mcap")
+}
+
 /// The samples of a data file as logged, matched to `model`'s joints: the samples, the file's
 /// joints the robot lacks, and the joint-state messages skipped (naming none of its joints).
 pub fn load_logged(
@@ -873,7 +878,7 @@ pub fn load_logged(
     opts: &DataOptions,
 ) -> Result<(crate::prepare::Logged, Vec<String>, usize), IoError> {
     let names: Vec<String> = model.joint_names();
-    let is_mcap = path.is_dir() || path.extension().and_then(|e| e.to_str()) == Some("mcap");
+    let is_mcap = is_bag(path);
     let in_memory = opts.memory.iter().find(|m| m.label == path);
     let (read, mut ignored, skipped) = if let Some(m) = in_memory {
         (m.logged.clone(), vec![], 0)

@@ -206,21 +206,7 @@ pub fn from_spec_with(
         path: path.to_path_buf(),
         source,
     };
-    let mut extras = spec.extras();
-    let dir = path.parent().unwrap_or(Path::new("."));
-    extras.geometry.package_dirs = extras
-        .geometry
-        .package_dirs
-        .iter()
-        .map(|d| dir.join(d))
-        .collect();
-    extras.geometry = opts.over(&extras.geometry);
-    RobotOptions {
-        ellipsoid_margin: Some(extras.geometry.margin),
-        ..Default::default()
-    }
-    .validate()
-    .map_err(|m| IoError::invalid(path, format!("robot.ellipsoid_margin: {m}")))?;
+    let extras = extras_of(spec, path, opts)?;
     check_ways(spec, path)?;
     let model = if let Some(b) = &spec.builtin {
         builtin_model(spec, b, &extras, path)?
@@ -269,13 +255,27 @@ pub fn load_floating_with(
             "robot.ellipsoid_scale: not read for floating robots",
         ));
     }
+    let extras = extras_of(&spec, path, opts)?;
     let dir = path.parent().unwrap_or(Path::new("."));
+    super::urdf::load_floating(&dir.join(u), &extras)
+}
+
+/// The table's extras with its package folders relative to the TOML file `path` and the
+/// command-line options over its keys; the resulting ellipsoid margin checked.
+fn extras_of(spec: &RobotSpec, path: &Path, opts: &RobotOptions) -> Result<RobotExtras, IoError> {
     let mut extras = spec.extras();
+    let dir = path.parent().unwrap_or(Path::new("."));
     extras.geometry.package_dirs = (extras.geometry.package_dirs.iter())
         .map(|d| dir.join(d))
         .collect();
     extras.geometry = opts.over(&extras.geometry);
-    super::urdf::load_floating(&dir.join(u), &extras)
+    RobotOptions {
+        ellipsoid_margin: Some(extras.geometry.margin),
+        ..Default::default()
+    }
+    .validate()
+    .map_err(|m| IoError::invalid(path, format!("robot.ellipsoid_margin: {m}")))?;
+    Ok(extras)
 }
 
 /// `model` with its ellipsoids scaled by `scale` (`robot.ellipsoid_scale`), if given.
