@@ -923,6 +923,72 @@ fn against_a_baseline_log_a_description_with_errors_names_the_payload_and_not_it
 }
 
 #[test]
+fn a_worn_knee_is_named_by_its_friction_against_the_description_and_a_baseline_not_as_a_body() {
+    // The front right knee's friction raised (viscous +0.8 N m s/rad, Coulomb +3 N m): against
+    // the exact description and against its fit to a standing baseline log of the unchanged
+    // robot, the knee's friction is named with its size and no body is; the unchanged robot
+    // standing again gets neither against the baseline.
+    use physid::api::floating::{identify_floating, quadruped_feet, IdentifyFloatingOptions};
+    use physid::ident::Parameterized;
+    let dir = tempfile::tempdir().unwrap();
+    let truth = physid::model::quadruped::quadruped();
+    let names = truth.parameter_names();
+    let column = |name: &str| names.iter().position(|n| n == name).unwrap();
+    let mut theta = truth.parameters();
+    theta[column("fr_knee_joint.B")] += 0.8;
+    theta[column("fr_knee_joint.Bc")] += 3.0;
+    let worn = dir.path().join("worn.urdf");
+    let worn_robot = truth.with_parameters(&theta).unwrap();
+    std::fs::write(&worn, physid::io::urdf::floating_to_string(&worn_robot)).unwrap();
+    let log = |robot: &str, seed: u64| {
+        let out = dir.path().join(format!("{seed}_{}.csv", robot.len()));
+        physid::api::floating::simulate_floating(&physid::api::floating::SimulateFloatingOptions {
+            robot: physid::api::model::RobotOptions::new(robot),
+            duration: 6.0,
+            rate: 1000.0,
+            seed,
+            trot: None,
+            still: false,
+            sensors: Default::default(),
+            out: out.clone(),
+        })
+        .unwrap();
+        out
+    };
+    let check = |data: &std::path::Path, baseline: Option<&std::path::Path>| {
+        identify_floating(&IdentifyFloatingOptions {
+            feet: quadruped_feet(&truth),
+            constraints: ConstraintSet::Consistent,
+            baseline: baseline.map(|b| b.to_path_buf()),
+            ..floating_options(data)
+        })
+        .unwrap()
+        .change
+    };
+    let baseline = log("cheetah3", 1);
+    let worn_log = log(worn.to_str().unwrap(), 2);
+    for against in [None, Some(baseline.as_path())] {
+        let found = check(&worn_log, against);
+        let knee = found
+            .friction_changed
+            .as_ref()
+            .expect("a joint's friction named");
+        assert_eq!(knee.joint, "fr_knee_joint", "{found:?}");
+        assert!(
+            ((knee.viscous + knee.coulomb) - 3.8).abs() < 0.2,
+            "{knee:?}"
+        );
+        assert!(
+            found.changed.is_none() && found.also_fit.is_empty(),
+            "{found:?}"
+        );
+    }
+    let unchanged = check(&log("cheetah3", 3), Some(&baseline));
+    assert!(unchanged.friction_changed.is_none(), "{unchanged:?}");
+    assert!(unchanged.changed.is_none(), "{unchanged:?}");
+}
+
+#[test]
 fn a_trotting_log_names_the_shank_that_carries_half_a_kilogram_and_no_body_when_unchanged() {
     // Trotting in place, default sensors, 6 s, identified from the unloaded description. On
     // unchanged logs the best body's change removes about 1 % of the residual (the filter's,

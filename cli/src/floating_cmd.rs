@@ -319,9 +319,45 @@ fn bodies_text(f: &physid::api::floating::FloatingIdentification) -> String {
     s
 }
 
+/// A joint's friction the log shows differing from the reference, where one is named or set
+/// aside (`None`: the bodies tell the story).
+fn friction_text(c: &physid::api::floating::DescriptionCheck) -> Option<String> {
+    let line = |f: &physid::diagnose::floating::FrictionChange| {
+        format!(
+            "the friction of {} (viscous {:+.3} N m s/rad, Coulomb {:+.3} N m; F {:.1}, residual -{:.1} %)",
+            f.joint,
+            f.viscous,
+            f.coulomb,
+            f.f,
+            100.0 * f.reduction
+        )
+    };
+    let against = c.baseline.as_ref().map_or("the description".into(), |b| {
+        format!("the baseline log {}", b.display())
+    });
+    if let (Some(f), Some(seen)) = (&c.friction_unseen_by_baseline, c.baseline_visibility) {
+        return Some(format!(
+            "against {against}: the log differs most in {}, which the baseline's motion hardly moves ({:.1} % of this log's): no change is named (record the baseline with this log's motion)\n",
+            line(f),
+            100.0 * seen
+        ));
+    }
+    let f = c.friction_changed.as_ref()?;
+    Some(match c.baseline {
+        Some(_) => format!("against {against}: {} changed, no body\n", line(f)),
+        None => format!(
+            "against {against}: the log differs most in {}, no body; a change of the joint or the description's own friction (--baseline-data, a log of the robot before the change, tells them apart)\n",
+            line(f)
+        ),
+    })
+}
+
 /// The body the log shows differing from the reference (the description, or its fit to the
 /// baseline log), or that none does.
 fn change_text(c: &physid::api::floating::DescriptionCheck) -> String {
+    if let Some(text) = friction_text(c) {
+        return text;
+    }
     let line = |b: &physid::diagnose::floating::BodyChange| {
         let at = b.com.map_or(String::new(), |p| {
             format!(" at ({:.3}, {:.3}, {:.3}) m in its frame", p.x, p.y, p.z)

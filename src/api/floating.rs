@@ -452,6 +452,15 @@ pub struct DescriptionCheck {
     /// hardly excites it (visibility below [`MIN_BASELINE_VISIBILITY`]): there the baseline
     /// cannot tell a change from the description's own error.
     pub unseen_by_baseline: Option<crate::diagnose::floating::BodyChange>,
+    /// The joint whose friction (viscous and Coulomb) differs, where its change passes both
+    /// thresholds and carries more evidence (F) than the best body's change: then no body is
+    /// named (a worn or freshly lubricated joint, not a payload).
+    pub friction_changed: Option<crate::diagnose::floating::FrictionChange>,
+    /// The three joints whose friction change explains the log best, the best first.
+    pub friction_candidates: Vec<crate::diagnose::floating::FrictionChange>,
+    /// With a baseline: the named friction change, set aside because the baseline's motion
+    /// hardly moves that joint (as `unseen_by_baseline`).
+    pub friction_unseen_by_baseline: Option<crate::diagnose::floating::FrictionChange>,
 }
 
 /// A change is named against a baseline only where the baseline's rows see it per sample at
@@ -465,10 +474,20 @@ impl DescriptionCheck {
     /// Sets the best change aside when the baseline (rows `base`) hardly sees it against the
     /// new log's rows `ne`.
     fn set_aside_if_unseen(&mut self, base: &NormalEquations, ne: &NormalEquations) {
+        if let Some(f) = &self.friction_changed {
+            let (columns, delta) = (f.columns.to_vec(), [f.viscous, f.coulomb]);
+            let seen = baseline_visibility((&columns, &delta), base, ne);
+            self.baseline_visibility = Some(seen);
+            if seen < MIN_BASELINE_VISIBILITY {
+                self.friction_unseen_by_baseline = self.friction_changed.take();
+            }
+            return;
+        }
         let Some(best) = self.candidates.first() else {
             return;
         };
-        let seen = baseline_visibility(best, base, ne);
+        let columns: Vec<usize> = (best.column..best.column + 10).collect();
+        let seen = baseline_visibility((&columns, &best.delta), base, ne);
         self.baseline_visibility = Some(seen);
         if seen < MIN_BASELINE_VISIBILITY {
             self.unseen_by_baseline = self.changed.take();
@@ -491,9 +510,16 @@ fn description_check(
     ne: &NormalEquations,
     baseline: Option<PathBuf>,
 ) -> DescriptionCheck {
-    use crate::diagnose::floating::{body_changes, name_change};
+    use crate::diagnose::floating::{body_changes, friction_changes, name_change, name_friction};
     let changes = body_changes(reference, ne);
-    let named = name_change(&changes, CHANGE_MIN_F, CHANGE_MIN_REDUCTION);
+    let mut named = name_change(&changes, CHANGE_MIN_F, CHANGE_MIN_REDUCTION);
+    let frictions = friction_changes(reference, ne);
+    let thresholds = (CHANGE_MIN_F, CHANGE_MIN_REDUCTION);
+    let friction_changed = name_friction(&frictions, changes.first(), thresholds);
+    if friction_changed.is_some() {
+        named.changed = None;
+        named.also_fit.clear();
+    }
     DescriptionCheck {
         baseline,
         min_f: CHANGE_MIN_F,
@@ -503,6 +529,9 @@ fn description_check(
         candidates: changes.into_iter().take(5).collect(),
         baseline_visibility: None,
         unseen_by_baseline: None,
+        friction_changed,
+        friction_candidates: frictions.into_iter().take(3).collect(),
+        friction_unseen_by_baseline: None,
     }
 }
 
@@ -665,17 +694,22 @@ fn fit_description(
     )?)
 }
 
-/// How much the baseline log's rows see the change `named` per sample, as a share of how much
-/// the new log's rows `ne` see it: `Δπᵀ (YᵀY)_b Δπ / N` of each over the body's columns.
+/// How much the baseline log's rows see a change (`delta` of `columns`) per sample, as a share
+/// of how much the new log's rows `ne` see it: `Δπᵀ (YᵀY)_c Δπ / N` of each over the columns.
 fn baseline_visibility(
-    named: &crate::diagnose::floating::BodyChange,
+    (columns, delta): (&[usize], &[f64]),
     base: &NormalEquations,
     ne: &NormalEquations,
 ) -> f64 {
-    let delta = DVector::from_column_slice(&named.delta);
     let seen = |e: &NormalEquations| {
-        let block = e.yty.view((named.column, named.column), (10, 10));
-        delta.dot(&(block * &delta)) / e.samples.max(1) as f64
+        let quad: f64 = (columns.iter().zip(delta))
+            .map(|(&i, di)| {
+                (columns.iter().zip(delta))
+                    .map(|(&j, dj)| di * e.yty[(i, j)] * dj)
+                    .sum::<f64>()
+            })
+            .sum();
+        quad / e.samples.max(1) as f64
     };
     let new = seen(ne);
     if new > 0.0 {

@@ -10,6 +10,12 @@
 //! columns in these data: a body is named only where `F_b` exceeds the threshold (the change
 //! would be noise otherwise), the largest first. A payload rigidly carried by a body is such a
 //! change: its mass `Δm` and centre of mass `Δh / Δm` in the body's frame come with it.
+//!
+//! A joint's friction is asked the same way ([`friction_changes`]): its viscous and Coulomb
+//! columns freed (`k ≤ 2`), the rest at the description. A body's ten free parameters absorb a
+//! little of any misfit; a friction change that explains the run with more evidence per column
+//! (a larger F) than the best body's is the better reading (a joint worn or lubricated, not a
+//! payload).
 
 use nalgebra::{DMatrix, DVector, Vector3};
 use physid_ident::{NormalEquations, Parameterized};
@@ -63,17 +69,9 @@ fn body_change(
     body: String,
     column: usize,
 ) -> BodyChange {
-    let block: DMatrix<f64> = ne.yty.view((column, column), (10, 10)).into_owned();
-    let pull: DVector<f64> = g.rows(column, 10).into_owned();
-    let (delta, determined) = pseudo_solve(&block, &pull);
-    let fall = pull.dot(&delta).max(0.0);
-    let rss = (rss0 - fall).max(0.0);
-    let k = determined.max(1) as f64;
-    let f = if rss > 0.0 {
-        (fall / k) / (rss / (rows - k).max(1.0))
-    } else {
-        f64::INFINITY
-    };
+    let columns: Vec<usize> = (column..column + 10).collect();
+    let fit = ColumnsFit::of(ne, g, (rss0, rows), &columns);
+    let delta = &fit.delta;
     let mass = delta[0];
     let com = (mass.abs() > 1e-9).then(|| Vector3::new(delta[1], delta[2], delta[3]) / mass);
     BodyChange {
@@ -82,10 +80,119 @@ fn body_change(
         delta: std::array::from_fn(|i| delta[i]),
         mass,
         com,
-        reduction: if rss0 > 0.0 { fall / rss0 } else { 0.0 },
-        f,
-        determined,
+        reduction: fit.reduction,
+        f: fit.f,
+        determined: fit.determined,
     }
+}
+
+/// The least-squares change of a group of `θ`'s columns with the rest at the description: the
+/// change, the F statistic, the share of the residual it removes and the columns determined.
+struct ColumnsFit {
+    delta: DVector<f64>,
+    f: f64,
+    reduction: f64,
+    determined: usize,
+}
+
+impl ColumnsFit {
+    /// The fit of `columns` on `ne`, `g = Yᵀτ − YᵀY θ_d`, the description's residual sum of
+    /// squares `rss0` over `rows` rows.
+    fn of(
+        ne: &NormalEquations,
+        g: &DVector<f64>,
+        (rss0, rows): (f64, f64),
+        columns: &[usize],
+    ) -> Self {
+        let k = columns.len();
+        let block = DMatrix::from_fn(k, k, |i, j| ne.yty[(columns[i], columns[j])]);
+        let pull = DVector::from_iterator(k, columns.iter().map(|&c| g[c]));
+        let (delta, determined) = pseudo_solve(&block, &pull);
+        let fall = pull.dot(&delta).max(0.0);
+        let rss = (rss0 - fall).max(0.0);
+        let k = determined.max(1) as f64;
+        let f = if rss > 0.0 {
+            (fall / k) / (rss / (rows - k).max(1.0))
+        } else {
+            f64::INFINITY
+        };
+        let reduction = if rss0 > 0.0 { fall / rss0 } else { 0.0 };
+        Self {
+            delta,
+            f,
+            reduction,
+            determined,
+        }
+    }
+}
+
+/// One joint's best friction change on the new run.
+#[derive(Clone, Debug, PartialEq, Serialize, serde::Deserialize)]
+pub struct FrictionChange {
+    /// Joint name.
+    pub joint: String,
+    /// Its viscous and Coulomb columns in `θ`.
+    pub columns: [usize; 2],
+    /// The change of its viscous coefficient (N m s/rad, N s/m for a prismatic joint).
+    pub viscous: f64,
+    /// The change of its Coulomb friction (N m, N for a prismatic joint).
+    pub coulomb: f64,
+    /// Relative fall of the residual sum of squares.
+    pub reduction: f64,
+    /// The F statistic of the change.
+    pub f: f64,
+    /// Columns of the joint's friction the data determine (`k`, at most 2).
+    pub determined: usize,
+}
+
+/// Every joint's friction change, largest F first, for the robot described by `description`
+/// on a run's normal equations `ne` (see the module docs).
+pub fn friction_changes<R: Parameterized + ?Sized>(
+    description: &R,
+    ne: &NormalEquations,
+) -> Vec<FrictionChange> {
+    let theta = description.parameters();
+    let g = &ne.ytt - &ne.yty * &theta;
+    let rss0 = ne.residual_sum_of_squares(&theta);
+    let rows = (ne.samples * ne.rows_per_sample()) as f64;
+    let names = description.parameter_names();
+    let (viscous, coulomb) = description.friction_columns();
+    let mut changes: Vec<FrictionChange> = (0..description.joints())
+        .map(|j| {
+            let columns = [viscous + j, coulomb + j];
+            let fit = ColumnsFit::of(ne, &g, (rss0, rows), &columns);
+            let name = &names[viscous + j];
+            FrictionChange {
+                joint: name
+                    .rsplit_once('.')
+                    .map_or(name.as_str(), |(j, _)| j)
+                    .into(),
+                columns,
+                viscous: fit.delta[0],
+                coulomb: fit.delta[1],
+                reduction: fit.reduction,
+                f: fit.f,
+                determined: fit.determined,
+            }
+        })
+        .collect();
+    changes.sort_by(|a, b| b.f.total_cmp(&a.f));
+    changes
+}
+
+/// The friction change [`friction_changes`] ranks first, named when it passes `min_f` and
+/// `min_reduction` (as [`name_change`]) and carries more evidence than the best body change
+/// (`best_body`, its F statistic): then it, not the body, reads the run.
+pub fn name_friction(
+    frictions: &[FrictionChange],
+    best_body: Option<&BodyChange>,
+    (min_f, min_reduction): (f64, f64),
+) -> Option<FrictionChange> {
+    frictions
+        .first()
+        .filter(|c| c.f > min_f && c.reduction >= min_reduction)
+        .filter(|c| best_body.is_none_or(|b| c.f > b.f))
+        .cloned()
 }
 
 /// The minimum-norm solution of `a x = b` for symmetric positive semidefinite `a`, on the

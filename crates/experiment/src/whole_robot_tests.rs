@@ -262,6 +262,78 @@ fn a_payload_on_the_trunk_is_found_from_the_description() {
     assert!(named_on(&description, 4).changed.is_none());
 }
 
+/// The normal equations of a standing run of `robot` (torques and contact forces, with noise).
+fn standing_rows(robot: &FloatingModel, seed: u64) -> physid_ident::NormalEquations {
+    use crate::whole_robot::{measured, normal_equations};
+    use physid_sim::floating::{standing, Standing};
+    let motion = Standing {
+        duration: 4.0,
+        seed,
+        ..Default::default()
+    };
+    let truth = standing(robot, &feet(robot), &motion).unwrap();
+    let noisy = measured(&truth, &WholeRobotSpec::default(), seed);
+    normal_equations(
+        robot,
+        (&noisy, &truth),
+        DataSetting::TorquesAndContacts,
+        truth.len(),
+    )
+}
+
+/// A joint whose friction changed (front-right knee: viscous +0.8 N m s/rad, Coulomb +3 N m)
+/// is named with its two changes, and no body is; a 5 kg payload on the trunk is still named
+/// as the trunk, not as any joint's friction; on an unloaded run neither is named.
+#[test]
+fn a_joint_s_changed_friction_is_named_and_a_payload_is_not_read_as_one() {
+    use physid_core::spatial::InertialParams;
+    use physid_diagnose::floating::{body_changes, friction_changes, name_change, name_friction};
+    let description = quadruped();
+    let names = description.parameter_names();
+    let column = |name: &str| names.iter().position(|n| n == name).unwrap();
+    let mut theta = description.parameters();
+    theta[column("fr_knee_joint.B")] += 0.8;
+    theta[column("fr_knee_joint.Bc")] += 3.0;
+    let worn = description.with_parameters(&theta).unwrap();
+    let mut theta = description.parameters();
+    let payload = InertialParams::from_mass_com_inertia(
+        5.0,
+        &nalgebra::Vector3::new(0.10, 0.0, 0.08),
+        &(nalgebra::Matrix3::identity() * 0.01),
+    );
+    for (k, v) in payload.0.iter().enumerate() {
+        theta[k] += v;
+    }
+    let loaded = description.with_parameters(&theta).unwrap();
+    let thresholds = (10.0, 0.05);
+    let read = |robot: &FloatingModel, seed: u64| {
+        let ne = standing_rows(robot, seed);
+        let bodies = body_changes(&description, &ne);
+        let body = name_change(&bodies, thresholds.0, thresholds.1).changed;
+        let frictions = friction_changes(&description, &ne);
+        let friction = name_friction(&frictions, body.as_ref(), thresholds);
+        (body, friction)
+    };
+    let (body, friction) = read(&worn, 5);
+    let friction = friction.expect("a friction change is named");
+    assert_eq!(friction.joint, "fr_knee_joint");
+    // The friction torque the change adds at 1 rad/s is found closely; its split between the
+    // viscous and Coulomb terms less so (the simulator's Coulomb friction is smoothed below
+    // `v_f`, where it looks partly viscous to the `sign(q̇)` column; measured 1.04 and 2.78).
+    let at_one = friction.viscous + friction.coulomb;
+    assert!((at_one - 3.8).abs() < 0.05 * 3.8, "{friction:?}");
+    assert!((friction.coulomb - 3.0).abs() < 0.15 * 3.0, "{friction:?}");
+    assert!(body.as_ref().is_none_or(|b| b.f < friction.f), "{body:?}");
+    let (body, friction) = read(&loaded, 6);
+    assert_eq!(body.expect("the trunk is named").body, "trunk");
+    assert!(friction.is_none(), "{friction:?}");
+    let (body, friction) = read(&description, 7);
+    assert!(
+        body.is_none() && friction.is_none(),
+        "{body:?} {friction:?}"
+    );
+}
+
 /// A summary table of one setting with the given medians per set (sizes 100, 300, 1000).
 fn summary_of(curves: &[(&str, [f64; 3])]) -> polars::prelude::DataFrame {
     use polars::prelude::*;
