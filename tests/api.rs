@@ -929,7 +929,6 @@ fn a_worn_knee_is_named_by_its_friction_against_the_description_and_a_baseline_n
     // robot, the knee's friction is named with its size and no body is; the unchanged robot
     // standing again gets neither against the baseline.
     use physid::api::floating::{identify_floating, quadruped_feet, IdentifyFloatingOptions};
-    use physid::ident::Parameterized;
     let dir = tempfile::tempdir().unwrap();
     let truth = physid::model::quadruped::quadruped();
     let names = truth.parameter_names();
