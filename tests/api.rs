@@ -987,6 +987,69 @@ fn a_worn_knee_is_named_by_its_friction_against_the_description_and_a_baseline_n
     assert!(unchanged.changed.is_none(), "{unchanged:?}");
 }
 
+/// `path`'s CSV with column `name` scaled by `factor`, written to `out`.
+fn scaled_column(path: &std::path::Path, name: &str, factor: f64, out: &std::path::Path) {
+    let text = std::fs::read_to_string(path).unwrap();
+    let mut lines = text.lines();
+    let header = lines.next().unwrap();
+    let at = header.split(',').position(|h| h == name).unwrap();
+    let mut scaled = vec![header.to_string()];
+    for line in lines {
+        let mut cells: Vec<String> = line.split(',').map(String::from).collect();
+        cells[at] = (cells[at].parse::<f64>().unwrap() * factor).to_string();
+        scaled.push(cells.join(","));
+    }
+    std::fs::write(out, scaled.join("\n") + "\n").unwrap();
+}
+
+#[test]
+fn a_knee_torque_logged_at_85_percent_is_named_a_gain_not_a_body_or_friction() {
+    // The front right knee's logged torque scaled by 0.85 (a current sensor's scale): against
+    // the description the knee's gain is named, -0.15, and no body or friction; the same log
+    // unscaled names nothing, and a payload's log names the body, not a gain.
+    use physid::api::floating::{identify_floating, simulate_floating, SimulateFloatingOptions};
+    let dir = tempfile::tempdir().unwrap();
+    let log = |robot: &str, name: &str| {
+        let out = dir.path().join(name);
+        simulate_floating(&SimulateFloatingOptions {
+            robot: physid::api::model::RobotOptions::new(robot),
+            duration: 6.0,
+            rate: 1000.0,
+            seed: 3,
+            trot: None,
+            still: false,
+            sensors: Default::default(),
+            out: out.clone(),
+        })
+        .unwrap();
+        out
+    };
+    let check = |data: &std::path::Path| identify_floating(&floating_options(data)).unwrap().change;
+    let plain = log("cheetah3", "plain.csv");
+    let scaled = dir.path().join("scaled.csv");
+    scaled_column(&plain, "tau_fr_knee_joint", 0.85, &scaled);
+    let found = check(&scaled);
+    let gain = found.gain_changed.as_ref().expect("a gain named");
+    assert_eq!(gain.joint, "fr_knee_joint", "{found:?}");
+    assert!((gain.gain + 0.15).abs() < 0.01, "{gain:?}");
+    assert!(
+        found.changed.is_none() && found.friction_changed.is_none(),
+        "{found:?}"
+    );
+    let unscaled = check(&plain);
+    assert!(
+        unscaled.gain_changed.is_none() && unscaled.changed.is_none(),
+        "{unscaled:?}"
+    );
+    let loaded = loaded_quadruped(dir.path(), "fr_shank", 0.5, [0.0, 0.0, -0.1]);
+    let payload = check(&log(loaded.to_str().unwrap(), "loaded.csv"));
+    assert!(payload.gain_changed.is_none(), "{payload:?}");
+    assert_eq!(
+        payload.changed.as_ref().expect("the shank named").body,
+        "fr_shank"
+    );
+}
+
 #[test]
 fn a_trotting_log_names_the_shank_that_carries_half_a_kilogram_and_no_body_when_unchanged() {
     // Trotting in place, default sensors, 6 s, identified from the unloaded description. On

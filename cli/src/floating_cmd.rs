@@ -319,8 +319,8 @@ fn bodies_text(f: &physid::api::floating::FloatingIdentification) -> String {
     s
 }
 
-/// A joint's friction the log shows differing from the reference, where one is named or set
-/// aside (`None`: the bodies tell the story).
+/// A joint's torque gain or friction the log shows differing from the reference, where one is
+/// named or set aside (`None`: the bodies tell the story).
 fn friction_text(c: &physid::api::floating::DescriptionCheck) -> Option<String> {
     let line = |f: &physid::diagnose::floating::FrictionChange| {
         format!(
@@ -340,6 +340,16 @@ fn friction_text(c: &physid::api::floating::DescriptionCheck) -> Option<String> 
             "against {against}: the log differs most in {}, which the baseline's motion hardly moves ({:.1} % of this log's): no change is named (record the baseline with this log's motion)\n",
             line(f),
             100.0 * seen
+        ));
+    }
+    if let Some(g) = &c.gain_changed {
+        return Some(format!(
+            "against {against}: the log differs most in the torque gain of {} ({:+.1} %: the logged torque is {:.3} times the motor's; F {:.1}, residual -{:.1} %), no body or friction\n",
+            g.joint,
+            100.0 * g.gain,
+            1.0 + g.gain,
+            g.f,
+            100.0 * g.reduction
         ));
     }
     let f = c.friction_changed.as_ref()?;

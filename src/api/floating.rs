@@ -13,7 +13,7 @@ pub use crate::io::floating_mcap::FloatingReadOptions;
 use crate::model::floating::FloatingModel;
 /// The sensors a floating run is logged through.
 pub use crate::sim::floating_sensors::Sensors;
-use nalgebra::{DVector, Vector3};
+use nalgebra::{DMatrix, DVector, Vector3};
 use physid_core::dynamics::BaseState;
 use physid_core::spatial::{Motion, Transform};
 use std::path::{Path, PathBuf};
@@ -461,6 +461,15 @@ pub struct DescriptionCheck {
     /// With a baseline: the named friction change, set aside because the baseline's motion
     /// hardly moves that joint (as `unseen_by_baseline`).
     pub friction_unseen_by_baseline: Option<crate::diagnose::floating::FrictionChange>,
+    /// The joint whose logged torque is scaled against the reference (a current sensor's or
+    /// torque constant's error), where its change passes `min_f`, removes
+    /// [`GAIN_MIN_JOINT_REDUCTION`](crate::diagnose::floating::GAIN_MIN_JOINT_REDUCTION) of its
+    /// joint's residual and carries more evidence (F) than the body or friction change named:
+    /// then neither is.
+    /// Asked with torques and contact forces only (`torques-and-contacts`).
+    pub gain_changed: Option<crate::diagnose::floating::GainChange>,
+    /// The three joints whose gain change explains the log best, the best first.
+    pub gain_candidates: Vec<crate::diagnose::floating::GainChange>,
 }
 
 /// A change is named against a baseline only where the baseline's rows see it per sample at
@@ -471,6 +480,21 @@ pub struct DescriptionCheck {
 pub const MIN_BASELINE_VISIBILITY: f64 = 0.05;
 
 impl DescriptionCheck {
+    /// Names the best gain change `gains` (largest F first) where it passes its thresholds and
+    /// outweighs the body or friction change named; those are then unnamed.
+    fn weigh_gains(&mut self, gains: Vec<crate::diagnose::floating::GainChange>) {
+        let others: Vec<f64> = (self.changed.as_ref().map(|b| b.f).into_iter())
+            .chain(self.friction_changed.as_ref().map(|f| f.f))
+            .collect();
+        self.gain_changed = crate::diagnose::floating::name_gain(&gains, &others, self.min_f);
+        if self.gain_changed.is_some() {
+            self.changed = None;
+            self.also_fit.clear();
+            self.friction_changed = None;
+        }
+        self.gain_candidates = gains.into_iter().take(3).collect();
+    }
+
     /// Sets the best change aside when the baseline (rows `base`) hardly sees it against the
     /// new log's rows `ne`.
     fn set_aside_if_unseen(&mut self, base: &NormalEquations, ne: &NormalEquations) {
@@ -532,6 +556,8 @@ fn description_check(
         friction_changed,
         friction_candidates: frictions.into_iter().take(3).collect(),
         friction_unseen_by_baseline: None,
+        gain_changed: None,
+        gain_candidates: vec![],
     }
 }
 
@@ -596,7 +622,7 @@ pub fn identify_floating(
         .map(|p| truth_scores(&robot, p, &found.theta))
         .transpose()?;
     // Every input read (the baseline too) before anything is written.
-    let change = change_check(&robot, opts, &ne)?;
+    let change = change_check(&robot, opts, (&samples, &ne))?;
     let identified = robot.with_parameters(&found.theta)?;
     write_models(opts, &identified)?;
     let identifiability = crate::ident::analysis::identifiability(&robot, &ne, &found.theta);
@@ -643,19 +669,34 @@ pub fn identify_floating(
     })
 }
 
-/// Which body differs on the rows `ne` from the description, or, given `opts.baseline`, from
-/// its fit to that log (a change is set aside where the baseline hardly sees it).
+/// Which body, joint friction or torque gain differs on the rows `ne` (of `samples`) from the
+/// description, or, given `opts.baseline`, from its fit to that log (a change is set aside
+/// where the baseline hardly sees it).
 fn change_check(
     robot: &FloatingModel,
     opts: &IdentifyFloatingOptions,
-    ne: &NormalEquations,
+    (samples, ne): (&Samples, &NormalEquations),
 ) -> Result<DescriptionCheck, ApiError> {
-    let Some(path) = &opts.baseline else {
-        return Ok(description_check(robot, ne, None));
+    let (reference, mut change) = match &opts.baseline {
+        None => (robot.clone(), description_check(robot, ne, None)),
+        Some(path) => {
+            let (reference, base_ne) = baseline_fit(robot, opts, path)?;
+            let mut change = description_check(&reference, ne, Some(path.clone()));
+            change.set_aside_if_unseen(&base_ne, ne);
+            (reference, change)
+        }
     };
-    let (reference, base_ne) = baseline_fit(robot, opts, path)?;
-    let mut change = description_check(&reference, ne, Some(path.clone()));
-    change.set_aside_if_unseen(&base_ne, ne);
+    if opts.setting == DataSetting::TorquesAndContacts {
+        let feet = if opts.feet.is_empty() {
+            quadruped_feet(robot)
+        } else {
+            opts.feet.clone()
+        };
+        let sums = gain_sums(&reference, &resolve_feet(robot, &feet)?, samples);
+        change.weigh_gains(crate::diagnose::floating::gain_changes(
+            &reference, ne, &sums,
+        ));
+    }
     Ok(change)
 }
 
@@ -1052,6 +1093,20 @@ fn normal_equations(
 ) -> NormalEquations {
     let per_sample = crate::ident::floating::rows_per_sample(robot, setting);
     let mut ne = NormalEquations::new(per_sample, robot.parameter_count());
+    for_each_rows(robot, feet, samples, setting, |y, target, _| {
+        ne.add(y, target.as_slice())
+    });
+    ne.finish()
+}
+
+/// Each sample's rows and targets in `setting` (and its joint torques), in order.
+fn for_each_rows(
+    robot: &FloatingModel,
+    feet: &[(usize, Vector3<f64>)],
+    samples: &Samples,
+    setting: DataSetting,
+    mut each: impl FnMut(&DMatrix<f64>, &DVector<f64>, &[f64]),
+) {
     let mut rows = FloatingRows::new(robot);
     // With forces measured every foot's force enters the targets, down or not: filtered, a
     // force is smeared across touchdown and lift-off, and a foot in the air pushes nothing (its
@@ -1071,7 +1126,35 @@ fn normal_equations(
             contacts: &contacts,
         };
         let (y, target) = rows.rows(robot, &sample, setting);
-        ne.add(&y, target.as_slice());
+        each(&y, &target, &s.tau);
     }
-    ne.finish()
+}
+
+/// Each joint's [`GainSums`](crate::diagnose::floating::GainSums) on `samples` against
+/// `reference` (rows with torques and contact forces): the predicted motor torque `τ̂_j` (the
+/// joint row's prediction less the contact forces' share of its target) and the row's
+/// residual.
+fn gain_sums(
+    reference: &FloatingModel,
+    feet: &[(usize, Vector3<f64>)],
+    samples: &Samples,
+) -> Vec<crate::diagnose::floating::GainSums> {
+    let n = reference.joints();
+    let theta = reference.parameters();
+    let mut sums = vec![(0.0, 0.0, 0.0); n];
+    let setting = DataSetting::TorquesAndContacts;
+    for_each_rows(reference, feet, samples, setting, |y, target, tau| {
+        let predicted = y * &theta;
+        for (j, (cc, cr, rr)) in sums.iter_mut().enumerate() {
+            let row = 6 + j;
+            let motor = predicted[row] - (target[row] - tau[j]);
+            let residual = target[row] - predicted[row];
+            *cc += motor * motor;
+            *cr += motor * residual;
+            *rr += residual * residual;
+        }
+    });
+    (reference.tree().joint_names().into_iter().zip(sums))
+        .map(|(joint, (cc, cr, rr))| crate::diagnose::floating::GainSums { joint, cc, cr, rr })
+        .collect()
 }
