@@ -845,6 +845,29 @@ fn standing_still_the_feet_carry_the_robot_s_weight_and_the_trunk_rests() {
     assert!(!dir.path().join("never.csv").exists());
 }
 
+/// Which change `identify-floating` reads in the quadruped's log `data` (consistent set)
+/// against `robot` (default: the built-in quadruped) or its fit to `baseline`.
+fn floating_change(
+    robot: Option<&std::path::Path>,
+    data: &std::path::Path,
+    baseline: Option<&std::path::Path>,
+) -> physid::api::floating::DescriptionCheck {
+    use physid::api::floating::{identify_floating, quadruped_feet, IdentifyFloatingOptions};
+    let defaults = floating_options(data);
+    let robot = robot.map_or(defaults.robot.clone(), |r| {
+        physid::api::model::RobotOptions::new(r.to_str().unwrap())
+    });
+    identify_floating(&IdentifyFloatingOptions {
+        robot,
+        feet: quadruped_feet(&physid::model::quadruped::quadruped()),
+        constraints: ConstraintSet::Consistent,
+        baseline: baseline.map(|b| b.to_path_buf()),
+        ..defaults
+    })
+    .unwrap()
+    .change
+}
+
 #[test]
 fn against_a_baseline_log_a_description_with_errors_names_the_payload_and_not_its_own_errors() {
     // A description with 10 % errors on every body's mass and inertia. Against it, an
@@ -852,7 +875,6 @@ fn against_a_baseline_log_a_description_with_errors_names_the_payload_and_not_it
     // unchanged robot standing, the same robot standing again differs in nothing, 5 kg on the
     // trunk is named and weighed, and a trot (which the standing baseline hardly excites in the
     // directions it differs in) is set aside unnamed.
-    use physid::api::floating::{identify_floating, quadruped_feet, IdentifyFloatingOptions};
     let dir = tempfile::tempdir().unwrap();
     let truth = physid::model::quadruped::quadruped();
     let mut theta = truth.parameters();
@@ -887,15 +909,7 @@ fn against_a_baseline_log_a_description_with_errors_names_the_payload_and_not_it
     };
     let baseline = log("cheetah3", 1, None);
     let check = |data: &std::path::Path, baseline: Option<&std::path::Path>| {
-        identify_floating(&IdentifyFloatingOptions {
-            robot: physid::api::model::RobotOptions::new(described.to_str().unwrap()),
-            feet: quadruped_feet(&truth),
-            constraints: ConstraintSet::Consistent,
-            baseline: baseline.map(|b| b.to_path_buf()),
-            ..floating_options(data)
-        })
-        .unwrap()
-        .change
+        floating_change(Some(&described), data, baseline)
     };
     let unchanged = log("cheetah3", 2, None);
     let against_description = check(&unchanged, None);
@@ -928,7 +942,6 @@ fn a_worn_knee_is_named_by_its_friction_against_the_description_and_a_baseline_n
     // the exact description and against its fit to a standing baseline log of the unchanged
     // robot, the knee's friction is named with its size and no body is; the unchanged robot
     // standing again gets neither against the baseline.
-    use physid::api::floating::{identify_floating, quadruped_feet, IdentifyFloatingOptions};
     let dir = tempfile::tempdir().unwrap();
     let truth = physid::model::quadruped::quadruped();
     let names = truth.parameter_names();
@@ -941,28 +954,10 @@ fn a_worn_knee_is_named_by_its_friction_against_the_description_and_a_baseline_n
     std::fs::write(&worn, physid::io::urdf::floating_to_string(&worn_robot)).unwrap();
     let log = |robot: &str, seed: u64| {
         let out = dir.path().join(format!("{seed}_{}.csv", robot.len()));
-        physid::api::floating::simulate_floating(&physid::api::floating::SimulateFloatingOptions {
-            robot: physid::api::model::RobotOptions::new(robot),
-            duration: 6.0,
-            rate: 1000.0,
-            seed,
-            trot: None,
-            still: false,
-            sensors: Default::default(),
-            out: out.clone(),
-        })
-        .unwrap();
-        out
+        floating_log_at(out, robot, (6.0, seed), Default::default())
     };
     let check = |data: &std::path::Path, baseline: Option<&std::path::Path>| {
-        identify_floating(&IdentifyFloatingOptions {
-            feet: quadruped_feet(&truth),
-            constraints: ConstraintSet::Consistent,
-            baseline: baseline.map(|b| b.to_path_buf()),
-            ..floating_options(data)
-        })
-        .unwrap()
-        .change
+        floating_change(None, data, baseline)
     };
     let baseline = log("cheetah3", 1);
     let worn_log = log(worn.to_str().unwrap(), 2);
@@ -1007,22 +1002,10 @@ fn a_knee_torque_logged_at_85_percent_is_named_a_gain_not_a_body_or_friction() {
     // The front right knee's logged torque scaled by 0.85 (a current sensor's scale): against
     // the description the knee's gain is named, -0.15, and no body or friction; the same log
     // unscaled names nothing, and a payload's log names the body, not a gain.
-    use physid::api::floating::{identify_floating, simulate_floating, SimulateFloatingOptions};
+    use physid::api::floating::identify_floating;
     let dir = tempfile::tempdir().unwrap();
     let log = |robot: &str, name: &str| {
-        let out = dir.path().join(name);
-        simulate_floating(&SimulateFloatingOptions {
-            robot: physid::api::model::RobotOptions::new(robot),
-            duration: 6.0,
-            rate: 1000.0,
-            seed: 3,
-            trot: None,
-            still: false,
-            sensors: Default::default(),
-            out: out.clone(),
-        })
-        .unwrap();
-        out
+        floating_log_at(dir.path().join(name), robot, (6.0, 3), Default::default())
     };
     let check = |data: &std::path::Path| identify_floating(&floating_options(data)).unwrap().change;
     let plain = log("cheetah3", "plain.csv");

@@ -42,16 +42,32 @@ pub struct BodyChange {
     pub determined: usize,
 }
 
+/// The run's pull away from the description: `g = Yᵀτ − YᵀY θ_d`, the description's residual
+/// sum of squares and the number of rows.
+struct Pull {
+    g: DVector<f64>,
+    rss0: f64,
+    rows: f64,
+}
+
+impl Pull {
+    fn of<R: Parameterized + ?Sized>(description: &R, ne: &NormalEquations) -> Self {
+        let theta = description.parameters();
+        Self {
+            g: &ne.ytt - &ne.yty * &theta,
+            rss0: ne.residual_sum_of_squares(&theta),
+            rows: (ne.samples * ne.rows_per_sample()) as f64,
+        }
+    }
+}
+
 /// Every body's change, largest F first, for the robot described by `description` on a run's
 /// normal equations `ne` (the robot's columns, any data setting).
 pub fn body_changes<R: Parameterized + ?Sized>(
     description: &R,
     ne: &NormalEquations,
 ) -> Vec<BodyChange> {
-    let theta = description.parameters();
-    let g = &ne.ytt - &ne.yty * &theta;
-    let rss0 = ne.residual_sum_of_squares(&theta);
-    let rows = (ne.samples * ne.rows_per_sample()) as f64;
+    let Pull { g, rss0, rows } = Pull::of(description, ne);
     let mut changes: Vec<BodyChange> = description
         .inertial_bodies()
         .into_iter()
@@ -151,10 +167,7 @@ pub fn friction_changes<R: Parameterized + ?Sized>(
     description: &R,
     ne: &NormalEquations,
 ) -> Vec<FrictionChange> {
-    let theta = description.parameters();
-    let g = &ne.ytt - &ne.yty * &theta;
-    let rss0 = ne.residual_sum_of_squares(&theta);
-    let rows = (ne.samples * ne.rows_per_sample()) as f64;
+    let Pull { g, rss0, rows } = Pull::of(description, ne);
     let names = description.parameter_names();
     let (viscous, coulomb) = description.friction_columns();
     let mut changes: Vec<FrictionChange> = (0..description.joints())
@@ -232,8 +245,7 @@ pub fn gain_changes<R: Parameterized + ?Sized>(
     ne: &NormalEquations,
     sums: &[GainSums],
 ) -> Vec<GainChange> {
-    let rss0 = ne.residual_sum_of_squares(&description.parameters());
-    let rows = (ne.samples * ne.rows_per_sample()) as f64;
+    let Pull { rss0, rows, .. } = Pull::of(description, ne);
     let mut changes: Vec<GainChange> = (sums.iter())
         .filter(|s| s.cc > 0.0)
         .map(|s| {
