@@ -303,6 +303,15 @@ impl IdentifyFloatingOptions {
         Ok(())
     }
 
+    /// The feet given, or the quadruped's (`feet` empty).
+    fn feet_or_quadruped(&self, robot: &FloatingModel) -> Vec<Foot> {
+        if self.feet.is_empty() {
+            quadruped_feet(robot)
+        } else {
+            self.feet.clone()
+        }
+    }
+
     /// The topics named, distinct, and changed only where a log (or the baseline) is MCAP or a
     /// rosbag2 directory.
     fn check_topics(&self) -> Result<(), ApiError> {
@@ -499,8 +508,7 @@ impl DescriptionCheck {
     /// new log's rows `ne`.
     fn set_aside_if_unseen(&mut self, base: &NormalEquations, ne: &NormalEquations) {
         if let Some(f) = &self.friction_changed {
-            let (columns, delta) = (f.columns.to_vec(), [f.viscous, f.coulomb]);
-            let seen = baseline_visibility((&columns, &delta), base, ne);
+            let seen = baseline_visibility((&f.columns, &[f.viscous, f.coulomb]), base, ne);
             self.baseline_visibility = Some(seen);
             if seen < MIN_BASELINE_VISIBILITY {
                 self.friction_unseen_by_baseline = self.friction_changed.take();
@@ -677,24 +685,22 @@ fn change_check(
     opts: &IdentifyFloatingOptions,
     (samples, ne): (&Samples, &NormalEquations),
 ) -> Result<DescriptionCheck, ApiError> {
+    let fitted;
     let (reference, mut change) = match &opts.baseline {
-        None => (robot.clone(), description_check(robot, ne, None)),
+        None => (robot, description_check(robot, ne, None)),
         Some(path) => {
-            let (reference, base_ne) = baseline_fit(robot, opts, path)?;
-            let mut change = description_check(&reference, ne, Some(path.clone()));
+            let base_ne;
+            (fitted, base_ne) = baseline_fit(robot, opts, path)?;
+            let mut change = description_check(&fitted, ne, Some(path.clone()));
             change.set_aside_if_unseen(&base_ne, ne);
-            (reference, change)
+            (&fitted, change)
         }
     };
     if opts.setting == DataSetting::TorquesAndContacts {
-        let feet = if opts.feet.is_empty() {
-            quadruped_feet(robot)
-        } else {
-            opts.feet.clone()
-        };
-        let sums = gain_sums(&reference, &resolve_feet(robot, &feet)?, samples);
+        let feet = resolve_feet(robot, &opts.feet_or_quadruped(robot))?;
+        let sums = gain_sums(reference, &feet, samples);
         change.weigh_gains(crate::diagnose::floating::gain_changes(
-            &reference, ne, &sums,
+            reference, ne, &sums,
         ));
     }
     Ok(change)
@@ -766,11 +772,7 @@ fn rows_of_log(
     robot: &FloatingModel,
     opts: &IdentifyFloatingOptions,
 ) -> Result<(FloatingLog, Samples, NormalEquations), ApiError> {
-    let feet = if opts.feet.is_empty() {
-        quadruped_feet(robot)
-    } else {
-        opts.feet.clone()
-    };
+    let feet = opts.feet_or_quadruped(robot);
     let points = resolve_feet(robot, &feet)?;
     let names: Vec<String> = feet.iter().map(|f| f.body.clone()).collect();
     let joints = robot.tree().joint_names();
