@@ -320,8 +320,9 @@ fn bodies_text(f: &physid::api::floating::FloatingIdentification) -> String {
 }
 
 /// A joint's torque gain or friction the log shows differing from the reference, where one is
-/// named or set aside (`None`: the bodies tell the story).
-fn friction_text(c: &physid::api::floating::DescriptionCheck) -> Option<String> {
+/// named or set aside (`None`: the bodies tell the story). A gain named comes first: it is
+/// weighed after the baseline set a friction change aside.
+fn joint_text(c: &physid::api::floating::DescriptionCheck) -> Option<String> {
     let line = |f: &physid::diagnose::floating::FrictionChange| {
         format!(
             "the friction of {} (viscous {:+.3} N m s/rad, Coulomb {:+.3} N m; F {:.1}, residual -{:.1} %)",
@@ -335,13 +336,6 @@ fn friction_text(c: &physid::api::floating::DescriptionCheck) -> Option<String> 
     let against = c.baseline.as_ref().map_or("the description".into(), |b| {
         format!("the baseline log {}", b.display())
     });
-    if let (Some(f), Some(seen)) = (&c.friction_unseen_by_baseline, c.baseline_visibility) {
-        return Some(format!(
-            "against {against}: the log differs most in {}, which the baseline's motion hardly moves ({:.1} % of this log's): no change is named (record the baseline with this log's motion)\n",
-            line(f),
-            100.0 * seen
-        ));
-    }
     if let Some(g) = &c.gain_changed {
         return Some(format!(
             "against {against}: the log differs most in the torque gain of {} ({:+.1} %: the logged torque is {:.3} times the motor's; F {:.1}, residual -{:.1} %), no body or friction\n",
@@ -350,6 +344,13 @@ fn friction_text(c: &physid::api::floating::DescriptionCheck) -> Option<String> 
             1.0 + g.gain,
             g.f,
             100.0 * g.reduction
+        ));
+    }
+    if let (Some(f), Some(seen)) = (&c.friction_unseen_by_baseline, c.baseline_visibility) {
+        return Some(format!(
+            "against {against}: the log differs most in {}, which the baseline's motion hardly moves ({:.1} % of this log's): no change is named (record the baseline with this log's motion)\n",
+            line(f),
+            100.0 * seen
         ));
     }
     let f = c.friction_changed.as_ref()?;
@@ -365,7 +366,7 @@ fn friction_text(c: &physid::api::floating::DescriptionCheck) -> Option<String> 
 /// The body the log shows differing from the reference (the description, or its fit to the
 /// baseline log), or that none does.
 fn change_text(c: &physid::api::floating::DescriptionCheck) -> String {
-    if let Some(text) = friction_text(c) {
+    if let Some(text) = joint_text(c) {
         return text;
     }
     let line = |b: &physid::diagnose::floating::BodyChange| {
@@ -421,4 +422,60 @@ fn undetermined_masses(f: &physid::api::floating::FloatingIdentification) -> Vec
     (f.bodies.iter().zip(&f.mass_standard_errors))
         .map(|(b, se)| !se.is_some_and(|e| physid::api::identify::mass_determined(e, b.pi[0])))
         .collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use physid::api::floating::DescriptionCheck;
+    use physid::diagnose::floating::{FrictionChange, GainChange};
+
+    /// A check against a baseline that set a friction change aside and then named a gain.
+    fn gain_after_unseen_friction() -> DescriptionCheck {
+        DescriptionCheck {
+            baseline: Some("before.csv".into()),
+            min_f: 10.0,
+            min_reduction: 0.05,
+            changed: None,
+            also_fit: vec![],
+            candidates: vec![],
+            baseline_visibility: Some(0.01),
+            unseen_by_baseline: None,
+            friction_changed: None,
+            friction_candidates: vec![],
+            friction_unseen_by_baseline: Some(FrictionChange {
+                joint: "fr_knee_joint".into(),
+                columns: [0, 1],
+                viscous: 0.1,
+                coulomb: 0.2,
+                reduction: 0.06,
+                f: 50.0,
+                determined: 2,
+            }),
+            gain_changed: Some(GainChange {
+                joint: "hl_abad_joint".into(),
+                gain: -0.15,
+                reduction: 0.02,
+                joint_reduction: 0.7,
+                f: 900.0,
+            }),
+            gain_candidates: vec![],
+        }
+    }
+
+    #[test]
+    fn a_gain_named_is_said_even_where_the_baseline_set_a_friction_change_aside() {
+        let text = super::change_text(&gain_after_unseen_friction());
+        assert!(
+            text.contains("torque gain of hl_abad_joint (-15.0 %"),
+            "{text}"
+        );
+        assert!(!text.contains("no change is named"), "{text}");
+        let mut without_gain = gain_after_unseen_friction();
+        without_gain.gain_changed = None;
+        let text = super::change_text(&without_gain);
+        assert!(
+            text.contains("fr_knee_joint") && text.contains("no change is named"),
+            "{text}"
+        );
+    }
 }
