@@ -936,6 +936,48 @@ mod tests {
     }
 
     #[test]
+    fn a_compliance_cross_validation_named_takes_a_tied_body_step_s_place_where_it_fits_as_well() {
+        let effect = |kind, param| Explanation::Effect(Variant { kind, param });
+        let payload = effect(Kind::Payload, 4.0);
+        let compliance = effect(Kind::Compliance, 1e-3);
+        let gain = effect(Kind::TorqueGain, 0.0);
+        // The KUKA case: the point mass kept for its fewer columns, 57.4 % against 58.7 %.
+        let scored: Vec<Scored> = vec![
+            (compliance, 0.587, 4.0, None),
+            (payload, 0.574, 4.2, Some(1.0)),
+            (gain, 0.50, 4.0, None),
+        ];
+        let selected = |kinds: &[Kind]| Selected {
+            chosen: kinds
+                .iter()
+                .map(|&kind| Variant { kind, param: 0.0 })
+                .collect(),
+            tied: vec![],
+        };
+        let n = 7;
+        let named = selected(&[Kind::TorqueGain, Kind::Compliance]);
+        assert_eq!(named_signal_over_body(&scored, &named, &[0, 1, 2], 1, n), 0);
+        // Not named by cross-validation, out of the tie, or fitting less: the body stays.
+        let gain_only = selected(&[Kind::TorqueGain]);
+        assert_eq!(
+            named_signal_over_body(&scored, &gain_only, &[0, 1, 2], 1, n),
+            1
+        );
+        assert_eq!(named_signal_over_body(&scored, &named, &[1, 2], 1, n), 1);
+        let mut less = scored.clone();
+        less[0].1 = 0.570;
+        assert_eq!(named_signal_over_body(&less, &named, &[0, 1, 2], 1, n), 1);
+        // A gain is not a signal-path effect (a payload is read as one on a real arm), and an
+        // effect chosen is kept whatever else cross-validation named.
+        let gain_first = vec![(gain, 0.60, 4.0, None), scored[1]];
+        assert_eq!(
+            named_signal_over_body(&gain_first, &gain_only, &[0, 1], 1, n),
+            1
+        );
+        assert_eq!(named_signal_over_body(&scored, &named, &[0, 1, 2], 2, n), 2);
+    }
+
+    #[test]
     fn a_candidate_that_leaves_far_more_than_the_best_does_not_tie_with_it() {
         let settings = Settings::default();
         assert_eq!((settings.tie, settings.min_t, LEFT_TIE), (0.1, 3.0, 2.0));
