@@ -461,6 +461,11 @@ impl Selected {
     fn tied_only(&self, v: &Variant) -> bool {
         self.tied.contains(v) && !self.chosen.contains(v) && !v.kind.offered_from_description()
     }
+
+    /// Whether cross-validation chose a variant of `kind` (any grid value).
+    fn names(&self, kind: Kind) -> bool {
+        self.chosen.iter().any(|c| c.kind == kind)
+    }
 }
 
 /// The diagnosis's ladder from the description (module docs), with relative uncertainty `eps`

@@ -134,9 +134,8 @@ pub(super) fn named_signal_over_body(
         return chosen;
     }
     let named = |e: &Explanation| {
-        e.variant().is_some_and(|v| {
-            v.kind.offered_from_description() && selected.chosen.iter().any(|c| c.kind == v.kind)
-        })
+        e.variant()
+            .is_some_and(|v| v.kind.offered_from_description() && selected.names(v.kind))
     };
     tied.iter()
         .copied()
