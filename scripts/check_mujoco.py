@@ -4,7 +4,9 @@ model), the link-only leg, the KUKA LWR4+, and two floating robots with a free j
 quadruped with rotors as armature, and Solo12 from its URDF). Also reports how large the rotor gyroscopic
 coupling is that the armature model drops (physid's full model minus MuJoCo), and checks
 physid's contact model against MuJoCo's on the quadruped standing still (the feet's forces, the
-trunk's height and the joints at rest). Exits non-zero on disagreement.
+trunk's height and the joints at rest) and in motion: dropped, pushed with its feet sticking, and
+pushed on a slippery ground (touchdown, the trunk's height, position and joints, the feet's
+loads). Exits non-zero on disagreement.
 
 usage: python scripts/check_mujoco.py [--physid PATH]
 """
@@ -202,6 +204,113 @@ def check_contact_standing_still(report, binary, directory, seconds=4.0):
                f"below μ = {sim['ground'][2]})", tangential, sim["ground"][2])
 
 
+def mj_follow(binary, directory, name, args, radius=0.001):
+    """physid's run of `simulate-floating <args> --sensors exact` and MuJoCo's from the same
+    start (the log's first sample, with `--push`'s velocity) under the same PD law, updated at
+    the log's rate and held between updates, and the same joint friction (physid's law,
+    `b q̇ + B_c tanh(q̇ / v_f)`, applied as a force; MuJoCo's own damping and dry friction off).
+    Per logged sample, for each engine: the trunk's height above its feet (physid's feet placed
+    by MuJoCo's kinematics at physid's state), its horizontal position, the joints and each
+    foot's normal force."""
+    log = os.path.join(directory, f"{name}.csv")
+    sim = json.loads(run(binary, "simulate-floating", "--sensors", "exact", "--out", log, "--json", *args))
+    xml = os.path.join(directory, f"{name}.xml")
+    run(binary, "export", "--floating-base", "--robot", sim["truth"], "--mjcf", xml)
+    model = mj_standing_quadruped(sim, xml, radius)
+    model.dof_damping[:] = 0
+    data = mujoco.MjData(model)
+    names = [model.joint(j).name for j in range(1, model.njnt)]
+    friction = np.array([[float(a) for a in (j.get("damping"), j.get("frictionloss"))]
+                         for j in _mjcf_joints(xml, names)])
+    with open(log) as f:
+        rows = list(csv.DictReader(f))
+    base = ["base_x", "base_y", "base_z", "base_qw", "base_qx", "base_qy", "base_qz"]
+    feet = [f["body"] for f in sim["feet"]]
+    foot_ids = [model.geom("foot_" + b).id for b in feet]
+
+    def state(row):
+        return [float(row[k]) for k in base] + [float(row["q_" + n]) for n in names]
+
+    def above_feet(d):
+        mujoco.mj_kinematics(model, d)
+        return d.qpos[2] - np.mean([d.geom_xpos[i][2] for i in foot_ids]) - radius
+
+    data.qpos[:] = state(rows[0])
+    data.qpos[2] += radius  # the sphere's bottom where physid's point foot is
+    data.qvel[0:3] = sim["push"]
+    (kp, kd), q_star = sim["gains"], np.tile(sim["posture"], 4)
+    per_sample = int(round((float(rows[1]["t"]) - float(rows[0]["t"])) / model.opt.timestep))
+    probe = mujoco.MjData(model)
+    ours, theirs = [], []
+    for row in rows:
+        probe.qpos[:] = state(row)
+        ours.append((above_feet(probe), probe.qpos[0:2].copy(), probe.qpos[7:].copy(),
+                     [float(row[f"force_{b}_z"]) for b in feet]))
+        forces = mj_feet_forces(model, data)
+        theirs.append((above_feet(data), data.qpos[0:2].copy(), data.qpos[7:].copy(),
+                       [forces.get(b, np.zeros(3))[2] for b in feet]))
+        motor = kp * (q_star - data.qpos[7:]) - kd * data.qvel[6:]
+        for _ in range(per_sample):
+            w = data.qvel[6:]
+            data.qfrc_applied[6:] = motor - friction[:, 0] * w - friction[:, 1] * np.tanh(w / sim["friction_speed"])
+            mujoco.mj_step(model, data)
+    weight = float(model.body_mass.sum()) * 9.81
+    return ours, theirs, weight
+
+
+def _mjcf_joints(xml, names):
+    """The exported MJCF's hinge joints' attributes, in `names` order."""
+    import xml.etree.ElementTree as ET
+    joints = {j.get("name"): j for j in ET.parse(xml).iter("joint")}
+    return [joints[n] for n in names]
+
+
+def contact_gaps(ours, theirs, weight, settle=200, window=50):
+    """The largest differences between two runs: the trunk's height above its feet (m), its
+    horizontal position (m), the joints (rad), and each foot's normal force over `window`-sample
+    means from sample `settle` on (after the landing), over the weight."""
+    height = max(abs(a[0] - b[0]) for a, b in zip(ours, theirs))
+    horizontal = max(float(np.linalg.norm(a[1] - b[1])) for a, b in zip(ours, theirs))
+    joints = max(float(np.abs(a[2] - b[2]).max()) for a, b in zip(ours, theirs))
+    normal = 0.0
+    for k in range(settle, len(ours) - window + 1, window):
+        a = np.mean([o[3] for o in ours[k:k + window]], axis=0)
+        b = np.mean([t[3] for t in theirs[k:k + window]], axis=0)
+        normal = max(normal, float(np.abs(a - b).max()) / weight)
+    return height, horizontal, joints, normal
+
+
+def check_contact_dynamics(report, binary, directory):
+    """physid's contact in motion against MuJoCo's: the quadruped holding its posture, dropped
+    3 cm (touchdown and landing), pushed sideways at 0.5 m/s (its feet stick) and pushed
+    forwards at 1 m/s on a ground of μ = 0.15 (its feet slide). The contacts differ (physid's
+    spring and damper under a point foot, MuJoCo's soft constraint under a 1 mm sphere), so the
+    runs agree to what that difference leaves: bounds of a few millimetres, hundredths of a
+    radian and percent of the weight, as for rapier (crates/sim/src/rapier_floating_tests.rs)."""
+    cases = [
+        ("dropped 3 cm", "drop", ["--drop", "0.03"]),
+        ("pushed sideways, feet sticking", "push", ["--push", "0,0.5,0"]),
+        ("pushed on a slippery ground (μ 0.15)", "slip", ["--push", "1,0,0", "--ground-friction", "0.15"]),
+    ]
+    for label, name, args in cases:
+        ours, theirs, weight = mj_follow(binary, directory, name, ["--still", "--duration", "1.2", *args])
+        height, horizontal, joints, normal = contact_gaps(ours, theirs, weight)
+        report.add(f"quadruped {label}: the trunk's height above its feet against MuJoCo (m)", height, 5e-3)
+        report.add(f"quadruped {label}: the trunk's horizontal position against MuJoCo (m)", horizontal, 1e-2)
+        report.add(f"quadruped {label}: joint angles against MuJoCo (rad)", joints, 2e-2)
+        report.add(f"quadruped {label}: each foot's normal force (50 ms means after 0.2 s) against MuJoCo, "
+                   "share of the weight", normal, 5e-2)
+        if name == "drop":
+            fall = (2 * 0.03 / 9.81) ** 0.5
+            first = [next(k for k, s in enumerate(run) if sum(s[3]) > 0) * 1e-3 for run in (ours, theirs)]
+            report.add("quadruped dropped 3 cm: touchdown after the free fall sqrt(2h/g), both engines (s)",
+                       max(abs(t - fall) for t in first), 2e-3)
+        if name == "slip":
+            travel = [float(run[-1][1][0]) for run in (ours, theirs)]
+            report.check(f"quadruped pushed on a slippery ground: its feet slide in both engines (the trunk "
+                         f"travels {travel[0]:.3f} and {travel[1]:.3f} m, over 0.2)", min(travel) > 0.2)
+
+
 def main():
     binary = physid_bin(sys.argv)
     report = Report("check_mujoco")
@@ -228,6 +337,7 @@ def main():
         mj_compare_floating(report, "Solo12 (floating URDF)", binary, ["--robot", SOLO12_URDF], d)
         check_identified_quadruped(report, binary, d)
         check_contact_standing_still(report, binary, d)
+        check_contact_dynamics(report, binary, d)
     report.finish()
 
 

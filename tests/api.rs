@@ -476,6 +476,7 @@ fn floating_log_at(
     sensors: physid::sim::floating_sensors::Sensors,
 ) -> std::path::PathBuf {
     let opts = physid::api::floating::SimulateFloatingOptions {
+        start: Default::default(),
         robot: physid::api::model::RobotOptions::new(robot),
         duration: seconds,
         rate: 1000.0,
@@ -794,6 +795,7 @@ fn standing_still_the_feet_carry_the_robot_s_weight_and_the_trunk_rests() {
     let dir = tempfile::tempdir().unwrap();
     let out = dir.path().join("still.csv");
     physid::api::floating::simulate_floating(&physid::api::floating::SimulateFloatingOptions {
+        start: Default::default(),
         robot: physid::api::model::RobotOptions::new("cheetah3"),
         duration: 2.0,
         rate: 1000.0,
@@ -831,6 +833,7 @@ fn standing_still_the_feet_carry_the_robot_s_weight_and_the_trunk_rests() {
     }
     // Standing still and trotting are two different runs.
     let both = physid::api::floating::SimulateFloatingOptions {
+        start: Default::default(),
         robot: physid::api::model::RobotOptions::new("cheetah3"),
         duration: 2.0,
         rate: 1000.0,
@@ -895,6 +898,7 @@ fn against_a_baseline_log_a_description_with_errors_names_the_payload_and_not_it
             .path()
             .join(format!("{seed}_{}_{}.csv", robot.len(), trot.is_some()));
         physid::api::floating::simulate_floating(&physid::api::floating::SimulateFloatingOptions {
+            start: Default::default(),
             robot: physid::api::model::RobotOptions::new(robot),
             duration: 6.0,
             rate: 1000.0,
@@ -1043,6 +1047,7 @@ fn a_trotting_log_names_the_shank_that_carries_half_a_kilogram_and_no_body_when_
     let trot = |robot: &str, seed: u64| {
         let out = dir.path().join(format!("trot_{seed}_{}.csv", robot.len()));
         physid::api::floating::simulate_floating(&physid::api::floating::SimulateFloatingOptions {
+            start: Default::default(),
             robot: physid::api::model::RobotOptions::new(robot),
             duration: 6.0,
             rate: 1000.0,

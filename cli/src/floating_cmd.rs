@@ -4,6 +4,7 @@
 use crate::robot_args::RobotArgs;
 use physid::api::floating::{
     identify_floating, simulate_floating, Foot, IdentifyFloatingOptions, SimulateFloatingOptions,
+    StartOptions,
 };
 use physid::ident::floating::DataSetting;
 use physid::ident::ConstraintSet;
@@ -36,6 +37,25 @@ pub struct SimulateArgs {
     /// robot's weight.
     #[arg(long)]
     still: bool,
+    /// Drop the robot: its lowest foot this high above the ground at the start (m).
+    #[arg(
+        long,
+        value_name = "M",
+        default_value_t = 0.0,
+        allow_negative_numbers = true
+    )]
+    drop: f64,
+    /// Push the robot: the whole robot's velocity at the start, `VX,VY,VZ` (m/s, world axes).
+    #[arg(
+        long,
+        value_name = "VX,VY,VZ",
+        value_delimiter = ',',
+        allow_negative_numbers = true
+    )]
+    push: Option<Vec<f64>>,
+    /// The ground's friction coefficient μ.
+    #[arg(long, value_name = "MU", default_value_t = StartOptions::default().ground_friction, allow_negative_numbers = true)]
+    ground_friction: f64,
     /// Sensor noise, `key=value` pairs, comma-separated (keys: torque_noise, force_noise,
     /// gyro_noise, gyro_bias, velocity_noise, velocity_bias, tilt_noise, position_noise,
     /// encoder_step; and velocities, forces, contacts = true/false for what is logged);
@@ -81,6 +101,15 @@ pub fn run_simulate(a: SimulateArgs) -> anyhow::Result<()> {
         seed: a.seed,
         trot: a.trot.step()?,
         still: a.still,
+        start: StartOptions {
+            drop: a.drop,
+            push: match a.push.as_deref() {
+                None => [0.0; 3],
+                Some(&[x, y, z]) => [x, y, z],
+                Some(_) => anyhow::bail!("--push: expected VX,VY,VZ (three numbers)"),
+            },
+            ground_friction: a.ground_friction,
+        },
         sensors: sensors(&a.sensors)?,
         out: a.out,
     };

@@ -1431,6 +1431,36 @@ fn a_floating_log_and_its_options_are_checked_naming_what_is_wrong() {
             "the robot fell at t = ",
         ),
         (&["--trot", "0.15,2.5", "--still"][..], "still and trot"),
+        (&["--drop", "0.6"][..], "drop = 0.6: expected 0 <= m <= 0.5"),
+        (
+            &["--drop", "-0.01"][..],
+            "drop = -0.01: expected 0 <= m <= 0.5",
+        ),
+        (&["--drop", "nan"][..], "drop = NaN: expected 0 <= m <= 0.5"),
+        (
+            &["--push", "1,2"][..],
+            "--push: expected VX,VY,VZ (three numbers)",
+        ),
+        (
+            &["--push", "3,3,3"][..],
+            "push: expected a velocity VX,VY,VZ of at most 5 m/s",
+        ),
+        (
+            &["--push", "inf,0,0"][..],
+            "push: expected a velocity VX,VY,VZ of at most 5 m/s",
+        ),
+        (
+            &["--push", "0,4,0", "--duration", "2"][..],
+            "the robot fell at t = ",
+        ),
+        (
+            &["--ground-friction", "-1"][..],
+            "ground_friction = -1: expected 0 <= μ <= 2",
+        ),
+        (
+            &["--ground-friction", "nan"][..],
+            "ground_friction = NaN: expected 0 <= μ <= 2",
+        ),
         (
             &[
                 "--robot",

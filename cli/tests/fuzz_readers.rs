@@ -188,6 +188,7 @@ fn the_floating_mcap_reader_never_panics_on_mutated_logs() {
     let dir = tempfile::tempdir().unwrap();
     let log = dir.path().join("seed.mcap");
     let opts = physid::api::floating::SimulateFloatingOptions {
+        start: Default::default(),
         robot: physid::api::model::RobotOptions::new("cheetah3"),
         duration: 0.05,
         rate: 1000.0,

@@ -667,6 +667,10 @@ def simulate_floating(
         crouched by up to CROUCH rad of the hip (its feet swing) at HZ steps per second.
     still: Stand still, holding the standing posture (no weight shifting): how the feet share
         the robot's weight.
+    drop: Drop the robot: its lowest foot this high above the ground at the start (m). Default:
+        0.
+    push: Push the robot: the whole robot's velocity at the start, `VX,VY,VZ` (m/s, world axes).
+    ground_friction: The ground's friction coefficient μ. Default: 0.8.
     sensors: The sensors' noise and what they log: a dict over the default sensors' fields
         (torque_noise, force_noise, gyro_noise, gyro_bias, velocity_noise, velocity_bias,
         tilt_noise, position_noise, encoder_step; velocities, forces, contacts: True/False), or

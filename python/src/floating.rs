@@ -7,7 +7,7 @@ use crate::work::*;
 use numpy::{IntoPyArray, PyArray1, PyArrayDyn};
 use physid::api;
 use physid::api::floating::{
-    FloatingReadOptions, Foot, IdentifyFloatingOptions, SimulateFloatingOptions,
+    FloatingReadOptions, Foot, IdentifyFloatingOptions, SimulateFloatingOptions, StartOptions,
 };
 use physid::api::model::RobotOptions;
 use pyo3::prelude::*;
@@ -131,7 +131,8 @@ fn robot_options(robot: PathBuf, no_rotors: bool) -> RobotOptions {
 #[doc = include_str!("../keywords/simulate_floating.txt")]
 #[pyfunction]
 #[pyo3(signature = (out, *, robot = None, no_rotors = false,
-    duration = 10.0, rate = 1000.0, seed = 1, trot = None, still = false, sensors = None))]
+    duration = 10.0, rate = 1000.0, seed = 1, trot = None, still = false, drop = 0.0,
+    push = None, ground_friction = None, sensors = None))]
 #[allow(clippy::too_many_arguments)]
 pub(crate) fn simulate_floating<'py>(
     py: Python<'py>,
@@ -143,8 +144,21 @@ pub(crate) fn simulate_floating<'py>(
     seed: u64,
     trot: Option<(f64, f64)>,
     still: bool,
+    drop: f64,
+    push: Option<Vec<f64>>,
+    ground_friction: Option<f64>,
     sensors: Option<&Bound<'py, PyAny>>,
 ) -> PyResult<Bound<'py, PyAny>> {
+    let standing = StartOptions::default();
+    let push = match push.as_deref() {
+        None => standing.push,
+        Some(&[x, y, z]) => [x, y, z],
+        Some(_) => {
+            return Err(InputError::new_err(
+                "push: expected VX,VY,VZ (three numbers)",
+            ))
+        }
+    };
     let opts = SimulateFloatingOptions {
         robot: floating_robot_options(robot, no_rotors)?,
         duration,
@@ -152,6 +166,11 @@ pub(crate) fn simulate_floating<'py>(
         seed,
         trot,
         still,
+        start: StartOptions {
+            drop,
+            push,
+            ground_friction: ground_friction.unwrap_or(standing.ground_friction),
+        },
         sensors: sensors_of(py, sensors)?,
         out,
     };

@@ -31,6 +31,15 @@ def test_the_log_is_the_cli_s_byte_for_byte(log, tmp_path):
     assert (tmp_path / "cli.csv").read_bytes() == log.read_bytes()
 
 
+def test_a_dropped_and_pushed_run_on_ice_is_the_cli_s(tmp_path):
+    ours = physid.simulate_floating(tmp_path / "py.csv", duration=0.5, still=True, drop=0.02,
+                                    push=(0.5, 0.0, 0.0), ground_friction=0.2)
+    assert ours["drop"] == 0.02 and ours["push"] == [0.5, 0.0, 0.0] and ours["ground"][2] == 0.2
+    cli("simulate-floating", "--out", str(tmp_path / "cli.csv"), "--duration", "0.5", "--still",
+        "--drop", "0.02", "--push", "0.5,0,0", "--ground-friction", "0.2")
+    assert (tmp_path / "cli.csv").read_bytes() == (tmp_path / "py.csv").read_bytes()
+
+
 def test_identification_equals_the_cli_and_loads_in_pinocchio_and_mujoco(log, tmp_path):
     urdf, xml = tmp_path / "id.urdf", tmp_path / "id.xml"
     truth = log.with_name("standing.truth.urdf")
@@ -124,6 +133,11 @@ def test_bad_identification_keywords_are_named(log, kw, message):
         (dict(rate=50.0), "rate"),
         (dict(trot=(0.2, 1.5), duration=4.0), "the robot fell at t = "),
         (dict(trot=(0.15, 2.5), still=True), "still and trot"),
+        (dict(drop=0.6), "drop must be 0 <= m <= 0.5, got 0.6"),
+        (dict(drop=float("nan")), "drop must be 0 <= m <= 0.5, got NaN"),
+        (dict(push=(3.0, 3.0, 3.0)), "push: expected a velocity VX,VY,VZ of at most 5 m/s"),
+        (dict(push=(0.0, 4.0, 0.0), duration=2.0), "the robot fell at t = "),
+        (dict(ground_friction=-1.0), "ground_friction must be 0 <= μ <= 2, got -1"),
     ],
 )
 def test_bad_simulation_keywords_are_named(tmp_path, kw, message):
@@ -133,6 +147,10 @@ def test_bad_simulation_keywords_are_named(tmp_path, kw, message):
     assert not out.exists()
     with pytest.raises(TypeError, match="'still'"):
         physid.simulate_floating(out, still="yes")
+    with pytest.raises(physid.InputError, match="push: expected VX,VY,VZ"):
+        physid.simulate_floating(out, push=(1.0, 2.0))
+    with pytest.raises(TypeError, match="'push'"):
+        physid.simulate_floating(out, push="fast")
     assert not out.exists()
 
 

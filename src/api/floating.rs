@@ -11,6 +11,7 @@ use crate::io::floating_log::{self, FloatingLog};
 use crate::io::floating_mcap;
 pub use crate::io::floating_mcap::FloatingReadOptions;
 use crate::model::floating::FloatingModel;
+use crate::sim::floating::{Start, MAX_START_HEIGHT, MAX_START_SPEED};
 /// The sensors a floating run is logged through.
 pub use crate::sim::floating_sensors::Sensors;
 use nalgebra::{DMatrix, DVector, Vector3};
@@ -109,11 +110,59 @@ pub struct SimulateFloatingOptions {
     /// Stand still holding the standing posture (no weight shifting, no steps): the robot's
     /// weight and how its feet share it, as a check of the contact model.
     pub still: bool,
+    /// How the run starts (dropped, pushed) and the ground's friction.
+    pub start: StartOptions,
     /// The sensors.
     pub sensors: Sensors,
     /// The log to write, CSV or MCAP (`.mcap`; docs/floating-base.md, "Logs"); the robot
     /// simulated, the ground truth, is written beside it as a floating URDF ([`truth_path`]).
     pub out: PathBuf,
+}
+
+/// How a floating run starts and on what ground: by default standing on it at rest, on the
+/// ground of [`crate::sim::floating::Ground::default`].
+#[derive(Clone, Debug, PartialEq)]
+pub struct StartOptions {
+    /// Drop the robot: its lowest foot this high above the ground at the start (m, 0 to 0.5).
+    pub drop: f64,
+    /// Push it: the whole robot's velocity at the start (m/s, world axes; at most 5 m/s).
+    pub push: [f64; 3],
+    /// The ground's friction coefficient μ (0 to 2).
+    pub ground_friction: f64,
+}
+
+impl Default for StartOptions {
+    fn default() -> Self {
+        Self {
+            drop: 0.0,
+            push: [0.0; 3],
+            ground_friction: crate::sim::floating::Ground::default().friction,
+        }
+    }
+}
+
+impl StartOptions {
+    /// The options checked; `Err` names the one at fault.
+    pub fn validate(&self) -> Result<(), ApiError> {
+        if !(0.0..=MAX_START_HEIGHT).contains(&self.drop) {
+            return Err(ApiError::invalid_option("drop", "0 <= m <= 0.5", self.drop));
+        }
+        let speed = Vector3::from(self.push).norm();
+        if !(speed.is_finite() && speed <= MAX_START_SPEED) {
+            return Err(ApiError::Options(format!(
+                "push: expected a velocity VX,VY,VZ of at most {MAX_START_SPEED} m/s, got {:?}",
+                self.push
+            )));
+        }
+        if !(0.0..=2.0).contains(&self.ground_friction) {
+            return Err(ApiError::invalid_option(
+                "ground_friction",
+                "0 <= μ <= 2",
+                self.ground_friction,
+            ));
+        }
+        Ok(())
+    }
 }
 
 /// Where the ground truth of the log `out` is written: `<stem>.truth.urdf` beside it.
@@ -146,7 +195,30 @@ impl SimulateFloatingOptions {
                 "still and trot: a robot standing still does not trot; give one".into(),
             ));
         }
+        self.start.validate()?;
         self.sensors.validate().map_err(ApiError::Options)
+    }
+}
+
+impl SimulateFloatingOptions {
+    /// The experiment these options ask for.
+    fn motion(&self) -> crate::sim::floating::Standing {
+        let mut motion = crate::sim::floating::Standing {
+            duration: self.duration,
+            rate: self.rate,
+            seed: self.seed,
+            step: self.trot.unwrap_or((0.0, 0.0)),
+            start: Start {
+                height: self.start.drop,
+                velocity: self.start.push,
+            },
+            ..Default::default()
+        };
+        motion.ground.friction = self.start.ground_friction;
+        if self.still {
+            motion.amplitude = [0.0; 3];
+        }
+        motion
     }
 }
 
@@ -171,6 +243,13 @@ pub struct FloatingSimulated {
     pub posture: [f64; 3],
     /// The ground: `[k N/m, c N s/m, μ, slip speed m/s]` (docs/floating-base.md).
     pub ground: [f64; 4],
+    /// The joints' friction law's speed `v_f` (rad/s): each joint feels `b q̇ + B_c tanh(q̇ /
+    /// v_f)` with its URDF `<dynamics damping friction>`.
+    pub friction_speed: f64,
+    /// The lowest foot's height above the ground at the start (m).
+    pub drop: f64,
+    /// The whole robot's velocity at the start (m/s, world axes).
+    pub push: [f64; 3],
 }
 
 /// Simulates and logs a floating-base run ([`SimulateFloatingOptions`]).
@@ -196,16 +275,7 @@ pub fn simulate_floating(opts: &SimulateFloatingOptions) -> Result<FloatingSimul
             robot.joints()
         )));
     }
-    let mut motion = crate::sim::floating::Standing {
-        duration: opts.duration,
-        rate: opts.rate,
-        seed: opts.seed,
-        step: opts.trot.unwrap_or((0.0, 0.0)),
-        ..Default::default()
-    };
-    if opts.still {
-        motion.amplitude = [0.0; 3];
-    }
+    let motion = opts.motion();
     let run = crate::sim::floating::standing(&robot, &points, &motion)
         .map_err(|e| ApiError::Options(e.to_string()))?;
     let joints = robot.tree().joint_names();
@@ -229,6 +299,9 @@ pub fn simulate_floating(opts: &SimulateFloatingOptions) -> Result<FloatingSimul
         gains: [motion.gains.0, motion.gains.1],
         posture: motion.posture,
         ground: [g.stiffness, g.damping, g.friction, g.slip_speed],
+        friction_speed: motion.friction_velocity,
+        drop: motion.start.height,
+        push: motion.start.velocity,
     })
 }
 

@@ -81,7 +81,43 @@ pub struct Standing {
     pub step: (f64, f64),
     /// Seeds the frequencies and phases of the sinusoids.
     pub seed: u64,
+    /// How the run starts: standing on the ground at rest, or dropped, or pushed.
+    pub start: Start,
 }
+
+/// The robot's state at `t = 0`: its standing posture, the trunk level, its lowest foot
+/// `height` above the ground and the whole robot moving at `velocity` (a drop, a push).
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct Start {
+    /// The lowest foot's height above the ground (m; 0: on it).
+    pub height: f64,
+    /// The trunk's velocity, world axes (m/s); the joints at rest.
+    pub velocity: [f64; 3],
+}
+
+impl Start {
+    /// `Err` naming the field out of range.
+    fn check(&self) -> Result<(), FloatingSimError> {
+        let Start { height, velocity } = *self;
+        let speed = Vector3::from(velocity).norm();
+        if !(height.is_finite() && (0.0..=MAX_START_HEIGHT).contains(&height)) {
+            return Err(FloatingSimError::Invalid(format!(
+                "start.height must be 0 to {MAX_START_HEIGHT} m, got {height}"
+            )));
+        }
+        if !(speed.is_finite() && speed <= MAX_START_SPEED) {
+            return Err(FloatingSimError::Invalid(format!(
+                "start.velocity {velocity:?}: its speed must be at most {MAX_START_SPEED} m/s"
+            )));
+        }
+        Ok(())
+    }
+}
+
+/// The highest start [`Start::height`] (m).
+pub const MAX_START_HEIGHT: f64 = 0.5;
+/// The fastest start [`Start::velocity`] (m/s).
+pub const MAX_START_SPEED: f64 = 5.0;
 
 impl Default for Standing {
     fn default() -> Self {
@@ -96,6 +132,7 @@ impl Default for Standing {
             ground: Ground::default(),
             step: (0.0, 0.0),
             seed: 1,
+            start: Start::default(),
         }
     }
 }
@@ -213,7 +250,7 @@ pub fn standing(
     check(robot, feet, experiment)?;
     let n = robot.joints();
     let mut data = Data::new(robot.tree());
-    let targets = Targets::new(n, experiment);
+    let targets = experiment.targets(n);
     let mut state = initial_state(robot, &mut data, feet, experiment);
     let mut run = FloatingRun {
         joints: n,
@@ -225,7 +262,7 @@ pub fn standing(
     let mut period_means = Vec::with_capacity(steps * feet.len());
     for k in 0..steps {
         let t = k as f64 / experiment.rate;
-        let tau = control(&state, &targets.at(t), experiment.gains);
+        let tau = experiment.motor_torques(&state.q, &state.qd, &targets.at(t));
         let mut sum = vec![Vector3::zeros(); feet.len()];
         for s in 0..experiment.substeps {
             let (nu_dot, contact) = accelerations(robot, &mut data, &state, &tau, feet, experiment)
@@ -270,7 +307,8 @@ fn around_steps(period_means: &[Vector3<f64>], feet: usize) -> Vec<Vector3<f64>>
         .collect()
 }
 
-fn check(
+/// Checks an experiment on `robot` with `feet` (`Err` naming the field out of range).
+pub fn check(
     robot: &FloatingModel,
     feet: &[(usize, Vector3<f64>)],
     e: &Standing,
@@ -308,6 +346,7 @@ fn check(
             "step ({height}, {hz}): the crouch must be 0 to 0.5 rad and the frequency 0 to 5 Hz"
         ));
     }
+    e.start.check()?;
     if e.substeps == 0 || e.duration * e.rate > 1e7 {
         return bad("substeps must be at least 1 and duration × rate at most 1e7".into());
     }
@@ -333,7 +372,7 @@ fn check(
 /// `d` is `Δhip = −d`, `Δknee = 2d`, which keeps a two-link foot under its hip). The
 /// amplitudes are `amplitude`'s: `[sway, pitch, heave]` (rad). A roll mode (left legs against
 /// right) was tried: with the ab/ad joints held, it tipped the robot over within two seconds.
-struct Targets {
+pub struct Targets {
     posture: Vec<f64>,
     amplitude: [f64; 3],
     omega: [f64; 3],
@@ -388,7 +427,7 @@ impl Targets {
     }
 
     /// `(q*, q̇*)` at `t` (s), faded in over the first second.
-    fn at(&self, t: f64) -> (Vec<f64>, Vec<f64>) {
+    pub fn at(&self, t: f64) -> (Vec<f64>, Vec<f64>) {
         let half_pi = std::f64::consts::FRAC_PI_2;
         let fade = (t.min(1.0) * half_pi).sin().powi(2);
         let fade_rate = if t < 1.0 {
@@ -421,36 +460,77 @@ impl Targets {
     }
 }
 
-fn control(
-    state: &State,
-    (q_star, qd_star): &(Vec<f64>, Vec<f64>),
-    (kp, kd): (f64, f64),
-) -> Vec<f64> {
-    (0..state.q.len())
-        .map(|j| kp * (q_star[j] - state.q[j]) + kd * (qd_star[j] - state.qd[j]))
-        .collect()
+impl Standing {
+    /// The controller's posture targets for a robot of `joints` joints (three per leg).
+    pub fn targets(&self, joints: usize) -> Targets {
+        Targets::new(joints, self)
+    }
+
+    /// The PD law's motor torques (N m) at joint angles `q` (rad) and rates `qd` (rad/s)
+    /// towards the targets `(q*, q̇*)`: `k_p (q* − q) + k_d (q̇* − q̇)`.
+    pub fn motor_torques(
+        &self,
+        q: &[f64],
+        qd: &[f64],
+        (q_star, qd_star): &(Vec<f64>, Vec<f64>),
+    ) -> Vec<f64> {
+        let (kp, kd) = self.gains;
+        (0..q.len())
+            .map(|j| kp * (q_star[j] - q[j]) + kd * (qd_star[j] - qd[j]))
+            .collect()
+    }
+
+    /// The joints' friction torques (N m) at rates `qd` (rad/s): each body's viscous term and
+    /// its Coulomb term smoothed as `B_c tanh(q̇ / v_f)`.
+    pub fn joint_friction(&self, robot: &FloatingModel, qd: &[f64]) -> Vec<f64> {
+        robot
+            .tree()
+            .bodies()
+            .iter()
+            .zip(qd)
+            .map(|(b, w)| {
+                b.friction.viscous * w + b.friction.coulomb * (w / self.friction_velocity).tanh()
+            })
+            .collect()
+    }
 }
 
-/// The robot at rest in its standing posture, trunk level, its lowest foot on the ground.
+/// The robot in its standing posture, trunk level, its lowest foot on the ground or
+/// [`Start::height`] above it, moving at [`Start::velocity`].
 fn initial_state(
     robot: &FloatingModel,
     data: &mut Data,
     feet: &[(usize, Vector3<f64>)],
     e: &Standing,
 ) -> State {
-    let n = robot.joints();
-    let q: Vec<f64> = (0..n).map(|j| e.posture[j % 3]).collect();
-    kinematics::update_world(robot.tree(), data, &q);
-    let lowest = feet
-        .iter()
-        .map(|(b, p)| kinematics::point_position(data, *b, p).z)
-        .fold(f64::INFINITY, f64::min);
+    let (pos, q) = e.initial_pose(robot, data, feet);
+    // Level: the trunk's axes are the world's, so its twist's linear part is the velocity.
     State {
         rot: Matrix3::identity(),
-        pos: Vector3::new(0.0, 0.0, -lowest),
-        v: Motion::zero(),
+        pos,
+        v: Motion::new(Vector3::zeros(), Vector3::from(e.start.velocity)),
+        qd: vec![0.0; q.len()],
         q,
-        qd: vec![0.0; n],
+    }
+}
+
+impl Standing {
+    /// Where the run starts: the trunk origin's world position (m; the trunk level) and the
+    /// joint angles (rad, the standing posture), the lowest foot [`Start::height`] above the
+    /// ground.
+    pub fn initial_pose(
+        &self,
+        robot: &FloatingModel,
+        data: &mut Data,
+        feet: &[(usize, Vector3<f64>)],
+    ) -> (Vector3<f64>, Vec<f64>) {
+        let q: Vec<f64> = (0..robot.joints()).map(|j| self.posture[j % 3]).collect();
+        kinematics::update_world(robot.tree(), data, &q);
+        let lowest = feet
+            .iter()
+            .map(|(b, p)| kinematics::point_position(data, *b, p).z)
+            .fold(f64::INFINITY, f64::min);
+        (Vector3::new(0.0, 0.0, self.start.height - lowest), q)
     }
 }
 
@@ -464,14 +544,11 @@ fn accelerations(
     feet: &[(usize, Vector3<f64>)],
     e: &Standing,
 ) -> Option<(DVector<f64>, Vec<Vector3<f64>>)> {
-    let tree = robot.tree();
     let n = robot.joints();
     let base = state.base(Motion::zero());
     let nu = DVector::from_iterator(6 + n, base.v.to_vec6().iter().chain(&state.qd).copied());
     let mut generalized = DVector::zeros(6 + n);
-    for (j, b) in tree.bodies().iter().enumerate() {
-        let w = state.qd[j];
-        let f = b.friction.viscous * w + b.friction.coulomb * (w / e.friction_velocity).tanh();
+    for (j, f) in e.joint_friction(robot, &state.qd).iter().enumerate() {
         generalized[6 + j] = tau[j] - f;
     }
     let mut contact = Vec::with_capacity(feet.len());

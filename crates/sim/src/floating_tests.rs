@@ -1,7 +1,7 @@
 //! The standing quadruped: it stays up on its feet, the ground carries its weight, and what is
 //! recorded obeys the floating-base equations of motion.
 
-use crate::floating::{standing, FloatingSimError, Standing};
+use crate::floating::{standing, FloatingSimError, Standing, Start};
 use nalgebra::{DMatrix, DVector, Vector3};
 use physid_core::dynamics::{point_jacobian_floating, regressor_floating, Data};
 use physid_core::model::cheetah3::LegOptions;
@@ -172,6 +172,34 @@ fn bad_experiment_values_are_named() {
     let far = vec![(99, Vector3::zeros())];
     let err = standing(&robot, &far, &Standing::default()).unwrap_err();
     assert!(err.to_string().contains("body 99"), "{err}");
+}
+
+#[test]
+fn a_bad_start_is_named() {
+    let robot = quadruped();
+    for (said, height, velocity) in [
+        (
+            "start.height must be 0 to 0.5 m, got -0.01",
+            -0.01,
+            [0.0; 3],
+        ),
+        (
+            "start.height must be 0 to 0.5 m, got NaN",
+            f64::NAN,
+            [0.0; 3],
+        ),
+        ("start.velocity [NaN, 0.0, 0.0]", 0.0, [f64::NAN, 0.0, 0.0]),
+        ("its speed must be at most 5 m/s", 0.0, [0.0, 0.0, -6.0]),
+    ] {
+        let e = Standing {
+            start: Start { height, velocity },
+            ..Default::default()
+        };
+        match standing(&robot, &feet(&robot), &e) {
+            Err(FloatingSimError::Invalid(m)) => assert!(m.contains(said), "{said}: {m}"),
+            other => panic!("{said}: {other:?}"),
+        }
+    }
 }
 
 /// Trotting in place: each diagonal pair lifts its feet in turn (two feet carry the robot

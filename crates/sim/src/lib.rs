@@ -12,6 +12,7 @@ pub mod floating_sensors;
 #[cfg(test)]
 mod floating_tests;
 pub mod rapier;
+pub mod rapier_floating;
 pub mod report;
 pub mod scenario;
 pub mod simulate;
@@ -306,3 +307,5 @@ mod tests {
         }
     }
 }
+#[cfg(test)]
+mod rapier_floating_tests;

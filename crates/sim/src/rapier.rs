@@ -30,28 +30,82 @@ pub enum RapierError {
 
 /// A model running in rapier's multibody solver.
 pub struct RapierSim {
-    bodies: RigidBodySet,
-    colliders: ColliderSet,
+    pub(crate) bodies: RigidBodySet,
+    pub(crate) colliders: ColliderSet,
     impulse_joints: ImpulseJointSet,
     multibody_joints: MultibodyJointSet,
     soft_bodies: SoftBodySet,
     islands: IslandManager,
     broad_phase: BroadPhaseBvh,
-    narrow_phase: NarrowPhase,
+    pub(crate) narrow_phase: NarrowPhase,
     ccd: CCDSolver,
     pipeline: PhysicsPipeline,
-    params: IntegrationParameters,
+    pub(crate) params: IntegrationParameters,
     gravity: Vector,
     /// Multibody joint handle of each physid joint.
-    handles: Vec<MultibodyJointHandle>,
+    pub(crate) handles: Vec<MultibodyJointHandle>,
     /// Rigid body of each physid body.
-    links: Vec<RigidBodyHandle>,
+    pub(crate) links: Vec<RigidBodyHandle>,
     /// Parent rigid body of each physid body (the base for roots).
     parents: Vec<RigidBodyHandle>,
     /// Joint axis of each body, in its own frame.
     axes: Vec<Vector3<f64>>,
     /// Multibody joint handle of each rotor (with its joint index and gear ratio).
     rotors: Vec<(usize, MultibodyJointHandle, f64)>,
+}
+
+/// A model's bodies hung in a rapier multibody: per physid body its joint's handle, its rigid
+/// body, its parent's, its joint axis; per rotor its joint index, handle and gear ratio.
+struct Hung {
+    handles: Vec<MultibodyJointHandle>,
+    links: Vec<RigidBodyHandle>,
+    parents: Vec<RigidBodyHandle>,
+    axes: Vec<Vector3<f64>>,
+    rotors: Vec<(usize, MultibodyJointHandle, f64)>,
+}
+
+impl Hung {
+    /// Inserts `model`'s bodies (and rotors) into `bodies` and `joints`, hung from `base`.
+    fn insert(
+        model: &Model,
+        bodies: &mut RigidBodySet,
+        joints: &mut MultibodyJointSet,
+        base: RigidBodyHandle,
+    ) -> Result<Self, RapierError> {
+        let mut hung = Hung {
+            handles: vec![],
+            links: vec![],
+            parents: vec![],
+            axes: vec![],
+            rotors: vec![],
+        };
+        for (i, b) in model.bodies().iter().enumerate() {
+            let Joint::Revolute { axis } = b.joint else {
+                return Err(RapierError::Unsupported(format!(
+                    "joint '{}' is prismatic",
+                    b.joint_name
+                )));
+            };
+            let body = RigidBodyBuilder::dynamic()
+                .additional_mass_properties(mass_properties(&b.inertia))
+                .build();
+            let h = bodies.insert(body);
+            let parent = b.parent.map_or(base, |p| hung.links[p]);
+            let joint = revolute(b.x_tree.to_pose(), &axis);
+            let jh = joints
+                .insert(parent, h, joint, true)
+                .ok_or_else(|| RapierError::Unsupported(format!("rapier refused joint {i}")))?;
+            if let Some(r) = &b.rotor {
+                let jr = RapierSim::add_rotor(bodies, joints, parent, r)?;
+                hung.rotors.push((i, jr, r.gear_ratio));
+            }
+            hung.links.push(h);
+            hung.handles.push(jh);
+            hung.parents.push(parent);
+            hung.axes.push(axis);
+        }
+        Ok(hung)
+    }
 }
 
 fn vec3(v: &Vector3<f64>) -> Vector {
@@ -70,7 +124,7 @@ fn x_onto(a: &Vector3<f64>) -> Matrix3<f64> {
         .into_inner()
 }
 
-fn mass_properties(p: &InertialParams) -> MassProperties {
+pub(crate) fn mass_properties(p: &InertialParams) -> MassProperties {
     let c = p.com().unwrap_or_default();
     let ic = p.inertia_about_com().unwrap_or_default();
     let col = |j: usize| Vector::new(ic[(0, j)], ic[(1, j)], ic[(2, j)]);
@@ -85,38 +139,22 @@ impl RapierSim {
     /// Builds the multibody at `(q0, q̇0)` with time step `dt` (s).
     pub fn new(model: &Model, q0: &[f64], qd0: &[f64], dt: f64) -> Result<Self, RapierError> {
         let mut bodies = RigidBodySet::new();
-        let mut multibody_joints = MultibodyJointSet::new();
         let base = bodies.insert(RigidBodyBuilder::fixed().build());
-        let mut rb = vec![];
-        let mut handles = vec![];
-        let mut parents = vec![];
-        let mut axes = vec![];
-        let mut rotors = vec![];
-        for (i, b) in model.bodies().iter().enumerate() {
-            let Joint::Revolute { axis } = b.joint else {
-                return Err(RapierError::Unsupported(format!(
-                    "joint '{}' is prismatic",
-                    b.joint_name
-                )));
-            };
-            let body = RigidBodyBuilder::dynamic()
-                .additional_mass_properties(mass_properties(&b.inertia))
-                .build();
-            let h = bodies.insert(body);
-            let parent = b.parent.map_or(base, |p| rb[p]);
-            let joint = revolute(b.x_tree.to_pose(), &axis);
-            let jh = multibody_joints
-                .insert(parent, h, joint, true)
-                .ok_or_else(|| RapierError::Unsupported(format!("rapier refused joint {i}")))?;
-            if let Some(r) = &b.rotor {
-                let jr = Self::add_rotor(&mut bodies, &mut multibody_joints, parent, r)?;
-                rotors.push((i, jr, r.gear_ratio));
-            }
-            rb.push(h);
-            handles.push(jh);
-            parents.push(parent);
-            axes.push(axis);
-        }
+        let mut sim = Self::hung_from(model, bodies, base, dt)?;
+        sim.set_state(q0, qd0, None);
+        Ok(sim)
+    }
+
+    /// `model`'s bodies (and rotors) inserted into `bodies` as one multibody hung from `base`
+    /// (a fixed body, or a floating trunk), gravity the model's; the joints at zero.
+    pub(crate) fn hung_from(
+        model: &Model,
+        mut bodies: RigidBodySet,
+        base: RigidBodyHandle,
+        dt: f64,
+    ) -> Result<Self, RapierError> {
+        let mut multibody_joints = MultibodyJointSet::new();
+        let tree = Hung::insert(model, &mut bodies, &mut multibody_joints, base)?;
         let mut sim = Self {
             bodies,
             colliders: ColliderSet::new(),
@@ -133,14 +171,13 @@ impl RapierSim {
                 ..Default::default()
             },
             gravity: vec3(&model.gravity()),
-            handles,
-            links: rb,
-            parents,
-            axes,
-            rotors,
+            handles: tree.handles,
+            links: tree.links,
+            parents: tree.parents,
+            axes: tree.axes,
+            rotors: tree.rotors,
         };
         sim.couple_rotors();
-        sim.set_state(q0, qd0);
         Ok(sim)
     }
 
@@ -178,9 +215,11 @@ impl RapierSim {
         }
     }
 
-    /// Sets joint positions (rad) and velocities (rad/s), rotors at `N q`, `N q̇`; assumes the
-    /// current coordinates are zero (called once, from [`RapierSim::new`]).
-    fn set_state(&mut self, q: &[f64], qd: &[f64]) {
+    /// Sets joint positions (rad) and velocities (rad/s), rotors at `N q`, `N q̇`, and a
+    /// floating root's six coordinates and velocities (`root`: its free joint's, linear then
+    /// angular, world axes); assumes the current coordinates are zero (called once, after
+    /// [`RapierSim::hung_from`]).
+    pub(crate) fn set_state(&mut self, q: &[f64], qd: &[f64], root: Option<([f64; 6], [f64; 6])>) {
         let ids = self.link_ids();
         let rotor_ids: Vec<(usize, usize, f64)> = self
             .rotors
@@ -194,6 +233,10 @@ impl RapierSim {
         mb.damping_mut().fill(0.0);
         let mut disp = vec![0.0; mb.ndofs()];
         let mut vel = vec![0.0; mb.ndofs()];
+        if let Some((x, v)) = root {
+            disp[..6].copy_from_slice(&x);
+            vel[..6].copy_from_slice(&v);
+        }
         for (i, &l) in ids.iter().enumerate() {
             let d = mb.link(l).expect("link exists").assembly_id();
             disp[d] = q[i];
