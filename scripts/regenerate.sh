@@ -35,10 +35,12 @@ run() {
     whole_robot) "$B" experiment scenarios/quadruped.toml --out results/whole_robot ;;
     whole_robot_force_noise) "$B" whole-robot --force-noise 0.5,1,2,5,10,20 --sizes 1000,3000 --out results/whole_robot_force_noise ;;
     whole_robot_trot) "$B" whole-robot --trot 0.15,2.5 --out results/whole_robot_trot ;;
+    whole_robot_logged) "$B" whole-robot --logged --out results/whole_robot_logged ;;
+    whole_robot_trot_logged) "$B" whole-robot --trot 0.15,2.5 --logged --out results/whole_robot_trot_logged ;;
     *) echo "unknown result '$1'" >&2; exit 2 ;;
   esac
 }
-[ $# -gt 0 ] || set -- sample_size ci_baseline noise excitation excitation_on_shell excitation_kuka kuka_diagnosis whole_robot whole_robot_force_noise whole_robot_trot
+[ $# -gt 0 ] || set -- sample_size ci_baseline noise excitation excitation_on_shell excitation_kuka kuka_diagnosis whole_robot whole_robot_force_noise whole_robot_trot whole_robot_logged whole_robot_trot_logged
 [ -n "${PHYSID_BIN:-}" ] || cargo build --release --quiet --bin physid
 for r in "$@"; do
   start=$(date +%s)

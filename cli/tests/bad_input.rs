@@ -1727,6 +1727,10 @@ fn a_whole_robot_scenario_is_the_whole_robot_command_and_its_bad_keys_are_named(
             "[whole_robot]\ntrot = [0.1]\n",
             "invalid length 1, expected an array of length 2",
         ),
+        (
+            "[whole_robot]\nlogged = \"yes\"\n",
+            "invalid type: string \"yes\", expected a boolean",
+        ),
     ] {
         std::fs::write(&scenario, text).unwrap();
         refused(&experiment, &[], said, &never);

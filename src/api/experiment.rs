@@ -135,6 +135,8 @@ struct WholeRobotTable {
     prior_weight: f64,
     /// `[crouch rad, frequency Hz]`: trot in place instead of standing.
     trot: Option<[f64; 2]>,
+    /// Train on the run as its sensors log it ([`crate::experiment::whole_robot::WholeRobotSpec::logged`]).
+    logged: bool,
 }
 
 impl Default for WholeRobotTable {
@@ -148,6 +150,7 @@ impl Default for WholeRobotTable {
             prior_error: spec.prior_error,
             prior_weight: spec.prior_weight,
             trot: None,
+            logged: false,
         }
     }
 }
@@ -187,6 +190,7 @@ pub fn whole_robot_plan(
         force_noise: t.force_noise,
         prior_error: t.prior_error,
         prior_weight: t.prior_weight,
+        logged: t.logged,
         ..Default::default()
     };
     spec.validate()

@@ -5,7 +5,8 @@
 
 use super::model::RobotOptions;
 use super::ApiError;
-use crate::ident::floating::{Contact, DataSetting, FloatingRows, FloatingSample};
+use crate::ident::floating::DataSetting;
+use crate::ident::floating_log::{log_samples, LogSamples, LogSampling};
 use crate::ident::{ConstraintSet, IdentifiedBody, NormalEquations, SolveStatus};
 use crate::io::floating_log::{self, FloatingLog};
 use crate::io::floating_mcap;
@@ -14,9 +15,7 @@ use crate::model::floating::FloatingModel;
 use crate::sim::floating::{Start, MAX_START_HEIGHT, MAX_START_SPEED};
 /// The sensors a floating run is logged through.
 pub use crate::sim::floating_sensors::Sensors;
-use nalgebra::{DMatrix, DVector, Vector3};
-use physid_core::dynamics::BaseState;
-use physid_core::spatial::{Motion, Transform};
+use nalgebra::{DVector, Vector3};
 use std::path::{Path, PathBuf};
 
 /// A foot: a point fixed in a body, where the ground pushes.
@@ -727,10 +726,10 @@ pub fn identify_floating(
         setting: opts.setting,
         constraints: opts.constraints,
         samples_read: log.len(),
-        samples_used: samples.samples.len(),
-        cutoff: samples.cutoff,
-        contact_share: samples.contact_share(),
-        samples_near_contact_changes: samples.dropped,
+        samples_used: samples.log.samples.len(),
+        cutoff: samples.log.cutoff,
+        contact_share: samples.log.contact_share(),
+        samples_near_contact_changes: samples.log.dropped,
         target_rms: (ne.tt / rows as f64).sqrt(),
         description_rms: rms(&prior),
         identified_rms: rms(&found.theta),
@@ -853,9 +852,9 @@ fn rows_of_log(
     check_setting(opts, &log)?;
     let samples = Samples {
         read_note: note,
-        ..samples_of(&log, opts)?
+        log: samples_of(&log, opts)?,
     };
-    let ne = normal_equations(robot, &points, &samples, opts.setting);
+    let ne = samples.log.normal_equations(robot, &points, opts.setting);
     Ok((log, samples, ne))
 }
 
@@ -956,253 +955,21 @@ fn check_setting(opts: &IdentifyFloatingOptions, log: &FloatingLog) -> Result<()
     }
 }
 
-/// One sample ready for the rows: the trunk's state, the joints', the feet down.
-struct Sample {
-    base: BaseState,
-    q: Vec<f64>,
-    qd: Vec<f64>,
-    qdd: Vec<f64>,
-    tau: Vec<f64>,
-    down: Vec<bool>,
-    force: Vec<Vector3<f64>>,
-}
-
-/// The samples the pipeline kept, and what it chose.
+/// The log's samples, and what reading it left out (joint samples the trunk's topic did not
+/// cover).
 struct Samples {
-    samples: Vec<Sample>,
-    cutoff: f64,
-    /// Samples left out near a change of the feet in contact (`TorquesOnly`).
-    dropped: usize,
-    /// What reading the log left out (joint samples the trunk's topic did not cover).
+    log: LogSamples,
     read_note: Option<String>,
 }
 
-impl Samples {
-    fn contact_share(&self) -> f64 {
-        let (down, all) = self.samples.iter().fold((0, 0), |(d, a), s| {
-            (d + s.down.iter().filter(|&&x| x).count(), a + s.down.len())
-        });
-        down as f64 / all.max(1) as f64
-    }
-}
-
-/// The log through the data pipeline ([`crate::prepare`]): the joints' q̇, q̈ derived where not
-/// logged and the runs' ends trimmed. The trunk's acceleration is the derivative of its logged
-/// twist filtered alike (the same zero-phase Butterworth at the same cutoff), and so are the
-/// joint torques and the contact forces: the equations of motion are linear in the
-/// accelerations and the forces, so filtering both sides alike keeps them (a stiff contact's
-/// forces change faster than any cutoff passes; filtered on one side only, the trunk rows
-/// would be off by what the filter takes from them).
-fn samples_of(log: &FloatingLog, opts: &IdentifyFloatingOptions) -> Result<Samples, ApiError> {
-    let prepared = crate::prepare::prepare(
-        &log.joints,
-        &crate::prepare::Options {
-            cutoff: opts.cutoff,
-            ..Default::default()
-        },
-    )
-    .map_err(|e| ApiError::invalid(&opts.data, e.to_string()))?;
-    let report = &prepared.report;
-    let (period, cutoff, settle) = (report.period, report.cutoff, report.settle_samples);
-    let sos = crate::signal::butterworth_lowpass(2, cutoff.min(0.4 / period), 1.0 / period)
-        .map_err(|e| ApiError::invalid(&opts.data, e.to_string()))?;
-    let (mut samples, mut dropped) = (vec![], 0);
-    for run in &prepared.runs {
-        let (first, last) = (run.index[0], *run.index.last().expect("a kept run"));
-        let pad = settle.min(first).min(log.len() - 1 - last);
-        let span = Filtered::new(log, first - pad..last + pad + 1, &sos);
-        let tr = &run.trajectory;
-        let run_samples: Vec<Sample> = (run.index.iter().enumerate())
-            .map(|(k, &i)| sample(log, opts, &span, i, (tr, k)))
-            .collect();
-        if opts.setting == DataSetting::TorquesOnly {
-            let kept = away_from_contact_changes(run_samples, settle);
-            dropped += run.index.len() - kept.len();
-            samples.extend(kept);
-        } else {
-            samples.extend(run_samples);
-        }
-    }
-    Ok(Samples {
-        samples,
-        cutoff,
-        dropped,
-        read_note: None,
-    })
-}
-
-/// `samples` (one run's, in order) less those within `guard` samples of a change of the feet
-/// in contact. Projecting out the contact forces is exact sample by sample, but the filtered
-/// torques and accelerations mix each sample with its neighbours: across a touchdown or a
-/// lift-off the neighbours obey another projection.
-fn away_from_contact_changes(samples: Vec<Sample>, guard: usize) -> Vec<Sample> {
-    let changes: Vec<usize> = (1..samples.len())
-        .filter(|&k| samples[k].down != samples[k - 1].down)
-        .collect();
-    samples
-        .into_iter()
-        .enumerate()
-        .filter(|(k, _)| {
-            let at = changes.partition_point(|&c| c + guard <= *k);
-            changes.get(at).is_none_or(|&c| c > k + guard)
-        })
-        .map(|(_, s)| s)
-        .collect()
-}
-
-/// A stretch of the log with its trunk acceleration derived and its joint torques and contact
-/// forces filtered.
-struct Filtered {
-    start: usize,
-    accel: Vec<Motion>,
-    tau: Vec<f64>,
-    force: Option<Vec<Vector3<f64>>>,
-}
-
-impl Filtered {
-    /// Rows `span` of `log`, filtered by `sos`.
-    fn new(log: &FloatingLog, span: std::ops::Range<usize>, sos: &crate::signal::Sos) -> Self {
-        let t = &log.joints.t[span.clone()];
-        let accel = twist_derivative(&log.twist[span.clone()], t, sos);
-        let n = log.joints.dof();
-        let tau = filtered_columns(&log.joints.tau[span.start * n..span.end * n], n, sos);
-        let f = log.feet.len();
-        let force = log.force.as_ref().map(|force| {
-            let flat: Vec<f64> = force[span.start * f..span.end * f]
-                .iter()
-                .flat_map(|v| v.iter().copied())
-                .collect();
-            let out = filtered_columns(&flat, 3 * f, sos);
-            out.chunks(3)
-                .map(|c| Vector3::new(c[0], c[1], c[2]))
-                .collect()
-        });
-        Self {
-            start: span.start,
-            accel,
-            tau,
-            force,
-        }
-    }
-}
-
-/// Each of the `n` columns of sample-major `x` filtered forwards and backwards by `sos`.
-fn filtered_columns(x: &[f64], n: usize, sos: &crate::signal::Sos) -> Vec<f64> {
-    let m = x.len() / n.max(1);
-    let mut out = vec![0.0; x.len()];
-    for j in 0..n {
-        let column: Vec<f64> = (0..m).map(|k| x[k * n + j]).collect();
-        for (k, v) in sos.filtfilt(&column).into_iter().enumerate() {
-            out[k * n + j] = v;
-        }
-    }
-    out
-}
-
-/// Sample `k` of `tr`, log row `i` (in `span`).
-fn sample(
-    log: &FloatingLog,
-    opts: &IdentifyFloatingOptions,
-    span: &Filtered,
-    i: usize,
-    (tr, k): (&crate::trajectory::Trajectory, usize),
-) -> Sample {
-    let (f, n, r) = (log.feet.len(), log.joints.dof(), i - span.start);
-    let down = match (&log.contact, &log.force) {
-        (Some(c), _) => c[i * f..(i + 1) * f].to_vec(),
-        (None, Some(force)) => force[i * f..(i + 1) * f]
-            .iter()
-            .map(|x| x.z > opts.contact_force)
-            .collect(),
-        (None, None) => vec![false; f],
+/// The log's samples for `opts` ([`log_samples`]).
+fn samples_of(log: &FloatingLog, opts: &IdentifyFloatingOptions) -> Result<LogSamples, ApiError> {
+    let sampling = LogSampling {
+        cutoff: opts.cutoff,
+        setting: opts.setting,
+        contact_force: opts.contact_force,
     };
-    Sample {
-        base: BaseState {
-            pose: Transform::from_pose(&log.rotation[i], &log.position[i]),
-            v: log.twist[i],
-            a: span.accel[r],
-        },
-        q: tr.q_at(k).to_vec(),
-        qd: tr.qd_at(k).to_vec(),
-        qdd: tr.qdd_at(k).expect("the pipeline derives q̈").to_vec(),
-        tau: span.tau[r * n..(r + 1) * n].to_vec(),
-        down,
-        force: match &span.force {
-            Some(v) => v[r * f..(r + 1) * f].to_vec(),
-            None => vec![Vector3::zeros(); f],
-        },
-    }
-}
-
-/// The time derivative of the trunk's twist (trunk coordinates: in a body's own frame the
-/// spatial acceleration is the derivative of the twist's components), by central differences on
-/// the stamps `t`, then `sos` forwards and backwards.
-fn twist_derivative(twist: &[Motion], t: &[f64], sos: &crate::signal::Sos) -> Vec<Motion> {
-    let m = twist.len();
-    let column = |c: usize| -> Vec<f64> {
-        let x: Vec<f64> = twist.iter().map(|v| v.to_vec6()[c]).collect();
-        let d: Vec<f64> = (0..m)
-            .map(|k| {
-                let (a, b) = (k.saturating_sub(1), (k + 1).min(m - 1));
-                if b > a {
-                    (x[b] - x[a]) / (t[b] - t[a])
-                } else {
-                    0.0
-                }
-            })
-            .collect();
-        sos.filtfilt(&d)
-    };
-    let columns: Vec<Vec<f64>> = (0..6).map(column).collect();
-    (0..m)
-        .map(|k| Motion::from_vec6(&nalgebra::Vector6::from_fn(|c, _| columns[c][k])))
-        .collect()
-}
-
-/// The normal equations of `samples` in `setting`.
-fn normal_equations(
-    robot: &FloatingModel,
-    feet: &[(usize, Vector3<f64>)],
-    samples: &Samples,
-    setting: DataSetting,
-) -> NormalEquations {
-    let per_sample = crate::ident::floating::rows_per_sample(robot, setting);
-    let mut ne = NormalEquations::new(per_sample, robot.parameter_count());
-    for_each_rows(robot, feet, samples, setting, |y, target, _| {
-        ne.add(y, target.as_slice())
-    });
-    ne.finish()
-}
-
-/// Each sample's rows and targets in `setting` (and its joint torques), in order.
-fn for_each_rows(
-    robot: &FloatingModel,
-    feet: &[(usize, Vector3<f64>)],
-    samples: &Samples,
-    setting: DataSetting,
-    mut each: impl FnMut(&DMatrix<f64>, &DVector<f64>, &[f64]),
-) {
-    let mut rows = FloatingRows::new(robot);
-    // With forces measured every foot's force enters the targets, down or not: filtered, a
-    // force is smeared across touchdown and lift-off, and a foot in the air pushes nothing (its
-    // sensor's noise aside). Only the projection of `TorquesOnly` needs which feet are down.
-    let projected = setting == DataSetting::TorquesOnly;
-    for s in &samples.samples {
-        let contacts: Vec<Contact> = (feet.iter().zip(&s.force).zip(&s.down))
-            .filter(|(_, &d)| d || !projected)
-            .map(|((&(body, point), &force), _)| Contact { body, point, force })
-            .collect();
-        let sample = FloatingSample {
-            base: &s.base,
-            q: &s.q,
-            qd: &s.qd,
-            qdd: &s.qdd,
-            tau: &s.tau,
-            contacts: &contacts,
-        };
-        let (y, target) = rows.rows(robot, &sample, setting);
-        each(&y, &target, &s.tau);
-    }
+    log_samples(log, &sampling).map_err(|e| ApiError::invalid(&opts.data, e.to_string()))
 }
 
 /// Each joint's [`GainSums`](crate::diagnose::floating::GainSums) on `samples` against
@@ -1218,17 +985,19 @@ fn gain_sums(
     let theta = reference.parameters();
     let mut sums = vec![(0.0, 0.0, 0.0); n];
     let setting = DataSetting::TorquesAndContacts;
-    for_each_rows(reference, feet, samples, setting, |y, target, tau| {
-        let predicted = y * &theta;
-        for (j, (cc, cr, rr)) in sums.iter_mut().enumerate() {
-            let row = 6 + j;
-            let motor = predicted[row] - (target[row] - tau[j]);
-            let residual = target[row] - predicted[row];
-            *cc += motor * motor;
-            *cr += motor * residual;
-            *rr += residual * residual;
-        }
-    });
+    samples
+        .log
+        .for_each_rows(reference, feet, setting, |y, target, tau| {
+            let predicted = y * &theta;
+            for (j, (cc, cr, rr)) in sums.iter_mut().enumerate() {
+                let row = 6 + j;
+                let motor = predicted[row] - (target[row] - tau[j]);
+                let residual = target[row] - predicted[row];
+                *cc += motor * motor;
+                *cr += motor * residual;
+                *rr += residual * residual;
+            }
+        });
     (reference.tree().joint_names().into_iter().zip(sums))
         .map(|(joint, (cc, cr, rr))| crate::diagnose::floating::GainSums { joint, cc, cr, rr })
         .collect()

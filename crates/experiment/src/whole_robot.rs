@@ -12,14 +12,22 @@
 //! validation run by the joint torques it predicts from the true motion and contact forces
 //! (`τ = (Y θ)_q − Σ J_c,qᵀ λ_c`) against the true torques, and by its parameter errors against
 //! the truth. Seeds run in parallel; rows come back in (seed, setting, size, set) order.
+//!
+//! With [`WholeRobotSpec::logged`] the training run is instead logged as its sensors give it
+//! (an IMU and a state estimator for the trunk, with noise and bias; joint encoders; noisy
+//! torques and forces) and read back as `identify-floating` reads a log: the sizes count the
+//! samples the data pipeline keeps (with joint torques alone, those away from a change of the
+//! feet down; a size beyond them has no rows), the feet down are the log's contact states.
 
 use super::{cad_prior, parameter_errors};
 use nalgebra::{DMatrix, DVector};
 use physid_core::dynamics::{point_jacobian_floating, regressor_floating, Data};
 use physid_core::model::floating::FloatingModel;
 use physid_ident::floating::{Contact, DataSetting, FloatingRows, FloatingSample};
+use physid_ident::floating_log::{log_samples, LogSamples, LogSampling};
 use physid_ident::{self as ident, ConstraintSet, NormalEquations, Options};
 use physid_sim::floating::{standing, FloatingRun, FloatingSimError, Standing};
+use physid_sim::floating_sensors::Sensors;
 use rand::SeedableRng;
 use rand_distr::{Distribution, Normal};
 use rayon::prelude::*;
@@ -47,6 +55,12 @@ pub struct WholeRobotSpec {
     pub prior_error: f64,
     /// Prior weight `w`.
     pub prior_weight: f64,
+    /// Train on the training run as its sensors log it ([`physid_sim::floating_sensors`]: the
+    /// trunk's pose and twist from an IMU and a state estimator, with noise and bias; torque
+    /// and force noise of this spec's sizes), read back through the data pipeline
+    /// ([`physid_ident::floating_log`]: q̇, q̈ and the trunk's acceleration derived, torques and
+    /// forces filtered alike), instead of on the true motion with noisy torques and forces.
+    pub logged: bool,
 }
 
 impl Default for WholeRobotSpec {
@@ -71,6 +85,7 @@ impl Default for WholeRobotSpec {
             force_noise: 2.0,
             prior_error: 0.1,
             prior_weight: 1e-4,
+            logged: false,
         }
     }
 }
@@ -197,36 +212,103 @@ fn run_seed(
     };
     let rate = spec.motion.rate;
     let largest = *spec.sizes.last().expect("checked non-empty");
-    let truth = simulate(seed, largest as f64 / rate)?;
-    let train = measured(&truth, spec, seed);
+    // A logged run loses its ends to the pipeline's filter: a second more covers them.
+    let margin = if spec.logged { rate } else { 0.0 };
+    let truth = simulate(seed, (largest as f64 + margin) / rate)?;
     let validation = simulate(seed + 1000, 10.0 * spec.validation as f64 / rate)?;
     let prior = cad_prior(robot, spec.prior_error, seed);
     let scorer = Scorer::new(robot, &validation, 10);
+    let train = (!spec.logged).then(|| measured(&truth, spec, seed));
     let mut rows = vec![];
     for &setting in &spec.settings {
-        let mut acc = Accumulator::new(robot, setting);
-        let mut added = 0;
-        for &size in &spec.sizes {
-            for k in added..size.min(train.len()) {
-                let down: Vec<bool> = truth.contact_at(k).iter().map(|f| f.z > 0.0).collect();
-                acc.add(robot, &train, k, &down);
+        let grown = match &train {
+            Some(train) => grown_from_run(robot, (train, &truth), setting, &spec.sizes),
+            None => {
+                let samples = logged(robot, &truth, spec, (seed, setting))?;
+                grown_from_log(robot, feet, samples, setting, &spec.sizes)
             }
-            added = size.min(train.len());
+        };
+        for (size, ne) in grown {
             let cell = Cell {
                 seed,
                 setting,
                 samples: size,
             };
-            rows.extend(identify_sets(
-                robot,
-                &acc.ne.clone().finish(),
-                (&prior, &scorer),
-                spec,
-                cell,
-            )?);
+            rows.extend(identify_sets(robot, &ne, (&prior, &scorer), spec, cell)?);
         }
     }
     Ok(rows)
+}
+
+/// The normal equations of the first `size` steps of `measured` in `setting`, for each of
+/// `sizes`, the feet in contact where `truth` (the same run before noise) has them loaded.
+fn grown_from_run(
+    robot: &FloatingModel,
+    (measured, truth): (&FloatingRun, &FloatingRun),
+    setting: DataSetting,
+    sizes: &[usize],
+) -> Vec<(usize, NormalEquations)> {
+    let mut acc = Accumulator::new(robot, setting);
+    let mut added = 0;
+    let mut out = vec![];
+    for &size in sizes {
+        for k in added..size.min(measured.len()) {
+            let down: Vec<bool> = truth.contact_at(k).iter().map(|f| f.z > 0.0).collect();
+            acc.add(robot, measured, k, &down);
+        }
+        added = size.min(measured.len());
+        out.push((size, acc.ne.clone().finish()));
+    }
+    out
+}
+
+/// The normal equations of the first `size` of the log's `samples` in `setting`, for each of
+/// `sizes` the log fills: a size beyond the samples the pipeline kept is not claimed (with
+/// joint torques alone, a trot keeps only the samples away from its many touchdowns).
+fn grown_from_log(
+    robot: &FloatingModel,
+    feet: &[(usize, nalgebra::Vector3<f64>)],
+    mut samples: LogSamples,
+    setting: DataSetting,
+    sizes: &[usize],
+) -> Vec<(usize, NormalEquations)> {
+    let largest = *sizes.last().expect("checked non-empty");
+    samples.samples.truncate(largest);
+    let per_sample = physid_ident::floating::rows_per_sample(robot, setting);
+    let mut ne = NormalEquations::new(per_sample, robot.parameter_count());
+    let (mut added, mut out) = (0, vec![]);
+    samples.for_each_rows(robot, feet, setting, |y, target, _| {
+        ne.add(y, target.as_slice());
+        added += 1;
+        if sizes.contains(&added) {
+            out.push((added, ne.clone().finish()));
+        }
+    });
+    out
+}
+
+/// The training run `truth` as its sensors log it (noise of `spec`'s sizes, seeded by
+/// `seed`) and read back through the data pipeline for `setting`.
+fn logged(
+    robot: &FloatingModel,
+    truth: &FloatingRun,
+    spec: &WholeRobotSpec,
+    (seed, setting): (u64, DataSetting),
+) -> Result<LogSamples, WholeRobotError> {
+    let sensors = Sensors {
+        torque_noise: spec.torque_noise,
+        force_noise: spec.force_noise,
+        ..Sensors::default()
+    };
+    let joints = robot.tree().joint_names();
+    let feet: Vec<String> = (0..truth.feet.len()).map(|f| format!("foot{f}")).collect();
+    let log = physid_sim::floating_sensors::log(truth, (&joints, &feet), &sensors, seed);
+    let sampling = LogSampling {
+        cutoff: None,
+        setting,
+        contact_force: 10.0,
+    };
+    log_samples(&log, &sampling).map_err(|e| WholeRobotError::Spec(format!("seed {seed}: {e}")))
 }
 
 /// Where in the experiment an identification is.

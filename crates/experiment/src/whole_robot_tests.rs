@@ -382,3 +382,35 @@ fn the_samples_a_set_needs_for_least_squares_error_are_interpolated_log_log() {
         assert!(*n == m && (k - l).abs() < 1e-12, "{spread:?}");
     }
 }
+
+/// Trained on the run as its sensors log it (an IMU and an estimator for the trunk, read back
+/// through the data pipeline) with joint torques and contact forces, the whole robot predicts a
+/// new motion's torques as well as when trained on the true motion (within a quarter), and
+/// both far better than the prior. The sizes count the samples the pipeline keeps.
+#[test]
+fn trained_on_the_logged_run_the_robot_predicts_as_from_the_true_motion() {
+    let robot = quadruped();
+    let spec = WholeRobotSpec {
+        sizes: vec![3000],
+        validation: 200,
+        sets: vec![ConstraintSet::Consistent],
+        settings: vec![DataSetting::TorquesAndContacts],
+        ..Default::default()
+    };
+    let truth = run(&robot, &feet(&robot), &spec).unwrap();
+    let logged = WholeRobotSpec {
+        logged: true,
+        ..spec
+    };
+    let from_log = run(&robot, &feet(&robot), &logged).unwrap();
+    let (a, b) = (&truth[0], &from_log[0]);
+    assert_eq!((a.samples, b.samples), (3000, 3000));
+    assert!(b.constraints_hold, "{b:?}");
+    assert!(
+        (b.validation_rms / a.validation_rms - 1.0).abs() < 0.25,
+        "logged {} N m against the true motion's {} N m",
+        b.validation_rms,
+        a.validation_rms
+    );
+    assert!(b.validation_rms < 0.7 * b.prior_rms, "{b:?}");
+}

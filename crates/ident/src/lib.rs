@@ -25,6 +25,7 @@
 pub mod analysis;
 mod cone;
 pub mod floating;
+pub mod floating_log;
 pub mod information;
 mod interior;
 pub mod lmi;
