@@ -54,7 +54,7 @@ FLOATING = {"simulate_floating", "identify_floating", "FloatingRobot"}
 # Keywords the CLI has no flag for (Python's own), or whose Python form differs (these come
 # first).
 PYTHON_FIRST = {
-    "sensors": "The sensors' noise and what they log: a dict over the default sensors' fields (torque_noise, force_noise, gyro_noise, gyro_bias, velocity_noise, velocity_bias, tilt_noise, position_noise, encoder_step; velocities, forces, contacts: True/False), or \"exact\" for noise-free sensors logging everything.",
+    "sensors": "The sensors' noise and what they log: a dict over the default sensors' fields (torque_noise, force_noise, gyro_noise, gyro_bias, velocity_noise, velocity_bias, tilt_noise, position_noise, accel_noise, accel_bias, encoder_step; velocities, forces, contacts, accelerometer: True/False), or \"exact\" for noise-free sensors logging everything.",
     "robot": "The robot: a physid.Robot (as returned by physid.Robot), or \"cheetah3\" (the built-in leg), a URDF or a robot TOML path.",
 }
 FLOATING_ROBOT = "The robot: a physid.FloatingRobot (as loaded, rotors and all), or \"cheetah3\" (the built-in quadruped), a floating URDF or its sidecar TOML path. Default: cheetah3."

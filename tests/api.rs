@@ -630,8 +630,9 @@ fn a_floating_export_carries_its_ellipsoids_in_a_sidecar_and_reads_back_whole() 
 
 #[test]
 fn a_floating_log_of_exact_sensors_obeys_the_description_that_made_it() {
-    // The trunk's acceleration is differentiated from its logged twist and the joints' from
-    // their positions. The trunk rows hold to a tenth of a newton on 180 N (measured 0.038 and
+    // The trunk's angular acceleration is differentiated from its logged twist, its linear
+    // one read from the accelerometer (exact sensors log everything), the joints' from their
+    // positions. The trunk rows hold to a tenth of a newton on 180 N (measured 0.038 and
     // 0.13 on seeds 3 and 2; 0.08 and 10.1 before the force sensors averaged over the two
     // periods around each sample, as an anti-aliasing filter does: seed 2 lifts its feet, and
     // a touchdown's force changes within a substep). The joint rows keep the filter's and the
@@ -1115,4 +1116,36 @@ fn what_the_log_determines(found: &physid::api::floating::FloatingIdentification
         );
         assert!(n.text.contains("the data do"), "{}", n.text);
     }
+}
+
+/// With joint torques alone (the contact forces projected out) the trunk's acceleration carries
+/// the rows, and an estimator's velocity, differentiated, brings its noise into every one of
+/// them: the robot comes out light (errors in the regressor shrink what it finds). The IMU's
+/// accelerometer gives that acceleration without differentiating: the robot's 45 kg come back.
+#[test]
+fn with_joint_torques_alone_the_accelerometer_weighs_the_robot_where_differentiated_velocity_cannot(
+) {
+    use physid::api::floating::identify_floating;
+    use physid::sim::floating_sensors::Sensors;
+    let dir = tempfile::tempdir().unwrap();
+    let weigh = |name: &str, accelerometer: bool| {
+        let sensors = Sensors {
+            accelerometer,
+            ..Default::default()
+        };
+        let log = floating_log_at(dir.path().join(name), "cheetah3", (6.0, 3), sensors);
+        let opts = physid::api::floating::IdentifyFloatingOptions {
+            setting: physid::ident::floating::DataSetting::TorquesOnly,
+            constraints: ConstraintSet::None,
+            ..floating_options(&log)
+        };
+        identify_floating(&opts).unwrap().identified_mass
+    };
+    let truth = physid::model::quadruped::quadruped().total_mass();
+    let (with, without) = (weigh("imu.csv", true), weigh("estimator.csv", false));
+    assert!((with / truth - 1.0).abs() < 0.01, "{with} kg of {truth}");
+    assert!(
+        without < 0.95 * truth,
+        "{without} kg of {truth}: the velocity noise no longer costs"
+    );
 }

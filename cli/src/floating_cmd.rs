@@ -58,7 +58,8 @@ pub struct SimulateArgs {
     ground_friction: f64,
     /// Sensor noise, `key=value` pairs, comma-separated (keys: torque_noise, force_noise,
     /// gyro_noise, gyro_bias, velocity_noise, velocity_bias, tilt_noise, position_noise,
-    /// encoder_step; and velocities, forces, contacts = true/false for what is logged);
+    /// accel_noise, accel_bias, encoder_step; and velocities, forces, contacts, accelerometer =
+    /// true/false for what is logged);
     /// `exact` for noise-free sensors logging everything.
     #[arg(long, value_delimiter = ',')]
     sensors: Vec<String>,

@@ -1411,6 +1411,14 @@ fn a_floating_log_and_its_options_are_checked_naming_what_is_wrong() {
         ),
         (&["--sensors", "bogus=1"][..], "unknown field `bogus`"),
         (
+            &["--sensors", "accel_noise=-0.1"][..],
+            "accel_noise = -0.1 must be finite and >= 0",
+        ),
+        (
+            &["--sensors", "accelerometer=maybe"][..],
+            "'maybe' is not a number or true/false",
+        ),
+        (
             &["--sensors", "torque_noise"][..],
             "expected key=value or exact",
         ),

@@ -673,8 +673,9 @@ def simulate_floating(
     ground_friction: The ground's friction coefficient μ. Default: 0.8.
     sensors: The sensors' noise and what they log: a dict over the default sensors' fields
         (torque_noise, force_noise, gyro_noise, gyro_bias, velocity_noise, velocity_bias,
-        tilt_noise, position_noise, encoder_step; velocities, forces, contacts: True/False), or
-        "exact" for noise-free sensors logging everything.
+        tilt_noise, position_noise, accel_noise, accel_bias, encoder_step; velocities, forces,
+        contacts, accelerometer: True/False), or "exact" for noise-free sensors logging
+        everything.
     """
 
 class FloatingRobot:

@@ -852,7 +852,7 @@ fn rows_of_log(
     check_setting(opts, &log)?;
     let samples = Samples {
         read_note: note,
-        log: samples_of(&log, opts)?,
+        log: samples_of(&log, opts, robot.tree().gravity())?,
     };
     let ne = samples.log.normal_equations(robot, &points, opts.setting);
     Ok((log, samples, ne))
@@ -963,11 +963,16 @@ struct Samples {
 }
 
 /// The log's samples for `opts` ([`log_samples`]).
-fn samples_of(log: &FloatingLog, opts: &IdentifyFloatingOptions) -> Result<LogSamples, ApiError> {
+fn samples_of(
+    log: &FloatingLog,
+    opts: &IdentifyFloatingOptions,
+    gravity: Vector3<f64>,
+) -> Result<LogSamples, ApiError> {
     let sampling = LogSampling {
         cutoff: opts.cutoff,
         setting: opts.setting,
         contact_force: opts.contact_force,
+        gravity,
     };
     log_samples(log, &sampling).map_err(|e| ApiError::invalid(&opts.data, e.to_string()))
 }

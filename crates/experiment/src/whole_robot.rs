@@ -56,8 +56,8 @@ pub struct WholeRobotSpec {
     /// Prior weight `w`.
     pub prior_weight: f64,
     /// Train on the training run as its sensors log it ([`physid_sim::floating_sensors`]: the
-    /// trunk's pose and twist from an IMU and a state estimator, with noise and bias; torque
-    /// and force noise of this spec's sizes), read back through the data pipeline
+    /// trunk's pose and twist from an IMU and a state estimator, and the IMU's accelerometer,
+    /// with noise and bias; torque and force noise of this spec's sizes), read back through the data pipeline
     /// ([`physid_ident::floating_log`]: q̇, q̈ and the trunk's acceleration derived, torques and
     /// forces filtered alike), instead of on the true motion with noisy torques and forces.
     pub logged: bool,
@@ -287,8 +287,9 @@ fn grown_from_log(
     out
 }
 
-/// The training run `truth` as its sensors log it (noise of `spec`'s sizes, seeded by
-/// `seed`) and read back through the data pipeline for `setting`.
+/// The training run `truth` as its sensors log it (the default sensors with the IMU's
+/// accelerometer, torque and force noise of `spec`'s sizes, seeded by `seed`) and read back
+/// through the data pipeline for `setting`.
 fn logged(
     robot: &FloatingModel,
     truth: &FloatingRun,
@@ -298,6 +299,7 @@ fn logged(
     let sensors = Sensors {
         torque_noise: spec.torque_noise,
         force_noise: spec.force_noise,
+        accelerometer: true,
         ..Sensors::default()
     };
     let joints = robot.tree().joint_names();
@@ -307,6 +309,7 @@ fn logged(
         cutoff: None,
         setting,
         contact_force: 10.0,
+        gravity: robot.tree().gravity(),
     };
     log_samples(&log, &sampling).map_err(|e| WholeRobotError::Spec(format!("seed {seed}: {e}")))
 }

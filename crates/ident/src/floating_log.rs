@@ -1,6 +1,7 @@
 //! A floating robot's log as samples for its rows ([`super::floating`]): the joints through
 //! the data pipeline ([`physid_io::prepare`]), the trunk's acceleration derived from its logged
-//! twist, and the joint torques and contact forces filtered alike.
+//! twist (its linear part from the accelerometer where the log has one), and the joint torques
+//! and contact forces filtered alike.
 
 use super::floating::{Contact, DataSetting, FloatingRows, FloatingSample};
 use super::NormalEquations;
@@ -29,6 +30,8 @@ pub struct LogSampling {
     pub setting: DataSetting,
     /// Without contact columns, a foot is down where its logged normal force exceeds this (N).
     pub contact_force: f64,
+    /// Gravity (m/s², world): an accelerometer reads the trunk's acceleration less it.
+    pub gravity: Vector3<f64>,
 }
 
 /// One sample ready for the rows: the trunk's state, the joints', the feet down.
@@ -72,8 +75,10 @@ impl LogSamples {
 
 /// The log through the data pipeline ([`physid_io::prepare`]): the joints' q̇, q̈ derived where not
 /// logged and the runs' ends trimmed. The trunk's acceleration is the derivative of its logged
-/// twist filtered alike (the same zero-phase Butterworth at the same cutoff), and so are the
-/// joint torques and the contact forces: the equations of motion are linear in the
+/// twist filtered alike (the same zero-phase Butterworth at the same cutoff), its linear part
+/// the accelerometer's reading with gravity and `ω × v` restored where the log has one (not
+/// differentiated: an estimator's velocity noise, differentiated, swamps a slow motion's
+/// acceleration), and so are the joint torques and the contact forces: the equations of motion are linear in the
 /// accelerations and the forces, so filtering both sides alike keeps them (a stiff contact's
 /// forces change faster than any cutoff passes; filtered on one side only, the trunk rows
 /// would be off by what the filter takes from them).
@@ -94,7 +99,7 @@ pub fn log_samples(log: &FloatingLog, opts: &LogSampling) -> Result<LogSamples, 
     for run in &prepared.runs {
         let (first, last) = (run.index[0], *run.index.last().expect("a kept run"));
         let pad = settle.min(first).min(log.len() - 1 - last);
-        let span = Filtered::new(log, first - pad..last + pad + 1, &sos);
+        let span = Filtered::new(log, first - pad..last + pad + 1, (&sos, &opts.gravity));
         let tr = &run.trajectory;
         let run_samples: Vec<LogSample> = (run.index.iter().enumerate())
             .map(|(k, &i)| sample(log, opts, &span, i, (tr, k)))
@@ -144,9 +149,22 @@ struct Filtered {
 
 impl Filtered {
     /// Rows `span` of `log`, filtered by `sos`.
-    fn new(log: &FloatingLog, span: std::ops::Range<usize>, sos: &Sos) -> Self {
+    fn new(
+        log: &FloatingLog,
+        span: std::ops::Range<usize>,
+        (sos, g): (&Sos, &Vector3<f64>),
+    ) -> Self {
         let t = &log.joints.t[span.clone()];
-        let accel = twist_derivative(&log.twist[span.clone()], t, sos);
+        let mut accel = twist_derivative(&log.twist[span.clone()], t, sos);
+        if let Some(measured) = &log.accel {
+            let linear = accelerometer_linear(log, span.clone(), measured, g);
+            for (a, lin) in accel
+                .iter_mut()
+                .zip(filtered_columns(&linear, 3, sos).chunks(3))
+            {
+                a.lin = Vector3::new(lin[0], lin[1], lin[2]);
+            }
+        }
         let n = log.joints.dof();
         let tau = filtered_columns(&log.joints.tau[span.start * n..span.end * n], n, sos);
         let f = log.feet.len();
@@ -167,6 +185,22 @@ impl Filtered {
             force,
         }
     }
+}
+
+/// The linear part of the trunk's spatial acceleration (trunk axes, m/s², sample-major `x, y,
+/// z`) over `span` from the accelerometer's specific force `f`: `a = f + Rᵀ g − ω × v`.
+fn accelerometer_linear(
+    log: &FloatingLog,
+    span: std::ops::Range<usize>,
+    f: &[Vector3<f64>],
+    g: &Vector3<f64>,
+) -> Vec<f64> {
+    span.flat_map(|k| {
+        let v = &log.twist[k];
+        let a = f[k] + log.rotation[k].transpose() * g - v.ang.cross(&v.lin);
+        [a.x, a.y, a.z]
+    })
+    .collect()
 }
 
 /// Each of the `n` columns of sample-major `x` filtered forwards and backwards by `sos`.

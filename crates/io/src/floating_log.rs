@@ -38,6 +38,9 @@ pub struct FloatingLog {
     pub force: Option<Vec<Vector3<f64>>>,
     /// Each foot's contact state, `feet.len()` per sample, if logged.
     pub contact: Option<Vec<bool>>,
+    /// The IMU's accelerometer at the trunk frame's origin, if logged: the specific force
+    /// `Rᵀ (p̈ − g)` per sample, trunk coordinates (m/s²; `+9.81` up at rest).
+    pub accel: Option<Vec<Vector3<f64>>>,
 }
 
 impl FloatingLog {
@@ -58,6 +61,9 @@ const BASE: [&str; 13] = [
     "base_wz", "base_vx", "base_vy", "base_vz",
 ];
 
+/// The accelerometer's column names, in order (optional, all three or none).
+const ACCEL: [&str; 3] = ["base_ax", "base_ay", "base_az"];
+
 /// Shortest text that reads back as the same `f64`.
 fn num(x: f64) -> String {
     format!("{x:?}")
@@ -76,6 +82,9 @@ pub fn to_csv(log: &FloatingLog) -> String {
         }
     }
     header.extend(BASE.iter().map(|s| s.to_string()));
+    if log.accel.is_some() {
+        header.extend(ACCEL.iter().map(|s| s.to_string()));
+    }
     for foot in &log.feet {
         if log.force.is_some() {
             header.extend(["x", "y", "z"].map(|c| format!("force_{foot}_{c}")));
@@ -108,6 +117,9 @@ fn row(log: &FloatingLog, groups: &[(&str, Option<&Vec<f64>>)], k: usize) -> Vec
         p.x, p.y, p.z, q.w, q.i, q.j, q.k, w.ang.x, w.ang.y, w.ang.z, w.lin.x, w.lin.y, w.lin.z,
     ];
     rec.extend(base.iter().map(|&x| num(x)));
+    if let Some(accel) = &log.accel {
+        rec.extend(accel[k].iter().map(|&x| num(x)));
+    }
     let f = log.feet.len();
     for i in 0..f {
         if let Some(force) = &log.force {
@@ -126,7 +138,8 @@ pub fn write_csv(path: &Path, log: &FloatingLog) -> Result<(), IoError> {
 }
 
 /// Reads a floating-base log: the joint columns matched to `joints` by name
-/// ([`crate::samples::read_csv_logged`]), the trunk's thirteen columns (all required), and per
+/// ([`crate::samples::read_csv_logged`]), the trunk's thirteen columns (all required), the
+/// accelerometer's three where the file has them (all or none), and per
 /// foot of `feet` the force columns and the contact column where the file has them (a foot's
 /// three force columns all or none; every foot alike). Errors name the file, the line and the
 /// column.
@@ -152,6 +165,7 @@ pub fn read_csv(path: &Path, joints: &[String], feet: &[String]) -> Result<Float
         feet: feet.to_vec(),
         force: cols.force.as_ref().map(|_| vec![]),
         contact: cols.contact.as_ref().map(|_| vec![]),
+        accel: cols.accel.map(|_| vec![]),
     };
     for (k, rec) in r.records().enumerate() {
         let line = k + 2;
@@ -172,6 +186,7 @@ pub fn read_csv(path: &Path, joints: &[String], feet: &[String]) -> Result<Float
 /// Where the trunk's and the feet's columns are.
 struct FloatingColumns {
     base: [usize; 13],
+    accel: Option<[usize; 3]>,
     force: Option<Vec<[usize; 3]>>,
     contact: Option<Vec<usize>>,
 }
@@ -194,8 +209,21 @@ impl FloatingColumns {
             .collect();
         let contact: Vec<Option<usize>> =
             feet.iter().map(|f| at(&format!("contact_{f}"))).collect();
+        let accel = ACCEL.map(at);
+        let accel = match accel.iter().position(Option::is_none) {
+            None => Some(accel.map(|c| c.expect("all"))),
+            Some(_) if accel.iter().all(Option::is_none) => None,
+            Some(i) => {
+                return Err(format!(
+                    "no column '{}': an accelerometer has three columns ({})",
+                    ACCEL[i],
+                    ACCEL.join(", ")
+                ))
+            }
+        };
         Ok(Self {
             base: base.map(|b| b.expect("checked")),
+            accel,
             force: all_or_none(&force, feet, "force_{foot}_x, _y and _z")?
                 .map(|v| v.into_iter().map(|c| c.map(|i| i.expect("all"))).collect()),
             contact: all_or_none(&contact, feet, "contact_{foot}")?
@@ -243,6 +271,9 @@ impl FloatingColumns {
             Vector3::new(b[7], b[8], b[9]),
             Vector3::new(b[10], b[11], b[12]),
         ));
+        if let (Some(c), Some(out)) = (&self.accel, log.accel.as_mut()) {
+            out.push(Vector3::new(value(c[0])?, value(c[1])?, value(c[2])?));
+        }
         if let (Some(cols), Some(out)) = (&self.force, log.force.as_mut()) {
             for c in cols {
                 out.push(Vector3::new(value(c[0])?, value(c[1])?, value(c[2])?));
@@ -338,6 +369,11 @@ mod tests {
                     .collect(),
             ),
             contact: Some((0..2 * m).map(|i| i % 3 != 0).collect()),
+            accel: Some(
+                t.iter()
+                    .map(|&x| Vector3::new(0.2 * x, -0.1, 9.81 + x))
+                    .collect(),
+            ),
         }
     }
 
@@ -361,17 +397,20 @@ mod tests {
         assert_eq!(got.joints, want.joints);
         assert_eq!((&got.position, &got.twist), (&want.position, &want.twist));
         assert_eq!((&got.force, &got.contact), (&want.force, &want.contact));
+        assert_eq!(got.accel, want.accel);
         for (a, b) in got.rotation.iter().zip(&want.rotation) {
             assert!((a - b).abs().max() < 1e-15, "{a} {b}");
         }
-        // Without the feet's columns, neither forces nor contacts.
+        // Without the feet's columns, neither forces nor contacts; without the accelerometer's,
+        // no accelerometer.
         let bare = FloatingLog {
             force: None,
             contact: None,
+            accel: None,
             ..want
         };
         let got = read(&to_csv(&bare)).unwrap();
-        assert_eq!((got.force, got.contact), (None, None));
+        assert_eq!((got.force, got.contact, got.accel), (None, None, None));
     }
 
     #[test]
@@ -404,6 +443,14 @@ mod tests {
                 "line 5, column 'force_left_z': 'x' is not a number",
             ),
             (with(1, "base_wz", "omega_z"), "no column 'base_wz'"),
+            (
+                with(1, "base_ay", "acc_y"),
+                "no column 'base_ay': an accelerometer has three columns",
+            ),
+            (
+                with(3, "base_az", "inf"),
+                "line 3, column 'base_az': inf is not a finite value",
+            ),
             (
                 with(1, "force_right_y", "f"),
                 "foot 'right' lacks some of its columns force_{foot}_x, _y and _z",

@@ -617,6 +617,7 @@ impl Aligned {
             feet: c.feet.to_vec(),
             force: None,
             contact: None,
+            accel: None,
         };
         for k in r {
             let (i, s) = self.trunk[k].expect("kept samples lie inside");

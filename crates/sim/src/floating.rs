@@ -161,10 +161,17 @@ pub struct FloatingRun {
     /// substep; sampled at the instant it aliases, and the twist's central difference over the
     /// same two periods is the mean acceleration this force produces.
     pub contact_mean: Vec<Vector3<f64>>,
+    /// The trunk's specific force `Rᵀ (p̈ − g)` at its frame's origin (trunk coordinates,
+    /// m/s²) averaged over the same two control periods around the step: what an IMU's
+    /// accelerometer reports through its anti-aliasing filter (a touchdown changes the
+    /// acceleration within a substep, as it does the force).
+    pub specific_force_mean: Vec<Vector3<f64>>,
     /// Joints per step.
     pub joints: usize,
     /// Feet: `(body, point in the body)`, in the order of `contact`.
     pub feet: Vec<(usize, Vector3<f64>)>,
+    /// Gravity (m/s², world).
+    pub gravity: Vector3<f64>,
 }
 
 impl FloatingRun {
@@ -255,15 +262,18 @@ pub fn standing(
     let mut run = FloatingRun {
         joints: n,
         feet: feet.to_vec(),
+        gravity: robot.tree().gravity(),
         ..Default::default()
     };
     let steps = (experiment.duration * experiment.rate).round() as usize;
     let dt = 1.0 / (experiment.rate * experiment.substeps as f64);
     let mut period_means = Vec::with_capacity(steps * feet.len());
+    let mut period_forces = Vec::with_capacity(steps);
     for k in 0..steps {
         let t = k as f64 / experiment.rate;
         let tau = experiment.motor_torques(&state.q, &state.qd, &targets.at(t));
         let mut sum = vec![Vector3::zeros(); feet.len()];
+        let mut specific = Vector3::zeros();
         for s in 0..experiment.substeps {
             let (nu_dot, contact) = accelerations(robot, &mut data, &state, &tau, feet, experiment)
                 .ok_or(FloatingSimError::Diverged {
@@ -274,13 +284,23 @@ pub fn standing(
                 record(&mut run, t, &state, &nu_dot, &tau, &contact);
             }
             sum.iter_mut().zip(&contact).for_each(|(a, f)| *a += f);
+            specific += specific_force(&state, &nu_dot, &run.gravity);
             step(&mut state, &nu_dot, dt);
         }
         period_means.extend(sum.iter().map(|f| f / experiment.substeps as f64));
+        period_forces.push(specific / experiment.substeps as f64);
         fallen(&state, t)?;
     }
     run.contact_mean = around_steps(&period_means, feet.len());
+    run.specific_force_mean = around_steps(&period_forces, 1);
     Ok(run)
+}
+
+/// The trunk's specific force `Rᵀ (p̈ − g) = a + ω × v − Rᵀ g` at `state` with accelerations
+/// `nu_dot` (trunk coordinates, m/s²; `a`, `ω`, `v` the spatial acceleration and twist).
+fn specific_force(state: &State, nu_dot: &DVector<f64>, g: &Vector3<f64>) -> Vector3<f64> {
+    let a = Motion::from_vec6(&nu_dot.fixed_rows::<6>(0).into_owned());
+    a.lin + state.v.ang.cross(&state.v.lin) - state.rot.transpose() * g
 }
 
 /// `Err` when the robot has fallen: its trunk tilted more than 60° or its origin below 5 cm.

@@ -1,8 +1,8 @@
 //! A floating-base run as a robot's sensors log it ([`physid_io::floating_log`]): joint
 //! encoders and motor currents, an IMU's gyro and a state estimator's pose and velocity for the
 //! trunk, force sensors (read through an anti-aliasing filter: [`FloatingRun::contact_mean`])
-//! and a contact estimator at the feet, each with its own noise and, for the trunk, a constant
-//! bias.
+//! and a contact estimator at the feet, and the IMU's accelerometer, each with its own noise
+//! and, for the trunk, a constant bias.
 //!
 //! Noise is Gaussian, drawn from `seed` in a fixed order, so the same seed gives the same log.
 
@@ -35,6 +35,10 @@ pub struct Sensors {
     pub tilt_noise: f64,
     /// Estimated position noise per axis (m).
     pub position_noise: f64,
+    /// Accelerometer noise per axis (m/s²).
+    pub accel_noise: f64,
+    /// Accelerometer bias per axis, drawn once per log (m/s²).
+    pub accel_bias: f64,
     /// Encoder resolution (rad): positions logged rounded to it (0: exact).
     pub encoder_step: f64,
     /// Log the joint velocities (else the data pipeline derives them).
@@ -43,6 +47,9 @@ pub struct Sensors {
     pub forces: bool,
     /// Log the feet's contact states (true where the force's normal part is positive).
     pub contacts: bool,
+    /// Log the IMU's accelerometer (at the trunk frame's origin; off by default: a state
+    /// estimator's pose and twist are what every floating log carries).
+    pub accelerometer: bool,
 }
 
 impl Default for Sensors {
@@ -56,10 +63,13 @@ impl Default for Sensors {
             velocity_bias: 0.005,
             tilt_noise: 0.002,
             position_noise: 0.002,
+            accel_noise: 0.04,
+            accel_bias: 0.02,
             encoder_step: 0.0,
             velocities: false,
             forces: true,
             contacts: true,
+            accelerometer: false,
         }
     }
 }
@@ -76,10 +86,13 @@ impl Sensors {
             velocity_bias: 0.0,
             tilt_noise: 0.0,
             position_noise: 0.0,
+            accel_noise: 0.0,
+            accel_bias: 0.0,
             encoder_step: 0.0,
             velocities: true,
             forces: true,
             contacts: true,
+            accelerometer: true,
         }
     }
 
@@ -94,6 +107,8 @@ impl Sensors {
             ("velocity_bias", self.velocity_bias),
             ("tilt_noise", self.tilt_noise),
             ("position_noise", self.position_noise),
+            ("accel_noise", self.accel_noise),
+            ("accel_bias", self.accel_bias),
             ("encoder_step", self.encoder_step),
         ];
         match fields.iter().find(|(_, v)| !(v.is_finite() && *v >= 0.0)) {
@@ -128,6 +143,9 @@ pub fn log(
         feet: feet.to_vec(),
         force: sensors.forces.then(Vec::new),
         contact: sensors.contacts.then(Vec::new),
+        accel: sensors
+            .accelerometer
+            .then(|| accelerometer(run, sensors, seed)),
     };
     for (k, base) in run.base.iter().enumerate() {
         let (rot, pos) = base.pose.to_pose();
@@ -155,6 +173,20 @@ pub fn log(
         }
     }
     out
+}
+
+/// The accelerometer at the trunk frame's origin: the specific force `Rᵀ (p̈ − g)` through its
+/// anti-aliasing filter ([`FloatingRun::specific_force_mean`]), with a bias drawn once and noise
+/// per sample, from a stream of its own (so that the other sensors' noise is the same with it
+/// or without it).
+fn accelerometer(run: &FloatingRun, sensors: &Sensors, seed: u64) -> Vec<Vector3<f64>> {
+    let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(seed.wrapping_mul(15_485_863) ^ 0xacce1);
+    let unit = Normal::new(0.0, 1.0).expect("unit normal");
+    let mut draw = |s: f64| Vector3::from_fn(|_, _| s * unit.sample(&mut rng));
+    let bias = draw(sensors.accel_bias);
+    (run.specific_force_mean.iter())
+        .map(|f| f + bias + draw(sensors.accel_noise))
+        .collect()
 }
 
 /// The rotation by the vector `theta` (axis times angle, rad).

@@ -38,6 +38,7 @@ fn log(m: usize) -> FloatingLog {
                 .collect(),
         ),
         contact: Some((0..2 * m).map(|i| i % 3 != 0).collect()),
+        accel: None,
     }
 }
 
@@ -229,6 +230,7 @@ fn topics_at_other_rates_are_brought_to_the_joint_samples() {
         feet: full.feet.clone(),
         force: Some(full.force.as_ref().unwrap()[k.start * f..k.end * f].to_vec()),
         contact: Some(held),
+        accel: None,
     };
     // Linear signals exactly (to rounding); the orientation's chord over 2 ms: 1e-7 rad.
     assert_close(
