@@ -497,9 +497,14 @@ fn a_floating_run_logged_as_mcap_identifies_as_its_csv_does() {
     // identifications agree to rounding.
     use physid::api::floating::{identify_floating, FloatingReadOptions};
     let dir = tempfile::tempdir().unwrap();
-    let csv = floating_log(dir.path(), "cheetah3", (2.0, 4), Default::default());
+    // With the IMU's accelerometer: its own topic in MCAP, three columns in the CSV.
+    let sensors = physid::sim::floating_sensors::Sensors {
+        accelerometer: true,
+        ..Default::default()
+    };
+    let csv = floating_log(dir.path(), "cheetah3", (2.0, 4), sensors.clone());
     let mcap = dir.path().join("run.mcap");
-    floating_log_at(mcap.clone(), "cheetah3", (2.0, 4), Default::default());
+    floating_log_at(mcap.clone(), "cheetah3", (2.0, 4), sensors);
     let truth = physid::api::floating::truth_path(&mcap);
     assert!(
         truth.ends_with("run.truth.urdf") && truth.is_file(),
@@ -550,6 +555,15 @@ fn a_floating_run_logged_as_mcap_identifies_as_its_csv_does() {
     );
     let err = with(&mcap, odometry(" "));
     assert!(err.contains("odometry_topic: empty"), "{err}");
+    let imu = FloatingReadOptions {
+        imu_topic: "/odometry".into(),
+        ..Default::default()
+    };
+    let err = with(&mcap, imu);
+    assert!(
+        err.contains("odometry_topic and imu_topic are both /odometry"),
+        "{err}"
+    );
     let feet = FloatingReadOptions {
         foot_forces_topic: "/contacts".into(),
         ..Default::default()

@@ -180,6 +180,10 @@ pub struct IdentifyArgs {
     /// ground's force in world coordinates and the contact state).
     #[arg(long, default_value = "/foot_forces")]
     foot_forces_topic: String,
+    /// MCAP and rosbag2 logs: the IMU's topic (sensor_msgs/msg/Imu at the trunk frame's
+    /// origin), whose accelerometer gives the trunk's linear acceleration where the log has it.
+    #[arg(long, default_value = "/imu")]
+    imu_topic: String,
     /// MCAP and rosbag2 logs: which time stamps a message, log (the recorder's receive time)
     /// or header (its header.stamp); every topic alike.
     #[arg(long, default_value = "log")]
@@ -244,6 +248,7 @@ pub fn run_identify(a: IdentifyArgs) -> anyhow::Result<()> {
             stamp: a.stamp,
             odometry_topic: a.odometry_topic,
             foot_forces_topic: a.foot_forces_topic,
+            imu_topic: a.imu_topic,
         },
         feet: a
             .feet

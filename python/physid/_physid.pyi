@@ -765,6 +765,9 @@ def identify_floating(
     foot_forces_topic: MCAP and rosbag2 logs: the feet's topic (physid_msgs/msg/FootForces: per
         foot, the ground's force in world coordinates and the contact state). Default:
         /foot_forces.
+    imu_topic: MCAP and rosbag2 logs: the IMU's topic (sensor_msgs/msg/Imu at the trunk frame's
+        origin), whose accelerometer gives the trunk's linear acceleration where the log has it.
+        Default: /imu.
     stamp: MCAP and rosbag2 logs: which time stamps a message, log (the recorder's receive time)
         or header (its header.stamp); every topic alike. Default: log.
     """

@@ -227,7 +227,7 @@ fn sensors_of(
     cutoff = None, foot = None, contact_force = 10.0, out_urdf = None, out_mjcf = None,
     truth = None, baseline = None, topic = String::from("/joint_states"),
     odometry_topic = String::from("/odometry"), foot_forces_topic = String::from("/foot_forces"),
-    stamp = "log"))]
+    imu_topic = String::from("/imu"), stamp = "log"))]
 #[allow(clippy::too_many_arguments)]
 pub(crate) fn identify_floating(
     py: Python<'_>,
@@ -247,6 +247,7 @@ pub(crate) fn identify_floating(
     topic: String,
     odometry_topic: String,
     foot_forces_topic: String,
+    imu_topic: String,
     stamp: &str,
 ) -> PyResult<FloatingIdentification> {
     let opts = IdentifyFloatingOptions {
@@ -259,6 +260,7 @@ pub(crate) fn identify_floating(
                 .map_err(|e| exception(format!("stamp: {e}")))?,
             odometry_topic,
             foot_forces_topic,
+            imu_topic,
         },
         feet: foot
             .unwrap_or_default()

@@ -392,6 +392,7 @@ impl IdentifyFloatingOptions {
             ("topic", &t.topic),
             ("odometry_topic", &t.odometry_topic),
             ("foot_forces_topic", &t.foot_forces_topic),
+            ("imu_topic", &t.imu_topic),
         ];
         if let Some((name, _)) = named.iter().find(|(_, v)| v.trim().is_empty()) {
             return Err(ApiError::Options(format!(
@@ -400,7 +401,7 @@ impl IdentifyFloatingOptions {
         }
         if let Some((i, j)) = crate::io::first_repeat_by(&named, |a, b| a.1 == b.1) {
             return Err(ApiError::Options(format!(
-                "{} and {} are both {}: the joint states, the trunk and the feet come on three topics",
+                "{} and {} are both {}: the joint states, the trunk, the feet and the IMU come on four topics",
                 named[i].0, named[j].0, named[i].1
             )));
         }
@@ -434,11 +435,14 @@ fn read_floating_log(
             "{}: {before} joint samples before and {after} after the span of {}{} left out (nothing to interpolate the trunk from)",
             path.display(),
             topics.odometry_topic,
-            if read.log.force.is_some() || read.log.contact.is_some() {
-                format!(" and {}", topics.foot_forces_topic)
-            } else {
-                String::new()
-            }
+            [
+                (read.log.force.is_some() || read.log.contact.is_some())
+                    .then(|| format!(" and {}", topics.foot_forces_topic)),
+                read.log.accel.is_some().then(|| format!(" and {}", topics.imu_topic)),
+            ]
+            .into_iter()
+            .flatten()
+            .collect::<String>()
         )),
     };
     Ok((read.log, note))

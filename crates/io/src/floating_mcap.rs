@@ -8,7 +8,10 @@
 //!   angular velocity, rad/s, and the velocity of the trunk frame's origin, m/s);
 //! - `/foot_forces` (`physid_msgs/msg/FootForces`, optional): per foot by name, the ground's
 //!   force on it in world coordinates (N, `force` holding x, y, z of each foot in turn) and
-//!   whether it is in contact; either array may be empty (not logged).
+//!   whether it is in contact; either array may be empty (not logged);
+//! - `/imu` (`sensor_msgs/msg/Imu`, optional): the IMU at the trunk frame's origin, of which
+//!   the accelerometer's `linear_acceleration` is read (the specific force, m/s², trunk
+//!   coordinates); its orientation and angular velocity are the odometry's business.
 //!
 //! **Reading** takes the joint states' times as the samples' times and brings the other topics
 //! to them: the trunk's position and twist and the feet's forces linearly interpolated between
@@ -34,6 +37,10 @@ pub const TOPIC_ODOMETRY: &str = "/odometry";
 pub const TOPIC_FOOT_FORCES: &str = "/foot_forces";
 /// The feet's message type.
 pub const FOOT_FORCES_TYPE: &str = "physid_msgs/msg/FootForces";
+/// The IMU's topic.
+pub const TOPIC_IMU: &str = "/imu";
+/// The message types that are `sensor_msgs/Imu` (ROS 2, and ROS 1 in MCAP).
+const IMU_TYPES: [&str; 2] = ["sensor_msgs/msg/Imu", "sensor_msgs/Imu"];
 /// The message types that are `nav_msgs/Odometry` (ROS 2, and ROS 1 in MCAP).
 const ODOMETRY_TYPES: [&str; 2] = ["nav_msgs/msg/Odometry", "nav_msgs/Odometry"];
 /// A topic silent for longer than this many times its median spacing cannot be interpolated.
@@ -75,6 +82,18 @@ struct Odometry {
     twist_covariance: Covariance,
 }
 
+/// `sensor_msgs/msg/Imu`.
+#[derive(Serialize, Deserialize, Debug, Clone, PartialEq)]
+struct Imu {
+    header: Header,
+    orientation: Xyzw,
+    orientation_covariance: [f64; 9],
+    angular_velocity: Xyz,
+    angular_velocity_covariance: [f64; 9],
+    linear_acceleration: Xyz,
+    linear_acceleration_covariance: [f64; 9],
+}
+
 /// `physid_msgs/msg/FootForces`.
 #[derive(Serialize, Deserialize, Debug, Clone, PartialEq)]
 struct FootForces {
@@ -87,6 +106,13 @@ struct FootForces {
 fn odometry_schema() -> String {
     format!(
         "std_msgs/Header header\nstring child_frame_id\ngeometry_msgs/PoseWithCovariance pose\ngeometry_msgs/TwistWithCovariance twist\n{}{SEP}\nMSG: geometry_msgs/PoseWithCovariance\nPose pose\nfloat64[36] covariance\n{SEP}\nMSG: geometry_msgs/Pose\nPoint position\nQuaternion orientation\n{SEP}\nMSG: geometry_msgs/Point\nfloat64 x\nfloat64 y\nfloat64 z\n{SEP}\nMSG: geometry_msgs/Quaternion\nfloat64 x 0\nfloat64 y 0\nfloat64 z 0\nfloat64 w 1\n{SEP}\nMSG: geometry_msgs/TwistWithCovariance\nTwist twist\nfloat64[36] covariance\n{SEP}\nMSG: geometry_msgs/Twist\nVector3 linear\nVector3 angular\n{SEP}\nMSG: geometry_msgs/Vector3\nfloat64 x\nfloat64 y\nfloat64 z\n",
+        header_defs()
+    )
+}
+
+fn imu_schema() -> String {
+    format!(
+        "std_msgs/Header header\ngeometry_msgs/Quaternion orientation\nfloat64[9] orientation_covariance\ngeometry_msgs/Vector3 angular_velocity\nfloat64[9] angular_velocity_covariance\ngeometry_msgs/Vector3 linear_acceleration\nfloat64[9] linear_acceleration_covariance\n{}{SEP}\nMSG: geometry_msgs/Quaternion\nfloat64 x 0\nfloat64 y 0\nfloat64 z 0\nfloat64 w 1\n{SEP}\nMSG: geometry_msgs/Vector3\nfloat64 x\nfloat64 y\nfloat64 z\n",
         header_defs()
     )
 }
@@ -118,11 +144,13 @@ pub fn write(path: &Path, log: &FloatingLog, trunk: &str) -> Result<(), IoError>
     })
 }
 
-/// The channels of `log`: joint states, odometry, and the feet's if it logs forces or contacts.
+/// The channels of `log`: joint states, odometry, the feet's if it logs forces or contacts, the
+/// IMU's if it logs an accelerometer.
 struct Channels {
     joints: u16,
     odometry: u16,
     feet: Option<u16>,
+    imu: Option<u16>,
 }
 
 /// Adds [`Channels`] for `log` to `w`.
@@ -150,10 +178,15 @@ fn add_channels<W: std::io::Write + std::io::Seek>(
     } else {
         None
     };
+    let imu = match log.accel {
+        Some(_) => Some(channel(IMU_TYPES[0], imu_schema(), TOPIC_IMU)?),
+        None => None,
+    };
     Ok(Channels {
         joints,
         odometry,
         feet,
+        imu,
     })
 }
 
@@ -206,8 +239,44 @@ fn write_messages<W: std::io::Write + std::io::Seek>(
             };
             w.write_to_known_channel(&mh(c), cdr_into(&mut buf, &msg))?;
         }
+        if let (Some(c), Some(accel)) = (channels.imu, &log.accel) {
+            let msg = imu_of(log, k, &header, trunk, &accel[k]);
+            w.write_to_known_channel(&mh(c), cdr_into(&mut buf, &msg))?;
+        }
     }
     Ok(())
+}
+
+/// Sample `k`'s IMU in `trunk` coordinates: the odometry's orientation and angular velocity,
+/// the accelerometer's `accel`; covariances unknown (zero).
+fn imu_of(log: &FloatingLog, k: usize, header: &Header, trunk: &str, accel: &Vector3<f64>) -> Imu {
+    let q = UnitQuaternion::from_matrix(&log.rotation[k]);
+    let w = log.twist[k].ang;
+    Imu {
+        header: Header {
+            frame_id: trunk.into(),
+            ..header.clone()
+        },
+        orientation: Xyzw {
+            x: q.i,
+            y: q.j,
+            z: q.k,
+            w: q.w,
+        },
+        orientation_covariance: [0.0; 9],
+        angular_velocity: Xyz {
+            x: w.x,
+            y: w.y,
+            z: w.z,
+        },
+        angular_velocity_covariance: [0.0; 9],
+        linear_acceleration: Xyz {
+            x: accel.x,
+            y: accel.y,
+            z: accel.z,
+        },
+        linear_acceleration_covariance: [0.0; 9],
+    }
 }
 
 /// Sample `k`'s trunk as odometry: pose in `world`, twist in `trunk` coordinates.
@@ -257,6 +326,8 @@ pub struct FloatingReadOptions {
     pub odometry_topic: String,
     /// The feet's topic (`physid_msgs/msg/FootForces`).
     pub foot_forces_topic: String,
+    /// The IMU's topic (`sensor_msgs/msg/Imu`): its accelerometer, where the log has the topic.
+    pub imu_topic: String,
 }
 
 impl Default for FloatingReadOptions {
@@ -266,6 +337,7 @@ impl Default for FloatingReadOptions {
             stamp: Stamp::Log,
             odometry_topic: TOPIC_ODOMETRY.into(),
             foot_forces_topic: TOPIC_FOOT_FORCES.into(),
+            imu_topic: TOPIC_IMU.into(),
         }
     }
 }
@@ -299,12 +371,20 @@ struct FeetMessage {
     contact: Option<Vec<bool>>,
 }
 
-/// The trunk's and the feet's messages collected while the joint states are read.
+/// One accelerometer reading.
+struct ImuMessage {
+    ns: [u64; 2],
+    sequence: u64,
+    accel: Vector3<f64>,
+}
+
+/// The trunk's, the feet's and the IMU's messages collected while the joint states are read.
 struct Collector<'a> {
     opts: &'a FloatingReadOptions,
     feet: &'a [String],
     trunk: Vec<TrunkMessage>,
     feet_messages: Vec<FeetMessage>,
+    imu: Vec<ImuMessage>,
     /// The other topics seen (name → type), for errors.
     topics: BTreeMap<String, String>,
 }
@@ -332,6 +412,17 @@ impl Collector<'_> {
             let first = self.feet_messages.first();
             let m = feet_message(data, (log_time, sequence), self.feet, first)?;
             self.feet_messages.push(m);
+        } else if topic == self.opts.imu_topic {
+            if !IMU_TYPES.contains(&kind) {
+                return Err(format!("carries {kind}, not sensor_msgs/msg/Imu"));
+            }
+            check_string_lengths(data, &["header.frame_id"])?;
+            let m: Imu = cdr::deserialize(data).map_err(|e| e.to_string())?;
+            self.imu.push(ImuMessage {
+                ns: [log_time, mcap_log::header_ns(&m.header)?],
+                sequence,
+                accel: vector("linear_acceleration", m.linear_acceleration)?,
+            });
         }
         Ok(())
     }
@@ -354,12 +445,13 @@ fn vector(what: &str, a: Xyz) -> Result<Vector3<f64>, String> {
     ))
 }
 
-/// Checks the two strings' lengths (the header's frame and the child frame) against the bytes
-/// that remain before the decoder allocates them.
-fn check_odometry_lengths(data: &[u8]) -> Result<(), String> {
+/// Checks the lengths of the strings that open a message after its header's stamp (the
+/// header's frame, and an odometry's child frame) against the bytes that remain, before the
+/// decoder allocates them.
+fn check_string_lengths(data: &[u8], strings: &[&str]) -> Result<(), String> {
     let (payload, little) = mcap_log::cdr_payload(data)?;
     let mut pos = 8usize;
-    for what in ["header.frame_id", "child_frame_id"] {
+    for what in strings {
         pos = pos.next_multiple_of(4);
         let bytes: [u8; 4] = payload
             .get(pos..pos + 4)
@@ -380,7 +472,7 @@ fn check_odometry_lengths(data: &[u8]) -> Result<(), String> {
 }
 
 fn trunk_message(data: &[u8], (log_time, sequence): (u64, u64)) -> Result<TrunkMessage, String> {
-    check_odometry_lengths(data)?;
+    check_string_lengths(data, &["header.frame_id", "child_frame_id"])?;
     let m: Odometry = cdr::deserialize(data).map_err(|e| e.to_string())?;
     let o = m.orientation;
     let quaternion = Quaternion::new(
@@ -487,6 +579,7 @@ pub fn read(
         feet,
         trunk: vec![],
         feet_messages: vec![],
+        imu: vec![],
         topics: BTreeMap::new(),
     };
     let log = {
@@ -533,6 +626,7 @@ struct Aligned {
     /// Message indices of the trunk sorted by time.
     trunk_order: Vec<usize>,
     feet: Option<(Vec<Bracket>, Vec<usize>)>,
+    imu: Option<(Vec<Bracket>, Vec<usize>)>,
     /// The joint samples kept.
     kept: std::ops::Range<usize>,
     samples: usize,
@@ -552,28 +646,34 @@ impl Aligned {
             .collect();
         let hint = |e: String| stamp_hint(e, opts.stamp);
         let (trunk_order, trunk) = brackets(t, &trunk_times, &opts.odometry_topic).map_err(hint)?;
-        let feet = if c.feet_messages.is_empty() {
-            None
-        } else {
-            let times: Vec<(f64, u64)> = (c.feet_messages.iter())
-                .map(|m| (seconds(m.ns[clock]), m.sequence))
-                .collect();
-            let (order, b) = brackets(t, &times, &opts.foot_forces_topic).map_err(hint)?;
-            Some((b, order))
+        let optional = |times: Vec<(f64, u64)>, topic: &str| {
+            (!times.is_empty())
+                .then(|| brackets(t, &times, topic).map(|(order, b)| (b, order)))
+                .transpose()
+                .map_err(hint)
         };
-        let inside =
-            |k: usize| trunk[k].is_some() && feet.as_ref().is_none_or(|(b, _)| b[k].is_some());
+        let feet_times = (c.feet_messages.iter()).map(|m| (seconds(m.ns[clock]), m.sequence));
+        let feet = optional(feet_times.collect(), &opts.foot_forces_topic)?;
+        let imu_times = (c.imu.iter()).map(|m| (seconds(m.ns[clock]), m.sequence));
+        let imu = optional(imu_times.collect(), &opts.imu_topic)?;
+        let covered = |o: &Option<(Vec<Bracket>, Vec<usize>)>, k: usize| {
+            o.as_ref().is_none_or(|(b, _)| b[k].is_some())
+        };
+        let inside = |k: usize| trunk[k].is_some() && covered(&feet, k) && covered(&imu, k);
         let first = (0..t.len()).find(|&k| inside(k));
         let Some(first) = first else {
+            let others: String = [
+                feet.as_ref()
+                    .map(|_| format!(" with {}", opts.foot_forces_topic)),
+                imu.as_ref().map(|_| format!(" and {}", opts.imu_topic)),
+            ]
+            .into_iter()
+            .flatten()
+            .collect();
             return Err(format!(
-                "the joint states ({} samples) and {} do not overlap in time{}",
+                "the joint states ({} samples) and {} do not overlap in time{others}",
                 t.len(),
                 opts.odometry_topic,
-                if feet.is_some() {
-                    format!(" with {}", opts.foot_forces_topic)
-                } else {
-                    String::new()
-                }
             ));
         };
         let end = (first..t.len()).find(|&k| !inside(k)).unwrap_or(t.len());
@@ -587,6 +687,7 @@ impl Aligned {
             trunk,
             trunk_order,
             feet,
+            imu,
             kept: first..end,
             samples: t.len(),
         })
@@ -647,6 +748,12 @@ impl Aligned {
                 if let Some(held) = &a.contact {
                     log.contact.get_or_insert_with(Vec::new).extend(held);
                 }
+            }
+            if let Some((brackets, order)) = &self.imu {
+                let (i, s) = brackets[k].expect("kept samples lie inside");
+                let a = &c.imu[order[i]].accel;
+                let b = &c.imu[order[(i + 1).min(order.len() - 1)]].accel;
+                log.accel.get_or_insert_with(Vec::new).push(a.lerp(b, s));
             }
         }
         log

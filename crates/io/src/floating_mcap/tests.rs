@@ -38,7 +38,11 @@ fn log(m: usize) -> FloatingLog {
                 .collect(),
         ),
         contact: Some((0..2 * m).map(|i| i % 3 != 0).collect()),
-        accel: None,
+        accel: Some(
+            t.iter()
+                .map(|&x| Vector3::new(0.3 * x, -0.2, 9.81 - x))
+                .collect(),
+        ),
     }
 }
 
@@ -75,6 +79,10 @@ fn assert_close(got: &FloatingLog, want: &FloatingLog, tol: f64) {
         (Some(a), Some(b)) => assert!(close(&v3(a), &v3(b))),
         (a, b) => assert_eq!(a.is_some(), b.is_some()),
     }
+    match (&got.accel, &want.accel) {
+        (Some(a), Some(b)) => assert!(close(&v3(a), &v3(b))),
+        (a, b) => assert_eq!(a.is_some(), b.is_some()),
+    }
     assert_eq!(got.contact, want.contact);
 }
 
@@ -96,6 +104,13 @@ fn a_log_reads_back_as_written() {
     write(&path, &bare, "trunk").unwrap();
     let got = read_back(&path).unwrap();
     assert_eq!((got.log.force, got.log.contact), (None, None));
+    // Without an accelerometer there is no IMU topic, and none is read.
+    let no_imu = FloatingLog {
+        accel: None,
+        ..want.clone()
+    };
+    write(&path, &no_imu, "trunk").unwrap();
+    assert_eq!(read_back(&path).unwrap().log.accel, None);
     // The foot order asked for, not the message's.
     let got = read(
         &path,
@@ -149,8 +164,9 @@ fn feet_message_of(log: &FloatingLog, k: usize, header: &Header) -> FootForces {
     }
 }
 
-/// The messages of `log` on the three topics at their own rates: joint states every sample,
-/// odometry every `every[0]`-th from sample `from[0]`, feet every `every[1]`-th from `from[1]`.
+/// The messages of `log` on the four topics at their own rates: joint states every sample,
+/// odometry every `every[0]`-th from sample `from[0]`, feet every `every[1]`-th from `from[1]`,
+/// the IMU every third from sample 2.
 fn at_rates(log: &FloatingLog, every: [usize; 2], from: [usize; 2]) -> Vec<Raw> {
     let mut out = vec![];
     let j = &log.joints;
@@ -189,6 +205,10 @@ fn at_rates(log: &FloatingLog, every: [usize; 2], from: [usize; 2]) -> Vec<Raw> 
                 ns,
                 cdr_into(&mut buf, &m).to_vec(),
             ));
+        }
+        if let (Some(accel), true) = (&log.accel, k >= 2 && (k - 2) % 3 == 0) {
+            let m = imu_of(log, k, &header, "trunk", &accel[k]);
+            out.push((TOPIC_IMU, IMU_TYPES[0], ns, cdr_into(&mut buf, &m).to_vec()));
         }
     }
     out
@@ -230,7 +250,7 @@ fn topics_at_other_rates_are_brought_to_the_joint_samples() {
         feet: full.feet.clone(),
         force: Some(full.force.as_ref().unwrap()[k.start * f..k.end * f].to_vec()),
         contact: Some(held),
-        accel: None,
+        accel: Some(full.accel.as_ref().unwrap()[k.clone()].to_vec()),
     };
     // Linear signals exactly (to rounding); the orientation's chord over 2 ms: 1e-7 rad.
     assert_close(
@@ -255,9 +275,13 @@ fn error_of(messages: &[Raw]) -> String {
     err
 }
 
-/// The messages of a 30-sample log, every topic at every sample.
+/// The messages of a 30-sample log without an accelerometer, every topic at every sample.
 fn good() -> Vec<Raw> {
-    at_rates(&log(30), [1, 1], [0, 0])
+    let without = FloatingLog {
+        accel: None,
+        ..log(30)
+    };
+    at_rates(&without, [1, 1], [0, 0])
 }
 
 /// [`good`] with the fifth message of `topic` (at sample 4) replaced by `data` of type `kind`.
@@ -436,4 +460,51 @@ fn unset_header_stamps_are_named_as_the_likely_cause() {
             && err.contains("a publisher that leaves it unset stamps every message alike"),
         "{err}"
     );
+}
+
+#[test]
+fn a_bad_imu_message_is_refused_naming_the_topic_and_the_message() {
+    let l = log(30);
+    let messages = at_rates(&l, [1, 1], [0, 0]);
+    let fifth = |kind: &'static str, data: Vec<u8>| {
+        let mut m = messages.clone();
+        let (i, _) = (m.iter().enumerate())
+            .filter(|(_, x)| x.0 == TOPIC_IMU)
+            .nth(4)
+            .unwrap();
+        m[i] = (m[i].0, kind, m[i].2, data);
+        m
+    };
+    let imu = |edit: &dyn Fn(&mut Imu)| {
+        let (header, _) = mcap_log::stamp(l.joints.t[14]);
+        let mut m = imu_of(&l, 14, &header, "trunk", &Vector3::new(0.0, 0.0, 9.81));
+        edit(&mut m);
+        fifth(IMU_TYPES[0], cdr_into(&mut vec![], &m).to_vec())
+    };
+    let mut corrupt = cdr_into(
+        &mut vec![],
+        &imu_of(
+            &l,
+            14,
+            &mcap_log::stamp(0.014).0,
+            "trunk",
+            &Vector3::zeros(),
+        ),
+    )
+    .to_vec();
+    corrupt[4 + 8..4 + 12].copy_from_slice(&u32::MAX.to_le_bytes());
+    assert_refused(vec![
+        (
+            fifth("std_msgs/msg/String", vec![0, 1, 0, 0]),
+            "carries std_msgs/msg/String, not sensor_msgs/msg/Imu",
+        ),
+        (
+            imu(&|m| m.linear_acceleration.y = f64::NAN),
+            "linear_acceleration.y is NaN, not a finite value",
+        ),
+        (
+            fifth(IMU_TYPES[0], corrupt),
+            "its header.frame_id claims 4294967295 bytes, more than remain",
+        ),
+    ]);
 }
