@@ -229,3 +229,48 @@ fn trotting_in_place_the_feet_touch_down_and_lift_off_as_in_rapier() {
         );
     }
 }
+
+#[test]
+fn a_bad_ground_or_start_is_named_not_a_panic() {
+    use crate::rapier_floating::RapierFloating;
+    use nalgebra::Vector3;
+    let robot = quadruped();
+    let q = vec![0.0; 12];
+    let start = (Vector3::new(0.0, 0.0, 0.5), Vector3::zeros());
+    for ((mu, radius, dt), said) in [
+        ((0.8, 0.0, 1e-4), "the feet's radius must be above 0"),
+        ((0.8, f64::NAN, 1e-4), "the feet's radius must be above 0"),
+        (
+            (-0.1, 0.001, 1e-4),
+            "the ground's friction must be finite and >= 0",
+        ),
+        ((0.8, 0.001, 0.0), "the step must be above 0"),
+    ] {
+        let err = RapierFloating::new(&robot, &feet(), (start.0, start.1, &q), (mu, radius), dt);
+        let err = err.err().expect("refused").to_string();
+        assert!(err.contains(said), "{said}: {err}");
+    }
+    let err = RapierFloating::new(
+        &robot,
+        &feet(),
+        (start.0, start.1, &q[..3]),
+        (0.8, 0.001),
+        1e-4,
+    );
+    assert!(err
+        .err()
+        .expect("refused")
+        .to_string()
+        .contains("with 12 joint angles (got 3)"));
+    let e = Standing {
+        substeps: 0,
+        ..Default::default()
+    };
+    let err = standing_in_rapier(&robot, &feet(), &e, FOOT_RADIUS)
+        .err()
+        .expect("refused");
+    assert!(
+        err.to_string().contains("substeps must be at least 1"),
+        "{err}"
+    );
+}
