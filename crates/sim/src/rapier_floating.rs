@@ -57,34 +57,7 @@ impl RapierFloating {
         (mu, radius): (f64, f64),
         dt: f64,
     ) -> Result<Self, RapierError> {
-        let bad = |what: &str, v: f64| {
-            RapierError::Unsupported(format!("floating robot on the ground: {what}, got {v}"))
-        };
-        if !(radius.is_finite() && radius > 0.0 && radius <= 0.1) {
-            return Err(bad(
-                "the feet's radius must be above 0 and at most 0.1 m",
-                radius,
-            ));
-        }
-        if !(mu.is_finite() && mu >= 0.0) {
-            return Err(bad("the ground's friction must be finite and >= 0", mu));
-        }
-        if !(dt.is_finite() && dt > 0.0 && dt <= 0.01) {
-            return Err(bad("the step must be above 0 and at most 0.01 s", dt));
-        }
-        if q.len() != robot.joints()
-            || !pos
-                .iter()
-                .chain(velocity.iter())
-                .chain(q)
-                .all(|x| x.is_finite())
-        {
-            return Err(RapierError::Unsupported(format!(
-                "floating robot on the ground: the start must be finite, with {} joint angles (got {})",
-                robot.joints(),
-                q.len()
-            )));
-        }
+        check_start(robot, (&pos, &velocity, q), (mu, radius), dt)?;
         let mut bodies = RigidBodySet::new();
         let trunk = bodies.insert(
             RigidBodyBuilder::dynamic()
@@ -167,6 +140,44 @@ impl RapierFloating {
             })
             .collect()
     }
+}
+
+/// `Err` naming what is out of range in [`RapierFloating::new`]'s arguments.
+fn check_start(
+    robot: &FloatingModel,
+    (pos, velocity, q): (&Vector3<f64>, &Vector3<f64>, &[f64]),
+    (mu, radius): (f64, f64),
+    dt: f64,
+) -> Result<(), RapierError> {
+    let bad = |what: &str, v: f64| {
+        RapierError::Unsupported(format!("floating robot on the ground: {what}, got {v}"))
+    };
+    if !(radius.is_finite() && radius > 0.0 && radius <= 0.1) {
+        return Err(bad(
+            "the feet's radius must be above 0 and at most 0.1 m",
+            radius,
+        ));
+    }
+    if !(mu.is_finite() && mu >= 0.0) {
+        return Err(bad("the ground's friction must be finite and >= 0", mu));
+    }
+    if !(dt.is_finite() && dt > 0.0 && dt <= 0.01) {
+        return Err(bad("the step must be above 0 and at most 0.01 s", dt));
+    }
+    if q.len() != robot.joints()
+        || !pos
+            .iter()
+            .chain(velocity.iter())
+            .chain(q)
+            .all(|x| x.is_finite())
+    {
+        return Err(RapierError::Unsupported(format!(
+            "floating robot on the ground: the start must be finite, with {} joint angles (got {})",
+            robot.joints(),
+            q.len()
+        )));
+    }
+    Ok(())
 }
 
 /// `experiment` run in rapier on `robot` with feet `feet`: the same start, the same PD law

@@ -266,9 +266,7 @@ fn a_bad_ground_or_start_is_named_not_a_panic() {
         substeps: 0,
         ..Default::default()
     };
-    let err = standing_in_rapier(&robot, &feet(), &e, FOOT_RADIUS)
-        .err()
-        .expect("refused");
+    let err = standing_in_rapier(&robot, &feet(), &e, FOOT_RADIUS).expect_err("refused");
     assert!(
         err.to_string().contains("substeps must be at least 1"),
         "{err}"
