@@ -15,6 +15,7 @@ import json
 import os
 import sys
 import tempfile
+import xml.etree.ElementTree as ElementTree
 
 import mujoco
 import numpy as np
@@ -143,6 +144,14 @@ def mj_standing_quadruped(sim, xml, radius):
     return model
 
 
+BASE = ["base_x", "base_y", "base_z", "base_qw", "base_qx", "base_qy", "base_qz"]
+
+
+def log_qpos(row, names):
+    """MuJoCo's qpos (free joint, then the hinges `names`) of one row of a floating log."""
+    return [float(row[k]) for k in BASE] + [float(row["q_" + n]) for n in names]
+
+
 def mj_feet_forces(model, data):
     """The ground's force on each foot (world frame), by foot body name."""
     out = {}
@@ -178,8 +187,7 @@ def check_contact_standing_still(report, binary, directory, seconds=4.0):
     assert names == sim["joints"], f"joint order differs: {names}"
     with open(log) as f:
         rows = list(csv.DictReader(f))
-    base = ["base_x", "base_y", "base_z", "base_qw", "base_qx", "base_qy", "base_qz"]
-    data.qpos[:] = [float(rows[0][k]) for k in base] + [float(rows[0]["q_" + n]) for n in names]
+    data.qpos[:] = log_qpos(rows[0], names)
     data.qpos[2] += radius  # the sphere's bottom where physid's point foot is
     (kp, kd), q_star = sim["gains"], np.tile(sim["posture"], 4)
     for _ in range(int(round(float(rows[-1]["t"]) / model.opt.timestep))):
@@ -224,18 +232,14 @@ def mj_follow(binary, directory, name, args, radius=0.001):
                          for j in _mjcf_joints(xml, names)])
     with open(log) as f:
         rows = list(csv.DictReader(f))
-    base = ["base_x", "base_y", "base_z", "base_qw", "base_qx", "base_qy", "base_qz"]
     feet = [f["body"] for f in sim["feet"]]
     foot_ids = [model.geom("foot_" + b).id for b in feet]
-
-    def state(row):
-        return [float(row[k]) for k in base] + [float(row["q_" + n]) for n in names]
 
     def above_feet(d):
         mujoco.mj_kinematics(model, d)
         return d.qpos[2] - np.mean([d.geom_xpos[i][2] for i in foot_ids]) - radius
 
-    data.qpos[:] = state(rows[0])
+    data.qpos[:] = log_qpos(rows[0], names)
     data.qpos[2] += radius  # the sphere's bottom where physid's point foot is
     data.qvel[0:3] = sim["push"]
     (kp, kd), q_star = sim["gains"], np.tile(sim["posture"], 4)
@@ -243,7 +247,7 @@ def mj_follow(binary, directory, name, args, radius=0.001):
     probe = mujoco.MjData(model)
     ours, theirs = [], []
     for row in rows:
-        probe.qpos[:] = state(row)
+        probe.qpos[:] = log_qpos(row, names)
         ours.append((above_feet(probe), probe.qpos[0:2].copy(), probe.qpos[7:].copy(),
                      [float(row[f"force_{b}_z"]) for b in feet]))
         forces = mj_feet_forces(model, data)
@@ -260,8 +264,7 @@ def mj_follow(binary, directory, name, args, radius=0.001):
 
 def _mjcf_joints(xml, names):
     """The exported MJCF's hinge joints' attributes, in `names` order."""
-    import xml.etree.ElementTree as ET
-    joints = {j.get("name"): j for j in ET.parse(xml).iter("joint")}
+    joints = {j.get("name"): j for j in ElementTree.parse(xml).iter("joint")}
     return [joints[n] for n in names]
 
 

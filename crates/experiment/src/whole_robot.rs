@@ -369,12 +369,8 @@ pub fn normal_equations(
     setting: DataSetting,
     samples: usize,
 ) -> NormalEquations {
-    let mut acc = Accumulator::new(robot, setting);
-    for k in 0..samples.min(measured.len()) {
-        let down: Vec<bool> = truth.contact_at(k).iter().map(|f| f.z > 0.0).collect();
-        acc.add(robot, measured, k, &down);
-    }
-    acc.ne.finish()
+    let mut grown = grown_from_run(robot, (measured, truth), setting, &[samples]);
+    grown.pop().expect("one size").1
 }
 
 /// The run as the sensors give it: motor torques and contact forces with Gaussian noise of

@@ -155,16 +155,8 @@ impl Filtered {
         (sos, g): (&Sos, &Vector3<f64>),
     ) -> Self {
         let t = &log.joints.t[span.clone()];
-        let mut accel = twist_derivative(&log.twist[span.clone()], t, sos);
-        if let Some(measured) = &log.accel {
-            let linear = accelerometer_linear(log, span.clone(), measured, g);
-            for (a, lin) in accel
-                .iter_mut()
-                .zip(filtered_columns(&linear, 3, sos).chunks(3))
-            {
-                a.lin = Vector3::new(lin[0], lin[1], lin[2]);
-            }
-        }
+        let measured = (log.accel.as_ref()).map(|f| accelerometer_linear(log, span.clone(), f, g));
+        let accel = twist_derivative(&log.twist[span.clone()], t, measured.as_deref(), sos);
         let n = log.joints.dof();
         let tau = filtered_columns(&log.joints.tau[span.start * n..span.end * n], n, sos);
         let f = log.feet.len();
@@ -253,10 +245,20 @@ fn sample(
 
 /// The time derivative of the trunk's twist (trunk coordinates: in a body's own frame the
 /// spatial acceleration is the derivative of the twist's components), by central differences on
-/// the stamps `t`, then `sos` forwards and backwards.
-fn twist_derivative(twist: &[Motion], t: &[f64], sos: &Sos) -> Vec<Motion> {
+/// the stamps `t`, then `sos` forwards and backwards; its linear part `measured` instead where
+/// given (sample-major `x, y, z`: [`accelerometer_linear`]), filtered alike, not differentiated.
+fn twist_derivative(
+    twist: &[Motion],
+    t: &[f64],
+    measured: Option<&[f64]>,
+    sos: &Sos,
+) -> Vec<Motion> {
     let m = twist.len();
     let column = |c: usize| -> Vec<f64> {
+        if let (Some(linear), 3..) = (measured, c) {
+            let x: Vec<f64> = linear.iter().skip(c - 3).step_by(3).copied().collect();
+            return sos.filtfilt(&x);
+        }
         let x: Vec<f64> = twist.iter().map(|v| v.to_vec6()[c]).collect();
         let d: Vec<f64> = (0..m)
             .map(|k| {

@@ -210,17 +210,20 @@ impl FloatingColumns {
         let contact: Vec<Option<usize>> =
             feet.iter().map(|f| at(&format!("contact_{f}"))).collect();
         let accel = ACCEL.map(at);
-        let accel = match accel.iter().position(Option::is_none) {
-            None => Some(accel.map(|c| c.expect("all"))),
-            Some(_) if accel.iter().all(Option::is_none) => None,
-            Some(i) => {
-                return Err(format!(
-                    "no column '{}': an accelerometer has three columns ({})",
-                    ACCEL[i],
-                    ACCEL.join(", ")
-                ))
-            }
-        };
+        if !(accel.complete() || accel.absent()) {
+            let missing = accel
+                .iter()
+                .position(Option::is_none)
+                .expect("not complete");
+            return Err(format!(
+                "no column '{}': an accelerometer has three columns ({})",
+                ACCEL[missing],
+                ACCEL.join(", ")
+            ));
+        }
+        let accel = accel
+            .complete()
+            .then(|| accel.map(|c| c.expect("complete")));
         Ok(Self {
             base: base.map(|b| b.expect("checked")),
             accel,

@@ -513,6 +513,24 @@ impl Standing {
             })
             .collect()
     }
+
+    /// Where the run starts: the trunk origin's world position (m; the trunk level) and the
+    /// joint angles (rad, the standing posture), the lowest foot [`Start::height`] above the
+    /// ground.
+    pub fn initial_pose(
+        &self,
+        robot: &FloatingModel,
+        data: &mut Data,
+        feet: &[(usize, Vector3<f64>)],
+    ) -> (Vector3<f64>, Vec<f64>) {
+        let q: Vec<f64> = (0..robot.joints()).map(|j| self.posture[j % 3]).collect();
+        kinematics::update_world(robot.tree(), data, &q);
+        let lowest = feet
+            .iter()
+            .map(|(b, p)| kinematics::point_position(data, *b, p).z)
+            .fold(f64::INFINITY, f64::min);
+        (Vector3::new(0.0, 0.0, self.start.height - lowest), q)
+    }
 }
 
 /// The robot in its standing posture, trunk level, its lowest foot on the ground or
@@ -531,26 +549,6 @@ fn initial_state(
         v: Motion::new(Vector3::zeros(), Vector3::from(e.start.velocity)),
         qd: vec![0.0; q.len()],
         q,
-    }
-}
-
-impl Standing {
-    /// Where the run starts: the trunk origin's world position (m; the trunk level) and the
-    /// joint angles (rad, the standing posture), the lowest foot [`Start::height`] above the
-    /// ground.
-    pub fn initial_pose(
-        &self,
-        robot: &FloatingModel,
-        data: &mut Data,
-        feet: &[(usize, Vector3<f64>)],
-    ) -> (Vector3<f64>, Vec<f64>) {
-        let q: Vec<f64> = (0..robot.joints()).map(|j| self.posture[j % 3]).collect();
-        kinematics::update_world(robot.tree(), data, &q);
-        let lowest = feet
-            .iter()
-            .map(|(b, p)| kinematics::point_position(data, *b, p).z)
-            .fold(f64::INFINITY, f64::min);
-        (Vector3::new(0.0, 0.0, self.start.height - lowest), q)
     }
 }
 

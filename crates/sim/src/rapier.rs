@@ -42,16 +42,8 @@ pub struct RapierSim {
     pipeline: PhysicsPipeline,
     pub(crate) params: IntegrationParameters,
     gravity: Vector,
-    /// Multibody joint handle of each physid joint.
-    pub(crate) handles: Vec<MultibodyJointHandle>,
-    /// Rigid body of each physid body.
-    pub(crate) links: Vec<RigidBodyHandle>,
-    /// Parent rigid body of each physid body (the base for roots).
-    parents: Vec<RigidBodyHandle>,
-    /// Joint axis of each body, in its own frame.
-    axes: Vec<Vector3<f64>>,
-    /// Multibody joint handle of each rotor (with its joint index and gear ratio).
-    rotors: Vec<(usize, MultibodyJointHandle, f64)>,
+    /// The model's bodies and rotors as rapier holds them.
+    tree: Hung,
 }
 
 /// A model's bodies hung in a rapier multibody: per physid body its joint's handle, its rigid
@@ -171,11 +163,7 @@ impl RapierSim {
                 ..Default::default()
             },
             gravity: vec3(&model.gravity()),
-            handles: tree.handles,
-            links: tree.links,
-            parents: tree.parents,
-            axes: tree.axes,
-            rotors: tree.rotors,
+            tree,
         };
         sim.couple_rotors();
         Ok(sim)
@@ -183,7 +171,8 @@ impl RapierSim {
 
     /// The multibody link id of each physid joint.
     fn link_ids(&self) -> Vec<usize> {
-        self.handles
+        self.tree
+            .handles
             .iter()
             .map(|&h| self.multibody_joints.get(h).expect("joint exists").1)
             .collect()
@@ -193,6 +182,7 @@ impl RapierSim {
     fn couple_rotors(&mut self) {
         let ids = self.link_ids();
         let couplings: Vec<MultibodyDofCoupling> = self
+            .tree
             .rotors
             .iter()
             .map(|&(i, jr, n)| MultibodyDofCoupling {
@@ -208,7 +198,7 @@ impl RapierSim {
             .collect();
         let (mb, _) = self
             .multibody_joints
-            .get_mut(self.handles[0])
+            .get_mut(self.tree.handles[0])
             .expect("joint exists");
         for c in couplings {
             mb.add_dof_coupling(c);
@@ -222,13 +212,14 @@ impl RapierSim {
     pub(crate) fn set_state(&mut self, q: &[f64], qd: &[f64], root: Option<([f64; 6], [f64; 6])>) {
         let ids = self.link_ids();
         let rotor_ids: Vec<(usize, usize, f64)> = self
+            .tree
             .rotors
             .iter()
             .map(|&(i, jr, n)| (i, self.multibody_joints.get(jr).expect("rotor exists").1, n))
             .collect();
         let (mb, _) = self
             .multibody_joints
-            .get_mut(self.handles[0])
+            .get_mut(self.tree.handles[0])
             .expect("joint exists");
         mb.damping_mut().fill(0.0);
         let mut disp = vec![0.0; mb.ndofs()];
@@ -255,18 +246,23 @@ impl RapierSim {
         mb.update_rigid_bodies(&mut self.bodies, true);
     }
 
+    /// The rigid body of physid body `b`.
+    pub(crate) fn link(&self, b: usize) -> RigidBodyHandle {
+        self.tree.links[b]
+    }
+
     /// Advances one time step with the joint torques `tau` (N m) held.
     pub fn step_with_torque(&mut self, tau: &[f64]) {
-        for h in self.links.iter().chain(&self.parents) {
+        for h in self.tree.links.iter().chain(&self.tree.parents) {
             if let Some(b) = self.bodies.get_mut(*h) {
                 b.reset_torques(true);
             }
         }
-        for (i, &h) in self.links.iter().enumerate() {
+        for (i, &h) in self.tree.links.iter().enumerate() {
             let rot = self.bodies[h].position().rotation;
-            let a = rot * vec3(&self.axes[i]);
+            let a = rot * vec3(&self.tree.axes[i]);
             self.bodies[h].add_torque(a * tau[i], true);
-            let p = self.parents[i];
+            let p = self.tree.parents[i];
             if self.bodies[p].is_dynamic() {
                 self.bodies[p].add_torque(-a * tau[i], true);
             }
@@ -321,7 +317,7 @@ impl RapierSim {
     pub fn state(&self) -> (Vec<f64>, Vec<f64>) {
         let (mb, _) = self
             .multibody_joints
-            .get(self.handles[0])
+            .get(self.tree.handles[0])
             .expect("joint exists");
         let mut q = vec![];
         let mut qd = vec![];

@@ -78,7 +78,7 @@ impl RapierFloating {
                 .translation(Vector::new(p.x, p.y, p.z))
                 .friction(mu)
                 .build();
-            let link = sim.links[b];
+            let link = sim.link(b);
             handles.push(
                 sim.colliders
                     .insert_with_parent(ball, link, &mut sim.bodies),
