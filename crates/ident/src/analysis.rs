@@ -3,7 +3,7 @@
 
 use super::NormalEquations;
 use nalgebra::{DMatrix, DVector, SymmetricEigen};
-use physid_core::dynamics::{regressor, Data};
+use physid_core::dynamics::{regressor, rnea, sign, Data};
 use physid_core::linalg::{excited_scale, RANK_TOL};
 use physid_core::model::Model;
 use physid_core::trajectory::{SampleSink, Trajectory};
@@ -20,20 +20,73 @@ pub fn residuals(
 ) -> Vec<f64> {
     use rayon::prelude::*;
     let n = model.dof();
+    let carrying = model.with_parameters(theta).ok();
     let starts: Vec<usize> = range.clone().step_by(RESIDUAL_CHUNK).collect();
     let chunks: Vec<Vec<f64>> = starts
         .par_iter()
         .map(|&start| {
             let chunk = start..(start + RESIDUAL_CHUNK).min(range.end);
             let mut out = Vec::with_capacity(chunk.len() * n);
-            super::normal::for_each_regressor(model, tr, chunk, &mut |k, y| {
-                let pred = y * theta;
+            let mut predict = Predictor::new(model, carrying.as_ref(), theta);
+            let mut pred = vec![0.0; n];
+            for k in chunk {
+                let qdd = tr.qdd_at(k).expect("q̈ present");
+                predict.torque(tr.q_at(k), tr.qd_at(k), qdd, &mut pred);
                 out.extend((0..n).map(|j| tr.tau_at(k)[j] - pred[j]));
-            });
+            }
             out
         })
         .collect();
     chunks.concat()
+}
+
+/// The joint torque `Y(q, q̇, q̈) θ` (N m) of a model's parameters `θ`, sample by sample: the
+/// inverse dynamics with friction of the model carrying `θ` (`O(n)` per sample, against the
+/// regressor's `O(n²)`; equal to `Y θ` up to round-off, `tests/dynamics.rs`), or the
+/// regressor's product where there is no such model (a `θ` with a non-finite entry).
+struct Predictor<'a> {
+    /// The model carrying `θ`, or the model whose regressor multiplies it.
+    model: &'a Model,
+    carrying: bool,
+    theta: &'a DVector<f64>,
+    data: Data,
+    y: DMatrix<f64>,
+}
+
+impl<'a> Predictor<'a> {
+    /// For `model`'s parameters `theta`, with `carrying` the model with them when there is one.
+    fn new(model: &'a Model, carrying: Option<&'a Model>, theta: &'a DVector<f64>) -> Self {
+        let y = match carrying {
+            Some(_) => DMatrix::zeros(0, 0),
+            None => DMatrix::zeros(model.dof(), model.layout().len),
+        };
+        // The workspace holds the spatial inertias of the model it is made for.
+        let model = carrying.unwrap_or(model);
+        Self {
+            model,
+            carrying: carrying.is_some(),
+            theta,
+            data: Data::new(model),
+            y,
+        }
+    }
+
+    /// `Y θ` at one state into `out` (N m per joint).
+    fn torque(&mut self, q: &[f64], qd: &[f64], qdd: &[f64], out: &mut [f64]) {
+        if self.carrying {
+            let tau = rnea(self.model, &mut self.data, q, qd, qdd);
+            for ((o, t), (b, w)) in out
+                .iter_mut()
+                .zip(tau.iter())
+                .zip(self.model.bodies().iter().zip(qd))
+            {
+                *o = t + b.friction.viscous * w + b.friction.coulomb * sign(*w);
+            }
+        } else {
+            regressor(self.model, &mut self.data, q, qd, qdd, &mut self.y);
+            out.copy_from_slice((&self.y * self.theta).as_slice());
+        }
+    }
 }
 
 /// Samples per chunk of [`residuals`].
@@ -87,13 +140,13 @@ pub fn residual_stream<E>(
     source: impl FnOnce(&mut SampleSink) -> Result<usize, E>,
     each: &mut dyn FnMut(f64, &[f64]),
 ) -> Result<usize, E> {
-    let (n, p) = (model.dof(), model.layout().len);
-    let mut d = Data::new(model);
-    let mut y = DMatrix::zeros(n, p);
+    let n = model.dof();
+    let carrying = model.with_parameters(theta).ok();
+    let mut predict = Predictor::new(model, carrying.as_ref(), theta);
+    let mut pred = vec![0.0; n];
     let mut r = vec![0.0; n];
     source(&mut |_, s| {
-        regressor(model, &mut d, s.q, s.qd, s.qdd, &mut y);
-        let pred = &y * theta;
+        predict.torque(s.q, s.qd, s.qdd, &mut pred);
         for j in 0..n {
             r[j] = pred[j] - s.tau[j];
         }
@@ -389,5 +442,69 @@ fn significant(x: f64) -> String {
         format!("{x:.digits$}")
     } else {
         format!("{x:.2e}")
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use physid_core::model::random::{random_state, random_tree};
+    use physid_core::model::RotorModel;
+
+    #[test]
+    fn residuals_are_the_torque_less_the_regressor_times_theta_in_memory_and_streamed() {
+        for m in [
+            random_tree(3, 5),
+            random_tree(4, 4).with_rotor_model(RotorModel::Reflected),
+        ] {
+            let (n, p) = (m.dof(), m.layout().len);
+            let [r, _, _] = random_state(9, p, 1.0);
+            let theta = DVector::from_iterator(
+                p,
+                m.parameters()
+                    .iter()
+                    .zip(&r)
+                    .map(|(t, r)| t * (1.0 + r) - 0.2 * r),
+            );
+            let mut tr = Trajectory::new((0..n).map(|j| format!("j{j}")).collect(), true);
+            let mut want = vec![];
+            let (mut d, mut y) = (Data::new(&m), DMatrix::zeros(n, p));
+            for k in 0..2 * RESIDUAL_CHUNK + 7 {
+                let [q, qd, qdd] = random_state(100 + k as u64, n, 2.0);
+                let [tau, _, _] = random_state(5000 + k as u64, n, 10.0);
+                regressor(&m, &mut d, &q, &qd, &qdd, &mut y);
+                want.extend((&y * &theta).iter().zip(&tau).map(|(yt, t)| t - yt));
+                tr.push(k as f64 * 1e-3, &q, &qd, Some(&qdd), &tau);
+            }
+            let got = residuals(&m, &theta, &tr, 0..tr.len());
+            let worst = got
+                .iter()
+                .zip(&want)
+                .map(|(g, w)| (g - w).abs())
+                .fold(0.0, f64::max);
+            assert!(
+                worst < 1e-9,
+                "{}: largest difference {worst:e} N m",
+                m.name()
+            );
+            let mut streamed = vec![];
+            residual_stream(
+                &m,
+                &theta,
+                |sink: &mut SampleSink| -> Result<usize, ()> { Ok(tr.stream(0..tr.len(), sink)) },
+                &mut |_, r| streamed.extend(r.iter().map(|v| -v)),
+            )
+            .unwrap();
+            let worst = streamed
+                .iter()
+                .zip(&want)
+                .map(|(g, w)| (g - w).abs())
+                .fold(0.0, f64::max);
+            assert!(
+                worst < 1e-9,
+                "{}: streamed, largest difference {worst:e} N m",
+                m.name()
+            );
+        }
     }
 }
