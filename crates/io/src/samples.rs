@@ -300,15 +300,110 @@ fn number(rec: &csv::ByteRecord, col: usize) -> Result<f64, String> {
 /// Reads a CSV as logged (velocity and acceleration columns optional, time stamps as written),
 /// its joints in `robot`'s order when given, and the joints named in the file that the robot
 /// lacks. Each value is checked (finite, within range), naming the line and column; the time
-/// stamps' order and gaps are the pipeline's ([`crate::prepare`]). One record buffer is reused
-/// for every line.
+/// stamps' order and gaps are the pipeline's ([`crate::prepare`]).
+///
+/// A large file without quotes is cut at line ends into parts read side by side (the current
+/// rayon pool) and joined in order: the same samples as one pass. Where a part fails, the file
+/// is read again in one pass, whose message names the line as it stands in the file.
 pub fn read_csv_logged(
     path: &Path,
     robot: Option<&[String]>,
 ) -> Result<(Logged, Vec<String>), IoError> {
-    let bad = |m: String| IoError::invalid(path, m);
-    let mut r = reader(path)?;
+    let bytes = std::fs::read(path).map_err(|source| IoError::Fs {
+        path: path.to_path_buf(),
+        source,
+    })?;
+    let mut r = records(&bytes[..]);
     let c = Columns::parse(&mut r, path, robot)?;
+    let body = &bytes[r.position().byte() as usize..];
+    let parts = line_parts(body);
+    if parts.len() > 1 {
+        use rayon::prelude::*;
+        let read: Result<Vec<Logged>, IoError> = (parts.par_iter())
+            .map(|part| read_rows(&mut records_without_header(part), &c, path, true))
+            .collect();
+        if let Ok(read) = read {
+            return Ok((joined(&c, read), c.ignored));
+        }
+    }
+    let out = read_rows(&mut r, &c, path, false)?;
+    Ok((out, c.ignored))
+}
+
+/// Bytes per part of a file read side by side ([`read_csv_logged`]); a smaller file is one part.
+const PART_BYTES: usize = 1 << 20;
+
+/// `body` (a CSV's records after its header) cut at line ends into up to one part per thread
+/// of at least [`PART_BYTES`]; one part where a quote could hold a line end.
+fn line_parts(body: &[u8]) -> Vec<&[u8]> {
+    let wanted = rayon::current_num_threads()
+        .min(body.len() / PART_BYTES)
+        .max(1);
+    if wanted == 1 || body.contains(&b'"') {
+        return vec![body];
+    }
+    let mut parts = vec![];
+    let mut start = 0;
+    for i in 1..wanted {
+        let aim = (body.len() * i / wanted).max(start);
+        let Some(nl) = body[aim..].iter().position(|&b| b == b'\n') else {
+            break;
+        };
+        parts.push(&body[start..aim + nl + 1]);
+        start = aim + nl + 1;
+    }
+    parts.push(&body[start..]);
+    parts
+}
+
+/// A CSV reader of `bytes` (headers trimmed, as every reader of logs here).
+fn records(bytes: &[u8]) -> csv::Reader<&[u8]> {
+    csv::ReaderBuilder::new()
+        .trim(csv::Trim::Headers)
+        .from_reader(bytes)
+}
+
+/// A CSV reader of records only (a part of a file after its header).
+fn records_without_header(bytes: &[u8]) -> csv::Reader<&[u8]> {
+    csv::ReaderBuilder::new()
+        .has_headers(false)
+        .from_reader(bytes)
+}
+
+/// The parts' samples joined in order.
+fn joined(c: &Columns, parts: Vec<Logged>) -> Logged {
+    let mut out = Logged {
+        joint_names: c.names.clone(),
+        t: vec![],
+        q: vec![],
+        qd: c.dq.is_some().then(Vec::new),
+        qdd: c.ddq.is_some().then(Vec::new),
+        tau: vec![],
+    };
+    for part in parts {
+        out.t.extend(part.t);
+        out.q.extend(part.q);
+        out.tau.extend(part.tau);
+        if let (Some(all), Some(v)) = (out.qd.as_mut(), part.qd) {
+            all.extend(v);
+        }
+        if let (Some(all), Some(v)) = (out.qdd.as_mut(), part.qdd) {
+            all.extend(v);
+        }
+    }
+    out
+}
+
+/// The samples of the records `r` reads, each value checked (lines numbered from the file's
+/// second). `part`: `r` reads a part of the file (its records must have the header's width,
+/// and an empty part is no error).
+fn read_rows<R: std::io::Read>(
+    r: &mut csv::Reader<R>,
+    c: &Columns,
+    path: &Path,
+    part: bool,
+) -> Result<Logged, IoError> {
+    let bad = |m: String| IoError::invalid(path, m);
     let mut out = Logged {
         joint_names: c.names.clone(),
         t: vec![],
@@ -324,6 +419,9 @@ pub fn read_csv_logged(
         .map_err(|e| bad(format!("line {}: {e}", k + 2)))?
     {
         let line = k + 2;
+        if part && rec.len() != c.header.len() {
+            return Err(bad(format!("line {line}: not the header's width")));
+        }
         let value = |col: usize, group: &str, t: Option<f64>| -> Result<f64, IoError> {
             let v = number(&rec, col).map_err(|s| {
                 bad(format!(
@@ -355,10 +453,10 @@ pub fn read_csv_logged(
         }
         k += 1;
     }
-    if k == 0 {
+    if k == 0 && !part {
         return Err(bad("no samples".into()));
     }
-    Ok((out, c.ignored))
+    Ok(out)
 }
 
 /// Checks sample `k`'s time `t` (s, column `name`): finite, and after the previous `prev`.
@@ -439,4 +537,93 @@ pub fn csv_streamable(path: &Path) -> Result<bool, IoError> {
     let mut r = reader(path)?;
     let c = Columns::parse(&mut r, path, None)?;
     Ok(c.dq.is_some() && c.ddq.is_some())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A log of `rows` samples of two joints (t, q, τ), `edit` applied to each line.
+    fn log(rows: usize, edit: impl Fn(usize, String) -> String) -> String {
+        let mut text = String::from("t,q1,q2,tau1,tau2\n");
+        for k in 0..rows {
+            let t = k as f64 * 1e-3;
+            let line = format!(
+                "{t},{},{},{},{}",
+                (0.7 * t).sin() + 1e-13 * k as f64,
+                -0.3 * t,
+                12.5 * (1.3 * t).cos(),
+                -3.25 + t
+            );
+            text.push_str(&edit(k, line));
+            text.push('\n');
+        }
+        text
+    }
+
+    fn read(text: &str) -> Result<Logged, IoError> {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("log.csv");
+        std::fs::write(&path, text).unwrap();
+        read_csv_logged(&path, None).map(|(l, _)| l)
+    }
+
+    /// The message of reading `text` on `threads` workers, after the file's path.
+    fn message(threads: usize, text: &str) -> String {
+        let err = on(threads, || read(text)).unwrap_err().to_string();
+        err.split_once("log.csv: ").unwrap().1.to_string()
+    }
+
+    /// A pool of `threads` workers running `f`.
+    fn on<T: Send>(threads: usize, f: impl FnOnce() -> T + Send) -> T {
+        let pool = rayon::ThreadPoolBuilder::new().num_threads(threads);
+        pool.build().unwrap().install(f)
+    }
+
+    #[test]
+    fn a_large_log_read_in_parts_side_by_side_is_the_log_read_in_one_pass() {
+        let text = log(60_000, |_, l| l);
+        assert!(text.len() > 3 * PART_BYTES, "{} bytes", text.len());
+        let one = on(1, || read(&text)).unwrap();
+        for threads in [2, 3, 4] {
+            let parts = on(threads, || line_parts(text.as_bytes()).len());
+            assert!(parts > 1, "{threads} threads: {parts} part");
+            let side_by_side = on(threads, || read(&text)).unwrap();
+            assert_eq!(side_by_side.t.len(), 60_000);
+            assert_eq!(side_by_side.t, one.t);
+            assert_eq!(side_by_side.q, one.q);
+            assert_eq!(side_by_side.tau, one.tau);
+        }
+        // With Windows line ends and a last line without its end, the same samples.
+        let crlf = text.replace('\n', "\r\n");
+        let crlf = on(4, || read(crlf.trim_end())).unwrap();
+        assert_eq!((crlf.t, crlf.q, crlf.tau), (one.t, one.q, one.tau));
+    }
+
+    #[test]
+    fn a_bad_value_or_a_short_line_in_a_later_part_names_its_line_in_the_file() {
+        let bad = log(60_000, |k, l| {
+            if k == 50_000 {
+                format!("{},x", l.rsplit_once(',').unwrap().0)
+            } else {
+                l
+            }
+        });
+        let err = on(4, || read(&bad)).unwrap_err().to_string();
+        assert!(err.contains("line 50002, column 'tau2': 'x"), "{err}");
+        let short = log(60_000, |k, l| {
+            if k == 45_000 {
+                l.rsplit_once(',').unwrap().0.to_string()
+            } else {
+                l
+            }
+        });
+        let one = message(1, &short);
+        assert_eq!(message(4, &short), one);
+        assert!(one.contains("line 45002"), "{one}");
+        // A truncated last line, as a recorder killed mid-write leaves it.
+        let cut = log(60_000, |_, l| l);
+        let cut = &cut[..cut.len() - 9];
+        assert_eq!(message(4, cut), message(1, cut));
+    }
 }
