@@ -476,12 +476,11 @@ mod tests {
                 want.extend((&y * &theta).iter().zip(&tau).map(|(yt, t)| t - yt));
                 tr.push(k as f64 * 1e-3, &q, &qd, Some(&qdd), &tau);
             }
-            let got = residuals(&m, &theta, &tr, 0..tr.len());
-            let worst = got
-                .iter()
-                .zip(&want)
-                .map(|(g, w)| (g - w).abs())
-                .fold(0.0, f64::max);
+            let largest = |got: &[f64]| -> f64 {
+                let gaps = got.iter().zip(&want).map(|(g, w)| (g - w).abs());
+                gaps.fold(0.0, f64::max)
+            };
+            let worst = largest(&residuals(&m, &theta, &tr, 0..tr.len()));
             assert!(
                 worst < 1e-9,
                 "{}: largest difference {worst:e} N m",
@@ -495,11 +494,7 @@ mod tests {
                 &mut |_, r| streamed.extend(r.iter().map(|v| -v)),
             )
             .unwrap();
-            let worst = streamed
-                .iter()
-                .zip(&want)
-                .map(|(g, w)| (g - w).abs())
-                .fold(0.0, f64::max);
+            let worst = largest(&streamed);
             assert!(
                 worst < 1e-9,
                 "{}: streamed, largest difference {worst:e} N m",

@@ -90,6 +90,18 @@ struct Columns {
 }
 
 impl Columns {
+    /// A log of no samples with these columns' joints (q̇ and q̈ where the file has them).
+    fn empty_log(&self) -> Logged {
+        Logged {
+            joint_names: self.names.clone(),
+            t: vec![],
+            q: vec![],
+            qd: self.dq.is_some().then(Vec::new),
+            qdd: self.ddq.is_some().then(Vec::new),
+            tau: vec![],
+        }
+    }
+
     /// The columns of each group of a streamed sample (q, q̇, q̈, τ): a file without q̇ or q̈
     /// cannot be streamed (they are derived over each run).
     fn sample_groups(&self, path: &Path) -> Result<[Vec<usize>; 4], IoError> {
@@ -377,14 +389,7 @@ fn records_without_header(bytes: &[u8]) -> csv::Reader<&[u8]> {
 
 /// The parts' samples joined in order.
 fn joined(c: &Columns, parts: Vec<Logged>) -> Logged {
-    let mut out = Logged {
-        joint_names: c.names.clone(),
-        t: vec![],
-        q: vec![],
-        qd: c.dq.is_some().then(Vec::new),
-        qdd: c.ddq.is_some().then(Vec::new),
-        tau: vec![],
-    };
+    let mut out = c.empty_log();
     for part in parts {
         out.t.extend(part.t);
         out.q.extend(part.q);
@@ -409,14 +414,7 @@ fn read_rows<R: std::io::Read>(
     part: bool,
 ) -> Result<Logged, IoError> {
     let bad = |m: String| IoError::invalid(path, m);
-    let mut out = Logged {
-        joint_names: c.names.clone(),
-        t: vec![],
-        q: vec![],
-        qd: c.dq.is_some().then(Vec::new),
-        qdd: c.ddq.is_some().then(Vec::new),
-        tau: vec![],
-    };
+    let mut out = c.empty_log();
     let mut rec = csv::ByteRecord::new();
     let mut k = 0usize;
     while r
