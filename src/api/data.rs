@@ -161,6 +161,20 @@ impl Data {
             .collect()
     }
 
+    /// The runs' trajectories with their samples within `r` (indices into each), uncopied: what
+    /// [`Data::pieces`] copies out (none for a streamed file).
+    pub fn spans<'a>(
+        &'a self,
+        r: &'a Range<usize>,
+    ) -> impl Iterator<Item = (&'a Trajectory, Range<usize>)> + 'a {
+        let runs = match self {
+            Data::Memory(d) => &d.runs[..],
+            Data::Stream { .. } => &[],
+        };
+        runs.iter()
+            .filter_map(move |run| run.span_within(r).map(|s| (&run.trajectory, s)))
+    }
+
     /// The runs' samples whose index in the file lies in `r` (in memory; none when streamed).
     pub fn pieces(&self, r: &Range<usize>) -> Vec<Trajectory> {
         match self {
@@ -177,7 +191,7 @@ impl Data {
     /// Samples of `r` that the fit and the scores use.
     pub fn used(&self, r: &Range<usize>) -> usize {
         match self {
-            Data::Memory(_) => self.pieces(r).iter().map(Trajectory::len).sum(),
+            Data::Memory(_) => self.spans(r).map(|(_, s)| s.len()).sum(),
             Data::Stream { .. } => r.len(),
         }
     }
@@ -194,12 +208,9 @@ impl Data {
                 let mut ne = NormalEquations::new(m.dof(), m.layout().len)
                     .excluding(excluded)
                     .finish();
-                for t in self.pieces(&r) {
+                for (t, span) in self.spans(&r) {
                     ne = ne.merged(&NormalEquations::from_trajectory_excluding(
-                        m,
-                        &t,
-                        0..t.len(),
-                        excluded,
+                        m, t, span, excluded,
                     ));
                 }
                 ne
@@ -219,11 +230,11 @@ impl Data {
     ) -> Result<(), ApiError> {
         match self {
             Data::Memory(_) => {
-                for t in self.pieces(&r) {
+                for (t, span) in self.spans(&r) {
                     analysis::residual_stream(
                         m,
                         theta,
-                        |sink| Ok::<usize, ApiError>(t.stream(0..t.len(), sink)),
+                        |sink| Ok::<usize, ApiError>(t.stream(span, sink)),
                         each,
                     )?;
                 }
@@ -245,9 +256,9 @@ impl Data {
         Ok(match self {
             Data::Memory(_) => {
                 let mut acc = SquaredErrors::new(m.dof());
-                for t in self.pieces(&r) {
-                    let (per, _) = analysis::rms_error(m, theta, &t, 0..t.len());
-                    acc = acc + SquaredErrors::from_rms(&per, t.len());
+                for (t, span) in self.spans(&r) {
+                    let (per, _) = analysis::rms_error(m, theta, t, span.clone());
+                    acc = acc + SquaredErrors::from_rms(&per, span.len());
                 }
                 acc
             }

@@ -319,12 +319,18 @@ pub struct Run {
 impl Run {
     /// The samples whose log index lies in `range`, as a run (`None` if there are none).
     pub fn within(&self, range: &std::ops::Range<usize>) -> Option<Run> {
+        self.span_within(range).map(|s| Run {
+            trajectory: self.trajectory.slice(s.clone()),
+            index: self.index[s].to_vec(),
+        })
+    }
+
+    /// The samples of this run (indices into its trajectory) whose log samples lie in `range`,
+    /// if any: what [`Run::within`] copies, without the copy.
+    pub fn span_within(&self, range: &std::ops::Range<usize>) -> Option<std::ops::Range<usize>> {
         let a = self.index.partition_point(|&i| i < range.start);
         let b = self.index.partition_point(|&i| i < range.end);
-        (a < b).then(|| Run {
-            trajectory: self.trajectory.slice(a..b),
-            index: self.index[a..b].to_vec(),
-        })
+        (a < b).then_some(a..b)
     }
 }
 
