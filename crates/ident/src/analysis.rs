@@ -3,7 +3,7 @@
 
 use super::NormalEquations;
 use nalgebra::{DMatrix, DVector, SymmetricEigen};
-use physid_core::dynamics::{regressor, rnea, sign, Data};
+use physid_core::dynamics::{joint_friction, regressor, rnea, Data};
 use physid_core::linalg::{excited_scale, RANK_TOL};
 use physid_core::model::Model;
 use physid_core::trajectory::{SampleSink, Trajectory};
@@ -47,24 +47,22 @@ pub fn residuals(
 struct Predictor<'a> {
     /// The model carrying `θ`, or the model whose regressor multiplies it.
     model: &'a Model,
-    carrying: bool,
     theta: &'a DVector<f64>,
     data: Data,
-    y: DMatrix<f64>,
+    /// The regressor's buffer where no model carries `θ`.
+    y: Option<DMatrix<f64>>,
 }
 
 impl<'a> Predictor<'a> {
     /// For `model`'s parameters `theta`, with `carrying` the model with them when there is one.
     fn new(model: &'a Model, carrying: Option<&'a Model>, theta: &'a DVector<f64>) -> Self {
-        let y = match carrying {
-            Some(_) => DMatrix::zeros(0, 0),
-            None => DMatrix::zeros(model.dof(), model.layout().len),
-        };
+        let y = carrying
+            .is_none()
+            .then(|| DMatrix::zeros(model.dof(), model.layout().len));
         // The workspace holds the spatial inertias of the model it is made for.
         let model = carrying.unwrap_or(model);
         Self {
             model,
-            carrying: carrying.is_some(),
             theta,
             data: Data::new(model),
             y,
@@ -73,18 +71,18 @@ impl<'a> Predictor<'a> {
 
     /// `Y θ` at one state into `out` (N m per joint).
     fn torque(&mut self, q: &[f64], qd: &[f64], qdd: &[f64], out: &mut [f64]) {
-        if self.carrying {
-            let tau = rnea(self.model, &mut self.data, q, qd, qdd);
-            for ((o, t), (b, w)) in out
-                .iter_mut()
-                .zip(tau.iter())
-                .zip(self.model.bodies().iter().zip(qd))
-            {
-                *o = t + b.friction.viscous * w + b.friction.coulomb * sign(*w);
+        match &mut self.y {
+            None => {
+                let tau = rnea(self.model, &mut self.data, q, qd, qdd);
+                let joints = self.model.bodies().iter().zip(qd);
+                for ((o, t), (b, &w)) in out.iter_mut().zip(tau.iter()).zip(joints) {
+                    *o = t + joint_friction(&b.friction, w);
+                }
             }
-        } else {
-            regressor(self.model, &mut self.data, q, qd, qdd, &mut self.y);
-            out.copy_from_slice((&self.y * self.theta).as_slice());
+            Some(y) => {
+                regressor(self.model, &mut self.data, q, qd, qdd, y);
+                out.copy_from_slice((&*y * self.theta).as_slice());
+            }
         }
     }
 }

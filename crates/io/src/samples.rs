@@ -294,9 +294,7 @@ fn reader(path: &Path) -> Result<csv::Reader<std::io::BufReader<std::fs::File>>,
         path: path.to_path_buf(),
         source,
     })?;
-    Ok(csv::ReaderBuilder::new()
-        .trim(csv::Trim::Headers)
-        .from_reader(std::io::BufReader::with_capacity(1 << 16, file)))
+    Ok(records(std::io::BufReader::with_capacity(1 << 16, file)))
 }
 
 /// Field `col` of `rec` as a number, its text trimmed of spaces; the text when it is not one
@@ -373,11 +371,12 @@ fn line_parts(body: &[u8]) -> Vec<&[u8]> {
     parts
 }
 
-/// A CSV reader of `bytes` (headers trimmed, as every reader of logs here).
-fn records(bytes: &[u8]) -> csv::Reader<&[u8]> {
+/// A CSV reader of a log from `source`: its headers trimmed (values are trimmed by
+/// [`number`]), as every reader of logs here.
+fn records<R: std::io::Read>(source: R) -> csv::Reader<R> {
     csv::ReaderBuilder::new()
         .trim(csv::Trim::Headers)
-        .from_reader(bytes)
+        .from_reader(source)
 }
 
 /// A CSV reader of records only (a part of a file after its header).

@@ -310,8 +310,7 @@ pub fn inject(logged: &Logged, description: &Model, inj: &Injection) -> Logged {
             for k in 0..rows {
                 for j in 0..n {
                     let f = &description.bodies()[j].friction;
-                    let w = qd[k * n + j];
-                    let extra = f.viscous * w + f.coulomb * physid_core::dynamics::sign(w);
+                    let extra = physid_core::dynamics::joint_friction(f, qd[k * n + j]);
                     out.tau[k * n + j] += (inj.magnitudes[j] - 1.0) * extra;
                 }
             }

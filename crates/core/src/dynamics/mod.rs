@@ -33,7 +33,8 @@ pub use floating::{
 pub use gravity::gravity_from_transforms;
 pub use regressor::{for_each_regressor, inertia_bilinear, regressor, row_columns};
 pub use rnea::{
-    friction_torque, rnea, rnea_after_joint, rnea_from_transforms, rnea_with_friction, sign,
+    friction_torque, joint_friction, rnea, rnea_after_joint, rnea_from_transforms,
+    rnea_with_friction, sign,
 };
 
 use crate::model::{Model, Rotor, RotorModel};

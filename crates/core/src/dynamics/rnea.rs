@@ -4,7 +4,7 @@ use super::{
     armature, base_acceleration, check_len, forward_pass_from_body, forward_pass_from_transforms,
     update_joint_transform, update_transforms, Data,
 };
-use crate::model::{Model, RotorModel};
+use crate::model::{JointFriction, Model, RotorModel};
 use crate::spatial::Motion;
 use nalgebra::DVector;
 
@@ -112,8 +112,15 @@ pub fn friction_torque(model: &Model, qd: &[f64]) -> DVector<f64> {
             .bodies()
             .iter()
             .zip(qd)
-            .map(|(b, &w)| b.friction.viscous * w + b.friction.coulomb * sign(w)),
+            .map(|(b, &w)| joint_friction(&b.friction, w)),
     )
+}
+
+/// One joint's friction torque `B q̇ + B_c sign(q̇)` (N m) at its speed `qd` (rad/s), with
+/// `sign(0) = 0`: the law of the regressor's friction columns.
+#[inline]
+pub fn joint_friction(f: &JointFriction, qd: f64) -> f64 {
+    f.viscous * qd + f.coulomb * sign(qd)
 }
 
 /// `τ` needed at the joints including friction: [`rnea`] plus [`friction_torque`].
