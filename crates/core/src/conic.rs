@@ -161,12 +161,13 @@ mod tests {
         let nv = q.len();
         let (a, b, cones) = rows.into_parts(nv);
         let p = CscMatrix::zeros((nv, nv));
-        // Tight tolerances (the bounding ellipsoids' own): the tests check the formulation.
+        // Tight tolerances: the tests check the formulation. At 1e-11 the exponential cones stall
+        // at "almost solved" on some CPUs (OpenBLAS's AVX-512 kernels), a hair short of the gap.
         let settings = DefaultSettings {
             verbose: false,
-            tol_gap_abs: 1e-11,
-            tol_gap_rel: 1e-11,
-            tol_feas: 1e-11,
+            tol_gap_abs: 1e-10,
+            tol_gap_rel: 1e-10,
+            tol_feas: 1e-10,
             ..DefaultSettings::default()
         };
         let mut solver = DefaultSolver::new(&p, q, &a, &b, &cones, settings).unwrap();
