@@ -63,6 +63,8 @@ pub struct Folds {
     pub rows: Vec<usize>,
     /// Whether the blocks are whole runs.
     pub by_run: bool,
+    /// Per block, the sum of the others (what a fold trains on), summed once on first use.
+    complements: std::sync::OnceLock<Vec<NormalEquations>>,
 }
 
 /// A cross-validated score.
@@ -161,6 +163,7 @@ impl Folds {
             blocks,
             rows,
             by_run,
+            complements: std::sync::OnceLock::new(),
         }
     }
 
@@ -184,6 +187,19 @@ impl Folds {
             .map(|(_, b)| b);
         let first = it.next().expect("at least two blocks").clone();
         it.fold(first, |acc, b| acc.merged(b))
+    }
+
+    /// The sum of the blocks but `f`: fold `f`'s training data. Every candidate of the forward
+    /// selection trains on the same `K` sums, so they are added once (in the order of
+    /// [`Folds::sum_except`], the same values) and kept.
+    fn trained_without(&self, f: usize) -> &NormalEquations {
+        let all = self.complements.get_or_init(|| {
+            (0..self.blocks.len())
+                .into_par_iter()
+                .map(|f| self.sum_except(f))
+                .collect()
+        });
+        &all[f]
     }
 
     /// Fits the model plus `chosen` on `ne` (augmented) with the description as prior.
@@ -221,7 +237,7 @@ impl Folds {
         // The folds' fits are independent: in parallel, read back in fold order.
         let thetas = (0..self.blocks.len())
             .into_par_iter()
-            .map(|f| self.fit(model, &self.sum_except(f), chosen, opts))
+            .map(|f| self.fit(model, self.trained_without(f), chosen, opts))
             .collect::<Result<Vec<_>, _>>()?;
         let block_sse: Vec<f64> = thetas
             .iter()
