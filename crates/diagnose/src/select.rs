@@ -191,14 +191,13 @@ impl Folds {
 
     /// The sum of the blocks but `f`: fold `f`'s training data. Every candidate of the forward
     /// selection trains on the same `K` sums, so they are added once (in the order of
-    /// [`Folds::sum_except`], the same values) and kept.
+    /// [`Folds::sum_except`], the same values) and kept. They are added on the calling thread,
+    /// not in parallel: the first caller is a rayon task, and a rayon worker waiting inside the
+    /// initializer would steal other folds' tasks, which would enter it again (a deadlock).
     fn trained_without(&self, f: usize) -> &NormalEquations {
-        let all = self.complements.get_or_init(|| {
-            (0..self.blocks.len())
-                .into_par_iter()
-                .map(|f| self.sum_except(f))
-                .collect()
-        });
+        let all = self
+            .complements
+            .get_or_init(|| (0..self.blocks.len()).map(|f| self.sum_except(f)).collect());
         &all[f]
     }
 
