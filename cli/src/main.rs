@@ -128,8 +128,8 @@ fn main() -> std::process::ExitCode {
     unsafe {
         libc::signal(libc::SIGPIPE, libc::SIG_DFL);
     }
-    // No OpenBLAS worker spins against rayon's threads (physid calls BLAS on one thread).
     physid::spatial::single_threaded_blas_without_workers();
+    physid::spatial::openblas_kernels_for_this_cpu();
     let args = Cli::parse();
     match run(args) {
         Ok(()) => std::process::ExitCode::SUCCESS,

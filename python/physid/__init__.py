@@ -23,7 +23,21 @@ RuntimeError); warnings about the data or the answer are issued as PhysidWarning
 description's once per file.
 """
 
-from .errors import Error, InputError, MissingFileError, PhysidWarning, SolverError
+
+
+def _openblas_already_loaded() -> bool:
+    """Whether this process had loaded the system OpenBLAS before physid (another module then
+    shares it, and its kernels are left as they are); True where that cannot be read."""
+    try:
+        with open("/proc/self/maps") as maps:
+            return "/libopenblas.so" in maps.read()
+    except OSError:
+        return True
+
+
+_OPENBLAS_SHARED = _openblas_already_loaded()
+
+from .errors import Error, InputError, MissingFileError, PhysidWarning, SolverError  # noqa: E402
 from .results import BodyChange
 from ._physid import (  # noqa: E402
     Comparison,
@@ -51,6 +65,13 @@ from ._physid import (  # noqa: E402
     version,
 )
 from .arrays import identify_arrays  # noqa: E402
+
+if not _OPENBLAS_SHARED:
+    # As the `physid` binary does: OpenBLAS's kernels for the CPU's instruction set where it did
+    # not know the CPU, so that results equal the binary's.
+    from ._physid import _select_blas_kernels  # noqa: E402
+
+    _select_blas_kernels()
 
 __all__ = [
     "BodyChange",

@@ -625,6 +625,7 @@ def load(
     """
 
 def version() -> str: ...
+def _select_blas_kernels() -> str | None: ...
 
 class FloatingIdentification:
     """A floating robot identified from a log; to_dict() is `physid identify-floating --json`."""

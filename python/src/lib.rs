@@ -29,6 +29,15 @@ fn version() -> &'static str {
     env!("CARGO_PKG_VERSION")
 }
 
+/// OpenBLAS's kernels for the CPU's instruction set where it did not know the CPU
+/// (`physid::api::openblas_kernels_for_this_cpu`): the kernels selected, if any. Called once
+/// by the package as it is imported, only when importing this module brought OpenBLAS into
+/// the process (no other module calls it yet).
+#[pyfunction]
+fn _select_blas_kernels() -> Option<&'static str> {
+    physid::api::openblas_kernels_for_this_cpu()
+}
+
 #[pymodule]
 fn _physid(m: &Bound<'_, PyModule>) -> PyResult<()> {
     // The library's parallel loops (the normal equations' chunks) run on rayon's global pool.
@@ -60,6 +69,7 @@ fn _physid(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(identify::identify, m)?)?;
     m.add_function(wrap_pyfunction!(identify::load, m)?)?;
     m.add_function(wrap_pyfunction!(version, m)?)?;
+    m.add_function(wrap_pyfunction!(_select_blas_kernels, m)?)?;
     m.add_function(wrap_pyfunction!(pickle::_restore, m)?)?;
     Ok(())
 }

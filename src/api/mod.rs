@@ -44,7 +44,7 @@ pub use crate::io::document;
 pub use crate::model::floating::FloatingModel;
 pub use crate::model::{Model, RotorModel};
 pub use crate::prepare::Logged;
-pub use crate::spatial::{ConsistencyReport, PARAM_NAMES};
+pub use crate::spatial::{openblas_kernels_for_this_cpu, ConsistencyReport, PARAM_NAMES};
 pub use crate::trajectory::Trajectory;
 
 /// An error of an entry point, naming what is at fault.

@@ -58,6 +58,123 @@ pub fn single_threaded_blas_without_workers() {
     ONCE.call_once(stop_blas_workers);
 }
 
+/// OpenBLAS's kernels for the CPU's instruction set, where the OpenBLAS loaded did not know
+/// the CPU and fell back to older ones: Debian 12's OpenBLAS 0.3.21 does not know recent
+/// models (a cloud VM's "Intel(R) Xeon(R) Processor" with AVX-512) and runs its Prescott (SSE3)
+/// kernels there, which made a KUKA diagnosis about 20 % slower. With AVX-512 (F, CD, BW, DQ,
+/// VL) its SkylakeX kernels are selected, with AVX2 and FMA its Haswell ones, as
+/// `OPENBLAS_CORETYPE` selects them when the library loads. Nothing changes when the user set
+/// `OPENBLAS_CORETYPE`, when the build has one set of kernels (no `DYNAMIC_ARCH`), or when
+/// OpenBLAS runs kernels of the AVX2 generation or later. Returns the kernels selected.
+///
+/// For a process that owns its OpenBLAS, before its first BLAS call: the selection replaces
+/// the kernel table a concurrent call would read. The `physid` binary calls it as it starts,
+/// the Python module as it is imported when it brought OpenBLAS into the process.
+pub fn openblas_kernels_for_this_cpu() -> Option<&'static str> {
+    #[cfg(all(target_os = "linux", target_arch = "x86_64"))]
+    {
+        if std::env::var_os("OPENBLAS_CORETYPE").is_some() {
+            return None;
+        }
+        extern "C" {
+            fn openblas_get_corename() -> *const std::ffi::c_char;
+        }
+        // SAFETY: OpenBLAS's getter of a static, NUL-terminated name.
+        let loaded = unsafe { std::ffi::CStr::from_ptr(openblas_get_corename()) };
+        let wanted = kernels_for(&loaded.to_string_lossy(), cpu_level())?;
+        select_openblas_kernels(wanted).then_some(wanted)
+    }
+    #[cfg(not(all(target_os = "linux", target_arch = "x86_64")))]
+    None
+}
+
+/// The instruction sets OpenBLAS's kernel generations need, as this CPU (and its OS) supports
+/// them.
+#[cfg(all(target_os = "linux", target_arch = "x86_64"))]
+fn cpu_level() -> CpuLevel {
+    let avx512 = is_x86_feature_detected!("avx512f")
+        && is_x86_feature_detected!("avx512cd")
+        && is_x86_feature_detected!("avx512bw")
+        && is_x86_feature_detected!("avx512dq")
+        && is_x86_feature_detected!("avx512vl");
+    let avx2 = is_x86_feature_detected!("avx2") && is_x86_feature_detected!("fma");
+    match (avx512, avx2) {
+        (true, true) => CpuLevel::Avx512,
+        (_, true) => CpuLevel::Avx2,
+        _ => CpuLevel::Older,
+    }
+}
+
+/// What a CPU offers OpenBLAS's kernels.
+#[derive(Clone, Copy, Debug, PartialEq)]
+enum CpuLevel {
+    /// AVX-512 F, CD, BW, DQ and VL (with AVX2 and FMA).
+    Avx512,
+    /// AVX2 and FMA.
+    Avx2,
+    /// Neither.
+    Older,
+}
+
+/// The kernels to select where OpenBLAS runs its `loaded` ones (its core name) on a CPU of
+/// `level`: none when `loaded` is of the AVX2 generation or later, or the CPU is older.
+fn kernels_for(loaded: &str, level: CpuLevel) -> Option<&'static str> {
+    const CURRENT: [&str; 7] = [
+        "haswell",
+        "zen",
+        "excavator",
+        "skylakex",
+        "cooperlake",
+        "sapphirerapids",
+        "neoversen1",
+    ];
+    if CURRENT.contains(&loaded.to_ascii_lowercase().as_str()) {
+        return None;
+    }
+    match level {
+        CpuLevel::Avx512 => Some("SkylakeX"),
+        CpuLevel::Avx2 => Some("Haswell"),
+        CpuLevel::Older => None,
+    }
+}
+
+/// Has a `DYNAMIC_ARCH` OpenBLAS select the kernels `name` (a core name it knows) as it would
+/// at load under `OPENBLAS_CORETYPE`; whether it now runs them. The variable is set for the
+/// selection only.
+#[cfg(all(target_os = "linux", target_arch = "x86_64"))]
+fn select_openblas_kernels(name: &str) -> bool {
+    extern "C" {
+        fn dlsym(
+            handle: *mut std::ffi::c_void,
+            symbol: *const std::ffi::c_char,
+        ) -> *mut std::ffi::c_void;
+        fn openblas_get_corename() -> *const std::ffi::c_char;
+    }
+    // SAFETY: dlsym with RTLD_DEFAULT (null on Linux) and NUL-terminated names only looks up.
+    let (quit, init) = unsafe {
+        (
+            dlsym(std::ptr::null_mut(), c"gotoblas_dynamic_quit".as_ptr()),
+            dlsym(std::ptr::null_mut(), c"gotoblas_dynamic_init".as_ptr()),
+        )
+    };
+    if quit.is_null() || init.is_null() {
+        return false;
+    }
+    // SAFETY: OpenBLAS's own `void gotoblas_dynamic_quit(void)` (clears its kernel table) and
+    // `void gotoblas_dynamic_init(void)` (selects one, by OPENBLAS_CORETYPE when set, and
+    // sets its block sizes), as its constructor calls them; the caller owns the process's
+    // OpenBLAS, which no other thread is calling.
+    unsafe {
+        let quit: extern "C" fn() = std::mem::transmute(quit);
+        let init: extern "C" fn() = std::mem::transmute(init);
+        std::env::set_var("OPENBLAS_CORETYPE", name);
+        quit();
+        init();
+        std::env::remove_var("OPENBLAS_CORETYPE");
+        std::ffi::CStr::from_ptr(openblas_get_corename()).to_bytes() == name.as_bytes()
+    }
+}
+
 /// Joins OpenBLAS's worker threads, if this OpenBLAS can
 /// (see [`single_threaded_blas_without_workers`]).
 fn stop_blas_workers() {
@@ -81,5 +198,27 @@ fn stop_blas_workers() {
                 unsafe { std::mem::transmute(symbol) };
             shutdown();
         }
+    }
+}
+
+#[cfg(test)]
+mod kernel_tests {
+    use super::{kernels_for, CpuLevel};
+
+    #[test]
+    fn kernels_of_an_older_generation_give_way_to_the_cpus() {
+        // Debian 12's OpenBLAS on an AVX-512 VM it does not know: Prescott, SSE3.
+        assert_eq!(kernels_for("Prescott", CpuLevel::Avx512), Some("SkylakeX"));
+        assert_eq!(kernels_for("Nehalem", CpuLevel::Avx2), Some("Haswell"));
+        assert_eq!(kernels_for("Sandybridge", CpuLevel::Avx2), Some("Haswell"));
+        assert_eq!(kernels_for("Unknown", CpuLevel::Avx512), Some("SkylakeX"));
+    }
+
+    #[test]
+    fn current_kernels_and_older_cpus_are_left_alone() {
+        for current in ["Haswell", "Zen", "SkylakeX", "Cooperlake", "SAPPHIRERAPIDS"] {
+            assert_eq!(kernels_for(current, CpuLevel::Avx512), None, "{current}");
+        }
+        assert_eq!(kernels_for("Prescott", CpuLevel::Older), None);
     }
 }
