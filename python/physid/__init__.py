@@ -24,7 +24,6 @@ description's once per file.
 """
 
 
-
 def _openblas_already_loaded() -> bool:
     """Whether this process had loaded the system OpenBLAS before physid (another module then
     shares it, and its kernels are left as they are); True where that cannot be read."""
@@ -38,7 +37,7 @@ def _openblas_already_loaded() -> bool:
 _OPENBLAS_SHARED = _openblas_already_loaded()
 
 from .errors import Error, InputError, MissingFileError, PhysidWarning, SolverError  # noqa: E402
-from .results import BodyChange
+from .results import BodyChange  # noqa: E402
 from ._physid import (  # noqa: E402
     Comparison,
     Data,

@@ -61,8 +61,8 @@ pub fn single_threaded_blas_without_workers() {
 /// OpenBLAS's kernels for the CPU's instruction set, where the OpenBLAS loaded did not know
 /// the CPU and fell back to older ones: Debian 12's OpenBLAS 0.3.21 does not know recent
 /// models (a cloud VM's "Intel(R) Xeon(R) Processor" with AVX-512) and runs its Prescott (SSE3)
-/// kernels there, which made a KUKA diagnosis about 20 % slower. With AVX-512 (F, CD, BW, DQ,
-/// VL) its SkylakeX kernels are selected, with AVX2 and FMA its Haswell ones, as
+/// kernels there, markedly slower on the diagnosis's small dense products. With AVX-512 (F,
+/// CD, BW, DQ, VL) its SkylakeX kernels are selected, with AVX2 and FMA its Haswell ones, as
 /// `OPENBLAS_CORETYPE` selects them when the library loads. Nothing changes when the user set
 /// `OPENBLAS_CORETYPE`, when the build has one set of kernels (no `DYNAMIC_ARCH`), or when
 /// OpenBLAS runs kernels of the AVX2 generation or later. Returns the kernels selected.
@@ -76,12 +76,7 @@ pub fn openblas_kernels_for_this_cpu() -> Option<&'static str> {
         if std::env::var_os("OPENBLAS_CORETYPE").is_some() {
             return None;
         }
-        extern "C" {
-            fn openblas_get_corename() -> *const std::ffi::c_char;
-        }
-        // SAFETY: OpenBLAS's getter of a static, NUL-terminated name.
-        let loaded = unsafe { std::ffi::CStr::from_ptr(openblas_get_corename()) };
-        let wanted = kernels_for(&loaded.to_string_lossy(), cpu_level())?;
+        let wanted = kernels_for(&openblas_corename(), cpu_level())?;
         select_openblas_kernels(wanted).then_some(wanted)
     }
     #[cfg(not(all(target_os = "linux", target_arch = "x86_64")))]
@@ -119,14 +114,13 @@ enum CpuLevel {
 /// The kernels to select where OpenBLAS runs its `loaded` ones (its core name) on a CPU of
 /// `level`: none when `loaded` is of the AVX2 generation or later, or the CPU is older.
 fn kernels_for(loaded: &str, level: CpuLevel) -> Option<&'static str> {
-    const CURRENT: [&str; 7] = [
+    const CURRENT: [&str; 6] = [
         "haswell",
         "zen",
         "excavator",
         "skylakex",
         "cooperlake",
         "sapphirerapids",
-        "neoversen1",
     ];
     if CURRENT.contains(&loaded.to_ascii_lowercase().as_str()) {
         return None;
@@ -143,23 +137,12 @@ fn kernels_for(loaded: &str, level: CpuLevel) -> Option<&'static str> {
 /// selection only.
 #[cfg(all(target_os = "linux", target_arch = "x86_64"))]
 fn select_openblas_kernels(name: &str) -> bool {
-    extern "C" {
-        fn dlsym(
-            handle: *mut std::ffi::c_void,
-            symbol: *const std::ffi::c_char,
-        ) -> *mut std::ffi::c_void;
-        fn openblas_get_corename() -> *const std::ffi::c_char;
-    }
-    // SAFETY: dlsym with RTLD_DEFAULT (null on Linux) and NUL-terminated names only looks up.
-    let (quit, init) = unsafe {
-        (
-            dlsym(std::ptr::null_mut(), c"gotoblas_dynamic_quit".as_ptr()),
-            dlsym(std::ptr::null_mut(), c"gotoblas_dynamic_init".as_ptr()),
-        )
-    };
-    if quit.is_null() || init.is_null() {
+    let (Some(quit), Some(init)) = (
+        openblas_symbol(c"gotoblas_dynamic_quit"),
+        openblas_symbol(c"gotoblas_dynamic_init"),
+    ) else {
         return false;
-    }
+    };
     // SAFETY: OpenBLAS's own `void gotoblas_dynamic_quit(void)` (clears its kernel table) and
     // `void gotoblas_dynamic_init(void)` (selects one, by OPENBLAS_CORETYPE when set, and
     // sets its block sizes), as its constructor calls them; the caller owns the process's
@@ -171,8 +154,36 @@ fn select_openblas_kernels(name: &str) -> bool {
         quit();
         init();
         std::env::remove_var("OPENBLAS_CORETYPE");
-        std::ffi::CStr::from_ptr(openblas_get_corename()).to_bytes() == name.as_bytes()
     }
+    openblas_corename() == name
+}
+
+/// The name of the kernels OpenBLAS runs (`Prescott`, `Haswell`, `SkylakeX`, ...).
+#[cfg(all(target_os = "linux", target_arch = "x86_64"))]
+fn openblas_corename() -> String {
+    extern "C" {
+        fn openblas_get_corename() -> *const std::ffi::c_char;
+    }
+    // SAFETY: OpenBLAS's getter of a static, NUL-terminated name.
+    let name = unsafe { std::ffi::CStr::from_ptr(openblas_get_corename()) };
+    name.to_string_lossy().into_owned()
+}
+
+/// The address of OpenBLAS's routine `symbol`, where this OpenBLAS has it (looked up at run
+/// time among the process's global symbols, so that a build without it still links).
+#[cfg(target_os = "linux")]
+fn openblas_symbol(symbol: &std::ffi::CStr) -> Option<*mut std::ffi::c_void> {
+    extern "C" {
+        fn dlsym(
+            handle: *mut std::ffi::c_void,
+            symbol: *const std::ffi::c_char,
+        ) -> *mut std::ffi::c_void;
+    }
+    // RTLD_DEFAULT on Linux: search the process's global symbols.
+    let rtld_default = std::ptr::null_mut();
+    // SAFETY: dlsym with RTLD_DEFAULT and a NUL-terminated name only looks a symbol up.
+    let address = unsafe { dlsym(rtld_default, symbol.as_ptr()) };
+    (!address.is_null()).then_some(address)
 }
 
 /// Joins OpenBLAS's worker threads, if this OpenBLAS can
@@ -180,17 +191,7 @@ fn select_openblas_kernels(name: &str) -> bool {
 fn stop_blas_workers() {
     #[cfg(target_os = "linux")]
     {
-        extern "C" {
-            fn dlsym(
-                handle: *mut std::ffi::c_void,
-                symbol: *const std::ffi::c_char,
-            ) -> *mut std::ffi::c_void;
-        }
-        // RTLD_DEFAULT on Linux: search the process's global symbols.
-        let rtld_default = std::ptr::null_mut();
-        // SAFETY: dlsym with RTLD_DEFAULT and a NUL-terminated name only looks a symbol up.
-        let symbol = unsafe { dlsym(rtld_default, c"blas_thread_shutdown_".as_ptr()) };
-        if !symbol.is_null() {
+        if let Some(symbol) = openblas_symbol(c"blas_thread_shutdown_") {
             // SAFETY: OpenBLAS's own `int blas_thread_shutdown_(void)` (used by its fork
             // handler): it asks each worker to exit and joins them, under OpenBLAS's lock;
             // with one thread set, later calls run on the caller's thread.
