@@ -983,6 +983,41 @@ mod tests {
     }
 
     #[test]
+    fn a_part_taken_for_a_compound_is_tied_with_its_own_neighbours_not_the_compound() {
+        // Semi-real seed 2, case 46: the spring (61.6 %) gave way to a point mass on lwr_4_link
+        // (51.2 %, with the offset 85 %); the point masses on the neighbouring links tie with
+        // it, the spring does not (it is said beside the step), nor does a compliance outside
+        // the tie or an offset below the t threshold.
+        let effect = |kind, param| Explanation::Effect(Variant { kind, param });
+        let mass = |body: f64| {
+            Explanation::PointMass(
+                Variant {
+                    kind: Kind::Payload,
+                    param: body,
+                },
+                [0.0; 3],
+            )
+        };
+        let scored: Vec<Scored> = vec![
+            (effect(Kind::Spring, 0.0), 0.616, 5.7, None),
+            (mass(6.0), 0.518, 3.8, Some(0.57)),
+            (mass(5.0), 0.512, 3.8, Some(0.57)),
+            (mass(7.0), 0.496, 3.7, Some(0.55)),
+            (effect(Kind::Compliance, 1e-3), 0.353, 3.1, None),
+            (effect(Kind::TorqueOffset, 0.0), 0.470, 1.9, None),
+        ];
+        let settings = Settings::default();
+        let t = step::ties_around(&scored, 2, 0, &settings);
+        assert_eq!((t.within, t.simplest), (vec![1, 2, 3], vec![2]));
+        // A candidate leaving more than twice what the part leaves does not tie with it.
+        let mut far = scored.clone();
+        far[2].1 = 0.98;
+        far[1].1 = 0.97;
+        let t = step::ties_around(&far, 2, 0, &settings);
+        assert_eq!(t.within, vec![1, 2]);
+    }
+
+    #[test]
     fn a_candidate_that_leaves_far_more_than_the_best_does_not_tie_with_it() {
         let settings = Settings::default();
         assert_eq!((settings.tie, settings.min_t, LEFT_TIE), (0.1, 3.0, 2.0));
