@@ -150,7 +150,7 @@ pub(super) fn simplest_or_best(
 /// and an explanation nested in the compound, together no wider than it, fit the held-out data
 /// better than it does alone: the compound's columns beyond its nested part were standing in for
 /// the other candidate. Of the two, the one with the larger reduction of its own is the step
-/// (the next step weighs the other); `None` where no pair does. A spring holds a torque offset; on real KUKA logs with
+/// where it is significant itself (the next step weighs the other); `None` where no pair does. A spring holds a torque offset; on real KUKA logs with
 /// 0.6 kg injected on `lwr_6_link` (semi-real benchmark seed 2, case 46, the run carrying a
 /// standing offset against its description's) a spring took 61.6 % of the held-out mean square,
 /// a point mass on `lwr_5_link` 51.8 %, an offset 14.5 %, and the offset with the point mass
@@ -183,7 +183,12 @@ pub(super) fn parts_over_compound(
                 continue;
             }
             let (r, _) = improvement(sse, &problem.held_out(data, &fit));
-            let first = if scored[c].1 >= scored[s].1 { c } else { s };
+            // A step is significant itself: the nested part only where it is.
+            let first = if significant(s) && scored[s].1 > scored[c].1 {
+                s
+            } else {
+                c
+            };
             if r >= scored[chosen].1 && best.is_none_or(|(b, _)| r > b) {
                 best = Some((r, first));
             }
