@@ -17,10 +17,7 @@ impl Ties {
         eligible: impl Fn(usize) -> bool,
         tie: f64,
     ) -> Ties {
-        let cut = score[0] * (1.0 - tie);
-        let within: Vec<usize> = (0..score.len())
-            .filter(|&i| eligible(i) && score[i] >= cut)
-            .collect();
+        let within = Ties::within_of(score, eligible, tie, 0);
         let fewest = within.iter().map(|&i| columns[i]).min().unwrap_or(0);
         let simplest = within
             .iter()
@@ -28,6 +25,20 @@ impl Ties {
             .filter(|&i| columns[i] == fewest)
             .collect();
         Ties { within, simplest }
+    }
+
+    /// The candidates `eligible` whose `score` is within `tie` of candidate `reference`'s:
+    /// `score[i] ≥ score[reference] (1 − tie)`, in candidate order.
+    pub(crate) fn within_of(
+        score: &[f64],
+        eligible: impl Fn(usize) -> bool,
+        tie: f64,
+        reference: usize,
+    ) -> Vec<usize> {
+        let cut = score[reference] * (1.0 - tie);
+        (0..score.len())
+            .filter(|&i| eligible(i) && score[i] >= cut)
+            .collect()
     }
 
     /// The fewest columns among the tied.

@@ -1027,11 +1027,12 @@ mod tests {
             &[0.990, 0.981, 0.920, 0.985],
             &[21.0, 9.0, 10.7, 2.0],
             &settings,
+            0,
         );
         assert_eq!(near_all, vec![true, true, false, false]);
         // Small reductions: what is left differs little, the reduction's own cut decides.
         let small = [0.30, 0.28, 0.25];
-        let eligible = tie_eligible(&small, &[5.0; 3], &settings);
+        let eligible = tie_eligible(&small, &[5.0; 3], &settings, 0);
         assert_eq!(eligible, vec![true; 3]);
         let t = Ties::of(&small, &[7, 1, 1], |i| eligible[i], settings.tie);
         assert_eq!(t.within, vec![0, 1]);

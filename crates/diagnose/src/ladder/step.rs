@@ -37,7 +37,7 @@ pub(super) fn next_step(
         let left = unweighed_beside(&unweighed, settings.min_reduction, settings, model);
         return Err((Stop::NoCandidate, left));
     };
-    if r < settings.min_reduction || t < settings.min_t {
+    if !significant(&scored[0], settings) {
         let stop = Stop::NotSignificant {
             best: best.name(model, UNREAD),
             reduction: r,
@@ -47,7 +47,8 @@ pub(super) fn next_step(
         return Err((stop, left));
     }
     let widths: Vec<usize> = scored.iter().map(|s| complexity(&s.0, data.n)).collect();
-    let (chosen, tied, gave_way) = choose(problem, data, selected, (set, sse, settings), &scored);
+    let parts = (set, sse, settings);
+    let (chosen, tied, gave_way) = choose(problem, data, selected, parts, (&scored, &widths));
     let (best, r, t, _) = scored[chosen];
     let (ties, mut also_fit) = tied_with(&scored, &tied, chosen, &widths, model);
     if let Some(compound) = gave_way {
@@ -90,17 +91,16 @@ fn choose(
     data: &Data,
     selected: &Selected,
     (set, sse, settings): (&[Explanation], &[f64], &Settings),
-    scored: &[Scored],
+    (scored, widths): (&[Scored], &[usize]),
 ) -> (usize, Ties, Option<usize>) {
     let reduction: Vec<f64> = scored.iter().map(|s| s.1).collect();
     let t_stats: Vec<f64> = scored.iter().map(|s| s.2).collect();
-    let widths: Vec<usize> = scored.iter().map(|s| complexity(&s.0, data.n)).collect();
-    let eligible = tie_eligible(&reduction, &t_stats, settings);
-    let tied = Ties::of(&reduction, &widths, |i| eligible[i], settings.tie);
+    let eligible = tie_eligible(&reduction, &t_stats, settings, 0);
+    let tied = Ties::of(&reduction, widths, |i| eligible[i], settings.tie);
     let p0 = problem.theta_d.len();
     let compound = simplest_or_best(data, scored, tied.simplest[0], p0);
     let parts = (set, sse, settings);
-    let part = parts_over_compound(problem, data, parts, scored, compound, &widths);
+    let part = parts_over_compound(problem, data, parts, scored, compound, widths);
     let (chosen, tied) = match part {
         Some(part) => (part, ties_around(scored, part, compound, settings)),
         None => (compound, tied),
@@ -119,9 +119,15 @@ pub(super) fn significant_if_tied_only(
 ) -> Vec<Scored> {
     scored.retain(|s| {
         let tied_only = s.0.variant().is_some_and(|v| selected.tied_only(&v));
-        !tied_only || (s.1 >= settings.min_reduction && s.2 >= settings.min_t)
+        !tied_only || significant(s, settings)
     });
     scored
+}
+
+/// Whether a candidate may be a step: it lowers the held-out mean square by at least
+/// `min_reduction` with a block t of at least `min_t`.
+fn significant(s: &Scored, settings: &Settings) -> bool {
+    s.1 >= settings.min_reduction && s.2 >= settings.min_t
 }
 
 /// A simpler explanation is kept over the best-fitting one (`scored[0]`) only where it is
@@ -150,11 +156,12 @@ pub(super) fn simplest_or_best(
 /// and an explanation nested in the compound, together no wider than it, fit the held-out data
 /// better than it does alone: the compound's columns beyond its nested part were standing in for
 /// the other candidate. Of the two, the one with the larger reduction of its own is the step
-/// where it is significant itself (the next step weighs the other); `None` where no pair does. A spring holds a torque offset; on real KUKA logs with
-/// 0.6 kg injected on `lwr_6_link` (semi-real benchmark seed 2, case 46, the run carrying a
-/// standing offset against its description's) a spring took 61.6 % of the held-out mean square,
-/// a point mass on `lwr_5_link` 51.8 %, an offset 14.5 %, and the offset with the point mass
-/// 85.1 % in 11 columns against the spring's 14: the payload had been named after the spring.
+/// where it is significant itself (the next step weighs the other); `None` where no pair does.
+/// A spring holds a torque offset; on real KUKA logs with 0.6 kg injected on `lwr_6_link`
+/// (semi-real benchmark seed 2, case 46, the run carrying a standing offset against its
+/// description's) a spring took 61.6 % of the held-out mean square, a point mass on
+/// `lwr_5_link` 51.8 %, an offset 14.5 %, and the offset with the point mass 85.1 % in 11
+/// columns against the spring's 14: the payload had been named after the spring.
 pub(super) fn parts_over_compound(
     problem: &Problem,
     data: &Data,
@@ -168,8 +175,7 @@ pub(super) fn parts_over_compound(
     let nested: Vec<usize> = (0..scored.len())
         .filter(|&i| widths[i] < widths[chosen] && spanned_by(data, &scored[i].0, &compound, p0))
         .collect();
-    let significant =
-        |i: usize| scored[i].1 >= settings.min_reduction && scored[i].2 >= settings.min_t;
+    let significant = |i: usize| significant(&scored[i], settings);
     let mut best: Option<(f64, usize)> = None;
     for &s in nested.iter().filter(|&&s| scored[s].1 > 0.0) {
         let room = widths[chosen] - widths[s];
@@ -206,13 +212,11 @@ pub(super) fn ties_around(
     compound: usize,
     settings: &Settings,
 ) -> Ties {
-    let (r, left) = (scored[part].1, left_after(&scored[part]));
-    let within = (0..scored.len())
-        .filter(|&i| i == part || (i != compound && scored[i].2 >= settings.min_t))
-        .filter(|&i| {
-            scored[i].1 >= r * (1.0 - settings.tie) && left_after(&scored[i]) <= LEFT_TIE * left
-        })
-        .collect();
+    let reduction: Vec<f64> = scored.iter().map(|s| s.1).collect();
+    let t_stats: Vec<f64> = scored.iter().map(|s| s.2).collect();
+    let eligible = tie_eligible(&reduction, &t_stats, settings, part);
+    let tied_with_part = |i: usize| eligible[i] && i != compound;
+    let within = Ties::within_of(&reduction, tied_with_part, settings.tie, part);
     Ties {
         within,
         simplest: vec![part],
@@ -394,11 +398,16 @@ pub(super) fn unweighed_beside(
 /// not fit the data as well, whatever its reduction.
 pub(super) const LEFT_TIE: f64 = 2.0;
 
-/// Which candidates (sorted by `reduction`, best first, with their block `t`) may tie with the
-/// best: significant themselves, and leaving at most [`LEFT_TIE`] times the held-out error the
-/// best leaves (the reduction's own cut is [`Ties::of`]'s).
-pub(super) fn tie_eligible(reduction: &[f64], t: &[f64], settings: &Settings) -> Vec<bool> {
-    let left_cut = (1.0 - reduction[0]) * LEFT_TIE;
+/// Which candidates (with their `reduction` and block `t`) may tie with candidate `reference`
+/// (the best, 0, where they are sorted best first): significant themselves, and leaving at most
+/// [`LEFT_TIE`] times the held-out error it leaves (the reduction's own cut is [`Ties::of`]'s).
+pub(super) fn tie_eligible(
+    reduction: &[f64],
+    t: &[f64],
+    settings: &Settings,
+    reference: usize,
+) -> Vec<bool> {
+    let left_cut = (1.0 - reduction[reference]) * LEFT_TIE;
     reduction
         .iter()
         .zip(t)
