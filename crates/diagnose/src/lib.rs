@@ -38,6 +38,7 @@ mod options;
 mod pipeline;
 pub mod report;
 mod residual;
+mod rows;
 pub mod select;
 pub mod spectrum;
 pub(crate) mod stage;

@@ -5,6 +5,7 @@
 use nalgebra::DVector;
 use physid_core::trajectory::Trajectory;
 use physid_effect::library::{self, Context};
+use rayon::prelude::*;
 
 /// The residual `res` (sample-major over `tr`) with the joint-samples slower than `min_speed`
 /// set to NaN (left out of every fit and error).
@@ -31,6 +32,9 @@ pub fn finite_mean_square(v: &[f64]) -> f64 {
     s / c.max(1) as f64
 }
 
+/// Samples per parallel task of [`residual_rms`].
+const RESIDUAL_CHUNK: usize = 256;
+
 /// The residual `τ − Z θ` over `tr` for the model plus `variants` (all rows), and its per-joint
 /// RMS over the joint-samples at or above `min_speed`.
 pub fn residual_rms(
@@ -41,11 +45,23 @@ pub fn residual_rms(
     min_speed: f64,
 ) -> (Vec<f64>, Vec<f64>) {
     let n = tr.dof();
-    let mut res = Vec::with_capacity(tr.len() * n);
-    ctx.for_each_row(tr, 0..tr.len(), variants, 0.0, &mut |_, z, tau| {
-        let pred = z * theta;
-        res.extend((0..n).map(|j| tau[j] - pred[j]));
-    });
+    // Each sample's residual is its own: chunks in parallel, joined in sample order.
+    let chunks: Vec<std::ops::Range<usize>> = (0..tr.len())
+        .step_by(RESIDUAL_CHUNK)
+        .map(|s| s..(s + RESIDUAL_CHUNK).min(tr.len()))
+        .collect();
+    let parts: Vec<Vec<f64>> = chunks
+        .into_par_iter()
+        .map(|range| {
+            let mut part = Vec::with_capacity(range.len() * n);
+            ctx.for_each_row(tr, range, variants, 0.0, &mut |_, z, tau| {
+                let pred = z * theta;
+                part.extend((0..n).map(|j| tau[j] - pred[j]));
+            });
+            part
+        })
+        .collect();
+    let res = parts.concat();
     let rms = (0..n)
         .map(|j| {
             let (mut s, mut c) = (0.0, 0usize);

@@ -14,6 +14,7 @@
 //! data as well: the one with fewest columns is kept (Occam), and equally simple ones are reported
 //! together as ambiguous.
 
+use super::rows::for_each_row_in_order;
 use super::stats::Ties;
 use nalgebra::DVector;
 use physid_core::model::Model;
@@ -148,7 +149,7 @@ impl Folds {
             .map(|r| {
                 let mut block = NormalEquations::new(n, c);
                 let mut rows = 0;
-                ctx.for_each_row(tr, r, &variants, min_speed, &mut |s, z, tau| {
+                for_each_row_in_order(ctx, tr, r, &variants, min_speed, &mut |s, z, tau| {
                     block.add(z, tau);
                     rows += tr.qd_at(s).iter().filter(|w| !slow(**w, min_speed)).count();
                 });

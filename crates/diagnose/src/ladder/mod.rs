@@ -474,7 +474,9 @@ pub(crate) fn ladder(stage: &Stage, eps: f64, selected: &Selected, settings: &Se
     let problem = problem(stage, eps);
     let variants = offered(stage);
     let p0 = problem.theta_d.len();
-    let data = Data::build(stage, &variants, &problem.theta_d, settings.blocks);
+    // The first fit takes the model's columns only: the effects' columns are built about the
+    // point it settles at, and about the description only where it does not settle.
+    let data = Data::build(stage, &[], &problem.theta_d, settings.blocks);
     let mut set: Vec<Explanation> = vec![];
     let mut rungs = vec![given_rung(stage)];
     let mut entered: Vec<(Explanation, Weighing)> = vec![];
@@ -791,7 +793,9 @@ fn candidates(data: &Data, selected: &Selected, set: &[Explanation]) -> Vec<Expl
 
 /// After a step: the columns rebuilt once about the model it fitted (payloads included) and
 /// the set refitted there, kept only if the held-out error does not rise (a linearization is
-/// trusted near its point, not followed wherever a fit leads it).
+/// trusted near its point, not followed wherever a fit leads it). `data` may hold the model's
+/// columns alone (the first fit, no explanation yet): where the rebuilt columns are not kept,
+/// every variant's are then built about `data`'s point.
 fn settle(
     problem: &Problem,
     stage: &Stage,
@@ -811,6 +815,11 @@ fn settle(
     if after <= before {
         set.copy_from_slice(&moved_set);
         (moved, refit)
+    } else if data.variants.len() < variants.len() {
+        // Built with the model's columns alone (the first fit): every variant's about its point.
+        let full = Data::build(stage, variants, &data.theta_lin, settings.blocks);
+        let fit = recentre(problem, &full, set);
+        (full, fit)
     } else {
         (data, fit)
     }
