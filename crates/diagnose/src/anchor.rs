@@ -747,7 +747,8 @@ pub fn information(
     let fit = super::stage::fit_nominal(model, data, opts)?;
     let mut ne = physid_ident::NormalEquations::new(model.dof(), model.layout().len);
     let ctx = physid_effect::library::Context::new(model, &fit.theta, data, opts.processing_cutoff);
-    ctx.for_each_row(
+    super::rows::for_each_row_in_order(
+        &ctx,
         data,
         0..data.len(),
         &[],

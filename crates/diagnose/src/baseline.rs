@@ -14,6 +14,7 @@ use super::calibrate::{self, Calibration, Run};
 use super::diagnosis::Diagnosis;
 use super::options::{DiagnoseError, Options};
 use super::pipeline::diagnose_runs;
+use super::rows::for_each_row_in_order;
 use physid_core::model::Model;
 use physid_core::trajectory::Trajectory;
 use physid_effect::library::{Context, Variant};
@@ -169,7 +170,7 @@ fn without_effects(
         .rows(p0, cal.identified.theta.len() - p0);
     let ctx = Context::new(model, &cal.nominal, tr, copts.processing_cutoff);
     let mut out = tr.clone();
-    ctx.for_each_row(tr, 0..tr.len(), &copts.terms, 0.0, &mut |k, z, _| {
+    for_each_row_in_order(&ctx, tr, 0..tr.len(), &copts.terms, 0.0, &mut |k, z, _| {
         let e = z.columns(p0, coef.len()) * coef;
         for j in 0..n {
             out.tau[k * n + j] -= e[j];

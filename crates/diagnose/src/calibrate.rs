@@ -9,6 +9,7 @@
 //! as the diagnosis does. Every run keeps its own samples: nothing is differentiated or filtered
 //! across the seam between two runs.
 
+use super::rows::for_each_row_in_order;
 use nalgebra::DVector;
 use physid_core::model::Model;
 use physid_core::trajectory::Trajectory;
@@ -203,7 +204,8 @@ pub fn normal_equations(
     let mut ne = NormalEquations::new(n, p).excluding(&opts.excluded);
     for r in runs {
         let ctx = Context::new(model, nominal, r.trajectory, opts.processing_cutoff);
-        ctx.for_each_row(
+        for_each_row_in_order(
+            &ctx,
             r.trajectory,
             r.range.clone(),
             &opts.terms,
@@ -257,7 +259,8 @@ pub fn for_each_residual(
             run.trajectory,
             opts.processing_cutoff,
         );
-        ctx.for_each_row(
+        for_each_row_in_order(
+            &ctx,
             run.trajectory,
             run.range.clone(),
             &opts.terms,

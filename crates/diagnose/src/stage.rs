@@ -23,7 +23,9 @@ pub fn fit_nominal(
 ) -> Result<ident::Identified, DiagnoseError> {
     let prior = model.parameters();
     let mut ne = NormalEquations::new(model.dof(), model.layout().len);
-    Context::new(model, &prior, train, opts.processing_cutoff).for_each_row(
+    let ctx = Context::new(model, &prior, train, opts.processing_cutoff);
+    super::rows::for_each_row_in_order(
+        &ctx,
         train,
         0..train.len(),
         &[],
