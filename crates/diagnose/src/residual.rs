@@ -46,11 +46,7 @@ pub fn residual_rms(
 ) -> (Vec<f64>, Vec<f64>) {
     let n = tr.dof();
     // Each sample's residual is its own: chunks in parallel, joined in sample order.
-    let chunks: Vec<std::ops::Range<usize>> = (0..tr.len())
-        .step_by(RESIDUAL_CHUNK)
-        .map(|s| s..(s + RESIDUAL_CHUNK).min(tr.len()))
-        .collect();
-    let parts: Vec<Vec<f64>> = chunks
+    let parts: Vec<Vec<f64>> = super::rows::chunks(0..tr.len(), RESIDUAL_CHUNK)
         .into_par_iter()
         .map(|range| {
             let mut part = Vec::with_capacity(range.len() * n);

@@ -26,14 +26,8 @@ pub(crate) fn for_each_row_in_order(
     min_speed: f64,
     f: &mut RowSink,
 ) {
-    let mut start = range.start;
-    while start < range.end {
-        let end = (start + WINDOW).min(range.end);
-        let chunks: Vec<Range<usize>> = (start..end)
-            .step_by(CHUNK)
-            .map(|s| s..(s + CHUNK).min(end))
-            .collect();
-        let computed: Vec<Vec<Row>> = chunks
+    for window in chunks(range, WINDOW) {
+        let computed: Vec<Vec<Row>> = chunks(window, CHUNK)
             .into_par_iter()
             .map(|r| {
                 let mut rows = Vec::with_capacity(r.len());
@@ -46,8 +40,16 @@ pub(crate) fn for_each_row_in_order(
         for (k, z, tau) in computed.iter().flatten() {
             f(*k, z, tau);
         }
-        start = end;
     }
+}
+
+/// `range` cut into consecutive pieces of `size` samples (the last one shorter).
+pub(crate) fn chunks(range: Range<usize>, size: usize) -> Vec<Range<usize>> {
+    let end = range.end;
+    range
+        .step_by(size)
+        .map(|s| s..(s + size).min(end))
+        .collect()
 }
 
 #[cfg(test)]

@@ -267,8 +267,13 @@ fn processed_without_own(
     )
 }
 
-/// The motor's offset in a backlash dead zone of `width` (rad) driven by the torque `tau`
-/// (sample-major), divided by the width: `effect::DeadZone` with the model's rotors.
+/// Per joint, whether its motor sits behind a rotor (a motor inertia of its own).
+fn behind_rotor(model: &Model) -> Vec<bool> {
+    (super::dead_zone::motor_inertia(model).iter())
+        .map(|&j| j > 0.0)
+        .collect()
+}
+
 /// The torque (N m, sample-major) that carries each joint's motor across a backlash dead zone:
 /// behind a rotor, the logged torque low-passed (`low_passed`), since the rotor's inertia
 /// averages the sensor's chatter about zero and crosses once in tens of ms; without one, the
@@ -276,14 +281,15 @@ fn processed_without_own(
 /// torque it is given, so a torque that chatters about zero (a feedback loop closed on the
 /// motor-side encoder) moves the encoder across the whole gap each time, and the processed
 /// offset is the filtered chatter rather than one step at the low-passed torque's zero.
-fn dead_zone_drive(model: &Model, low_passed: &[f64], raw: &[f64]) -> Vec<f64> {
-    let n = model.dof();
-    let inertia = super::dead_zone::motor_inertia(model);
+fn dead_zone_drive(behind_rotor: &[bool], low_passed: &[f64], raw: &[f64]) -> Vec<f64> {
+    let n = behind_rotor.len();
     (low_passed.iter().zip(raw).enumerate())
-        .map(|(i, (&lp, &r))| if inertia[i % n] > 0.0 { lp } else { r })
+        .map(|(i, (&lp, &r))| if behind_rotor[i % n] { lp } else { r })
         .collect()
 }
 
+/// The motor's offset in a backlash dead zone of `width` (rad) driven by the torque `tau`
+/// (sample-major), divided by the width: `effect::DeadZone` with the model's rotors.
 fn dead_zone_offsets(model: &Model, tau: &[f64], at: &Layout, width: f64) -> Vec<f64> {
     let n = at.n;
     let Some(dt) = at.dt else {
@@ -403,7 +409,8 @@ impl<'a> Context<'a> {
         // ([`dead_zone_drive`]), which carries the motor across the gap as the simulator's
         // dead zone does (`effect::DeadZone`), at each width of the grid; the tangent takes
         // half its sign (an instant crossing).
-        let drive = dead_zone_drive(model, &logged[0], &at.tau);
+        let behind_rotor = behind_rotor(model);
+        let drive = dead_zone_drive(&behind_rotor, &logged[0], &at.tau);
         let half_sign: Vec<f64> = drive
             .iter()
             .map(|t| 0.5 * physid_core::dynamics::sign(*t))
@@ -412,9 +419,6 @@ impl<'a> Context<'a> {
         // torque; without one the offset at a sample is the side of that sample's own torque
         // (the effect itself), and leaving it out kept a fifth of the effect (generalization
         // benchmark, KUKA seed 1, case 9: backlash −9 % of the CV mean square, −93 % with it).
-        let behind_rotor: Vec<bool> = (super::dead_zone::motor_inertia(model).iter())
-            .map(|&j| j > 0.0)
-            .collect();
         let filter = (cutoff, &taps);
         let processed = |x: &[f64]| inner(processed_without_own(x, &at, filter, &behind_rotor));
         let mut slack = vec![(0.0, processed(&half_sign))];
@@ -665,8 +669,14 @@ mod tests {
             .map(|i| if (i / n) % 2 == 0 { 1.3 } else { -0.7 })
             .collect();
         let low_passed = vec![0.1; raw.len()];
-        assert_eq!(dead_zone_drive(&leg, &low_passed, &raw), low_passed);
-        assert_eq!(dead_zone_drive(&bare, &low_passed, &raw), raw);
+        assert_eq!(
+            dead_zone_drive(&behind_rotor(&leg), &low_passed, &raw),
+            low_passed
+        );
+        assert_eq!(
+            dead_zone_drive(&behind_rotor(&bare), &low_passed, &raw),
+            raw
+        );
         let mut tr = Trajectory::new(bare.joint_names(), true);
         for k in 0..600 {
             let tau = &raw[k * n..(k + 1) * n];
