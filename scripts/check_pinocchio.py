@@ -6,6 +6,7 @@ written into the KUKA's own URDF by `identify --out-urdf`. Exits non-zero on dis
 
 usage: python scripts/check_pinocchio.py [--physid PATH]
 """
+import os
 import sys
 import tempfile
 
@@ -161,6 +162,37 @@ def check_identified_quadruped(report, binary, directory):
     check_floating(report, binary, directory, rotors=False, urdf=urdf)
 
 
+# An arm written the way ROS descriptions are (not any one robot's): a Gazebo plugin's
+# <jointName> after each joint, a joint with two <origin> (urdfdom reads the first), a visual
+# with two <material>, a fixed joint whose <axis> is misspelt (urdfdom, and so pinocchio,
+# refuses a <limit> without velocity, which physid reads as not given).
+ROS_STYLE_ARM = """<robot name="ros_style_arm">
+  <material name="grey"><color rgba="0.5 0.5 0.5 1"/></material>
+  <link name="world_base"/>
+  <link name="base"><visual><geometry><box size="0.1 0.1 0.1"/></geometry><material name=""/><material name="grey"/></visual></link>
+  <joint name="mount" type="fixed"><parent link="world_base"/><child link="base"/><axis xzy="0 0 1"/><origin xyz="0 0 0.05"/></joint>
+{links}
+</robot>"""
+ROS_STYLE_LINK = """  <link name="l{i}"><inertial><origin xyz="{cx} 0.01 -0.02" rpy="0.1 0 0.2"/><mass value="{m}"/>
+    <inertia ixx="0.004" ixy="0.0003" ixz="0" iyy="0.005" iyz="0.0001" izz="0.003"/></inertial></link>
+  <joint name="j{i}" type="revolute"><parent link="{parent}"/><child link="l{i}"/>
+    <origin xyz="0.{i} 0 0.3" rpy="{rpy}"/><origin xyz="9 9 9"/><axis xyz="{axis}"/>
+    <limit lower="-2" upper="2" effort="30" velocity="2"/><dynamics damping="0" friction="0"/></joint>
+  <gazebo><plugin name="ft{i}" filename="libgazebo_ros_ft_sensor.so"><jointName>j{i}</jointName></plugin></gazebo>"""
+
+
+def check_ros_style_arm(report, binary, directory):
+    links = "\n".join(
+        ROS_STYLE_LINK.format(i=i, parent="base" if i == 1 else f"l{i - 1}", cx=0.05 * i, m=1.5 - 0.3 * i,
+                              rpy=f"{0.3 * i} -0.2 0.1", axis=["0 0 1", "0 1 0", "1 0 0"][i - 1])
+        for i in (1, 2, 3))
+    urdf = os.path.join(directory, "ros_style_arm.urdf")
+    with open(urdf, "w") as f:
+        f.write(ROS_STYLE_ARM.format(links=links))
+    check(report, "arm as ROS descriptions write it (plugins' <jointName>, repeated <origin>)", urdf,
+          dynamics(binary, ["--robot", urdf]))
+
+
 def main():
     binary = physid_bin(sys.argv)
     report = Report("check_pinocchio")
@@ -174,6 +206,7 @@ def main():
         check_floating(report, binary, d, rotors=True)
         check_floating(report, binary, d, rotors=False, urdf=SOLO12_URDF)
         check_identified_quadruped(report, binary, d)
+        check_ros_style_arm(report, binary, d)
     check(report, "KUKA LWR4+ (data/kuka_lwr4 URDF)", KUKA_URDF, dynamics(binary, ["--robot", KUKA_URDF]))
     report.finish()
 

@@ -168,6 +168,15 @@ fn bad_urdfs_get_errors_that_name_the_element() {
     // Inertia violating the triangle inequality: Izz > Ixx + Iyy.
     let e = urdf_err(&robot(&two.replace("izz=\"0.01\"", "izz=\"0.05\"")));
     assert!(e.contains("body 'a'") && e.contains("triangle"), "{e}");
+    // A rank-one inertia (Drake's Robotiq tensioner: every entry 0.01, eigenvalues 0.03, 0, 0)
+    // breaks the triangle inequality; its spatial inertia is PSD but for rounding (−3e-18),
+    // which named the wrong matrix.
+    let rank_one = two.replace(
+        r#"ixy="0" ixz="0" iyy="0.01" iyz="0""#,
+        r#"ixy="0.01" ixz="0.01" iyy="0.01" iyz="0.01""#,
+    );
+    let e = urdf_err(&robot(&rank_one));
+    assert!(e.contains("body 'a'") && e.contains("triangle"), "{e}");
     // A massless moving chain.
     let e = urdf_err(&robot(&two.replace(LINK, "")));
     assert!(e.contains("'j1'") && e.contains("massless"), "{e}");
@@ -470,4 +479,37 @@ fn solo12_floats_with_its_base_link_as_the_trunk() {
     );
     // Read as fixed-base it is the same tree (no floating joint in this file).
     assert_eq!(urdf::load(&path, &Default::default()).unwrap().0.dof(), 12);
+}
+
+#[test]
+fn a_gazebo_plugins_joint_name_leaves_the_next_joint_its_origin() {
+    // Kinova's URDFs put `<jointName>` in a force-torque plugin after each joint. Searched as
+    // text, "<joint" matched it, and the next joint's <origin> was dropped as a repeat of the
+    // link's inertial origin in between: the arm's kinematics were silently wrong (torques off
+    // by 100 % against pinocchio). Read from the document, the plugin is no joint.
+    let xml = robot(&format!(
+        r#"<link name="base"/><link name="a">{LINK}</link>
+  <joint name="j1" type="revolute"><parent link="base"/><child link="a"/><axis xyz="0 0 1"/><origin xyz="0 0 0.2"/></joint>
+  <gazebo><plugin name="ft_sensor" filename="libgazebo_ros_ft_sensor.so"><jointName>j1</jointName></plugin></gazebo>
+  <link name="b"><inertial><origin xyz="0 -0.1 0"/><mass value="1"/><inertia ixx="0.01" ixy="0" ixz="0" iyy="0.01" iyz="0" izz="0.01"/></inertial></link>
+  <joint name="j2" type="revolute"><parent link="a"/><child link="b"/><axis xyz="0 1 0"/><origin rpy="0 0 0" xyz="0.3 0 0.4"/></joint>"#
+    ));
+    let (m, warnings) =
+        io::urdf::from_str(&xml, std::path::Path::new("arm.urdf"), &Default::default()).unwrap();
+    assert!(
+        !warnings.iter().any(|w| w.contains("more than one")),
+        "{warnings:?}"
+    );
+    assert_eq!(
+        m.bodies()[0].x_tree.r,
+        nalgebra::Vector3::new(0.0, 0.0, 0.2)
+    );
+    assert_eq!(
+        m.bodies()[1].x_tree.r,
+        nalgebra::Vector3::new(0.3, 0.0, 0.4)
+    );
+    assert_eq!(
+        m.bodies()[1].inertia.h(),
+        nalgebra::Vector3::new(0.0, -0.1, 0.0)
+    );
 }

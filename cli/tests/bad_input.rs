@@ -945,10 +945,98 @@ fn meshes_and_masses_no_robot_has_are_named() {
             .any(|w| w.contains("tet.stl") && w.contains("mesh scale")),
         "{warnings:?}"
     );
+    // A mass below 1e-9 kg is read as none: alone on its joint, that joint moves nothing.
     let err = load(urdf("tet.stl", "1 1 1", "1e-300"))
         .unwrap_err()
         .to_string();
-    assert!(err.contains("'arm'") && err.contains("1e-300 kg"), "{err}");
+    assert!(
+        err.contains("joint 'j1' moves only massless links") && err.contains("'arm' (1e-300 kg)"),
+        "{err}"
+    );
+    // Fixed to a link that weighs (a camera frame of 1e-10 kg, as PR2's URDF gives them), it
+    // is left out with a warning, and the body's mass is the link's own.
+    let framed = urdf("tet.stl", "1 1 1", "1").replace(
+        "</robot>",
+        r#"<link name="frame"><inertial><mass value="1e-10"/><inertia ixx="1e-12" ixy="0" ixz="0" iyy="1e-12" iyz="0" izz="1e-12"/></inertial></link>
+  <joint name="f" type="fixed"><parent link="arm"/><child link="frame"/><origin xyz="0 0 0.1"/></joint>
+</robot>"#,
+    );
+    let (m, warnings) = load(framed).unwrap();
+    assert_eq!(m.bodies()[0].inertia.mass(), 1.0);
+    assert!(
+        warnings
+            .iter()
+            .any(|w| w.contains("read as massless: 'frame' (1e-10 kg)")),
+        "{warnings:?}"
+    );
+}
+
+#[test]
+fn what_real_urdfs_leave_out_or_write_loosely_is_read_as_urdf_means_it() {
+    // Before: "missing field `velocity`" (Drake's gripper), "missing field `xyz`" for a fixed
+    // joint's misspelt axis (a Pioneer base), "duplicate field `material`" (xacro output), and
+    // SDF's velocity = effort = -1 ("no limit") refused; a moving joint's axis without xyz was
+    // "missing field `xyz`" with no joint named.
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("r.urdf");
+    let urdf = |elbow_axis: &str, limit: &str| {
+        format!(
+            r#"<robot name="r">
+  <material name="red"><color rgba="1 0 0 1"/></material>
+  <link name="base"><visual><geometry><box size="0.1 0.1 0.1"/></geometry><material name=""/><material name="red"/></visual></link>
+  <link name="plate"/>
+  <joint name="plate_joint" type="fixed"><parent link="base"/><child link="plate"/><axis xzy="0 0 1"/></joint>
+  <link name="arm"><inertial><mass value="2"/><inertia ixx="0.01" ixy="0" ixz="0" iyy="0.01" iyz="0" izz="0.01"/></inertial></link>
+  <joint name="shoulder" type="revolute"><parent link="plate"/><child link="arm"/><axis xyz="0 0 1"/>
+    <limit lower="-1" upper="1"/></joint>
+  <link name="hand"><inertial><mass value="1"/><origin xyz="0.1 0 0"/><inertia ixx="0.01" ixy="0" ixz="0" iyy="0.01" iyz="0" izz="0.01"/></inertial></link>
+  <joint name="elbow" type="revolute"><parent link="arm"/><child link="hand"/><origin xyz="0.3 0 0"/>{elbow_axis}
+    {limit}</joint>
+</robot>"#
+        )
+    };
+    let load = |xml: String| io::urdf::from_str(&xml, &path, &Default::default());
+    let (m, warnings) = load(urdf(
+        r#"<axis xyz="0 1 0"/>"#,
+        r#"<limit lower="-2" upper="2" effort="-1" velocity="-1.0"/>"#,
+    ))
+    .unwrap();
+    assert_eq!(m.dof(), 2);
+    for b in m.bodies() {
+        assert!(b.limits.velocity.is_infinite() && b.limits.effort.is_infinite());
+    }
+    assert_eq!(m.bodies()[1].limits.upper, 2.0);
+    for field in [r#"velocity="-1""#, r#"effort="-1""#] {
+        assert!(
+            warnings
+                .iter()
+                .any(|w| w.contains("joint 'elbow'") && w.contains(field)),
+            "{field}: {warnings:?}"
+        );
+    }
+    let err = load(urdf(r#"<axis xzy="0 1 0"/>"#, ""))
+        .unwrap_err()
+        .to_string();
+    assert!(
+        err.contains("r.urdf") && err.contains("joint 'elbow' (revolute): its <axis> has no xyz"),
+        "{err}"
+    );
+    // A gripper's linkage coupled by <mimic> is named, with what to do about it.
+    let gripper = urdf(r#"<axis xyz="0 1 0"/>"#, "").replace(
+        "</robot>",
+        r#"<link name="knuckle"><inertial><mass value="0.1"/><inertia ixx="1e-5" ixy="0" ixz="0" iyy="1e-5" iyz="0" izz="1e-5"/></inertial></link>
+  <joint name="knuckle_joint" type="revolute"><parent link="hand"/><child link="knuckle"/><axis xyz="1 0 0"/><mimic joint="elbow" multiplier="-1"/></joint>
+  <link name="finger"/>
+  <joint name="finger_joint" type="fixed"><parent link="knuckle"/><child link="finger"/></joint>
+</robot>"#,
+    );
+    let err = load(gripper).unwrap_err().to_string();
+    assert!(
+        err.contains("joint 'knuckle_joint' mimics 'elbow'")
+            && err.contains("a linkage coupled by <mimic>")
+            && err.contains(r#"type="fixed""#),
+        "{err}"
+    );
 }
 
 #[test]

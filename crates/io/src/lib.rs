@@ -25,6 +25,7 @@ pub mod rosbag2;
 pub mod samples;
 pub mod urdf;
 pub mod urdf_patch;
+mod urdf_text;
 
 use physid_core::model::{cheetah3, Model, ModelError};
 use physid_core::trajectory::Trajectory;

@@ -15,7 +15,11 @@
 //! - `<dynamics damping friction>` become viscous and Coulomb friction;
 //! - a link without `<inertial>` is massless (urdf-rs gives it zero mass); a moving joint whose
 //!   whole subtree is massless is an error (its mass matrix would be singular);
-//! - a joint limit of `effort = 0` or `velocity = 0` means "not given" (infinite);
+//! - a joint limit of `effort = 0` or `velocity = 0` means "not given" (infinite), and so does
+//!   SDF's −1 for "no limit" (with a warning) or a missing `velocity`; another negative limit
+//!   is refused by name;
+//! - what physid does not read and urdf-rs would refuse is taken out first (`urdf_text`):
+//!   materials, and the axis of a fixed joint;
 //! - where an element appears twice (for example two `<origin>` in one joint), urdfdom and
 //!   so pinocchio and ROS use the first; physid does the same and reports a warning.
 
@@ -81,59 +85,6 @@ fn origin_transform(p: &urdf_rs::Pose) -> Transform {
         &rpy_to_matrix(&Vector3::from(p.rpy.0)),
         &Vector3::from(p.xyz.0),
     )
-}
-
-/// Joints in which an element that URDF allows once appears more than once.
-fn duplicate_elements(xml: &str) -> Vec<String> {
-    let mut out = vec![];
-    let mut rest = xml;
-    while let Some(start) = rest.find("<joint") {
-        let block = &rest[start..];
-        let end = block.find("</joint>").map_or(block.len(), |e| e + 8);
-        let body = &block[..end];
-        let name = body
-            .split("name=\"")
-            .nth(1)
-            .and_then(|s| s.split('"').next())
-            .unwrap_or("?")
-            .to_string();
-        for tag in ["<origin", "<axis", "<limit", "<dynamics", "<mimic"] {
-            if body.matches(tag).count() > 1 {
-                out.push(format!(
-                    "joint '{name}' has more than one {tag}>; the first is used"
-                ));
-            }
-        }
-        rest = &block[end.min(block.len())..];
-        if end == 0 {
-            break;
-        }
-    }
-    out
-}
-
-/// Keeps only the first `<origin>` of each joint, as urdfdom does, before urdf-rs parses it.
-fn first_origin_only(xml: &str) -> String {
-    let mut out = String::with_capacity(xml.len());
-    let mut rest = xml;
-    while let Some(start) = rest.find("<joint") {
-        out.push_str(&rest[..start]);
-        let block = &rest[start..];
-        let end = block.find("</joint>").map_or(block.len(), |e| e + 8);
-        let mut body = block[..end].to_string();
-        if let Some(first) = body.find("<origin") {
-            let after = first + 7;
-            while let Some(k) = body[after..].find("<origin") {
-                let s = after + k;
-                let e = body[s..].find("/>").map_or(body.len(), |e| s + e + 2);
-                body.replace_range(s..e, "");
-            }
-        }
-        out.push_str(&body);
-        rest = &block[end..];
-    }
-    out.push_str(rest);
-    out
 }
 
 /// The name of the document's first element (after the XML declaration, comments and
@@ -216,9 +167,13 @@ fn read_robot<'x>(
             message: format!("not a URDF: the document's root element is <{root}>, not <robot>"),
         });
     }
-    let warnings = duplicate_elements(xml);
     let doc = roxmltree::Document::parse(xml).ok();
-    let robot = urdf_rs::read_from_string(&first_origin_only(xml)).map_err(|e| IoError::Parse {
+    // Not XML to roxmltree: urdf-rs names what is wrong with it.
+    let (text, warnings) = match &doc {
+        Some(d) => super::urdf_text::readable(xml, d, path)?,
+        None => (xml.to_string(), vec![]),
+    };
+    let robot = urdf_rs::read_from_string(&text).map_err(|e| IoError::Parse {
         path: path.to_path_buf(),
         message: format!("not a valid URDF: {e}"),
     })?;
@@ -233,7 +188,9 @@ fn parse(
     floating: bool,
 ) -> Result<(Model, Vec<String>, Option<Trunk>), IoError> {
     let (robot, doc, mut warnings) = read_robot(xml, path)?;
-    let robot = rooted(robot, path, floating)?;
+    let mut robot = rooted(robot, path, floating)?;
+    let tiny = tiny_masses_zeroed(&mut robot);
+    warnings.extend(tiny_masses_note(&tiny));
     let rates = doc
         .as_ref()
         .map_or(Ok(HashMap::new()), |d| rate_limits(d, path))?;
@@ -253,6 +210,7 @@ fn parse(
         ..
     } = walk(&robot, &link_idx, &children, (root, floating), &lookup)?;
     warnings.extend(doc.as_ref().map_or(vec![], empty_ranges));
+    warnings.extend(doc.as_ref().map_or(vec![], sdf_no_limits));
     apply_rate_limits(&mut bodies, &rates);
     warnings.extend(lost_meshes(&shapes, &base));
     bound_bodies(&mut bodies, &shapes, &lookup, &mut warnings);
@@ -261,7 +219,7 @@ fn parse(
     // floating robot, is its own).
     let (trunk_sidecar, extras) = extras.split_ellipsoid(floating.then_some(root), path)?;
     extras.apply(&mut bodies, &body_parent_link_x, path)?;
-    check_subtree_masses(&bodies, path)?;
+    check_subtree_masses(&bodies, &tiny, path)?;
     let trunk = floating.then(|| Trunk {
         name: root.to_string(),
         inertia: base_inertia,
@@ -484,6 +442,27 @@ fn empty_ranges(doc: &roxmltree::Document) -> Vec<String> {
     out
 }
 
+/// A warning per moving joint whose `<limit>` gives `velocity` or `effort` −1: read as not
+/// given (SDF's "no limit", which descriptions converted from SDF carry).
+fn sdf_no_limits(doc: &roxmltree::Document) -> Vec<String> {
+    let moving = |j: &roxmltree::Node| j.attribute("type").is_some_and(|t| t != "fixed");
+    let mut out = vec![];
+    for (joint, limit) in joint_limits(doc).filter(|(j, _)| moving(j)) {
+        for field in ["velocity", "effort"] {
+            let value = limit
+                .attribute(field)
+                .and_then(|v| v.trim().parse::<f64>().ok());
+            if value == Some(-1.0) {
+                out.push(format!(
+                    "joint '{}': <limit {field}=\"-1\"> read as not given (SDF's -1 for no limit)",
+                    joint.attribute("name").unwrap_or("")
+                ));
+            }
+        }
+    }
+    out
+}
+
 /// Each top-level `<joint>` with its `<limit>` (joints without one left out).
 fn joint_limits<'a, 'input>(
     doc: &'a roxmltree::Document<'input>,
@@ -528,8 +507,43 @@ fn rate_limits(doc: &roxmltree::Document, path: &Path) -> Result<RateLimits, IoE
     Ok(out)
 }
 
-/// The smallest nonzero link mass read (kg): dummy links of real URDFs weigh 1e-5 and more.
+/// The smallest link mass read as a mass (kg): no part weighs less, and a body that did would
+/// make the mass matrix singular in effect. Real URDFs give such masses to frames (1e-10 kg
+/// on PR2's camera frames), so a link below it is read as massless, with a warning.
 const MIN_MASS: f64 = 1e-9;
+
+/// Each link of `robot` whose mass is positive and below [`MIN_MASS`], made massless (its
+/// `<inertial>` zeroed): the links and the masses they had.
+fn tiny_masses_zeroed(robot: &mut urdf_rs::Robot) -> Vec<(String, f64)> {
+    let mut out = vec![];
+    for l in robot.links.iter_mut() {
+        let m = l.inertial.mass.value;
+        if m > 0.0 && m < MIN_MASS {
+            out.push((l.name.clone(), m));
+            l.inertial = urdf_rs::Inertial::default();
+        }
+    }
+    out
+}
+
+/// The warning (or, in the error of a massless joint, the note) for the links read as massless.
+fn tiny_masses_note(tiny: &[(String, f64)]) -> Option<String> {
+    let links: Vec<String> = tiny
+        .iter()
+        .map(|(l, m)| format!("'{l}' ({m:e} kg)"))
+        .collect();
+    (!tiny.is_empty()).then(|| {
+        format!(
+            "{} below {MIN_MASS:e} kg, which no part weighs, read as massless: {}",
+            if tiny.len() == 1 {
+                "a link mass"
+            } else {
+                "link masses"
+            },
+            links.join(", ")
+        )
+    })
+}
 
 /// Link name → index; every link defined once with a finite non-negative mass.
 fn link_index<'r>(
@@ -546,12 +560,6 @@ fn link_index<'r>(
         if !m.is_finite() || m < 0.0 {
             return Err(bad(format!(
                 "link '{}': mass {m} kg is not a finite non-negative number",
-                l.name
-            )));
-        }
-        if m > 0.0 && m < MIN_MASS {
-            return Err(bad(format!(
-                "link '{}': mass {m:e} kg is below {MIN_MASS:e} kg, which no part weighs and which makes the mass matrix singular in effect: give 0 for a massless link",
                 l.name
             )));
         }
@@ -766,7 +774,7 @@ fn walk<'r>(
             if let Some(mimic) = &jt.mimic {
                 if children.get(child).is_some_and(|c| !c.is_empty()) {
                     return Err(bad(format!(
-                        "joint '{}' mimics '{}' but its child link '{child}' has children: only a leaf link can be a rotor",
+                        "joint '{}' mimics '{}' but its child link '{child}' has children: only a leaf link can be a rotor. {MIMIC_LINKAGE}",
                         jt.name, mimic.joint
                     )));
                 }
@@ -852,6 +860,9 @@ fn moving_joint(jt: &urdf_rs::Joint, path: &Path) -> Result<Option<Joint>, IoErr
     }
 }
 
+/// What a mimic joint that is not a rotor is, and what to do with it (errors end with it).
+const MIMIC_LINKAGE: &str = "physid reads a <mimic> joint as a rotor only (a leaf link on the parent body of the joint it mimics); a linkage coupled by <mimic> (a gripper's fingers, a parallel link or piston) is not modelled: if it holds still in the data, make its joints and the joint they mimic type=\"fixed\" in a copy of the URDF (their links' mass then counts in the body they hang from)";
+
 /// After the walk: every joint was reached from the root, and some joint moves.
 fn check_walked(
     robot: &urdf_rs::Robot,
@@ -881,7 +892,7 @@ fn check_walked(
 }
 
 /// A moving joint's body: its child link's inertia, the joint's limits (0/0 or continuous:
-/// unlimited; a zero velocity or effort limit: unknown) and friction.
+/// unlimited; a velocity or effort limit of 0 or SDF's −1: unknown) and friction.
 fn moving_body(
     jt: &urdf_rs::Joint,
     parent: Option<usize>,
@@ -891,8 +902,16 @@ fn moving_body(
 ) -> Body {
     use urdf_rs::JointType as T;
     let lim = &jt.limit;
-    // 0 means "not given" in URDF; a negative limit is kept for the model to refuse by name.
-    let inf_if_zero = |v: f64| if v == 0.0 { f64::INFINITY } else { v };
+    // 0 means "not given" in URDF, and −1 "no limit" in SDF, which descriptions converted from
+    // SDF carry (`sdf_no_limits` warns); any other negative limit is kept for the model to
+    // refuse by name.
+    let inf_if_zero = |v: f64| {
+        if v == 0.0 || v == -1.0 {
+            f64::INFINITY
+        } else {
+            v
+        }
+    };
     let (lower, upper) = match jt.joint_type {
         T::Continuous => (f64::NEG_INFINITY, f64::INFINITY),
         _ if lim.lower == 0.0 && lim.upper == 0.0 => (f64::NEG_INFINITY, f64::INFINITY),
@@ -991,7 +1010,7 @@ fn rotor_host(
         })?;
     if bodies[k].parent != pb {
         return Err(bad(format!(
-            "joint '{}' mimics '{}' but is not mounted on that joint's parent body: not a rotor",
+            "joint '{}' mimics '{}' but is not mounted on that joint's parent body: not a rotor. {MIMIC_LINKAGE}",
             jt.name, mimic.joint
         )));
     }
@@ -1080,7 +1099,11 @@ fn check_bounds(
 }
 
 /// A joint whose subtree (and rotor) has no mass cannot be accelerated.
-fn check_subtree_masses(bodies: &[Body], path: &Path) -> Result<(), IoError> {
+fn check_subtree_masses(
+    bodies: &[Body],
+    tiny: &[(String, f64)],
+    path: &Path,
+) -> Result<(), IoError> {
     let bad = |m: String| IoError::invalid(path, m);
     let n = bodies.len();
     let mut subtree_mass: Vec<f64> = bodies
@@ -1094,8 +1117,10 @@ fn check_subtree_masses(bodies: &[Body], path: &Path) -> Result<(), IoError> {
     }
     if let Some(i) = (0..n).find(|&i| subtree_mass[i] <= 0.0) {
         return Err(bad(format!(
-            "joint '{}' moves only massless links (no <inertial> or zero mass from link '{}' on): its mass matrix would be singular",
-            bodies[i].joint_name, bodies[i].name
+            "joint '{}' moves only massless links (no <inertial> or zero mass from link '{}' on): its mass matrix would be singular{}",
+            bodies[i].joint_name,
+            bodies[i].name,
+            tiny_masses_note(tiny).map_or(String::new(), |n| format!(" ({n})"))
         )));
     }
     Ok(())

@@ -781,7 +781,9 @@ fn check_physical_element(
     let r = p.consistency(e);
     let tol = 1e-12 * p.pseudo_inertia().norm();
     if r.min_eig_pseudo < -tol {
-        let why = if r.min_eig_spatial < 0.0 {
+        // The same tolerance picks the reason: a rank-one inertia (eigenvalues 0.03, 0, 0)
+        // has `λ_min(I) = −3e-18` from rounding, and it is the triangle inequality it breaks.
+        let why = if r.min_eig_spatial < -tol {
             "the 6x6 spatial inertia I(pi) is not positive semidefinite"
         } else {
             "the pseudo-inertia J(pi) is not positive semidefinite (principal moments violate the triangle inequality)"
