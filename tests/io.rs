@@ -513,3 +513,39 @@ fn a_gazebo_plugins_joint_name_leaves_the_next_joint_its_origin() {
         nalgebra::Vector3::new(0.0, -0.1, 0.0)
     );
 }
+
+#[test]
+fn mjcf_export_leaves_out_zero_sized_shapes_and_rounding_beyond_the_triangle_inequality() {
+    // A placeholder `<box size="0 0 0"/>` (Kinova's, Sawyer's and Atlas's URDFs) and a flat
+    // plate whose moments, written in decimals, exceed A + B = C by 4e-18 (ROBOTIS OP2's
+    // gripper): MuJoCo refused both files.
+    let xml = robot(
+        r#"<link name="base"><visual><geometry><box size="0 0 0"/></geometry></visual></link>
+  <link name="plate"><inertial><mass value="0.01"/>
+    <inertia ixx="8.53333333333e-07" ixy="0" ixz="0" iyy="1.70666666667e-06" iyz="0" izz="8.53333333333e-07"/></inertial>
+    <visual><geometry><box size="0.02 0.01 0"/></geometry></visual>
+    <visual><geometry><cylinder radius="0.01" length="0.03"/></geometry></visual></link>
+  <joint name="j1" type="revolute"><parent link="base"/><child link="plate"/><axis xyz="0 0 1"/></joint>"#,
+    );
+    let (m, _) = urdf::from_str(&xml, Path::new("op2.urdf"), &Default::default()).unwrap();
+    let text = io::mjcf::to_string(&m);
+    assert!(!text.contains("type=\"box\""), "{text}");
+    assert_eq!(text.matches("type=\"cylinder\"").count(), 1, "{text}");
+    let full = text
+        .split("fullinertia=\"")
+        .nth(1)
+        .and_then(|s| s.split('"').next())
+        .unwrap();
+    let v: Vec<f64> = full.split(' ').map(|x| x.parse().unwrap()).collect();
+    let ic = nalgebra::Matrix3::new(v[0], v[3], v[4], v[3], v[1], v[5], v[4], v[5], v[2]);
+    let mut l = ic.symmetric_eigenvalues().as_slice().to_vec();
+    l.sort_by(f64::total_cmp);
+    assert!(l[0] + l[1] >= l[2], "{l:?}");
+    // Moved by no more than its excess and the room it leaves (1e-12 of the sum).
+    let excess = 1.70666666667e-06 - 2.0 * 8.53333333333e-07;
+    assert!(
+        (l[2] - 1.70666666667e-06).abs() <= excess + 2e-12 * l[2],
+        "{l:?}"
+    );
+    assert!((l[0] - 8.53333333333e-07).abs() < 1e-20, "{l:?}");
+}

@@ -53,7 +53,7 @@ fn pose_attrs(x: &Transform) -> String {
 fn inertial(p: &InertialParams) -> String {
     let (c, ic) = (
         p.com().unwrap_or_default(),
-        p.inertia_about_com().unwrap_or_default(),
+        within_triangle(&p.inertia_about_com().unwrap_or_default()),
     );
     format!(
         "<inertial pos=\"{}\" mass=\"{}\" fullinertia=\"{} {} {} {} {} {}\"/>",
@@ -66,6 +66,33 @@ fn inertial(p: &InertialParams) -> String {
         ic[(0, 2)],
         ic[(1, 2)]
     )
+}
+
+/// Relative room left below the triangle inequality by [`within_triangle`].
+const TRIANGLE_ROOM: f64 = 1e-12;
+
+/// The rotational inertia `ic` (kg m², about the CoM) with any principal moment that exceeds
+/// the sum of the other two by rounding (a flat plate's `A + B = C` written in decimals:
+/// 8.53e-7 + 8.53e-7 against 1.70666666667e-6 in ROBOTIS OP2's URDF) brought to
+/// `(1 − 10⁻¹²)` times that sum: MuJoCo refuses any excess, and physid has read the body as
+/// consistent, so the excess is below `10⁻¹²` of its pseudo-inertia. Unchanged otherwise.
+fn within_triangle(ic: &nalgebra::Matrix3<f64>) -> nalgebra::Matrix3<f64> {
+    let eig = SymmetricEigen::new(*ic);
+    let mut moments = eig.eigenvalues;
+    let total = moments.sum();
+    let mut changed = false;
+    for k in 0..3 {
+        let limit = (total - moments[k]) * (1.0 - TRIANGLE_ROOM);
+        if moments[k] > limit && limit > 0.0 {
+            moments[k] = limit;
+            changed = true;
+        }
+    }
+    if !changed {
+        return *ic;
+    }
+    let r = eig.eigenvectors;
+    r * nalgebra::Matrix3::from_diagonal(&moments) * r.transpose()
 }
 
 /// Whether MuJoCo reads this mesh file (STL, OBJ).
@@ -123,18 +150,14 @@ fn mesh_assets(model: &Model) -> Vec<(String, String, [f64; 3])> {
 }
 
 /// The `<geom>` of a shape: visual only (`contype = conaffinity = 0`, group 1), so that
-/// contacts never enter `mj_inverse`; `None` for a mesh MuJoCo cannot read.
+/// contacts never enter `mj_inverse`; `None` for a mesh MuJoCo cannot read and for a shape
+/// with a size of zero (URDFs' placeholder `<box size="0 0 0"/>`), which MuJoCo refuses.
 fn shape_geom(body: &str, k: usize, sh: &Shape) -> Option<String> {
     let (kind, size) = match &sh.kind {
-        ShapeKind::Box { size } => (
-            "box",
-            format!("{} {} {}", size[0] / 2.0, size[1] / 2.0, size[2] / 2.0),
-        ),
-        ShapeKind::Cylinder { radius, length } => {
-            ("cylinder", format!("{radius} {}", length / 2.0))
-        }
-        ShapeKind::Capsule { radius, length } => ("capsule", format!("{radius} {}", length / 2.0)),
-        ShapeKind::Sphere { radius } => ("sphere", format!("{radius}")),
+        ShapeKind::Box { size } => ("box", vec![size[0] / 2.0, size[1] / 2.0, size[2] / 2.0]),
+        ShapeKind::Cylinder { radius, length } => ("cylinder", vec![*radius, length / 2.0]),
+        ShapeKind::Capsule { radius, length } => ("capsule", vec![*radius, length / 2.0]),
+        ShapeKind::Sphere { radius } => ("sphere", vec![*radius]),
         ShapeKind::Mesh { path, .. } => {
             if !mujoco_reads(path) {
                 return None;
@@ -145,8 +168,13 @@ fn shape_geom(body: &str, k: usize, sh: &Shape) -> Option<String> {
             ));
         }
     };
+    if !size.iter().all(|s| s.is_finite() && *s > 0.0) {
+        return None;
+    }
+    let size: Vec<String> = size.iter().map(f64::to_string).collect();
     Some(format!(
-        "<geom type=\"{kind}\" size=\"{size}\" {} contype=\"0\" conaffinity=\"0\" group=\"1\"/>",
+        "<geom type=\"{kind}\" size=\"{}\" {} contype=\"0\" conaffinity=\"0\" group=\"1\"/>",
+        size.join(" "),
         pose_attrs(&sh.pose)
     ))
 }
