@@ -317,8 +317,9 @@ def check_contact_dynamics(report, binary, directory):
 
 
 # An arm as URDFs are written (not any one robot's): a placeholder <box size="0 0 0"/>, a flat
-# plate whose moments, in decimals, exceed A + B = C by 4e-18 (MuJoCo refuses both if exported
-# as they are), on a tree whose branches have branches (MuJoCo numbers dofs depth-first,
+# plate whose moments, in decimals, exceed A + B = C by 4e-18, a point mass (inertia zeros),
+# a massless link between two joints, a thin rod turned off the axes (MuJoCo refuses all five
+# if exported as they are, the rod from its own eigendecomposition of a full inertia), on a tree whose branches have branches (MuJoCo numbers dofs depth-first,
 # physid need not).
 PLACEHOLDER_ARM = """<robot name="placeholder_arm">
   <link name="base"><visual><geometry><box size="0 0 0"/></geometry></visual></link>
@@ -335,8 +336,12 @@ PLACEHOLDER_ARM = """<robot name="placeholder_arm">
   <link name="finger"><inertial><origin xyz="0.01 0 0"/><mass value="0.05"/>
     <inertia ixx="1e-5" ixy="0" ixz="0" iyy="2e-5" iyz="0" izz="2e-5"/></inertial></link>
   <joint name="finger" type="prismatic"><parent link="plate"/><child link="finger"/><axis xyz="0 1 0"/></joint>
-  <link name="camera"><inertial><mass value="0.2"/><inertia ixx="1e-4" ixy="0" ixz="0" iyy="1e-4" iyz="0" izz="1e-4"/></inertial></link>
-  <joint name="pan" type="continuous"><parent link="base"/><child link="camera"/><origin xyz="0.3 0 0.1"/><axis xyz="0 0 1"/></joint>
+  <link name="camera"><inertial><origin xyz="0.02 0 0"/><mass value="0.2"/><inertia ixx="0" ixy="0" ixz="0" iyy="0" iyz="0" izz="0"/></inertial></link>
+  <link name="tilt_link"/>
+  <joint name="tilt" type="revolute"><parent link="base"/><child link="tilt_link"/><origin xyz="0.3 0 0.1"/><axis xyz="0 1 0"/></joint>
+  <joint name="pan" type="continuous"><parent link="tilt_link"/><child link="camera"/><axis xyz="0 0 1"/></joint>
+  <link name="rod"><inertial><origin xyz="0 0 0.1"/><mass value="0.4"/><inertia ixx="0.0013" ixy="0" ixz="0" iyy="0.0013" iyz="0" izz="0"/></inertial></link>
+  <joint name="rod_joint" type="revolute"><parent link="tool"/><child link="rod"/><origin xyz="0 0 0.1" rpy="0.2 0.7 -0.4"/><axis xyz="0 1 0"/></joint>
 </robot>"""
 
 
@@ -346,7 +351,7 @@ def check_placeholder_arm(report, binary, directory):
         f.write(PLACEHOLDER_ARM)
     xml = export(binary, ["--robot", urdf], "mjcf", directory)
     dyn = dynamics(binary, ["--robot", urdf])
-    mj_compare(report, "arm with placeholder shapes and a flat plate", xml, dyn)
+    mj_compare(report, "arm with placeholder shapes, a flat plate, a point mass, a massless link and a thin rod", xml, dyn)
 
 
 def main():

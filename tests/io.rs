@@ -518,7 +518,8 @@ fn a_gazebo_plugins_joint_name_leaves_the_next_joint_its_origin() {
 fn mjcf_export_leaves_out_zero_sized_shapes_and_rounding_beyond_the_triangle_inequality() {
     // A placeholder `<box size="0 0 0"/>` (Kinova's, Sawyer's and Atlas's URDFs) and a flat
     // plate whose moments, written in decimals, exceed A + B = C by 4e-18 (ROBOTIS OP2's
-    // gripper): MuJoCo refused both files.
+    // gripper): MuJoCo refused both files. The inertia goes in principal axes, checked here on
+    // the numbers written, as MuJoCo checks them.
     let xml = robot(
         r#"<link name="base"><visual><geometry><box size="0 0 0"/></geometry></visual></link>
   <link name="plate"><inertial><mass value="0.01"/>
@@ -531,14 +532,12 @@ fn mjcf_export_leaves_out_zero_sized_shapes_and_rounding_beyond_the_triangle_ine
     let text = io::mjcf::to_string(&m);
     assert!(!text.contains("type=\"box\""), "{text}");
     assert_eq!(text.matches("type=\"cylinder\"").count(), 1, "{text}");
-    let full = text
-        .split("fullinertia=\"")
+    let diag = text
+        .split("diaginertia=\"")
         .nth(1)
         .and_then(|s| s.split('"').next())
         .unwrap();
-    let v: Vec<f64> = full.split(' ').map(|x| x.parse().unwrap()).collect();
-    let ic = nalgebra::Matrix3::new(v[0], v[3], v[4], v[3], v[1], v[5], v[4], v[5], v[2]);
-    let mut l = ic.symmetric_eigenvalues().as_slice().to_vec();
+    let mut l: Vec<f64> = diag.split(' ').map(|x| x.parse().unwrap()).collect();
     l.sort_by(f64::total_cmp);
     assert!(l[0] + l[1] >= l[2], "{l:?}");
     // Moved by no more than its excess and the room it leaves (1e-12 of the sum).
@@ -548,4 +547,18 @@ fn mjcf_export_leaves_out_zero_sized_shapes_and_rounding_beyond_the_triangle_ine
         "{l:?}"
     );
     assert!((l[0] - 8.53333333333e-07).abs() < 1e-20, "{l:?}");
+    // A point mass (URDFs' inertia of zeros under a mass) gets moments of 1e-14 kg m².
+    let point = xml.replace(
+        r#"ixx="8.53333333333e-07" ixy="0" ixz="0" iyy="1.70666666667e-06" iyz="0" izz="8.53333333333e-07""#,
+        r#"ixx="0" ixy="0" ixz="0" iyy="0" iyz="0" izz="0""#,
+    );
+    let (m, _) = urdf::from_str(&point, Path::new("op2.urdf"), &Default::default()).unwrap();
+    let text = io::mjcf::to_string(&m);
+    let floor = "0.00000000000001";
+    assert!(
+        text.contains(&format!(
+            r#"mass="0.01" diaginertia="{floor} {floor} {floor}""#
+        )),
+        "{text}"
+    );
 }

@@ -10,10 +10,13 @@
 //! physid models it (`frictionloss` is MuJoCo's dry-friction constraint, not `B_c sign(q̇)`),
 //! and bounding ellipsoids as constraints (they are drawn as group-3 geoms).
 //!
-//! Written: inertias (explicit, `inertiafromgeom="false"`), joints with `armature`,
+//! Written: inertias (explicit, `inertiafromgeom="false"`, in principal axes; moments at least
+//! 1e-14 kg m², a moment beyond the sum of the others by rounding brought 1e-12 inside it, a
+//! massless moving body given 1e-12 kg: MuJoCo refuses each as written), joints with `armature`,
 //! `damping` (viscous), `frictionloss` (Coulomb), `range` and `actuatorfrcrange` where finite,
 //! the description's shapes as visual geoms (group 1, no contacts, so `mj_inverse` never sees a
-//! contact force; STL and OBJ meshes by absolute path, other mesh formats left out).
+//! contact force; STL and OBJ meshes by absolute path, other mesh formats and shapes of zero
+//! size left out).
 
 use nalgebra::{Rotation3, SymmetricEigen, UnitQuaternion, Vector3};
 use physid_core::model::{Joint, Model, Rotor, Shape, ShapeKind};
@@ -49,50 +52,55 @@ fn pose_attrs(x: &Transform) -> String {
     )
 }
 
-/// An `<inertial>` element.
+/// An `<inertial>` element, in principal axes (`quat`, `diaginertia`): MuJoCo stores it so,
+/// and a `fullinertia` it would decompose itself, with an eigensolver that turns a thin rod's
+/// zero moment (1e-9 of the others) negative and refuses the body.
 fn inertial(p: &InertialParams) -> String {
-    let (c, ic) = (
-        p.com().unwrap_or_default(),
-        within_triangle(&p.inertia_about_com().unwrap_or_default()),
-    );
+    let c = p.com().unwrap_or_default();
+    let (axes, moments) = principal_for_mujoco(&p.inertia_about_com().unwrap_or_default());
+    let q = UnitQuaternion::from_rotation_matrix(&axes);
     format!(
-        "<inertial pos=\"{}\" mass=\"{}\" fullinertia=\"{} {} {} {} {} {}\"/>",
+        "<inertial pos=\"{}\" quat=\"{} {} {} {}\" mass=\"{}\" diaginertia=\"{}\"/>",
         v3(&c),
-        p.mass(),
-        ic[(0, 0)],
-        ic[(1, 1)],
-        ic[(2, 2)],
-        ic[(0, 1)],
-        ic[(0, 2)],
-        ic[(1, 2)]
+        q.w,
+        q.i,
+        q.j,
+        q.k,
+        p.mass().max(MASS_FLOOR),
+        v3(&moments)
     )
 }
 
-/// Relative room left below the triangle inequality by [`within_triangle`].
+/// The smallest mass written (kg): MuJoCo refuses a moving body of no mass, which physid
+/// allows where the body carries others (a massless link between two joints: Fetch's base).
+const MASS_FLOOR: f64 = 1e-12;
+
+/// Relative room left below the triangle inequality by [`principal_for_mujoco`].
 const TRIANGLE_ROOM: f64 = 1e-12;
 
-/// The rotational inertia `ic` (kg m², about the CoM) with any principal moment that exceeds
-/// the sum of the other two by rounding (a flat plate's `A + B = C` written in decimals:
-/// 8.53e-7 + 8.53e-7 against 1.70666666667e-6 in ROBOTIS OP2's URDF) brought to
-/// `(1 − 10⁻¹²)` times that sum: MuJoCo refuses any excess, and physid has read the body as
-/// consistent, so the excess is below `10⁻¹²` of its pseudo-inertia. Unchanged otherwise.
-fn within_triangle(ic: &nalgebra::Matrix3<f64>) -> nalgebra::Matrix3<f64> {
+/// The smallest principal moment written (kg m²): MuJoCo refuses moments below 1e-15, which a
+/// point mass (URDFs' `<inertia>` of zeros under a mass) has; 1e-14 kg m² is a gram at 3 µm.
+const MOMENT_FLOOR: f64 = 1e-14;
+
+/// The principal axes (a proper rotation, body frame) and moments (kg m²) of the rotational
+/// inertia `ic` about the CoM, as MuJoCo takes them: moments at least [`MOMENT_FLOOR`], and
+/// any that exceeds the sum of the other two by rounding (a flat plate's `A + B = C` written
+/// in decimals: 8.53e-7 + 8.53e-7 against 1.70666666667e-6 in ROBOTIS OP2's URDF) brought to
+/// `(1 − 10⁻¹²)` times that sum. MuJoCo refuses any excess, and physid has read the body as
+/// consistent, so the excess is below `10⁻¹²` of its pseudo-inertia.
+fn principal_for_mujoco(ic: &nalgebra::Matrix3<f64>) -> (Rotation3<f64>, Vector3<f64>) {
     let eig = SymmetricEigen::new(*ic);
-    let mut moments = eig.eigenvalues;
+    let mut axes = eig.eigenvectors;
+    if axes.determinant() < 0.0 {
+        axes.column_mut(2).neg_mut();
+    }
+    let mut moments = eig.eigenvalues.map(|m| m.max(MOMENT_FLOOR));
     let total = moments.sum();
-    let mut changed = false;
     for k in 0..3 {
         let limit = (total - moments[k]) * (1.0 - TRIANGLE_ROOM);
-        if moments[k] > limit && limit > 0.0 {
-            moments[k] = limit;
-            changed = true;
-        }
+        moments[k] = moments[k].min(limit);
     }
-    if !changed {
-        return *ic;
-    }
-    let r = eig.eigenvectors;
-    r * nalgebra::Matrix3::from_diagonal(&moments) * r.transpose()
+    (Rotation3::from_matrix_unchecked(axes), moments)
 }
 
 /// Whether MuJoCo reads this mesh file (STL, OBJ).
