@@ -400,3 +400,48 @@ fn frozen_rotors_are_the_reflected_model_without_its_armature() {
         }
     }
 }
+
+#[test]
+fn a_singular_mass_matrix_names_the_joint_that_moves_no_inertia() {
+    // A low-cost arm of point masses (the AL5D's URDF: every <inertia> zero, each mass at its
+    // link's origin): the wrist's body sits on its own axis, so nothing turns with it. Before,
+    // simulation said only that the mass matrix was not positive definite.
+    let point = |m: f64, x: f64| {
+        format!(
+            r#"<inertial><origin xyz="{x} 0 0"/><mass value="{m}"/><inertia ixx="0" ixy="0" ixz="0" iyy="0" iyz="0" izz="0"/></inertial>"#
+        )
+    };
+    let xml = format!(
+        r#"<robot name="points"><link name="base"/>
+  <link name="upper">{}</link><link name="hand">{}</link>
+  <joint name="shoulder" type="revolute"><parent link="base"/><child link="upper"/><axis xyz="0 0 1"/></joint>
+  <joint name="wrist" type="revolute"><parent link="upper"/><child link="hand"/><origin xyz="0.2 0 0"/><axis xyz="1 0 0"/></joint>
+</robot>"#,
+        point(0.3, 0.1),
+        point(0.1, 0.05)
+    );
+    let (m, _) = physid::io::urdf::from_str(
+        &xml,
+        std::path::Path::new("points.urdf"),
+        &Default::default(),
+    )
+    .unwrap();
+    let mut d = Data::new(&m);
+    let e = forward_dynamics(&m, &mut d, &[0.3, 0.2], &[0.0, 0.0], &[0.0, 0.0])
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("joint 'wrist'"), "{e}");
+    // Off its axis, the hand's mass turns with the wrist: the matrix is positive definite.
+    let off_axis = xml.replace(
+        r#"<origin xyz="0.05 0 0"/>"#,
+        r#"<origin xyz="0.05 0.02 0"/>"#,
+    );
+    let (m, _) = physid::io::urdf::from_str(
+        &off_axis,
+        std::path::Path::new("points.urdf"),
+        &Default::default(),
+    )
+    .unwrap();
+    let mut d = Data::new(&m);
+    assert!(forward_dynamics(&m, &mut d, &[0.3, 0.2], &[0.0, 0.0], &[0.0, 0.0]).is_ok());
+}

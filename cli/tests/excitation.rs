@@ -149,6 +149,35 @@ fn bad_design_options_are_named() {
     assert!(e.contains("abad_joint") && e.contains("empty"), "{e}");
 }
 
+#[test]
+fn a_joint_whose_friction_exceeds_its_torque_limit_is_named() {
+    // Drake's Allegro hand: 10 N m of Coulomb friction under a 0.7 N m limit. Before: "no
+    // excitation found ... check the velocity and acceleration limits", after scaling every
+    // motion to nothing.
+    let urdf = |friction: &str| {
+        format!(
+            r#"<robot name="finger">
+  <link name="palm"/>
+  <link name="a"><inertial><origin xyz="0.02 0 0"/><mass value="0.05"/><inertia ixx="1e-5" ixy="0" ixz="0" iyy="1e-5" iyz="0" izz="1e-5"/></inertial></link>
+  <joint name="knuckle" type="revolute"><parent link="palm"/><child link="a"/><axis xyz="0 0 1"/>
+    <limit effort="0.7" lower="-0.5" upper="0.5" velocity="7"/><dynamics damping="0.015" friction="{friction}"/></joint>
+</robot>"#
+        )
+    };
+    let load = |f: &str| {
+        physid::io::urdf::from_str(&urdf(f), Path::new("finger.urdf"), &Default::default())
+            .unwrap()
+            .0
+    };
+    let e = design(&load("10"), None, &opts(1)).unwrap_err().to_string();
+    assert!(
+        e.contains("joint knuckle: moving") && e.contains("Coulomb friction is 10.000 N m"),
+        "{e}"
+    );
+    // Within the limit (with its margin), the same finger is designed for.
+    assert!(design(&load("0.1"), None, &opts(1)).is_ok());
+}
+
 /// A file of the repository, as an argument.
 fn repo(path: &str) -> String {
     root().join(path).to_str().unwrap().to_string()

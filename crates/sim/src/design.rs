@@ -164,13 +164,16 @@ pub enum DesignError {
         /// Upper end (rad).
         upper: f64,
     },
-    /// Gravity alone exceeds a torque limit at the centre of the range.
-    #[error("joint {joint}: holding the centre of its range takes {torque:.3} N m, above its torque limit {limit:.3} N m (with the margin)")]
+    /// Gravity alone, or with the joint's Coulomb friction, exceeds a torque limit at the
+    /// centre of the range.
+    #[error("joint {joint}: {} at the centre of its range takes {torque:.3} N m, above its torque limit {limit:.3} N m (with the margin){}", if *friction > 0.0 { "moving" } else { "holding still" }, if *friction > 0.0 { format!(": its Coulomb friction is {friction:.3} N m, so no motion of it fits the limit (check the description's <dynamics friction> against its <limit effort>)") } else { String::new() })]
     TorqueInfeasible {
         /// Joint name.
         joint: String,
-        /// The torque needed at rest (N m).
+        /// The torque needed at rest or to start moving (N m).
         torque: f64,
+        /// The Coulomb friction counted in `torque` (N m; 0 for holding still).
+        friction: f64,
         /// Its limit (N m).
         limit: f64,
     },
@@ -883,19 +886,30 @@ pub fn design_watched(
     })
 }
 
-/// The torque that holds the robot at the centre of its ranges fits every effort limit.
+/// The torque that holds the robot at the centre of its ranges fits every effort limit, and
+/// so does the torque that starts each joint moving from there either way (the holding torque
+/// and its Coulomb friction): a periodic motion moves every joint both ways, and one whose
+/// friction alone exceeds its limit cannot move at all (Drake's Allegro hand: 10 N m of
+/// friction under a 0.7 N m limit), which the design would otherwise find only as a motion
+/// scaled to nothing.
 fn check_holding_torque(model: &Model, limits: &Limits) -> Result<(), DesignError> {
     let n = model.dof();
     let mut data = Data::new(model);
     let zero = vec![0.0; n];
     let tau = rnea_with_friction(model, &mut data, &limits.centre(), &zero, &zero);
     for (j, b) in model.bodies().iter().enumerate() {
+        let infeasible = |torque: f64, friction: f64| DesignError::TorqueInfeasible {
+            joint: b.joint_name.clone(),
+            torque,
+            friction,
+            limit: limits.effort[j],
+        };
         if tau[j].abs() > limits.effort[j] {
-            return Err(DesignError::TorqueInfeasible {
-                joint: b.joint_name.clone(),
-                torque: tau[j].abs(),
-                limit: limits.effort[j],
-            });
+            return Err(infeasible(tau[j].abs(), 0.0));
+        }
+        let moving = tau[j].abs() + b.friction.coulomb.abs();
+        if moving > limits.effort[j] {
+            return Err(infeasible(moving, b.friction.coulomb.abs()));
         }
     }
     Ok(())
