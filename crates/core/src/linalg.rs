@@ -4,7 +4,7 @@
 //!
 //! Floor 1 (architecture.md §6): imports nothing from physid.
 
-use nalgebra::{DMatrix, DVector, SymmetricEigen};
+use nalgebra::{DMatrix, DVector, Matrix3, Rotation3, SymmetricEigen, Vector3};
 
 /// Relative eigenvalue threshold below which a direction of the (column-scaled) normal matrix
 /// counts as unidentifiable.
@@ -177,6 +177,18 @@ pub fn min_norm_solve(h: &DMatrix<f64>, g: &DMatrix<f64>) -> DMatrix<f64> {
         }
     }
     x
+}
+
+/// The principal axes of a symmetric 3×3 matrix as a proper rotation (columns the
+/// eigenvectors, the third negated where they would make a reflection) and its eigenvalues in
+/// the same order: `m = R diag(λ) Rᵀ`. For a rotational inertia, or an ellipsoid's shape matrix.
+pub fn principal_axes(m: &Matrix3<f64>) -> (Rotation3<f64>, Vector3<f64>) {
+    let eig = SymmetricEigen::new(*m);
+    let mut r = eig.eigenvectors;
+    if r.determinant() < 0.0 {
+        r.column_mut(2).neg_mut();
+    }
+    (Rotation3::from_matrix_unchecked(r), eig.eigenvalues)
 }
 
 /// The median of `v` (values ordered by `f64::total_cmp`, a NaN above every number); 0 for no

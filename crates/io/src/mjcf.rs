@@ -18,7 +18,8 @@
 //! contact force; STL and OBJ meshes by absolute path, other mesh formats and shapes of zero
 //! size left out).
 
-use nalgebra::{Rotation3, SymmetricEigen, UnitQuaternion, Vector3};
+use nalgebra::{Rotation3, UnitQuaternion, Vector3};
+use physid_core::linalg::principal_axes;
 use physid_core::model::{Joint, Model, Rotor, Shape, ShapeKind};
 use physid_core::spatial::{Ellipsoid, InertialParams, Transform};
 use std::fmt::Write;
@@ -38,17 +39,19 @@ pub fn lumped_inertias(model: &Model) -> Vec<InertialParams> {
     out
 }
 
+/// A rotation as the MJCF `quat` attribute.
+fn quat_attr(r: &Rotation3<f64>) -> String {
+    let q = UnitQuaternion::from_rotation_matrix(r);
+    format!("quat=\"{} {} {} {}\"", q.w, q.i, q.j, q.k)
+}
+
 /// A pose as MJCF `pos` and `quat` attributes.
 fn pose_attrs(x: &Transform) -> String {
     let (rot, pos) = x.to_pose();
-    let q = UnitQuaternion::from_rotation_matrix(&Rotation3::from_matrix_unchecked(rot));
     format!(
-        "pos=\"{}\" quat=\"{} {} {} {}\"",
+        "pos=\"{}\" {}",
         v3(&pos),
-        q.w,
-        q.i,
-        q.j,
-        q.k
+        quat_attr(&Rotation3::from_matrix_unchecked(rot))
     )
 }
 
@@ -58,14 +61,10 @@ fn pose_attrs(x: &Transform) -> String {
 fn inertial(p: &InertialParams) -> String {
     let c = p.com().unwrap_or_default();
     let (axes, moments) = principal_for_mujoco(&p.inertia_about_com().unwrap_or_default());
-    let q = UnitQuaternion::from_rotation_matrix(&axes);
     format!(
-        "<inertial pos=\"{}\" quat=\"{} {} {} {}\" mass=\"{}\" diaginertia=\"{}\"/>",
+        "<inertial pos=\"{}\" {} mass=\"{}\" diaginertia=\"{}\"/>",
         v3(&c),
-        q.w,
-        q.i,
-        q.j,
-        q.k,
+        quat_attr(&axes),
         p.mass().max(MASS_FLOOR),
         v3(&moments)
     )
@@ -89,18 +88,14 @@ const MOMENT_FLOOR: f64 = 1e-14;
 /// `(1 − 10⁻¹²)` times that sum. MuJoCo refuses any excess, and physid has read the body as
 /// consistent, so the excess is below `10⁻¹²` of its pseudo-inertia.
 fn principal_for_mujoco(ic: &nalgebra::Matrix3<f64>) -> (Rotation3<f64>, Vector3<f64>) {
-    let eig = SymmetricEigen::new(*ic);
-    let mut axes = eig.eigenvectors;
-    if axes.determinant() < 0.0 {
-        axes.column_mut(2).neg_mut();
-    }
-    let mut moments = eig.eigenvalues.map(|m| m.max(MOMENT_FLOOR));
+    let (axes, moments) = principal_axes(ic);
+    let mut moments = moments.map(|m| m.max(MOMENT_FLOOR));
     let total = moments.sum();
     for k in 0..3 {
         let limit = (total - moments[k]) * (1.0 - TRIANGLE_ROOM);
         moments[k] = moments[k].min(limit);
     }
-    (Rotation3::from_matrix_unchecked(axes), moments)
+    (axes, moments)
 }
 
 /// Whether MuJoCo reads this mesh file (STL, OBJ).
@@ -189,21 +184,13 @@ fn shape_geom(body: &str, k: usize, sh: &Shape) -> Option<String> {
 
 /// The bounding ellipsoid as a geom (group 3, visual only).
 fn ellipsoid_geom(e: &Ellipsoid) -> String {
-    let eig = SymmetricEigen::new(e.qs);
-    let mut r = eig.eigenvectors;
-    if r.determinant() < 0.0 {
-        r.column_mut(2).neg_mut();
-    }
-    let a = eig.eigenvalues.map(|l| l.max(0.0).sqrt());
-    let q = UnitQuaternion::from_rotation_matrix(&Rotation3::from_matrix_unchecked(r));
+    let (r, eigenvalues) = principal_axes(&e.qs);
+    let a = eigenvalues.map(|l| l.max(0.0).sqrt());
     format!(
-        "<geom type=\"ellipsoid\" size=\"{}\" pos=\"{}\" quat=\"{} {} {} {}\" contype=\"0\" conaffinity=\"0\" group=\"3\" rgba=\"0.2 0.6 1 0.15\"/>",
+        "<geom type=\"ellipsoid\" size=\"{}\" pos=\"{}\" {} contype=\"0\" conaffinity=\"0\" group=\"3\" rgba=\"0.2 0.6 1 0.15\"/>",
         v3(&a),
         v3(&e.center),
-        q.w,
-        q.i,
-        q.j,
-        q.k
+        quat_attr(&r)
     )
 }
 

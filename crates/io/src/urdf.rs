@@ -442,6 +442,9 @@ fn empty_ranges(doc: &roxmltree::Document) -> Vec<String> {
     out
 }
 
+/// SDF's value of a velocity or effort limit for "no limit".
+const SDF_NO_LIMIT: f64 = -1.0;
+
 /// A warning per moving joint whose `<limit>` gives `velocity` or `effort` −1: read as not
 /// given (SDF's "no limit", which descriptions converted from SDF carry).
 fn sdf_no_limits(doc: &roxmltree::Document) -> Vec<String> {
@@ -452,7 +455,7 @@ fn sdf_no_limits(doc: &roxmltree::Document) -> Vec<String> {
             let value = limit
                 .attribute(field)
                 .and_then(|v| v.trim().parse::<f64>().ok());
-            if value == Some(-1.0) {
+            if value == Some(SDF_NO_LIMIT) {
                 out.push(format!(
                     "joint '{}': <limit {field}=\"-1\"> read as not given (SDF's -1 for no limit)",
                     joint.attribute("name").unwrap_or("")
@@ -467,13 +470,10 @@ fn sdf_no_limits(doc: &roxmltree::Document) -> Vec<String> {
 fn joint_limits<'a, 'input>(
     doc: &'a roxmltree::Document<'input>,
 ) -> impl Iterator<Item = (roxmltree::Node<'a, 'input>, roxmltree::Node<'a, 'input>)> {
-    doc.root_element()
-        .children()
-        .filter(|n| n.has_tag_name("joint"))
-        .filter_map(|joint| {
-            let limit = joint.children().find(|n| n.has_tag_name("limit"))?;
-            Some((joint, limit))
-        })
+    super::urdf_text::top_level_joints(doc).filter_map(|joint| {
+        let limit = joint.children().find(|n| n.has_tag_name("limit"))?;
+        Some((joint, limit))
+    })
 }
 
 /// Per joint name, `<limit acceleration jerk>` as given.
@@ -905,8 +905,8 @@ fn moving_body(
     // 0 means "not given" in URDF, and −1 "no limit" in SDF, which descriptions converted from
     // SDF carry (`sdf_no_limits` warns); any other negative limit is kept for the model to
     // refuse by name.
-    let inf_if_zero = |v: f64| {
-        if v == 0.0 || v == -1.0 {
+    let infinite_if_not_given = |v: f64| {
+        if v == 0.0 || v == SDF_NO_LIMIT {
             f64::INFINITY
         } else {
             v
@@ -938,8 +938,8 @@ fn moving_body(
         limits: JointLimits {
             lower,
             upper,
-            velocity: inf_if_zero(lim.velocity),
-            effort: inf_if_zero(lim.effort),
+            velocity: infinite_if_not_given(lim.velocity),
+            effort: infinite_if_not_given(lim.effort),
             ..Default::default()
         },
     }

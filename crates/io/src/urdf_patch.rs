@@ -203,13 +203,9 @@ pub(crate) fn ellipsoid_toml(
     e: &physid_core::spatial::Ellipsoid,
     p: &InertialParams,
 ) -> String {
-    let eig = nalgebra::SymmetricEigen::new(e.qs);
-    let mut r = eig.eigenvectors;
-    if r.determinant() < 0.0 {
-        r.column_mut(2).neg_mut();
-    }
-    let (roll, pitch, yaw) = nalgebra::Rotation3::from_matrix_unchecked(r).euler_angles();
-    let a = eig.eigenvalues.map(|l| l.max(0.0).sqrt());
+    let (r, eigenvalues) = physid_core::linalg::principal_axes(&e.qs);
+    let (roll, pitch, yaw) = r.euler_angles();
+    let a = eigenvalues.map(|l| l.max(0.0).sqrt());
     let c = e.center;
     // A model identified under a looser set may lie outside: it still loads, with a warning.
     let inside = p

@@ -32,25 +32,32 @@ pub(crate) fn readable(
     path: &Path,
 ) -> Result<(String, Vec<String>), IoError> {
     let (mut edits, warnings) = repeated_in_joints(doc);
-    for node in doc.descendants().filter(|n| n.is_element()) {
-        match node.tag_name().name() {
-            "material" => edits.push((node.range(), "")),
-            "axis" if under_joint(&node) => {
-                let joint = node.parent().expect("under a joint");
-                if joint.attribute("type") == Some("fixed") {
-                    edits.push((node.range(), ""));
-                } else if node.attribute("xyz").is_none() {
-                    return Err(IoError::invalid(path, axis_without_xyz(&joint, &node)));
-                }
-            }
-            "limit" if under_joint(&node) && node.attribute("velocity").is_none() => {
+    let materials = doc.descendants().filter(|n| n.has_tag_name("material"));
+    edits.extend(materials.map(|m| (m.range(), "")));
+    for joint in top_level_joints(doc) {
+        let fixed = joint.attribute("type") == Some("fixed");
+        for node in joint.children() {
+            if node.has_tag_name("axis") && fixed {
+                edits.push((node.range(), ""));
+            } else if node.has_tag_name("axis") && node.attribute("xyz").is_none() {
+                return Err(IoError::invalid(path, axis_without_xyz(&joint, &node)));
+            } else if node.has_tag_name("limit") && node.attribute("velocity").is_none() {
                 let at = node.range().start + "<limit".len();
                 edits.push((at..at, " velocity=\"0\""));
             }
-            _ => {}
         }
     }
     Ok((apply(xml, edits), warnings))
+}
+
+/// The robot's own `<joint>` elements, children of `<robot>` (not a `<transmission>`'s
+/// `<joint>` or a plugin's `<jointName>`).
+pub(crate) fn top_level_joints<'a, 'input>(
+    doc: &'a roxmltree::Document<'input>,
+) -> impl Iterator<Item = roxmltree::Node<'a, 'input>> {
+    doc.root_element()
+        .children()
+        .filter(|n| n.has_tag_name("joint"))
 }
 
 /// The removal of every repeat of an element a top-level joint has once, and a warning per
@@ -59,11 +66,7 @@ fn repeated_in_joints<'d>(
     doc: &roxmltree::Document,
 ) -> (Vec<(Range<usize>, &'d str)>, Vec<String>) {
     let (mut edits, mut warnings) = (vec![], vec![]);
-    let joints = doc
-        .root_element()
-        .children()
-        .filter(|n| n.has_tag_name("joint"));
-    for joint in joints {
+    for joint in top_level_joints(doc) {
         for tag in ONCE_PER_JOINT {
             let repeats: Vec<_> = joint
                 .children()
@@ -81,13 +84,6 @@ fn repeated_in_joints<'d>(
         }
     }
     (edits, warnings)
-}
-
-/// Whether `node` is a child of a top-level `<joint>` (not of a `<gazebo>` or `<transmission>`).
-fn under_joint(node: &roxmltree::Node) -> bool {
-    node.parent().is_some_and(|p| {
-        p.has_tag_name("joint") && p.parent().is_some_and(|r| r.has_tag_name("robot"))
-    })
 }
 
 /// The error for a moving joint's `<axis>` that gives no `xyz`, naming what it does give.
