@@ -794,7 +794,9 @@ mod tests {
         let mut tr = Trajectory::new(bare.joint_names(), true);
         for k in 0..m {
             let wave = (k as f64 * dt * 5.0 * std::f64::consts::TAU).sin();
-            let tau: Vec<f64> = (0..3).map(|j| amplitude[j] * wave + noise[j][k]).collect();
+            let tau: Vec<f64> = (amplitude.iter().zip(&noise))
+                .map(|(a, e)| a * wave + e[k])
+                .collect();
             tr.push(k as f64 * dt, &[0.0; 3], &[0.0; 3], Some(&[0.0; 3]), &tau);
         }
         let at = Layout::of(&tr);
