@@ -464,8 +464,12 @@ impl<'a> Context<'a> {
         // (the effect itself), and leaving it out kept a fifth of the effect (generalization
         // benchmark, KUKA seed 1, case 9: backlash −9 % of the CV mean square, −93 % with it).
         let filter = (cutoff, &taps);
-        // A joint whose dead zone's side is its torque noise's has no backlash columns.
-        let noise_sided = side_is_noise(&at, &logged[0]);
+        // A joint without a rotor whose dead zone's side is its torque noise's has no backlash
+        // columns (behind a rotor the motor averages the torque it is given).
+        let noise_sided: Vec<bool> = (side_is_noise(&at, &logged[0]).iter())
+            .zip(&behind_rotor)
+            .map(|(&noise, &rotor)| noise && !rotor)
+            .collect();
         let processed = |x: &[f64]| {
             let columns = inner(processed_without_own(x, &at, filter, &behind_rotor));
             zeroed(columns, at.n, &noise_sided)
@@ -786,7 +790,8 @@ mod tests {
         // about its 40 reversals. The wheel's dead-zone side is its noise's: the processed half
         // sign of its torque fits that noise (correlation −0.18, against ±0.016 by chance), the
         // residual's own noise, which cross-validation cannot see. It gets no columns; the
-        // others keep theirs.
+        // others keep theirs, and so does the wheel behind a rotor, whose motor averages the
+        // torque it is given.
         let (m, dt) = (4000, 1e-3);
         let noise: Vec<Vec<f64>> = (0..3).map(|j| normal_noise(m, 0.3, 7 + j)).collect();
         let amplitude = [0.05, 5.0, 2.0];
@@ -818,6 +823,10 @@ mod tests {
                 );
             }
         }
+        let leg = physid_core::model::cheetah3::leg();
+        let ctx = Context::new(&leg, &leg.parameters(), &tr, 20.0);
+        let wheel_angle = ctx.slack(0.02)[0].iter().step_by(3);
+        assert!(wheel_angle.fold(0.0, |a: f64, v| a.max(v.abs())) > 0.0);
     }
 
     #[test]
