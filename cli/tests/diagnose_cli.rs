@@ -113,11 +113,12 @@ fn cart_urdf() -> String {
 #[test]
 fn wheels_whose_torque_is_their_noise_are_not_read_as_backlash() {
     // The wheels' torque (their inertia times a gentle acceleration, about 0.06 N m) sits
-    // within the 0.3 N m sensor noise of zero. The backlash columns once took the side of the
+    // within the 0.3 N m sensor noise of zero. A joint without a rotor takes the side of its
     // dead zone from each logged torque sample, whose sign on such a joint is the noise's, so
-    // they fitted the residual's own noise where cross-validation could not see it: backlash
-    // named on each of these seeds (and on an unchanged simulated Husky run, 4 of 5 seeds).
-    // Driven by the predicted torque, the unchanged runs are read as unchanged.
+    // its backlash columns fitted the residual's own noise where cross-validation could not
+    // see it: backlash named on each of these seeds (and on an unchanged simulated Husky run,
+    // 4 of 5 seeds) until such joints were left without backlash columns. The report names
+    // them.
     let dir = tempfile::tempdir().unwrap();
     let robot = dir.path().join("cart.urdf");
     std::fs::write(&robot, cart_urdf()).unwrap();
@@ -168,5 +169,10 @@ fn wheels_whose_torque_is_their_noise_are_not_read_as_backlash() {
             j["summary"]
         );
         assert_eq!(j["verdict"], "no_effect", "seed {seed}: {}", j["summary"]);
+        // And the report says so: the wheels' backlash is not tested.
+        assert_eq!(
+            j["backlash_untested"],
+            serde_json::json!(["fl", "fr", "rl", "rr"])
+        );
     }
 }

@@ -168,6 +168,11 @@ pub struct Diagnosis {
     /// Why the description test did not run although an uncertainty was stated (`None` when
     /// it ran or was not asked for).
     pub description_test_skipped: Option<String>,
+    /// Joints whose backlash was not tested: without a rotor, their torque within its noise of
+    /// zero on most samples of the training or validation data (a wheel in the air), so the
+    /// log cannot tell their dead zone's side from that noise.
+    #[serde(default)]
+    pub backlash_untested: Vec<String>,
     /// The ladder from the description (when its uncertainty is stated): every explanation
     /// (effects, a payload or change on any body, friction) competing from the description as
     /// given, scored on the held-out data.

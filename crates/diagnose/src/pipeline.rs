@@ -77,6 +77,7 @@ fn diagnose_recordings(
         selection: found.selection,
         description_test: found.description_test,
         description_test_skipped: found.description_test_skipped,
+        backlash_untested: backlash_untested(&stage),
         ladder: found.from_description,
         described_effects: found.described_effects,
         effects: found.effects,
@@ -90,6 +91,18 @@ fn diagnose_recordings(
         verdict,
         summary,
     })
+}
+
+/// The joints whose backlash neither data set's columns test (`Context::backlash_untested`).
+fn backlash_untested(stage: &Stage) -> Vec<String> {
+    let (train, val) = (
+        stage.ctx_train.backlash_untested(),
+        stage.ctx_val.backlash_untested(),
+    );
+    (stage.model.joint_names().into_iter().enumerate())
+        .filter(|(j, _)| train[*j] || val[*j])
+        .map(|(_, name)| name)
+        .collect()
 }
 
 /// What the steps find on a stage, before the verdict.

@@ -131,6 +131,7 @@ fn spectrum_plot(path: &Path, d: &Diagnosis) -> Result<Option<String>, ReportErr
 /// the terminal its condensed view ([`text`]).
 pub fn document(d: &Diagnosis) -> Document {
     let mut which = which_section(d);
+    untested_blocks(d, &mut which);
     description_blocks(d, &mut which);
     effect_blocks(d, &mut which);
     Document {
@@ -347,6 +348,21 @@ fn scores_table(scores: &[super::select::Score]) -> Table {
         ]);
     }
     t
+}
+
+/// The joints whose backlash was not tested, and why.
+fn untested_blocks(d: &Diagnosis, s: &mut Section) {
+    if !d.backlash_untested.is_empty() {
+        s.push(Block::Paragraph(
+            format!(
+                "Backlash was not tested on {}: without a rotor, their torque is within its \
+                 noise of zero on most samples, so the log cannot tell the side of a dead zone \
+                 from that noise.",
+                d.backlash_untested.join(", ")
+            )
+            .into(),
+        ));
+    }
 }
 
 /// The test against the description, when it ran (each candidate's statistic in the files),

@@ -145,6 +145,9 @@ pub struct Context<'a> {
     /// Two unit vectors perpendicular to gravity (the tilt directions).
     pub(crate) perp: [Vector3<f64>; 2],
     pub(crate) gear: Vec<f64>,
+    /// Per joint, whether it has no backlash columns: no rotor, and its dead zone's side the
+    /// torque noise's on most samples ([`side_is_noise`]).
+    pub(crate) backlash_untested: Vec<bool>,
 }
 
 /// `x` (sample-major, `n` columns) processed like an encoder angle: `F(x)`, `F(D x)`,
@@ -499,6 +502,7 @@ impl<'a> Context<'a> {
             slack,
             perp: perpendiculars(&model.gravity()),
             gear,
+            backlash_untested: noise_sided,
         }
     }
 
@@ -518,12 +522,20 @@ impl<'a> Context<'a> {
             slack: self.slack.clone(),
             perp: self.perp,
             gear: self.gear.clone(),
+            backlash_untested: self.backlash_untested.clone(),
         }
     }
 
     /// The model.
     pub fn model(&self) -> &'a Model {
         self.model
+    }
+
+    /// Per joint, whether its backlash is not tested on this data: a joint without a rotor
+    /// whose torque is within its noise of zero on most samples, so the log cannot tell its
+    /// dead zone's side from that noise (its backlash columns are zero).
+    pub fn backlash_untested(&self) -> &[bool] {
+        &self.backlash_untested
     }
 
     /// The processed unit-width dead-zone offset for backlash at grid width `width` (the
