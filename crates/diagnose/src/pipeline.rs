@@ -43,9 +43,7 @@ fn diagnose_recordings(
     let nominal = fit_nominal(model, train, opts)?;
     let stage = Stage::new(model, recorded, validate, opts, nominal.theta.clone());
     let found = find(&stage)?;
-    let train_seconds = train
-        .sample_period()
-        .map_or(0.0, |dt| dt * train.len() as f64);
+    let train_seconds = seconds(train);
     let anchored = found.description_test.as_ref().map_or(0, |r| r.steps.len());
     let steps = (found.selection.steps.len(), anchored);
     let verdict = verdict_of(
@@ -91,6 +89,11 @@ fn diagnose_recordings(
         verdict,
         summary,
     })
+}
+
+/// The time `tr` spans at its sample period (s; 0 without one).
+fn seconds(tr: &Trajectory) -> f64 {
+    tr.sample_period().map_or(0.0, |dt| dt * tr.len() as f64)
 }
 
 /// The joints whose backlash neither data set's columns test (`Context::backlash_untested`).

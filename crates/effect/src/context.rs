@@ -292,17 +292,21 @@ fn dead_zone_drive(behind_rotor: &[bool], low_passed: &[f64], raw: &[f64]) -> Ve
 }
 
 /// Per joint, whether the side of its backlash dead zone is the torque sensor's noise on most
-/// samples: its low-passed torque (`low_passed`, over `at`'s extended samples) within one
+/// samples: no rotor (`behind_rotor` false: behind one the motor averages the torque it is
+/// given), and its low-passed torque (`low_passed`, over `at`'s extended samples) within one
 /// noise deviation of zero on more than half of them. The deviation is the logged torque's
 /// robust scale of second differences within each run (`MAD / 0.6745 / √6`, white noise's;
 /// a motion sampled well adds little to them, and the sparse jumps of friction or chatter
 /// nothing to a median). The columns of such a joint (a wheel in the air) would be the sign of
 /// the residual's own noise, which they fit where cross-validation cannot see it: an unchanged
 /// simulated Husky run was read as backlash on 4 of 5 seeds.
-fn side_is_noise(at: &Layout, low_passed: &[f64]) -> Vec<bool> {
+fn side_is_noise(at: &Layout, low_passed: &[f64], behind_rotor: &[bool]) -> Vec<bool> {
     let n = at.n;
     (0..n)
         .map(|j| {
+            if behind_rotor[j] {
+                return false;
+            }
             let x = |k: usize| at.tau[k * n + j];
             let second: Vec<f64> = (at.runs.iter())
                 .flat_map(|r| {
@@ -467,12 +471,8 @@ impl<'a> Context<'a> {
         // (the effect itself), and leaving it out kept a fifth of the effect (generalization
         // benchmark, KUKA seed 1, case 9: backlash −9 % of the CV mean square, −93 % with it).
         let filter = (cutoff, &taps);
-        // A joint without a rotor whose dead zone's side is its torque noise's has no backlash
-        // columns (behind a rotor the motor averages the torque it is given).
-        let noise_sided: Vec<bool> = (side_is_noise(&at, &logged[0]).iter())
-            .zip(&behind_rotor)
-            .map(|(&noise, &rotor)| noise && !rotor)
-            .collect();
+        // A joint whose dead zone's side is its torque noise's has no backlash columns.
+        let noise_sided = side_is_noise(&at, &logged[0], &behind_rotor);
         let processed = |x: &[f64]| {
             let columns = inner(processed_without_own(x, &at, filter, &behind_rotor));
             zeroed(columns, at.n, &noise_sided)
@@ -818,7 +818,10 @@ mod tests {
         }
         let at = Layout::of(&tr);
         let low_passed = processed_like_encoder(&at.tau, &at, 20.0);
-        assert_eq!(side_is_noise(&at, &low_passed[0]), [true, false, false]);
+        assert_eq!(
+            side_is_noise(&at, &low_passed[0], &[false; 3]),
+            [true, false, false]
+        );
         let wheel: Vec<f64> = (0..m).map(|k| 0.5 * tr.tau[k * 3].signum()).collect();
         let processed = processed_like_encoder(&wheel, &Layout::of(&one_joint(&wheel)), 20.0);
         let r = correlation(&processed[2], &noise[0], 200..m - 200);
