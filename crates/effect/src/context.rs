@@ -319,10 +319,11 @@ fn side_is_noise(at: &Layout, low_passed: &[f64], behind_rotor: &[bool]) -> Vec<
             let centre = physid_core::linalg::median(&second);
             let spread: Vec<f64> = second.iter().map(|d| (d - centre).abs()).collect();
             let sd = physid_core::linalg::median(&spread) / 0.6745 / 6f64.sqrt();
-            let near_zero = (0..low_passed.len() / n.max(1))
+            let samples = low_passed.len() / n;
+            let near_zero = (0..samples)
                 .filter(|&k| low_passed[k * n + j].abs() < sd)
                 .count();
-            2 * near_zero > low_passed.len() / n.max(1)
+            2 * near_zero > samples
         })
         .collect()
 }
