@@ -132,10 +132,23 @@ fn nearest(x: &[f64], dim: usize, idx: &[usize], i: usize, exclude: usize) -> Ve
         if idx[i].abs_diff(idx[jx]) < exclude.max(1) {
             continue;
         }
-        let d2: f64 = (0..dim)
-            .map(|d| (x[i * dim + d] - x[jx * dim + d]).powi(2))
-            .sum();
-        if near.len() < NEIGHBOURS || d2 < near[near.len() - 1].0 {
+        // Squares summed in coordinate order; a partial sum never decreases, so once it
+        // reaches the k-th distance so far the point cannot enter (the same list as the full
+        // sum would give, bit for bit).
+        let bound = if near.len() < NEIGHBOURS {
+            f64::INFINITY
+        } else {
+            near[NEIGHBOURS - 1].0
+        };
+        let (xi, xj) = (&x[i * dim..(i + 1) * dim], &x[jx * dim..(jx + 1) * dim]);
+        let mut d2 = 0.0;
+        for (a, b) in xi.iter().zip(xj) {
+            d2 += (a - b).powi(2);
+            if d2 >= bound {
+                break;
+            }
+        }
+        if d2 < bound {
             let pos = near.partition_point(|a| a.0 < d2);
             near.insert(pos, (d2, jx));
             near.truncate(NEIGHBOURS);

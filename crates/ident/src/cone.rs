@@ -6,7 +6,8 @@
 //! mass). [`solve`] hands Clarabel every group; `interior.rs` checks a point against them.
 
 use super::{
-    lmi, ConstraintSet, IdentError, Options, Parameterized, Regularizer, SolveStatus, SolverInfo,
+    dense, lmi, ConstraintSet, IdentError, Options, Parameterized, Regularizer, SolveStatus,
+    SolverInfo,
 };
 use clarabel::algebra::CscMatrix;
 use clarabel::solver::{
@@ -334,8 +335,9 @@ fn subtract_a_x(a: &CscMatrix<f64>, x: &[f64], b: &mut [f64]) {
     }
 }
 
-/// Solves the scaled cone program `min ½ xᵀ P x + qᵀ x` s.t. `rows` with Clarabel and maps its
-/// status: θ = D x on success, an [`IdentError`] otherwise. No Clarabel type leaves here.
+/// Solves the scaled cone program `min ½ xᵀ P x + qᵀ x` s.t. `rows`, shifted to the
+/// unconstrained minimizer: by the dense method where its cones allow and it converges, else by
+/// Clarabel. θ = D x on success, an [`IdentError`] otherwise. No Clarabel type leaves here.
 fn run_clarabel(
     ps: &DMatrix<f64>,
     q: &[f64],
@@ -345,8 +347,37 @@ fn run_clarabel(
 ) -> Result<(DVector<f64>, SolverInfo), IdentError> {
     let nv = q.len();
     let (a, b, cones) = rows.into_parts(nv);
-    let p_upper = upper_csc(ps);
     let shifted = shifted_to_unconstrained(ps, q, &a, b.clone(), p);
+    let start = std::time::Instant::now();
+    if let Some(found) = dense_optimum(ps, &a, &shifted, &cones) {
+        let info = SolverInfo {
+            status: SolveStatus::Solved,
+            iterations: found.iterations,
+            seconds: start.elapsed().as_secs_f64(),
+            residuals: found.residuals,
+        };
+        return Ok((theta_of(&found.x, &shifted.0, p, d), info));
+    }
+    clarabel_optimum(ps, (&a, &cones), shifted, (q, b), (p, d))
+}
+
+/// θ = D (x₀ + δ), the first `p` entries.
+fn theta_of(delta: &[f64], x0: &[f64], p: usize, d: &[f64]) -> DVector<f64> {
+    let x = delta.iter().zip(x0).map(|(dx, x0)| x0 + dx);
+    DVector::from_iterator(p, x.zip(d).take(p).map(|(x, s)| x * s))
+}
+
+/// Clarabel's optimum of the program, shifted (`(x₀, q + P x₀, b − A x₀)`) and about the
+/// origin (`q`, `b`).
+fn clarabel_optimum(
+    ps: &DMatrix<f64>,
+    (a, cones): (&CscMatrix<f64>, &[SupportedConeT<f64>]),
+    shifted: (Vec<f64>, Vec<f64>, Vec<f64>),
+    (q, b): (&[f64], Vec<f64>),
+    (p, d): (usize, &[f64]),
+) -> Result<(DVector<f64>, SolverInfo), IdentError> {
+    let nv = q.len();
+    let p_upper = upper_csc(ps);
     let origin = (vec![0.0; nv], q.to_vec(), b);
     // In `x − x₀` first, then about the origin; each with Clarabel's equilibration, then
     // without it. The variables are already scaled to unit curvature; the equilibration on top
@@ -371,7 +402,7 @@ fn run_clarabel(
             equilibrate_enable: equilibrate,
             ..DefaultSettings::default()
         };
-        let mut solver = DefaultSolver::new(&p_upper, q, &a, b, &cones, settings)
+        let mut solver = DefaultSolver::new(&p_upper, q, a, b, cones, settings)
             .map_err(|e| IdentError::Rejected(e.to_string()))?;
         solver.solve();
         let sol = solver.solution;
@@ -395,6 +426,37 @@ fn run_clarabel(
     solution(sol, &x0, p, d, seconds)
 }
 
+/// The shifted program's optimum by the dense method (`dense.rs`), where its cones are only
+/// orthants and PSD cones and the method converges; `None` sends it to Clarabel.
+fn dense_optimum(
+    ps: &DMatrix<f64>,
+    a: &CscMatrix<f64>,
+    (_, q, b): &(Vec<f64>, Vec<f64>, Vec<f64>),
+    cones: &[SupportedConeT<f64>],
+) -> Option<dense::Optimum> {
+    let cones: Vec<dense::Cone> = cones
+        .iter()
+        .map(|c| match c {
+            SupportedConeT::NonnegativeConeT(n) => Some(dense::Cone::Nonneg(*n)),
+            SupportedConeT::PSDTriangleConeT(k) => Some(dense::Cone::Psd(*k)),
+            _ => None,
+        })
+        .collect::<Option<_>>()?;
+    let mut dense_a = DMatrix::zeros(a.m, a.n);
+    for j in 0..a.n {
+        for k in a.colptr[j]..a.colptr[j + 1] {
+            dense_a[(a.rowval[k], j)] = a.nzval[k];
+        }
+    }
+    dense::solve(&dense::Program {
+        p: ps,
+        q,
+        a: &dense_a,
+        b,
+        cones: &cones,
+    })
+}
+
 /// θ = D (x₀ + δ) from Clarabel's solution `δ`, or the error its status names.
 fn solution(
     sol: DefaultSolution<f64>,
@@ -411,8 +473,7 @@ fn solution(
     };
     match sol.status {
         SolverStatus::Solved | SolverStatus::AlmostSolved => {
-            let x = sol.x.iter().zip(x0).map(|(dx, x0)| x0 + dx);
-            let theta = DVector::from_iterator(p, x.zip(d).take(p).map(|(x, s)| x * s));
+            let theta = theta_of(&sol.x, x0, p, d);
             let status = if sol.status == SolverStatus::Solved {
                 SolveStatus::Solved
             } else {

@@ -24,6 +24,7 @@
 
 pub mod analysis;
 mod cone;
+mod dense;
 pub mod floating;
 pub mod floating_log;
 pub mod information;
