@@ -256,7 +256,8 @@ pub enum SolveStatus {
     /// The unconstrained optimum satisfies every constraint, so it is the constrained optimum
     /// (a convex problem, strictly convex objective): found without the cone solver.
     Interior,
-    /// Clarabel: solved to its full tolerances.
+    /// The cone solver (physid's dense interior-point method, or Clarabel): solved to
+    /// Clarabel's full tolerances.
     Solved,
     /// Clarabel: solved to its reduced tolerances.
     AlmostSolved,
