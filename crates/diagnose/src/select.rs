@@ -214,8 +214,11 @@ impl Folds {
         let mut sub = ne.select(&cols);
         let mut prior = DVector::zeros(cols.len());
         prior.rows_mut(0, self.p0).copy_from(&model.parameters());
-        // Effects with a physical sign keep it (in the subset's column order).
+        // Effects with a physical sign keep it (in the subset's column order). These fits only
+        // score held-out errors: the dense solver's speed serves them, its looser parameters
+        // along flat directions do not matter to them.
         let mut opts = opts.clone();
+        opts.dense_solver = true;
         let mut c = self.p0;
         for &v in chosen {
             let kind = self.variants[v].kind;

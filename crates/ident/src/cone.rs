@@ -131,7 +131,7 @@ pub(crate) fn solve<R: Parameterized + ?Sized>(
         logdet_rows(model, prior, opts.prior_weight, &d, &mut q, &mut rows)?;
     }
     nonnegative_rows(&nonneg, &d, &mut rows);
-    run_clarabel(&ps, &q, rows, p, &d)
+    run_clarabel(&ps, &q, rows, (p, &d), opts.dense_solver)
 }
 
 /// The cones of the body groups under `set` appended to `rows` (per body its LMI, then under
@@ -336,20 +336,23 @@ fn subtract_a_x(a: &CscMatrix<f64>, x: &[f64], b: &mut [f64]) {
 }
 
 /// Solves the scaled cone program `min ½ xᵀ P x + qᵀ x` s.t. `rows`, shifted to the
-/// unconstrained minimizer: by the dense method where its cones allow and it converges, else by
-/// Clarabel. θ = D x on success, an [`IdentError`] otherwise. No Clarabel type leaves here.
+/// unconstrained minimizer: by the dense method where `dense` asks for it, its cones allow and
+/// it converges, else by Clarabel. θ = D x on success, an [`IdentError`] otherwise. No Clarabel type leaves here.
 fn run_clarabel(
     ps: &DMatrix<f64>,
     q: &[f64],
     rows: ConeRows,
-    p: usize,
-    d: &[f64],
+    (p, d): (usize, &[f64]),
+    dense: bool,
 ) -> Result<(DVector<f64>, SolverInfo), IdentError> {
     let nv = q.len();
     let (a, b, cones) = rows.into_parts(nv);
     let shifted = shifted_to_unconstrained(ps, q, &a, b.clone(), p);
     let start = std::time::Instant::now();
-    if let Some(found) = dense_optimum(ps, &a, &shifted, &cones) {
+    let found = dense
+        .then(|| dense_optimum(ps, &a, &shifted, &cones))
+        .flatten();
+    if let Some(found) = found {
         let info = SolverInfo {
             status: SolveStatus::Solved,
             iterations: found.iterations,
