@@ -337,7 +337,8 @@ fn subtract_a_x(a: &CscMatrix<f64>, x: &[f64], b: &mut [f64]) {
 
 /// Solves the scaled cone program `min ½ xᵀ P x + qᵀ x` s.t. `rows`, shifted to the
 /// unconstrained minimizer: by the dense method where `dense` asks for it, its cones allow and
-/// it converges, else by Clarabel. θ = D x on success, an [`IdentError`] otherwise. No Clarabel type leaves here.
+/// it converges, else by Clarabel. θ = D x on success, an [`IdentError`] otherwise. No
+/// Clarabel type leaves here.
 fn run_clarabel(
     ps: &DMatrix<f64>,
     q: &[f64],

@@ -16,6 +16,7 @@
 //! Newton system, a step that stalls, 60 iterations) it returns `None` and the caller hands
 //! the same program to Clarabel, which stays the reference solver.
 
+use crate::lmi::{smat, svec};
 use nalgebra::{DMatrix, DVector};
 
 /// A cone of `K`.
@@ -525,30 +526,6 @@ fn step_length(blocks: &[Block], ds_scaled: &DVector<f64>, dz_scaled: &DVector<f
 /// The `(row, column)` of each `svec` entry of a `k × k` matrix, in order.
 fn svec_entries(k: usize) -> impl Iterator<Item = (usize, usize)> {
     (0..k).flat_map(|j| (0..=j).map(move |i| (i, j)))
-}
-
-fn svec(m: &DMatrix<f64>) -> Vec<f64> {
-    let s2 = std::f64::consts::SQRT_2;
-    svec_entries(m.nrows())
-        .map(|(i, j)| {
-            if i == j {
-                m[(i, j)]
-            } else {
-                s2 * 0.5 * (m[(i, j)] + m[(j, i)])
-            }
-        })
-        .collect()
-}
-
-fn smat(v: &[f64], k: usize) -> DMatrix<f64> {
-    let s2 = std::f64::consts::SQRT_2;
-    let mut m = DMatrix::zeros(k, k);
-    for ((i, j), &x) in svec_entries(k).zip(v) {
-        let x = if i == j { x } else { x / s2 };
-        m[(i, j)] = x;
-        m[(j, i)] = x;
-    }
-    m
 }
 
 #[cfg(test)]
