@@ -571,8 +571,17 @@ fn the_entry_modules_stay_short() {
 }
 
 /// The files of `crates/effect/src/` that are not a kind's: the table, the checks and trait of the
-/// simulator's form, the per-data state, the columns over a data set, the dead zone's dynamics.
-const EFFECT_SHARED: [&str; 6] = ["mod", "lib", "physics", "context", "library", "dead_zone"];
+/// simulator's form, the per-data state, the columns over a data set, the dead zone's dynamics,
+/// the encoder-shifted inverse dynamics.
+const EFFECT_SHARED: [&str; 7] = [
+    "mod",
+    "lib",
+    "physics",
+    "context",
+    "library",
+    "dead_zone",
+    "shifted",
+];
 
 /// Lines of library code outside the kinds' own files that name a particular kind, as
 /// `Kind::X` (the diagnosis's table) or `EffectSpec::X` (the simulator's form).

@@ -4,10 +4,9 @@
 //! ([`Context`]); a sample as a kind's columns see it ([`Sample`]) and their workspaces
 //! ([`Scratch`]). It knows no effect kind: the kinds (`super::kinds`) read it.
 
+use crate::shifted::{Predicting, State};
 use nalgebra::{DMatrix, DVector, Vector3};
-use physid_core::dynamics::{
-    friction_torque, regressor, rnea_after_joint, update_transforms, Data,
-};
+use physid_core::dynamics::{regressor, Data};
 use physid_core::model::Model;
 use physid_core::trajectory::Trajectory;
 
@@ -99,7 +98,9 @@ pub(crate) struct Scratch {
     /// The nominal model under the two tilted gravities, built on first use.
     pub tilted: Option<Vec<(Model, Data)>>,
     /// Workspaces of [`Context::predictors`] (θ̂₀, smooth), when it has them.
-    pub predicting: Option<[Data; 2]>,
+    pub predicting: Option<[Predicting; 2]>,
+    /// Torques of one sample (N m): shifted by `+h`, by `−h`, unshifted.
+    pub shifted: [Vec<f64>; 3],
 }
 
 impl Scratch {
@@ -114,7 +115,8 @@ impl Scratch {
             predicting: ctx
                 .predictors
                 .as_ref()
-                .map(|m| [Data::new(&m[0]), Data::new(&m[1])]),
+                .map(|m| [Predicting::new(&m[0]), Predicting::new(&m[1])]),
+            shifted: std::array::from_fn(|_| vec![0.0; n]),
         }
     }
 }
@@ -551,12 +553,9 @@ impl<'a> Context<'a> {
     }
 
     /// `Y θ` (N m) at sample `s` with joint `j`'s angle, velocity and acceleration shifted by
-    /// `−by · shift_j`, for `θ` = θ̂₀ (`which` 0) or its smooth part (1): inverse dynamics with
-    /// friction on [`Context::predictors`] (whose workspace holds the transforms of `s.q`, from
-    /// [`Context::encoder_shift_columns`]: only joint `j`'s is recomputed, then restored, and
-    /// the bodies before `j` the velocities of sample `s` or of a shift of a later joint:
-    /// [`rnea_after_joint`]), or the regressor where there are none.
-    fn shifted(
+    /// `−by · shift_j`, for `θ` = θ̂₀ (`which` 0) or its smooth part (1), by the regressor: where
+    /// [`Context::predictors`] are missing (a non-finite θ̂₀).
+    fn shifted_by_regressor(
         &self,
         (which, j, by): (usize, usize, f64),
         shift: &[Vec<f64>; 3],
@@ -564,17 +563,10 @@ impl<'a> Context<'a> {
         w: &mut Scratch,
     ) -> DVector<f64> {
         let at = s.k * s.n + j;
-        let (mut qd, mut qdd) = (s.qd.to_vec(), s.qdd.to_vec());
-        let q_j = s.q[j] - by * shift[0][at];
+        let (mut q, mut qd, mut qdd) = (s.q.to_vec(), s.qd.to_vec(), s.qdd.to_vec());
+        q[j] -= by * shift[0][at];
         qd[j] -= by * shift[1][at];
         qdd[j] -= by * shift[2][at];
-        if let (Some(models), Some(data)) = (&self.predictors, &mut w.predicting) {
-            let (model, data) = (&models[which], &mut data[which]);
-            return rnea_after_joint(model, data, (j, q_j), &qd, &qdd)
-                + friction_torque(model, &qd);
-        }
-        let mut q = s.q.to_vec();
-        q[j] = q_j;
         let theta = [&self.theta0, &self.theta_smooth][which];
         regressor(self.model, &mut w.data, &q, &qd, &qdd, &mut w.yg);
         &w.yg * theta
@@ -596,21 +588,44 @@ impl<'a> Context<'a> {
     ) -> DMatrix<f64> {
         let n = s.n;
         let (h, which) = if secant > 0.0 { (secant, 0) } else { (1e-7, 1) };
-        if let (Some(models), Some(data)) = (&self.predictors, &mut w.predicting) {
-            update_transforms(&models[which], &mut data[which], s.q);
-        }
-        let id = |j: usize, by: f64, w: &mut Scratch| self.shifted((which, j, by), shift, s, w);
         let mut out = DMatrix::zeros(n, n);
-        // The unshifted state first (every body's velocity), then the joints from the last to
+        let (Some(models), Some(predicting)) = (&self.predictors, &mut w.predicting) else {
+            let id =
+                |j, by, w: &mut Scratch| self.shifted_by_regressor((which, j, by), shift, s, w);
+            let base = id(0, 0.0, w);
+            for j in (0..n).rev() {
+                let d = if secant > 0.0 {
+                    (id(j, h, w) - &base) / h
+                } else {
+                    (id(j, h, w) - id(j, -h, w)) / (2.0 * h)
+                };
+                out.column_mut(j).copy_from(&d);
+            }
+            return out;
+        };
+        let (model, p) = (&models[which], &mut predicting[which]);
+        let [plus, minus, base] = &mut w.shifted;
+        // The unshifted state first (every body's motion), then the joints from the last to
         // the first: each shifted pass leaves the bodies before its joint as they were.
-        let base = id(0, 0.0, w);
+        let s = &State {
+            k: s.k,
+            q: s.q,
+            qd: s.qd,
+            qdd: s.qdd,
+        };
+        base.copy_from_slice(p.unshifted(model, s));
         for j in (0..n).rev() {
-            let d = if secant > 0.0 {
-                (id(j, h, w) - &base) / h
+            p.shifted(model, (j, h), shift, s, plus);
+            if secant > 0.0 {
+                for i in 0..n {
+                    out[(i, j)] = (plus[i] - base[i]) / h;
+                }
             } else {
-                (id(j, h, w) - id(j, -h, w)) / (2.0 * h)
-            };
-            out.column_mut(j).copy_from(&d);
+                p.shifted(model, (j, -h), shift, s, minus);
+                for i in 0..n {
+                    out[(i, j)] = (plus[i] - minus[i]) / (2.0 * h);
+                }
+            }
         }
         out
     }
@@ -924,6 +939,56 @@ mod tests {
                 }
             }
             assert!(largest > 1e-3, "the columns are not all zero: {largest:e}");
+        }
+    }
+
+    #[test]
+    fn encoder_shift_columns_are_the_same_bit_for_bit_whatever_ran_before_on_the_workspace() {
+        // A sample's unshifted pass is kept for its other variants (and restored between
+        // them): every variant's columns equal those of a fresh workspace, bit for bit, in any
+        // order, with rotors (full model) and without.
+        for model in [
+            physid_core::model::cheetah3::leg(),
+            physid_core::model::cheetah3::leg().without_rotors(),
+        ] {
+            let n = model.dof();
+            let tr = moving_leg(&model, 600);
+            let ctx = Context::new(&model, &(model.parameters() * 1.1), &tr, 20.0);
+            let mut shared = Scratch::new(&ctx);
+            let mut distinct = 0;
+            for k in [200, 201, 300, 300, 400] {
+                let sample = Sample {
+                    k,
+                    n,
+                    q: tr.q_at(k),
+                    qd: tr.qd_at(k),
+                    qdd: tr.qdd_at(k).unwrap(),
+                    param: 0.0,
+                };
+                let mut last: Option<DMatrix<f64>> = None;
+                for (shift, secant) in [
+                    (&ctx.defl, 0.02),
+                    (ctx.slack(0.01), 0.01),
+                    (&ctx.defl, 0.0),
+                    (&ctx.defl, 0.004),
+                    (&ctx.defl, 0.02),
+                ] {
+                    let again = ctx.encoder_shift_columns(shift, secant, &sample, &mut shared);
+                    let fresh =
+                        ctx.encoder_shift_columns(shift, secant, &sample, &mut Scratch::new(&ctx));
+                    assert!(
+                        again
+                            .iter()
+                            .zip(fresh.iter())
+                            .all(|(a, b)| a.to_bits() == b.to_bits()),
+                        "k {k}, secant {secant}"
+                    );
+                    distinct += usize::from(last.as_ref() != Some(&again));
+                    last = Some(again);
+                }
+            }
+            // Every variant differs from the one before it: the comparison sees a stale state.
+            assert_eq!(distinct, 25);
         }
     }
 

@@ -193,6 +193,7 @@ pub mod context;
 mod dead_zone;
 pub mod library;
 pub mod physics;
+mod shifted;
 
 pub use dead_zone::DeadZone;
 pub use payload::{

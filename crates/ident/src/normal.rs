@@ -65,6 +65,11 @@ impl NormalEquations {
 
     /// Adds one sample's regressor `y` (n×p) and torque `tau`.
     pub fn add(&mut self, y: &DMatrix<f64>, tau: &[f64]) {
+        if self.rows.nrows() == 0 {
+            // Released by `finish`: the buffer again.
+            self.rows = DMatrix::zeros(BLOCK_SAMPLES * self.n, self.yty.ncols());
+            self.taus = DVector::zeros(BLOCK_SAMPLES * self.n);
+        }
         let r0 = self.filled * self.n;
         self.rows
             .view_mut((r0, 0), (self.n, y.ncols()))
@@ -98,10 +103,15 @@ impl NormalEquations {
         self.filled = 0;
     }
 
-    /// Folds in buffered rows and fills the lower triangle; call before reading the sums.
+    /// Folds in buffered rows and fills the lower triangle; call before reading the sums. The
+    /// row buffer (`BLOCK_SAMPLES · n` rows of `p`) is released: finished sums are cloned and
+    /// merged many times over (folds, their complements), and a copy of the buffer each time
+    /// would cost more than the sums.
     pub fn finish(mut self) -> Self {
         self.flush();
         self.yty.fill_lower_triangle_with_upper_triangle();
+        self.rows = DMatrix::zeros(0, self.yty.ncols());
+        self.taus = DVector::zeros(0);
         self
     }
 
@@ -400,6 +410,38 @@ impl JointSums {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn sums_finished_then_added_to_are_the_sums_of_one_pass() {
+        // `finish` releases the row buffer; samples added after it take a new one, and the sums
+        // are those of one pass over every sample (the same flushes, bit for bit).
+        let (n, p) = (2, 3);
+        let sample = |k: usize| {
+            let y = DMatrix::from_fn(n, p, |i, j| ((k * 7 + i * 3 + j) as f64 * 0.37).sin());
+            let tau: Vec<f64> = (0..n).map(|i| ((k + i) as f64 * 0.11).cos()).collect();
+            (y, tau)
+        };
+        let mut whole = NormalEquations::new(n, p);
+        let mut parts = NormalEquations::new(n, p);
+        for k in 0..BLOCK_SAMPLES {
+            let (y, tau) = sample(k);
+            whole.add(&y, &tau);
+            parts.add(&y, &tau);
+        }
+        let mut parts = parts.finish();
+        assert_eq!(parts.rows.nrows(), 0, "the buffer is released");
+        for k in BLOCK_SAMPLES..BLOCK_SAMPLES + 40 {
+            let (y, tau) = sample(k);
+            whole.add(&y, &tau);
+            parts.add(&y, &tau);
+        }
+        let (whole, parts) = (whole.finish(), parts.finish());
+        assert_eq!(parts.samples, BLOCK_SAMPLES + 40);
+        assert!(whole.yty.amax() > 1.0);
+        assert_eq!(whole.yty, parts.yty);
+        assert_eq!(whole.ytt, parts.ytt);
+        assert_eq!(whole.tt, parts.tt);
+    }
 
     #[test]
     fn a_pinned_mean_fixes_the_direction_the_data_leave_free_and_no_other() {

@@ -57,6 +57,11 @@ pub struct Data {
     pub a: Vec<Motion>,
     /// Net spatial force on body `i` (RNEA backward pass).
     pub f: Vec<Force>,
+    /// Body `i`'s own term of the backward pass, `I_i a_i + v_i ×* I_i v_i` (body coordinates):
+    /// kept apart from `f` so that a pass from a later body reuses it for the bodies before.
+    pub f_body: Vec<Force>,
+    /// The same of rotor `i` (rotor coordinates; zero where joint `i` has no rotor).
+    pub f_rotor: Vec<Force>,
     /// The wrench the root (the fixed base, or a floating trunk) exerts on the tree, root
     /// coordinates `[n; f]` (N m, N): the sum the RNEA's backward pass passes up from the bodies
     /// and rotors mounted on the root.
@@ -109,6 +114,8 @@ impl Data {
             v: vec![Motion::zero(); n],
             a: vec![Motion::zero(); n],
             f: vec![Force::zero(); n],
+            f_body: vec![Force::zero(); n],
+            f_rotor: vec![Force::zero(); n],
             f_root: Force::zero(),
             x_rot: vec![Transform::identity(); n],
             s_rot: vec![Motion::zero(); n],

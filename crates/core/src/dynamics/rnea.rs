@@ -45,9 +45,10 @@ pub fn rnea_from_transforms<'a>(
 /// alone: its angle `q_j` (the joint's transform set for the pass and restored after), rate
 /// and acceleration in `qd`, `qdd`. The forward pass starts at body `j` (no body before it
 /// descends from it, so their velocities and accelerations in `data` stand), the backward pass
-/// is whole. The same numbers as a whole [`rnea`], bit for bit, when the bodies before `j`
-/// hold those of `qd`, `qdd`: after a whole pass at the unchanged state, evaluate changed
-/// joints from the last to the first. Returns `&data.tau`.
+/// is whole but takes their own terms (`I a + v ×* I v`) from `data`. The same numbers as a
+/// whole [`rnea`], bit for bit, when the bodies before `j` hold those of `qd`, `qdd`: after a
+/// whole pass at the unchanged state, evaluate changed joints from the last to the first.
+/// Returns `&data.tau`.
 pub fn rnea_after_joint<'a>(
     model: &Model,
     data: &'a mut Data,
@@ -61,7 +62,7 @@ pub fn rnea_after_joint<'a>(
     update_joint_transform(model, data, j, q_j);
     let root = (Motion::zero(), base_acceleration(model));
     forward_pass_from_body(model, data, qd, qdd, root, j);
-    backward_pass(model, data, qdd);
+    backward_pass_from(model, data, qdd, j);
     (data.x_up[j], data.s[j], data.x_rot[j], data.s_rot[j]) = frame;
     &data.tau
 }
@@ -74,19 +75,34 @@ pub(crate) fn backward_pass<'a>(
     data: &'a mut Data,
     qdd: &[f64],
 ) -> &'a DVector<f64> {
+    backward_pass_from(model, data, qdd, 0)
+}
+
+/// [`backward_pass`] with the own terms (`data.f_body`, `data.f_rotor`) of the bodies before
+/// `first` those already in `data` (their motions unchanged since they were computed).
+fn backward_pass_from<'a>(
+    model: &Model,
+    data: &'a mut Data,
+    qdd: &[f64],
+    first: usize,
+) -> &'a DVector<f64> {
     let full = model.rotor_model() == RotorModel::Full;
-    data.f_root = crate::spatial::Force::zero();
-    for i in 0..model.dof() {
+    for (i, b) in model.bodies().iter().enumerate().skip(first) {
         let (ii, v) = (&data.inertia[i], data.v[i]);
-        data.f[i] = ii.mul_motion(&data.a[i]) + v.cross_force(&ii.mul_motion(&v));
+        data.f_body[i] = ii.mul_motion(&data.a[i]) + v.cross_force(&ii.mul_motion(&v));
+        if b.rotor.is_some() {
+            let (ir, vr) = (&data.inertia_rot[i], data.v_rot[i]);
+            data.f_rotor[i] = ir.mul_motion(&data.a_rot[i]) + vr.cross_force(&ir.mul_motion(&vr));
+        }
     }
+    data.f.copy_from_slice(&data.f_body);
+    data.f_root = crate::spatial::Force::zero();
     for i in (0..model.dof()).rev() {
         let b = &model.bodies()[i];
         let mut tau = data.s[i].dot(&data.f[i]);
         let mut to_parent = data.x_up[i].inv_apply_force(&data.f[i]);
         if b.rotor.is_some() {
-            let (ir, vr) = (&data.inertia_rot[i], data.v_rot[i]);
-            let f_rot = ir.mul_motion(&data.a_rot[i]) + vr.cross_force(&ir.mul_motion(&vr));
+            let f_rot = data.f_rotor[i];
             tau += if full {
                 data.s_rot[i].dot(&f_rot)
             } else {
