@@ -911,7 +911,6 @@ mod tests {
             physid_core::model::cheetah3::leg(),
             physid_core::model::cheetah3::leg().without_rotors(),
         ] {
-            let n = model.dof();
             let tr = moving_leg(&model, 400);
             let theta0 = model.parameters() * 1.1;
             let fast = Context::new(&model, &theta0, &tr, 20.0);
@@ -921,14 +920,7 @@ mod tests {
             let (mut wf, mut ws) = (Scratch::new(&fast), Scratch::new(&slow));
             let mut largest = 0.0_f64;
             for k in [3, 150, 222, 377] {
-                let sample = Sample {
-                    k,
-                    n,
-                    q: tr.q_at(k),
-                    qd: tr.qd_at(k),
-                    qdd: tr.qdd_at(k).unwrap(),
-                    param: 0.0,
-                };
+                let sample = sample_at(&tr, k);
                 for secant in [0.0, 0.02] {
                     let a = fast.encoder_shift_columns(&fast.defl, secant, &sample, &mut wf);
                     let b = slow.encoder_shift_columns(&slow.defl, secant, &sample, &mut ws);
@@ -951,20 +943,12 @@ mod tests {
             physid_core::model::cheetah3::leg(),
             physid_core::model::cheetah3::leg().without_rotors(),
         ] {
-            let n = model.dof();
             let tr = moving_leg(&model, 600);
             let ctx = Context::new(&model, &(model.parameters() * 1.1), &tr, 20.0);
             let mut shared = Scratch::new(&ctx);
             let mut distinct = 0;
             for k in [200, 201, 300, 300, 400] {
-                let sample = Sample {
-                    k,
-                    n,
-                    q: tr.q_at(k),
-                    qd: tr.qd_at(k),
-                    qdd: tr.qdd_at(k).unwrap(),
-                    param: 0.0,
-                };
+                let sample = sample_at(&tr, k);
                 let mut last: Option<DMatrix<f64>> = None;
                 for (shift, secant) in [
                     (&ctx.defl, 0.02),
@@ -989,6 +973,18 @@ mod tests {
             }
             // Every variant differs from the one before it: the comparison sees a stale state.
             assert_eq!(distinct, 25);
+        }
+    }
+
+    /// Sample `k` of `tr` (which carries q̈), for a kind without a grid value.
+    fn sample_at(tr: &Trajectory, k: usize) -> Sample<'_> {
+        Sample {
+            k,
+            n: tr.dof(),
+            q: tr.q_at(k),
+            qd: tr.qd_at(k),
+            qdd: tr.qdd_at(k).expect("q̈ present"),
+            param: 0.0,
         }
     }
 

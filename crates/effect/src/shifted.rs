@@ -4,7 +4,7 @@
 //! (the grid's secants share it), then one pass from the shifted joint on ([`rnea_after_joint`]):
 //! the same numbers, bit for bit, as a whole pass for each variant.
 
-use physid_core::dynamics::{joint_friction, rnea_after_joint, update_transforms, Data};
+use physid_core::dynamics::{joint_friction, rnea, rnea_after_joint, Data};
 use physid_core::model::Model;
 use physid_core::spatial::{Force, Motion};
 
@@ -70,11 +70,8 @@ impl Predicting {
             }
             return &self.tau0;
         }
-        update_transforms(model, d, s.q);
-        let tau = rnea_after_joint(model, d, (0, s.q[0]), s.qd, s.qdd);
-        for (i, b) in model.bodies().iter().enumerate() {
-            self.tau0[i] = tau[i] + joint_friction(&b.friction, s.qd[i]);
-        }
+        let tau = rnea(model, d, s.q, s.qd, s.qdd);
+        with_friction(model, tau.as_slice(), s.qd, &mut self.tau0);
         for (saved, now) in self
             .motions
             .iter_mut()
@@ -108,8 +105,14 @@ impl Predicting {
         self.qd[j] -= by * shift[1][at];
         self.qdd[j] -= by * shift[2][at];
         let tau = rnea_after_joint(model, &mut self.data, (j, q_j), &self.qd, &self.qdd);
-        for (i, b) in model.bodies().iter().enumerate() {
-            out[i] = tau[i] + joint_friction(&b.friction, self.qd[i]);
-        }
+        with_friction(model, tau.as_slice(), &self.qd, out);
+    }
+}
+
+/// `τ` plus the joints' friction at speeds `qd` into `out` (N m): the prediction's law, as
+/// `rnea_with_friction` adds it.
+fn with_friction(model: &Model, tau: &[f64], qd: &[f64], out: &mut [f64]) {
+    for (i, b) in model.bodies().iter().enumerate() {
+        out[i] = tau[i] + joint_friction(&b.friction, qd[i]);
     }
 }
