@@ -355,7 +355,11 @@ fn run_clarabel(
         .flatten();
     if let Some(found) = found {
         let info = SolverInfo {
-            status: SolveStatus::Solved,
+            status: if found.reduced {
+                SolveStatus::AlmostSolved
+            } else {
+                SolveStatus::Solved
+            },
             iterations: found.iterations,
             seconds: start.elapsed().as_secs_f64(),
             residuals: found.residuals,

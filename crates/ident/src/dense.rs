@@ -12,9 +12,13 @@
 //! The method is the one of Vandenberghe's `coneqp` (CVXOPT): Nesterov–Todd scaling `W`, with
 //! `W z = W⁻ᵀ s = λ`, Mehrotra's predictor–corrector, and CVXOPT's starting point. It stops on
 //! Clarabel's default tolerances (relative feasibility 1e-8, gap 1e-8 absolute or relative), so
-//! an optimum it returns is one Clarabel would accept. Where it does not converge (a singular
-//! Newton system, a step that stalls, 60 iterations) it returns `None` and the caller hands
-//! the same program to Clarabel, which stays the reference solver.
+//! an optimum it returns is one Clarabel would accept. Where it cannot go on (a singular
+//! Newton system or cone scaling near a degenerate optimum, a step that stalls, 60 iterations)
+//! it returns its last iterate within reduced tolerances (10⁻⁶, a fiftieth of Clarabel's own
+//! "almost solved" ones), marked as such; short of those it returns `None` and the caller
+//! hands the same program to Clarabel, which stays the reference solver. The diagnosis's
+//! cross-validation fits stop short most often: bodies at the boundary `J ⪰ 0`, where the
+//! dual residual stalls near 10⁻⁷.
 
 use crate::lmi::{smat, svec};
 use nalgebra::{DMatrix, DVector};
@@ -59,9 +63,18 @@ pub(crate) struct Optimum {
     pub iterations: u32,
     /// Relative primal and dual residuals at the optimum.
     pub residuals: [f64; 2],
+    /// Whether only the reduced tolerances ([`REDUCED_TOLERANCE`]) are met: the method
+    /// stopped before the full ones, at a point within the reduced ones.
+    pub reduced: bool,
 }
 
 const TOLERANCE: f64 = 1e-8;
+/// The tolerances an iterate must meet to be returned where the method cannot go on (its
+/// Newton system or a cone's scaling no longer factors near a degenerate optimum, a step
+/// stalls, or the iterations run out): the relative residuals and the gap (absolute or
+/// relative) below 10⁻⁶, a fiftieth of Clarabel's own reduced tolerances (5·10⁻⁵ on the gap,
+/// 10⁻⁴ on feasibility), under which it reports "almost solved".
+const REDUCED_TOLERANCE: f64 = 1e-6;
 const MAX_ITERATIONS: u32 = 60;
 /// The fraction of the way to the cone's boundary a step goes.
 const STEP_FRACTION: f64 = 0.99;
@@ -86,8 +99,14 @@ enum Scaling {
     },
 }
 
-/// Solves `program`; `None` where the method does not reach the tolerances.
+/// Solves `program` to the full tolerances, or where the method stops short of them, to the
+/// reduced ones ([`Optimum::reduced`]); `None` where it reaches neither.
 pub(crate) fn solve(program: &Program) -> Option<Optimum> {
+    solve_within(program, MAX_ITERATIONS)
+}
+
+/// [`solve`] in at most `max_iterations` iterations.
+fn solve_within(program: &Program, max_iterations: u32) -> Option<Optimum> {
     let (m, n) = program.a.shape();
     if program.cones.iter().map(|c| c.rows()).sum::<usize>() != m || program.b.len() != m {
         return None;
@@ -99,28 +118,34 @@ pub(crate) fn solve(program: &Program) -> Option<Optimum> {
         DVector::from_column_slice(program.q),
         DVector::from_column_slice(program.b),
     );
-    for iteration in 0..=MAX_ITERATIONS {
+    // The last iterate within the reduced tolerances, returned where the method stops short.
+    let mut reduced: Option<Optimum> = None;
+    for iteration in 0..=max_iterations {
         let px = program.p * &x;
         let r_x = &px + &q + program.a.tr_mul(&z);
         let r_z = program.a * &x + &s - &b;
         let measures = Measures::at(&x, &s, &z, (&px, &q, &b), (&r_x, &r_z));
         if !measures.finite() {
-            return None;
+            return reduced;
         }
-        if measures.converged() {
-            return Some(Optimum {
-                x: x.as_slice().to_vec(),
-                iterations: iteration,
-                residuals: measures.residuals,
-            });
+        let optimum = |reduced| Optimum {
+            x: x.as_slice().to_vec(),
+            iterations: iteration,
+            residuals: measures.residuals,
+            reduced,
+        };
+        if measures.within(TOLERANCE) {
+            return Some(optimum(false));
         }
-        if iteration == MAX_ITERATIONS {
-            return None;
+        if measures.within(REDUCED_TOLERANCE) {
+            reduced = Some(optimum(true));
         }
-        for block in &mut blocks {
-            block.scaling = scaling(block, &s, &z)?;
+        if iteration == max_iterations {
+            return reduced;
         }
-        let newton = Newton::factor(program, &blocks, n)?;
+        let Some(newton) = rescaled(program, &mut blocks, (&s, &z), n) else {
+            return reduced;
+        };
         let mu = s.dot(&z) / nu as f64;
         let lambda_sq = jordan_self(&blocks, m);
         let affine = newton.solve(&blocks, &r_x, &r_z, &(-&lambda_sq));
@@ -132,13 +157,13 @@ pub(crate) fn solve(program: &Program) -> Option<Optimum> {
         let (dx, ds_scaled, dz_scaled) = newton.solve(&blocks, &r_x, &r_z, &target);
         let alpha = (STEP_FRACTION * step_length(&blocks, &ds_scaled, &dz_scaled)).min(1.0);
         if alpha.is_nan() || alpha <= 1e-10 {
-            return None;
+            return reduced;
         }
         x += dx * alpha;
         s += unscale_s(&blocks, &ds_scaled) * alpha;
         z += unscale_z(&blocks, &dz_scaled) * alpha;
     }
-    None
+    reduced
 }
 
 /// Clarabel's measures of convergence at `(x, s, z)`: the residuals relative to the data's
@@ -176,9 +201,10 @@ impl Measures {
         self.gap.is_finite() && self.residuals.iter().all(|r| r.is_finite())
     }
 
-    fn converged(&self) -> bool {
-        self.residuals.iter().all(|&r| r < TOLERANCE)
-            && (self.gap < TOLERANCE || self.relative_gap < TOLERANCE)
+    /// Whether the relative residuals and the gap (absolute or relative) are below `tolerance`.
+    fn within(&self, tolerance: f64) -> bool {
+        self.residuals.iter().all(|&r| r < tolerance)
+            && (self.gap < tolerance || self.relative_gap < tolerance)
     }
 }
 
@@ -293,6 +319,20 @@ fn scaling(block: &Block, s: &DVector<f64>, z: &DVector<f64>) -> Option<Scaling>
             Some(Scaling::Psd { r, r_inv, lambda })
         }
     }
+}
+
+/// The cones' scalings at `(s, z)` and the Newton system factored there; `None` where a
+/// scaling or the factorization fails (a point numerically off a cone's interior).
+fn rescaled(
+    program: &Program,
+    blocks: &mut [Block],
+    (s, z): (&DVector<f64>, &DVector<f64>),
+    n: usize,
+) -> Option<Newton> {
+    for block in blocks.iter_mut() {
+        block.scaling = scaling(block, s, z)?;
+    }
+    Newton::factor(program, blocks, n)
 }
 
 /// The factored Newton system `P + Ãᵀ Ã`, `Ã = W⁻ᵀ A`, with each cone's `Ã` rows kept on the
@@ -690,6 +730,40 @@ mod tests {
         }
         // The optimum sits on some cone's boundary in most programs.
         assert!(active >= 8, "{active} of 10 with an active constraint");
+    }
+
+    #[test]
+    fn stopped_short_it_returns_its_last_iterate_within_the_reduced_tolerances_only() {
+        let program = identification_like(2, 6, 12, Lmi::Pseudo);
+        let full = solve(&program.program()).expect("converges");
+        assert!(!full.reduced && full.iterations > 4, "{}", full.iterations);
+        let reference = program.objective(&clarabel(&program));
+        let scale = reference.abs().max(1.0);
+        // Cut off one iteration short of the full tolerances, then earlier and earlier: the
+        // last cut that is still within the reduced ones returns an iterate marked reduced,
+        // near Clarabel's optimum; before any iterate gets there, nothing.
+        let mut reduced_seen = 0;
+        for cut in (0..full.iterations).rev() {
+            match solve_within(&program.program(), cut) {
+                Some(found) => {
+                    assert!(found.reduced && found.iterations == cut);
+                    let worst = found.residuals.iter().copied().fold(0.0, f64::max);
+                    assert!(worst < REDUCED_TOLERANCE, "residual {worst:e}");
+                    let f = program.objective(&found.x);
+                    assert!(
+                        (f - reference).abs() <= 1e-4 * scale,
+                        "{f} against {reference}"
+                    );
+                    reduced_seen += 1;
+                }
+                None => {
+                    // Every earlier cut stops short of the reduced tolerances too.
+                    assert!((0..cut).all(|c| solve_within(&program.program(), c).is_none()));
+                    break;
+                }
+            }
+        }
+        assert!(reduced_seen >= 1, "no iterate between the tolerances");
     }
 
     #[test]

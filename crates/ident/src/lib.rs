@@ -267,7 +267,8 @@ pub enum SolveStatus {
     /// The cone solver (physid's dense interior-point method, or Clarabel): solved to
     /// Clarabel's full tolerances.
     Solved,
-    /// Clarabel: solved to its reduced tolerances.
+    /// The cone solver: solved to reduced tolerances only (Clarabel's own; the dense method's,
+    /// a fiftieth of them, where it stops short of the full ones).
     AlmostSolved,
 }
 

@@ -53,6 +53,17 @@ impl Data {
         }
     }
 
+    /// How far the model parameters `theta` move the predicted torques from those of the
+    /// point the columns were built about, relative: `‖Y (θ − θ_lin)‖ / ‖Y θ_lin‖` over the
+    /// training samples and joints (from the normal equations' `YᵀY`).
+    pub(super) fn moved_from(&self, theta: &DVector<f64>) -> f64 {
+        let p0 = self.theta_lin.len();
+        let yty = self.train.yty.view((0, 0), (p0, p0));
+        let d = theta - &self.theta_lin;
+        let at = self.theta_lin.dot(&(yty * &self.theta_lin));
+        (d.dot(&(yty * &d)) / at).sqrt()
+    }
+
     /// The variant's index.
     pub(super) fn index(&self, v: &Variant) -> usize {
         self.variants
@@ -81,6 +92,16 @@ pub(super) struct Problem<'a> {
     /// with the data is not overrun by them.
     pub(super) radius2: f64,
 }
+
+/// The largest relative move of the predicted torques ([`Data::moved_from`]) after which a
+/// step keeps the columns built about the previous point. A linearized column (a gain's `Y θ`,
+/// a tilt's, a delay's, a compliance's deflection) built about `θ_lin` differs from one about
+/// `θ`, to first order, by the same column of `θ − θ_lin`: a move of 2 % changes an effect's
+/// predicted torque by about 2 % of itself. On the real KUKA (run 3 against runs 1+2's
+/// identification) the three steps after the first moved the torques by 0.15 %, 1.3 % and
+/// 0.22 %, and rebuilding about them changed the held-out mean square by less than 10⁻⁶,
+/// 10⁻⁶ and 7·10⁻⁴ relative.
+pub(super) const LINEARIZATION_TRUST: f64 = 0.02;
 
 /// Probability that a description drawn from its stated uncertainty lies outside the region
 /// the ladder's base may move in.

@@ -793,9 +793,11 @@ fn candidates(data: &Data, selected: &Selected, set: &[Explanation]) -> Vec<Expl
 
 /// After a step: the columns rebuilt once about the model it fitted (payloads included) and
 /// the set refitted there, kept only if the held-out error does not rise (a linearization is
-/// trusted near its point, not followed wherever a fit leads it). `data` may hold the model's
-/// columns alone (the first fit, no explanation yet): where the rebuilt columns are not kept,
-/// every variant's are then built about `data`'s point.
+/// trusted near its point, not followed wherever a fit leads it). Not rebuilt where the fit
+/// moved the model's predicted torques by less than [`LINEARIZATION_TRUST`] from the point
+/// the columns were built about ([`Data::moved_from`]). `data` may hold the model's columns
+/// alone (the first fit, no explanation yet): where the rebuilt columns are not kept, every
+/// variant's are then built about `data`'s point.
 fn settle(
     problem: &Problem,
     stage: &Stage,
@@ -808,6 +810,10 @@ fn settle(
     let fit = recentre(problem, &data, set);
     let before: f64 = problem.held_out(&data, &fit).iter().sum();
     let (theta, _) = model_of(&data, &fit, set, p0);
+    let every_variant = data.variants.len() == variants.len();
+    if every_variant && data.moved_from(&theta) < LINEARIZATION_TRUST {
+        return (data, fit);
+    }
     let moved = Data::build(stage, variants, &theta, settings.blocks);
     let mut moved_set = set.to_vec();
     let refit = recentre(problem, &moved, &mut moved_set);
