@@ -808,12 +808,12 @@ fn settle(
 ) -> (Data, Fit) {
     let p0 = problem.theta_d.len();
     let fit = recentre(problem, &data, set);
-    let before: f64 = problem.held_out(&data, &fit).iter().sum();
     let (theta, _) = model_of(&data, &fit, set, p0);
     let every_variant = data.variants.len() == variants.len();
     if every_variant && data.moved_from(&theta) < LINEARIZATION_TRUST {
         return (data, fit);
     }
+    let before: f64 = problem.held_out(&data, &fit).iter().sum();
     let moved = Data::build(stage, variants, &theta, settings.blocks);
     let mut moved_set = set.to_vec();
     let refit = recentre(problem, &moved, &mut moved_set);
@@ -821,7 +821,7 @@ fn settle(
     if after <= before {
         set.copy_from_slice(&moved_set);
         (moved, refit)
-    } else if data.variants.len() < variants.len() {
+    } else if !every_variant {
         // Built with the model's columns alone (the first fit): every variant's about its point.
         let full = Data::build(stage, variants, &data.theta_lin, settings.blocks);
         let fit = recentre(problem, &full, set);
