@@ -9,20 +9,27 @@ use super::select::Selection;
 use super::stage::Stage;
 use physid_effect::library::Variant;
 
+/// The ladder's first rungs, which cross-validation does not change: started beside it
+/// (`None` without a stated uncertainty of the description).
+pub(crate) fn start<'a>(stage: &'a Stage) -> Option<ladder::Start<'a>> {
+    let eps = stage.opts.description_uncertainty?;
+    Some(ladder::start(stage, eps, &stage.opts.ladder))
+}
+
 /// The ladder from the description when its uncertainty is stated, its first explanation added
 /// to `effects` when cross-validation and the description test did not name it (a payload on
 /// any body, an absorbed tilt or gain beside a linearized effect); its later steps stay in the
 /// ladder (on perturbed simulated descriptions they are mostly the description's own errors).
 /// Returns the ladder and every explanation it chose as an effect estimate, anchored at the
-/// description ([`estimates`]).
+/// description ([`estimates`]), from the ladder's [`start`].
 pub(crate) fn from_description(
     stage: &Stage,
     selection: &Selection,
+    start: Option<ladder::Start>,
     effects: &mut Vec<EffectEstimate>,
 ) -> Option<(Ladder, Vec<EffectEstimate>)> {
     let selected = selected_or_tied(stage, selection);
-    let eps = stage.opts.description_uncertainty?;
-    let l = ladder::ladder(stage, eps, &selected, &stage.opts.ladder);
+    let l = ladder::ladder(start?, &selected, &stage.opts.ladder);
     let described = estimates(&l, stage);
     if let Some(e) = described.first() {
         if !effects.iter().any(|x| x.group().any(|k| k == e.kind)) {

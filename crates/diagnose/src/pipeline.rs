@@ -122,35 +122,50 @@ struct Found {
     structure_left: StructureLeft,
 }
 
+/// What cross-validation and the description test find, with the ladder of the re-identified
+/// model and the magnitudes of their effects.
+struct Selected {
+    selection: select::Selection,
+    description_test: Option<anchor::Report>,
+    description_test_skipped: Option<String>,
+    /// The effects cross-validation chose, then those the description test found (variants).
+    chosen: Vec<usize>,
+    ladder: gap::Ladder,
+    effects: Vec<EffectEstimate>,
+}
+
 /// Which effects (cross-validation, then the description test), how far each takes the
 /// validation residual, their magnitudes, the ladder from the description and the structure
-/// left.
+/// left. The ladder from the description starts beside cross-validation (its first rungs do not
+/// depend on it), and is climbed beside how far the selected effects go: the same numbers as
+/// one after the other, whatever the thread count.
 fn find(stage: &Stage) -> Result<Found, DiagnoseError> {
-    let selection = select::forward_select(
-        &stage.folds,
-        stage.model,
-        &stage.ident_opts,
-        &stage.opts.selection,
-    )?;
-    let (description_test, description_test_skipped) = run_description_test(stage, &selection)?;
-    let anchored: &[anchor::Step] = description_test.as_ref().map_or(&[], |r| &r.steps);
+    let (selected, start) = rayon::join(|| select_effects(stage), || described::start(stage));
+    let Selected {
+        selection,
+        description_test,
+        description_test_skipped,
+        chosen,
+        ladder,
+        mut effects,
+    } = selected?;
     let n_cv = selection.chosen.len();
-    // The effects cross-validation chose, then those the description test found (variants).
-    let chosen: Vec<usize> = [&selection.chosen[..], &variants_of(anchored)].concat();
-    let ladder = gap::ladder(stage, &chosen)?;
-    let mut effects = magnitude::cross_validated(stage, &selection, &ladder.final_theta);
-    effects.extend(magnitude::against_description(stage, anchored));
-    let (from_description, described_effects) =
-        match described::from_description(stage, &selection, &mut effects) {
-            Some((l, described)) => (Some(l), described),
-            None => (None, vec![]),
-        };
-    let how_far = gap::how_far(stage, &chosen, n_cv, &ladder)?;
+    let (described, after) = rayon::join(
+        || described::from_description(stage, &selection, start, &mut effects),
+        || {
+            let how_far = gap::how_far(stage, &chosen, n_cv, &ladder);
+            (how_far, structure_after(stage, &chosen, &ladder))
+        },
+    );
+    let (how_far, structure_left) = (after.0?, after.1);
+    let (from_description, described_effects) = match described {
+        Some((l, described)) => (Some(l), described),
+        None => (None, vec![]),
+    };
     let explained_from_description = match &from_description {
         Some(l) => described::description_steps(l),
         None => explain::from_description(stage, &chosen, &ladder),
     };
-    let structure_left = structure_after(stage, &chosen, &ladder);
     Ok(Found {
         selection,
         description_test,
@@ -162,6 +177,31 @@ fn find(stage: &Stage) -> Result<Found, DiagnoseError> {
         how_far,
         explained_from_description,
         structure_left,
+    })
+}
+
+/// Cross-validation's selection, the description test beside it, the re-identified ladder of
+/// what they chose and their effects' magnitudes.
+fn select_effects(stage: &Stage) -> Result<Selected, DiagnoseError> {
+    let selection = select::forward_select(
+        &stage.folds,
+        stage.model,
+        &stage.ident_opts,
+        &stage.opts.selection,
+    )?;
+    let (description_test, description_test_skipped) = run_description_test(stage, &selection)?;
+    let anchored: &[anchor::Step] = description_test.as_ref().map_or(&[], |r| &r.steps);
+    let chosen: Vec<usize> = [&selection.chosen[..], &variants_of(anchored)].concat();
+    let ladder = gap::ladder(stage, &chosen)?;
+    let mut effects = magnitude::cross_validated(stage, &selection, &ladder.final_theta);
+    effects.extend(magnitude::against_description(stage, anchored));
+    Ok(Selected {
+        selection,
+        description_test,
+        description_test_skipped,
+        chosen,
+        ladder,
+        effects,
     })
 }
 

@@ -39,6 +39,7 @@ use physid_core::linalg::least_squares_nonneg;
 use physid_core::model::Model;
 use physid_core::spatial::InertialParams;
 use physid_effect::library::{Kind, Variant};
+use rayon::prelude::*;
 use serde::Serialize;
 
 pub use super::options::LadderSettings as Settings;
@@ -468,25 +469,58 @@ impl Selected {
     }
 }
 
-/// The diagnosis's ladder from the description (module docs), with relative uncertainty `eps`
-/// of the description's inertial parameters.
-pub(crate) fn ladder(stage: &Stage, eps: f64, selected: &Selected, settings: &Settings) -> Ladder {
+/// The ladder's first two rungs (the description as given, then within its uncertainty) and
+/// the columns about the point the second settles at: what the ladder needs before it weighs
+/// any explanation, so it does not wait for cross-validation ([`start`]).
+pub(crate) struct Start<'a> {
+    eps: f64,
+    problem: Problem<'a>,
+    data: Data,
+    current: Fit,
+    rungs: Vec<Rung>,
+}
+
+/// The ladder's [`Start`] with relative uncertainty `eps` of the description's inertial
+/// parameters.
+pub(crate) fn start<'a>(stage: &'a Stage, eps: f64, settings: &Settings) -> Start<'a> {
     let problem = problem(stage, eps);
-    let variants = offered(stage);
-    let p0 = problem.theta_d.len();
     // The first fit takes the model's columns only: the effects' columns are built about the
     // point it settles at, and about the description only where it does not settle.
     let data = Data::build(stage, &[], &problem.theta_d, settings.blocks);
+    let variants = offered(stage);
+    // The columns about the description within its uncertainty, not the raw description.
+    let (data, current) = settle(&problem, stage, &variants, data, &mut [], settings);
+    let within = Added::fixed("description within its uncertainty");
+    let rungs = vec![
+        given_rung(stage),
+        rung(stage, at(&data, &current, &[]), within),
+    ];
+    Start {
+        eps,
+        problem,
+        data,
+        current,
+        rungs,
+    }
+}
+
+/// The diagnosis's ladder from the description (module docs), from its [`Start`].
+pub(crate) fn ladder(start: Start, selected: &Selected, settings: &Settings) -> Ladder {
+    let Start {
+        eps,
+        problem,
+        mut data,
+        mut current,
+        mut rungs,
+    } = start;
+    let stage = problem.stage;
+    let variants = offered(stage);
+    let p0 = problem.theta_d.len();
     let mut set: Vec<Explanation> = vec![];
-    let mut rungs = vec![given_rung(stage)];
     let mut entered: Vec<(Explanation, Weighing)> = vec![];
     let mut entered_coefficients: Vec<(Explanation, Vec<f64>, Vec<f64>)> = vec![];
     let mut unweighed = vec![];
-    // The columns about the description within its uncertainty, not the raw description.
-    let (mut data, mut current) = settle(&problem, stage, &variants, data, &mut set, settings);
     let mut sse = problem.held_out(&data, &current);
-    let within = Added::fixed("description within its uncertainty");
-    rungs.push(rung(stage, at(&data, &current, &set), within));
     let stop = loop {
         if set.len() >= settings.max_steps {
             break Stop::MaxSteps;
@@ -559,7 +593,8 @@ type Tie = (String, Option<f64>);
 type Scored = (Explanation, f64, f64, Option<f64>);
 
 /// Every candidate fitted with the set so far and scored on the held-out data against `sse`
-/// (a changed body must still be a body).
+/// (a changed body must still be a body). The candidates' fits are independent: in parallel,
+/// collected in the candidates' order.
 fn scored_candidates(
     problem: &Problem,
     data: &Data,
@@ -570,8 +605,8 @@ fn scored_candidates(
     let model = problem.stage.model;
     let p0 = problem.theta_d.len();
     candidates(data, selected, set)
-        .into_iter()
-        .flat_map(|e| with_point_mass(problem, data, set, e))
+        .into_par_iter()
+        .flat_map_iter(|e| with_point_mass(problem, data, set, e))
         .filter_map(|e| {
             let mut trial = set.to_vec();
             trial.push(e);
