@@ -283,9 +283,7 @@ fn min_eigenvalue(blocks: &[Block], v: &DVector<f64>) -> Option<f64> {
         let rows = v.rows(block.row0, block.cone.rows());
         let low = match block.cone {
             Cone::Nonneg(_) => rows.min(),
-            Cone::Psd(k) => nalgebra::SymmetricEigen::new(smat(rows.as_slice(), k))
-                .eigenvalues
-                .min(),
+            Cone::Psd(k) => smat(rows.as_slice(), k).symmetric_eigenvalues().min(),
         };
         if !low.is_finite() {
             return None;
@@ -610,7 +608,7 @@ fn step_length(blocks: &[Block], ds_scaled: &DVector<f64>, dz_scaled: &DVector<f
                     let dm = smat(rows, k);
                     let scaled =
                         DMatrix::from_fn(k, k, |i, j| dm[(i, j)] / (lambda[i] * lambda[j]).sqrt());
-                    let low = nalgebra::SymmetricEigen::new(scaled).eigenvalues.min();
+                    let low = scaled.symmetric_eigenvalues().min();
                     if low < 0.0 {
                         -1.0 / low
                     } else {
