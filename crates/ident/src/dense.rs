@@ -480,18 +480,42 @@ impl Cholesky {
 fn w_inv_t(scaling: &Scaling, v: &[f64]) -> Vec<f64> {
     match scaling {
         Scaling::Nonneg { w, .. } => v.iter().zip(w).map(|(v, w)| v / w).collect(),
-        Scaling::Psd { r_inv, .. } => {
-            let k = r_inv.nrows();
-            svec(&(r_inv * smat(v, k) * r_inv.transpose()))
-        }
+        Scaling::Psd { r_inv, .. } => congruence(r_inv, v),
     }
+}
+
+/// `svec(M smat(v) Mᵀ)` of one PSD cone's rows `v` (`M` is `k × k`): by fixed-size
+/// arithmetic for the pseudo-inertia's 4 × 4 cones, without allocating.
+fn congruence(m: &DMatrix<f64>, v: &[f64]) -> Vec<f64> {
+    let k = m.nrows();
+    if k != 4 {
+        return svec(&(m * smat(v, k) * m.transpose()));
+    }
+    let s2 = std::f64::consts::SQRT_2;
+    let m4 = nalgebra::Matrix4::from_column_slice(m.as_slice());
+    let mut x = nalgebra::Matrix4::zeros();
+    for (idx, (i, j)) in svec_entries(4).enumerate() {
+        let e = if i == j { v[idx] } else { v[idx] / s2 };
+        x[(i, j)] = e;
+        x[(j, i)] = e;
+    }
+    let y = m4 * x * m4.transpose();
+    svec_entries(4)
+        .map(|(i, j)| {
+            if i == j {
+                y[(i, j)]
+            } else {
+                s2 * 0.5 * (y[(i, j)] + y[(j, i)])
+            }
+        })
+        .collect()
 }
 
 /// `ds = Wᵀ d̃s` over every block.
 fn unscale_s(blocks: &[Block], ds_scaled: &DVector<f64>) -> DVector<f64> {
     map_blocks(blocks, ds_scaled, |scaling, v| match scaling {
         Scaling::Nonneg { w, .. } => v.iter().zip(w).map(|(v, w)| v * w).collect(),
-        Scaling::Psd { r, .. } => svec(&(r * smat(v, r.nrows()) * r.transpose())),
+        Scaling::Psd { r, .. } => congruence(r, v),
     })
 }
 
@@ -499,7 +523,7 @@ fn unscale_s(blocks: &[Block], ds_scaled: &DVector<f64>) -> DVector<f64> {
 fn unscale_z(blocks: &[Block], dz_scaled: &DVector<f64>) -> DVector<f64> {
     map_blocks(blocks, dz_scaled, |scaling, v| match scaling {
         Scaling::Nonneg { w, .. } => v.iter().zip(w).map(|(v, w)| v / w).collect(),
-        Scaling::Psd { r_inv, .. } => svec(&(r_inv.transpose() * smat(v, r_inv.nrows()) * r_inv)),
+        Scaling::Psd { r_inv, .. } => congruence(&r_inv.transpose(), v),
     })
 }
 
