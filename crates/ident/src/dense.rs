@@ -20,7 +20,7 @@
 //! cross-validation fits stop short most often: bodies at the boundary `J ⪰ 0`, where the
 //! dual residual stalls near 10⁻⁷.
 
-use crate::lmi::{smat, svec};
+use crate::lmi::{smat, smat_into, svec};
 use nalgebra::{DMatrix, DVector};
 
 /// A cone of `K`.
@@ -491,24 +491,10 @@ fn congruence(m: &DMatrix<f64>, v: &[f64]) -> Vec<f64> {
     if k != 4 {
         return svec(&(m * smat(v, k) * m.transpose()));
     }
-    let s2 = std::f64::consts::SQRT_2;
     let m4 = nalgebra::Matrix4::from_column_slice(m.as_slice());
     let mut x = nalgebra::Matrix4::zeros();
-    for (idx, (i, j)) in svec_entries(4).enumerate() {
-        let e = if i == j { v[idx] } else { v[idx] / s2 };
-        x[(i, j)] = e;
-        x[(j, i)] = e;
-    }
-    let y = m4 * x * m4.transpose();
-    svec_entries(4)
-        .map(|(i, j)| {
-            if i == j {
-                y[(i, j)]
-            } else {
-                s2 * 0.5 * (y[(i, j)] + y[(j, i)])
-            }
-        })
-        .collect()
+    smat_into(v, &mut x);
+    svec(&(m4 * x * m4.transpose()))
 }
 
 /// `ds = Wᵀ d̃s` over every block.
@@ -879,6 +865,35 @@ mod tests {
         let mut program = identification_like(3, 2, 2, Lmi::Pseudo);
         program.cones.pop();
         assert!(solve(&program.program()).is_none());
+    }
+
+    #[test]
+    fn a_4x4_cone_s_congruence_equals_the_general_path_bit_for_bit() {
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(11);
+        for _ in 0..20 {
+            let m = DMatrix::from_fn(4, 4, |_, _| rng.random_range(-2.0..2.0));
+            let v: Vec<f64> = (0..10).map(|_| rng.random_range(-1.0..1.0)).collect();
+            let general = svec(&(&m * smat(&v, 4) * m.transpose()));
+            assert_eq!(congruence(&m, &v), general);
+            // Against the definition, entry by entry: (M X Mᵀ)_ij = Σ_kl M_ik X_kl M_jl.
+            let x = smat(&v, 4);
+            let by_sums = DMatrix::from_fn(4, 4, |i, j| {
+                (0..4)
+                    .flat_map(|k| (0..4).map(move |l| (k, l)))
+                    .map(|(k, l)| m[(i, k)] * x[(k, l)] * m[(j, l)])
+                    .sum::<f64>()
+            });
+            for (a, b) in congruence(&m, &v).iter().zip(svec(&by_sums)) {
+                assert!((a - b).abs() <= 1e-12 * (1.0 + b.abs()), "{a} against {b}");
+            }
+        }
+        // A 6 × 6 cone (the spatial inertia's) takes the general path.
+        let m = DMatrix::from_fn(6, 6, |i, j| (i + 2 * j) as f64 * 0.1 - 0.4);
+        let v: Vec<f64> = (0..21).map(|k| k as f64 * 0.05 - 0.5).collect();
+        assert_eq!(
+            congruence(&m, &v),
+            svec(&(&m * smat(&v, 6) * m.transpose()))
+        );
     }
 
     #[test]

@@ -5,11 +5,12 @@
 //! off-diagonal entries times √2: `svec(M) = [M00, √2 M01, M11, √2 M02, √2 M12, M22, …]`, so that
 //! `svec(A)·svec(B) = tr(A B)`.
 
-use nalgebra::{DMatrix, SVector};
+use nalgebra::{DMatrix, Dim, Matrix, RawStorage, RawStorageMut, SVector};
 use physid_core::spatial::{Ellipsoid, InertialParams};
 
-/// `svec` of a symmetric matrix in Clarabel's order (see the module docs).
-pub fn svec(m: &DMatrix<f64>) -> Vec<f64> {
+/// `svec` of a symmetric matrix (any nalgebra storage) in Clarabel's order (see the module
+/// docs).
+pub fn svec<R: Dim, C: Dim, S: RawStorage<f64, R, C>>(m: &Matrix<f64, R, C, S>) -> Vec<f64> {
     let n = m.nrows();
     let s2 = std::f64::consts::SQRT_2;
     let mut v = Vec::with_capacity(n * (n + 1) / 2);
@@ -27,10 +28,20 @@ pub fn svec(m: &DMatrix<f64>) -> Vec<f64> {
 
 /// The inverse of [`svec`].
 pub fn smat(v: &[f64], n: usize) -> DMatrix<f64> {
-    let s2 = std::f64::consts::SQRT_2;
     let mut m = DMatrix::zeros(n, n);
+    smat_into(v, &mut m);
+    m
+}
+
+/// [`smat`] written into a square matrix of any nalgebra storage (a fixed-size one needs no
+/// allocation).
+pub fn smat_into<R: Dim, C: Dim, S: RawStorageMut<f64, R, C>>(
+    v: &[f64],
+    m: &mut Matrix<f64, R, C, S>,
+) {
+    let s2 = std::f64::consts::SQRT_2;
     let mut k = 0;
-    for j in 0..n {
+    for j in 0..m.ncols() {
         for i in 0..=j {
             let x = if i == j { v[k] } else { v[k] / s2 };
             m[(i, j)] = x;
@@ -38,7 +49,6 @@ pub fn smat(v: &[f64], n: usize) -> DMatrix<f64> {
             k += 1;
         }
     }
-    m
 }
 
 /// Which matrix inequality.
@@ -98,6 +108,17 @@ mod tests {
     use nalgebra::Vector3;
     use physid_core::model::random::random_body;
     use rand::SeedableRng;
+
+    #[test]
+    fn svec_and_smat_read_a_fixed_size_matrix_as_a_dynamic_one() {
+        let v: Vec<f64> = (0..10).map(|k| 0.3 * k as f64 - 1.1).collect();
+        let dynamic = smat(&v, 4);
+        let mut fixed = nalgebra::Matrix4::zeros();
+        smat_into(&v, &mut fixed);
+        assert_eq!(fixed.as_slice(), dynamic.as_slice());
+        assert_eq!(svec(&fixed), v);
+        assert_eq!(svec(&dynamic), v);
+    }
 
     #[test]
     fn svec_inner_product_is_the_trace_inner_product() {
