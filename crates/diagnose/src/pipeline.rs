@@ -124,7 +124,7 @@ struct Found {
 
 /// What cross-validation and the description test find, with the ladder of the re-identified
 /// model and the magnitudes of their effects.
-struct Selected {
+struct CrossValidated {
     selection: select::Selection,
     description_test: Option<anchor::Report>,
     description_test_skipped: Option<String>,
@@ -140,15 +140,16 @@ struct Selected {
 /// depend on it), and is climbed beside how far the selected effects go: the same numbers as
 /// one after the other, whatever the thread count.
 fn find(stage: &Stage) -> Result<Found, DiagnoseError> {
-    let (selected, start) = rayon::join(|| select_effects(stage), || described::start(stage));
-    let Selected {
+    let (cross_validated, start) =
+        rayon::join(|| select_effects(stage), || described::start(stage));
+    let CrossValidated {
         selection,
         description_test,
         description_test_skipped,
         chosen,
         ladder,
         mut effects,
-    } = selected?;
+    } = cross_validated?;
     let n_cv = selection.chosen.len();
     let (described, after) = rayon::join(
         || described::from_description(stage, &selection, start, &mut effects),
@@ -182,7 +183,7 @@ fn find(stage: &Stage) -> Result<Found, DiagnoseError> {
 
 /// Cross-validation's selection, the description test beside it, the re-identified ladder of
 /// what they chose and their effects' magnitudes.
-fn select_effects(stage: &Stage) -> Result<Selected, DiagnoseError> {
+fn select_effects(stage: &Stage) -> Result<CrossValidated, DiagnoseError> {
     let selection = select::forward_select(
         &stage.folds,
         stage.model,
@@ -195,7 +196,7 @@ fn select_effects(stage: &Stage) -> Result<Selected, DiagnoseError> {
     let ladder = gap::ladder(stage, &chosen)?;
     let mut effects = magnitude::cross_validated(stage, &selection, &ladder.final_theta);
     effects.extend(magnitude::against_description(stage, anchored));
-    Ok(Selected {
+    Ok(CrossValidated {
         selection,
         description_test,
         description_test_skipped,
