@@ -125,7 +125,7 @@ fn solve_within(program: &Program, max_iterations: u32) -> Option<Optimum> {
     for iteration in 0..=max_iterations {
         let px = program.p * &x;
         let r_x = &px + &q + program.a.tr_mul(&z);
-        let r_z = program.a * &x + &s - &b;
+        let r_z = a_times(&blocks, &x, m) + &s - &b;
         let measures = Measures::at(&x, &s, &z, (&px, &q, &b), (&r_x, &r_z));
         if !measures.finite() {
             return reduced;
@@ -247,6 +247,18 @@ fn blocks(program: &Program) -> Vec<Block> {
         .collect()
 }
 
+/// `A x` (`m` rows), each cone's rows on the columns it touches (`A` is zero elsewhere): the
+/// dense product's terms, added in the same order, without its zeros.
+fn a_times(blocks: &[Block], x: &DVector<f64>, m: usize) -> DVector<f64> {
+    let mut out = DVector::zeros(m);
+    for block in blocks {
+        let x_cols = DVector::from_iterator(block.cols.len(), block.cols.iter().map(|&c| x[c]));
+        out.rows_mut(block.row0, block.cone.rows())
+            .copy_from(&(&block.a * x_cols));
+    }
+    out
+}
+
 /// CVXOPT's starting point: `x` minimizing `½ xᵀPx + qᵀx + ½ ‖Ax − b‖²`, and `s = b − Ax`,
 /// `z = Ax − b`, each moved into its cone's interior along `e` where it is not inside.
 fn start(
@@ -283,7 +295,7 @@ fn min_eigenvalue(blocks: &[Block], v: &DVector<f64>) -> Option<f64> {
         let rows = v.rows(block.row0, block.cone.rows());
         let low = match block.cone {
             Cone::Nonneg(_) => rows.min(),
-            Cone::Psd(k) => smat(rows.as_slice(), k).symmetric_eigenvalues().min(),
+            Cone::Psd(k) => least_eigenvalue(rows.as_slice(), k, |_, _| 1.0),
         };
         if !low.is_finite() {
             return None;
@@ -291,6 +303,45 @@ fn min_eigenvalue(blocks: &[Block], v: &DVector<f64>) -> Option<f64> {
         least = least.min(low);
     }
     Some(least)
+}
+
+/// The least eigenvalue of `smat(v)` (`k × k`) with entry `(i, j)` divided by
+/// `divisor(i, j)`: by fixed-size arithmetic for the pseudo-inertia's 4 × 4 cones (the same
+/// algorithm on the same numbers as the general path, without allocating).
+fn least_eigenvalue(v: &[f64], k: usize, divisor: impl Fn(usize, usize) -> f64) -> f64 {
+    if k == 4 {
+        let mut m = nalgebra::Matrix4::zeros();
+        smat_into(v, &mut m);
+        m = nalgebra::Matrix4::from_fn(|i, j| m[(i, j)] / divisor(i, j));
+        return m.symmetric_eigenvalues().min();
+    }
+    let m = smat(v, k);
+    DMatrix::from_fn(k, k, |i, j| m[(i, j)] / divisor(i, j))
+        .symmetric_eigenvalues()
+        .min()
+}
+
+/// `R = L_s V Λ^{-1/2}`, `R⁻¹ = Λ^{-1/2} Uᵀ L_zᵀ` and `λ` of the Nesterov–Todd scaling of one
+/// PSD cone at `(S, Z)` (square matrices, fixed-size or not); `None` off the cone's interior.
+macro_rules! psd_scaling {
+    ($s:expr, $z:expr) => {{
+        let l_s = $s.cholesky()?.unpack();
+        let l_z = $z.cholesky()?.unpack();
+        let svd = (l_z.transpose() * &l_s).svd(true, true);
+        let (u, v_t) = (svd.u?, svd.v_t?);
+        let lambda: Vec<f64> = svd.singular_values.iter().copied().collect();
+        if lambda.iter().any(|&l| l.is_nan() || l <= 0.0) {
+            return None;
+        }
+        let mut inv_sqrt = l_s.clone();
+        inv_sqrt.fill(0.0);
+        for (i, l) in lambda.iter().enumerate() {
+            inv_sqrt[(i, i)] = 1.0 / l.sqrt();
+        }
+        let r = l_s * v_t.transpose() * &inv_sqrt;
+        let r_inv = inv_sqrt * u.transpose() * l_z.transpose();
+        (r.as_slice().to_vec(), r_inv.as_slice().to_vec(), lambda)
+    }};
 }
 
 /// The Nesterov–Todd scaling of `block` at `(s, z)`; `None` off the cone's interior.
@@ -308,22 +359,21 @@ fn scaling(block: &Block, s: &DVector<f64>, z: &DVector<f64>) -> Option<Scaling>
             })
         }
         Cone::Psd(k) => {
-            let l_s = smat(&s.as_slice()[rows.clone()], k).cholesky()?.unpack();
-            let l_z = smat(&z.as_slice()[rows], k).cholesky()?.unpack();
-            let svd = (l_z.transpose() * &l_s).svd(true, true);
-            let (u, v_t) = (svd.u?, svd.v_t?);
-            let lambda: Vec<f64> = svd.singular_values.iter().copied().collect();
-            if lambda.iter().any(|&l| l.is_nan() || l <= 0.0) {
-                return None;
-            }
-            let inv_sqrt = DMatrix::from_diagonal(&DVector::from_iterator(
-                k,
-                lambda.iter().map(|l| 1.0 / l.sqrt()),
-            ));
-            // R = L_s V Λ^{-1/2}, R⁻¹ = Λ^{-1/2} Uᵀ L_zᵀ.
-            let r = l_s * v_t.transpose() * &inv_sqrt;
-            let r_inv = inv_sqrt * u.transpose() * l_z.transpose();
-            Some(Scaling::Psd { r, r_inv, lambda })
+            let (s, z) = (&s.as_slice()[rows.clone()], &z.as_slice()[rows]);
+            let (r, r_inv, lambda) = if k == 4 {
+                let (mut s_mat, mut z_mat) =
+                    (nalgebra::Matrix4::zeros(), nalgebra::Matrix4::zeros());
+                smat_into(s, &mut s_mat);
+                smat_into(z, &mut z_mat);
+                psd_scaling!(s_mat, z_mat)
+            } else {
+                psd_scaling!(smat(s, k), smat(z, k))
+            };
+            Some(Scaling::Psd {
+                r: DMatrix::from_vec(k, k, r),
+                r_inv: DMatrix::from_vec(k, k, r_inv),
+                lambda,
+            })
         }
     }
 }
@@ -570,6 +620,12 @@ fn jordan(blocks: &[Block], u: &DVector<f64>, v: &DVector<f64>) -> DVector<f64> 
         let (us, vs) = (&u.as_slice()[range.clone()], &v.as_slice()[range.clone()]);
         let product = match block.cone {
             Cone::Nonneg(_) => us.iter().zip(vs).map(|(a, b)| a * b).collect(),
+            Cone::Psd(4) => {
+                let (mut um, mut vm) = (nalgebra::Matrix4::zeros(), nalgebra::Matrix4::zeros());
+                smat_into(us, &mut um);
+                smat_into(vs, &mut vm);
+                svec(&((um * vm + vm * um) * 0.5))
+            }
             Cone::Psd(k) => {
                 let (um, vm) = (smat(us, k), smat(vs, k));
                 svec(&((&um * &vm + &vm * &um) * 0.5))
@@ -614,11 +670,8 @@ fn step_length(blocks: &[Block], ds_scaled: &DVector<f64>, dz_scaled: &DVector<f
                     .fold(f64::INFINITY, f64::min),
                 Scaling::Psd { lambda, .. } => {
                     // Λ + α D ⪰ 0 ⇔ 1 + α Λ^{-1/2} D Λ^{-1/2} ⪰ 0.
-                    let k = lambda.len();
-                    let dm = smat(rows, k);
-                    let scaled =
-                        DMatrix::from_fn(k, k, |i, j| dm[(i, j)] / (lambda[i] * lambda[j]).sqrt());
-                    let low = scaled.symmetric_eigenvalues().min();
+                    let low =
+                        least_eigenvalue(rows, lambda.len(), |i, j| (lambda[i] * lambda[j]).sqrt());
                     if low < 0.0 {
                         -1.0 / low
                     } else {

@@ -218,10 +218,27 @@ impl NormalEquations {
 
     /// The normal equations of the columns `cols` only (in that order).
     pub fn select(&self, cols: &[usize]) -> Self {
-        let m = cols.len();
+        let (m, p) = (cols.len(), self.yty.nrows());
+        // Runs of consecutive columns `(at, from, len)` are copied as slices: a model's own
+        // columns are one run.
+        let mut runs: Vec<(usize, usize, usize)> = vec![];
+        for (i, &c) in cols.iter().enumerate() {
+            match runs.last_mut() {
+                Some((at, from, len)) if *from + *len == c && *at + *len == i => *len += 1,
+                _ => runs.push((i, c, 1)),
+            }
+        }
+        let mut yty = DMatrix::zeros(m, m);
+        for (j, &c) in cols.iter().enumerate() {
+            let source = &self.yty.as_slice()[c * p..(c + 1) * p];
+            let target = &mut yty.as_mut_slice()[j * m..(j + 1) * m];
+            for &(at, from, len) in &runs {
+                target[at..at + len].copy_from_slice(&source[from..from + len]);
+            }
+        }
         let mut out = Self::from_sums(
             self.n,
-            DMatrix::from_fn(m, m, |i, j| self.yty[(cols[i], cols[j])]),
+            yty,
             DVector::from_fn(m, |i, _| self.ytt[cols[i]]),
             self.tt,
             self.samples,
@@ -410,6 +427,32 @@ impl JointSums {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn a_selection_copies_each_chosen_entry_in_the_order_given() {
+        // Runs of consecutive columns are copied as slices: the result must be the entrywise
+        // definition for runs, gaps, repeats and columns out of order.
+        let p = 9;
+        let yty = DMatrix::from_fn(p, p, |i, j| (i * p + j) as f64 + 0.5 * (i + j) as f64);
+        let ytt = DVector::from_fn(p, |i, _| 10.0 * i as f64);
+        let ne = NormalEquations::from_sums(2, yty.clone(), ytt.clone(), 3.0, 7);
+        for cols in [
+            vec![0, 1, 2, 3, 4, 5, 6, 7, 8],
+            vec![0, 1, 2, 5, 6, 8],
+            vec![4, 5, 0, 1, 1, 2, 7],
+            vec![8, 3],
+            vec![],
+        ] {
+            let sub = ne.select(&cols);
+            let m = cols.len();
+            assert_eq!(
+                sub.yty,
+                DMatrix::from_fn(m, m, |i, j| yty[(cols[i], cols[j])])
+            );
+            assert_eq!(sub.ytt, DVector::from_fn(m, |i, _| ytt[cols[i]]));
+            assert_eq!((sub.tt, sub.samples), (3.0, 7));
+        }
+    }
 
     #[test]
     fn sums_finished_then_added_to_are_the_sums_of_one_pass() {
