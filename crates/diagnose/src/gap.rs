@@ -94,15 +94,24 @@ pub(crate) struct HowFar {
     pub confirmed_only: Option<(Vec<f64>, f64)>,
 }
 
-/// The gap per joint and overall, against the noise floor of the final residual; `n_cv` of the
-/// `chosen` effects come from cross-validation (the rest from the description test).
+/// The final model's residual on the training data (sample-major, N m): the `chosen` effects
+/// with the ladder's final parameters.
+pub(crate) fn final_train_residual(stage: &Stage, chosen: &[usize], ladder: &Ladder) -> Vec<f64> {
+    let variants: Vec<_> = chosen.iter().map(|&v| stage.folds.variants[v]).collect();
+    let (train, ms) = (stage.train, stage.opts.min_speed);
+    residual_rms(&stage.ctx_train, train, &variants, &ladder.final_theta, ms).1
+}
+
+/// The gap per joint and overall, against the noise floor of the final residual (on the
+/// training data `train_res`, [`final_train_residual`], and the validation data); `n_cv` of
+/// the `chosen` effects come from cross-validation (the rest from the description test).
 pub(crate) fn how_far(
     stage: &Stage,
-    chosen: &[usize],
-    n_cv: usize,
+    (chosen, n_cv): (&[usize], usize),
     ladder: &Ladder,
+    train_res: &[f64],
 ) -> Result<HowFar, DiagnoseError> {
-    let floor_var = noise_floor(stage, chosen, ladder);
+    let floor_var = noise_floor(stage, ladder, train_res);
     let gap = joint_gaps(stage, ladder, &floor_var);
     let overall: Vec<f64> = ladder
         .per_step_rms
@@ -150,15 +159,13 @@ pub(crate) fn how_far(
 }
 
 /// Noise-floor variance per joint (N² m², NaN for a joint that never moves fast enough) of the
-/// final residual, on training and validation data, each run on its own when the training
-/// runs are given (`train_runs`; the validation data then are runs of their own), else as one
-/// recording (the fit's own training samples bias it by p/N, negligible here).
-fn noise_floor(stage: &Stage, chosen: &[usize], ladder: &Ladder) -> Vec<f64> {
+/// final residual, on training (`train_res`) and validation data, each run on its own when the
+/// training runs are given (`train_runs`; the validation data then are runs of their own), else
+/// as one recording (the fit's own training samples bias it by p/N, negligible here).
+fn noise_floor(stage: &Stage, ladder: &Ladder, train_res: &[f64]) -> Vec<f64> {
     let (train, validate, ms) = (stage.train, stage.validate, stage.opts.min_speed);
     let rate = validate.sample_rate().unwrap_or(1.0);
     let exclude = (NEIGHBOUR_EXCLUSION * rate).ceil() as usize;
-    let variants: Vec<_> = chosen.iter().map(|&v| stage.folds.variants[v]).collect();
-    let (_, train_res) = residual_rms(&stage.ctx_train, train, &variants, &ladder.final_theta, ms);
     let both =
         Trajectory::concatenate(vec![train.clone(), validate.clone()]).expect("two trajectories");
     let joined: Vec<f64> = train_res.iter().chain(&ladder.final_res).copied().collect();

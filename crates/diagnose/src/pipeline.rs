@@ -5,7 +5,7 @@
 use super::breakdown::{self, breakdown};
 use super::diagnosis::{DescriptionStep, Diagnosis, EffectEstimate, Verdict};
 use super::options::{DiagnoseError, Options};
-use super::residual::{mean_square, residual_rms};
+use super::residual::mean_square;
 use super::stage::{check_data, fit_nominal, Stage};
 use super::structure::{self, StructureLeft};
 use super::{anchor, described, explain, gap, magnitude, select, verdict};
@@ -154,8 +154,9 @@ fn find(stage: &Stage) -> Result<Found, DiagnoseError> {
     let (described, after) = rayon::join(
         || described::from_description(stage, &selection, start, &mut effects),
         || {
-            let how_far = gap::how_far(stage, &chosen, n_cv, &ladder);
-            (how_far, structure_after(stage, &chosen, &ladder))
+            let train_res = gap::final_train_residual(stage, &chosen, &ladder);
+            let how_far = gap::how_far(stage, (&chosen, n_cv), &ladder, &train_res);
+            (how_far, structure_after(stage, &train_res, &ladder))
         },
     );
     let (how_far, structure_left) = (after.0?, after.1);
@@ -231,23 +232,16 @@ fn variants_of(steps: &[anchor::Step]) -> Vec<usize> {
 }
 
 /// What structure is left after the chosen effects: a smooth function of each joint's speed
-/// and angle fitted on the final training residual, scored on the final validation residual.
+/// and angle fitted on the final training residual `train_res`, scored on the final validation
+/// residual.
 fn structure_after(
     stage: &Stage,
-    chosen: &[usize],
+    train_res: &[f64],
     ladder: &gap::Ladder,
 ) -> structure::StructureLeft {
-    let final_variants: Vec<_> = chosen.iter().map(|&v| stage.folds.variants[v]).collect();
-    let (_, final_train_res) = residual_rms(
-        &stage.ctx_train,
-        stage.train,
-        &final_variants,
-        &ladder.final_theta,
-        stage.opts.min_speed,
-    );
     structure::structure_left(
         stage,
-        &final_train_res,
+        train_res,
         &ladder.final_res,
         stage.opts.structure_threshold,
     )
