@@ -295,7 +295,7 @@ fn min_eigenvalue(blocks: &[Block], v: &DVector<f64>) -> Option<f64> {
         let rows = v.rows(block.row0, block.cone.rows());
         let low = match block.cone {
             Cone::Nonneg(_) => rows.min(),
-            Cone::Psd(k) => least_eigenvalue(rows.as_slice(), k, |_, _| 1.0),
+            Cone::Psd(k) => least_eigenvalue(rows.as_slice(), k, |_, _| 1.0, f64::NEG_INFINITY),
         };
         if !low.is_finite() {
             return None;
@@ -305,20 +305,28 @@ fn min_eigenvalue(blocks: &[Block], v: &DVector<f64>) -> Option<f64> {
     Some(least)
 }
 
-/// The least eigenvalue of `smat(v)` (`k × k`) with entry `(i, j)` divided by
-/// `divisor(i, j)`: by fixed-size arithmetic for the pseudo-inertia's 4 × 4 cones (the same
-/// algorithm on the same numbers as the general path, without allocating).
-fn least_eigenvalue(v: &[f64], k: usize, divisor: impl Fn(usize, usize) -> f64) -> f64 {
+/// The least eigenvalue of `M`, `M_ij = smat(v)_ij / divisor(i, j)` (`k × k`), where it is
+/// at most `floor`; `+∞` where `M − floor · 1` factors by Cholesky (every eigenvalue is above
+/// `floor`; never with `floor = −∞`). By fixed-size arithmetic for the pseudo-inertia's 4 × 4
+/// cones: the same algorithm on the same numbers as the general path, without allocating.
+fn least_eigenvalue(v: &[f64], k: usize, divisor: impl Fn(usize, usize) -> f64, floor: f64) -> f64 {
     if k == 4 {
         let mut m = nalgebra::Matrix4::zeros();
         smat_into(v, &mut m);
         m = nalgebra::Matrix4::from_fn(|i, j| m[(i, j)] / divisor(i, j));
+        let shifted = m - nalgebra::Matrix4::identity() * floor;
+        if floor.is_finite() && shifted.cholesky().is_some() {
+            return f64::INFINITY;
+        }
         return m.symmetric_eigenvalues().min();
     }
     let m = smat(v, k);
-    DMatrix::from_fn(k, k, |i, j| m[(i, j)] / divisor(i, j))
-        .symmetric_eigenvalues()
-        .min()
+    let m = DMatrix::from_fn(k, k, |i, j| m[(i, j)] / divisor(i, j));
+    let shifted = &m - DMatrix::identity(k, k) * floor;
+    if floor.is_finite() && shifted.cholesky().is_some() {
+        return f64::INFINITY;
+    }
+    m.symmetric_eigenvalues().min()
 }
 
 /// `R = L_s V Λ^{-1/2}`, `R⁻¹ = Λ^{-1/2} Uᵀ L_zᵀ` and `λ` of the Nesterov–Todd scaling of one
@@ -655,7 +663,12 @@ fn identity(blocks: &[Block], m: usize) -> DVector<f64> {
     out
 }
 
-/// The largest `α` with `λ + α d̃s` and `λ + α d̃z` in every cone (∞ where nothing binds).
+/// A PSD cone's step bound is computed exactly only below this (a step is at most
+/// `1 / STEP_FRACTION`); above it, a Cholesky factorization shows the cone does not bind.
+const UNBINDING_STEP: f64 = 2.0;
+
+/// The largest `α` with `λ + α d̃s` and `λ + α d̃z` in every cone where it is below
+/// [`UNBINDING_STEP`] (∞ where nothing binds below it): every step taken is at most 1.
 fn step_length(blocks: &[Block], ds_scaled: &DVector<f64>, dz_scaled: &DVector<f64>) -> f64 {
     let mut alpha = f64::INFINITY;
     for block in blocks {
@@ -669,9 +682,13 @@ fn step_length(blocks: &[Block], ds_scaled: &DVector<f64>, dz_scaled: &DVector<f
                     .map(|(d, l)| -l / d)
                     .fold(f64::INFINITY, f64::min),
                 Scaling::Psd { lambda, .. } => {
-                    // Λ + α D ⪰ 0 ⇔ 1 + α Λ^{-1/2} D Λ^{-1/2} ⪰ 0.
-                    let low =
-                        least_eigenvalue(rows, lambda.len(), |i, j| (lambda[i] * lambda[j]).sqrt());
+                    // Λ + α D ⪰ 0 ⇔ 1 + α Λ^{-1/2} D Λ^{-1/2} ⪰ 0: α up to −1/λ_min.
+                    let low = least_eigenvalue(
+                        rows,
+                        lambda.len(),
+                        |i, j| (lambda[i] * lambda[j]).sqrt(),
+                        -1.0 / UNBINDING_STEP,
+                    );
                     if low < 0.0 {
                         -1.0 / low
                     } else {
@@ -918,6 +935,41 @@ mod tests {
         let mut program = identification_like(3, 2, 2, Lmi::Pseudo);
         program.cones.pop();
         assert!(solve(&program.program()).is_none());
+    }
+
+    #[test]
+    fn a_cone_s_least_eigenvalue_is_exact_below_its_floor_and_unbounded_only_above_it() {
+        // The step length computes a cone's least eigenvalue only where it may bind; where the
+        // shifted matrix factors it reports +∞. Below the floor the value is the eigenvalue,
+        // bit for bit, by the fixed-size path (4 × 4) as by the general one.
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(5);
+        let (mut skipped, mut exact) = (0, 0);
+        for k in [4, 6] {
+            for _ in 0..200 {
+                let v: Vec<f64> = (0..k * (k + 1) / 2)
+                    .map(|_| rng.random_range(-0.4..0.4))
+                    .collect();
+                let lambda: Vec<f64> = (0..k).map(|_| rng.random_range(0.3..3.0)).collect();
+                let divisor = |i: usize, j: usize| (lambda[i] * lambda[j]).sqrt();
+                let m = smat(&v, k);
+                let scaled = DMatrix::from_fn(k, k, |i, j| m[(i, j)] / divisor(i, j));
+                let truth = scaled.clone().symmetric_eigenvalues().min();
+                let floor = -1.0 / UNBINDING_STEP;
+                let found = least_eigenvalue(&v, k, divisor, floor);
+                if found == f64::INFINITY {
+                    assert!(truth > floor, "skipped a binding cone: {truth}");
+                    skipped += 1;
+                } else {
+                    assert_eq!(found, truth, "k = {k}");
+                    exact += 1;
+                }
+                assert_eq!(least_eigenvalue(&v, k, divisor, f64::NEG_INFINITY), truth);
+            }
+        }
+        assert!(
+            skipped > 50 && exact > 50,
+            "{skipped} skipped, {exact} exact"
+        );
     }
 
     #[test]
