@@ -35,13 +35,14 @@ use super::select::Folds;
 use super::stage::Stage;
 use super::stats::Ties;
 use nalgebra::{DMatrix, DVector};
-use physid_core::linalg::{least_squares, least_squares_nonneg, min_norm_solve};
+use physid_core::linalg::{least_squares, least_squares_nonneg, MinNorm};
 use physid_core::model::Model;
 use physid_core::spatial::InertialParams;
 use physid_effect::library::{Kind, Variant};
 use physid_ident::NormalEquations;
 use rand::Rng;
 use rand_distr::StandardNormal;
+use rayon::prelude::*;
 use serde::Serialize;
 
 /// Family-wise false-claim level of the description test over all candidate variants.
@@ -198,6 +199,22 @@ pub struct Anchor<'a> {
     pub precision: DMatrix<f64>,
 }
 
+/// The base columns of a description test's step and what every candidate's fit on them
+/// shares ([`Anchor::base`]).
+pub struct Base {
+    columns: Vec<usize>,
+    /// `A = Y_bᵀ Y_b` (weighted by the anchor's data weight where used).
+    a: DMatrix<f64>,
+    /// `b = Y_bᵀ τ`.
+    b: DVector<f64>,
+    /// `A⁺`'s decomposition.
+    a_plus: MinNorm,
+    /// The prior's precision `P` on the base columns.
+    pmat: DMatrix<f64>,
+    /// `P θ_d`.
+    pm: DVector<f64>,
+}
+
 /// One candidate's test.
 #[derive(Clone, Debug, Serialize, serde::Deserialize, schemars::JsonSchema)]
 pub struct Test {
@@ -266,33 +283,54 @@ impl Anchor<'_> {
             .collect()
     }
 
+    /// What every candidate's fit on the base columns `base` shares: their normal equations
+    /// `A`, `b`, the decomposition of `A` and the prior on them.
+    pub fn base(&self, base: &[usize]) -> Base {
+        let pb = base.len();
+        let a = DMatrix::from_fn(pb, pb, |i, j| self.ne.yty[(base[i], base[j])]);
+        let b = DVector::from_fn(pb, |i, _| self.ne.ytt[base[i]]);
+        let (pmat, mean) = self.prior_on(base);
+        let pm = &pmat * &mean;
+        Base {
+            columns: base.to_vec(),
+            a_plus: MinNorm::new(&a),
+            a,
+            b,
+            pmat,
+            pm,
+        }
+    }
+
     /// `J*` with base columns `base` (model columns first, then chosen effects, all free of
     /// prior but the model's) and the absorbable part of candidate columns `cand`, whose
     /// coefficients are held at or above zero when `signed` (a kind with a physical sign:
     /// [`signed`]).
     pub fn fit(&self, base: &[usize], cand: &[usize], signed: bool) -> Fit {
+        self.fit_on(&self.base(base), cand, signed)
+    }
+
+    /// [`Anchor::fit`] on a base computed once for many candidates ([`Anchor::base`]).
+    pub fn fit_on(&self, on: &Base, cand: &[usize], signed: bool) -> Fit {
+        let (base, a, b) = (&on.columns, &on.a, &on.b);
+        let (pmat, pm) = (&on.pmat, &on.pm);
         let (pb, d) = (base.len(), cand.len());
-        let a = DMatrix::from_fn(pb, pb, |i, j| self.ne.yty[(base[i], base[j])]);
-        let b = DVector::from_fn(pb, |i, _| self.ne.ytt[base[i]]);
         let abe = DMatrix::from_fn(pb, d, |i, j| self.ne.yty[(base[i], cand[j])]);
         // S = A⁺ A_YE, the minimum-norm solution: no component along parameter combinations
         // the data never excite (there any choice is equivalent in exact arithmetic, and a
         // near-singular Cholesky would fill them with round-off).
-        let s = min_norm_solve(&a, &abe);
-        let (pmat, mean) = self.prior_on(base);
-        let pm = &pmat * &mean;
-        let ps = &pmat * &s;
+        let s = on.a_plus.solve(&abe);
+        let ps = pmat * &s;
         // Variables x = [u; β]; J = xᵀHx − 2 gᵀx + const.
         let mut h = DMatrix::zeros(pb + d, pb + d);
         h.view_mut((0, 0), (pb, pb))
-            .copy_from(&(&a * self.weight + &pmat));
+            .copy_from(&(a * self.weight + pmat));
         h.view_mut((0, pb), (pb, d)).copy_from(&(-&ps));
         h.view_mut((pb, 0), (d, pb)).copy_from(&(-ps.transpose()));
         h.view_mut((pb, pb), (d, d))
             .copy_from(&(s.transpose() * &ps));
         let mut g = DVector::zeros(pb + d);
-        g.rows_mut(0, pb).copy_from(&(&b * self.weight + &pm));
-        g.rows_mut(pb, d).copy_from(&(-(s.transpose() * &pm)));
+        g.rows_mut(0, pb).copy_from(&(b * self.weight + pm));
+        g.rows_mut(pb, d).copy_from(&(-(s.transpose() * pm)));
         // A small relative ridge; directions neither data nor prior see are held at zero.
         let floor = 1e-12 * h.diagonal().max().max(1e-300);
         for i in 0..pb + d {
@@ -457,11 +495,14 @@ impl<'de> serde::Deserialize<'de> for TestStop {
 /// variants the model absorbs (every column's visible fraction at most [`ABSORBED`]): the
 /// candidates of the test. The fits are kept for the first step.
 fn absorbed(anchor: &Anchor, folds: &Folds, base: &[usize], exclude: &[Kind]) -> Candidates {
+    // Independent fits on one base: in parallel, read back in the variants' order.
+    let on = anchor.base(base);
     let first: Vec<Option<Fit>> = (0..folds.variants.len())
+        .into_par_iter()
         .map(|v| {
             let kind = folds.variants[v].kind;
             (!exclude.contains(&kind))
-                .then(|| anchor.fit(base, &variant_columns(folds, v), signed(kind)))
+                .then(|| anchor.fit_on(&on, &variant_columns(folds, v), signed(kind)))
         })
         .collect();
     let candidates: Vec<usize> = (0..folds.variants.len())
@@ -476,6 +517,9 @@ fn absorbed(anchor: &Anchor, folds: &Folds, base: &[usize], exclude: &[Kind]) ->
         first,
     }
 }
+
+/// A candidate variant (index into [`Folds::variants`]) with its test and fit.
+type Candidate = (usize, Test, Fit);
 
 /// The description test's candidate variants, and each variant's fit on the first step.
 struct Candidates {
@@ -598,42 +642,62 @@ fn best_per_kind(
     used: &[Kind],
     per_test: f64,
     first_step: bool,
-) -> Vec<(usize, Test, Fit)> {
-    let mut best = vec![];
-    for kind in Kind::ALL {
-        if used.contains(&kind) {
+) -> Vec<Candidate> {
+    let kind_of = |v: usize| folds.variants[v].kind;
+    let offered: Vec<usize> = candidates
+        .variants
+        .iter()
+        .copied()
+        .filter(|&v| !used.contains(&kind_of(v)))
+        .collect();
+    // The first step reuses the fits that found the candidates; later steps fit every offered
+    // variant on the new base at once (independent fits, read back in order).
+    let kept: Vec<Option<Fit>> = offered
+        .iter()
+        .map(|&v| candidates.first[v].take().filter(|_| first_step))
+        .collect();
+    let fits: Vec<Fit> = if kept.iter().all(Option::is_some) {
+        kept.into_iter().flatten().collect()
+    } else {
+        let on = anchor.base(base);
+        offered
+            .par_iter()
+            .zip(kept)
+            .map(|(&vi, kept)| {
+                kept.unwrap_or_else(|| {
+                    anchor.fit_on(&on, &variant_columns(folds, vi), signed(kind_of(vi)))
+                })
+            })
+            .collect()
+    };
+    // Each kind's best variant, kinds in their report order, variants in the order offered.
+    let mut tops: Vec<(Kind, Option<Candidate>)> = Kind::ALL
+        .iter()
+        .filter(|k| !used.contains(k))
+        .map(|&k| (k, None))
+        .collect();
+    for (vi, f) in offered.into_iter().zip(fits) {
+        let kind = kind_of(vi);
+        let Some((_, top)) = tops.iter_mut().find(|(k, _)| *k == kind) else {
             continue;
-        }
-        let mut top: Option<(usize, Test, Fit)> = None;
-        for &vi in candidates
-            .variants
-            .iter()
-            .filter(|&&v| folds.variants[v].kind == kind)
+        };
+        let d = variant_columns(folds, vi).len();
+        let t = Test {
+            kind,
+            param: folds.variants[vi].param,
+            statistic: f.statistic,
+            threshold: chi2_upper_quantile(d, per_test),
+            columns: d,
+            visible: f.visible.iter().copied().fold(0.0, f64::max),
+        };
+        if top
+            .as_ref()
+            .is_none_or(|(_, b, _)| t.statistic > b.statistic)
         {
-            let cand = variant_columns(folds, vi);
-            let d = cand.len();
-            let f = match candidates.first[vi].take() {
-                Some(f) if first_step => f,
-                _ => anchor.fit(base, &cand, signed(kind)),
-            };
-            let t = Test {
-                kind,
-                param: folds.variants[vi].param,
-                statistic: f.statistic,
-                threshold: chi2_upper_quantile(d, per_test),
-                columns: d,
-                visible: f.visible.iter().copied().fold(0.0, f64::max),
-            };
-            if top
-                .as_ref()
-                .is_none_or(|(_, b, _)| t.statistic > b.statistic)
-            {
-                top = Some((vi, t, f));
-            }
+            *top = Some((vi, t, f));
         }
-        best.extend(top);
     }
-    best
+    tops.into_iter().filter_map(|(_, top)| top).collect()
 }
 
 /// How many of the description test's `steps`, in order, pass again on the held-out data
