@@ -632,17 +632,17 @@ fn variant_columns(folds: &Folds, vi: usize) -> Vec<usize> {
     (folds.offsets[vi]..folds.offsets[vi] + d).collect()
 }
 
-/// Per kind not `used`, its candidate variant of the largest statistic against `base`: the
-/// variant, its test and its fit (on the first step, the fits that chose the candidates).
-fn best_per_kind(
+/// The candidate variants of kinds not `used`, in order, each with its fit on `base`: the
+/// first step reuses the fits that found the candidates; later steps fit every offered variant
+/// on the new base at once (independent fits, read back in order).
+fn offered_fits(
     anchor: &Anchor,
     folds: &Folds,
     candidates: &mut Candidates,
     base: &[usize],
     used: &[Kind],
-    per_test: f64,
     first_step: bool,
-) -> Vec<Candidate> {
+) -> (Vec<usize>, Vec<Fit>) {
     let kind_of = |v: usize| folds.variants[v].kind;
     let offered: Vec<usize> = candidates
         .variants
@@ -650,8 +650,6 @@ fn best_per_kind(
         .copied()
         .filter(|&v| !used.contains(&kind_of(v)))
         .collect();
-    // The first step reuses the fits that found the candidates; later steps fit every offered
-    // variant on the new base at once (independent fits, read back in order).
     let kept: Vec<Option<Fit>> = offered
         .iter()
         .map(|&v| candidates.first[v].take().filter(|_| first_step))
@@ -670,6 +668,22 @@ fn best_per_kind(
             })
             .collect()
     };
+    (offered, fits)
+}
+
+/// Per kind not `used`, its candidate variant of the largest statistic against `base`: the
+/// variant, its test and its fit (on the first step, the fits that chose the candidates).
+fn best_per_kind(
+    anchor: &Anchor,
+    folds: &Folds,
+    candidates: &mut Candidates,
+    base: &[usize],
+    used: &[Kind],
+    per_test: f64,
+    first_step: bool,
+) -> Vec<Candidate> {
+    let kind_of = |v: usize| folds.variants[v].kind;
+    let (offered, fits) = offered_fits(anchor, folds, candidates, base, used, first_step);
     // Each kind's best variant, kinds in their report order, variants in the order offered.
     let mut tops: Vec<(Kind, Option<Candidate>)> = Kind::ALL
         .iter()
