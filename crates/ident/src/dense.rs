@@ -20,7 +20,7 @@
 //! cross-validation fits stop short most often: bodies at the boundary `J ⪰ 0`, where the
 //! dual residual stalls near 10⁻⁷.
 
-use crate::lmi::{smat, smat_into, svec};
+use crate::lmi::{smat, smat4, svec};
 use nalgebra::{DMatrix, DVector};
 
 /// A cone of `K`.
@@ -311,22 +311,26 @@ fn min_eigenvalue(blocks: &[Block], v: &DVector<f64>) -> Option<f64> {
 /// cones: the same algorithm on the same numbers as the general path, without allocating.
 fn least_eigenvalue(v: &[f64], k: usize, divisor: impl Fn(usize, usize) -> f64, floor: f64) -> f64 {
     if k == 4 {
-        let mut m = nalgebra::Matrix4::zeros();
-        smat_into(v, &mut m);
-        m = nalgebra::Matrix4::from_fn(|i, j| m[(i, j)] / divisor(i, j));
-        let shifted = m - nalgebra::Matrix4::identity() * floor;
-        if floor.is_finite() && shifted.cholesky().is_some() {
-            return f64::INFINITY;
-        }
-        return m.symmetric_eigenvalues().min();
+        let s = smat4(v);
+        let m = nalgebra::Matrix4::from_fn(|i, j| s[(i, j)] / divisor(i, j));
+        let above = floor.is_finite()
+            && (m - nalgebra::Matrix4::identity() * floor)
+                .cholesky()
+                .is_some();
+        return if above {
+            f64::INFINITY
+        } else {
+            m.symmetric_eigenvalues().min()
+        };
     }
-    let m = smat(v, k);
-    let m = DMatrix::from_fn(k, k, |i, j| m[(i, j)] / divisor(i, j));
-    let shifted = &m - DMatrix::identity(k, k) * floor;
-    if floor.is_finite() && shifted.cholesky().is_some() {
-        return f64::INFINITY;
+    let s = smat(v, k);
+    let m = DMatrix::from_fn(k, k, |i, j| s[(i, j)] / divisor(i, j));
+    let above = floor.is_finite() && (&m - DMatrix::identity(k, k) * floor).cholesky().is_some();
+    if above {
+        f64::INFINITY
+    } else {
+        m.symmetric_eigenvalues().min()
     }
-    m.symmetric_eigenvalues().min()
 }
 
 /// `R = L_s V Λ^{-1/2}`, `R⁻¹ = Λ^{-1/2} Uᵀ L_zᵀ` and `λ` of the Nesterov–Todd scaling of one
@@ -369,11 +373,7 @@ fn scaling(block: &Block, s: &DVector<f64>, z: &DVector<f64>) -> Option<Scaling>
         Cone::Psd(k) => {
             let (s, z) = (&s.as_slice()[rows.clone()], &z.as_slice()[rows]);
             let (r, r_inv, lambda) = if k == 4 {
-                let (mut s_mat, mut z_mat) =
-                    (nalgebra::Matrix4::zeros(), nalgebra::Matrix4::zeros());
-                smat_into(s, &mut s_mat);
-                smat_into(z, &mut z_mat);
-                psd_scaling!(s_mat, z_mat)
+                psd_scaling!(smat4(s), smat4(z))
             } else {
                 psd_scaling!(smat(s, k), smat(z, k))
             };
@@ -550,9 +550,7 @@ fn congruence(m: &DMatrix<f64>, v: &[f64]) -> Vec<f64> {
         return svec(&(m * smat(v, k) * m.transpose()));
     }
     let m4 = nalgebra::Matrix4::from_column_slice(m.as_slice());
-    let mut x = nalgebra::Matrix4::zeros();
-    smat_into(v, &mut x);
-    svec(&(m4 * x * m4.transpose()))
+    svec(&(m4 * smat4(v) * m4.transpose()))
 }
 
 /// `ds = Wᵀ d̃s` over every block.
@@ -629,9 +627,7 @@ fn jordan(blocks: &[Block], u: &DVector<f64>, v: &DVector<f64>) -> DVector<f64> 
         let product = match block.cone {
             Cone::Nonneg(_) => us.iter().zip(vs).map(|(a, b)| a * b).collect(),
             Cone::Psd(4) => {
-                let (mut um, mut vm) = (nalgebra::Matrix4::zeros(), nalgebra::Matrix4::zeros());
-                smat_into(us, &mut um);
-                smat_into(vs, &mut vm);
+                let (um, vm) = (smat4(us), smat4(vs));
                 svec(&((um * vm + vm * um) * 0.5))
             }
             Cone::Psd(k) => {

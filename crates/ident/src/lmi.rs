@@ -33,6 +33,13 @@ pub fn smat(v: &[f64], n: usize) -> DMatrix<f64> {
     m
 }
 
+/// [`smat`] of a 4 × 4 block (a pseudo-inertia's), fixed-size.
+pub fn smat4(v: &[f64]) -> nalgebra::Matrix4<f64> {
+    let mut m = nalgebra::Matrix4::zeros();
+    smat_into(v, &mut m);
+    m
+}
+
 /// [`smat`] written into a square matrix of any nalgebra storage (a fixed-size one needs no
 /// allocation).
 pub fn smat_into<R: Dim, C: Dim, S: RawStorageMut<f64, R, C>>(
