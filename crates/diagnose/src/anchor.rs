@@ -823,17 +823,8 @@ pub fn information(
     opts: &super::options::Options,
 ) -> Result<physid_ident::information::Information, super::options::DiagnoseError> {
     let fit = super::stage::fit_nominal(model, data, opts)?;
-    let mut ne = physid_ident::NormalEquations::new(model.dof(), model.layout().len);
     let ctx = physid_effect::library::Context::new(model, &fit.theta, data, opts.processing_cutoff);
-    super::rows::for_each_row_in_order(
-        &ctx,
-        data,
-        0..data.len(),
-        &[],
-        opts.min_speed,
-        &mut |_, z, tau| ne.add(z, tau),
-    );
-    let ne = ne.finish();
+    let (ne, _) = super::rows::normal_equations(&ctx, data, 0..data.len(), &[], opts.min_speed);
     let (_, res) = super::residual::residual_rms(&ctx, data, &[], &fit.theta, opts.min_speed);
     let masked = super::residual::mask_slow(data, &res, opts.min_speed);
     let s2 = super::residual::finite_mean_square(&masked);

@@ -14,12 +14,12 @@
 //! data as well: the one with fewest columns is kept (Occam), and equally simple ones are reported
 //! together as ambiguous.
 
-use super::rows::for_each_row_in_order;
+use super::rows::normal_equations;
 use super::stats::Ties;
 use nalgebra::DVector;
 use physid_core::model::Model;
 use physid_core::trajectory::Trajectory;
-use physid_effect::library::{slow, Context, Kind, Variant};
+use physid_effect::library::{Context, Kind, Variant};
 use physid_ident::{identify, IdentError, NormalEquations, Options};
 use rayon::prelude::*;
 use serde::Serialize;
@@ -142,19 +142,11 @@ impl Folds {
             offsets.push(c);
             c += v.kind.columns(n);
         }
-        // Each block is accumulated on its own (in parallel): the same sums, in the same
-        // order, as one pass over the whole range.
+        // Each block is accumulated on its own (in parallel), in fixed chunks: the same sums
+        // whatever the thread count.
         let (blocks, rows): (Vec<NormalEquations>, Vec<usize>) = ranges
             .into_par_iter()
-            .map(|r| {
-                let mut block = NormalEquations::new(n, c);
-                let mut rows = 0;
-                for_each_row_in_order(ctx, tr, r, &variants, min_speed, &mut |s, z, tau| {
-                    block.add(z, tau);
-                    rows += tr.qd_at(s).iter().filter(|w| !slow(**w, min_speed)).count();
-                });
-                (block.finish(), rows)
-            })
+            .map(|r| normal_equations(ctx, tr, r, &variants, min_speed))
             .unzip();
         Self {
             p0,

@@ -22,18 +22,10 @@ pub fn fit_nominal(
     opts: &Options,
 ) -> Result<ident::Identified, DiagnoseError> {
     let prior = model.parameters();
-    let mut ne = NormalEquations::new(model.dof(), model.layout().len);
     let ctx = Context::new(model, &prior, train, opts.processing_cutoff);
-    super::rows::for_each_row_in_order(
-        &ctx,
-        train,
-        0..train.len(),
-        &[],
-        opts.min_speed,
-        &mut |_, z, tau| ne.add(z, tau),
-    );
+    let (ne, _) = super::rows::normal_equations(&ctx, train, 0..train.len(), &[], opts.min_speed);
     let iopts = ident::Options::new(opts.constraints);
-    Ok(ident::identify(model, &ne.finish(), &prior, &iopts)?)
+    Ok(ident::identify(model, &ne, &prior, &iopts)?)
 }
 
 /// Both data sets fit the robot and the diagnosis: same joints, accelerations present, at least

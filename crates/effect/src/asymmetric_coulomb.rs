@@ -4,12 +4,13 @@
 
 use super::physics::{self, Physics, ScenarioError, State};
 use super::EffectSpec;
-use super::{per_joint, row, Blind, ColumnCount::PerJoint, Kind, KindSpec};
+use super::{per_joint, row, Blind, ColumnCount::PerJoint, Kind, KindSpec, Property};
 use physid_core::dynamics::sign;
 use serde::{Deserialize, Serialize};
 
 /// The kind's row: name, columns, magnitudes, replay and the blind benchmark's draw.
 pub(super) const SPEC: KindSpec = KindSpec {
+    properties: &[Property::RowLocal],
     magnitude: ("forward excess delta", "N m"),
     replay: |_, c, _, _| {
         Some(EffectSpec::AsymmetricCoulomb(AsymmetricCoulomb {

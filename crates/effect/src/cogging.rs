@@ -15,6 +15,7 @@ pub(super) const SPEC: KindSpec = KindSpec {
     magnitude: ("amplitude", "N m"),
     grid: Grid::CoggingHarmonic,
     properties: &[
+        Property::RowLocal,
         Property::MagnitudePairs,
         Property::NeedsRotor,
     ],

@@ -306,6 +306,11 @@ pub(crate) enum Property {
     /// A motor-side effect at the rotor's angle: offered only on joints whose rotor (and gear
     /// ratio) the description knows (cogging: a link-angle harmonic is not cogging).
     NeedsRotor,
+    /// Per-joint columns that touch only their own joint's row: column `c·n + j` is zero in
+    /// every row but joint `j`'s (friction-like terms, a joint's own gain, offset, spring,
+    /// cogging, reflected inertia; not compliance or backlash, whose shifted encoder moves
+    /// every joint's torque).
+    RowLocal,
 }
 
 /// Everything physid knows about one kind: one row of [`KIND_TABLE`].
@@ -405,6 +410,17 @@ impl Kind {
         match self.spec().columns {
             ColumnCount::Fixed(c) => c,
             ColumnCount::PerJoint(k) => k * n,
+        }
+    }
+
+    /// The columns (from the kind's first, ascending) that can be nonzero in joint `j`'s row
+    /// of `n`: the joint's own for a [`Property::RowLocal`] kind, every column otherwise.
+    pub fn columns_of_row(&self, n: usize, j: usize) -> Vec<usize> {
+        match self.spec().columns {
+            ColumnCount::PerJoint(k) if self.spec().has(Property::RowLocal) => {
+                (0..k).map(|c| c * n + j).collect()
+            }
+            _ => (0..self.columns(n)).collect(),
         }
     }
 

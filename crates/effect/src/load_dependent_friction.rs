@@ -13,6 +13,7 @@ use serde::{Deserialize, Serialize};
 pub(super) const SPEC: KindSpec = KindSpec {
     magnitude: ("coefficient mu", "-"),
     properties: &[
+        Property::RowLocal,
         Property::NonNegative,
         Property::Linearized,
     ],

@@ -9,6 +9,7 @@ use physid_core::model::Model;
 pub(super) const SPEC: KindSpec = KindSpec {
     magnitude: ("reflected inertia", "kg m^2"),
     properties: &[
+        Property::RowLocal,
         Property::NonNegative,
         Property::RotorParameter,
         Property::Approximate,

@@ -4,13 +4,14 @@
 
 use super::physics::{self, Physics, ScenarioError, State};
 use super::EffectSpec;
-use super::{per_joint, row, uniform, Blind, ColumnCount::PerJoint, Kind, KindSpec};
+use super::{per_joint, row, uniform, Blind, ColumnCount::PerJoint, Kind, KindSpec, Property};
 use physid_core::model::Model;
 use rand_chacha::ChaCha8Rng;
 use serde::{Deserialize, Serialize};
 
 /// The kind's row: name, columns, magnitudes, replay and the blind benchmark's draw.
 pub(super) const SPEC: KindSpec = KindSpec {
+    properties: &[Property::RowLocal],
     magnitude: ("stiffness", "N m/rad"),
     magnitudes: |c, n, _| c[..n].to_vec(),
     replay: replay_spring,

@@ -11,6 +11,7 @@ use serde::{Deserialize, Serialize};
 /// The kind's row: name, columns, magnitudes, replay and the blind benchmark's draw.
 pub(super) const SPEC: KindSpec = KindSpec {
     properties: &[
+        Property::RowLocal,
         Property::NonNegative,
     ],
     magnitude: ("static excess F_s", "N m"),

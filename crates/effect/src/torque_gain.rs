@@ -15,6 +15,7 @@ use serde::{Deserialize, Serialize};
 pub(super) const SPEC: KindSpec = KindSpec {
     magnitude: ("gain error relative to the median joint", "-"),
     properties: &[
+        Property::RowLocal,
         Property::Linearized,
         // `β = c 1` adds `c Y θ̂₀`: with `θ` free the fit could scale every inertial parameter and
         // take it back in the gains. Unpinned, `identify --effects torque_gain` on the KUKA run 3

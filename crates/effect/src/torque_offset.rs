@@ -4,11 +4,12 @@
 
 use super::physics::{self, Physics, ScenarioError};
 use super::EffectSpec;
-use super::{row, signed, times, Blind, ColumnCount::PerJoint, Kind, KindSpec};
+use super::{row, signed, times, Blind, ColumnCount::PerJoint, Kind, KindSpec, Property};
 use serde::{Deserialize, Serialize};
 
 /// The kind's row: name, columns, magnitudes, replay and the blind benchmark's draw.
 pub(super) const SPEC: KindSpec = KindSpec {
+    properties: &[Property::RowLocal],
     magnitude: ("offset", "N m"),
     replay: |_, c, _, _| {
         Some(EffectSpec::TorqueOffset(TorqueOffset {

@@ -33,7 +33,7 @@ pub mod lmi;
 pub mod normal;
 mod structure;
 
-pub use normal::NormalEquations;
+pub use normal::{NormalEquations, RowSums};
 pub use structure::Parameterized;
 
 use nalgebra::{DMatrix, DVector};

@@ -158,7 +158,7 @@ impl NormalEquations {
         let parts: Vec<Self> = chunks
             .into_par_iter()
             .map(|chunk| {
-                let mut sums = JointSums::new(model, excluded);
+                let mut sums = RowSums::for_model(model, excluded);
                 for_each_regressor(model, tr, chunk, &mut |k, y| sums.add(y, tr.tau_at(k)));
                 sums.finish()
             })
@@ -179,14 +179,14 @@ impl NormalEquations {
         // The same chunks, summed in the same order, as `from_trajectory`: a file streamed
         // gives the sums it gives in memory, bit for bit.
         let mut sum = Self::new(n, p).finish();
-        let mut chunk = JointSums::new(model, &[]);
+        let mut chunk = RowSums::for_model(model, &[]);
         let mut d = Data::new(model);
         let mut y = DMatrix::zeros(n, p);
         let total = source(&mut |_, s| {
             regressor(model, &mut d, s.q, s.qd, s.qdd, &mut y);
             chunk.add(&y, s.tau);
             if chunk.samples == CHUNK_SAMPLES {
-                let full = std::mem::replace(&mut chunk, JointSums::new(model, &[]));
+                let full = std::mem::replace(&mut chunk, RowSums::for_model(model, &[]));
                 sum.absorb(&full.finish());
             }
         })?;
@@ -326,10 +326,14 @@ struct JointRows {
     ytt: DVector<f64>,
 }
 
-/// The normal equations of a model's regressor accumulated joint by joint: row `k` of `Y` is
-/// zero outside the columns of `k`'s subtree and friction, so `YᵀY = Σ_k Σ_s y_k yₖᵀ` costs
-/// `Σ_k |C_k|²` per sample instead of `n p²` (on a 3-joint leg with rotors, 5,900 against 13,100).
-struct JointSums {
+/// Normal equations accumulated joint by joint: row `k` of each sample's `Y` is zero outside
+/// the columns `C_k` (a model's regressor: `k`'s subtree and friction, [`row_columns`]; an
+/// augmented regressor adds the effect columns row `k` can touch), so
+/// `YᵀY = Σ_k Σ_s y_k y_kᵀ` costs `Σ_k |C_k|²` per sample instead of `n p²` (on a 3-joint leg
+/// with rotors, 5,900 against 13,100). Entries outside `C_k` are not read: they must be zero.
+///
+/// [`row_columns`]: physid_core::dynamics::row_columns
+pub struct RowSums {
     n: usize,
     p: usize,
     excluded: Vec<usize>,
@@ -339,10 +343,22 @@ struct JointSums {
     tt: f64,
 }
 
-impl JointSums {
+impl RowSums {
     /// Empty sums for `model`'s regressor, leaving out the rows of `excluded` joints.
-    fn new(model: &Model, excluded: &[usize]) -> Self {
-        let joints = physid_core::dynamics::row_columns(model)
+    pub fn for_model(model: &Model, excluded: &[usize]) -> Self {
+        let cols = physid_core::dynamics::row_columns(model);
+        Self::new(model.dof(), model.layout().len, cols, excluded)
+    }
+
+    /// Empty sums for `n` joints' rows over `p` columns, row `k` nonzero only in the columns
+    /// `row_columns[k]` (each below `p`, none repeated), leaving out the rows of `excluded`
+    /// joints.
+    pub fn new(n: usize, p: usize, row_columns: Vec<Vec<usize>>, excluded: &[usize]) -> Self {
+        assert!(
+            row_columns.len() == n && row_columns.iter().flatten().all(|&c| c < p),
+            "row columns: one list per joint, each column below p"
+        );
+        let joints = row_columns
             .into_iter()
             .enumerate()
             .filter(|(k, _)| !excluded.contains(k))
@@ -359,8 +375,8 @@ impl JointSums {
             })
             .collect();
         Self {
-            n: model.dof(),
-            p: model.layout().len,
+            n,
+            p,
             excluded: excluded.to_vec(),
             joints,
             filled: 0,
@@ -369,8 +385,8 @@ impl JointSums {
         }
     }
 
-    /// Adds one sample's regressor `y` (n×p, the model's layout) and torque `tau`.
-    fn add(&mut self, y: &DMatrix<f64>, tau: &[f64]) {
+    /// Adds one sample's rows `y` (n×p) and torque `tau` (one per joint).
+    pub fn add(&mut self, y: &DMatrix<f64>, tau: &[f64]) {
         let (n, s) = (self.n, self.filled);
         let y = y.as_slice();
         for jr in &mut self.joints {
@@ -405,7 +421,7 @@ impl JointSums {
 
     /// The finished normal equations: each joint's sums added into `YᵀY` and `Yᵀτ` at its
     /// columns, joints in order.
-    fn finish(mut self) -> NormalEquations {
+    pub fn finish(mut self) -> NormalEquations {
         self.flush();
         let mut yty = DMatrix::zeros(self.p, self.p);
         let mut ytt = DVector::zeros(self.p);
