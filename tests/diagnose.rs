@@ -459,6 +459,14 @@ fn a_payload_on_the_last_body_is_revealed_by_the_description() {
         mass.value,
         mass.se
     );
+    // The step's test on the held-out data alone is reported, and it passed there.
+    use physid::diagnose::anchor::{chi2_upper_quantile, CONFIRM_ALPHA};
+    let step = &d.description_test.as_ref().unwrap().steps[0];
+    let held_out = step.held_out.expect("the step's held-out statistic");
+    assert!(
+        held_out >= chi2_upper_quantile(10, CONFIRM_ALPHA) && held_out.is_finite(),
+        "held-out Δ {held_out}"
+    );
 }
 
 #[test]

@@ -35,7 +35,7 @@ use super::select::Folds;
 use super::stage::Stage;
 use super::stats::Ties;
 use nalgebra::{DMatrix, DVector};
-use physid_core::linalg::{least_squares, least_squares_nonneg, MinNorm};
+use physid_core::linalg::{least_squares_nonneg, MinNorm};
 use physid_core::model::Model;
 use physid_core::spatial::InertialParams;
 use physid_effect::library::{Kind, Variant};
@@ -54,6 +54,9 @@ pub const CONFIRM_ALPHA: f64 = 1e-2;
 /// identification absorbs; visible ones are cross-validation's (which, unlike an in-sample
 /// test, is robust to what the model still misses).
 pub const ABSORBED: f64 = 0.2;
+/// The fraction of the prior's information on a candidate's absorbable direction that the data
+/// must see for the direction to be tested ([`Anchor::fit_on`]).
+pub const UNSEEN: f64 = 1e-9;
 /// Batch length of the autocorrelation estimate (s).
 pub const BATCH: f64 = 1.0;
 
@@ -203,16 +206,44 @@ pub struct Anchor<'a> {
 /// shares ([`Anchor::base`]).
 pub struct Base {
     columns: Vec<usize>,
-    /// `A = Y_bᵀ Y_b` (weighted by the anchor's data weight where used).
+    /// `A = Y_bᵀ Y_b`.
     a: DMatrix<f64>,
-    /// `b = Y_bᵀ τ`.
-    b: DVector<f64>,
     /// `A⁺`'s decomposition.
     a_plus: MinNorm,
     /// The prior's precision `P` on the base columns.
     pmat: DMatrix<f64>,
-    /// `P θ_d`.
-    pm: DVector<f64>,
+    /// The base block of the objective's Hessian, `H_uu = w A + P` (ridged), decomposed.
+    huu: Solver,
+    /// `H_uu⁻¹ (b − A θ_d)`, `b = Y_bᵀ τ`: the description's misfit to the data, through the
+    /// base block (`w` times it is `u₀ − θ_d`, the fit without a candidate from the
+    /// description).
+    hinv_misfit: DVector<f64>,
+    /// The ridge's floor for a diagonal entry neither data nor prior see.
+    floor: f64,
+}
+
+/// A symmetric positive semidefinite matrix decomposed as
+/// [`least_squares`](physid_core::linalg::least_squares) solves with it:
+/// Cholesky when it succeeds, otherwise the minimum-norm solution on its range.
+enum Solver {
+    Cholesky(nalgebra::Cholesky<f64, nalgebra::Dyn>),
+    MinNorm(MinNorm),
+}
+
+impl Solver {
+    fn new(h: &DMatrix<f64>) -> Self {
+        match h.clone().cholesky() {
+            Some(c) if c.l_dirty().iter().all(|v| v.is_finite()) => Self::Cholesky(c),
+            _ => Self::MinNorm(MinNorm::new(h)),
+        }
+    }
+
+    fn solve(&self, g: &DMatrix<f64>) -> DMatrix<f64> {
+        match self {
+            Self::Cholesky(c) => c.solve(g),
+            Self::MinNorm(m) => m.solve(g),
+        }
+    }
 }
 
 /// One candidate's test.
@@ -290,14 +321,26 @@ impl Anchor<'_> {
         let a = DMatrix::from_fn(pb, pb, |i, j| self.ne.yty[(base[i], base[j])]);
         let b = DVector::from_fn(pb, |i, _| self.ne.ytt[base[i]]);
         let (pmat, mean) = self.prior_on(base);
-        let pm = &pmat * &mean;
+        let mut huu = &a * self.weight + &pmat;
+        let floor = 1e-12 * huu.diagonal().max().max(1e-300);
+        for i in 0..pb {
+            let v = huu[(i, i)];
+            huu[(i, i)] = if v > 0.0 { v * (1.0 + 1e-12) } else { floor };
+        }
+        let huu = Solver::new(&huu);
+        let misfit = b - &a * mean;
+        let hinv_misfit = huu
+            .solve(&DMatrix::from_column_slice(pb, 1, misfit.as_slice()))
+            .column(0)
+            .into_owned();
         Base {
             columns: base.to_vec(),
             a_plus: MinNorm::new(&a),
             a,
-            b,
             pmat,
-            pm,
+            huu,
+            hinv_misfit,
+            floor,
         }
     }
 
@@ -310,60 +353,59 @@ impl Anchor<'_> {
     }
 
     /// [`Anchor::fit`] on a base computed once for many candidates ([`Anchor::base`]).
+    ///
+    /// With `x = [u; β]` and `J = xᵀHx − 2gᵀx + const`, minimizing over `u` first leaves a
+    /// problem in `β` alone, the Schur complement of the base block `H_uu = w A + P`:
+    /// `J(β) = J*(∅) + βᵀ H_S β − 2 rᵀβ`, so `Δ = 2 rᵀβ* − β*ᵀ H_S β*`. Its terms are taken in
+    /// the forms without cancellation, `H_S = Sᵀ(P − P H_uu⁻¹ P)S = w (P S)ᵀ H_uu⁻¹ (A S)` and
+    /// `r = Sᵀ P (u₀ − θ_d) = w (P S)ᵀ H_uu⁻¹ (b − A θ_d)`: neither `Δ` as a difference of two
+    /// objectives of the data's whole size nor `H_S` as a difference of two nearly equal
+    /// matrices, whose round-off can exceed `Δ` where the data barely see the base's
+    /// directions that the prior holds.
     pub fn fit_on(&self, on: &Base, cand: &[usize], signed: bool) -> Fit {
-        let (base, a, b) = (&on.columns, &on.a, &on.b);
-        let (pmat, pm) = (&on.pmat, &on.pm);
-        let (pb, d) = (base.len(), cand.len());
+        let (base, pb, d) = (&on.columns, on.columns.len(), cand.len());
         let abe = DMatrix::from_fn(pb, d, |i, j| self.ne.yty[(base[i], cand[j])]);
         // S = A⁺ A_YE, the minimum-norm solution: no component along parameter combinations
         // the data never excite (there any choice is equivalent in exact arithmetic, and a
         // near-singular Cholesky would fill them with round-off).
         let s = on.a_plus.solve(&abe);
-        let ps = pmat * &s;
-        // Variables x = [u; β]; J = xᵀHx − 2 gᵀx + const.
-        let mut h = DMatrix::zeros(pb + d, pb + d);
-        h.view_mut((0, 0), (pb, pb))
-            .copy_from(&(a * self.weight + pmat));
-        h.view_mut((0, pb), (pb, d)).copy_from(&(-&ps));
-        h.view_mut((pb, 0), (d, pb)).copy_from(&(-ps.transpose()));
-        h.view_mut((pb, pb), (d, d))
-            .copy_from(&(s.transpose() * &ps));
-        let mut g = DVector::zeros(pb + d);
-        g.rows_mut(0, pb).copy_from(&(b * self.weight + pm));
-        g.rows_mut(pb, d).copy_from(&(-(s.transpose() * pm)));
-        // A small relative ridge; directions neither data nor prior see are held at zero.
-        let floor = 1e-12 * h.diagonal().max().max(1e-300);
-        for i in 0..pb + d {
-            let v = h[(i, i)];
-            h[(i, i)] = if v > 0.0 { v * (1.0 + 1e-12) } else { floor };
+        let ps = &on.pmat * &s;
+        let hinv_as = on.huu.solve(&(&on.a * &s));
+        let mut hs = ps.transpose() * hinv_as * self.weight;
+        hs = (&hs + hs.transpose()) * 0.5;
+        let mut r = ps.transpose() * &on.hinv_misfit * self.weight;
+        // `0 ⪯ H_S ⪯ SᵀPS`: the prior's information on β, in the fraction the data see. Where
+        // that fraction is below [`UNSEEN`] the prior alone holds the parameters, and `Δ`
+        // there is a data-only test of a sliver of the columns that nearly cancels, which
+        // model error decides (cross-validation's domain, not this test's) and whose terms
+        // are at the limit of what the sums resolve. A ridge of that fraction of `SᵀPS` (a
+        // prior on β) keeps β near zero there; a column the prior does not see at all is
+        // held at zero.
+        let sps = s.transpose() * &ps;
+        for i in 0..d {
+            if sps[(i, i)] > 0.0 {
+                hs[(i, i)] += UNSEEN * sps[(i, i)];
+            } else {
+                hs.row_mut(i).fill(0.0);
+                hs.column_mut(i).fill(0.0);
+                hs[(i, i)] = on.floor;
+                r[i] = 0.0;
+            }
         }
-        // At the bounded minimum `J* = −gᵀx` still holds: a free coordinate has `(Hx)_i = g_i`,
-        // a bound one `x_i = 0`.
-        let bounded: Vec<usize> = if signed {
-            (pb..pb + d).collect()
-        } else {
-            vec![]
-        };
-        let x = least_squares_nonneg(&h, &g, &bounded);
-        let j_with = -g.dot(&x);
-        // Without the candidate: the model block alone.
-        let h0 = h.view((0, 0), (pb, pb)).into_owned();
-        let g0 = g.rows(0, pb).into_owned();
-        let x0 = least_squares(&h0, &g0);
-        let j_without = -g0.dot(&x0);
-        let inv = h
+        let bounded: Vec<usize> = if signed { (0..d).collect() } else { vec![] };
+        let beta = least_squares_nonneg(&hs, &r, &bounded);
+        let statistic = 2.0 * r.dot(&beta) - beta.dot(&(&hs * &beta));
+        // The posterior covariance of β is the β block of H⁻¹, that is H_S⁻¹.
+        let inv = hs
             .clone()
             .cholesky()
             .map(|c| c.inverse())
-            .unwrap_or_else(|| h.clone().pseudo_inverse(1e-14).expect("symmetric"));
-        let se = (0..d)
-            .map(|c| inv[(pb + c, pb + c)].max(0.0).sqrt())
-            .collect();
+            .unwrap_or_else(|| hs.clone().pseudo_inverse(1e-14).expect("symmetric"));
         Fit {
             visible: self.visible(cand, &abe, &s),
-            statistic: (j_without - j_with).max(0.0),
-            beta: x.rows(pb, d).iter().copied().collect(),
-            se,
+            statistic: statistic.max(0.0),
+            se: (0..d).map(|c| inv[(c, c)].max(0.0).sqrt()).collect(),
+            beta: beta.iter().copied().collect(),
         }
     }
 }
@@ -401,6 +443,11 @@ pub struct Step {
     pub statistic: f64,
     /// The threshold it passed.
     pub threshold: f64,
+    /// Its test again on the held-out data alone, against the chosen effects and the steps
+    /// before it (`None` before that test is made); it passed
+    /// `χ²(d)`'s upper [`CONFIRM_ALPHA`] quantile.
+    #[serde(default)]
+    pub held_out: Option<f64>,
     /// Equally simple kinds within `tie` of its statistic that also pass.
     pub ambiguous_with: Vec<Kind>,
     /// Every kind's best test in this step, largest `Δ − 2d` first.
@@ -450,7 +497,14 @@ pub enum TestStop {
     },
     /// A step passed on the training data but not again on the held-out data, and was
     /// dropped with those after it.
-    NotConfirmed(Kind),
+    NotConfirmed {
+        /// The step's kind.
+        kind: Kind,
+        /// Its statistic `Δ` on the held-out data.
+        statistic: f64,
+        /// The threshold it missed.
+        threshold: f64,
+    },
     /// A stop as a report states it, read back from its JSON (its sentence).
     Stated(String),
 }
@@ -470,9 +524,14 @@ impl std::fmt::Display for TestStop {
                 "best remaining candidate {} has Δ = {statistic:.1} below its χ² threshold {threshold:.1}",
                 kind.name()
             ),
-            Self::NotConfirmed(kind) => write!(
+            Self::NotConfirmed {
+                kind,
+                statistic,
+                threshold,
+            } => write!(
                 f,
-                "{} passed on the training data but not again on the held-out data (dropped)",
+                "{} passed on the training data but not again on the held-out data \
+                 (Δ = {statistic:.1} below its χ² threshold {threshold:.1}; dropped)",
                 kind.name()
             ),
         }
@@ -588,19 +647,34 @@ pub fn select(
         used.push(t.kind);
         used.extend(&ambiguous_with);
         base.extend(variant_columns(folds, vi));
-        steps.push(Step {
-            beta: f.beta,
-            se: f.se,
-            kind: t.kind,
-            param: t.param,
-            statistic: t.statistic,
-            threshold: t.threshold,
-            ambiguous_with,
-            tests,
-            variant: vi,
-        });
+        steps.push(Step::accepted(vi, t, f, ambiguous_with, tests));
     };
     (steps, stop)
+}
+
+impl Step {
+    /// Variant `variant`'s step, accepted on its `test` with `fit`, beside the kinds it ties
+    /// with and every kind's best `tests`; not yet tested on held-out data.
+    fn accepted(
+        variant: usize,
+        test: Test,
+        fit: Fit,
+        ambiguous_with: Vec<Kind>,
+        tests: Vec<Test>,
+    ) -> Self {
+        Self {
+            beta: fit.beta,
+            se: fit.se,
+            kind: test.kind,
+            param: test.param,
+            statistic: test.statistic,
+            threshold: test.threshold,
+            held_out: None,
+            ambiguous_with,
+            tests,
+            variant,
+        }
+    }
 }
 
 /// Whether the test holds a kind's coefficients at or above zero: a physical sign (a rotor
@@ -714,15 +788,15 @@ fn best_per_kind(
     tops.into_iter().filter_map(|(_, top)| top).collect()
 }
 
-/// How many of the description test's `steps`, in order, pass again on the held-out data
-/// alone (the test is in-sample): each against the chosen effects (`chosen_variants`) and the
-/// steps before it, at [`CONFIRM_ALPHA`].
-fn passed_held_out(
+/// The description test's `steps` tested again, in order, on the held-out data alone (the test
+/// is in-sample): each against the chosen effects (`chosen_variants`) and the steps before it.
+/// The statistics up to and including the first below its [`CONFIRM_ALPHA`] threshold.
+fn held_out_statistics(
     stage: &Stage,
     anchor: Anchor,
     chosen_variants: &[Variant],
     steps: &[Step],
-) -> usize {
+) -> Vec<f64> {
     let (validate, n, ms) = (stage.validate, stage.model.dof(), stage.opts.min_speed);
     // Held-out variants: the chosen effects first, then the steps.
     let nc = chosen_variants.len();
@@ -737,16 +811,39 @@ fn passed_held_out(
         ne: &vall,
         ..anchor
     };
-    (0..steps.len())
-        .take_while(|&k| {
-            let base = vfolds.columns(&(0..nc + k).collect::<Vec<_>>());
-            let d = steps[k].kind.columns(n);
-            let at = vfolds.offsets[nc + k];
-            let cand: Vec<usize> = (at..at + d).collect();
-            let signed = signed(steps[k].kind);
-            held.fit(&base, &cand, signed).statistic >= chi2_upper_quantile(d, CONFIRM_ALPHA)
-        })
-        .count()
+    let mut statistics = vec![];
+    for (k, step) in steps.iter().enumerate() {
+        let base = vfolds.columns(&(0..nc + k).collect::<Vec<_>>());
+        let d = step.kind.columns(n);
+        let at = vfolds.offsets[nc + k];
+        let cand: Vec<usize> = (at..at + d).collect();
+        let statistic = held.fit(&base, &cand, signed(step.kind)).statistic;
+        statistics.push(statistic);
+        if statistic < chi2_upper_quantile(d, CONFIRM_ALPHA) {
+            break;
+        }
+    }
+    statistics
+}
+
+/// Keeps the `steps` the held-out data confirm (their `statistics` from
+/// [`held_out_statistics`]) and drops the first that fails with those after it, saying so in
+/// the returned stop (`None` when every step passed).
+fn confirm(steps: &mut Vec<Step>, statistics: &[f64], n: usize) -> Option<TestStop> {
+    for (k, &statistic) in statistics.iter().enumerate() {
+        let kind = steps[k].kind;
+        let threshold = chi2_upper_quantile(kind.columns(n), CONFIRM_ALPHA);
+        if statistic < threshold {
+            steps.truncate(k);
+            return Some(TestStop::NotConfirmed {
+                kind,
+                statistic,
+                threshold,
+            });
+        }
+        steps[k].held_out = Some(statistic);
+    }
+    None
 }
 
 /// The test against the description (docs/diagnose.md, "Absorbed effects"): candidates that
@@ -797,10 +894,9 @@ pub(crate) fn test_description(
     );
     // The test is in-sample: each step must pass again on the held-out data alone.
     if !steps.is_empty() {
-        let passed = passed_held_out(stage, anchor, &chosen_variants, &steps);
-        if passed < steps.len() {
-            stop = TestStop::NotConfirmed(steps[passed].kind);
-            steps.truncate(passed);
+        let statistics = held_out_statistics(stage, anchor, &chosen_variants, &steps);
+        if let Some(dropped) = confirm(&mut steps, &statistics, n) {
+            stop = dropped;
         }
     }
     Ok(Report {
@@ -899,8 +995,10 @@ mod tests {
         let spr = s.dot(&(&precision * &r));
         let sps = s.dot(&(&precision * &s));
         let want = spr * spr / sps;
+        // Δ is formed from the candidate's own terms (a Schur complement), not as the
+        // difference of two objectives of size ~10⁸ (whose round-off here is ~10⁻³ of Δ).
         assert!(
-            (f.statistic - want).abs() < 1e-4 * want,
+            (f.statistic - want).abs() < 1e-8 * want,
             "{} vs {want}",
             f.statistic
         );
@@ -919,20 +1017,67 @@ mod tests {
             mirrored.fit(&[0, 1, 2, 3], &[p], true),
         );
         assert!((free.beta[0] + spr / sps).abs() < 1e-6, "{}", free.beta[0]);
-        // (Δ is a difference of two objectives of size ~10⁸ here: 10⁻³ is their round-off.)
         assert!(
-            (free.statistic - want).abs() < 1e-2 * want,
+            (free.statistic - want).abs() < 1e-8 * want,
             "{} vs {want}",
             free.statistic
         );
         assert_eq!(held.beta[0], 0.0);
-        assert!(held.statistic < 1e-2 * want, "{}", held.statistic);
+        assert!(held.statistic < 1e-8 * want, "{}", held.statistic);
         let kept = Anchor {
             mean: mean.clone(),
             ..mirrored
         }
         .fit(&[0, 1, 2, 3], &[p], true);
         assert_eq!((kept.beta[0], kept.statistic), (f.beta[0], f.statistic));
+    }
+
+    /// Held-out statistics keep the steps that pass (recording each one's), and drop the first
+    /// that does not with those after it, naming its statistic and threshold in the stop.
+    #[test]
+    fn steps_are_kept_while_the_held_out_data_confirm_them() {
+        let n = 7;
+        let step = |kind: Kind| {
+            let test = Test {
+                kind,
+                param: 0.0,
+                statistic: 100.0,
+                threshold: 40.0,
+                columns: kind.columns(n),
+                visible: 0.0,
+            };
+            let fit = Fit {
+                statistic: 100.0,
+                beta: vec![],
+                se: vec![],
+                visible: vec![],
+            };
+            Step::accepted(0, test, fit, vec![], vec![])
+        };
+        let kinds = [Kind::Payload, Kind::TorqueGain, Kind::Tilt];
+        let gain_threshold = chi2_upper_quantile(Kind::TorqueGain.columns(n), CONFIRM_ALPHA);
+        let mut steps: Vec<Step> = kinds.iter().map(|&k| step(k)).collect();
+        let dropped = confirm(&mut steps, &[50.0, gain_threshold * 0.99], n);
+        assert_eq!(steps.len(), 1);
+        assert_eq!(steps[0].held_out, Some(50.0));
+        assert_eq!(
+            dropped,
+            Some(TestStop::NotConfirmed {
+                kind: Kind::TorqueGain,
+                statistic: gain_threshold * 0.99,
+                threshold: gain_threshold,
+            })
+        );
+        let sentence = dropped.unwrap().to_string();
+        assert!(
+            sentence.contains("torque_gain passed on the training data"),
+            "{sentence}"
+        );
+        // Every step confirmed: no stop, each statistic recorded.
+        let mut steps: Vec<Step> = kinds.iter().map(|&k| step(k)).collect();
+        assert_eq!(confirm(&mut steps, &[50.0, 60.0, 70.0], n), None);
+        let held: Vec<_> = steps.iter().map(|s| s.held_out).collect();
+        assert_eq!(held, vec![Some(50.0), Some(60.0), Some(70.0)]);
     }
 
     /// The perturbation has the deviation the prior states (mass: 10 % at `ε = 0.1`), and the

@@ -394,9 +394,13 @@ fn description_blocks(d: &Diagnosis, s: &mut Section) {
         let mut line = Text::plain(format!("Step {}: ", i + 1))
             .code(st.kind.name())
             .and(format!(
-                " (Δ = {:.1} > χ² threshold {:.1})",
+                " (Δ = {:.1} > χ² threshold {:.1}",
                 st.statistic, st.threshold
             ));
+        if let Some(held_out) = st.held_out {
+            line = line.and(format!("; on the held-out data Δ = {held_out:.1}"));
+        }
+        line = line.and(")");
         if !st.ambiguous_with.is_empty() {
             line = with_codes(
                 line.and("; ").strong("ambiguous").and(" with "),
