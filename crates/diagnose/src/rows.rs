@@ -58,24 +58,32 @@ pub(crate) fn normal_equations(
     min_speed: f64,
 ) -> (NormalEquations, usize) {
     let model = ctx.model();
-    let (n, cols) = (model.dof(), row_columns(model, variants));
-    let p = model.layout().len + variants.iter().map(|v| v.kind.columns(n)).sum::<usize>();
-    let parts: Vec<NormalEquations> = chunks(range.clone(), CHUNK)
-        .into_par_iter()
-        .map(|r| {
-            let mut sums = RowSums::new(n, p, cols.clone(), &[]);
+    let (n, p, cols) = (
+        model.dof(),
+        columns(model, variants),
+        row_columns(model, variants),
+    );
+    let ne = NormalEquations::summed_in_chunks(
+        range.clone(),
+        CHUNK,
+        NormalEquations::new(n, p).finish(),
+        || RowSums::new(n, p, cols.clone(), &[]),
+        |r, sums| {
             ctx.for_each_row(tr, r, variants, min_speed, &mut |_, z, tau| {
                 sums.add(z, tau)
-            });
-            sums.finish()
-        })
-        .collect();
-    let empty = NormalEquations::new(n, p).finish();
-    let ne = parts.iter().fold(empty, |sum, part| sum.merged(part));
+            })
+        },
+    );
     let kept = range
         .map(|k| tr.qd_at(k).iter().filter(|w| !slow(**w, min_speed)).count())
         .sum();
     (ne, kept)
+}
+
+/// The number of columns of `Z = [Y | E]`: the model's, then `variants'`.
+pub(crate) fn columns(model: &Model, variants: &[Variant]) -> usize {
+    let n = model.dof();
+    model.layout().len + variants.iter().map(|v| v.kind.columns(n)).sum::<usize>()
 }
 
 /// The columns of `Z = [Y | E]` (the model's, then `variants`' in order) that can be nonzero
@@ -166,7 +174,7 @@ mod tests {
         let ctx = Context::new(&model, &model.parameters(), &tr, 20.0);
         let variants = library::variants(&Kind::ALL, n);
         let cols = row_columns(&model, &variants);
-        let p = model.layout().len + variants.iter().map(|v| v.kind.columns(n)).sum::<usize>();
+        let p = columns(&model, &variants);
         // The declaration leaves columns out of every row (friction-like kinds are local).
         assert!(cols.iter().all(|c| c.len() < p));
         let (mut outside, mut inside_nonzero) = (0usize, 0usize);
@@ -191,7 +199,7 @@ mod tests {
         let ctx = Context::new(&model, &model.parameters(), &tr, 20.0);
         let variants = library::variants(&Kind::ALL, n);
         let range = 5..tr.len() - 3;
-        let p = model.layout().len + variants.iter().map(|v| v.kind.columns(n)).sum::<usize>();
+        let p = columns(&model, &variants);
         let mut dense = NormalEquations::new(n, p);
         let mut kept = 0;
         ctx.for_each_row(&tr, range.clone(), &variants, 0.3, &mut |k, z, tau| {

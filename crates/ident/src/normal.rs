@@ -146,26 +146,44 @@ impl NormalEquations {
         range: std::ops::Range<usize>,
         excluded: &[usize],
     ) -> Self {
+        let empty = Self::new(model.dof(), model.layout().len).excluding(excluded);
+        Self::summed_in_chunks(
+            range,
+            CHUNK_SAMPLES,
+            empty.finish(),
+            || RowSums::for_model(model, excluded),
+            |chunk, sums| {
+                for_each_regressor(model, tr, chunk, &mut |k, y| sums.add(y, tr.tau_at(k)))
+            },
+        )
+    }
+
+    /// Sums over samples `range` cut into consecutive chunks of `chunk` samples (fixed from
+    /// `range`'s start): each chunk's rows are added by `fill` into fresh sums from `sums`, the
+    /// chunks in parallel (the current rayon pool), and their sums added to the finished `empty`
+    /// in chunk order: the same numbers whatever the thread count.
+    pub fn summed_in_chunks(
+        range: std::ops::Range<usize>,
+        chunk: usize,
+        empty: Self,
+        sums: impl Fn() -> RowSums + Sync,
+        fill: impl Fn(std::ops::Range<usize>, &mut RowSums) + Sync,
+    ) -> Self {
         use rayon::prelude::*;
-        let empty = || Self::new(model.dof(), model.layout().len).excluding(excluded);
+        let end = range.end;
         let chunks: Vec<std::ops::Range<usize>> = range
-            .clone()
-            .step_by(CHUNK_SAMPLES)
-            .map(|start| start..(start + CHUNK_SAMPLES).min(range.end))
+            .step_by(chunk.max(1))
+            .map(|start| start..(start + chunk).min(end))
             .collect();
-        // Chunks in parallel (the regressor and its rank-k updates), their sums added in
-        // chunk order.
         let parts: Vec<Self> = chunks
             .into_par_iter()
-            .map(|chunk| {
-                let mut sums = RowSums::for_model(model, excluded);
-                for_each_regressor(model, tr, chunk, &mut |k, y| sums.add(y, tr.tau_at(k)));
-                sums.finish()
+            .map(|c| {
+                let mut s = sums();
+                fill(c, &mut s);
+                s.finish()
             })
             .collect();
-        parts
-            .iter()
-            .fold(empty().finish(), |sum, part| sum.merged(part))
+        parts.iter().fold(empty, |sum, part| sum.merged(part))
     }
 
     /// Accumulates the samples a source streams (e.g. a CSV read from disk by
