@@ -1032,6 +1032,121 @@ mod tests {
         assert_eq!((kept.beta[0], kept.statistic), (f.beta[0], f.statistic));
     }
 
+    /// Normal equations of four model columns (the last scaled by `last`) and a candidate
+    /// `Y s` in their span, the torque `Y u + e` with a residual `e` the model cannot fit.
+    fn scaled_candidate(last: f64, s: &DVector<f64>) -> NormalEquations {
+        let (m, p) = (40, 4);
+        let mut y = DMatrix::from_fn(m, p, |i, j| ((i * 7 + j * 3) % 11) as f64 - 5.0 + j as f64);
+        y.column_mut(3).scale_mut(last);
+        let u = DVector::from_vec(vec![1.3, 0.2, -0.7, 0.9]);
+        let e = DVector::from_fn(m, |i, _| 0.3 * ((i * 5 % 13) as f64 - 6.0));
+        let tau = &y * &u + e;
+        let mut z = DMatrix::zeros(m, p + 1);
+        z.view_mut((0, 0), (m, p)).copy_from(&y);
+        z.set_column(p, &(&y * s));
+        NormalEquations::from_sums(
+            1,
+            z.transpose() * &z,
+            z.transpose() * &tau,
+            tau.norm_squared(),
+            m,
+        )
+    }
+
+    /// At a weight where the objectives are small (no cancellation), `Δ` is the drop of the
+    /// objective `J*(∅) − J*(S)` minimized over `[u; β]` directly, free or with `β ≥ 0`.
+    #[test]
+    fn the_statistic_is_the_drop_of_the_jointly_minimized_objective() {
+        let s = DVector::from_vec(vec![0.4, -1.0, 0.25, 2.0]);
+        let ne = scaled_candidate(1.0, &s);
+        // The description off the data by −3 s: the candidate explains it with β ≈ −3.
+        let mean = DVector::from_vec(vec![2.5, -2.8, 0.05, 6.9]);
+        let precision = DMatrix::from_fn(4, 4, |i, j| if i == j { 2.0 + i as f64 } else { 0.3 });
+        let anchor = Anchor {
+            ne: &ne,
+            weight: 0.05,
+            mean: mean.clone(),
+            precision: precision.clone(),
+        };
+        // J(u, β) = w‖Yu − τ‖² + (u − sβ − θ_d)ᵀP(u − sβ − θ_d) = xᵀHx − 2gᵀx + c.
+        let (a, b) = (
+            ne.yty.view((0, 0), (4, 4)).into_owned(),
+            ne.ytt.rows(0, 4).into_owned(),
+        );
+        let mut h = DMatrix::zeros(5, 5);
+        h.view_mut((0, 0), (4, 4))
+            .copy_from(&(&a * 0.05 + &precision));
+        let ps = &precision * &s;
+        h.view_mut((0, 4), (4, 1)).copy_from(&(-&ps));
+        h.view_mut((4, 0), (1, 4)).copy_from(&(-ps.transpose()));
+        h[(4, 4)] = s.dot(&ps);
+        let mut g = DVector::zeros(5);
+        g.rows_mut(0, 4)
+            .copy_from(&(&b * 0.05 + &precision * &mean));
+        g[4] = -ps.dot(&mean);
+        let j_min = |h: &DMatrix<f64>, g: &DVector<f64>| {
+            let x = h.clone().cholesky().unwrap().solve(g);
+            x.dot(&(h * &x)) - 2.0 * g.dot(&x)
+        };
+        let h0 = h.view((0, 0), (4, 4)).into_owned();
+        let without = j_min(&h0, &g.rows(0, 4).into_owned());
+        let free = anchor.fit(&[0, 1, 2, 3], &[4], false);
+        let want = without - j_min(&h, &g);
+        assert!(want > 1.0, "a test that sees the candidate: Δ {want}");
+        // The ridge `UNSEEN · SᵀPS` moves Δ by about UNSEEN relative where the data see the
+        // candidate fully (`H_S ≈ SᵀPS`, as here).
+        assert!(
+            (free.statistic - want).abs() < 3.0 * UNSEEN * want,
+            "{} vs {want}",
+            free.statistic
+        );
+        // Held at zero: the free optimum's β is negative here, so nothing is explained.
+        assert!(free.beta[0] < 0.0, "β {}", free.beta[0]);
+        let held = anchor.fit(&[0, 1, 2, 3], &[4], true);
+        assert_eq!((held.beta[0], held.statistic), (0.0, 0.0));
+    }
+
+    /// A candidate along a direction the data see with far less than [`UNSEEN`] of the prior's
+    /// information is not tested: the ridge, a prior on β of `UNSEEN · SᵀPS`, bounds `Δ` by
+    /// `r² / (UNSEEN · SᵀPS)` (with `r` the data's own correlation with the column, which the
+    /// residual the model cannot fit sets here), far below any threshold, and every number is
+    /// finite.
+    #[test]
+    fn a_direction_the_data_barely_see_is_not_tested() {
+        let s = DVector::from_vec(vec![0.0, 0.0, 0.0, 1.0]);
+        for last in [1e-7, 1e-9] {
+            let ne = scaled_candidate(last, &s);
+            let anchor = Anchor {
+                ne: &ne,
+                weight: 1e4,
+                mean: DVector::from_vec(vec![1.0, 0.0, -0.5, 3.0]),
+                precision: DMatrix::from_diagonal(&DVector::from_vec(vec![4.0, 1.0, 9.0, 1e6])),
+            };
+            let seen = 1e4 * ne.yty[(3, 3)] / 1e6;
+            assert!(seen < 1e-3 * UNSEEN, "fraction seen {seen}");
+            let f = anchor.fit(&[0, 1, 2, 3], &[4], false);
+            // r ≈ w y₃ᵀ(τ − Y θ_d): the prior holds u₃ at θ_d.
+            let misfit = ne.ytt[3] - (0..4).map(|c| ne.yty[(3, c)] * anchor.mean[c]).sum::<f64>();
+            let bound = (1e4 * misfit).powi(2) / (UNSEEN * 1e6);
+            assert!(
+                f.statistic <= 1.01 * bound,
+                "Δ {} above {bound}",
+                f.statistic
+            );
+            assert!(
+                f.statistic < 0.1 * chi2_upper_quantile(1, CONFIRM_ALPHA),
+                "Δ {}",
+                f.statistic
+            );
+            assert!(
+                f.beta[0].is_finite() && f.se[0].is_finite(),
+                "{:?} {:?}",
+                f.beta,
+                f.se
+            );
+        }
+    }
+
     /// Held-out statistics keep the steps that pass (recording each one's), and drop the first
     /// that does not with those after it, naming its statistic and threshold in the stop.
     #[test]
