@@ -1188,6 +1188,12 @@ mod tests {
             sentence.contains("torque_gain passed on the training data"),
             "{sentence}"
         );
+        // A report written before the held-out statistic was reported reads back without it.
+        let mut json = serde_json::to_value(&steps[0]).unwrap();
+        assert_eq!(json["held_out"], serde_json::json!(50.0));
+        json.as_object_mut().unwrap().remove("held_out");
+        let read: Step = serde_json::from_value(json).unwrap();
+        assert_eq!((read.kind, read.held_out), (Kind::Payload, None));
         // Every step confirmed: no stop, each statistic recorded.
         let mut steps: Vec<Step> = kinds.iter().map(|&k| step(k)).collect();
         assert_eq!(confirm(&mut steps, &[50.0, 60.0, 70.0], n), None);
