@@ -788,9 +788,9 @@ fn best_per_kind(
     tops.into_iter().filter_map(|(_, top)| top).collect()
 }
 
-/// The description test's `steps` tested again, in order, on the held-out data alone (the test
-/// is in-sample): each against the chosen effects (`chosen_variants`) and the steps before it.
-/// The statistics up to and including the first below its [`CONFIRM_ALPHA`] threshold.
+/// The description test's `steps` tested again on the held-out data alone (the test is
+/// in-sample): each one's statistic against the chosen effects (`chosen_variants`) and the
+/// steps before it; [`confirm`] judges them.
 fn held_out_statistics(
     stage: &Stage,
     anchor: Anchor,
@@ -811,19 +811,16 @@ fn held_out_statistics(
         ne: &vall,
         ..anchor
     };
-    let mut statistics = vec![];
-    for (k, step) in steps.iter().enumerate() {
-        let base = vfolds.columns(&(0..nc + k).collect::<Vec<_>>());
-        let d = step.kind.columns(n);
-        let at = vfolds.offsets[nc + k];
-        let cand: Vec<usize> = (at..at + d).collect();
-        let statistic = held.fit(&base, &cand, signed(step.kind)).statistic;
-        statistics.push(statistic);
-        if statistic < chi2_upper_quantile(d, CONFIRM_ALPHA) {
-            break;
-        }
-    }
-    statistics
+    steps
+        .iter()
+        .enumerate()
+        .map(|(k, step)| {
+            let base = vfolds.columns(&(0..nc + k).collect::<Vec<_>>());
+            let at = vfolds.offsets[nc + k];
+            let cand: Vec<usize> = (at..at + step.kind.columns(n)).collect();
+            held.fit(&base, &cand, signed(step.kind)).statistic
+        })
+        .collect()
 }
 
 /// Keeps the `steps` the held-out data confirm (their `statistics` from
