@@ -22,6 +22,7 @@ mod floating_tests;
 mod gravity;
 pub mod kinematics;
 mod regressor;
+mod regressor_slope;
 mod rnea;
 
 pub use crba::crba;
@@ -32,6 +33,7 @@ pub use floating::{
 };
 pub use gravity::gravity_from_transforms;
 pub use regressor::{for_each_regressor, inertia_bilinear, regressor, row_columns};
+pub use regressor_slope::weighted_regressor_slope;
 pub use rnea::{
     friction_torque, joint_friction, rnea, rnea_after_joint, rnea_from_transforms,
     rnea_with_friction, sign,

@@ -4,13 +4,14 @@
 //! - **Variables.** `x = (a_jl, b_jl)`, joint-major (all `a`, then all `b`), optimized as
 //!   `y_i = x_i ω_l² / Ā_j` (each coefficient's peak acceleration over joint `j`'s acceleration
 //!   limit), so that one step size suits every harmonic and joint.
-//! - **Gradient** of the objective `φ(F)` by the chain rule, analytic but for the regressor's
-//!   own derivatives: `dφ = ⟨Φ, dF⟩` with `Φ = ∂φ/∂F` (`F⁻¹/r` for D-optimality),
+//! - **Gradient** of the objective `φ(F)` by the chain rule, analytic throughout:
+//!   `dφ = ⟨Φ, dF⟩` with `Φ = ∂φ/∂F` (`F⁻¹/r` for D-optimality),
 //!   `dF = Vᵀ D⁻¹ (Σ_k dY_kᵀ Y_k + Y_kᵀ dY_k) D⁻¹ V / K`, so `∂φ/∂s_k = (2/K) ⟨Y_k M, ∂Y_k/∂s_k⟩`
-//!   with `M = D⁻¹ V Φ Vᵀ D⁻¹` for each of a sample's `3n` states `s_k` (`q_j`, `q̇_j`, `q̈_j`;
-//!   `∂Y/∂s` by forward differences, `Y` being linear in `q̈`), then through the Fourier series,
-//!   linear in `x`. `1 + 3n` regressors per sample instead of `2nL + 1` objective evaluations
-//!   (the design's Coulomb columns are smooth, [`super::design_regressor`]).
+//!   with `M = D⁻¹ V Φ Vᵀ D⁻¹` for each of a sample's `3n` states `s_k` (`q_j`, `q̇_j`, `q̈_j`),
+//!   all `3n` by one reverse sweep of the regressor ([`weighted_regressor_slope`]), then
+//!   through the Fourier series, linear in `x`: about three regressors per sample instead of
+//!   `2nL + 1` objective evaluations (the design's Coulomb columns are smooth,
+//!   [`super::design_regressor`]).
 //! - **Limits.** Position, speed, acceleration and jerk at the check times (`K` per period of
 //!   the steady motion and over both ramps) are linear in `x`, windowed or not: each step keeps
 //!   them at those times. The rows near their limit enter the subproblem; any other row its
@@ -24,11 +25,11 @@
 //!   gain falls below `1e-6` of the objective. Deterministic: every sum runs in a fixed order
 //!   whatever the thread count.
 
-use super::{design_regressor, times, FourierSeries, GramSum, Problem};
+use super::{design_regressor, times, FourierSeries, GramSum, Problem, COULOMB_SPEED};
 use clarabel::algebra::CscMatrix;
 use clarabel::solver::{DefaultSettings, DefaultSolver, IPSolver, SolverStatus, SupportedConeT};
 use nalgebra::{DMatrix, DVector, SymmetricEigen};
-use physid_core::dynamics::Data;
+use physid_core::dynamics::{weighted_regressor_slope, Data};
 use rayon::prelude::*;
 
 /// Rows whose use of their limit is above this enter the subproblem from the start.
@@ -121,11 +122,8 @@ impl Problem<'_> {
             .par_iter()
             .zip(&ys)
             .map_init(
-                || (Data::new(self.model), DMatrix::zeros(n, p)),
-                |(data, dy), ([q, qd, qdd], y)| {
-                    let w = y * &m;
-                    self.state_slope(data, dy, [q, qd, qdd], y, &w)
-                },
+                || Data::new(self.model),
+                |data, ([q, qd, qdd], y)| self.state_slope(data, [q, qd, qdd], &(y * &m)),
             )
             .collect();
         Some(Slope {
@@ -134,26 +132,20 @@ impl Problem<'_> {
         })
     }
 
-    /// `⟨W, ∂Y/∂s⟩` for each joint's `q`, `q̇`, `q̈` at one sample (forward differences).
+    /// `⟨W, ∂Y/∂s⟩` for each joint's `q`, `q̇`, `q̈` at one sample: the regressor's by its
+    /// adjoint ([`weighted_regressor_slope`]), the design's smooth Coulomb column's
+    /// (`tanh(q̇ / COULOMB_SPEED)`) added.
     fn state_slope(
         &self,
         data: &mut Data,
-        dy: &mut DMatrix<f64>,
         [q, qd, qdd]: [&Vec<f64>; 3],
-        y: &DMatrix<f64>,
         w: &DMatrix<f64>,
     ) -> Vec<[f64; 3]> {
-        let n = q.len();
-        let mut state = [q.clone(), qd.clone(), qdd.clone()];
-        let mut out = vec![[0.0; 3]; n];
-        for (d, h) in [1e-6, 1e-6, 1.0].into_iter().enumerate() {
-            for (j, o) in out.iter_mut().enumerate() {
-                let keep = state[d][j];
-                state[d][j] = keep + h;
-                design_regressor(self.model, data, [&state[0], &state[1], &state[2]], dy);
-                state[d][j] = keep;
-                o[d] = (w.dot(dy) - w.dot(y)) / h;
-            }
+        let mut out = weighted_regressor_slope(self.model, data, [q, qd, qdd], w);
+        let c = self.model.layout().coulomb_col;
+        for (j, o) in out.iter_mut().enumerate() {
+            let t = (qd[j] / COULOMB_SPEED).tanh();
+            o[1] += w[(j, c + j)] * (1.0 - t * t) / COULOMB_SPEED;
         }
         out
     }
