@@ -32,8 +32,12 @@ use nalgebra::{DMatrix, DVector, SymmetricEigen};
 use physid_core::dynamics::{weighted_regressor_slope, Data};
 use rayon::prelude::*;
 
-/// Rows whose use of their limit is above this enter the subproblem from the start.
-const NEAR: f64 = 0.9;
+/// Rows whose use of their limit is above this enter the subproblem from the start; any other
+/// the solution breaks is added and the subproblem solved again ([`Subproblem::step`]). Near a
+/// smooth motion's peak many check times use nearly as much of the limit, with nearly parallel
+/// rows: at 0.9 the KUKA's 30 s design took about 1,060 rows into each subproblem, at 0.99
+/// about 350, with no step failing for rows broken six times over.
+const NEAR: f64 = 0.99;
 /// The trust region's first, largest and smallest sizes (in `y`).
 const RHO: [f64; 3] = [0.05, 1.0, 1e-6];
 
