@@ -5,8 +5,10 @@
 //! physical consistency and solve time.
 //!
 //! Work is reused: the regressor of every sample is computed once per seed and the normal
-//! equations grow incrementally along the size grid. Seeds run in parallel (rayon); rows come back
-//! in (seed, size, set) order, so results are identical whatever the thread count.
+//! equations grow incrementally along the size grid. Seeds run in parallel (rayon), and within a
+//! seed its (size, set) cells (twenty seeds alone would keep at most twenty threads busy, the
+//! last few seeds alone at the end); rows come back in (seed, size, set) order, so results are
+//! identical whatever the thread count.
 //!
 //! A floor of physid (docs/architecture.md §6) of its own crate, `physid-experiment`; the `physid`
 //! crate re-exports it as `physid::experiment`.
@@ -414,33 +416,26 @@ pub fn run_seed_validated_on(
     let val_data = validation.unwrap_or(data);
     let prior = cad_prior(model, spec.prior_error, 1_000_003 ^ seed);
     let truth = model.parameters();
-    let mut ne = NormalEquations::new(n, p);
-    let mut added = 0;
-    let mut rows = vec![];
-    let mut window_rng = rand_chacha::ChaCha8Rng::seed_from_u64(seed ^ 0x77_1d0e);
-    for &n_s in &grid {
-        // Training samples start..start + n_s, validation on the next `validation` samples.
-        let start = window_start(spec, &mut window_rng, n_s, total);
-        let snapshot = if start == 0 {
-            while added < n_s.min(total) {
-                ne.add(&ys[added], data.tau_at(added));
-                added += 1;
-            }
-            ne.clone().finish()
-        } else {
-            window_equations(&ys, data, start..start + n_s, (n, p))
-        };
-        // Validation: the samples after the window, or the separate validation run.
-        let after = start + n_s..(start + n_s + spec.validation).min(total);
-        let (vys, vtr, vrange) = match &ys_val {
-            Some(yv) => (yv.as_slice(), val_data, 0..yv.len()),
-            None => (ys.as_slice(), data, after),
-        };
-        for &set in &spec.constraints {
-            let r = identify_with(model, &snapshot, &prior, (spec, set), (seed, n_s))?;
+    let windows = training_windows(spec, seed, (&ys, data), total, (n, p));
+    // Every (size, set) cell on its own: in parallel, read back in (size, set) order.
+    let cells: Vec<(&Window, ConstraintSet)> = windows
+        .iter()
+        .flat_map(|w| spec.constraints.iter().map(move |&set| (w, set)))
+        .collect();
+    cells
+        .par_iter()
+        .map(|&(w, set)| {
+            let (n_s, start) = (w.n_s, w.start);
+            // Validation: the samples after the window, or the separate validation run.
+            let after = start + n_s..(start + n_s + spec.validation).min(total);
+            let (vys, vtr, vrange) = match &ys_val {
+                Some(yv) => (yv.as_slice(), val_data, 0..yv.len()),
+                None => (ys.as_slice(), data, after),
+            };
+            let r = identify_with(model, &w.equations, &prior, (spec, set), (seed, n_s))?;
             let (val_rms, val_rms_overall) = torque_rms(vys, vtr, &r.theta, vrange.clone());
             let (_, train_rms_overall) = torque_rms(&ys, data, &r.theta, start..start + n_s);
-            rows.push(Row {
+            Ok(Row {
                 seed,
                 n_s,
                 constraints: set,
@@ -449,10 +444,50 @@ pub fn run_seed_validated_on(
                 train_rms_overall,
                 val_truth_rms: model_rms(vys, &(&r.theta - &truth), vrange.clone()),
                 ..errors_of(model, &r)
-            });
-        }
+            })
+        })
+        .collect()
+}
+
+/// One training window of a seed: its size, its first sample, its normal equations.
+struct Window {
+    n_s: usize,
+    start: usize,
+    equations: NormalEquations,
+}
+
+/// The training window of every size of the grid, in order: windows from the first sample
+/// share one running sum, random ones ([`window_start`]) are summed on their own.
+fn training_windows(
+    spec: &ExperimentSpec,
+    seed: u64,
+    (ys, data): (&[DMatrix<f64>], &physid_core::trajectory::Trajectory),
+    total: usize,
+    (n, p): (usize, usize),
+) -> Vec<Window> {
+    let mut ne = NormalEquations::new(n, p);
+    let mut added = 0;
+    let mut window_rng = rand_chacha::ChaCha8Rng::seed_from_u64(seed ^ 0x77_1d0e);
+    let mut out = vec![];
+    for n_s in spec.grid() {
+        // Training samples start..start + n_s, validation on the next `validation` samples.
+        let start = window_start(spec, &mut window_rng, n_s, total);
+        let equations = if start == 0 {
+            while added < n_s.min(total) {
+                ne.add(&ys[added], data.tau_at(added));
+                added += 1;
+            }
+            ne.clone().finish()
+        } else {
+            window_equations(ys, data, start..start + n_s, (n, p))
+        };
+        out.push(Window {
+            n_s,
+            start,
+            equations,
+        });
     }
-    Ok(rows)
+    out
 }
 
 /// The first training sample of the window of `n_s` samples among `total`: the first sample,
