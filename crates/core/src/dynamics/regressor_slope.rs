@@ -12,7 +12,7 @@
 //! `X_rot = X_J(N q_i) X_rot,0` likewise with `S_rot`). Adjoints of motions are forces:
 //! `Xᵀ f` carries one from child to parent ([`Transform::inv_apply_force`]).
 
-use super::{base_acceleration, forward_pass, Data};
+use super::{base_acceleration, check_len, forward_pass, Data};
 use crate::model::{Model, RotorModel};
 use crate::spatial::{Force, Motion, RigidInertia, Transform};
 use nalgebra::{DMatrix, Matrix3, Vector3};
@@ -27,6 +27,9 @@ pub fn weighted_regressor_slope(
     [q, qd, qdd]: [&[f64]; 3],
     w: &DMatrix<f64>,
 ) -> Vec<[f64; 3]> {
+    check_len(model, "q", q);
+    check_len(model, "qd", qd);
+    check_len(model, "qdd", qdd);
     let n = model.dof();
     assert_eq!(
         w.shape(),
