@@ -911,8 +911,7 @@ fn absorbed_steps(
         let d = v.kind.columns(data.n);
         let at = data.offsets[step.variant];
         let cand: Vec<usize> = (at..at + d).collect();
-        let threshold = anchor::chi2_upper_quantile(d, anchor::CONFIRM_ALPHA);
-        if held.fit(&base, &cand, anchor::signed(v.kind)).statistic < threshold {
+        if held.fit(&base, &cand, anchor::signed(v.kind)).statistic < anchor::confirm_threshold(d) {
             break;
         }
         let e = Explanation::Effect(v);
