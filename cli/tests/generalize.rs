@@ -142,3 +142,83 @@ fn the_benchmark_s_bad_inputs_are_refused_by_name() {
     ]);
     assert!(code == 2 && err.contains("bench.toml"), "{err}");
 }
+
+#[test]
+fn no_payload_the_description_test_claims_leaves_its_body_without_mass() {
+    // The benchmark's held-out SO-100, 30 s runs, seed 1, case 2: a 0.113 kg payload on the
+    // wrist. The description test once also claimed −0.025 kg on the gripper (which weighs
+    // less), "revealed by the description".
+    let dir = tempfile::tempdir().unwrap();
+    let urdf = common::root().join("data/so100/so100.urdf");
+    let bench = dir.path().join("bench.toml");
+    let text = format!(
+        "duration = 30.0\n[[robot]]\nname = \"so100\"\nrobot = \"{}\"\nrate = 100.0\ntorque_noise = 0.01\nencoder_step = 1.5e-3\nheld_out = true\n",
+        urdf.display()
+    );
+    std::fs::write(&bench, text).unwrap();
+    let (out, keep) = (dir.path().join("out"), dir.path().join("keep"));
+    let p = |p: &Path| p.to_str().unwrap().to_string();
+    let (code, _, stderr) = common::physid(&[
+        "generalize",
+        "--robots",
+        &p(&bench),
+        "--cases",
+        "3",
+        "--seeds",
+        "1",
+        "--out",
+        &p(&out),
+        "--keep-cases",
+        &p(&keep),
+    ]);
+    assert_eq!(code, 0, "{stderr}");
+    let case = keep.join("so100/seed1/case2");
+    let report = dir.path().join("report");
+    let (code, _, stderr) = common::physid(&[
+        "diagnose",
+        "--robot",
+        &p(&case.join("robot.urdf")),
+        "--data",
+        &p(&case.join("data.csv")),
+        "--description-uncertainty",
+        "0.05",
+        "--report",
+        &p(&report),
+    ]);
+    assert_eq!(code, 0, "{stderr}");
+    let injected: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(case.join("injected.json")).unwrap())
+            .unwrap();
+    let true_mass = injected["injection"]["magnitudes"][0].as_f64().unwrap();
+    let r: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(report.join("report.json")).unwrap())
+            .unwrap();
+    let described = physid::io::load_robot(case.join("robot.urdf").to_str().unwrap()).unwrap();
+    let mass_of = |joint: &str| {
+        let b = described.bodies().iter().find(|b| b.joint_name == joint);
+        b.expect("a payload's joint is the description's")
+            .inertia
+            .mass()
+    };
+    let payloads: Vec<(String, f64)> = (r["effects"].as_array().unwrap().iter())
+        .filter(|e| e["kind"] == "payload")
+        .map(|e| {
+            let m = &e["magnitudes"][0];
+            (
+                m["joint"].as_str().unwrap().to_string(),
+                m["value"].as_f64().unwrap(),
+            )
+        })
+        .collect();
+    for (joint, dm) in &payloads {
+        assert!(
+            mass_of(joint) + dm > 0.0,
+            "{dm} kg on {joint}: {payloads:?}"
+        );
+    }
+    // The true payload is still named, on the wrist, within 10 % of its mass.
+    assert!(
+        (payloads.iter()).any(|(j, m)| j == "wrist_flex" && (m / true_mass - 1.0).abs() < 0.1),
+        "{payloads:?} against {true_mass} kg on the wrist"
+    );
+}
