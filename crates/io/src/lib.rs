@@ -788,10 +788,9 @@ pub fn load_all(
         Some(_) => vec![None; read.len()],
     };
     popts.band_edge = own_edges.iter().flatten().copied().reduce(f64::max);
-    paths
-        .iter()
-        .zip(read)
-        .zip(own_edges)
+    // Each file prepared on its own (side by side); the first error in the files' order.
+    use rayon::prelude::*;
+    let each: Vec<Result<LoadedData, IoError>> = (paths.par_iter().zip(read).zip(own_edges))
         .map(
             |((path, (logged, ignored_joints, skipped_messages)), own)| {
                 let mut prepared = crate::prepare::prepare(&logged, &popts)
@@ -807,7 +806,8 @@ pub fn load_all(
                 })
             },
         )
-        .collect()
+        .collect();
+    each.into_iter().collect()
 }
 
 /// Refuses two runs of `paths` whose samples are the same (every angle and torque equal): one
