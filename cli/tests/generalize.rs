@@ -6,11 +6,11 @@ mod common;
 
 use std::path::Path;
 
-/// A benchmark file of the low-cost arm alone (10 s runs at 100 Hz), in `dir`.
-fn so100_bench(dir: &Path) -> String {
+/// A benchmark file of the low-cost arm alone (runs of `duration` s at 100 Hz), in `dir`.
+fn so100_bench(dir: &Path, duration: f64) -> String {
     let urdf = common::root().join("data/so100/so100.urdf");
     let text = format!(
-        "duration = 10.0\n[[robot]]\nname = \"so100\"\nrobot = \"{}\"\nrate = 100.0\ntorque_noise = 0.01\nencoder_step = 1.5e-3\nheld_out = true\n",
+        "duration = {duration:?}\n[[robot]]\nname = \"so100\"\nrobot = \"{}\"\nrate = 100.0\ntorque_noise = 0.01\nencoder_step = 1.5e-3\nheld_out = true\n",
         urdf.display()
     );
     let path = dir.join("bench.toml");
@@ -21,7 +21,7 @@ fn so100_bench(dir: &Path) -> String {
 #[test]
 fn a_held_out_robot_is_run_scored_and_reported_apart_the_same_on_any_thread_count() {
     let dir = tempfile::tempdir().unwrap();
-    let bench = so100_bench(dir.path());
+    let bench = so100_bench(dir.path(), 10.0);
     let mut tables = vec![];
     for threads in ["1", "2"] {
         let out = dir.path().join(format!("out{threads}"));
@@ -74,7 +74,7 @@ fn a_held_out_robot_is_run_scored_and_reported_apart_the_same_on_any_thread_coun
 #[test]
 fn the_benchmark_s_bad_inputs_are_refused_by_name() {
     let dir = tempfile::tempdir().unwrap();
-    let bench = so100_bench(dir.path());
+    let bench = so100_bench(dir.path(), 10.0);
     let bad = dir.path().join("bad.toml");
     std::fs::write(
         &bad,
@@ -149,19 +149,13 @@ fn no_payload_the_description_test_claims_leaves_its_body_without_mass() {
     // wrist. The description test once also claimed −0.025 kg on the gripper (which weighs
     // less), "revealed by the description".
     let dir = tempfile::tempdir().unwrap();
-    let urdf = common::root().join("data/so100/so100.urdf");
-    let bench = dir.path().join("bench.toml");
-    let text = format!(
-        "duration = 30.0\n[[robot]]\nname = \"so100\"\nrobot = \"{}\"\nrate = 100.0\ntorque_noise = 0.01\nencoder_step = 1.5e-3\nheld_out = true\n",
-        urdf.display()
-    );
-    std::fs::write(&bench, text).unwrap();
+    let bench = so100_bench(dir.path(), 30.0);
     let (out, keep) = (dir.path().join("out"), dir.path().join("keep"));
     let p = |p: &Path| p.to_str().unwrap().to_string();
     let (code, _, stderr) = common::physid(&[
         "generalize",
         "--robots",
-        &p(&bench),
+        &bench,
         "--cases",
         "3",
         "--seeds",

@@ -416,7 +416,7 @@ pub fn run_seed_validated_on(
     let val_data = validation.unwrap_or(data);
     let prior = cad_prior(model, spec.prior_error, 1_000_003 ^ seed);
     let truth = model.parameters();
-    let windows = training_windows(spec, seed, (&ys, data), total, (n, p));
+    let windows = training_windows(spec, (&grid, seed), (&ys, data), total, (n, p));
     // Every (size, set) cell on its own: in parallel, read back in (size, set) order.
     let cells: Vec<(&Window, ConstraintSet)> = windows
         .iter()
@@ -456,11 +456,11 @@ struct Window {
     equations: NormalEquations,
 }
 
-/// The training window of every size of the grid, in order: windows from the first sample
+/// The training window of every size of `grid`, in order: windows from the first sample
 /// share one running sum, random ones ([`window_start`]) are summed on their own.
 fn training_windows(
     spec: &ExperimentSpec,
-    seed: u64,
+    (grid, seed): (&[usize], u64),
     (ys, data): (&[DMatrix<f64>], &physid_core::trajectory::Trajectory),
     total: usize,
     (n, p): (usize, usize),
@@ -469,7 +469,7 @@ fn training_windows(
     let mut added = 0;
     let mut window_rng = rand_chacha::ChaCha8Rng::seed_from_u64(seed ^ 0x77_1d0e);
     let mut out = vec![];
-    for n_s in spec.grid() {
+    for &n_s in grid {
         // Training samples start..start + n_s, validation on the next `validation` samples.
         let start = window_start(spec, &mut window_rng, n_s, total);
         let equations = if start == 0 {

@@ -134,13 +134,7 @@ pub(crate) fn joint_rows(model: &Model, data: &mut Data, qd: &[f64], qdd: &[f64]
     let full = model.rotor_model() == RotorModel::Full;
     for i in 0..n {
         let b = &model.bodies()[i];
-        // Joint axes of the support of i, in body i coordinates.
-        data.s_anc[i * n + i] = data.s[i];
-        if let Some(p) = b.parent {
-            for &k in model.support(p) {
-                data.s_anc[i * n + k] = data.x_up[i].apply_motion(&data.s_anc[p * n + k]);
-            }
-        }
+        ancestor_axes(model, data, i);
         let (v, a) = (data.v[i], data.a[i]);
         for &k in model.support(i) {
             out.put(k, 10 * i, &row_block(&data.s_anc[i * n + k], &v, &a));
@@ -162,6 +156,18 @@ pub(crate) fn joint_rows(model: &Model, data: &mut Data, qd: &[f64], qdd: &[f64]
         }
         out.set(i, layout.viscous_col + i, qd[i]);
         out.set(i, layout.coulomb_col + i, sign(qd[i]));
+    }
+}
+
+/// `data.s_anc` of body `i`: the joint axes of its support in body `i` coordinates, from its
+/// parent's (filled first, as a parent precedes its children) and the transforms in `data`.
+pub(crate) fn ancestor_axes(model: &Model, data: &mut Data, i: usize) {
+    let n = model.dof();
+    data.s_anc[i * n + i] = data.s[i];
+    if let Some(p) = model.bodies()[i].parent {
+        for &k in model.support(p) {
+            data.s_anc[i * n + k] = data.x_up[i].apply_motion(&data.s_anc[p * n + k]);
+        }
     }
 }
 

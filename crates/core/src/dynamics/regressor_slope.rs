@@ -12,6 +12,7 @@
 //! `X_rot = X_J(N q_i) X_rot,0` likewise with `S_rot`). Adjoints of motions are forces:
 //! `Xᵀ f` carries one from child to parent ([`Transform::inv_apply_force`]).
 
+use super::regressor::ancestor_axes;
 use super::{base_acceleration, check_len, forward_pass, Data};
 use crate::model::{Model, RotorModel};
 use crate::spatial::{Force, Motion, RigidInertia, Transform};
@@ -37,7 +38,9 @@ pub fn weighted_regressor_slope(
         "the weight must have the regressor's shape"
     );
     forward_pass(model, data, q, qd, qdd, true);
-    fill_axes(model, data);
+    for i in 0..n {
+        ancestor_axes(model, data, i);
+    }
     let mut adj = Adjoint::new(n);
     for i in (0..n).rev() {
         adj.body_rows(model, data, w, i);
@@ -46,20 +49,6 @@ pub fn weighted_regressor_slope(
         adj.out[i][1] += w[(i, model.layout().viscous_col + i)];
     }
     adj.out
-}
-
-/// `data.s_anc`: each body's ancestors' joint axes in its coordinates (as the regressor
-/// fills them).
-fn fill_axes(model: &Model, data: &mut Data) {
-    let n = model.dof();
-    for (i, b) in model.bodies().iter().enumerate() {
-        data.s_anc[i * n + i] = data.s[i];
-        if let Some(p) = b.parent {
-            for &k in model.support(p) {
-                data.s_anc[i * n + k] = data.x_up[i].apply_motion(&data.s_anc[p * n + k]);
-            }
-        }
-    }
 }
 
 /// `I(π)` of ten entries of `W` in the paper's order `[m, h, Ixx, Ixy, Ixz, Iyy, Iyz, Izz]`
