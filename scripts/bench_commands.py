@@ -16,10 +16,8 @@ Rows (medians of `--rounds` runs, default 5, each a fresh process):
   scored on their true motion by `physid excite --score`.
 
 There is no Python peer of the diagnosis. Timing is reported, never asserted.
-
-usage: python scripts/bench_commands.py [--physid PATH] [--rounds N] [--rows a,b,…]
-                                        [--threads 1,2,4] [--quick] [--no-peer]
 """
+import argparse
 import json
 import os
 import re
@@ -27,7 +25,7 @@ import statistics
 import sys
 import tempfile
 
-from physid_common import KUKA_URDF, ROOT, physid_bin, run, timed
+from physid_common import KUKA_URDF, ROOT, arguments, names_from, physid_bin, positive_int, run, timed
 
 ROWS = ["diagnose_kuka", "excite_kuka", "main_job"]
 
@@ -79,19 +77,26 @@ def excite_rows(binary, d, rounds, peer):
           f"log det F/r {score(binary, theirs):.3f}  (physid {pm / m:.1f}x faster)", flush=True)
 
 
-def arg(name, default):
-    return sys.argv[sys.argv.index(name) + 1] if name in sys.argv else default
+def thread_counts(text):
+    """An argparse type: comma-separated thread counts, each at least 1."""
+    try:
+        return [positive_int(t) for t in text.split(",")]
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"{text} is not a list of thread counts such as 1,2,4")
 
 
 def main():
-    binary = physid_bin(sys.argv)
-    rounds = int(arg("--rounds", "5"))
-    chosen = arg("--rows", ",".join(ROWS)).split(",")
-    threads = [int(t) for t in arg("--threads", "1,2,4,8,16").split(",")]
-    unknown = [r for r in chosen if r not in ROWS]
-    if unknown or rounds < 1 or any(t < 1 for t in threads):
-        sys.exit(f"bench_commands: unknown rows {unknown} (choose from {', '.join(ROWS)}), "
-                 "--rounds < 1 or a thread count < 1")
+    args = arguments(
+        __doc__,
+        (["--rounds"], dict(type=positive_int, default=5, help="runs per row (default 5)")),
+        (["--rows"], dict(type=names_from(ROWS), default=ROWS,
+                          help=f"comma-separated rows (default all: {','.join(ROWS)})")),
+        (["--threads"], dict(type=thread_counts, default=[1, 2, 4, 8, 16],
+                             help="the main job's thread counts (default 1,2,4,8,16)")),
+        (["--quick"], dict(action="store_true", help="the main job with 3 seeds")),
+        (["--no-peer"], dict(action="store_true", help="skip the SciPy excitation peer")))
+    binary = physid_bin(args.physid)
+    rounds, chosen, threads = args.rounds, args.rows, args.threads
     cores = os.cpu_count() or 1
     print(f"whole process, medians of {rounds} runs (min..max), {cores} cores")
     real = [os.path.join(ROOT, "data", "kuka_lwr4", f"measurements_{i}.csv") for i in (1, 2, 3)]
@@ -104,9 +109,9 @@ def main():
                                    "--report", os.path.join(d, "diagnosis")], rounds)
             print(f"{'diagnose_kuka':<22} {m:7.2f} s ({lo:.2f}..{hi:.2f})", flush=True)
         if "excite_kuka" in chosen:
-            excite_rows(binary, d, rounds, "--no-peer" not in sys.argv)
+            excite_rows(binary, d, rounds, not args.no_peer)
         if "main_job" in chosen:
-            scenario = main_job_scenario(d, "--quick" in sys.argv)
+            scenario = main_job_scenario(d, args.quick)
             one = None
             for t in threads:
                 m, lo, hi, _ = median_of([binary, "experiment", scenario, "--out",

@@ -22,8 +22,6 @@ with `consistent` and with `identify`'s default `ellipsoid` (bounds from the URD
 the real KUKA runs 1 + 2 with run 3 held out (`ellipsoid`; the peer also predicts run 3 and
 the validation RMS is compared); the leg's shell experiment (10,000 samples, 66 parameters,
 `ellipsoid`).
-
-usage: python scripts/bench_identify.py [--physid PATH] [--rounds N] [--rows a,b,…]
 """
 import json
 import os
@@ -31,7 +29,7 @@ import statistics
 import sys
 import tempfile
 
-from physid_common import KUKA_URDF, ROOT, physid_bin, run, timed
+from physid_common import KUKA_URDF, ROOT, arguments, names_from, physid_bin, positive_int, run, timed
 
 ROWS = ["kuka_sim_consistent", "kuka_sim_ellipsoid", "kuka_real_heldout", "leg_shell"]
 
@@ -134,14 +132,16 @@ def setup(binary, d):
 
 
 def main():
-    if "--peer" in sys.argv:
-        return peer(sys.argv[sys.argv.index("--peer") + 1])
-    binary = physid_bin(sys.argv)
-    rounds = int(sys.argv[sys.argv.index("--rounds") + 1]) if "--rounds" in sys.argv else 5
-    chosen = sys.argv[sys.argv.index("--rows") + 1].split(",") if "--rows" in sys.argv else ROWS
-    unknown = [r for r in chosen if r not in ROWS]
-    if unknown or rounds < 1:
-        sys.exit(f"bench_identify: unknown rows {unknown} (choose from {', '.join(ROWS)}) or --rounds < 1")
+    args = arguments(
+        __doc__,
+        (["--rounds"], dict(type=positive_int, default=5, help="alternated runs per row (default 5)")),
+        (["--rows"], dict(type=names_from(ROWS), default=ROWS,
+                          help=f"comma-separated rows (default all: {','.join(ROWS)})")),
+        (["--peer"], dict(metavar="SPEC", help="run as the peer on one row's spec (internal)")))
+    if args.peer:
+        return peer(args.peer)
+    binary = physid_bin(args.physid)
+    rounds, chosen = args.rounds, args.rows
     failed = 0
     with tempfile.TemporaryDirectory() as d:
         specs = setup(binary, d)

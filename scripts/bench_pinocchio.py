@@ -2,17 +2,14 @@
 on the same models (the link-only Cheetah-3 leg exported by physid, and the KUKA LWR4+), called
 from Python as a Python user would, and once more with the per-call Python overhead measured
 separately (an empty pinocchio call) so the C++ cost can be estimated.
-
-usage: python scripts/bench_pinocchio.py [--physid PATH]
 """
-import sys
 import tempfile
 import time
 
 import numpy as np
 import pinocchio as pin
 
-from physid_common import KUKA_URDF, export, physid_bin
+from physid_common import KUKA_URDF, arguments, export, physid_bin
 
 
 def per_call(f, states, reps=20):
@@ -38,8 +35,9 @@ def bench(label, urdf):
 
 
 def main():
+    binary = physid_bin(arguments(__doc__).physid)
     with tempfile.TemporaryDirectory() as d:
-        bench("cheetah3 leg links only", export(physid_bin(sys.argv), ["--robot", "cheetah3", "--no-rotors"], "urdf", d))
+        bench("cheetah3 leg links only", export(binary, ["--robot", "cheetah3", "--no-rotors"], "urdf", d))
     bench("kuka lwr4", KUKA_URDF)
 
 

@@ -9,8 +9,8 @@
   as fast as a Python loop goes (the samples' rows passed as they are, the joints being in
   pinocchio's order, into one preallocated array): the fair ratio is the second.
 
-usage: python scripts/bench_python.py [--package DIR]   (DIR holds physid/ with the extension
-built, as scripts/test.sh makes it; default: $PHYSID_PYTHON)
+The package folder (`--package DIR`, default $PHYSID_PYTHON) holds physid/ with the extension
+built, as scripts/test.sh makes it.
 """
 import os
 import statistics
@@ -21,10 +21,12 @@ import warnings
 import numpy as np
 import pinocchio as pin
 
-from physid_common import KUKA_URDF, ROOT
+from physid_common import KUKA_URDF, ROOT, arguments
 
-argv = sys.argv[1:]
-package = argv[argv.index("--package") + 1] if "--package" in argv else os.environ.get("PHYSID_PYTHON")
+args = arguments(__doc__, (["--package"], dict(
+    metavar="DIR", default=os.environ.get("PHYSID_PYTHON"),
+    help="a folder holding the built physid package (default: $PHYSID_PYTHON)")), binary=False)
+package = args.package
 if not package:
     sys.exit("give --package DIR or $PHYSID_PYTHON (a folder holding the built physid package)")
 sys.path.insert(0, package)

@@ -6,18 +6,15 @@ ellipsoids). This script builds the paper's constraints itself from the paramete
 (I(pi) 6x6, J(pi) 4x4 >= eps 1, tr(J Q) >= 0, C(pi) >= 0, friction >= 0), solves with CVXPY,
 and compares the optimal objective with physid's. Exits non-zero if any differs by more than
 1e-6 relative.
-
-usage: python scripts/check_cvxpy.py [--physid PATH]
 """
 import json
 import os
-import sys
 import tempfile
 
 import cvxpy as cp
 import numpy as np
 
-from physid_common import ROOT, Report, physid_bin, run
+from physid_common import ROOT, Report, arguments, physid_bin, run
 
 TOL = 1e-6
 
@@ -132,7 +129,7 @@ def logdet_suboptimality(problem):
 
 
 def main():
-    binary = physid_bin(sys.argv)
+    binary = physid_bin(arguments(__doc__).physid)
     report = Report("check_cvxpy")
     scenario = os.path.join(ROOT, "scenarios", "cheetah3_shell.toml")
     with tempfile.TemporaryDirectory() as d:

@@ -2,19 +2,16 @@
 them: every file is there, the CSV and Parquet tables parse (pyarrow) and agree, the grid is the
 one the provenance declares, the numbers are finite, the SVGs are well-formed XML, and the
 physics of the result holds (the physically consistent sets give consistent models).
-
-usage: python scripts/check_main_outputs.py RESULT_DIR
 """
 import csv
 import json
 import math
 import os
-import sys
 import xml.etree.ElementTree as ET
 
 import pyarrow.parquet as pq
 
-from physid_common import Report
+from physid_common import Report, arguments
 
 FILES = ["rows.parquet", "rows.csv", "summary.parquet", "summary.csv", "summary.md",
          "validation_error.svg", "parameter_error.svg", "provenance.json"]
@@ -26,7 +23,8 @@ def read_csv(path):
 
 
 def main():
-    out = sys.argv[1]
+    out = arguments(__doc__, (["result_dir"], dict(
+        metavar="RESULT_DIR", help="the folder scripts/run.sh wrote")), binary=False).result_dir
     report = Report("main command outputs")
     missing = [f for f in FILES if not os.path.isfile(os.path.join(out, f))]
     report.check(f"all {len(FILES)} files written (missing: {', '.join(missing) or 'none'})",

@@ -7,21 +7,18 @@ physid's contact model against MuJoCo's on the quadruped standing still (the fee
 trunk's height and the joints at rest) and in motion: dropped, pushed with its feet sticking, and
 pushed on a slippery ground (touchdown, the trunk's height, position and joints, the feet's
 loads). Exits non-zero on disagreement.
-
-usage: python scripts/check_mujoco.py [--physid PATH]
 """
 import csv
 import json
 import os
-import sys
 import tempfile
 import xml.etree.ElementTree as ElementTree
 
 import mujoco
 import numpy as np
 
-from physid_common import (KUKA_URDF, SOLO12_URDF, Report, dynamics, export, identified_quadruped,
-                           physid_bin, rel_err, run)
+from physid_common import (KUKA_URDF, SOLO12_URDF, Report, arguments, dynamics, export,
+                           identified_quadruped, physid_bin, rel_err, run)
 
 TOL = 1e-9
 
@@ -355,7 +352,7 @@ def check_placeholder_arm(report, binary, directory):
 
 
 def main():
-    binary = physid_bin(sys.argv)
+    binary = physid_bin(arguments(__doc__).physid)
     report = Report("check_mujoco")
     with tempfile.TemporaryDirectory() as d:
         xml = export(binary, ["--robot", "cheetah3"], "mjcf", d)

@@ -16,19 +16,16 @@ Checked:
 - the gap splits the run, the dropped samples are counted, the finger is locked;
 - physid's model of the mimic finger (a sliding rotor) is pinocchio's with mimic=True: mass
   matrix and torques at random states.
-
-usage: python scripts/check_panda.py [--physid PATH]
 """
 import json
 import os
-import sys
 import tempfile
 
 import numpy as np
 import pinocchio as pin
 
 import panda_truth as P
-from physid_common import Report, dynamics, physid_bin, run
+from physid_common import Report, arguments, dynamics, physid_bin, run
 
 SEED = 1
 
@@ -71,7 +68,7 @@ def check_mimic(report, binary):
 
 
 def main():
-    binary = physid_bin(sys.argv)
+    binary = physid_bin(arguments(__doc__).physid)
     report = Report("Panda (pinocchio truth, logs as robots write them)")
     check_mimic(report, binary)
     with tempfile.TemporaryDirectory() as d:

@@ -3,8 +3,6 @@ inertial parameters read from URDF, on the link-only Cheetah-3 leg (exported by 
 and on the real KUKA LWR4+ URDF (read by both); and RNEA of the full leg with its rotors, exported
 as URDF mimic joints and loaded with mimic=True; and a KUKA model identified on its real logs,
 written into the KUKA's own URDF by `identify --out-urdf`. Exits non-zero on disagreement.
-
-usage: python scripts/check_pinocchio.py [--physid PATH]
 """
 import os
 import sys
@@ -13,8 +11,8 @@ import tempfile
 import numpy as np
 import pinocchio as pin
 
-from physid_common import (KUKA_URDF, SOLO12_URDF, PIN_FROM_PAPER, Report, dynamics, export,
-                           identified_quadruped, physid_bin, rel_err, run)
+from physid_common import (KUKA_URDF, SOLO12_URDF, PIN_FROM_PAPER, Report, arguments, dynamics,
+                           export, identified_quadruped, physid_bin, rel_err, run)
 
 TOL = 1e-9
 
@@ -194,7 +192,7 @@ def check_ros_style_arm(report, binary, directory):
 
 
 def main():
-    binary = physid_bin(sys.argv)
+    binary = physid_bin(arguments(__doc__).physid)
     report = Report("check_pinocchio")
     with tempfile.TemporaryDirectory() as d:
         leg = ["--robot", "cheetah3", "--no-rotors"]

@@ -13,8 +13,8 @@ Checked:
 - bad arrays raise ValueError naming the array, sample and joint;
 - python/examples/identify_from_arrays.py runs.
 
-usage: python scripts/check_python_package.py [--package DIR]   (DIR holds physid/ with the
-extension built: see scripts/test.sh; default: $PHYSID_PYTHON)
+The package folder (`--package DIR`, default $PHYSID_PYTHON) holds physid/ with the extension
+built, as scripts/test.sh makes it.
 """
 import json
 import os
@@ -26,10 +26,12 @@ import xml.etree.ElementTree as ET
 import numpy as np
 import pinocchio as pin
 
-from physid_common import KUKA_URDF, physid_bin, run
+from physid_common import KUKA_URDF, arguments, physid_bin, run
 
-argv = sys.argv[1:]
-package = argv[argv.index("--package") + 1] if "--package" in argv else os.environ.get("PHYSID_PYTHON")
+args = arguments(__doc__, (["--package"], dict(
+    metavar="DIR", default=os.environ.get("PHYSID_PYTHON"),
+    help="a folder holding the built physid package (default: $PHYSID_PYTHON)")))
+package = args.package
 if not package:
     sys.exit("give --package DIR or $PHYSID_PYTHON (a folder holding the built physid package)")
 sys.path.insert(0, package)
@@ -44,7 +46,7 @@ def check(name, ok, detail=""):
     passed, failed = passed + ok, failed + (not ok)
 
 
-binary = physid_bin(argv)
+binary = physid_bin(args.physid)
 
 # describe() is the CLI's model JSON.
 for robot in [KUKA_URDF, "cheetah3"]:

@@ -10,7 +10,7 @@ import sys
 import tempfile
 from html.parser import HTMLParser
 
-from physid_common import KUKA_URDF, ROOT, physid_bin, run
+from physid_common import KUKA_URDF, ROOT, arguments, physid_bin, run
 
 BROWSERS = ["chromium-headless-shell", "chromium", "chromium-browser", "google-chrome"]
 
@@ -77,7 +77,7 @@ def colored_rows(path):
 
 
 def main():
-    binary = physid_bin(sys.argv)
+    binary = physid_bin(arguments(__doc__).physid)
     browser = next((b for b in BROWSERS if shutil.which(b)), None)
     passed = failed = 0
 

@@ -15,21 +15,18 @@ absolute header stamps and jittered log times; `physid identify-floating --stamp
 give the CSV's parameters to 1e-9 relative, and with the odometry at half the rate, starting
 later, the left-out samples must be noted and the identified mass stay within 1 % of the CSV's.
 Exits non-zero on disagreement.
-
-usage: python scripts/check_rosbag.py [--physid PATH]
 """
 import csv
 import json
 import os
 import subprocess
-import sys
 import tempfile
 
 import numpy as np
 from rosbags.rosbag2 import StoragePlugin, Writer
 from rosbags.typesys import Stores, get_typestore
 
-from physid_common import KUKA_URDF, Report, physid_bin
+from physid_common import KUKA_URDF, Report, arguments, physid_bin
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 RUN1 = os.path.join(ROOT, "data", "kuka_lwr4", "measurements_1.csv")
@@ -262,7 +259,7 @@ def check_floating_imu(binary, report, d):
 
 
 def main():
-    binary = physid_bin(sys.argv)
+    binary = physid_bin(arguments(__doc__).physid)
     report = Report("check_rosbag")
     t, q, dq, tau = read_run(RUN1)
     t_ns = T0_NS + np.round((t - t[0]) * 1e9).astype(np.int64)

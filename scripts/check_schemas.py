@@ -10,11 +10,11 @@ import tempfile
 
 import jsonschema
 
-from physid_common import KUKA_URDF, ROOT, physid_bin, run
+from physid_common import KUKA_URDF, ROOT, arguments, physid_bin, run
 
 
 def main():
-    binary = physid_bin(sys.argv)
+    binary = physid_bin(arguments(__doc__).physid)
     passed = failed = 0
 
     def check(name, doc, schema_name):

@@ -15,8 +15,6 @@ key, state, spool and free ports, nothing under /etc), then:
 
 Needs root (slurmd starts jobs as their user). The daemons are stopped when the check ends,
 and any left by an interrupted earlier run of this check are stopped when it starts.
-
-usage: python scripts/check_slurm.py [--physid PATH]
 """
 import os
 import re
@@ -28,7 +26,7 @@ import sys
 import tempfile
 import time
 
-from physid_common import ROOT, Report, physid_bin
+from physid_common import ROOT, Report, arguments, physid_bin
 
 PREFIX = "physid-slurm-"  # the temporary directory's prefix, how leftover daemons are found
 SAMPLE_SIZE = os.path.join(ROOT, "scenarios", "sample_size.toml")
@@ -283,7 +281,7 @@ def run_killed(cluster, report, binary, sweep, out, reference):
 
 
 def main():
-    binary = os.path.abspath(physid_bin(sys.argv))
+    binary = os.path.abspath(physid_bin(arguments(__doc__).physid))
     report = Report("check_slurm")
     if os.geteuid() != 0:
         sys.exit("check_slurm: needs root (slurmd starts jobs as their user): run as root")

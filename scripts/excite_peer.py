@@ -16,19 +16,17 @@ and the limits kept, given as the design's JSON) and designs anew, independently
 
 Writes the scenario with its coefficients in place of physid's, for `physid excite --score`
 to evaluate both motions the same way.
-
-usage: python scripts/excite_peer.py SCENARIO.toml DESIGN.json OUT.toml [--seed S] [--maxiter N]
-(DESIGN.json: `physid excite --json` of the run that wrote SCENARIO.toml, for its limits)
 """
 import json
 import os
 import re
-import sys
 import time
 
 import numpy as np
 import pinocchio as pin
 import scipy.optimize as so
+
+from physid_common import arguments, positive_int
 
 POINTS = 100  # limit points per period in the optimization
 EPS = 1e-3  # finite-difference step (rad/s² of each coefficient)
@@ -110,10 +108,16 @@ def into_limits(fourier, x, ranges, bounds, harmonics):
 
 
 def main():
-    args = [a for a in sys.argv[1:] if not a.startswith("--")]
-    opt = lambda name, default: type(default)(sys.argv[sys.argv.index(name) + 1]) if name in sys.argv else default
-    seed, maxiter = opt("--seed", 1), opt("--maxiter", 300)
-    scenario, design_json, out = args[:3]
+    args = arguments(
+        __doc__,
+        (["scenario"], dict(metavar="SCENARIO.toml", help="the scenario physid excite wrote")),
+        (["design_json"], dict(metavar="DESIGN.json",
+                               help="`physid excite --json` of the run that wrote it (its limits)")),
+        (["out"], dict(metavar="OUT.toml", help="where the peer's scenario is written")),
+        (["--seed"], dict(type=int, default=1, help="the random start's seed (default 1)")),
+        (["--maxiter"], dict(type=positive_int, default=300, help="SLSQP iterations (default 300)")), binary=False)
+    seed, maxiter = args.seed, args.maxiter
+    scenario, design_json, out = args.scenario, args.design_json, args.out
     t0 = time.perf_counter()
     with open(scenario) as f:
         text = f.read()

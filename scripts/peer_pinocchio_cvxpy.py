@@ -16,8 +16,6 @@ With `--kuka`, the same on real data: the KUKA LWR4+ URDF and its logged runs 1 
 URDF geometry), pinocchio's regressor plus viscous and Coulomb columns; the peer's time covers
 reading the CSVs, the regressor, the normal equations and the solve (not Python's start-up and
 imports), physid's the whole `identify` command.
-
-usage: python scripts/peer_pinocchio_cvxpy.py [--physid PATH] [--samples N] [--kuka]
 """
 import functools
 import json
@@ -31,7 +29,7 @@ import numpy as np
 import pinocchio as pin
 
 from check_cvxpy import solve
-from physid_common import PIN_FROM_PAPER, ROOT, physid_bin, run
+from physid_common import PIN_FROM_PAPER, ROOT, arguments, physid_bin, positive_int, run
 
 
 def rpy_matrix(r, p, y):
@@ -213,10 +211,15 @@ def kuka(binary):
 
 
 def main():
-    binary = physid_bin(sys.argv)
-    if "--kuka" in sys.argv:
+    args = arguments(
+        __doc__,
+        (["--samples"], dict(type=positive_int, default=10000,
+                             help="samples of the shell experiment (default 10000)")),
+        (["--kuka"], dict(action="store_true", help="the real KUKA runs 1 and 2 instead")))
+    binary = physid_bin(args.physid)
+    if args.kuka:
         return kuka(binary)
-    samples = int(sys.argv[sys.argv.index("--samples") + 1]) if "--samples" in sys.argv else 10000
+    samples = args.samples
     scenario = os.path.join(ROOT, "scenarios", "cheetah3_shell.toml")
     with tempfile.TemporaryDirectory() as d:
         csv_path, mcap = os.path.join(d, "shell.csv"), os.path.join(d, "shell.mcap")

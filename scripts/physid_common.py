@@ -1,4 +1,5 @@
 """Helpers shared by the cross-check scripts: run the physid binary, load its JSON."""
+import argparse
 import json
 import os
 import subprocess
@@ -15,10 +16,44 @@ KUKA_URDF = os.path.join(ROOT, "data", "kuka_lwr4", "kuka_lwr4.urdf")
 SOLO12_URDF = os.path.join(ROOT, "data", "solo12", "solo12.urdf")
 
 
-def physid_bin(argv):
-    """The physid binary: --physid PATH, $PHYSID_BIN, or the release build."""
-    if "--physid" in argv:
-        return argv[argv.index("--physid") + 1]
+def arguments(doc, *options, binary=True):
+    """The script's command line, parsed: `--physid PATH` (if the script runs the `binary`) and
+    the script's own `options`, each `(flags, argparse keywords)`. `-h` prints the script's docstring; an unknown option, a missing
+    value or a value of the wrong type exits with argparse's message naming it."""
+    parser = argparse.ArgumentParser(description=doc,
+                                     formatter_class=argparse.RawDescriptionHelpFormatter)
+    if binary:
+        parser.add_argument("--physid", metavar="PATH",
+                            help="the physid binary (default: $PHYSID_BIN, else the release build)")
+    for flags, keywords in options:
+        parser.add_argument(*flags, **keywords)
+    return parser.parse_args()
+
+
+def positive_int(text):
+    """An argparse type: an integer of at least 1."""
+    value = int(text)
+    if value < 1:
+        raise argparse.ArgumentTypeError(f"{text} is not at least 1")
+    return value
+
+
+def names_from(choices):
+    """An argparse type: a comma-separated list of names, each one of `choices`."""
+    def parse(text):
+        names = [n for n in text.split(",") if n]
+        unknown = [n for n in names if n not in choices]
+        if unknown or not names:
+            raise argparse.ArgumentTypeError(
+                f"unknown {', '.join(unknown) or 'empty list'} (choose from {', '.join(choices)})")
+        return names
+    return parse
+
+
+def physid_bin(path=None):
+    """The physid binary: `path` (from --physid), $PHYSID_BIN, or the release build."""
+    if path:
+        return path
     if os.environ.get("PHYSID_BIN"):
         return os.environ["PHYSID_BIN"]
     target = os.environ.get("CARGO_TARGET_DIR", os.path.join(ROOT, "target"))

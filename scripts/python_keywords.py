@@ -7,9 +7,8 @@ by the text below (PYTHON_ONLY).
 The same text closes each function's docstring in the type stubs (python/physid/_physid.pyi),
 after a line "Keywords:", for editors that read the stubs.
 
-usage: python scripts/python_keywords.py [--write]
-  (default: check that python/keywords/ and the stubs are current; $PHYSID_BIN the built physid, and
-   $PHYSID_PYTHON a folder holding the built package, as scripts/test.sh makes them)
+By default it checks that python/keywords/ and the stubs are current; $PHYSID_BIN is the built
+physid and $PHYSID_PYTHON a folder holding the built package, as scripts/test.sh makes them.
 """
 import inspect
 import json
@@ -19,7 +18,7 @@ import subprocess
 import sys
 import textwrap
 
-from physid_common import ROOT
+from physid_common import ROOT, arguments, physid_bin
 
 # Python function -> the CLI command whose flags it takes.
 COMMANDS = {
@@ -70,9 +69,7 @@ PYTHON_ONLY = {
 }
 
 
-def cli_flags():
-    binary = os.environ.get("PHYSID_BIN") or os.path.join(
-        os.environ.get("CARGO_TARGET_DIR", os.path.join(ROOT, "target")), "release", "physid")
+def cli_flags(binary):
     out = subprocess.run([binary, "keywords"], capture_output=True, text=True, check=True)
     return {command: {f["flag"]: f for f in flags} for command, flags in json.loads(out.stdout).items()}
 
@@ -138,12 +135,14 @@ def in_stub(stub, name, text):
 
 
 if __name__ == "__main__":
+    args = arguments(__doc__, (["--write"], dict(
+        action="store_true", help="write python/keywords/ and the stubs instead of checking them")))
     package = os.environ.get("PHYSID_PYTHON")
     if package:
         sys.path.insert(0, package)
     import physid  # noqa: E402
 
-    flags = cli_flags()
+    flags = cli_flags(physid_bin(args.physid))
     folder = os.path.join(ROOT, "python", "keywords")
     stale = []
     stub_path = os.path.join(ROOT, "python", "physid", "_physid.pyi")
@@ -152,13 +151,13 @@ if __name__ == "__main__":
         text = document(name, flags[command])
         stub = in_stub(stub, name, text)
         path = os.path.join(folder, f"{name}.txt")
-        if "--write" in sys.argv:
+        if args.write:
             os.makedirs(folder, exist_ok=True)
             with open(path, "w") as f:
                 f.write(text)
         elif not os.path.exists(path) or open(path).read() != text:
             stale.append(path)
-    if "--write" in sys.argv:
+    if args.write:
         with open(stub_path, "w") as f:
             f.write(stub)
     elif open(stub_path).read() != stub:
