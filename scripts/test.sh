@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # Runs every physid test on a fresh machine: formatting, lints, the Rust test suite, and the
-# Python cross-checks against pinocchio, MuJoCo and CVXPY, the rendering of diagnose's
-# report.html in a headless browser, the Slurm job-array recipe of docs/sweeps.md on a
+# Python cross-checks against pinocchio, MuJoCo and CVXPY, the scripts' command lines, the
+# rendering of diagnose's report.html in a headless browser, the Slurm job-array recipe of docs/sweeps.md on a
 # single-node Slurm cluster, and the README's main command
 # (scripts/run.sh into a temporary directory, its outputs parsed). Installs what it needs
 # (scripts/setup.sh: Debian packages, the Python venv) when missing. Build outputs go to $CARGO_TARGET_DIR (default
@@ -47,7 +47,7 @@ export PHYSID_PYTHON="$main_out/python"
 "$PHYSID_VENV/bin/python" -m pip install -q --disable-pip-version-check --no-deps --no-index \
   --target "$PHYSID_PYTHON" "$main_out"/wheels/physid-*.whl
 ls -l "$main_out"/wheels/physid-*.whl
-for s in check_pinocchio check_mujoco check_cvxpy check_rosbag check_panda check_schemas check_report_html check_slurm check_python_package python_keywords pytest check_main_outputs; do
+for s in check_scripts_cli check_pinocchio check_mujoco check_cvxpy check_rosbag check_panda check_schemas check_report_html check_slurm check_python_package python_keywords pytest check_main_outputs; do
   if [ "$s" = pytest ]; then
     step "the Python package's tests (pytest python/tests)"
     out=$("$PHYSID_VENV/bin/python" -m pytest -q -p no:cacheprovider python/tests 2>&1) && rc=0 || rc=$?
