@@ -9,6 +9,10 @@ Rows (medians of `--rounds` runs, default 5, each a fresh process):
   each T of `--threads` (default 1,2,4,8,16), with its speed-up over one thread and the
   parallel efficiency (speed-up / min(T, cores)); threads beyond the machine's cores are run
   and reported, marked as oversubscribed. With `--quick` the main job runs 3 seeds.
+- `blind_T`: the simulated blind benchmark (`physid blind --cases N --seed 1 --threads T`,
+  `--blind-cases`, default 21: one of each category's slots) for each T of `--threads`, scaled
+  the same way. Not in the default rows (a 21-case run takes about half a minute on 2 cores);
+  `--rows blind` adds it.
 
 - `excite_kuka_scipy_peer`: scripts/excite_peer.py, SLSQP over pinocchio's regressor with the
   same basis, objective, timing and limits as physid's design (from its scenario and JSON),
@@ -27,7 +31,8 @@ import tempfile
 
 from physid_common import KUKA_URDF, ROOT, arguments, names_from, physid_bin, positive_int, run, timed
 
-ROWS = ["diagnose_kuka", "excite_kuka", "main_job"]
+ROWS = ["diagnose_kuka", "excite_kuka", "main_job", "blind"]
+DEFAULT_ROWS = ["diagnose_kuka", "excite_kuka", "main_job"]
 
 
 def median_of(cmd, rounds):
@@ -89,11 +94,14 @@ def main():
     args = arguments(
         __doc__,
         (["--rounds"], dict(type=positive_int, default=5, help="runs per row (default 5)")),
-        (["--rows"], dict(type=names_from(ROWS), default=ROWS,
-                          help=f"comma-separated rows (default all: {','.join(ROWS)})")),
+        (["--rows"], dict(type=names_from(ROWS), default=DEFAULT_ROWS,
+                          help=f"comma-separated rows of {','.join(ROWS)} "
+                               f"(default {','.join(DEFAULT_ROWS)})")),
         (["--threads"], dict(type=thread_counts, default=[1, 2, 4, 8, 16],
-                             help="the main job's thread counts (default 1,2,4,8,16)")),
+                             help="thread counts of the main job and blind rows (default 1,2,4,8,16)")),
         (["--quick"], dict(action="store_true", help="the main job with 3 seeds")),
+        (["--blind-cases"], dict(type=positive_int, default=21,
+                                 help="cases of the blind row (default 21)")),
         (["--no-peer"], dict(action="store_true", help="skip the SciPy excitation peer")))
     binary = physid_bin(args.physid)
     rounds, chosen, threads = args.rounds, args.rows, args.threads
@@ -112,19 +120,29 @@ def main():
             excite_rows(binary, d, rounds, not args.no_peer)
         if "main_job" in chosen:
             scenario = main_job_scenario(d, args.quick)
-            one = None
-            for t in threads:
-                m, lo, hi, _ = median_of([binary, "experiment", scenario, "--out",
-                                       os.path.join(d, f"main_{t}"), "--threads", str(t)], rounds)
-                one = m if t == 1 else one
-                line = f"{f'main_job_{t}':<22} {m:7.2f} s ({lo:.2f}..{hi:.2f})"
-                if one is not None:
-                    speedup = one / m
-                    line += f"  speed-up {speedup:4.2f}x, efficiency {speedup / min(t, cores):4.2f}"
-                if t > cores:
-                    line += "  (oversubscribed)"
-                print(line, flush=True)
+            scaling_rows("main_job", [binary, "experiment", scenario], d, threads, rounds)
+        if "blind" in chosen:
+            blind = [binary, "blind", "--scenario", os.path.join(ROOT, "scenarios", "blind.toml"),
+                     "--cases", str(args.blind_cases), "--seed", "1"]
+            scaling_rows("blind", blind, d, threads, rounds)
 
+
+def scaling_rows(name, cmd, d, threads, rounds):
+    """`cmd --out DIR --threads T` for each T, timed, with its speed-up over one thread and the
+    parallel efficiency (speed-up / min(T, cores)); threads beyond the cores are marked."""
+    cores = os.cpu_count() or 1
+    one = None
+    for t in threads:
+        m, lo, hi, _ = median_of([*cmd, "--out", os.path.join(d, f"{name}_{t}"), "--threads", str(t)],
+                                 rounds)
+        one = m if t == 1 else one
+        line = f"{f'{name}_{t}':<22} {m:7.2f} s ({lo:.2f}..{hi:.2f})"
+        if one is not None:
+            speedup = one / m
+            line += f"  speed-up {speedup:4.2f}x, efficiency {speedup / min(t, cores):4.2f}"
+        if t > cores:
+            line += "  (oversubscribed)"
+        print(line, flush=True)
 
 if __name__ == "__main__":
     main()

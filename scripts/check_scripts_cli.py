@@ -22,6 +22,7 @@ BAD_VALUES = [
     ("bench_commands", ["--rows", "diagnose"], "unknown diagnose (choose from"),
     ("bench_commands", ["--threads", "1,x"], "--threads: 1,x is not a list of thread counts"),
     ("bench_commands", ["--threads", "2,0"], "--threads: 0 is not at least 1"),
+    ("bench_commands", ["--blind-cases", "0"], "--blind-cases: 0 is not at least 1"),
     ("bench_identify", ["--rounds"], "--rounds: expected one argument"),
     ("bench_identify", ["--rows", ","], "--rows: unknown empty list"),
     ("peer_pinocchio_cvxpy", ["--samples", "-3"], "--samples: -3 is not at least 1"),
