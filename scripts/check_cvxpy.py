@@ -3,7 +3,7 @@
 physid simulates a short shell experiment, identifies it under each constraint set and exports
 the problem (objective theta' H theta - 2 g' theta + c, the bodies' parameter columns and
 ellipsoids). This script builds the paper's constraints itself from the parameter vector
-(I(pi) 6x6, J(pi) 4x4 >= eps 1, tr(J Q) >= 0, C(pi) >= 0, friction >= 0), solves with CVXPY,
+(I(pi) 6x6, J(pi) 4x4 >= eps 1, tr(J Q) >= eps, C(pi) >= 0, friction >= 0), solves with CVXPY,
 and compares the optimal objective with physid's. Exits non-zero if any differs by more than
 1e-6 relative.
 """
@@ -62,7 +62,7 @@ def solve(problem, solver, return_theta=False):
             qs = np.array(e["qs"]).reshape(3, 3, order="F")
             qi = np.linalg.inv(qs)
             q4 = np.block([[-qi, (qi @ xs)[:, None]], [(qi @ xs)[None, :], np.array([[1 - xs @ qi @ xs]])]])
-            cons.append(cp.trace(j @ q4) >= 0)
+            cons.append(cp.trace(j @ q4) >= eps)  # physid keeps the same margin as on J
             dvec = hcol - cp.reshape(m * xs, (3, 1), order="F")
             c4 = cp.bmat([[cp.reshape(m, (1, 1), order="F"), dvec.T], [dvec, m * qs]])
             cons.append(0.5 * (c4 + c4.T) >> 0)
