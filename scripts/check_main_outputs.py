@@ -114,7 +114,13 @@ def main():
     report.check("summary.md has the validation table with every set as a column",
                  all(f"| {s} " in md for s in sets))
     same_folder = os.path.realpath(out) == os.path.realpath(args.committed)
-    if not same_folder:
+    with open(os.path.join(args.committed, "provenance.json")) as f:
+        reference = json.load(f)
+    same_job = all(prov.get(k) == reference.get(k) for k in ("scenario", "experiment", "seeds"))
+    if not same_folder and not same_job:
+        print(f"note: {out} is not a run of the committed scenario and experiment "
+              f"({args.committed}): not compared with it")
+    if not same_folder and same_job:
         # Joints and parameters from the rows' per-joint and per-body columns: ten inertial
         # parameters per body, viscous and Coulomb friction per joint.
         joints = sum(1 for c in rows[0] if c.startswith("val_rms_"))
