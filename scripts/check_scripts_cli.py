@@ -24,7 +24,7 @@ BAD_VALUES = [
     ("bench_commands", ["--threads", "2,0"], "--threads: 0 is not at least 1"),
     ("bench_commands", ["--blind-cases", "0"], "--blind-cases: 0 is not at least 1"),
     ("bench_identify", ["--rounds"], "--rounds: expected one argument"),
-    ("bench_identify", ["--rows", ","], "--rows: unknown empty list"),
+    ("bench_identify", ["--rows", ","], "--rows: no name given (choose from"),
     ("peer_pinocchio_cvxpy", ["--samples", "-3"], "--samples: -3 is not at least 1"),
     ("peer_pinocchio_cvxpy", ["--samples", "ten"], "--samples: invalid positive_int value: 'ten'"),
     ("excite_peer", ["a.toml", "a.json"], "required: OUT.toml"),

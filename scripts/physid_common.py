@@ -18,8 +18,9 @@ SOLO12_URDF = os.path.join(ROOT, "data", "solo12", "solo12.urdf")
 
 def arguments(doc, *options, binary=True):
     """The script's command line, parsed: `--physid PATH` (if the script runs the `binary`) and
-    the script's own `options`, each `(flags, argparse keywords)`. `-h` prints the script's docstring; an unknown option, a missing
-    value or a value of the wrong type exits with argparse's message naming it."""
+    the script's own `options`, each `(flags, argparse keywords)`. `-h` prints the script's
+    docstring; an unknown option, a missing value or a value of the wrong type exits with
+    argparse's message naming it."""
     parser = argparse.ArgumentParser(description=doc,
                                      formatter_class=argparse.RawDescriptionHelpFormatter)
     if binary:
@@ -44,8 +45,8 @@ def names_from(choices):
         names = [n for n in text.split(",") if n]
         unknown = [n for n in names if n not in choices]
         if unknown or not names:
-            raise argparse.ArgumentTypeError(
-                f"unknown {', '.join(unknown) or 'empty list'} (choose from {', '.join(choices)})")
+            what = f"unknown {', '.join(unknown)}" if unknown else "no name given"
+            raise argparse.ArgumentTypeError(f"{what} (choose from {', '.join(choices)})")
         return names
     return parse
 
