@@ -29,7 +29,8 @@ import statistics
 import sys
 import tempfile
 
-from physid_common import KUKA_URDF, ROOT, arguments, names_from, physid_bin, positive_int, run, timed
+from physid_common import (KUKA_URDF, ROOT, arguments, names_from, physid_bin, positive_int, run,
+                           timed)
 
 ROWS = ["diagnose_kuka", "excite_kuka", "main_job", "blind"]
 DEFAULT_ROWS = ["diagnose_kuka", "excite_kuka", "main_job"]
@@ -98,7 +99,8 @@ def main():
                           help=f"comma-separated rows of {','.join(ROWS)} "
                                f"(default {','.join(DEFAULT_ROWS)})")),
         (["--threads"], dict(type=thread_counts, default=[1, 2, 4, 8, 16],
-                             help="thread counts of the main job and blind rows (default 1,2,4,8,16)")),
+                             help="thread counts of the main job and blind rows "
+                                  "(default 1,2,4,8,16)")),
         (["--quick"], dict(action="store_true", help="the main job with 3 seeds")),
         (["--blind-cases"], dict(type=positive_int, default=21,
                                  help="cases of the blind row (default 21)")),
@@ -133,8 +135,8 @@ def scaling_rows(name, cmd, d, threads, rounds):
     cores = os.cpu_count() or 1
     one = None
     for t in threads:
-        m, lo, hi, _ = median_of([*cmd, "--out", os.path.join(d, f"{name}_{t}"), "--threads", str(t)],
-                                 rounds)
+        out = os.path.join(d, f"{name}_{t}")
+        m, lo, hi, _ = median_of([*cmd, "--out", out, "--threads", str(t)], rounds)
         one = m if t == 1 else one
         line = f"{f'{name}_{t}':<22} {m:7.2f} s ({lo:.2f}..{hi:.2f})"
         if one is not None:
@@ -143,6 +145,7 @@ def scaling_rows(name, cmd, d, threads, rounds):
         if t > cores:
             line += "  (oversubscribed)"
         print(line, flush=True)
+
 
 if __name__ == "__main__":
     main()

@@ -29,7 +29,8 @@ import statistics
 import sys
 import tempfile
 
-from physid_common import KUKA_URDF, ROOT, arguments, names_from, physid_bin, positive_int, run, timed
+from physid_common import (KUKA_URDF, ROOT, arguments, names_from, physid_bin, positive_int, run,
+                           timed)
 
 ROWS = ["kuka_sim_consistent", "kuka_sim_ellipsoid", "kuka_real_heldout", "leg_shell"]
 

@@ -14,22 +14,15 @@ built, as scripts/test.sh makes it.
 """
 import os
 import statistics
-import sys
 import time
 import warnings
 
 import numpy as np
 import pinocchio as pin
 
-from physid_common import KUKA_URDF, ROOT, arguments
+from physid_common import KUKA_URDF, PACKAGE_OPTION, ROOT, arguments, on_path
 
-args = arguments(__doc__, (["--package"], dict(
-    metavar="DIR", default=os.environ.get("PHYSID_PYTHON"),
-    help="a folder holding the built physid package (default: $PHYSID_PYTHON)")), binary=False)
-package = args.package
-if not package:
-    sys.exit("give --package DIR or $PHYSID_PYTHON (a folder holding the built physid package)")
-sys.path.insert(0, package)
+on_path(arguments(__doc__, PACKAGE_OPTION, binary=False).package)
 import physid  # noqa: E402
 
 warnings.simplefilter("ignore", physid.PhysidWarning)

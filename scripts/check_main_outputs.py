@@ -30,7 +30,8 @@ def read_csv(path):
 # stale. Cells with fewer equations (n_s x joints) than parameters are not compared: there the
 # prior and the solver's tolerance place the parameters the data leave free, and round-off alone
 # moved a median by 1.7 %.
-STATISTICS = [f"{v}_{q}" for v in ("val_rms", "val_truth_rms", "j_err") for q in ("q25", "median", "q75")]
+STATISTICS = [f"{v}_{q}" for v in ("val_rms", "val_truth_rms", "j_err")
+              for q in ("q25", "median", "q75")]
 COMMITTED_TOLERANCE = 0.01
 
 
@@ -113,20 +114,25 @@ def main():
         md = f.read()
     report.check("summary.md has the validation table with every set as a column",
                  all(f"| {s} " in md for s in sets))
-    same_folder = os.path.realpath(out) == os.path.realpath(args.committed)
-    with open(os.path.join(args.committed, "provenance.json")) as f:
-        reference = json.load(f)
-    same_job = all(prov.get(k) == reference.get(k) for k in ("scenario", "experiment", "seeds"))
-    if not same_folder and not same_job:
-        print(f"note: {out} is not a run of the committed scenario and experiment "
-              f"({args.committed}): not compared with it")
-    if not same_folder and same_job:
-        # Joints and parameters from the rows' per-joint and per-body columns: ten inertial
-        # parameters per body, viscous and Coulomb friction per joint.
-        joints = sum(1 for c in rows[0] if c.startswith("val_rms_"))
-        bodies = sum(1 for c in rows[0] if c.startswith("j_err_"))
-        committed(report, summary, read_csv(os.path.join(args.committed, "summary.csv")),
-                  joints, 10 * bodies + 2 * joints)
+    if os.path.realpath(out) != os.path.realpath(args.committed):
+        needed = [os.path.join(args.committed, f) for f in ("provenance.json", "summary.csv")]
+        absent = [f for f in needed if not os.path.isfile(f)]
+        report.check(f"the committed results to compare with are there (missing: "
+                     f"{', '.join(absent) or 'none'})", not absent)
+        if absent:
+            report.finish()
+        with open(needed[0]) as f:
+            reference = json.load(f)
+        if all(prov.get(k) == reference.get(k) for k in ("scenario", "experiment", "seeds")):
+            # Joints and parameters from the rows' per-joint and per-body columns: ten inertial
+            # parameters per body, viscous and Coulomb friction per joint.
+            joints = sum(1 for c in rows[0] if c.startswith("val_rms_"))
+            bodies = sum(1 for c in rows[0] if c.startswith("j_err_"))
+            committed(report, summary, read_csv(os.path.join(args.committed, "summary.csv")),
+                      joints, 10 * bodies + 2 * joints)
+        else:
+            print(f"note: {out} is not a run of the committed scenario and experiment "
+                  f"({args.committed}): not compared with it")
     for svg in ("validation_error.svg", "parameter_error.svg"):
         root = ET.parse(os.path.join(out, svg)).getroot()
         report.check(f"{svg} is an SVG document with drawn elements",

@@ -26,15 +26,11 @@ import xml.etree.ElementTree as ET
 import numpy as np
 import pinocchio as pin
 
-from physid_common import KUKA_URDF, arguments, physid_bin, run
+from physid_common import KUKA_URDF, PACKAGE_OPTION, arguments, on_path, physid_bin, run
 
-args = arguments(__doc__, (["--package"], dict(
-    metavar="DIR", default=os.environ.get("PHYSID_PYTHON"),
-    help="a folder holding the built physid package (default: $PHYSID_PYTHON)")))
+args = arguments(__doc__, PACKAGE_OPTION)
 package = args.package
-if not package:
-    sys.exit("give --package DIR or $PHYSID_PYTHON (a folder holding the built physid package)")
-sys.path.insert(0, package)
+on_path(package)
 import physid  # noqa: E402
 
 passed, failed = 0, 0

@@ -31,6 +31,20 @@ def arguments(doc, *options, binary=True):
     return parser.parse_args()
 
 
+# The `--package DIR` option of the scripts that import the built Python package.
+PACKAGE_OPTION = (["--package"], dict(
+    metavar="DIR", default=os.environ.get("PHYSID_PYTHON"),
+    help="a folder holding the built physid package (default: $PHYSID_PYTHON)"))
+
+
+def on_path(package):
+    """Puts the built package's folder (`--package`) first on the import path; exits saying
+    what to give when there is none."""
+    if not package:
+        sys.exit("give --package DIR or $PHYSID_PYTHON (a folder holding the built physid package)")
+    sys.path.insert(0, package)
+
+
 def positive_int(text):
     """An argparse type: an integer of at least 1."""
     value = int(text)
